@@ -1,0 +1,17 @@
+//! Spherical Faces: approximation of free-form surfaces by meshes with spherical faces.
+//!
+//! Layers, one direction:
+//! - pure geometry and numerics ([`mesh`], [`import`], [`sphere`], [`curvature`], [`samples`]),
+//! - the pipeline and its worker protocol ([`pipeline`], [`design_link`]),
+//! - the browser app ([`web`], wasm32 only), which consumes snapshots.
+
+pub mod curvature;
+pub mod design_link;
+pub mod import;
+pub mod mesh;
+pub mod pipeline;
+pub mod samples;
+pub mod sphere;
+
+#[cfg(target_arch = "wasm32")]
+pub mod web;

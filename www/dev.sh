@@ -1,0 +1,133 @@
+#!/usr/bin/env bash
+# Spherical Faces developer entry point.
+#   bash www/dev.sh serve   install what is missing, build the release wasm, serve on 127.0.0.1:8080
+#   bash www/dev.sh test    install what is missing, run native, wasm-pack and browser end-to-end tests
+# Both are idempotent: installs are skipped when present, target/ is reused.
+# The install recipe is ../shared/toolchain.md: nothing is downloaded outside crates.io, npm and Debian.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+WASM_TARGET=wasm32-unknown-unknown
+DIST="$ROOT/target/dist"
+PORT="${PORT:-8080}"
+
+log() { printf '\033[1m[dev]\033[0m %s\n' "$*" >&2; }
+have() { command -v "$1" >/dev/null 2>&1; }
+
+as_root() { if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi; }
+
+APT_UPDATED=0
+apt_install() {
+  local missing=()
+  for p in "$@"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  have apt-get || { log "missing system packages (${missing[*]}) and no apt-get: install them by hand"; exit 1; }
+  if [ $APT_UPDATED = 0 ]; then as_root apt-get update -qq; APT_UPDATED=1; fi
+  log "apt-get install ${missing[*]}"
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+}
+
+# --- Rust toolchain able to build wasm32 -----------------------------------------------------
+setup_rust() {
+  if have rustup && rustup target list --installed 2>/dev/null | grep -qx "$WASM_TARGET"; then
+    log "using rustup's installed $WASM_TARGET target"
+    return 0
+  fi
+  # Debian route (toolchain.md steps 1-2): rustc-web with std sources, wasm32 std built once.
+  apt_install rustc-web cargo-web rust-web-src rust-web-llvm lld-22
+  export PATH="/usr/bin:$PATH"
+  local sysroot
+  sysroot="$(/usr/bin/rustc --print sysroot)"
+  local libdir="$sysroot/lib/rustlib/$WASM_TARGET/lib"
+  if ! ls "$libdir"/libstd-*.rlib >/dev/null 2>&1; then
+    log "building std for $WASM_TARGET into $libdir (once per machine)"
+    local scratch
+    scratch="$(mktemp -d)"
+    mkdir -p "$scratch/src"
+    cat >"$scratch/Cargo.toml" <<'TOML'
+[package]
+name = "sf_wasm_std_scratch"
+version = "0.0.0"
+edition = "2021"
+[lib]
+crate-type = ["cdylib"]
+[profile.release]
+lto = true
+TOML
+    echo '#[no_mangle] pub extern "C" fn sf_scratch() -> i32 { 1 }' >"$scratch/src/lib.rs"
+    (cd "$scratch" && RUSTC_BOOTSTRAP=1 /usr/bin/cargo build -q --release --target "$WASM_TARGET" \
+      -Zbuild-std=std,test,panic_abort)
+    as_root mkdir -p "$libdir"
+    as_root cp "$scratch/target/$WASM_TARGET/release/deps/"lib*.rlib "$libdir/"
+    as_root rm -f "$libdir"/libsf_wasm_std_scratch*.rlib
+    rm -rf "$scratch"
+  fi
+}
+
+lock_version() { # version of a package in Cargo.lock
+  awk -v n="$1" '$0=="name = \"" n "\""{getline; gsub(/version = |"/,""); print; exit}' Cargo.lock
+}
+
+setup_wasm_tools() {
+  local wbv
+  wbv="$(lock_version wasm-bindgen)"
+  if ! (have wasm-bindgen && wasm-bindgen --version | grep -q " $wbv\$"); then
+    log "cargo install wasm-bindgen-cli $wbv (a few minutes, once)"
+    cargo install -q wasm-bindgen-cli --version "$wbv" --force
+  fi
+  if ! have wasm-pack; then
+    log "cargo install wasm-pack (a few minutes, once)"
+    cargo install -q wasm-pack --version 0.13.1
+  fi
+}
+
+setup_browser() {
+  apt_install chromium chromium-driver
+  if [ ! -d tests/e2e/node_modules/playwright-core ] || [ tests/e2e/package-lock.json -nt tests/e2e/node_modules/.stamp ]; then
+    have npm || apt_install nodejs npm
+    log "npm ci (tests/e2e)"
+    (cd tests/e2e && npm ci --no-audit --no-fund --silent && touch node_modules/.stamp)
+  fi
+}
+
+# --- build ------------------------------------------------------------------------------------
+build_web() {
+  local profile="${1:-release}"
+  log "building wasm ($profile)"
+  local flag=--release; [ "$profile" = dev ] && flag=--dev
+  wasm-pack build -q $flag --target web --out-dir target/pkg --out-name spherical_faces --no-typescript --no-pack . >&2
+  rm -rf "$DIST"; mkdir -p "$DIST/pkg"
+  cp index.html "$DIST/"
+  cp www/*.js www/*.css "$DIST/" 2>/dev/null || true
+  cp target/pkg/spherical_faces.js target/pkg/spherical_faces_bg.wasm "$DIST/pkg/"
+  log "wasm: $(stat -c %s "$DIST/pkg/spherical_faces_bg.wasm") bytes"
+}
+
+cmd_setup() { setup_rust; setup_wasm_tools; }
+
+cmd_serve() {
+  cmd_setup
+  build_web release
+  exec python3 www/serve.py --root "$DIST" --port "$PORT"
+}
+
+cmd_test() {
+  cmd_setup
+  setup_browser
+  log "native tests"
+  cargo test --all-targets
+  log "wasm-pack tests in headless Chromium"
+  wasm-pack test --headless --chrome --chromedriver /usr/bin/chromedriver . -- --test web
+  build_web release
+  log "browser end-to-end tests (WebGPU and WebGL2 on SwiftShader)"
+  (cd tests/e2e && SF_DIST="$DIST" node --test --test-concurrency=1 *.test.mjs)
+}
+
+case "${1:-}" in
+  setup) cmd_setup ;;
+  build) cmd_setup; build_web "${2:-release}" ;;
+  serve) cmd_serve ;;
+  test) cmd_test ;;
+  *) echo "usage: bash www/dev.sh serve|test   (also: setup, build [release|dev])" >&2; exit 2 ;;
+esac
