@@ -86,6 +86,8 @@ setup_browser() {
   apt_install chromium chromium-driver
   if [ ! -d tests/e2e/node_modules/playwright-core ] || [ tests/e2e/package-lock.json -nt tests/e2e/node_modules/.stamp ]; then
     have npm || apt_install nodejs npm
+    node -e 'const [a,b]=process.versions.node.split(".").map(Number); process.exit(a>20||(a==20&&b>=10)?0:1)' ||
+      { log "Node.js >= 20.10 is needed for the browser tests (found $(node --version))"; exit 1; }
     log "npm ci (tests/e2e)"
     (cd tests/e2e && npm ci --no-audit --no-fund --silent && touch node_modules/.stamp)
   fi
@@ -96,7 +98,7 @@ build_web() {
   local profile="${1:-release}"
   log "building wasm ($profile)"
   local flag=--release; [ "$profile" = dev ] && flag=--dev
-  wasm-pack build -q $flag --target web --out-dir target/pkg --out-name spherical_faces --no-typescript --no-pack . >&2
+  wasm-pack --quiet build --mode no-install $flag --target web --out-dir target/pkg --out-name spherical_faces --no-typescript --no-pack . >&2
   rm -rf "$DIST"; mkdir -p "$DIST/pkg"
   cp index.html "$DIST/"
   cp www/*.js www/*.css "$DIST/" 2>/dev/null || true

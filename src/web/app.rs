@@ -1,0 +1,863 @@
+//! The main-thread app: an immediate-mode egui UI over the wgpu viewport. It never computes
+//! geometry; it sends the design to the worker and draws the snapshots that come back.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use egui::{Color32, Pos2, Rect, RichText, Sense, Vec2};
+use glam::{Mat4, Vec3};
+use wasm_bindgen::prelude::*;
+
+use super::colormap;
+use super::viewer::{MeshData, OrbitCamera, Overlay, OverlayShape, ScalarData, Uniforms, ViewerFrame, ViewerResources};
+use super::worker_client::{Incoming, WorkerClient};
+use crate::curvature::CurvatureSummary;
+use crate::design_link::{CameraState, ColorBy, Design, Reference, Shading};
+use crate::pipeline::protocol::{field, find, Field, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
+use crate::samples::Sample;
+
+/// Viewport background, also reported to tests.
+pub const CLEAR_COLOR: Color32 = Color32::from_rgb(28, 30, 36);
+
+struct Loaded {
+    info: ReferenceInfo,
+    mesh: Arc<MeshData>,
+    center: Vec3,
+    radius: f32,
+    curvature: Option<CurvatureView>,
+}
+
+struct CurvatureView {
+    fields: Vec<Field>,
+    summary: Option<CurvatureSummary>,
+}
+
+struct Busy {
+    stage: String,
+    progress: Option<Progress>,
+}
+
+/// The colour map currently uploaded.
+struct ScalarView {
+    color: ColorBy,
+    data: Arc<ScalarData>,
+    range: (f32, f32),
+    diverging: bool,
+}
+
+pub struct App {
+    design: Design,
+    notices: Vec<String>,
+    error: Option<String>,
+    worker: Option<WorkerClient>,
+    loaded: Option<Loaded>,
+    /// The file behind the loaded design, kept to restore it in a fresh worker.
+    file: Option<web_sys::File>,
+    /// A file sent to the worker but not yet confirmed as loaded.
+    file_in_flight: Option<web_sys::File>,
+    busy: Option<Busy>,
+    camera: OrbitCamera,
+    camera_from_link: Option<CameraState>,
+    selected: Option<usize>,
+    scalars: Option<ScalarView>,
+    generation: u64,
+    backend: String,
+    frames: u64,
+    drawn: bool,
+    viewport: Rect,
+    last_fragment: String,
+    last_state: String,
+    picked_files: Rc<RefCell<Vec<web_sys::File>>>,
+    file_input: Option<web_sys::HtmlInputElement>,
+    _file_input_closure: Option<Closure<dyn FnMut()>>,
+}
+
+impl App {
+    pub fn new(cc: &eframe::CreationContext<'_>) -> Self {
+        let mut backend = String::new();
+        if let Some(rs) = cc.wgpu_render_state.as_ref() {
+            rs.renderer.write().callback_resources.insert(ViewerResources::new(&rs.device, rs.target_format));
+            backend = match rs.adapter.get_info().backend {
+                egui_wgpu::wgpu::Backend::BrowserWebGpu => "WebGPU".into(),
+                egui_wgpu::wgpu::Backend::Gl => "WebGL2".into(),
+                other => format!("{other:?}"),
+            };
+        }
+        cc.egui_ctx.set_visuals(egui::Visuals::dark());
+        let fragment = location_hash();
+        let (design, notices) = Design::from_fragment(&fragment);
+        let ctx = cc.egui_ctx.clone();
+        let repaint: Rc<dyn Fn()> = Rc::new(move || ctx.request_repaint());
+        let (worker, error) = match WorkerClient::spawn(repaint) {
+            Ok(w) => (Some(w), None),
+            Err(e) => (None, Some(e)),
+        };
+        let picked_files = Rc::new(RefCell::new(Vec::new()));
+        let (file_input, closure) = make_file_input(picked_files.clone(), cc.egui_ctx.clone());
+        let mut app = Self {
+            camera_from_link: design.camera,
+            design,
+            notices,
+            error,
+            worker,
+            loaded: None,
+            file: None,
+            file_in_flight: None,
+            busy: None,
+            camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
+            selected: None,
+            scalars: None,
+            generation: 0,
+            backend,
+            frames: 0,
+            drawn: false,
+            viewport: Rect::NOTHING,
+            last_fragment: fragment,
+            last_state: String::new(),
+            picked_files,
+            file_input,
+            _file_input_closure: closure,
+        };
+        app.load_design_reference();
+        app
+    }
+
+    /// Sends the design's reference surface to the worker (own files need the file itself).
+    fn load_design_reference(&mut self) {
+        let sample = match &self.design.reference {
+            Reference::Sample(s) => *s,
+            Reference::OwnFile(_) => match self.file.clone() {
+                Some(f) => return self.load_file(f),
+                // The link names a file we do not have: open on the default sample meanwhile.
+                None => Sample::Dome,
+            },
+        };
+        self.send(&ToWorker::LoadSample(sample), None);
+    }
+
+    fn load_file(&mut self, file: web_sys::File) {
+        self.send(&ToWorker::LoadFile { name: file.name() }, Some(&file));
+        self.file_in_flight = Some(file);
+        self.busy = Some(Busy { stage: "import".into(), progress: None });
+    }
+
+    fn send(&mut self, msg: &ToWorker, file: Option<&web_sys::File>) {
+        match &self.worker {
+            Some(w) => w.send(msg, file),
+            None => self.error = Some("The pipeline worker is not running; reload the page.".into()),
+        }
+    }
+
+    fn run_method(&mut self) {
+        if self.loaded.is_none() {
+            return;
+        }
+        if self.busy.as_ref().is_some_and(|b| b.stage != "import") {
+            self.cancel();
+        }
+        let stage = StageRequest::Curvature(self.design.jet.clone());
+        self.busy = Some(Busy { stage: stage.name().into(), progress: None });
+        self.send(&ToWorker::Run(stage), None);
+    }
+
+    fn cancel(&mut self) {
+        if let Some(w) = self.worker.as_mut() {
+            if !w.cancel() {
+                // Without shared memory the worker was replaced; its Ready reloads the design.
+                self.notices.push("Cancelled (the worker was restarted).".into());
+            }
+        }
+        self.busy = None;
+    }
+
+    fn handle_messages(&mut self) {
+        loop {
+            let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) else { break };
+            match item {
+                Incoming::Crashed(message) => {
+                    self.error = Some(format!("{message}. The worker was restarted; your design is kept."));
+                    self.busy = None;
+                    if let Some(w) = self.worker.as_mut() {
+                        w.restart();
+                    }
+                }
+                Incoming::Message(msg, fields) => self.handle_message(msg, fields),
+            }
+        }
+    }
+
+    fn handle_message(&mut self, msg: FromWorker, fields: Vec<Field>) {
+        match msg {
+            FromWorker::Ready => {
+                // A fresh worker (first start or after a crash): restore the design in it.
+                if let Some(l) = &self.loaded {
+                    match l.info.source.clone() {
+                        Source::Sample(s) => self.send(&ToWorker::LoadSample(s), None),
+                        Source::File(_) => {
+                            if let Some(f) = self.file.clone() {
+                                self.send(&ToWorker::LoadFile { name: f.name() }, Some(&f));
+                            }
+                        }
+                    }
+                }
+            }
+            FromWorker::Loaded(info) => {
+                self.error = None;
+                match &info.source {
+                    Source::Sample(s) => {
+                        self.design.reference = Reference::Sample(*s);
+                        self.file = None;
+                    }
+                    Source::File(name) => {
+                        self.design.reference = Reference::OwnFile(name.clone());
+                        if let Some(f) = self.file_in_flight.take() {
+                            self.file = Some(f);
+                        }
+                    }
+                }
+                for n in &info.notes {
+                    self.notices.push(n.clone());
+                }
+                self.loaded = Some(Loaded { info, mesh: Arc::new(empty_mesh()), center: Vec3::ZERO, radius: 1.0, curvature: None });
+            }
+            FromWorker::Snapshot { stage, .. } if stage == "reference" => self.install_geometry(&fields),
+            FromWorker::Snapshot { .. } => {
+                if let Some(l) = self.loaded.as_mut() {
+                    let summary = l.curvature.take().and_then(|c| c.summary);
+                    l.curvature = Some(CurvatureView { fields, summary });
+                    self.scalars = None;
+                }
+            }
+            FromWorker::Progress(p) => {
+                if let Some(b) = self.busy.as_mut() {
+                    if b.stage == p.stage {
+                        b.progress = Some(p);
+                    }
+                }
+            }
+            FromWorker::Finished { result, .. } => {
+                self.busy = None;
+                match result {
+                    StageResult::Curvature(summary) => {
+                        if let Some(c) = self.loaded.as_mut().and_then(|l| l.curvature.as_mut()) {
+                            c.summary = Some(summary);
+                        }
+                    }
+                }
+            }
+            FromWorker::Cancelled { stage } => {
+                self.busy = None;
+                self.notices.push(format!("Stage '{stage}' cancelled."));
+            }
+            FromWorker::Error { message } => {
+                self.busy = None;
+                self.file_in_flight = None;
+                self.error = Some(message);
+            }
+        }
+    }
+
+    fn install_geometry(&mut self, fields: &[Field]) {
+        let Some(l) = self.loaded.as_mut() else { return };
+        let get_f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
+        let get_u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+        self.generation += 1;
+        let mesh = MeshData {
+            generation: self.generation,
+            positions: get_f(field::POSITIONS),
+            normals: get_f(field::NORMALS),
+            triangles: get_u(field::TRIANGLES),
+            edges: get_u(field::EDGES),
+        };
+        let (lo, hi) = mesh.positions.chunks_exact(3).fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(Vec3::from_slice(p)), hi.max(Vec3::from_slice(p))),
+        );
+        l.center = (lo + hi) * 0.5;
+        l.radius = ((hi - lo).length() * 0.5).max(1e-6);
+        l.mesh = Arc::new(mesh);
+        l.curvature = None;
+        self.scalars = None;
+        self.selected = None;
+        self.camera = OrbitCamera::framing(l.center, l.radius);
+        if let Some(c) = self.camera_from_link.take() {
+            self.camera.yaw = c.yaw as f32;
+            self.camera.pitch = c.pitch as f32;
+            self.camera.distance = c.distance as f32;
+            self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
+        }
+        self.busy = None;
+        self.run_method();
+    }
+
+    /// Scalars for the current colour choice, with a robust range (2nd to 98th percentile).
+    fn scalar_view(&mut self) -> Option<&ScalarView> {
+        let color = self.design.color;
+        let fresh = self.scalars.as_ref().is_some_and(|s| s.color == color);
+        if !fresh {
+            self.scalars = None;
+            let c = self.loaded.as_ref()?.curvature.as_ref()?;
+            let key = match color {
+                ColorBy::None => return None,
+                ColorBy::MeanCurvature => field::MEAN_CURVATURE,
+                ColorBy::K1 => field::K1,
+                ColorBy::K2 => field::K2,
+                ColorBy::K1MinusK2 => field::K1_MINUS_K2,
+            };
+            let values = find(&c.fields, key)?.as_f32()?.to_vec();
+            let (range, diverging) = colormap::robust_range(&values);
+            self.generation += 1;
+            self.scalars = Some(ScalarView {
+                color,
+                data: Arc::new(ScalarData { generation: self.generation, values }),
+                range,
+                diverging,
+            });
+        }
+        self.scalars.as_ref()
+    }
+
+    fn apply_link_if_changed(&mut self) {
+        let hash = location_hash();
+        if hash == self.last_fragment {
+            return;
+        }
+        // The user edited or navigated the link: apply it.
+        self.last_fragment = hash.clone();
+        let (design, notices) = Design::from_fragment(&hash);
+        self.notices = notices;
+        let reference_changed = design.reference != self.design.reference;
+        let jet_changed = design.jet != self.design.jet;
+        self.camera_from_link = design.camera;
+        self.design = design;
+        if reference_changed {
+            self.load_design_reference();
+        } else {
+            if let Some(c) = self.camera_from_link.take() {
+                self.camera.yaw = c.yaw as f32;
+                self.camera.pitch = c.pitch as f32;
+                self.camera.distance = c.distance as f32;
+                self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
+            }
+            if jet_changed {
+                self.run_method();
+            }
+        }
+    }
+
+    fn write_link(&mut self, dragging: bool) {
+        if self.loaded.is_none() || dragging {
+            return;
+        }
+        let mut d = self.design.clone();
+        d.camera = Some(CameraState {
+            yaw: self.camera.yaw as f64,
+            pitch: self.camera.pitch as f64,
+            distance: self.camera.distance as f64,
+            target: [self.camera.target.x as f64, self.camera.target.y as f64, self.camera.target.z as f64],
+        });
+        let frag = d.to_fragment();
+        if frag != self.last_fragment {
+            if let Some(w) = web_sys::window() {
+                if let Ok(h) = w.history() {
+                    let _ = h.replace_state_with_url(&JsValue::NULL, "", Some(&frag));
+                }
+            }
+            self.last_fragment = frag;
+        }
+    }
+
+    fn share_url(&self) -> String {
+        let w = web_sys::window();
+        let base = w
+            .and_then(|w| {
+                let l = w.location();
+                Some(format!("{}{}{}", l.origin().ok()?, l.pathname().ok()?, l.search().ok()?))
+            })
+            .unwrap_or_default();
+        format!("{base}{}", self.last_fragment)
+    }
+
+    fn publish_state(&mut self) {
+        let (v, f, bl, nm, source) = match &self.loaded {
+            Some(l) => (
+                l.info.stats.vertices,
+                l.info.stats.faces,
+                l.info.stats.boundary_loops,
+                l.info.stats.non_manifold_edges,
+                l.info.source.label(),
+            ),
+            None => (0, 0, 0, 0, String::new()),
+        };
+        let curvature_ready =
+            self.loaded.as_ref().and_then(|l| l.curvature.as_ref()).is_some_and(|c| c.summary.is_some());
+        let vp = self.viewport;
+        let state = serde_json::json!({
+            "ready": self.drawn,
+            "backend": self.backend,
+            "frames": self.frames,
+            "source": source,
+            "vertices": v, "faces": f, "boundary_loops": bl, "non_manifold_edges": nm,
+            "busy": self.busy.is_some(),
+            "stage": self.busy.as_ref().map(|b| b.stage.clone()).unwrap_or_default(),
+            "curvature_ready": curvature_ready,
+            "color_by": self.design.color.key(),
+            "shading": self.design.shading.key(),
+            "edges": self.design.edges,
+            "jet_degree": self.design.jet.degree,
+            "error": self.error,
+            "notices": self.notices,
+            "design_link": self.last_fragment,
+            "clear_color": [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],
+            "viewport": [vp.min.x, vp.min.y, vp.width(), vp.height()],
+            "worker_restarts": self.worker.as_ref().map_or(0, |w| w.restarts),
+            "selected_vertex": self.selected,
+        })
+        .to_string();
+        if state != self.last_state {
+            if let Some(el) = web_sys::window().and_then(|w| w.document()).and_then(|d| d.get_element_by_id("sf-state")) {
+                el.set_text_content(Some(&state));
+            }
+            self.last_state = state;
+        }
+    }
+
+    // --- UI --------------------------------------------------------------------------------
+
+    fn top_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.heading("Spherical Faces");
+            ui.separator();
+            let current = match &self.design.reference {
+                Reference::Sample(s) => s.title().to_string(),
+                Reference::OwnFile(name) => name.clone(),
+            };
+            egui::ComboBox::from_id_salt("sample").selected_text(current).show_ui(ui, |ui| {
+                for s in Sample::ALL {
+                    let selected = self.design.reference == Reference::Sample(s);
+                    if ui.selectable_label(selected, s.title()).on_hover_text(s.description()).clicked() && !selected {
+                        self.send(&ToWorker::LoadSample(s), None);
+                        self.busy = Some(Busy { stage: "import".into(), progress: None });
+                    }
+                }
+            });
+            if ui.button("Open…").on_hover_text("OBJ, glTF (.gltf with embedded data) or GLB; or drop a file on the view").clicked() {
+                if let Some(input) = &self.file_input {
+                    input.set_value("");
+                    input.click();
+                }
+            }
+            if ui.button("Copy link").on_hover_text("Copy a link that restores this design").clicked() {
+                let url = self.share_url();
+                ui.ctx().copy_text(url);
+                self.notices.push("Design link copied.".into());
+            }
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                let label = if self.backend.is_empty() { "no GPU backend".to_string() } else { self.backend.clone() };
+                ui.label(RichText::new(label).monospace()).on_hover_text("Graphics backend in use");
+            });
+        });
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            if let Some(err) = self.error.clone() {
+                egui::Frame::new().fill(Color32::from_rgb(90, 24, 24)).inner_margin(6.0).corner_radius(4.0).show(ui, |ui| {
+                    ui.label(RichText::new(err).color(Color32::WHITE));
+                    if ui.small_button("Dismiss").clicked() {
+                        self.error = None;
+                    }
+                });
+                ui.add_space(6.0);
+            }
+            ui.strong("Method");
+            ui.label("Curvature: jet fitting (Sec. 2.6)");
+            let mut jet = self.design.jet.clone();
+            let mut degree = jet.degree as u32;
+            ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
+            jet.degree = degree as u8;
+            ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
+            if jet != self.design.jet {
+                self.design.jet = jet;
+                self.run_method();
+            }
+            ui.separator();
+            ui.strong("Display");
+            ui.horizontal(|ui| {
+                for s in Shading::ALL {
+                    ui.radio_value(&mut self.design.shading, s, s.key());
+                }
+            });
+            ui.checkbox(&mut self.design.edges, "edges");
+            egui::ComboBox::from_label("colour by").selected_text(self.design.color.label()).show_ui(ui, |ui| {
+                for c in ColorBy::ALL {
+                    ui.selectable_value(&mut self.design.color, c, c.label());
+                }
+            });
+            ui.separator();
+            self.info_section(ui);
+            if !self.notices.is_empty() {
+                ui.separator();
+                ui.horizontal(|ui| {
+                    ui.strong("Notices");
+                    if ui.small_button("clear").clicked() {
+                        self.notices.clear();
+                    }
+                });
+                for n in self.notices.iter().rev().take(8) {
+                    ui.label(RichText::new(n).small());
+                }
+            }
+        });
+    }
+
+    fn info_section(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Reference");
+        let Some(l) = &self.loaded else {
+            ui.label("loading…");
+            return;
+        };
+        let s = &l.info.stats;
+        egui::Grid::new("info").num_columns(2).show(ui, |ui| {
+            ui.label("source");
+            ui.label(l.info.source.label());
+            ui.end_row();
+            ui.label("vertices");
+            ui.label(s.vertices.to_string());
+            ui.end_row();
+            ui.label("faces");
+            ui.label(s.faces.to_string());
+            ui.end_row();
+            ui.label("boundary loops");
+            ui.label(s.boundary_loops.to_string());
+            ui.end_row();
+            ui.label("non-manifold edges");
+            ui.label(s.non_manifold_edges.to_string());
+            ui.end_row();
+            ui.label("bbox diagonal");
+            ui.label(format!("{:.4}", l.info.bbox_diagonal));
+            ui.end_row();
+        });
+        if let Some(sum) = l.curvature.as_ref().and_then(|c| c.summary.as_ref()) {
+            ui.add_space(4.0);
+            ui.strong("Curvature");
+            egui::Grid::new("curv").num_columns(2).show(ui, |ui| {
+                ui.label("H min / max");
+                ui.label(format!("{:.4} / {:.4}", sum.min_h, sum.max_h));
+                ui.end_row();
+                ui.label("H mean");
+                ui.label(format!("{:.4}", sum.mean_h));
+                ui.end_row();
+                ui.label("boundary vertices");
+                ui.label(sum.boundary_vertices.to_string());
+                ui.end_row();
+                ui.label("H ≈ 0 vertices");
+                ui.label(sum.planar_vertices.to_string());
+                ui.end_row();
+                ui.label("low-degree / failed fits");
+                ui.label(format!("{} / {}", sum.low_degree_fits, sum.failed_fits));
+                ui.end_row();
+            });
+            if sum.h_changes_sign {
+                ui.colored_label(
+                    Color32::from_rgb(240, 180, 80),
+                    "H changes sign: central spheres flip through planes there; the sphere methods need H of one sign.",
+                );
+            }
+            if sum.planar_vertices > 0 {
+                ui.label(RichText::new(format!("{} vertices have H ≈ 0: their central spheres are planes.", sum.planar_vertices)).small());
+            }
+        }
+        if let Some(v) = self.selected {
+            ui.add_space(4.0);
+            ui.strong(format!("Vertex {v}"));
+            if let Some(text) = self.selected_vertex_text(v) {
+                ui.label(RichText::new(text).monospace().small());
+            }
+        } else {
+            ui.label(RichText::new("Click the surface to see a vertex's central sphere.").small());
+        }
+    }
+
+    fn selected_vertex_text(&self, v: usize) -> Option<String> {
+        let c = self.loaded.as_ref()?.curvature.as_ref()?;
+        let val = |k| find(&c.fields, k).and_then(Field::as_f32).and_then(|x| x.get(v).copied());
+        let (h, k1, k2) = (val(field::MEAN_CURVATURE)?, val(field::K1)?, val(field::K2)?);
+        let sphere = central_sphere(&c.fields, v)?;
+        let desc = match sphere_center_radius(&sphere) {
+            Some((center, r)) => format!("centre ({:.3}, {:.3}, {:.3})\nradius {:.4}", center.x, center.y, center.z, r.abs()),
+            None => "central sphere is a plane (H ≈ 0)".into(),
+        };
+        let boundary = find(&c.fields, field::BOUNDARY).and_then(Field::as_u32).and_then(|b| b.get(v).copied()) == Some(1);
+        Some(format!(
+            "H  {h:.5}\nκ1 {k1:.5}\nκ2 {k2:.5}\n{desc}{}",
+            if boundary { "\n(boundary vertex: one-sided fit)" } else { "" }
+        ))
+    }
+
+    fn viewport(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        self.viewport = rect;
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        ui.painter().rect_filled(rect, 0.0, CLEAR_COLOR);
+
+        // Camera: orbit (primary), pan (secondary, middle or shift), zoom (wheel, pinch).
+        let shift = ui.input(|i| i.modifiers.shift);
+        if response.dragged_by(egui::PointerButton::Primary) && !shift {
+            let d = response.drag_delta();
+            self.camera.orbit(d.x, d.y);
+        } else if response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+            || (response.dragged_by(egui::PointerButton::Primary) && shift)
+        {
+            let d = response.drag_delta();
+            self.camera.pan(d.x, d.y, rect.height());
+        }
+        if response.hovered() {
+            let (scroll, zoom, touch) = ui.input(|i| (i.smooth_scroll_delta.y, i.zoom_delta(), i.multi_touch()));
+            if scroll != 0.0 {
+                self.camera.zoom((scroll * 0.002).exp());
+            }
+            if zoom != 1.0 {
+                self.camera.zoom(zoom);
+            }
+            if let Some(t) = touch {
+                self.camera.pan(t.translation_delta.x, t.translation_delta.y, rect.height());
+            }
+        }
+        if response.double_clicked() {
+            if let Some(l) = &self.loaded {
+                self.camera = OrbitCamera { target: l.center, ..OrbitCamera::framing(l.center, l.radius) };
+            }
+        } else if response.clicked() {
+            if let Some(pos) = response.interact_pointer_pos() {
+                self.selected = self.pick(pos, rect);
+            }
+        }
+
+        let Some(l) = &self.loaded else {
+            ui.painter().text(rect.center(), egui::Align2::CENTER_CENTER, "loading…", egui::FontId::proportional(18.0), Color32::GRAY);
+            return;
+        };
+        if l.mesh.triangles.is_empty() {
+            return;
+        }
+        let mesh = l.mesh.clone();
+        let radius = l.radius;
+        self.camera.scene_radius = radius;
+        let aspect = rect.width() / rect.height().max(1.0);
+        let view_proj = self.camera.proj(aspect) * self.camera.view();
+        let shading = self.design.shading;
+        let edges = self.design.edges;
+        let overlay = self.selected.and_then(|v| self.overlay_for(v));
+        let (scalars, range, diverging) = match self.scalar_view() {
+            Some(s) => (Some(s.data.clone()), s.range, s.diverging),
+            None => (None, (0.0, 1.0), false),
+        };
+        let eye = self.camera.eye();
+        let uniforms = Uniforms {
+            view_proj: view_proj.to_cols_array_2d(),
+            model: Mat4::IDENTITY.to_cols_array_2d(),
+            eye: [eye.x, eye.y, eye.z, 1.0],
+            base_color: [0.72, 0.78, 0.86, 1.0],
+            scalar_range: [range.0, range.1, diverging as u32 as f32, 0.0],
+            mode: [
+                match shading {
+                    Shading::Flat => 0,
+                    Shading::Smooth => 1,
+                    Shading::Reflective => 2,
+                },
+                scalars.is_some() as u32,
+                0,
+                0,
+            ],
+        };
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(
+            rect,
+            ViewerFrame { mesh, scalars, uniforms, edges, overlay },
+        ));
+        self.drawn = true;
+        if let Some(s) = &self.scalars {
+            colormap::legend(ui.painter(), rect, self.design.color.label(), s.range, s.diverging);
+        }
+        if let Some(b) = &self.busy {
+            let text = match &b.progress {
+                Some(p) if p.total > 0 => format!("{}: {}/{} · {:.0} ms", b.stage, p.iteration, p.total, p.elapsed_ms),
+                _ => format!("{}…", b.stage),
+            };
+            ui.painter().text(rect.left_top() + Vec2::new(10.0, 10.0), egui::Align2::LEFT_TOP, text, egui::FontId::proportional(13.0), Color32::LIGHT_GRAY);
+        }
+    }
+
+    /// The translucent central sphere (or plane) at vertex `v`.
+    fn overlay_for(&self, v: usize) -> Option<Overlay> {
+        let l = self.loaded.as_ref()?;
+        let sphere = central_sphere(&l.curvature.as_ref()?.fields, v)?;
+        let p = Vec3::from_slice(l.mesh.positions.get(3 * v..3 * v + 3)?);
+        let color = [0.35, 0.65, 1.0, 0.28];
+        match sphere_center_radius(&sphere) {
+            Some((c, r)) if r.abs() < 50.0 * l.radius => Some(Overlay {
+                shape: OverlayShape::Sphere,
+                model: Mat4::from_translation(c) * Mat4::from_scale(Vec3::splat(r.abs())),
+                color,
+            }),
+            _ => {
+                // A plane (or a sphere too large to draw): a disc in the tangent plane at v.
+                let n = Vec3::new(sphere[1], sphere[2], sphere[3]).normalize_or(Vec3::Z);
+                let rot = glam::Quat::from_rotation_arc(Vec3::Z, n);
+                Some(Overlay {
+                    shape: OverlayShape::Disc,
+                    model: Mat4::from_scale_rotation_translation(Vec3::splat(l.radius * 0.6), rot, p),
+                    color,
+                })
+            }
+        }
+    }
+
+    /// The mesh vertex nearest to the surface point under the pointer.
+    fn pick(&self, pos: Pos2, rect: Rect) -> Option<usize> {
+        let l = self.loaded.as_ref()?;
+        let ndc_x = (pos.x - rect.min.x) / rect.width() * 2.0 - 1.0;
+        let ndc_y = 1.0 - (pos.y - rect.min.y) / rect.height() * 2.0;
+        let (o, d) = self.camera.ray(ndc_x, ndc_y, rect.width() / rect.height().max(1.0));
+        let p = &l.mesh.positions;
+        let vtx = |i: u32| Vec3::from_slice(&p[3 * i as usize..3 * i as usize + 3]);
+        let mut best: Option<(f32, [u32; 3], Vec3)> = None;
+        for t in l.mesh.triangles.chunks_exact(3) {
+            let (a, b, c) = (vtx(t[0]), vtx(t[1]), vtx(t[2]));
+            if let Some(s) = ray_triangle(o, d, a, b, c) {
+                if best.is_none_or(|(bs, ..)| s < bs) {
+                    best = Some((s, [t[0], t[1], t[2]], o + d * s));
+                }
+            }
+        }
+        let (_, tri, hit) = best?;
+        tri.into_iter().min_by(|&a, &b| (vtx(a) - hit).length().total_cmp(&(vtx(b) - hit).length())).map(|v| v as usize)
+    }
+}
+
+impl eframe::App for App {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.frames += 1;
+        self.handle_messages();
+        self.apply_link_if_changed();
+
+        // Dropped files (eframe) and picked files (the Open… dialog).
+        let dropped: Vec<web_sys::File> =
+            ui.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.web_file().cloned()).collect());
+        let picked: Vec<web_sys::File> = self.picked_files.borrow_mut().drain(..).collect();
+        if let Some(f) = dropped.into_iter().chain(picked).last() {
+            self.load_file(f);
+        }
+
+        egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
+        if self.busy.is_some() {
+            egui::Panel::bottom("progress").show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let (frac, text) = match self.busy.as_ref().and_then(|b| b.progress.as_ref()) {
+                        Some(p) if p.total > 0 => (p.iteration as f32 / p.total as f32, format!("{} {}/{}", p.stage, p.iteration, p.total)),
+                        _ => (0.0, self.busy.as_ref().map(|b| b.stage.clone()).unwrap_or_default()),
+                    };
+                    if ui.button("Cancel").clicked() {
+                        self.cancel();
+                    }
+                    ui.add(egui::ProgressBar::new(frac).text(text).animate(true));
+                });
+            });
+        }
+        egui::Panel::left("side").default_size(290.0).resizable(true).show(ui, |ui| self.side_panel(ui));
+        let hovering = ui.input(|i| !i.raw.hovered_files.is_empty());
+        egui::CentralPanel::no_frame().show(ui, |ui| {
+            self.viewport(ui);
+            if hovering {
+                ui.painter().rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
+                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF or GLB to load", egui::FontId::proportional(22.0), Color32::WHITE);
+            }
+        });
+        let dragging = ui.input(|i| i.pointer.any_down());
+        self.write_link(dragging);
+        self.publish_state();
+        if self.busy.is_some() || !self.drawn {
+            ui.ctx().request_repaint();
+        }
+    }
+
+    fn clear_color(&self, _visuals: &egui::Visuals) -> [f32; 4] {
+        CLEAR_COLOR.to_normalized_gamma_f32()
+    }
+}
+
+fn empty_mesh() -> MeshData {
+    MeshData { generation: 0, positions: Vec::new(), normals: Vec::new(), triangles: Vec::new(), edges: Vec::new() }
+}
+
+fn central_sphere(fields: &[Field], v: usize) -> Option<[f32; 5]> {
+    let s = find(fields, field::CENTRAL_SPHERES)?.as_f32()?;
+    s.get(5 * v..5 * v + 5)?.try_into().ok()
+}
+
+/// Centre and signed radius of a normalized generalized sphere (a, b, c); `None` for a plane.
+fn sphere_center_radius(s: &[f32; 5]) -> Option<(Vec3, f32)> {
+    let a = s[0];
+    if a.abs() < 1e-9 {
+        return None;
+    }
+    Some((Vec3::new(s[1], s[2], s[3]) / (2.0 * a), 1.0 / (2.0 * a)))
+}
+
+/// Möller–Trumbore: ray parameter of the hit, if any.
+fn ray_triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f32> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let t = o - a;
+    let u = t.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = t.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let s = e2.dot(q) * inv;
+    (s > 0.0).then_some(s)
+}
+
+fn location_hash() -> String {
+    web_sys::window().and_then(|w| w.location().hash().ok()).unwrap_or_default()
+}
+
+/// A hidden `<input type=file>` whose chosen files land in `sink`.
+fn make_file_input(
+    sink: Rc<RefCell<Vec<web_sys::File>>>,
+    ctx: egui::Context,
+) -> (Option<web_sys::HtmlInputElement>, Option<Closure<dyn FnMut()>>) {
+    let doc = web_sys::window().and_then(|w| w.document());
+    let Some(doc) = doc else { return (None, None) };
+    let Ok(el) = doc.create_element("input") else { return (None, None) };
+    let Ok(input) = el.dyn_into::<web_sys::HtmlInputElement>() else { return (None, None) };
+    input.set_type("file");
+    input.set_accept(".obj,.gltf,.glb");
+    input.set_id("sf-file-input");
+    let _ = input.style().set_property("display", "none");
+    if let Some(body) = doc.body() {
+        let _ = body.append_child(&input);
+    }
+    let inp = input.clone();
+    let closure = Closure::<dyn FnMut()>::new(move || {
+        if let Some(files) = inp.files() {
+            if let Some(f) = files.get(0) {
+                sink.borrow_mut().push(f);
+                ctx.request_repaint();
+            }
+        }
+    });
+    input.set_onchange(Some(closure.as_ref().unchecked_ref()));
+    (Some(input), Some(closure))
+}

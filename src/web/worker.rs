@@ -1,0 +1,71 @@
+//! The worker side: the same wasm, instantiated by www/worker.js in a dedicated Web Worker, runs
+//! the pipeline [`Session`] and streams messages back.
+
+use std::cell::RefCell;
+
+use js_sys::{Atomics, Int32Array, Reflect};
+use wasm_bindgen::prelude::*;
+use web_sys::DedicatedWorkerGlobalScope;
+
+use super::transport;
+use crate::pipeline::protocol::{decode_to_worker, encode_from_worker, Field, FromWorker};
+use crate::pipeline::{Session, Sink};
+
+thread_local! {
+    static SESSION: RefCell<Session> = RefCell::new(Session::new());
+    static CANCEL: RefCell<Option<Int32Array>> = const { RefCell::new(None) };
+}
+
+fn scope() -> DedicatedWorkerGlobalScope {
+    js_sys::global().unchecked_into()
+}
+
+fn post_panic(message: &str) {
+    let obj = js_sys::Object::new();
+    let _ = Reflect::set(&obj, &"panic".into(), &JsValue::from_str(message));
+    let _ = scope().post_message(&obj);
+}
+
+/// Called once by worker.js. `cancel` is an `Int32Array` over a `SharedArrayBuffer` when the
+/// page is cross-origin isolated (cancel within one iteration), otherwise `undefined`.
+#[wasm_bindgen]
+pub fn worker_start(cancel: JsValue) {
+    std::panic::set_hook(Box::new(|info| {
+        console_error_panic_hook::hook(info);
+        post_panic(&format!("The computation crashed: {info}"));
+    }));
+    CANCEL.with(|c| *c.borrow_mut() = cancel.dyn_into::<Int32Array>().ok());
+    WorkerSink.send(FromWorker::Ready, Vec::new());
+}
+
+/// Handles one message `{json, bodies}` from the main thread.
+#[wasm_bindgen]
+pub fn worker_handle(data: JsValue) {
+    let env = match transport::from_js(&data) {
+        Ok(e) => e,
+        Err(message) => return WorkerSink.send(FromWorker::Error { message }, Vec::new()),
+    };
+    match decode_to_worker(&env) {
+        Ok((msg, bytes)) => SESSION.with(|s| s.borrow_mut().handle(msg, bytes, &mut WorkerSink)),
+        Err(message) => WorkerSink.send(FromWorker::Error { message }, Vec::new()),
+    }
+}
+
+struct WorkerSink;
+
+impl Sink for WorkerSink {
+    fn send(&mut self, msg: FromWorker, fields: Vec<Field>) {
+        let (obj, transfer) = transport::to_js(&encode_from_worker(&msg, &fields));
+        if let Err(e) = scope().post_message_with_transfer(&obj, &transfer) {
+            web_sys::console::error_2(&"postMessage failed".into(), &e);
+        }
+    }
+
+    fn cancel_requested(&mut self) -> bool {
+        CANCEL.with(|c| c.borrow().as_ref().is_some_and(|a| Atomics::load(a, 0).unwrap_or(0) != 0))
+    }
+
+    fn now_ms(&self) -> f64 {
+        js_sys::Date::now()
+    }
+}

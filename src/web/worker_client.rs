@@ -1,0 +1,140 @@
+//! The main thread's handle on the pipeline worker: typed messages out, decoded messages in.
+//! A crashed worker is replaced; the app re-sends its design so nothing is lost.
+
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::rc::Rc;
+
+use js_sys::{Atomics, Int32Array, Object, Reflect, SharedArrayBuffer};
+use wasm_bindgen::prelude::*;
+use web_sys::{MessageEvent, Worker, WorkerOptions, WorkerType};
+
+use super::transport;
+use crate::pipeline::protocol::{decode_from_worker, encode_to_worker, Field, FromWorker, ToWorker};
+
+pub enum Incoming {
+    Message(FromWorker, Vec<Field>),
+    /// The worker crashed (panic or failed start); it has been replaced by a fresh one.
+    Crashed(String),
+}
+
+type Inbox = Rc<RefCell<VecDeque<Incoming>>>;
+
+pub struct WorkerClient {
+    worker: Worker,
+    inbox: Inbox,
+    cancel_flag: Option<Int32Array>,
+    repaint: Rc<dyn Fn()>,
+    _on_message: Closure<dyn FnMut(MessageEvent)>,
+    _on_error: Closure<dyn FnMut(web_sys::ErrorEvent)>,
+    pub restarts: u32,
+}
+
+impl WorkerClient {
+    /// Spawns `worker.js` next to the page. `repaint` wakes the UI when a message arrives.
+    pub fn spawn(repaint: Rc<dyn Fn()>) -> Result<Self, String> {
+        let inbox: Inbox = Rc::new(RefCell::new(VecDeque::new()));
+        let opts = WorkerOptions::new();
+        opts.set_type(WorkerType::Module);
+        let worker = Worker::new_with_options("./worker.js", &opts)
+            .map_err(|e| format!("cannot start the pipeline worker: {e:?}"))?;
+        let on_message = {
+            let inbox = inbox.clone();
+            let repaint = repaint.clone();
+            Closure::<dyn FnMut(MessageEvent)>::new(move |ev: MessageEvent| {
+                let data = ev.data();
+                let item = if let Some(p) = Reflect::get(&data, &"panic".into()).ok().and_then(|p| p.as_string()) {
+                    Incoming::Crashed(p)
+                } else {
+                    match transport::from_js(&data).and_then(|env| decode_from_worker(&env)) {
+                        Ok((msg, fields)) => Incoming::Message(msg, fields),
+                        Err(message) => Incoming::Message(FromWorker::Error { message }, Vec::new()),
+                    }
+                };
+                inbox.borrow_mut().push_back(item);
+                repaint();
+            })
+        };
+        let on_error = {
+            let inbox = inbox.clone();
+            let repaint = repaint.clone();
+            Closure::<dyn FnMut(web_sys::ErrorEvent)>::new(move |ev: web_sys::ErrorEvent| {
+                ev.prevent_default();
+                inbox.borrow_mut().push_back(Incoming::Crashed(format!("The pipeline worker failed: {}", ev.message())));
+                repaint();
+            })
+        };
+        worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+        worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+        // Cancel within one iteration needs shared memory, which needs cross-origin isolation.
+        let isolated = Reflect::get(&js_sys::global(), &"crossOriginIsolated".into())
+            .ok()
+            .and_then(|v| v.as_bool())
+            .unwrap_or(false);
+        let cancel_flag = isolated.then(|| Int32Array::new(&SharedArrayBuffer::new(4)));
+        let init = Object::new();
+        let flag: JsValue = cancel_flag.as_ref().map_or(JsValue::UNDEFINED, |a| a.clone().into());
+        let _ = Reflect::set(&init, &"init".into(), &flag);
+        worker.post_message(&init).map_err(|e| format!("cannot start the pipeline worker: {e:?}"))?;
+        Ok(Self { worker, inbox, cancel_flag, repaint, _on_message: on_message, _on_error: on_error, restarts: 0 })
+    }
+
+    /// Sends a message; a `LoadFile` carries the browser `File` (read inside the worker).
+    pub fn send(&self, msg: &ToWorker, file: Option<&web_sys::File>) {
+        if matches!(msg, ToWorker::Run(_)) {
+            if let Some(a) = &self.cancel_flag {
+                let _ = Atomics::store(a, 0, 0);
+            }
+        }
+        let (obj, transfer) = transport::to_js(&encode_to_worker(msg, None));
+        if let Some(f) = file {
+            let _ = Reflect::set(&obj, &"file".into(), f);
+        }
+        if let Err(e) = self.worker.post_message_with_transfer(&obj, &transfer) {
+            self.inbox.borrow_mut().push_back(Incoming::Message(
+                FromWorker::Error { message: format!("could not send to the worker: {e:?}") },
+                Vec::new(),
+            ));
+        }
+    }
+
+    /// Requests a cancel. With shared memory the running stage stops at its next iteration;
+    /// without it, the worker is replaced (the caller re-sends its design).
+    pub fn cancel(&mut self) -> bool {
+        match &self.cancel_flag {
+            Some(a) => {
+                let _ = Atomics::store(a, 0, 1);
+                self.send(&ToWorker::Cancel, None);
+                true
+            }
+            None => {
+                self.restart();
+                false
+            }
+        }
+    }
+
+    /// Replaces the worker with a fresh one.
+    pub fn restart(&mut self) {
+        self.worker.terminate();
+        self.inbox.borrow_mut().retain(|m| !matches!(m, Incoming::Message(..)));
+        let restarts = self.restarts + 1;
+        match Self::spawn(self.repaint.clone()) {
+            Ok(w) => {
+                *self = w;
+                self.restarts = restarts;
+            }
+            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(FromWorker::Error { message: e }, Vec::new())),
+        }
+    }
+
+    pub fn poll(&self) -> Option<Incoming> {
+        self.inbox.borrow_mut().pop_front()
+    }
+}
+
+impl Drop for WorkerClient {
+    fn drop(&mut self) {
+        self.worker.terminate();
+    }
+}

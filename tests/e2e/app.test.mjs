@@ -1,0 +1,170 @@
+// Browser end-to-end tests of the web build in $SF_DIST, each run as two projects:
+// "webgpu" (?backend=webgpu, WebGPU on SwiftShader) and "webgl2" (?backend=webgl2).
+// They talk to the app only through its automation contract: #sf-canvas, the JSON in
+// <pre id="sf-state">, the design-link fragment and files dropped on the canvas.
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import { after, describe, test } from 'node:test';
+import {
+  PROJECTS,
+  T,
+  TRI_DOME,
+  dropFile,
+  isSettled,
+  launchBrowser,
+  measureViewport,
+  readState,
+  requireDist,
+  startServer,
+  truncatedGlb,
+  waitForState,
+  withApp,
+} from './helpers.mjs';
+
+const MIN_DRAWN = 0.02; // share of the viewport that must differ from the clear colour
+const MIN_BACKGROUND = 0.01; // ... and that must show the clear colour (else clear_color is wrong)
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+function assertDrawn(m, what) {
+  assert.ok(m.area > 0, `${what}: the viewport ${JSON.stringify(m.rect)} is empty inside the ${m.image.join('x')} screenshot`);
+  assert.ok(
+    m.drawnFraction > MIN_DRAWN,
+    `${what}: only ${(100 * m.drawnFraction).toFixed(2)}% of the viewport differs from clear_color ` +
+      `(need > ${100 * MIN_DRAWN}%); screenshot ${m.file}`,
+  );
+  assert.ok(
+    m.backgroundFraction > MIN_BACKGROUND,
+    `${what}: clear_color is almost nowhere in the viewport (${(100 * m.backgroundFraction).toFixed(2)}%): ` +
+      `is state.clear_color the sRGB 0-255 background and state.viewport right? screenshot ${m.file}`,
+  );
+}
+
+const settledDefault = (app) =>
+  waitForState(app, 'the default sample drawn (ready && curvature_ready && !busy)', isSettled, { timeout: T.load });
+
+for (const project of PROJECTS) {
+  describe(`${project.name}`, () => {
+    // Started by the first test that needs them (not in a before() hook: node:test would report
+    // a failing hook as "cancelled" tests; this way a missing build fails every test loudly).
+    let setup;
+    let server;
+    let browser;
+    const env = () => {
+      setup ??= (async () => {
+        const dist = requireDist(); // throws a clear error when SF_DIST is unset or not built
+        server = await startServer(dist);
+        browser = await launchBrowser(project);
+        return { server, browser };
+      })();
+      return setup;
+    };
+
+    after(async () => {
+      if (browser) await browser.close().catch(() => {});
+      if (server) await server.stop({ signal: 'SIGINT', timeout: 3000 }).catch(() => {});
+    });
+
+    test(`[${project.name}] a. page loads and draws the default sample`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'a-default' }, async (app) => {
+        const s = await settledDefault(app);
+        assert.equal(s.backend, project.backend, `backend (asked for ?backend=${project.query})`);
+        assert.match(String(s.source), /^sample:/, 'source of the default mesh');
+        assert.ok(s.vertices > 0 && s.faces > 0, `vertices ${s.vertices}, faces ${s.faces}`);
+        assert.ok(s.frames > 0, `frames ${s.frames}`);
+        assert.ok(!s.error, `an error is shown right after loading: ${JSON.stringify(s.error)}`);
+        const m = await measureViewport(app, s, 'default-sample');
+        t.diagnostic(`drawn ${(100 * m.drawnFraction).toFixed(1)}% of viewport ${JSON.stringify(m.rect)}; screenshot ${m.file}`);
+        assertDrawn(m, 'default sample');
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] b. dropping tri_dome.obj shows it`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const bytes = fs.readFileSync(TRI_DOME);
+      await withApp(t, browser, server, project, { name: 'b-drop-obj' }, async (app) => {
+        await settledDefault(app);
+        const d = await dropFile(app, 'tri_dome.obj', bytes, 'model/obj');
+        assert.equal(d.files, 1);
+        const s = await waitForState(
+          app,
+          'source == "file:tri_dome.obj" with curvature_ready',
+          (s) => s.source === 'file:tri_dome.obj' && isSettled(s),
+        );
+        assert.equal(s.vertices, 91, 'vertices of tri_dome.obj');
+        assert.ok(s.faces > 0, `faces ${s.faces}`);
+        assert.ok(!s.error, `error after a valid drop: ${JSON.stringify(s.error)}`);
+        const m = await measureViewport(app, s, 'tri_dome');
+        t.diagnostic(`drawn ${(100 * m.drawnFraction).toFixed(1)}% of the viewport; screenshot ${m.file}`);
+        assertDrawn(m, 'tri_dome.obj');
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    const corrupt = [
+      { name: 'broken.obj', mime: 'model/obj', bytes: () => Buffer.from('v 1 2\nf 1 2 9\n') },
+      { name: 'truncated.glb', mime: 'model/gltf-binary', bytes: truncatedGlb },
+    ];
+    for (const file of corrupt) {
+      test(`[${project.name}] c. a corrupt ${file.name} shows an error and keeps the mesh`, { timeout: T.test }, async (t) => {
+        const { server, browser } = await env();
+        await withApp(t, browser, server, project, { name: `c-${file.name}` }, async (app) => {
+          const before = await settledDefault(app);
+          assert.ok(!before.error, `an error is already shown before the drop: ${JSON.stringify(before.error)}`);
+          await dropFile(app, file.name, file.bytes(), file.mime);
+          const s = await waitForState(
+            app,
+            `state.error after dropping ${file.name}`,
+            (s) => typeof s.error === 'string' && s.error.trim().length > 0 && s.busy === false,
+          );
+          t.diagnostic(`error shown: ${s.error}`);
+          assert.equal(s.source, before.source, 'the previous mesh is kept (source)');
+          assert.equal(s.vertices, before.vertices, 'the previous mesh is kept (vertices)');
+          assert.equal(s.faces, before.faces, 'the previous mesh is kept (faces)');
+          // nothing replaces it a moment later either, and it is still drawn
+          await sleep(1000);
+          const later = await readState(app.page);
+          assert.equal(later.source, before.source, 'source a second later');
+          assert.equal(later.vertices, before.vertices, 'vertices a second later');
+          assert.equal(later.ready, true, 'still ready');
+          assertDrawn(await measureViewport(app, later, `after-${file.name}`), `mesh kept after ${file.name}`);
+          assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+        });
+      });
+    }
+
+    test(`[${project.name}] d. a design link restores its parameters`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=torus&color=k1&shading=flat&jet_degree=2&cam=0.5,0.3,6,0,0,0&bogus=7';
+      await withApp(t, browser, server, project, { name: 'd-design-link', fragment }, async (app) => {
+        await waitForState(
+          app,
+          'sample:torus drawn (ready && source == "sample:torus")',
+          (s) => s.ready === true && s.source === 'sample:torus',
+          { timeout: T.load },
+        );
+        // give the rest of the link a moment to show up, then assert field by field
+        const restored = (s) =>
+          s.color_by === 'k1' && s.shading === 'flat' && String(s.design_link).includes('jet_degree=2') &&
+          Array.isArray(s.notices) && s.notices.some((n) => String(n).includes('bogus'));
+        const s = await waitForState(app, 'every design-link field restored', restored, { timeout: 15_000 }).catch(
+          () => app.lastState,
+        );
+        assert.equal(s.backend, project.backend, 'backend');
+        assert.equal(s.color_by, 'k1', 'color_by');
+        assert.equal(s.shading, 'flat', 'shading');
+        assert.equal(typeof s.design_link, 'string', 'design_link');
+        assert.ok(s.design_link.includes('sample=torus'), `design_link ${s.design_link} has sample=torus`);
+        assert.ok(s.design_link.includes('jet_degree=2'), `design_link ${s.design_link} has jet_degree=2`);
+        assert.ok(s.design_link.includes('v=1'), `design_link ${s.design_link} has v=1`);
+        assert.ok(Array.isArray(s.notices), `notices is an array: ${JSON.stringify(s.notices)}`);
+        assert.ok(
+          s.notices.some((n) => String(n).includes('bogus')),
+          `a notice mentions the ignored field "bogus": ${JSON.stringify(s.notices)}`,
+        );
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+  });
+}

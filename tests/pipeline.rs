@@ -1,0 +1,121 @@
+//! The worker protocol and session, natively: the same code the Web Worker runs.
+
+use spherical_faces::curvature::JetParams;
+use spherical_faces::pipeline::protocol::*;
+use spherical_faces::pipeline::{Session, Sink};
+use spherical_faces::samples::Sample;
+
+/// Records messages, round-tripping each through the wire encoding; cancels after `cancel_after`
+/// progress messages.
+#[derive(Default)]
+struct Recorder {
+    messages: Vec<(FromWorker, Vec<Field>)>,
+    cancel_after: Option<usize>,
+    progress_seen: usize,
+}
+
+impl Sink for Recorder {
+    fn send(&mut self, msg: FromWorker, fields: Vec<Field>) {
+        if matches!(msg, FromWorker::Progress(_)) {
+            self.progress_seen += 1;
+        }
+        let env = encode_from_worker(&msg, &fields);
+        let decoded = decode_from_worker(&env).expect("decodes");
+        assert_eq!(decoded.0, msg);
+        assert_eq!(decoded.1, if matches!(msg, FromWorker::Snapshot { .. }) { fields } else { vec![] });
+        self.messages.push(decoded);
+    }
+    fn cancel_requested(&mut self) -> bool {
+        self.cancel_after.is_some_and(|n| self.progress_seen >= n)
+    }
+    fn now_ms(&self) -> f64 {
+        0.0
+    }
+}
+
+fn send(session: &mut Session, sink: &mut Recorder, msg: ToWorker, bytes: Option<Vec<u8>>) {
+    // Through the wire encoding, as the worker receives it.
+    let env = encode_to_worker(&msg, bytes);
+    let (decoded, body) = decode_to_worker(&env).unwrap();
+    assert_eq!(decoded, msg);
+    session.handle(decoded, body, sink);
+}
+
+#[test]
+fn load_sample_then_curvature_streams_snapshots() {
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!("{:?}", r.messages[0].0) };
+    assert_eq!(info.source, Source::Sample(Sample::Dome));
+    let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[1] else { panic!() };
+    assert_eq!(stage, "reference");
+    let pos = find(fields, field::POSITIONS).unwrap().as_f32().unwrap();
+    let tri = find(fields, field::TRIANGLES).unwrap().as_u32().unwrap();
+    assert_eq!(pos.len(), 3 * info.stats.vertices);
+    assert_eq!(tri.len(), 3 * info.stats.faces);
+    assert!(tri.iter().all(|&i| (i as usize) < info.stats.vertices));
+
+    r.messages.clear();
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(matches!(r.messages[0].0, FromWorker::Progress(_)));
+    let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "curvature")).unwrap();
+    let h = find(&snap.1, field::MEAN_CURVATURE).unwrap().as_f32().unwrap();
+    assert_eq!(h.len(), info.stats.vertices);
+    assert!(h.iter().all(|x| x.is_finite()));
+    let spheres = find(&snap.1, field::CENTRAL_SPHERES).unwrap();
+    assert_eq!(spheres.dim, 5);
+    let Some((FromWorker::Finished { result: StageResult::Curvature(summary), .. }, _)) = r.messages.last() else { panic!() };
+    assert!(!summary.h_changes_sign, "the default dome keeps one sign of H");
+}
+
+#[test]
+fn a_bad_file_reports_an_error_and_keeps_the_design() {
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::TorusPatch), None);
+    r.messages.clear();
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "broken.obj".into() }, Some(b"v 1 2\nf 1 2 9\n".to_vec()));
+    assert_eq!(r.messages.len(), 1);
+    let FromWorker::Error { message } = &r.messages[0].0 else { panic!() };
+    assert!(message.starts_with("broken.obj"), "{message}");
+    assert_eq!(s.reference.as_ref().unwrap().info.source, Source::Sample(Sample::TorusPatch));
+    // The previous reference still computes.
+    r.messages.clear();
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(matches!(r.messages.last().unwrap().0, FromWorker::Finished { .. }));
+}
+
+#[test]
+fn a_file_loads_through_the_session() {
+    let bytes = std::fs::read("../shared/data/meshes/tri_dome.obj").unwrap();
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "tri_dome.obj".into() }, Some(bytes));
+    let FromWorker::Loaded(info) = &r.messages[0].0 else { panic!("{:?}", r.messages[0].0) };
+    assert_eq!(info.stats.vertices, 91);
+    assert_eq!(info.source, Source::File("tri_dome.obj".into()));
+}
+
+#[test]
+fn running_without_a_reference_is_an_error() {
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(matches!(&r.messages[0].0, FromWorker::Error { .. }));
+}
+
+#[test]
+fn cancel_takes_effect_within_one_iteration() {
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    r.messages.clear();
+    r.cancel_after = Some(1);
+    r.progress_seen = 0;
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    let kinds: Vec<_> = r.messages.iter().map(|m| std::mem::discriminant(&m.0)).collect();
+    assert_eq!(r.progress_seen, 1, "stopped at the first iteration boundary");
+    assert!(matches!(r.messages.last().unwrap().0, FromWorker::Cancelled { .. }), "{kinds:?}");
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Finished { .. })));
+}

@@ -1,0 +1,134 @@
+//! In the browser (wasm-pack test --headless --chrome): the worker protocol across a real
+//! MessageChannel with transferred buffers, the importers, and the session.
+#![cfg(target_arch = "wasm32")]
+
+use js_sys::{Promise, Reflect};
+use wasm_bindgen::prelude::*;
+use wasm_bindgen_futures::JsFuture;
+use wasm_bindgen_test::*;
+
+use spherical_faces::curvature::JetParams;
+use spherical_faces::import::{import_mesh, Format};
+use spherical_faces::pipeline::protocol::*;
+use spherical_faces::pipeline::{Session, Sink};
+use spherical_faces::samples::Sample;
+use spherical_faces::web::transport;
+
+wasm_bindgen_test_configure!(run_in_browser);
+
+/// Posts `value` through a MessageChannel (structured clone + transfer) and awaits it.
+async fn through_channel(value: &JsValue, transfer: &JsValue) -> JsValue {
+    let channel = web_sys::MessageChannel::new().unwrap();
+    let port2 = channel.port2();
+    let promise = Promise::new(&mut |resolve, _reject| {
+        let cb = Closure::once_into_js(move |ev: web_sys::MessageEvent| {
+            resolve.call1(&JsValue::NULL, &ev.data()).unwrap();
+        });
+        port2.set_onmessage(Some(cb.unchecked_ref()));
+    });
+    channel.port1().post_message_with_transferable(value, transfer).unwrap();
+    JsFuture::from(promise).await.unwrap()
+}
+
+#[wasm_bindgen_test]
+async fn protocol_round_trip_across_a_message_channel() {
+    let fields = vec![
+        Field::f32(field::POSITIONS, 3, vec![0.0, 1.0, 2.0, -3.5, 4.25, 1e-7]),
+        Field::u32(field::TRIANGLES, 3, vec![0, 1, 1]),
+        Field::f32(field::MEAN_CURVATURE, 1, vec![0.5, -0.25]),
+    ];
+    let msg = FromWorker::Snapshot { stage: "curvature".into(), iteration: 7, fields: fields.iter().map(Field::header).collect() };
+    let (obj, transfer) = transport::to_js(&encode_from_worker(&msg, &fields));
+    let first_body = Reflect::get(&obj, &"bodies".into()).unwrap();
+    let first_body: js_sys::ArrayBuffer = js_sys::Array::from(&first_body).get(0).unchecked_into();
+    assert_eq!(first_body.byte_length(), 24);
+    let received = through_channel(&obj, &transfer).await;
+    // Transferred, not copied: the sender's buffer is detached.
+    assert_eq!(first_body.byte_length(), 0);
+    let (back, back_fields) = decode_from_worker(&transport::from_js(&received).unwrap()).unwrap();
+    assert_eq!(back, msg);
+    assert_eq!(back_fields, fields);
+
+    let to = ToWorker::LoadFile { name: "roof.obj".into() };
+    let (obj, transfer) = transport::to_js(&encode_to_worker(&to, Some(b"v 0 0 0".to_vec())));
+    let received = through_channel(&obj, &transfer).await;
+    let env = transport::from_js(&received).unwrap();
+    let (back, body) = decode_to_worker(&env).unwrap();
+    assert_eq!(back, to);
+    assert_eq!(body, Some(&b"v 0 0 0"[..]));
+
+    assert!(transport::from_js(&JsValue::from_str("nonsense")).is_err());
+}
+
+#[wasm_bindgen_test]
+fn obj_importer_in_the_browser() {
+    let bytes = include_bytes!("../../shared/data/meshes/tri_dome.obj");
+    let imported = import_mesh(bytes, "tri_dome.obj").unwrap();
+    assert_eq!(imported.stats.vertices, 91);
+    assert_eq!(imported.stats.faces, 160);
+    assert_eq!(imported.format, Format::Obj);
+    let quads = import_mesh(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", "q.obj").unwrap();
+    assert_eq!(quads.stats.faces, 2);
+    assert!(import_mesh(b"v 1 2\nf 1 2 9\n", "broken.obj").is_err());
+    assert!(import_mesh(&bytes[..bytes.len() / 3], "tri_dome.obj").map(|m| m.stats.vertices < 91).unwrap_or(true));
+}
+
+#[wasm_bindgen_test]
+fn gltf_importers_in_the_browser() {
+    // One triangle with an embedded data: URI buffer: 3 × vec3 f32 positions.
+    let mut bin = Vec::new();
+    for x in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+        bin.extend_from_slice(&x.to_le_bytes());
+    }
+    const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut b64 = String::new();
+    for c in bin.chunks(3) {
+        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            if k <= c.len() {
+                b64.push(B64[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                b64.push('=');
+            }
+        }
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"mesh":0,"translation":[10,0,0]}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}}],
+        "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#
+    );
+    let m = import_mesh(json.as_bytes(), "tri.gltf").unwrap();
+    assert_eq!(m.format, Format::Gltf);
+    assert_eq!(m.stats.faces, 1);
+    assert!(m.mesh.positions.iter().all(|p| p.x >= 10.0));
+    assert!(import_mesh(&json.as_bytes()[..json.len() / 2], "tri.gltf").is_err());
+    assert!(import_mesh(b"glTF\x02\x00\x00\x00\xff\xff\x00\x00", "t.glb").is_err());
+}
+
+struct Recorder(Vec<FromWorker>);
+
+impl Sink for Recorder {
+    fn send(&mut self, msg: FromWorker, _fields: Vec<Field>) {
+        self.0.push(msg);
+    }
+    fn cancel_requested(&mut self) -> bool {
+        false
+    }
+    fn now_ms(&self) -> f64 {
+        js_sys::Date::now()
+    }
+}
+
+#[wasm_bindgen_test]
+fn session_runs_curvature_in_wasm() {
+    let mut s = Session::new();
+    let mut r = Recorder(Vec::new());
+    s.handle(ToWorker::LoadSample(Sample::SphereCap), None, &mut r);
+    s.handle(ToWorker::Run(StageRequest::Curvature(JetParams::default())), None, &mut r);
+    let Some(FromWorker::Finished { result: StageResult::Curvature(summary), .. }) = r.0.last() else { panic!("{:?}", r.0.last()) };
+    assert!(summary.min_h.is_finite() && summary.max_h.is_finite());
+    assert!(!summary.h_changes_sign);
+}
