@@ -120,7 +120,7 @@ cmd_test() {
   log "native tests"
   cargo test --all-targets
   log "wasm-pack tests in headless Chromium"
-  wasm-pack test --headless --chrome --chromedriver /usr/bin/chromedriver . -- --test web
+  wasm-pack test --headless --chrome --chromedriver /usr/bin/chromedriver . --test web
   build_web release
   log "browser end-to-end tests (WebGPU and WebGL2 on SwiftShader)"
   (cd tests/e2e && SF_DIST="$DIST" node --test --test-concurrency=1 *.test.mjs)

@@ -249,7 +249,7 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
         return Err(ctx.malformed(None, format!("face {t:?} refers to a missing vertex")));
     }
     let raw_mesh = TriMesh::new(positions, triangles);
-    let diag = referenced_diagonal(&raw_mesh);
+    let diag = raw_mesh.referenced_diagonal();
     let (mesh, report) = weld(&raw_mesh, WELD_TOLERANCE * diag);
     let total_faces = raw_mesh.triangles.len();
     drop(raw_mesh);
@@ -277,21 +277,3 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
     })
 }
 
-/// Bounding-box diagonal of the vertices that faces use (stray vertices do not count).
-fn referenced_diagonal(mesh: &TriMesh) -> f64 {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for t in &mesh.triangles {
-        for &v in t {
-            if let Some(p) = mesh.positions.get(v as usize) {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-        }
-    }
-    if lo.x > hi.x {
-        0.0
-    } else {
-        (hi - lo).length()
-    }
-}

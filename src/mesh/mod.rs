@@ -45,6 +45,20 @@ impl TriMesh {
         (hi - lo).length()
     }
 
+    /// Bounding-box diagonal of the vertices faces refer to (stray and out-of-range indices
+    /// do not count); 0 without faces.
+    pub fn referenced_diagonal(&self) -> f64 {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for &v in self.triangles.iter().flatten() {
+            if let Some(p) = self.positions.get(v as usize) {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        if lo.x > hi.x { 0.0 } else { (hi - lo).length() }
+    }
+
     /// Corner positions of face `f`.
     pub fn face_points(&self, f: usize) -> [DVec3; 3] {
         let t = self.triangles[f];

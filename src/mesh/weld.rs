@@ -80,7 +80,7 @@ pub fn weld(mesh: &TriMesh, tolerance: f64) -> (TriMesh, WeldReport) {
     }
 
     // 2. Faces: remap, drop out-of-range, repeated and zero-area faces.
-    let diag = referenced_diagonal(mesh);
+    let diag = mesh.referenced_diagonal();
     let abs_area = (AREA_REL * diag) * (AREA_REL * diag);
     let mut faces: Vec<[u32; 3]> = Vec::with_capacity(mesh.triangles.len());
     for t in &mesh.triangles {
@@ -220,21 +220,3 @@ fn merge_vertices(positions: &[DVec3], tolerance: f64) -> Vec<u32> {
     remap
 }
 
-/// Bounding-box diagonal of the vertices faces refer to (in-range indices only).
-fn referenced_diagonal(mesh: &TriMesh) -> f64 {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for t in &mesh.triangles {
-        for &v in t {
-            if let Some(p) = mesh.positions.get(v as usize) {
-                lo = lo.min(*p);
-                hi = hi.max(*p);
-            }
-        }
-    }
-    if lo.x > hi.x {
-        0.0
-    } else {
-        (hi - lo).length()
-    }
-}

@@ -132,6 +132,7 @@ impl Session {
             ToWorker::Run(stage) => self.run(stage, sink),
             // A cancel that arrives between stages has nothing to stop.
             ToWorker::Cancel => {}
+            ToWorker::Crash => panic!("crash requested for diagnostics"),
         }
     }
 

@@ -47,6 +47,8 @@ pub enum ToWorker {
     LoadFile { name: String },
     Run(StageRequest),
     Cancel,
+    /// Diagnostics: the worker panics on purpose, to exercise crash recovery end to end.
+    Crash,
 }
 
 /// A named energy or statistic of an iteration.

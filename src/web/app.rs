@@ -57,6 +57,8 @@ pub struct App {
     /// A file sent to the worker but not yet confirmed as loaded.
     file_in_flight: Option<web_sys::File>,
     busy: Option<Busy>,
+    /// A fresh worker is being given the current design back: keep the view and the message.
+    restoring: bool,
     camera: OrbitCamera,
     camera_from_link: Option<CameraState>,
     selected: Option<usize>,
@@ -69,6 +71,8 @@ pub struct App {
     last_fragment: String,
     last_state: String,
     picked_files: Rc<RefCell<Vec<web_sys::File>>>,
+    crash_requests: Rc<RefCell<u32>>,
+    _crash_listener: Option<Closure<dyn FnMut()>>,
     file_input: Option<web_sys::HtmlInputElement>,
     _file_input_closure: Option<Closure<dyn FnMut()>>,
 }
@@ -84,7 +88,7 @@ impl App {
                 other => format!("{other:?}"),
             };
         }
-        cc.egui_ctx.set_visuals(egui::Visuals::dark());
+        cc.egui_ctx.set_theme(egui::Theme::Dark);
         let fragment = location_hash();
         let (design, notices) = Design::from_fragment(&fragment);
         let ctx = cc.egui_ctx.clone();
@@ -95,6 +99,17 @@ impl App {
         };
         let picked_files = Rc::new(RefCell::new(Vec::new()));
         let (file_input, closure) = make_file_input(picked_files.clone(), cc.egui_ctx.clone());
+        // Diagnostics: `window.dispatchEvent(new Event('sf-crash-worker'))` makes the worker panic.
+        let crash_requests = Rc::new(RefCell::new(0));
+        let crash_listener = {
+            let (count, ctx) = (crash_requests.clone(), cc.egui_ctx.clone());
+            let c = Closure::<dyn FnMut()>::new(move || {
+                *count.borrow_mut() += 1;
+                ctx.request_repaint();
+            });
+            web_sys::window().map(|w| w.add_event_listener_with_callback("sf-crash-worker", c.as_ref().unchecked_ref()));
+            Some(c)
+        };
         let mut app = Self {
             camera_from_link: design.camera,
             design,
@@ -105,6 +120,7 @@ impl App {
             file: None,
             file_in_flight: None,
             busy: None,
+            restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
             scalars: None,
@@ -116,6 +132,8 @@ impl App {
             last_fragment: fragment,
             last_state: String::new(),
             picked_files,
+            crash_requests,
+            _crash_listener: crash_listener,
             file_input,
             _file_input_closure: closure,
         };
@@ -192,6 +210,7 @@ impl App {
             FromWorker::Ready => {
                 // A fresh worker (first start or after a crash): restore the design in it.
                 if let Some(l) = &self.loaded {
+                    self.restoring = true;
                     match l.info.source.clone() {
                         Source::Sample(s) => self.send(&ToWorker::LoadSample(s), None),
                         Source::File(_) => {
@@ -203,7 +222,9 @@ impl App {
                 }
             }
             FromWorker::Loaded(info) => {
-                self.error = None;
+                if !self.restoring {
+                    self.error = None;
+                }
                 match &info.source {
                     Source::Sample(s) => {
                         self.design.reference = Reference::Sample(*s);
@@ -279,8 +300,14 @@ impl App {
         l.mesh = Arc::new(mesh);
         l.curvature = None;
         self.scalars = None;
-        self.selected = None;
-        self.camera = OrbitCamera::framing(l.center, l.radius);
+        if !self.restoring {
+            self.selected = None;
+        }
+        if std::mem::take(&mut self.restoring) {
+            self.camera.scene_radius = l.radius;
+        } else {
+            self.camera = OrbitCamera::framing(l.center, l.radius);
+        }
         if let Some(c) = self.camera_from_link.take() {
             self.camera.yaw = c.yaw as f32;
             self.camera.pitch = c.pitch as f32;
@@ -519,46 +546,32 @@ impl App {
             return;
         };
         let s = &l.info.stats;
-        egui::Grid::new("info").num_columns(2).show(ui, |ui| {
-            ui.label("source");
-            ui.label(l.info.source.label());
-            ui.end_row();
-            ui.label("vertices");
-            ui.label(s.vertices.to_string());
-            ui.end_row();
-            ui.label("faces");
-            ui.label(s.faces.to_string());
-            ui.end_row();
-            ui.label("boundary loops");
-            ui.label(s.boundary_loops.to_string());
-            ui.end_row();
-            ui.label("non-manifold edges");
-            ui.label(s.non_manifold_edges.to_string());
-            ui.end_row();
-            ui.label("bbox diagonal");
-            ui.label(format!("{:.4}", l.info.bbox_diagonal));
-            ui.end_row();
-        });
+        key_values(
+            ui,
+            "info",
+            &[
+                ("source", l.info.source.label()),
+                ("vertices", s.vertices.to_string()),
+                ("faces", s.faces.to_string()),
+                ("boundary loops", s.boundary_loops.to_string()),
+                ("non-manifold edges", s.non_manifold_edges.to_string()),
+                ("bbox diagonal", format!("{:.4}", l.info.bbox_diagonal)),
+            ],
+        );
         if let Some(sum) = l.curvature.as_ref().and_then(|c| c.summary.as_ref()) {
             ui.add_space(4.0);
             ui.strong("Curvature");
-            egui::Grid::new("curv").num_columns(2).show(ui, |ui| {
-                ui.label("H min / max");
-                ui.label(format!("{:.4} / {:.4}", sum.min_h, sum.max_h));
-                ui.end_row();
-                ui.label("H mean");
-                ui.label(format!("{:.4}", sum.mean_h));
-                ui.end_row();
-                ui.label("boundary vertices");
-                ui.label(sum.boundary_vertices.to_string());
-                ui.end_row();
-                ui.label("H ≈ 0 vertices");
-                ui.label(sum.planar_vertices.to_string());
-                ui.end_row();
-                ui.label("low-degree / failed fits");
-                ui.label(format!("{} / {}", sum.low_degree_fits, sum.failed_fits));
-                ui.end_row();
-            });
+            key_values(
+                ui,
+                "curvature",
+                &[
+                    ("H min / max", format!("{:.4} / {:.4}", sum.min_h, sum.max_h)),
+                    ("H mean", format!("{:.4}", sum.mean_h)),
+                    ("boundary vertices", sum.boundary_vertices.to_string()),
+                    ("H ≈ 0 vertices", sum.planar_vertices.to_string()),
+                    ("low-degree / failed fits", format!("{} / {}", sum.low_degree_fits, sum.failed_fits)),
+                ],
+            );
             if sum.h_changes_sign {
                 ui.colored_label(
                     Color32::from_rgb(240, 180, 80),
@@ -742,6 +755,10 @@ impl eframe::App for App {
         self.frames += 1;
         self.handle_messages();
         self.apply_link_if_changed();
+        let crashes = std::mem::take(&mut *self.crash_requests.borrow_mut());
+        if crashes > 0 {
+            self.send(&ToWorker::Crash, None);
+        }
 
         // Dropped files (eframe) and picked files (the Open… dialog).
         let dropped: Vec<web_sys::File> =
@@ -786,6 +803,17 @@ impl eframe::App for App {
     fn clear_color(&self, _visuals: &egui::Visuals) -> [f32; 4] {
         CLEAR_COLOR.to_normalized_gamma_f32()
     }
+}
+
+/// A two-column table of labels and values.
+fn key_values(ui: &mut egui::Ui, id: &str, rows: &[(&str, String)]) {
+    egui::Grid::new(id).num_columns(2).show(ui, |ui| {
+        for (k, v) in rows {
+            ui.label(*k);
+            ui.label(v);
+            ui.end_row();
+        }
+    });
 }
 
 fn empty_mesh() -> MeshData {

@@ -166,5 +166,43 @@ for (const project of PROJECTS) {
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });
+
+    test(`[${project.name}] e. a worker crash is shown, the worker restarts and the design survives`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'e-crash' }, async (app) => {
+        const before = await settledDefault(app);
+        assert.equal(before.worker_restarts, 0);
+        await app.page.evaluate(() => window.dispatchEvent(new Event('sf-crash-worker')));
+        const s = await waitForState(
+          app,
+          'worker restarted, error shown, curvature recomputed',
+          (s) => s.worker_restarts >= 1 && /crash/i.test(String(s.error)) && isSettled(s),
+          { failOnPageError: false },
+        );
+        t.diagnostic(`error shown: ${s.error}`);
+        assert.equal(s.source, before.source, 'the design is kept (source)');
+        assert.equal(s.vertices, before.vertices, 'the design is kept (vertices)');
+        assert.equal(s.design_link, before.design_link, 'the design link is unchanged');
+        assertDrawn(await measureViewport(app, s, 'after-crash'), 'mesh after the worker crash');
+      });
+    });
+
+    test(`[${project.name}] f. reflective shading with edges draws, and a click shows a central sphere`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=sphere-cap&shading=reflective&edges=1&color=none';
+      await withApp(t, browser, server, project, { name: 'f-reflective', fragment }, async (app) => {
+        const s = await waitForState(app, 'sphere cap settled', (s) => s.source === 'sample:sphere-cap' && isSettled(s), { timeout: T.load });
+        assert.equal(s.shading, 'reflective');
+        assert.equal(s.edges, true);
+        const m = await measureViewport(app, s, 'reflective-edges');
+        assertDrawn(m, 'reflective sphere cap with edges');
+        const [x, y, w, h] = s.viewport;
+        await app.page.mouse.click(x + w / 2, y + h / 2);
+        const picked = await waitForState(app, 'a vertex is selected', (s) => Number.isInteger(s.selected_vertex));
+        t.diagnostic(`selected vertex ${picked.selected_vertex}`);
+        assertDrawn(await measureViewport(app, picked, 'central-sphere'), 'central sphere overlay');
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
   });
 }
