@@ -2,7 +2,7 @@
 
 struct Uniforms {
     view_proj: mat4x4<f32>,
-    // Model matrix of overlay geometry (identity for the surface).
+    // Model matrix of the layer's geometry.
     model: mat4x4<f32>,
     eye: vec4<f32>,
     base_color: vec4<f32>,
@@ -122,7 +122,7 @@ fn vs_edges(@location(0) pos: vec3<f32>) -> @builtin(position) vec4<f32> {
 
 @fragment
 fn fs_edges() -> @location(0) vec4<f32> {
-    return vec4<f32>(0.05, 0.06, 0.08, 1.0);
+    return u.base_color;
 }
 
 @fragment

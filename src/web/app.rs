@@ -10,7 +10,7 @@ use glam::{Mat4, Vec3};
 use wasm_bindgen::prelude::*;
 
 use super::colormap;
-use super::viewer::{MeshData, OrbitCamera, Overlay, OverlayShape, ScalarData, Uniforms, ViewerFrame, ViewerResources};
+use super::viewer::{ColorMap, Geometry, Layer, MeshData, OrbitCamera, ScalarData, Style, ViewerFrame, ViewerResources};
 use super::worker_client::{Incoming, WorkerClient};
 use crate::curvature::CurvatureSummary;
 use crate::design_link::{CameraState, ColorBy, Design, Reference, Shading};
@@ -657,39 +657,25 @@ impl App {
             return;
         }
         let mesh = l.mesh.clone();
-        let radius = l.radius;
-        self.camera.scene_radius = radius;
+        self.camera.scene_radius = l.radius;
         let aspect = rect.width() / rect.height().max(1.0);
-        let view_proj = self.camera.proj(aspect) * self.camera.view();
-        let shading = self.design.shading;
-        let edges = self.design.edges;
-        let overlay = self.selected.and_then(|v| self.overlay_for(v));
-        let (scalars, range, diverging) = match self.scalar_view() {
-            Some(s) => (Some(s.data.clone()), s.range, s.diverging),
-            None => (None, (0.0, 1.0), false),
+        let shading = match self.design.shading {
+            Shading::Flat => 0,
+            Shading::Smooth => 1,
+            Shading::Reflective => 2,
         };
-        let eye = self.camera.eye();
-        let uniforms = Uniforms {
-            view_proj: view_proj.to_cols_array_2d(),
-            model: Mat4::IDENTITY.to_cols_array_2d(),
-            eye: [eye.x, eye.y, eye.z, 1.0],
-            base_color: [0.72, 0.78, 0.86, 1.0],
-            scalar_range: [range.0, range.1, diverging as u32 as f32, 0.0],
-            mode: [
-                match shading {
-                    Shading::Flat => 0,
-                    Shading::Smooth => 1,
-                    Shading::Reflective => 2,
-                },
-                scalars.is_some() as u32,
-                0,
-                0,
-            ],
-        };
-        ui.painter().add(egui_wgpu::Callback::new_paint_callback(
-            rect,
-            ViewerFrame { mesh, scalars, uniforms, edges, overlay },
-        ));
+        let color_map = self.scalar_view().map(|s| ColorMap { scalars: s.data.clone(), range: s.range, diverging: s.diverging });
+        let mut layers = vec![Layer {
+            geometry: Geometry::Mesh(mesh.clone()),
+            model: Mat4::IDENTITY,
+            style: Style::Surface { shading, color: [0.72, 0.78, 0.86, 1.0], color_map },
+        }];
+        if self.design.edges {
+            layers.push(Layer { geometry: Geometry::Mesh(mesh), model: Mat4::IDENTITY, style: Style::Lines { color: [0.05, 0.06, 0.08, 1.0] } });
+        }
+        layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
+        let frame = ViewerFrame { view_proj: self.camera.proj(aspect) * self.camera.view(), eye: self.camera.eye(), layers };
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, frame));
         self.drawn = true;
         if let Some(s) = &self.scalars {
             colormap::legend(ui.painter(), rect, self.design.color.label(), s.range, s.diverging);
@@ -704,25 +690,25 @@ impl App {
     }
 
     /// The translucent central sphere (or plane) at vertex `v`.
-    fn overlay_for(&self, v: usize) -> Option<Overlay> {
+    fn central_sphere_layer(&self, v: usize) -> Option<Layer> {
         let l = self.loaded.as_ref()?;
         let sphere = central_sphere(&l.curvature.as_ref()?.fields, v)?;
         let p = Vec3::from_slice(l.mesh.positions.get(3 * v..3 * v + 3)?);
         let color = [0.35, 0.65, 1.0, 0.28];
         match sphere_center_radius(&sphere) {
-            Some((c, r)) if r.abs() < 50.0 * l.radius => Some(Overlay {
-                shape: OverlayShape::Sphere,
+            Some((c, r)) if r.abs() < 50.0 * l.radius => Some(Layer {
+                geometry: Geometry::UnitSphere,
                 model: Mat4::from_translation(c) * Mat4::from_scale(Vec3::splat(r.abs())),
-                color,
+                style: Style::Translucent { color },
             }),
             _ => {
                 // A plane (or a sphere too large to draw): a disc in the tangent plane at v.
                 let n = Vec3::new(sphere[1], sphere[2], sphere[3]).normalize_or(Vec3::Z);
                 let rot = glam::Quat::from_rotation_arc(Vec3::Z, n);
-                Some(Overlay {
-                    shape: OverlayShape::Disc,
+                Some(Layer {
+                    geometry: Geometry::UnitDisc,
                     model: Mat4::from_scale_rotation_translation(Vec3::splat(l.radius * 0.6), rot, p),
-                    color,
+                    style: Style::Translucent { color },
                 })
             }
         }

@@ -1,6 +1,7 @@
 //! The wgpu renderer behind the egui viewport: our WGSL pipelines (shaders/mesh.wgsl) drawn
 //! through egui-wgpu paint callbacks into egui's render pass, which has a depth buffer.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
@@ -31,6 +32,7 @@ pub struct MeshData {
     pub positions: Vec<f32>,
     pub normals: Vec<f32>,
     pub triangles: Vec<u32>,
+    /// Line segments (pairs of vertex indices).
     pub edges: Vec<u32>,
 }
 
@@ -40,63 +42,113 @@ pub struct ScalarData {
     pub values: Vec<f32>,
 }
 
-/// A translucent overlay: a unit sphere or a unit disc (in the xy plane), placed by `model`.
-#[derive(Clone, Copy, PartialEq)]
-pub enum OverlayShape {
-    Sphere,
-    Disc,
+/// What a layer draws.
+#[derive(Clone)]
+pub enum Geometry {
+    Mesh(Arc<MeshData>),
+    /// The unit sphere (for central spheres and Ω).
+    UnitSphere,
+    /// The unit disc in the xy plane, normal +z (for planes).
+    UnitDisc,
 }
 
-#[derive(Clone, Copy)]
-pub struct Overlay {
-    pub shape: OverlayShape,
+/// A colour map over per-vertex scalars: data, display range, diverging or sequential.
+#[derive(Clone)]
+pub struct ColorMap {
+    pub scalars: Arc<ScalarData>,
+    pub range: (f32, f32),
+    pub diverging: bool,
+}
+
+/// How a layer is drawn.
+#[derive(Clone)]
+pub enum Style {
+    /// Opaque shaded triangles; `shading` 0 flat, 1 smooth, 2 reflective.
+    Surface { shading: u32, color: [f32; 4], color_map: Option<ColorMap> },
+    /// The geometry's line segments.
+    Lines { color: [f32; 4] },
+    /// Alpha-blended triangles, not writing depth.
+    Translucent { color: [f32; 4] },
+}
+
+#[derive(Clone)]
+pub struct Layer {
+    pub geometry: Geometry,
     pub model: Mat4,
-    pub color: [f32; 4],
+    pub style: Style,
 }
 
-/// One frame's draw request, handed to egui as a paint callback.
+/// One frame's draw request, handed to egui as a paint callback. Layers draw in order.
 pub struct ViewerFrame {
-    pub mesh: Arc<MeshData>,
-    pub scalars: Option<Arc<ScalarData>>,
-    pub uniforms: Uniforms,
-    pub edges: bool,
-    pub overlay: Option<Overlay>,
+    pub view_proj: Mat4,
+    pub eye: Vec3,
+    pub layers: Vec<Layer>,
 }
+
+/// Layers beyond this are not drawn (one uniform slot each).
+pub const MAX_LAYERS: usize = 32;
+/// Uniform slots are spaced by the largest minUniformBufferOffsetAlignment WebGPU allows.
+const SLOT: u64 = 256;
 
 struct GpuMesh {
-    generation: u64,
     positions: wgpu::Buffer,
     normals: wgpu::Buffer,
+    zeros: wgpu::Buffer,
     triangles: wgpu::Buffer,
     triangle_count: u32,
     edges: wgpu::Buffer,
     edge_count: u32,
-    vertex_count: usize,
 }
 
-struct GpuShape {
-    positions: wgpu::Buffer,
-    normals: wgpu::Buffer,
-    zeros: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    count: u32,
+impl GpuMesh {
+    fn new(device: &wgpu::Device, p: &[f32], n: &[f32], t: &[u32], e: &[u32]) -> Self {
+        let normals = if n.len() == p.len() { n.to_vec() } else { vec![0.0; p.len()] };
+        Self {
+            positions: init_buffer(device, p, wgpu::BufferUsages::VERTEX),
+            normals: init_buffer(device, &normals, wgpu::BufferUsages::VERTEX),
+            zeros: init_buffer(device, &vec![0f32; p.len() / 3], wgpu::BufferUsages::VERTEX),
+            triangles: init_buffer(device, t, wgpu::BufferUsages::INDEX),
+            triangle_count: t.len() as u32,
+            edges: init_buffer(device, e, wgpu::BufferUsages::INDEX),
+            edge_count: e.len() as u32,
+        }
+    }
 }
 
 /// GPU state kept in egui-wgpu's callback resources.
 pub struct ViewerResources {
     surface: wgpu::RenderPipeline,
-    edges: wgpu::RenderPipeline,
-    overlay: wgpu::RenderPipeline,
-    surface_uniforms: wgpu::Buffer,
-    surface_bind: wgpu::BindGroup,
-    overlay_uniforms: wgpu::Buffer,
-    overlay_bind: wgpu::BindGroup,
-    mesh: Option<GpuMesh>,
-    scalars: Option<(u64, wgpu::Buffer)>,
-    zero_scalars: Option<(usize, wgpu::Buffer)>,
-    sphere: GpuShape,
-    disc: GpuShape,
-    overlay_shape: Option<OverlayShape>,
+    lines: wgpu::RenderPipeline,
+    translucent: wgpu::RenderPipeline,
+    uniforms: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+    meshes: HashMap<u64, GpuMesh>,
+    scalars: HashMap<u64, wgpu::Buffer>,
+    sphere: GpuMesh,
+    disc: GpuMesh,
+    /// What `paint` draws: (geometry key, scalar key, style kind) per layer.
+    draws: Vec<Draw>,
+}
+
+#[derive(Clone, Copy)]
+enum Key {
+    Mesh(u64),
+    Sphere,
+    Disc,
+}
+
+#[derive(Clone, Copy)]
+enum Kind {
+    Surface,
+    Lines,
+    Translucent,
+}
+
+#[derive(Clone, Copy)]
+struct Draw {
+    geometry: Key,
+    scalars: Option<u64>,
+    kind: Kind,
 }
 
 impl ViewerResources {
@@ -112,8 +164,8 @@ impl ViewerResources {
                 visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
+                    has_dynamic_offset: true,
+                    min_binding_size: std::num::NonZeroU64::new(std::mem::size_of::<Uniforms>() as u64),
                 },
                 count: None,
             }],
@@ -126,18 +178,8 @@ impl ViewerResources {
         let buf = |stride, attrs: &'static [wgpu::VertexAttribute]| {
             Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode: wgpu::VertexStepMode::Vertex, attributes: attrs })
         };
-        let (pos_attr, nrm_attr, scalar_attr) = (&POS_ATTR[..], &NRM_ATTR[..], &SCALAR_ATTR[..]);
-        let surface_buffers = [buf(12, pos_attr), buf(12, nrm_attr), buf(4, scalar_attr)];
-        let edge_buffers = [buf(12, pos_attr)];
-        let depth = |write: bool| {
-            Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(write),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            })
-        };
+        let surface_buffers = [buf(12, &POS_ATTR), buf(12, &NRM_ATTR), buf(4, &SCALAR_ATTR)];
+        let line_buffers = [buf(12, &POS_ATTR)];
         let pipeline = |label, vs, fs, buffers: &[Option<wgpu::VertexBufferLayout>], topology, write, blend| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -149,7 +191,13 @@ impl ViewerResources {
                     buffers,
                 },
                 primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
-                depth_stencil: depth(write),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(write),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
@@ -165,72 +213,57 @@ impl ViewerResources {
                 cache: None,
             })
         };
-        let surface = pipeline(
-            "surface",
-            "vs_surface",
-            "fs_surface",
-            &surface_buffers,
-            wgpu::PrimitiveTopology::TriangleList,
-            true,
-            None,
-        );
-        let edges = pipeline("edges", "vs_edges", "fs_edges", &edge_buffers, wgpu::PrimitiveTopology::LineList, false, None);
-        let overlay = pipeline(
-            "overlay",
+        let tri = wgpu::PrimitiveTopology::TriangleList;
+        let surface = pipeline("surface", "vs_surface", "fs_surface", &surface_buffers, tri, true, None);
+        let lines = pipeline("lines", "vs_edges", "fs_edges", &line_buffers, wgpu::PrimitiveTopology::LineList, true, None);
+        let translucent = pipeline(
+            "translucent",
             "vs_surface",
             "fs_overlay",
             &surface_buffers,
-            wgpu::PrimitiveTopology::TriangleList,
+            tri,
             false,
             Some(wgpu::BlendState::ALPHA_BLENDING),
         );
-        let uniform_buffer = |label| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: std::mem::size_of::<Uniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
-        let bind = |buffer: &wgpu::Buffer| {
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &bind_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() }],
-            })
-        };
-        let surface_uniforms = uniform_buffer("surface uniforms");
-        let overlay_uniforms = uniform_buffer("overlay uniforms");
-        let surface_bind = bind(&surface_uniforms);
-        let overlay_bind = bind(&overlay_uniforms);
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("layer uniforms"),
+            size: SLOT * MAX_LAYERS as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &bind_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &uniforms,
+                    offset: 0,
+                    size: std::num::NonZeroU64::new(std::mem::size_of::<Uniforms>() as u64),
+                }),
+            }],
+        });
         let (sp, sn, si) = unit_sphere(48, 24);
         let (dp, dn, di) = unit_disc(64);
         Self {
             surface,
-            edges,
-            overlay,
-            surface_uniforms,
-            surface_bind,
-            overlay_uniforms,
-            overlay_bind,
-            mesh: None,
-            scalars: None,
-            zero_scalars: None,
-            sphere: GpuShape::new(device, &sp, &sn, &si),
-            disc: GpuShape::new(device, &dp, &dn, &di),
-            overlay_shape: None,
+            lines,
+            translucent,
+            uniforms,
+            bind,
+            meshes: HashMap::new(),
+            scalars: HashMap::new(),
+            sphere: GpuMesh::new(device, &sp, &sn, &si, &[]),
+            disc: GpuMesh::new(device, &dp, &dn, &di, &[]),
+            draws: Vec::new(),
         }
     }
-}
 
-impl GpuShape {
-    fn new(device: &wgpu::Device, p: &[f32], n: &[f32], i: &[u32]) -> Self {
-        Self {
-            positions: init_buffer(device, p, wgpu::BufferUsages::VERTEX),
-            normals: init_buffer(device, n, wgpu::BufferUsages::VERTEX),
-            zeros: init_buffer(device, &vec![0f32; p.len() / 3], wgpu::BufferUsages::VERTEX),
-            indices: init_buffer(device, i, wgpu::BufferUsages::INDEX),
-            count: i.len() as u32,
+    fn gpu_mesh(&self, key: Key) -> Option<&GpuMesh> {
+        match key {
+            Key::Mesh(g) => self.meshes.get(&g),
+            Key::Sphere => Some(&self.sphere),
+            Key::Disc => Some(&self.disc),
         }
     }
 }
@@ -260,40 +293,59 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
         let Some(r) = resources.get_mut::<ViewerResources>() else {
             return Vec::new();
         };
-        if r.mesh.as_ref().map(|m| m.generation) != Some(self.mesh.generation) {
-            let m = &self.mesh;
-            r.mesh = Some(GpuMesh {
-                generation: m.generation,
-                positions: init_buffer(device, &m.positions, wgpu::BufferUsages::VERTEX),
-                normals: init_buffer(device, &m.normals, wgpu::BufferUsages::VERTEX),
-                triangles: init_buffer(device, &m.triangles, wgpu::BufferUsages::INDEX),
-                triangle_count: m.triangles.len() as u32,
-                edges: init_buffer(device, &m.edges, wgpu::BufferUsages::INDEX),
-                edge_count: m.edges.len() as u32,
-                vertex_count: m.positions.len() / 3,
-            });
-        }
-        let n = r.mesh.as_ref().map_or(0, |m| m.vertex_count);
-        match &self.scalars {
-            Some(s) if s.values.len() == n => {
-                if r.scalars.as_ref().map(|x| x.0) != Some(s.generation) {
-                    r.scalars = Some((s.generation, init_buffer(device, &s.values, wgpu::BufferUsages::VERTEX)));
+        r.draws.clear();
+        let mut used_meshes = Vec::new();
+        let mut used_scalars = Vec::new();
+        for (slot, layer) in self.layers.iter().take(MAX_LAYERS).enumerate() {
+            let (key, vertex_count) = match &layer.geometry {
+                Geometry::Mesh(m) => {
+                    r.meshes
+                        .entry(m.generation)
+                        .or_insert_with(|| GpuMesh::new(device, &m.positions, &m.normals, &m.triangles, &m.edges));
+                    used_meshes.push(m.generation);
+                    (Key::Mesh(m.generation), m.positions.len() / 3)
                 }
-            }
-            _ => r.scalars = None,
+                Geometry::UnitSphere => (Key::Sphere, 0),
+                Geometry::UnitDisc => (Key::Disc, 0),
+            };
+            let mut u = Uniforms {
+                view_proj: self.view_proj.to_cols_array_2d(),
+                model: layer.model.to_cols_array_2d(),
+                eye: [self.eye.x, self.eye.y, self.eye.z, 1.0],
+                base_color: [1.0; 4],
+                scalar_range: [0.0, 1.0, 0.0, 0.0],
+                mode: [1, 0, 0, 0],
+            };
+            let mut scalars = None;
+            let kind = match &layer.style {
+                Style::Surface { shading, color, color_map } => {
+                    u.mode[0] = *shading;
+                    u.base_color = *color;
+                    if let Some(cm) = color_map.as_ref().filter(|cm| cm.scalars.values.len() == vertex_count) {
+                        let g = cm.scalars.generation;
+                        r.scalars.entry(g).or_insert_with(|| init_buffer(device, &cm.scalars.values, wgpu::BufferUsages::VERTEX));
+                        used_scalars.push(g);
+                        scalars = Some(g);
+                        u.mode[1] = 1;
+                        u.scalar_range = [cm.range.0, cm.range.1, cm.diverging as u32 as f32, 0.0];
+                    }
+                    Kind::Surface
+                }
+                Style::Lines { color } => {
+                    u.base_color = *color;
+                    Kind::Lines
+                }
+                Style::Translucent { color } => {
+                    u.base_color = *color;
+                    Kind::Translucent
+                }
+            };
+            queue.write_buffer(&r.uniforms, slot as u64 * SLOT, bytemuck::bytes_of(&u));
+            r.draws.push(Draw { geometry: key, scalars, kind });
         }
-        if r.zero_scalars.as_ref().map(|z| z.0) != Some(n) {
-            r.zero_scalars = Some((n, init_buffer(device, &vec![0f32; n.max(1)], wgpu::BufferUsages::VERTEX)));
-        }
-        queue.write_buffer(&r.surface_uniforms, 0, bytemuck::bytes_of(&self.uniforms));
-        r.overlay_shape = self.overlay.map(|o| o.shape);
-        if let Some(o) = self.overlay {
-            let mut u = self.uniforms;
-            u.model = o.model.to_cols_array_2d();
-            u.base_color = o.color;
-            u.mode[1] = 0;
-            queue.write_buffer(&r.overlay_uniforms, 0, bytemuck::bytes_of(&u));
-        }
+        // Keep GPU buffers only for what is still shown.
+        r.meshes.retain(|g, _| used_meshes.contains(g));
+        r.scalars.retain(|g, _| used_scalars.contains(g));
         Vec::new()
     }
 
@@ -304,36 +356,32 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
         resources: &egui_wgpu::CallbackResources,
     ) {
         let Some(r) = resources.get::<ViewerResources>() else { return };
-        let Some(m) = &r.mesh else { return };
-        let scalars = match (&r.scalars, &r.zero_scalars) {
-            (Some((_, b)), _) => b,
-            (None, Some((_, b))) => b,
-            (None, None) => return,
-        };
-        pass.set_bind_group(0, &r.surface_bind, &[]);
-        if m.triangle_count > 0 {
-            pass.set_pipeline(&r.surface);
-            pass.set_vertex_buffer(0, m.positions.slice(..));
-            pass.set_vertex_buffer(1, m.normals.slice(..));
-            pass.set_vertex_buffer(2, scalars.slice(..));
-            pass.set_index_buffer(m.triangles.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..m.triangle_count, 0, 0..1);
-        }
-        if self.edges && m.edge_count > 0 {
-            pass.set_pipeline(&r.edges);
-            pass.set_vertex_buffer(0, m.positions.slice(..));
-            pass.set_index_buffer(m.edges.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..m.edge_count, 0, 0..1);
-        }
-        if let Some(shape) = r.overlay_shape {
-            let s = if shape == OverlayShape::Sphere { &r.sphere } else { &r.disc };
-            pass.set_pipeline(&r.overlay);
-            pass.set_bind_group(0, &r.overlay_bind, &[]);
-            pass.set_vertex_buffer(0, s.positions.slice(..));
-            pass.set_vertex_buffer(1, s.normals.slice(..));
-            pass.set_vertex_buffer(2, s.zeros.slice(..));
-            pass.set_index_buffer(s.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..s.count, 0, 0..1);
+        for (slot, d) in r.draws.iter().enumerate() {
+            let Some(m) = r.gpu_mesh(d.geometry) else { continue };
+            pass.set_bind_group(0, &r.bind, &[(slot as u64 * SLOT) as u32]);
+            match d.kind {
+                Kind::Surface | Kind::Translucent => {
+                    if m.triangle_count == 0 {
+                        continue;
+                    }
+                    let scalars = d.scalars.and_then(|g| r.scalars.get(&g)).unwrap_or(&m.zeros);
+                    pass.set_pipeline(if matches!(d.kind, Kind::Surface) { &r.surface } else { &r.translucent });
+                    pass.set_vertex_buffer(0, m.positions.slice(..));
+                    pass.set_vertex_buffer(1, m.normals.slice(..));
+                    pass.set_vertex_buffer(2, scalars.slice(..));
+                    pass.set_index_buffer(m.triangles.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..m.triangle_count, 0, 0..1);
+                }
+                Kind::Lines => {
+                    if m.edge_count == 0 {
+                        continue;
+                    }
+                    pass.set_pipeline(&r.lines);
+                    pass.set_vertex_buffer(0, m.positions.slice(..));
+                    pass.set_index_buffer(m.edges.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..m.edge_count, 0, 0..1);
+                }
+            }
         }
     }
 }
