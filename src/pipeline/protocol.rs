@@ -94,6 +94,8 @@ pub enum FromWorker {
     Progress(Progress),
     /// A snapshot: the stage's geometry and per-vertex data as fields.
     Snapshot { stage: String, iteration: u32, fields: Vec<FieldHeader> },
+    /// Files for download (fields of raw bytes named by file name), with their MIME types.
+    Files { stage: String, fields: Vec<FieldHeader>, mime: Vec<String> },
     Finished { stage: String, result: StageResult, elapsed_ms: f64 },
     Cancelled { stage: String },
     /// An error a user can act on. The previous design stays loaded.
@@ -125,12 +127,15 @@ pub mod field {
 pub enum FieldData {
     F32(Vec<f32>),
     U32(Vec<u32>),
+    /// Raw bytes, e.g. an exported file.
+    Bytes(Vec<u8>),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum FieldKind {
     F32,
     U32,
+    U8,
 }
 
 /// A named per-element array with `dim` components per element.
@@ -159,10 +164,15 @@ impl Field {
         Self { name: name.into(), dim, data: FieldData::U32(values) }
     }
 
+    pub fn bytes(name: &str, bytes: Vec<u8>) -> Self {
+        Self { name: name.into(), dim: 1, data: FieldData::Bytes(bytes) }
+    }
+
     pub fn header(&self) -> FieldHeader {
         let (kind, len) = match &self.data {
             FieldData::F32(v) => (FieldKind::F32, v.len()),
             FieldData::U32(v) => (FieldKind::U32, v.len()),
+            FieldData::Bytes(v) => (FieldKind::U8, v.len()),
         };
         FieldHeader { name: self.name.clone(), kind, dim: self.dim, len: len as u32 }
     }
@@ -170,14 +180,21 @@ impl Field {
     pub fn as_f32(&self) -> Option<&[f32]> {
         match &self.data {
             FieldData::F32(v) => Some(v),
-            FieldData::U32(_) => None,
+            _ => None,
         }
     }
 
     pub fn as_u32(&self) -> Option<&[u32]> {
         match &self.data {
             FieldData::U32(v) => Some(v),
-            FieldData::F32(_) => None,
+            _ => None,
+        }
+    }
+
+    pub fn as_bytes(&self) -> Option<&[u8]> {
+        match &self.data {
+            FieldData::Bytes(v) => Some(v),
+            _ => None,
         }
     }
 
@@ -186,16 +203,18 @@ impl Field {
         match &self.data {
             FieldData::F32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
             FieldData::U32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            FieldData::Bytes(v) => v.clone(),
         }
     }
 
     /// Rebuilds a field from its header and bytes; rejects a length mismatch.
     pub fn from_bytes(header: &FieldHeader, bytes: &[u8]) -> Result<Self, String> {
-        if bytes.len() != header.len as usize * 4 {
+        let width = if header.kind == FieldKind::U8 { 1 } else { 4 };
+        if bytes.len() != header.len as usize * width {
             return Err(format!(
                 "field '{}': expected {} bytes, got {}",
                 header.name,
-                header.len as usize * 4,
+                header.len as usize * width,
                 bytes.len()
             ));
         }
@@ -203,6 +222,7 @@ impl Field {
         let data = match header.kind {
             FieldKind::F32 => FieldData::F32(words.map(f32::from_le_bytes).collect()),
             FieldKind::U32 => FieldData::U32(words.map(u32::from_le_bytes).collect()),
+            FieldKind::U8 => FieldData::Bytes(bytes.to_vec()),
         };
         Ok(Self { name: header.name.clone(), dim: header.dim, data })
     }
@@ -233,7 +253,7 @@ pub fn decode_from_worker(env: &Envelope) -> Result<(FromWorker, Vec<Field>), St
     let msg: FromWorker =
         serde_json::from_str(&env.json).map_err(|e| format!("bad worker message: {e}"))?;
     let mut fields = Vec::new();
-    if let FromWorker::Snapshot { fields: headers, .. } = &msg {
+    if let FromWorker::Snapshot { fields: headers, .. } | FromWorker::Files { fields: headers, .. } = &msg {
         if headers.len() != env.bodies.len() {
             return Err(format!(
                 "snapshot lists {} fields but carries {} buffers",
@@ -279,6 +299,19 @@ mod tests {
         };
         let env = encode_from_worker(&msg, &fields);
         let (back, back_fields) = decode_from_worker(&env).unwrap();
+        assert_eq!(back, msg);
+        assert_eq!(back_fields, fields);
+    }
+
+    #[test]
+    fn files_round_trip() {
+        let fields = vec![Field::bytes("panels.glb", b"glTF\x02\x00\x00\x00abc".to_vec()), Field::bytes("panels.csv", b"id\n".to_vec())];
+        let msg = FromWorker::Files {
+            stage: "st-support".into(),
+            fields: fields.iter().map(Field::header).collect(),
+            mime: vec!["model/gltf-binary".into(), "text/csv".into()],
+        };
+        let (back, back_fields) = decode_from_worker(&encode_from_worker(&msg, &fields)).unwrap();
         assert_eq!(back, msg);
         assert_eq!(back_fields, fields);
     }

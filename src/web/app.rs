@@ -14,7 +14,7 @@ use super::viewer::{ColorMap, Geometry, Layer, MeshData, OrbitCamera, ScalarData
 use super::worker_client::{Incoming, WorkerClient};
 use crate::curvature::CurvatureSummary;
 use crate::design_link::{CameraState, ColorBy, Design, Reference, Shading};
-use crate::pipeline::protocol::{field, find, Field, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
+use crate::pipeline::protocol::{field, find, Field, FieldData, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 use crate::samples::Sample;
 
 /// Viewport background, also reported to tests.
@@ -31,6 +31,13 @@ struct Loaded {
 struct CurvatureView {
     fields: Vec<Field>,
     summary: Option<CurvatureSummary>,
+}
+
+/// A file the worker produced, offered for download.
+struct Download {
+    name: String,
+    mime: String,
+    bytes: Vec<u8>,
 }
 
 struct Busy {
@@ -57,6 +64,7 @@ pub struct App {
     /// A file sent to the worker but not yet confirmed as loaded.
     file_in_flight: Option<web_sys::File>,
     busy: Option<Busy>,
+    downloads: Vec<Download>,
     /// A fresh worker is being given the current design back: keep the view and the message.
     restoring: bool,
     camera: OrbitCamera,
@@ -120,6 +128,7 @@ impl App {
             file: None,
             file_in_flight: None,
             busy: None,
+            downloads: Vec::new(),
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -243,6 +252,16 @@ impl App {
                 self.loaded = Some(Loaded { info, mesh: Arc::new(empty_mesh()), center: Vec3::ZERO, radius: 1.0, curvature: None });
             }
             FromWorker::Snapshot { stage, .. } if stage == "reference" => self.install_geometry(&fields),
+            FromWorker::Files { mime, .. } => {
+                self.downloads = fields
+                    .into_iter()
+                    .zip(mime)
+                    .filter_map(|(f, m)| match f.data {
+                        FieldData::Bytes(b) => Some(Download { name: f.name, mime: m, bytes: b }),
+                        _ => None,
+                    })
+                    .collect();
+            }
             FromWorker::Snapshot { .. } => {
                 if let Some(l) = self.loaded.as_mut() {
                     let summary = l.curvature.take().and_then(|c| c.summary);
@@ -524,6 +543,19 @@ impl App {
             });
             ui.separator();
             self.info_section(ui);
+            if !self.downloads.is_empty() {
+                ui.separator();
+                ui.strong("Downloads");
+                ui.horizontal_wrapped(|ui| {
+                    for d in &self.downloads {
+                        if ui.button(&d.name).on_hover_text(format!("{} bytes", d.bytes.len())).clicked() {
+                            if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
+                                self.error = Some(format!("could not save {}: {e:?}", d.name));
+                            }
+                        }
+                    }
+                });
+            }
             if !self.notices.is_empty() {
                 ui.separator();
                 ui.horizontal(|ui| {
@@ -789,6 +821,27 @@ impl eframe::App for App {
     fn clear_color(&self, _visuals: &egui::Visuals) -> [f32; 4] {
         CLEAR_COLOR.to_normalized_gamma_f32()
     }
+}
+
+/// Saves `bytes` as a file through a temporary object URL.
+fn save_file(name: &str, mime: &str, bytes: &[u8]) -> Result<(), JsValue> {
+    let parts = js_sys::Array::of1(&js_sys::Uint8Array::from(bytes));
+    let opts = web_sys::BlobPropertyBag::new();
+    opts.set_type(mime);
+    let blob = web_sys::Blob::new_with_u8_array_sequence_and_options(&parts, &opts)?;
+    let url = web_sys::Url::create_object_url_with_blob(&blob)?;
+    let doc = web_sys::window().and_then(|w| w.document()).ok_or("no document")?;
+    let a: web_sys::HtmlAnchorElement = doc.create_element("a")?.dyn_into()?;
+    a.set_href(&url);
+    a.set_download(name);
+    a.click();
+    // Release the object URL once the download has started.
+    let release = Closure::once_into_js(move || {
+        let _ = web_sys::Url::revoke_object_url(&url);
+    });
+    let window = web_sys::window().ok_or("no window")?;
+    window.set_timeout_with_callback_and_timeout_and_arguments_0(release.unchecked_ref(), 10_000)?;
+    Ok(())
 }
 
 /// A two-column table of labels and values.
