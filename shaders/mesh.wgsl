@@ -6,7 +6,8 @@ struct Uniforms {
     model: mat4x4<f32>,
     eye: vec4<f32>,
     base_color: vec4<f32>,
-    // x: min, y: max of the scalar range; z: colour map (0 sequential, 1 diverging); w: unused.
+    // x: min, y: max of the scalar range; z: colour map (0 sequential, 1 diverging);
+    // w: for lines, how far (world units) they are pulled toward the eye to win against their faces.
     scalar_range: vec4<f32>,
     // x: shading (0 flat, 1 smooth, 2 reflective); y: colour by scalar (0/1).
     mode: vec4<u32>,
@@ -114,10 +115,10 @@ fn fs_surface(i: VsOut) -> @location(0) vec4<f32> {
 
 @vertex
 fn vs_edges(@location(0) pos: vec3<f32>) -> @builtin(position) vec4<f32> {
-    var clip = u.view_proj * u.model * vec4<f32>(pos, 1.0);
-    // Pull lines slightly toward the camera so they win the depth test against their faces.
-    clip.z = clip.z - 2e-4 * clip.w;
-    return clip;
+    let world = (u.model * vec4<f32>(pos, 1.0)).xyz;
+    // Pull lines slightly toward the eye so they win the depth test against their own faces.
+    let toward = normalize(u.eye.xyz - world);
+    return u.view_proj * vec4<f32>(world + toward * u.scalar_range.w, 1.0);
 }
 
 @fragment

@@ -70,18 +70,48 @@ impl Shading {
 /// The methods of the pipeline. Later methods add variants and their parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
+    /// Jet-fitted curvature and central spheres only (Sec. 2.6).
     Curvature,
+    /// ST mesh with support structure (Sec. 4).
+    StSupport,
 }
 
 impl Method {
+    pub const ALL: [Method; 2] = [Method::Curvature, Method::StSupport];
+
     pub fn key(self) -> &'static str {
         match self {
             Method::Curvature => "curvature",
+            Method::StSupport => "st-support",
+        }
+    }
+
+    pub fn title(self) -> &'static str {
+        match self {
+            Method::Curvature => "Curvature (Sec. 2.6)",
+            Method::StSupport => "ST with support structure (Sec. 4)",
         }
     }
 
     pub fn from_key(s: &str) -> Option<Self> {
-        (s == "curvature").then_some(Method::Curvature)
+        Self::ALL.into_iter().find(|m| m.key() == s)
+    }
+}
+
+/// Parameters of the ST-with-support-structure method; lengths relative to the bbox diagonal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StSupportDesign {
+    /// Choose R² to minimize the intersection angles (Fig. 16, right).
+    pub optimize_radius: bool,
+    pub support_depth: f64,
+    pub axis_length: f64,
+    /// Radii closer than this count as one in the panel schedule.
+    pub radius_tolerance: f64,
+}
+
+impl Default for StSupportDesign {
+    fn default() -> Self {
+        Self { optimize_radius: false, support_depth: 0.02, axis_length: 0.1, radius_tolerance: 1e-3 }
     }
 }
 
@@ -107,6 +137,7 @@ pub struct Design {
     pub reference: Reference,
     pub method: Method,
     pub jet: JetParams,
+    pub st: StSupportDesign,
     pub color: ColorBy,
     pub shading: Shading,
     pub edges: bool,
@@ -120,6 +151,7 @@ impl Default for Design {
             reference: Reference::Sample(Sample::Dome),
             method: Method::Curvature,
             jet: JetParams::default(),
+            st: StSupportDesign::default(),
             color: ColorBy::MeanCurvature,
             shading: Shading::Smooth,
             edges: false,
@@ -138,6 +170,16 @@ impl Design {
         }
         s += &format!("&method={}", self.method.key());
         s += &format!("&jet_degree={}&jet_rings={}", self.jet.degree, self.jet.max_rings);
+        if self.method == Method::StSupport {
+            let st = &self.st;
+            s += &format!(
+                "&opt_r={}&depth={}&axis={}&rtol={}",
+                st.optimize_radius as u8,
+                fmt_num(st.support_depth),
+                fmt_num(st.axis_length),
+                fmt_num(st.radius_tolerance)
+            );
+        }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
         if let Some(c) = self.camera {
             s += &format!(
@@ -191,6 +233,16 @@ impl Design {
                 "method" => Method::from_key(v).map(|m| d.method = m).is_some(),
                 "jet_degree" => parse_in(v, 2, 4).map(|x| d.jet.degree = x as u8).is_some(),
                 "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
+                "opt_r" => match v.as_str() {
+                    "0" | "1" => {
+                        d.st.optimize_radius = v == "1";
+                        true
+                    }
+                    _ => false,
+                },
+                "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st.support_depth = x).is_some(),
+                "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st.axis_length = x).is_some(),
+                "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st.radius_tolerance = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
                 "edges" => match v.as_str() {
@@ -221,6 +273,10 @@ impl Design {
 
 fn parse_in(v: &str, lo: i64, hi: i64) -> Option<i64> {
     v.parse::<i64>().ok().filter(|x| (lo..=hi).contains(x))
+}
+
+fn parse_f64_in(v: &str, lo: f64, hi: f64) -> Option<f64> {
+    v.parse::<f64>().ok().filter(|x| x.is_finite() && (lo..=hi).contains(x))
 }
 
 fn parse_camera(v: &str) -> Option<CameraState> {
@@ -287,6 +343,7 @@ mod tests {
             reference: Reference::Sample(Sample::TorusPatch),
             method: Method::Curvature,
             jet: JetParams { degree: 2, max_rings: 3, ..JetParams::default() },
+            st: StSupportDesign::default(),
             color: ColorBy::K1,
             shading: Shading::Flat,
             edges: true,
@@ -295,6 +352,21 @@ mod tests {
         let (back, notices) = Design::from_fragment(&d.to_fragment());
         assert!(notices.is_empty(), "{notices:?}");
         assert_eq!(back, d);
+    }
+
+    #[test]
+    fn st_support_parameters_round_trip() {
+        let d = Design {
+            method: Method::StSupport,
+            st: StSupportDesign { optimize_radius: true, support_depth: 0.035, axis_length: 0.25, radius_tolerance: 0.002 },
+            ..Design::default()
+        };
+        let (back, notices) = Design::from_fragment(&d.to_fragment());
+        assert!(notices.is_empty(), "{notices:?}");
+        assert_eq!(back, d);
+        let (bad, notices) = Design::from_fragment("#v=1&method=st-support&depth=-1&opt_r=2&rtol=nan");
+        assert_eq!(bad.st, StSupportDesign::default());
+        assert_eq!(notices.len(), 3);
     }
 
     #[test]

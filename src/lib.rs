@@ -12,6 +12,11 @@ pub mod mesh;
 pub mod pipeline;
 pub mod samples;
 pub mod sphere;
+pub mod sphere_mesh;
+pub mod panels;
+pub mod export;
+pub mod absolute_sphere;
+pub mod st_support;
 
 #[cfg(target_arch = "wasm32")]
 pub mod web;

@@ -10,8 +10,13 @@
 //! `from_point_normal_curvature(f, n, h)`, ψ(f + t n) = −t + h t²/2: ψ is minus the signed distance
 //! along `n`, for every h including the plane.
 
+// Negated float comparisons are deliberate in the toolkit: they also reject NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+
+use crate::sphere_mesh::AbsoluteSphere;
 
 /// A generalized sphere ψ(x) = a|x|² − ⟨b, x⟩ + c = 0 (a plane when a = 0).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,6 +108,426 @@ impl Sphere {
     /// All coefficients finite.
     pub fn is_finite(&self) -> bool {
         self.a.is_finite() && self.b.is_finite() && self.c.is_finite()
+    }
+}
+
+// --- Sphere toolkit (issue 3 §1) ----------------------------------------------------------------
+//
+// Conventions used below (all checked in `tests/sphere_toolkit.rs`):
+// - The **oriented normal** of a normalized sphere at a point x on it is N(x) = b − 2a x (unit
+//   there, since |b − 2ax|² = 1 + 4aψ(x)). For r > 0 it points to the centre: N = (c − x)/r; for a
+//   plane it is b. `from_point_normal_curvature(f, n, h)` has N(f) = n. Multiplying (a, b, c) by
+//   −1 flips the orientation ([`Sphere::flipped`]).
+// - The inversive product ⟨s₁, s₂⟩ = N₁·N₂ on the common circle, so with both spheres oriented
+//   like the surface the **kink angle** of two panels is arccos⟨s₁, s₂⟩, computed stably by
+//   [`Sphere::kink_angle`].
+// - A similarity x = t + σ y (σ > 0) maps coefficients to (a σ², σ(b − 2a t), ψ(t)) in the y-frame
+//   ([`Sphere::in_frame`]); bᵀb − 4ac scales by σ² and the orientation is kept. The toolkit solves
+//   its small linear systems in frames centred at the data and scaled to it, then maps back.
+
+impl Sphere {
+    /// (a, b₁, b₂, b₃, c).
+    pub fn to_array(&self) -> [f64; 5] {
+        [self.a, self.b.x, self.b.y, self.b.z, self.c]
+    }
+
+    /// From (a, b₁, b₂, b₃, c).
+    pub fn from_array(v: [f64; 5]) -> Self {
+        Self { a: v[0], b: DVec3::new(v[1], v[2], v[3]), c: v[4] }
+    }
+
+    /// The same point set with the opposite orientation: (−a, −b, −c). The signed radius changes
+    /// sign, the centre is kept.
+    pub fn flipped(&self) -> Self {
+        Self { a: -self.a, b: -self.b, c: -self.c }
+    }
+
+    /// Linear combination w₀ s₀ + w₁ s₁ of coefficient vectors (not normalized).
+    pub fn combine(s0: &Sphere, w0: f64, s1: &Sphere, w1: f64) -> Self {
+        Self { a: w0 * s0.a + w1 * s1.a, b: w0 * s0.b + w1 * s1.b, c: w0 * s0.c + w1 * s1.c }
+    }
+
+    /// The oriented normal b − 2a x. Unit at points of a normalized sphere; for r > 0 it points to
+    /// the centre, for a plane it is b. ψ decreases along it.
+    pub fn normal_at(&self, x: DVec3) -> DVec3 {
+        self.b - 2.0 * self.a * x
+    }
+
+    /// `self` or its flip, whichever has ⟨normal_at(x), n⟩ ≥ 0 (x a point on the sphere, n the
+    /// desired outward direction there).
+    pub fn orient_toward(&self, x: DVec3, n: DVec3) -> Self {
+        if self.normal_at(x).dot(n) < 0.0 {
+            self.flipped()
+        } else {
+            *self
+        }
+    }
+
+    /// Unsigned Euclidean distance from `x` to a **normalized** sphere or plane, | |x − c| − |r| |,
+    /// evaluated without cancellation for huge radii: with ψ = ψ(x), |x − c| = |r|√(1 + 4aψ), so
+    /// |x − c| − |r| = 2 sign(a) ψ / (1 + √(1 + 4aψ)) (= |ψ| for a plane).
+    pub fn distance(&self, x: DVec3) -> f64 {
+        let psi = self.eval(x);
+        let q = (1.0 + 4.0 * self.a * psi).max(0.0);
+        (2.0 * psi / (1.0 + q.sqrt())).abs()
+    }
+
+    /// The row of the linear condition "passes through p": [|p|², −p, 1] · (a, b, c) = ψ(p).
+    pub fn point_row(p: DVec3) -> [f64; 5] {
+        [p.length_squared(), -p.x, -p.y, -p.z, 1.0]
+    }
+
+    /// The row r with r · (a', b', c') = ⟨self, s'⟩ (inversive product): [−2c, b, −2a]. For Ω's
+    /// coefficients it is the condition "orthogonal to Ω".
+    pub fn inversive_row(&self) -> [f64; 5] {
+        [-2.0 * self.c, self.b.x, self.b.y, self.b.z, -2.0 * self.a]
+    }
+
+    /// Coefficients in the frame y = (x − t)/σ (σ > 0): (a σ², σ(b − 2a t), ψ(t)), the same set
+    /// with the same orientation; bᵀb − 4ac is multiplied by σ².
+    pub fn in_frame(&self, t: DVec3, sigma: f64) -> Self {
+        Self { a: self.a * sigma * sigma, b: sigma * (self.b - 2.0 * self.a * t), c: self.eval(t) }
+    }
+
+    /// Inverse of [`Self::in_frame`]: coefficients given in the frame y = (x − t)/σ, back in x.
+    pub fn from_frame(&self, t: DVec3, sigma: f64) -> Self {
+        let a = self.a / (sigma * sigma);
+        let b = self.b / sigma + 2.0 * a * t;
+        // ψ_y(0) = ψ_x(t) = a|t|² − ⟨b, t⟩ + c.
+        let c = self.c - a * t.length_squared() + b.dot(t);
+        Self { a, b, c }
+    }
+
+    /// The spheres through three points form a pencil: the 2-dimensional null space of the 3 × 5
+    /// matrix of their [`Self::point_row`]s. It is computed by a Jacobi SVD in the frame centred
+    /// at the centroid and scaled by the largest distance from it, and returned as a normalized
+    /// basis that is orthonormal for the inversive product:
+    /// - `[0]`: the plane of the points, oriented by (p₁ − p₀) × (p₂ − p₀);
+    /// - `[1]`: the sphere through them with its centre in that plane (their circumcircle's
+    ///   smallest sphere), with positive radius, i.e. its normal points to the centre.
+    ///
+    /// Every sphere through the points is, up to a positive factor, cos θ `[0]` + sin θ `[1]`,
+    /// which is already normalized. On the points the normal of that member is
+    /// cos θ n + sin θ (in-plane), so the members with cos θ > 0 are the ones oriented like the
+    /// triangle. Collinear points give two planes through their line; coincident points give
+    /// some spheres through them.
+    pub fn through_points_family(p: [DVec3; 3]) -> [Sphere; 2] {
+        let (t, sigma) = point_frame(&p);
+        let [s0, s1] = family_in_frame(&p, t, sigma);
+        [s0.from_frame(t, sigma).normalized(), s1.from_frame(t, sigma).normalized()]
+    }
+
+    /// The sphere through three points orthogonal to Ω: the null vector of the 4 × 5 matrix of
+    /// the three [`Self::point_row`]s and Ω's row, normalized. Computed as the member of
+    /// [`Self::through_points_family`] (in the local frame of the points) on which Ω's row
+    /// vanishes: s = ⟨s₁, Ω⟩ s₀ − ⟨s₀, Ω⟩ s₁, so planes (a → 0) need no special case. Works for
+    /// R² > 0, R² < 0, R² = 0 (the sphere passes through m) and for Ω a plane (the centre lies in
+    /// it). Oriented like the triangle (p₁ − p₀) × (p₂ − p₀) (see the family). None when the
+    /// points coincide or every member is orthogonal to Ω (e.g. R² = 0 and m on their circle).
+    pub fn through_points_orthogonal(p: [DVec3; 3], omega: &AbsoluteSphere) -> Option<Sphere> {
+        let (t, sigma) = point_frame(&p);
+        if !(sigma > 0.0) || !sigma.is_finite() {
+            return None;
+        }
+        let [s0, s1] = family_in_frame(&p, t, sigma);
+        let o = omega.coefficients().in_frame(t, sigma);
+        // Scale Ω's row to unit size so that the degeneracy test is relative.
+        let scale = o.a.abs().max(o.b.length()).max(o.c.abs());
+        if !(scale > 0.0) || !scale.is_finite() {
+            return None;
+        }
+        let o = Sphere { a: o.a / scale, b: o.b / scale, c: o.c / scale };
+        combine_orthogonal(&s0, &s1, &o).map(|s| s.from_frame(t, sigma).normalized())
+    }
+
+    /// The kink angle (radians, in [0, π]) of two panels along their common circle: the angle
+    /// between their oriented normals there, arccos⟨s₁, s₂⟩ for normalized spheres oriented alike
+    /// (0 = tangent continuous). Evaluated as 2 atan2(|s₁ − s₂|, |s₁ + s₂|) with the inversive
+    /// norm |s|² = bᵀb − 4ac (|s₁ ∓ s₂|² = 2 ∓ 2 cos φ), accurate for small angles too. For
+    /// spheres that do not meet (|⟨s₁, s₂⟩| > 1) the result is 0 or π.
+    pub fn kink_angle(&self, other: &Sphere) -> f64 {
+        let d = Sphere::combine(self, 1.0, other, -1.0).discriminant().max(0.0).sqrt();
+        let s = Sphere::combine(self, 1.0, other, 1.0).discriminant().max(0.0).sqrt();
+        2.0 * d.atan2(s)
+    }
+}
+
+/// Centroid and largest distance from it.
+fn point_frame(p: &[DVec3; 3]) -> (DVec3, f64) {
+    let t = (p[0] + p[1] + p[2]) / 3.0;
+    let sigma = p.iter().map(|q| (*q - t).length()).fold(0.0, f64::max);
+    (t, sigma)
+}
+
+/// The inversive-orthonormal family basis [plane, centred sphere] in the frame (t, σ).
+fn family_in_frame(p: &[DVec3; 3], t: DVec3, sigma: f64) -> [Sphere; 2] {
+    let inv = if sigma > 0.0 && sigma.is_finite() { 1.0 / sigma } else { 1.0 };
+    let y = p.map(|q| (q - t) * inv);
+    let rows = [Sphere::point_row(y[0]), Sphere::point_row(y[1]), Sphere::point_row(y[2])];
+    let svd = dense::Svd::new(&rows);
+    let n1 = Sphere::from_array(svd.v[3]);
+    let n2 = Sphere::from_array(svd.v[4]);
+    let normal = (y[1] - y[0]).cross(y[2] - y[0]);
+    // The plane member: a = 0 exactly (a₂a₁ − a₁a₂ rounds to 0).
+    let mut plane = if n1.a == 0.0 && n2.a == 0.0 { n1 } else { Sphere::combine(&n1, n2.a, &n2, -n1.a) };
+    if plane.discriminant() <= 0.0 {
+        plane = n1;
+    }
+    let plane = plane.normalized();
+    let plane = if plane.b.dot(normal) < 0.0 { plane.flipped() } else { plane };
+    // The member orthogonal to it, by Gram–Schmidt in the inversive product (positive definite on
+    // a pencil of real spheres): start from the basis vector farther from the plane.
+    let other = if n1.a.abs() >= n2.a.abs() { n1 } else { n2 };
+    let other = Sphere::combine(&other, 1.0, &plane, -other.inversive_product(&plane)).normalized();
+    let other = if other.a < 0.0 { other.flipped() } else { other };
+    [plane, other]
+}
+
+/// The member of the orthonormal pencil (s₀, s₁) orthogonal to `o`, oriented with a non-negative
+/// s₀ component and normalized; None when every member is orthogonal to `o`.
+fn combine_orthogonal(s0: &Sphere, s1: &Sphere, o: &Sphere) -> Option<Sphere> {
+    let alpha = s1.inversive_product(o);
+    let beta = s0.inversive_product(o);
+    let h = alpha.hypot(beta);
+    if !(h > 1e-13) {
+        return None;
+    }
+    let sign = if alpha < 0.0 { -1.0 } else { 1.0 };
+    Some(Sphere::combine(s0, sign * alpha / h, s1, -sign * beta / h))
+}
+
+/// The node axis of a vertex star: the line through v and the second common point v̄ of the
+/// spheres around v. See [`star_axis`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StarAxis {
+    /// Unit direction of the line v v̄ (sign arbitrary).
+    pub direction: DVec3,
+    /// v̄; None when it is at infinity (all spheres are planes).
+    pub second_point: Option<DVec3>,
+    /// σ₃/σ₁ of the system below: how well the spheres determine the line (0 = not at all).
+    pub condition: f64,
+}
+
+/// Minimum [`StarAxis::condition`] accepted by [`second_common_point`] and [`star_axis`]'s
+/// callers in this crate: below it the spheres are nearly coaxal (e.g. all equal, as on a sphere)
+/// and the line is not determined to better than ≈ 1e-10 relative.
+pub const STAR_AXIS_MIN_CONDITION: f64 = 1e-6;
+
+/// The common line through v of normalized spheres that all pass through v (at least 3 of them).
+///
+/// Every pair's radical plane a_jψ_i − a_iψ_j = 0 contains v and v̄; in the frame y = (x − v)/S
+/// the line is y = t ℓ, and it meets sphere j again where ⟨N_j(v), ℓ⟩ = a_j S τ with t = τ/|ℓ|²
+/// (N_j = b_j − 2a_j v, the normal at v). So (ℓ, τ) is the least-squares null vector of the k × 4
+/// matrix with rows [N_j, −a_j S]: the pairwise radical-plane conditions are the differences of
+/// these rows, solved for all pairs at once by a Jacobi SVD. S = min |r_j| keeps |ℓ| ≥ 1/√5
+/// (|v̄ − v| ≤ 2 min |r_j|), so the direction is well conditioned even when v̄ is far.
+/// All planes: the direction is the common line of the planes and v̄ is at infinity.
+/// None for fewer than 3 spheres or non-finite input; check `condition` against
+/// [`STAR_AXIS_MIN_CONDITION`].
+pub fn star_axis(spheres: &[Sphere], v: DVec3) -> Option<StarAxis> {
+    if spheres.len() < 3 || !v.is_finite() || spheres.iter().any(|s| !s.is_finite()) {
+        return None;
+    }
+    let amax = spheres.iter().map(|s| s.a.abs()).fold(0.0, f64::max);
+    if amax == 0.0 {
+        let rows: Vec<[f64; 3]> = spheres.iter().map(|s| s.normal_at(v).to_array()).collect();
+        let svd = dense::Svd::new(&rows);
+        let condition = if svd.sigma[0] > 0.0 { svd.sigma[1] / svd.sigma[0] } else { 0.0 };
+        let direction = DVec3::from_array(svd.v[2]).try_normalize()?;
+        return Some(StarAxis { direction, second_point: None, condition });
+    }
+    let scale = 0.5 / amax;
+    let rows: Vec<[f64; 4]> = spheres
+        .iter()
+        .map(|s| {
+            let n = s.normal_at(v);
+            [n.x, n.y, n.z, -s.a * scale]
+        })
+        .collect();
+    let svd = dense::Svd::new(&rows);
+    let condition = if svd.sigma[0] > 0.0 { svd.sigma[2] / svd.sigma[0] } else { 0.0 };
+    let [lx, ly, lz, tau] = svd.v[3];
+    let l = DVec3::new(lx, ly, lz);
+    let l2 = l.length_squared();
+    if !(l2 > 0.0) {
+        return None;
+    }
+    let direction = l / l2.sqrt();
+    let second = v + (scale * tau / l2) * l;
+    Some(StarAxis { direction, second_point: second.is_finite().then_some(second), condition })
+}
+
+/// The second common point v̄ of the spheres around a vertex v (all passing through v): see
+/// [`star_axis`]. None when it is not determined (fewer than 3 spheres, condition below
+/// [`STAR_AXIS_MIN_CONDITION`]) or at infinity.
+pub fn second_common_point(spheres: &[Sphere], v: DVec3) -> Option<DVec3> {
+    star_axis(spheres, v).filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION).and_then(|a| a.second_point)
+}
+
+impl AbsoluteSphere {
+    /// The generalized-sphere coefficients of Ω, unnormalized: (1, 2m, |m|² − R²) for a sphere,
+    /// so that `eval(x)` is the power |x − m|² − R² (valid for R² < 0 too, where bᵀb − 4ac < 0);
+    /// (0, −a, −d) for the plane ⟨x, a⟩ = d, so that `eval(x)` = ⟨x, a⟩ − d.
+    pub fn coefficients(&self) -> Sphere {
+        match *self {
+            AbsoluteSphere::Sphere { center, r2 } => {
+                Sphere { a: 1.0, b: 2.0 * center, c: center.length_squared() - r2 }
+            }
+            AbsoluteSphere::Plane { axis, d } => Sphere { a: 0.0, b: -axis, c: -d },
+        }
+    }
+
+    /// The linear condition on a sphere s = (a, b, c) to be orthogonal to Ω (notes, "Linear
+    /// conditions"): [|m|² − R², −m, 1] · s = ψ_s(m) − a R² = 0 for a sphere, i.e.
+    /// |c − m|² − r² = R²; [−2d, a, 0] · s = 0 for the plane ⟨x, a⟩ = d (the centre lies in it).
+    /// Proportional to the inversive row of [`Self::coefficients`].
+    pub fn row(&self) -> [f64; 5] {
+        match *self {
+            AbsoluteSphere::Sphere { center, r2 } => {
+                [center.length_squared() - r2, -center.x, -center.y, -center.z, 1.0]
+            }
+            AbsoluteSphere::Plane { axis, d } => [-2.0 * d, axis.x, axis.y, axis.z, 0.0],
+        }
+    }
+
+    /// The power of x: |x − m|² − R²; for a plane the signed distance ⟨x, a⟩ − d.
+    pub fn power(&self, x: DVec3) -> f64 {
+        match *self {
+            AbsoluteSphere::Sphere { center, r2 } => (x - center).length_squared() - r2,
+            AbsoluteSphere::Plane { axis, d } => x.dot(axis) - d,
+        }
+    }
+
+    /// Inversion in Ω: m + R² (x − m)/|x − m|². R² < 0 is the anti-inversion (through m to the
+    /// other side), R² = 0 maps every x ≠ m to m. For a plane it is the reflection in it. Every
+    /// sphere orthogonal to Ω is mapped onto itself. None for x = m (or non-finite results).
+    pub fn invert(&self, x: DVec3) -> Option<DVec3> {
+        let y = match *self {
+            AbsoluteSphere::Sphere { center, r2 } => {
+                let d = x - center;
+                let l2 = d.length_squared();
+                if !(l2 > 0.0) {
+                    return None;
+                }
+                center + (r2 / l2) * d
+            }
+            AbsoluteSphere::Plane { axis, d } => x - 2.0 * (x.dot(axis) - d) * axis,
+        };
+        y.is_finite().then_some(y)
+    }
+
+    /// Centre m (None for a plane).
+    pub fn center(&self) -> Option<DVec3> {
+        match *self {
+            AbsoluteSphere::Sphere { center, .. } => Some(center),
+            AbsoluteSphere::Plane { .. } => None,
+        }
+    }
+
+    /// How far a normalized sphere s is from being orthogonal to Ω:
+    /// - Ω a sphere: the power defect | |c − m|² − r² − R² | = |row · s| / |a| (an area); for a
+    ///   plane s (|a| ≤ 1e-300) the distance of m from it, |ψ_s(m)| (planes orthogonal to Ω pass
+    ///   through m);
+    /// - Ω a plane: the distance of s's centre from it, |⟨c, a⟩ − d|; for a plane s, |⟨b_s, a⟩|
+    ///   (the cosine of its angle to Ω: 0 when perpendicular to it).
+    pub fn orthogonality_defect(&self, s: &Sphere) -> f64 {
+        let row = self.row();
+        let dot: f64 = row.iter().zip(s.to_array()).map(|(r, x)| r * x).sum();
+        match self {
+            AbsoluteSphere::Sphere { center, .. } => {
+                if s.a.abs() > 1e-300 {
+                    (dot / s.a).abs()
+                } else {
+                    s.eval(*center).abs()
+                }
+            }
+            AbsoluteSphere::Plane { .. } => {
+                if s.a.abs() > 1e-300 {
+                    (dot / (2.0 * s.a)).abs()
+                } else {
+                    dot.abs()
+                }
+            }
+        }
+    }
+}
+
+/// Small dense linear algebra for the toolkit: a one-sided Jacobi SVD of m × N matrices
+/// (N ≤ 5 in practice), giving singular values and right singular vectors to high relative
+/// accuracy (null vectors of the sphere systems).
+pub mod dense {
+    /// Singular values (descending) and matching right singular vectors `v[j]` of an m × N
+    /// matrix given by rows (m may be smaller than N: the missing singular values are 0).
+    #[derive(Clone, Debug)]
+    pub struct Svd<const N: usize> {
+        pub sigma: [f64; N],
+        pub v: [[f64; N]; N],
+    }
+
+    impl<const N: usize> Svd<N> {
+        /// One-sided (Hestenes) Jacobi: rotate column pairs of A until all are orthogonal to
+        /// `f64::EPSILON` relative; the column norms are the singular values and the accumulated
+        /// rotations the right singular vectors.
+        pub fn new(rows: &[[f64; N]]) -> Self {
+            let mut a: Vec<[f64; N]> = rows.to_vec();
+            let mut v = [[0.0; N]; N];
+            for (i, row) in v.iter_mut().enumerate() {
+                row[i] = 1.0;
+            }
+            // v is stored by columns: v[j] is column j (a right singular vector).
+            // A column at the rounding level of A is a null direction: rotating it against another
+            // column would only move the null vector by O(ε) (and never terminates: the rounding
+            // noise stays parallel to the other column), so such pairs are skipped.
+            let norm2: f64 = a.iter().flat_map(|r| r.iter()).map(|x| x * x).sum();
+            let negligible = (8.0 * f64::EPSILON) * (8.0 * f64::EPSILON) * norm2;
+            for _sweep in 0..60 {
+                let mut rotated = false;
+                for p in 0..N {
+                    for q in p + 1..N {
+                        let (mut alpha, mut beta, mut gamma) = (0.0, 0.0, 0.0);
+                        for r in &a {
+                            alpha += r[p] * r[p];
+                            beta += r[q] * r[q];
+                            gamma += r[p] * r[q];
+                        }
+                        if gamma == 0.0
+                            || gamma.abs() <= 8.0 * f64::EPSILON * (alpha * beta).sqrt()
+                            || alpha.min(beta) <= negligible
+                        {
+                            continue;
+                        }
+                        rotated = true;
+                        let zeta = (beta - alpha) / (2.0 * gamma);
+                        let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
+                        let c = 1.0 / (1.0 + t * t).sqrt();
+                        let s = c * t;
+                        for r in a.iter_mut() {
+                            let (x, y) = (r[p], r[q]);
+                            r[p] = c * x - s * y;
+                            r[q] = s * x + c * y;
+                        }
+                        let (vp, vq) = (v[p], v[q]);
+                        for k in 0..N {
+                            v[p][k] = c * vp[k] - s * vq[k];
+                            v[q][k] = s * vp[k] + c * vq[k];
+                        }
+                    }
+                }
+                if !rotated {
+                    break;
+                }
+            }
+            let mut sigma = [0.0; N];
+            for (j, s) in sigma.iter_mut().enumerate() {
+                *s = a.iter().map(|r| r[j] * r[j]).sum::<f64>().sqrt();
+            }
+            let mut order: [usize; N] = [0; N];
+            for (i, o) in order.iter_mut().enumerate() {
+                *o = i;
+            }
+            order.sort_by(|&i, &j| sigma[j].partial_cmp(&sigma[i]).unwrap_or(std::cmp::Ordering::Equal));
+            Svd { sigma: order.map(|i| sigma[i]), v: order.map(|i| v[i]) }
+        }
     }
 }
 

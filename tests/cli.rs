@@ -52,3 +52,40 @@ fn unreadable_input_exits_2_with_one_line() {
     }
     assert_eq!(run(&[]).status.code(), Some(2));
 }
+
+#[test]
+fn st_support_writes_panels_and_report() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-st-{}", std::process::id()));
+    let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--optimize-radius", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"] {
+        assert!(dir.join(f).metadata().map(|m| m.len() > 0).unwrap_or(false), "{f}");
+    }
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["method"], "st-support");
+    assert_eq!(r["input"]["vertices"], 272);
+    assert_eq!(r["output"]["panels"], 480);
+    let m = &r["metrics"];
+    for k in ["max_vertex_sphere_residual", "max_orthogonality_residual", "max_node_axis_offset"] {
+        assert!(m[k].as_f64().unwrap() <= 1e-9, "{k} = {}", m[k]);
+    }
+    for k in ["mean_axis_normal_angle_deg", "max_axis_normal_angle_deg", "mean_kink_angle_deg", "max_kink_angle_deg", "max_distance_to_reference"] {
+        assert!(m[k].as_f64().unwrap().is_finite(), "{k}");
+    }
+    assert!(r["absolute_sphere"]["r2"].is_number());
+    assert!(r["timings_ms"]["face_spheres"].is_number());
+    let csv = std::fs::read_to_string(dir.join("panels.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 481, "header plus one row per panel");
+}
+
+#[test]
+fn st_support_refuses_a_minimal_surface() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-enneper-{}", std::process::id()));
+    let out = run(&["st-support", "../shared/data/meshes/enneper2.obj", "--out", dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("no usable central spheres"), "{err}");
+    assert!(!dir.join("report.json").exists(), "nothing written");
+    assert_eq!(run(&["st-support", "../shared/data/meshes/cmc1.obj"]).status.code(), Some(2), "--out is required");
+}

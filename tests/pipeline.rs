@@ -22,7 +22,7 @@ impl Sink for Recorder {
         let env = encode_from_worker(&msg, &fields);
         let decoded = decode_from_worker(&env).expect("decodes");
         assert_eq!(decoded.0, msg);
-        assert_eq!(decoded.1, if matches!(msg, FromWorker::Snapshot { .. }) { fields } else { vec![] });
+        assert!(decoded.1 == if matches!(msg, FromWorker::Snapshot { .. } | FromWorker::Files { .. }) { fields } else { vec![] });
         self.messages.push(decoded);
     }
     fn cancel_requested(&mut self) -> bool {
@@ -118,4 +118,46 @@ fn cancel_takes_effect_within_one_iteration() {
     assert_eq!(r.progress_seen, 1, "stopped at the first iteration boundary");
     assert!(matches!(r.messages.last().unwrap().0, FromWorker::Cancelled { .. }), "{kinds:?}");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Finished { .. })));
+}
+
+#[test]
+fn st_support_streams_panels_files_and_a_report() {
+    use spherical_faces::pipeline::st_support::{fields as stf, StSupportRequest};
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    r.messages.clear();
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::StSupport(StSupportRequest::default())), None);
+    let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "st-support")).unwrap();
+    let tri = find(&snap.1, stf::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
+    let pos = find(&snap.1, stf::PANEL_POSITIONS).unwrap().as_f32().unwrap();
+    assert!(!tri.is_empty() && tri.iter().all(|&i| (i as usize) < pos.len() / 3));
+    assert!(!find(&snap.1, stf::AXES_LINES).unwrap().as_u32().unwrap().is_empty());
+    let (FromWorker::Files { fields, mime, .. }, bodies) = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap() else { panic!() };
+    let names: Vec<_> = fields.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
+    assert_eq!(mime.len(), 5);
+    assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
+    let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
+    let m = &summary.report.metrics;
+    assert!(m.max_vertex_sphere_residual.unwrap() <= 1e-9);
+    assert!(m.max_orthogonality_residual.unwrap() <= 1e-9);
+    assert!(m.max_node_axis_offset.unwrap() <= 1e-9);
+    assert_eq!(summary.report.output.panels, summary.report.input.faces);
+    let report: serde_json::Value = serde_json::from_slice(bodies[4].as_bytes().unwrap()).unwrap();
+    assert_eq!(report["method"], "st-support");
+}
+
+#[test]
+fn st_support_on_a_minimal_surface_is_refused() {
+    use spherical_faces::pipeline::st_support::StSupportRequest;
+    let bytes = std::fs::read("../shared/data/meshes/enneper2.obj").unwrap();
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "enneper2.obj".into() }, Some(bytes));
+    r.messages.clear();
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::StSupport(StSupportRequest::default())), None);
+    let Some((FromWorker::Error { message }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
+    assert!(message.contains("no usable central spheres"), "{message}");
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. })));
 }

@@ -2,11 +2,13 @@
 //! the browser; the worker (wasm) and the CLI (native) both drive a [`Session`] through a [`Sink`].
 
 pub mod protocol;
+pub mod st_support;
 
 use crate::curvature::{jet_fit, CurvatureField, JetParams};
 use crate::import::{import_mesh, Imported};
 use crate::mesh::{Topology, TriMesh};
 use crate::samples::Sample;
+use crate::st_support::Clock;
 use protocol::{field, Field, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 
 /// Where a stage streams its messages, and how it learns of a cancel request.
@@ -24,6 +26,8 @@ pub struct Reference {
     pub topology: Topology,
     pub info: ReferenceInfo,
     pub curvature: Option<CurvatureField>,
+    /// The parameters `curvature` was computed with.
+    pub curvature_params: Option<JetParams>,
 }
 
 impl Reference {
@@ -37,7 +41,7 @@ impl Reference {
             bbox_diagonal: mesh.bbox_diagonal(),
             notes: Vec::new(),
         };
-        Self { mesh, topology, info, curvature: None }
+        Self { mesh, topology, info, curvature: None, curvature_params: None }
     }
 
     pub fn from_file(bytes: &[u8], name: &str) -> Result<Self, String> {
@@ -51,7 +55,7 @@ impl Reference {
             bbox_diagonal: mesh.bbox_diagonal(),
             notes,
         };
-        Ok(Self { mesh, topology, info, curvature: None })
+        Ok(Self { mesh, topology, info, curvature: None, curvature_params: None })
     }
 
     /// Positions, triangles and normals for display.
@@ -72,6 +76,7 @@ impl Reference {
             sink.send(
                 FromWorker::Progress(Progress {
                     stage: "curvature".into(),
+                    detail: String::new(),
                     iteration: done as u32,
                     total: total as u32,
                     energies: Vec::new(),
@@ -82,6 +87,7 @@ impl Reference {
             !sink.cancel_requested()
         };
         self.curvature = jet_fit(&self.mesh, &self.topology, params, &mut progress);
+        self.curvature_params = self.curvature.as_ref().map(|_| params.clone());
         self.curvature.as_ref()
     }
 }
@@ -111,6 +117,8 @@ fn flatten(it: impl Iterator<Item = [f64; 3]>) -> Vec<f32> {
 #[derive(Default)]
 pub struct Session {
     pub reference: Option<Reference>,
+    /// Times the stages (none by default: timings read 0).
+    pub clock: Clock,
 }
 
 impl Session {
@@ -161,6 +169,42 @@ impl Session {
                     sink.send(FromWorker::Finished { stage: name, result: StageResult::Curvature(summary), elapsed_ms }, vec![]);
                 }
             },
+            StageRequest::StSupport(req) => {
+                if reference.curvature_params.as_ref() != Some(&req.jet) && reference.run_curvature(&req.jet, sink).is_none() {
+                    return sink.send(FromWorker::Cancelled { stage: name }, vec![]);
+                }
+                let Some(field) = reference.curvature.as_ref() else { return };
+                let mut progress = |detail: &str, done: usize, total: usize| {
+                    let elapsed_ms = sink.now_ms() - start;
+                    sink.send(
+                        FromWorker::Progress(Progress {
+                            stage: "st-support".into(),
+                            detail: detail.into(),
+                            iteration: done as u32,
+                            total: total as u32,
+                            energies: Vec::new(),
+                            elapsed_ms,
+                        }),
+                        Vec::new(),
+                    );
+                    !sink.cancel_requested()
+                };
+                match st_support::run(&reference.mesh, &reference.topology, field, &req, self.clock, &mut progress) {
+                    Err(e) if e == "cancelled" => sink.send(FromWorker::Cancelled { stage: name }, vec![]),
+                    Err(message) => sink.send(FromWorker::Error { message }, vec![]),
+                    Ok(out) => {
+                        let fields = st_support::display_fields(&out);
+                        sink.send(snapshot(&name, 1, &fields), fields);
+                        let files: Vec<Field> = out.files.iter().map(|f| Field::bytes(&f.name, f.bytes.clone())).collect();
+                        let mime = out.files.iter().map(|f| f.mime.clone()).collect();
+                        let headers = files.iter().map(Field::header).collect();
+                        sink.send(FromWorker::Files { stage: name.clone(), fields: headers, mime }, files);
+                        let elapsed_ms = sink.now_ms() - start;
+                        let result = StageResult::StSupport(Box::new(out.summary));
+                        sink.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
+                    }
+                }
+            }
         }
     }
 }

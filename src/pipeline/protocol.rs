@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::st_support::{StSupportRequest, StSupportSummary};
 use crate::curvature::{CurvatureSummary, JetParams};
 use crate::import::Format;
 use crate::mesh::MeshStats;
@@ -30,12 +31,15 @@ impl Source {
 pub enum StageRequest {
     /// Jet-fitted curvature and central spheres (Sec. 2.6).
     Curvature(JetParams),
+    /// ST mesh with support structure (Sec. 4), with panels and exports.
+    StSupport(StSupportRequest),
 }
 
 impl StageRequest {
     pub fn name(&self) -> &'static str {
         match self {
             StageRequest::Curvature(_) => "curvature",
+            StageRequest::StSupport(_) => "st-support",
         }
     }
 }
@@ -61,6 +65,9 @@ pub struct Energy {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Progress {
     pub stage: String,
+    /// The step within the stage, e.g. "absolute_sphere".
+    #[serde(default)]
+    pub detail: String,
     pub iteration: u32,
     /// Total iterations when known (0 when open-ended).
     pub total: u32,
@@ -82,6 +89,7 @@ pub struct ReferenceInfo {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum StageResult {
     Curvature(CurvatureSummary),
+    StSupport(Box<StSupportSummary>),
 }
 
 /// Worker to main thread.

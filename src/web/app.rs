@@ -13,7 +13,10 @@ use super::colormap;
 use super::viewer::{ColorMap, Geometry, Layer, MeshData, OrbitCamera, ScalarData, Style, ViewerFrame, ViewerResources};
 use super::worker_client::{Incoming, WorkerClient};
 use crate::curvature::CurvatureSummary;
-use crate::design_link::{CameraState, ColorBy, Design, Reference, Shading};
+use crate::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading};
+use crate::pipeline::st_support::{fields as stf, StSupportRequest, StSupportSummary};
+use crate::absolute_sphere::Histogram;
+use crate::sphere_mesh::AbsoluteSphere;
 use crate::pipeline::protocol::{field, find, Field, FieldData, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 use crate::samples::Sample;
 
@@ -26,6 +29,36 @@ struct Loaded {
     center: Vec3,
     radius: f32,
     curvature: Option<CurvatureView>,
+    st: Option<StView>,
+}
+
+/// The ST-with-support-structure result as display meshes.
+struct StView {
+    panels: Arc<MeshData>,
+    support: Arc<MeshData>,
+    axes: Arc<MeshData>,
+    envelope: Option<Arc<MeshData>>,
+    summary: Option<StSupportSummary>,
+}
+
+impl StView {
+    fn from_fields(fields: &[Field], generation: &mut u64) -> Self {
+        let f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
+        let u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+        let mut mesh = |positions: Vec<f32>, normals: Vec<f32>, triangles: Vec<u32>, edges: Vec<u32>| {
+            *generation += 1;
+            Arc::new(MeshData { generation: *generation, positions, normals, triangles, edges })
+        };
+        let env_pos = f(stf::ENVELOPE_POSITIONS);
+        Self {
+            panels: mesh(f(stf::PANEL_POSITIONS), f(stf::PANEL_NORMALS), u(stf::PANEL_TRIANGLES), u(stf::PANEL_EDGES)),
+            support: mesh(f(stf::SUPPORT_POSITIONS), Vec::new(), u(stf::SUPPORT_TRIANGLES), Vec::new()),
+            axes: mesh(f(stf::AXES_POSITIONS), Vec::new(), Vec::new(), u(stf::AXES_LINES)),
+            envelope: (!env_pos.is_empty())
+                .then(|| mesh(env_pos, Vec::new(), u(stf::ENVELOPE_TRIANGLES), Vec::new())),
+            summary: None,
+        }
+    }
 }
 
 struct CurvatureView {
@@ -65,6 +98,10 @@ pub struct App {
     file_in_flight: Option<web_sys::File>,
     busy: Option<Busy>,
     downloads: Vec<Download>,
+    /// Method parameters changed while a slider is held: rerun on release.
+    st_dirty: bool,
+    show_reference: bool,
+    show_envelope: bool,
     /// A fresh worker is being given the current design back: keep the view and the message.
     restoring: bool,
     camera: OrbitCamera,
@@ -81,6 +118,8 @@ pub struct App {
     picked_files: Rc<RefCell<Vec<web_sys::File>>>,
     crash_requests: Rc<RefCell<u32>>,
     _crash_listener: Option<Closure<dyn FnMut()>>,
+    download_requests: Rc<RefCell<Vec<String>>>,
+    _download_listener: Option<Closure<dyn FnMut(web_sys::CustomEvent)>>,
     file_input: Option<web_sys::HtmlInputElement>,
     _file_input_closure: Option<Closure<dyn FnMut()>>,
 }
@@ -118,6 +157,19 @@ impl App {
             web_sys::window().map(|w| w.add_event_listener_with_callback("sf-crash-worker", c.as_ref().unchecked_ref()));
             Some(c)
         };
+        // Automation: `new CustomEvent('sf-download', {detail: 'panels.glb'})` saves that file.
+        let download_requests = Rc::new(RefCell::new(Vec::new()));
+        let download_listener = {
+            let (queue, ctx) = (download_requests.clone(), cc.egui_ctx.clone());
+            let c = Closure::<dyn FnMut(web_sys::CustomEvent)>::new(move |ev: web_sys::CustomEvent| {
+                if let Some(name) = ev.detail().as_string() {
+                    queue.borrow_mut().push(name);
+                    ctx.request_repaint();
+                }
+            });
+            web_sys::window().map(|w| w.add_event_listener_with_callback("sf-download", c.as_ref().unchecked_ref()));
+            Some(c)
+        };
         let mut app = Self {
             camera_from_link: design.camera,
             design,
@@ -129,6 +181,9 @@ impl App {
             file_in_flight: None,
             busy: None,
             downloads: Vec::new(),
+            st_dirty: false,
+            show_reference: false,
+            show_envelope: false,
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -143,6 +198,8 @@ impl App {
             picked_files,
             crash_requests,
             _crash_listener: crash_listener,
+            download_requests,
+            _download_listener: download_listener,
             file_input,
             _file_input_closure: closure,
         };
@@ -183,9 +240,27 @@ impl App {
         if self.busy.as_ref().is_some_and(|b| b.stage != "import") {
             self.cancel();
         }
-        let stage = StageRequest::Curvature(self.design.jet.clone());
-        self.busy = Some(Busy { stage: stage.name().into(), progress: None });
-        self.send(&ToWorker::Run(stage), None);
+        // Curvature first (its colour maps and central spheres); methods reuse it in the worker.
+        let mut stages = vec![StageRequest::Curvature(self.design.jet.clone())];
+        if self.design.method == Method::StSupport {
+            let st = self.design.st;
+            stages.push(StageRequest::StSupport(StSupportRequest {
+                optimize_radius: st.optimize_radius,
+                support_depth: st.support_depth,
+                axis_length: st.axis_length,
+                radius_tolerance: st.radius_tolerance,
+                jet: self.design.jet.clone(),
+            }));
+        }
+        if let Some(l) = self.loaded.as_mut() {
+            l.st = None;
+        }
+        self.downloads.clear();
+        let last = stages.last().map(|s| s.name().to_string()).unwrap_or_default();
+        self.busy = Some(Busy { stage: last, progress: None });
+        for stage in stages {
+            self.send(&ToWorker::Run(stage), None);
+        }
     }
 
     fn cancel(&mut self) {
@@ -249,7 +324,7 @@ impl App {
                 for n in &info.notes {
                     self.notices.push(n.clone());
                 }
-                self.loaded = Some(Loaded { info, mesh: Arc::new(empty_mesh()), center: Vec3::ZERO, radius: 1.0, curvature: None });
+                self.loaded = Some(Loaded { info, mesh: Arc::new(empty_mesh()), center: Vec3::ZERO, radius: 1.0, curvature: None, st: None });
             }
             FromWorker::Snapshot { stage, .. } if stage == "reference" => self.install_geometry(&fields),
             FromWorker::Files { mime, .. } => {
@@ -262,6 +337,11 @@ impl App {
                     })
                     .collect();
             }
+            FromWorker::Snapshot { stage, .. } if stage == "st-support" => {
+                if let Some(l) = self.loaded.as_mut() {
+                    l.st = Some(StView::from_fields(&fields, &mut self.generation));
+                }
+            }
             FromWorker::Snapshot { .. } => {
                 if let Some(l) = self.loaded.as_mut() {
                     let summary = l.curvature.take().and_then(|c| c.summary);
@@ -271,17 +351,22 @@ impl App {
             }
             FromWorker::Progress(p) => {
                 if let Some(b) = self.busy.as_mut() {
-                    if b.stage == p.stage {
-                        b.progress = Some(p);
-                    }
+                    b.progress = Some(p);
                 }
             }
-            FromWorker::Finished { result, .. } => {
-                self.busy = None;
+            FromWorker::Finished { stage, result, .. } => {
+                if self.busy.as_ref().is_some_and(|b| b.stage == stage) {
+                    self.busy = None;
+                }
                 match result {
                     StageResult::Curvature(summary) => {
                         if let Some(c) = self.loaded.as_mut().and_then(|l| l.curvature.as_mut()) {
                             c.summary = Some(summary);
+                        }
+                    }
+                    StageResult::StSupport(summary) => {
+                        if let Some(st) = self.loaded.as_mut().and_then(|l| l.st.as_mut()) {
+                            st.summary = Some(*summary);
                         }
                     }
                 }
@@ -291,6 +376,7 @@ impl App {
                 self.notices.push(format!("Stage '{stage}' cancelled."));
             }
             FromWorker::Error { message } => {
+                // A failed stage also ends the stages queued after it.
                 self.busy = None;
                 self.file_in_flight = None;
                 self.error = Some(message);
@@ -318,6 +404,7 @@ impl App {
         l.radius = ((hi - lo).length() * 0.5).max(1e-6);
         l.mesh = Arc::new(mesh);
         l.curvature = None;
+        l.st = None;
         self.scalars = None;
         if !self.restoring {
             self.selected = None;
@@ -374,7 +461,7 @@ impl App {
         let (design, notices) = Design::from_fragment(&hash);
         self.notices = notices;
         let reference_changed = design.reference != self.design.reference;
-        let jet_changed = design.jet != self.design.jet;
+        let jet_changed = design.jet != self.design.jet || design.method != self.design.method || design.st != self.design.st;
         self.camera_from_link = design.camera;
         self.design = design;
         if reference_changed {
@@ -459,6 +546,10 @@ impl App {
             "viewport": [vp.min.x, vp.min.y, vp.width(), vp.height()],
             "worker_restarts": self.worker.as_ref().map_or(0, |w| w.restarts),
             "selected_vertex": self.selected,
+            "method": self.design.method.key(),
+            "st_ready": self.loaded.as_ref().and_then(|l| l.st.as_ref()).is_some_and(|s| s.summary.is_some()),
+            "panels": self.loaded.as_ref().and_then(|l| l.st.as_ref()).and_then(|s| s.summary.as_ref()).map_or(0, |s| s.report.output.panels),
+            "downloads": self.downloads.iter().map(|d| d.name.clone()).collect::<Vec<_>>(),
         })
         .to_string();
         if state != self.last_state {
@@ -518,7 +609,17 @@ impl App {
                 ui.add_space(6.0);
             }
             ui.strong("Method");
-            ui.label("Curvature: jet fitting (Sec. 2.6)");
+            let mut method = self.design.method;
+            egui::ComboBox::from_id_salt("method").selected_text(method.title()).show_ui(ui, |ui| {
+                for m in Method::ALL {
+                    ui.selectable_value(&mut method, m, m.title());
+                }
+            });
+            if method != self.design.method {
+                self.design.method = method;
+                self.run_method();
+            }
+            ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
             let mut jet = self.design.jet.clone();
             let mut degree = jet.degree as u32;
             ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
@@ -527,6 +628,26 @@ impl App {
             if jet != self.design.jet {
                 self.design.jet = jet;
                 self.run_method();
+            }
+            if self.design.method == Method::StSupport {
+                let mut st = self.design.st;
+                ui.checkbox(&mut st.optimize_radius, "optimize R (Fig. 16, right)");
+                ui.add(egui::Slider::new(&mut st.support_depth, 0.0..=0.1).text("support depth"));
+                ui.add(egui::Slider::new(&mut st.axis_length, 0.0..=0.5).text("axis length"));
+                ui.add(egui::Slider::new(&mut st.radius_tolerance, 1e-5..=1e-1).logarithmic(true).text("radius tolerance"));
+                ui.label(RichText::new("lengths relative to the bbox diagonal").small());
+                let changed = st != self.design.st;
+                let released = !ui.input(|i| i.pointer.any_down());
+                self.design.st = st;
+                if changed {
+                    self.st_dirty = true;
+                }
+                if self.st_dirty && released {
+                    self.st_dirty = false;
+                    self.run_method();
+                }
+                ui.checkbox(&mut self.show_reference, "show reference surface");
+                ui.checkbox(&mut self.show_envelope, "show second envelope");
             }
             ui.separator();
             ui.strong("Display");
@@ -543,6 +664,7 @@ impl App {
             });
             ui.separator();
             self.info_section(ui);
+            self.st_section(ui);
             if !self.downloads.is_empty() {
                 ui.separator();
                 ui.strong("Downloads");
@@ -625,6 +747,45 @@ impl App {
         }
     }
 
+    /// Ω, the report metrics and the histograms of Fig. 14.
+    fn st_section(&self, ui: &mut egui::Ui) {
+        if self.design.method != Method::StSupport {
+            return;
+        }
+        let Some(sum) = self.loaded.as_ref().and_then(|l| l.st.as_ref()).and_then(|s| s.summary.as_ref()) else { return };
+        ui.separator();
+        ui.strong("ST mesh with support structure");
+        let omega = match sum.omega {
+            AbsoluteSphere::Sphere { center, r2 } => {
+                format!("m = ({:.3}, {:.3}, {:.3})\nR² = {:.4}{}", center.x, center.y, center.z, r2, if r2 < 0.0 { " (imaginary Ω)" } else { "" })
+            }
+            AbsoluteSphere::Plane { axis, d } => format!("plane at infinity: a = ({:.3}, {:.3}, {:.3}), d = {:.4}", axis.x, axis.y, axis.z, d),
+        };
+        ui.label(RichText::new(omega).monospace().small());
+        let r = &sum.report;
+        let m = &r.metrics;
+        let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3e}"));
+        let d = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3}°"));
+        key_values(
+            ui,
+            "st-metrics",
+            &[
+                ("panels", r.output.panels.to_string()),
+                ("distinct radii", sum.distinct_radii.to_string()),
+                ("kink mean / max", format!("{} / {}", d(m.mean_kink_angle_deg), d(m.max_kink_angle_deg))),
+                ("axis–normal mean / max", format!("{} / {}", d(m.mean_axis_normal_angle_deg), d(m.max_axis_normal_angle_deg))),
+                ("vertex–sphere residual", g(m.max_vertex_sphere_residual)),
+                ("orthogonality residual", g(m.max_orthogonality_residual)),
+                ("node-axis offset", g(m.max_node_axis_offset)),
+                ("distance to reference", g(m.max_distance_to_reference)),
+            ],
+        );
+        ui.label(RichText::new("∠(v − m, n): m0 (green) and optimized m (red)").small());
+        histogram(ui, &[(&sum.angles_m0, Color32::from_rgb(90, 190, 90)), (&sum.angles_m, Color32::from_rgb(220, 80, 70))], "°");
+        ui.label(RichText::new(if matches!(sum.omega, AbsoluteSphere::Plane { .. }) { "distances dᵢ" } else { "Rᵢ² of the central spheres" }).small());
+        histogram(ui, &[(&sum.r2, Color32::from_rgb(110, 150, 230))], "");
+    }
+
     fn selected_vertex_text(&self, v: usize) -> Option<String> {
         let c = self.loaded.as_ref()?.curvature.as_ref()?;
         let val = |k| find(&c.fields, k).and_then(Field::as_f32).and_then(|x| x.get(v).copied());
@@ -697,19 +858,35 @@ impl App {
             Shading::Reflective => 2,
         };
         let color_map = self.scalar_view().map(|s| ColorMap { scalars: s.data.clone(), range: s.range, diverging: s.diverging });
-        let mut layers = vec![Layer {
-            geometry: Geometry::Mesh(mesh.clone()),
-            model: Mat4::IDENTITY,
-            style: Style::Surface { shading, color: [0.72, 0.78, 0.86, 1.0], color_map },
-        }];
-        if self.design.edges {
-            layers.push(Layer { geometry: Geometry::Mesh(mesh), model: Mat4::IDENTITY, style: Style::Lines { color: [0.05, 0.06, 0.08, 1.0] } });
+        let st = self.loaded.as_ref().and_then(|l| l.st.as_ref()).filter(|_| self.design.method == Method::StSupport);
+        let edge_color = [0.05, 0.06, 0.08, 1.0];
+        let mut layers = Vec::new();
+        if st.is_none() || self.show_reference {
+            layers.push(Layer {
+                geometry: Geometry::Mesh(mesh.clone()),
+                model: Mat4::IDENTITY,
+                style: Style::Surface { shading, color: [0.72, 0.78, 0.86, 1.0], color_map },
+            });
+            if self.design.edges {
+                layers.push(Layer { geometry: Geometry::Mesh(mesh), model: Mat4::IDENTITY, style: Style::Lines { color: edge_color } });
+            }
+        }
+        if let Some(st) = st {
+            layers.extend(self.st_layers(st, shading, edge_color));
         }
         layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
-        let frame = ViewerFrame { view_proj: self.camera.proj(aspect) * self.camera.view(), eye: self.camera.eye(), layers };
+        let frame = ViewerFrame {
+            view_proj: self.camera.proj(aspect) * self.camera.view(),
+            eye: self.camera.eye(),
+            line_bias: 2e-3 * self.camera.distance.min(4.0 * self.camera.scene_radius),
+            layers,
+        };
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, frame));
         self.drawn = true;
-        if let Some(s) = &self.scalars {
+        let reference_shown = self.design.method != Method::StSupport
+            || self.show_reference
+            || self.loaded.as_ref().is_some_and(|l| l.st.is_none());
+        if let Some(s) = self.scalars.as_ref().filter(|_| reference_shown) {
             colormap::legend(ui.painter(), rect, self.design.color.label(), s.range, s.diverging);
         }
         if let Some(b) = &self.busy {
@@ -719,6 +896,50 @@ impl App {
             };
             ui.painter().text(rect.left_top() + Vec2::new(10.0, 10.0), egui::Align2::LEFT_TOP, text, egui::FontId::proportional(13.0), Color32::LIGHT_GRAY);
         }
+    }
+
+    /// Panels (with their arcs), support structure, node axes, Ω and m, and the second envelope.
+    fn st_layers(&self, st: &StView, shading: u32, edge_color: [f32; 4]) -> Vec<Layer> {
+        let id = Mat4::IDENTITY;
+        let radius = self.loaded.as_ref().map_or(1.0, |l| l.radius);
+        let mut layers = vec![
+            Layer { geometry: Geometry::Mesh(st.panels.clone()), model: id, style: Style::Surface { shading, color: [0.70, 0.80, 0.88, 1.0], color_map: None } },
+            Layer { geometry: Geometry::Mesh(st.panels.clone()), model: id, style: Style::Lines { color: edge_color } },
+            Layer { geometry: Geometry::Mesh(st.support.clone()), model: id, style: Style::Surface { shading: 0, color: [0.80, 0.55, 0.30, 1.0], color_map: None } },
+            Layer { geometry: Geometry::Mesh(st.axes.clone()), model: id, style: Style::Lines { color: [0.85, 0.15, 0.12, 1.0] } },
+        ];
+        if self.show_envelope {
+            if let Some(env) = &st.envelope {
+                layers.push(Layer { geometry: Geometry::Mesh(env.clone()), model: id, style: Style::Surface { shading: 0, color: [0.55, 0.75, 0.55, 1.0], color_map: None } });
+            }
+        }
+        if let Some(AbsoluteSphere::Plane { axis, d }) = st.summary.as_ref().map(|s| s.omega) {
+            // Ω at infinity: a disc of the plane ⟨x, a⟩ = d under the mesh centre.
+            let (a, center) = (axis.as_vec3().normalize_or(Vec3::Z), self.loaded.as_ref().map_or(Vec3::ZERO, |l| l.center));
+            let foot = center + a * (d as f32 - center.dot(a));
+            layers.push(Layer {
+                geometry: Geometry::UnitDisc,
+                model: Mat4::from_scale_rotation_translation(Vec3::splat(radius * 1.2), glam::Quat::from_rotation_arc(Vec3::Z, a), foot),
+                style: Style::Translucent { color: [0.95, 0.75, 0.30, 0.15] },
+            });
+        }
+        if let Some(AbsoluteSphere::Sphere { center, r2 }) = st.summary.as_ref().map(|s| s.omega) {
+            let m = center.as_vec3();
+            // m itself, and Ω when real and not too large to see.
+            layers.push(Layer {
+                geometry: Geometry::UnitSphere,
+                model: Mat4::from_translation(m) * Mat4::from_scale(Vec3::splat(radius * 0.02)),
+                style: Style::Surface { shading: 1, color: [0.85, 0.15, 0.12, 1.0], color_map: None },
+            });
+            if r2 > 0.0 && (r2.sqrt() as f32) < 20.0 * radius {
+                layers.push(Layer {
+                    geometry: Geometry::UnitSphere,
+                    model: Mat4::from_translation(m) * Mat4::from_scale(Vec3::splat(r2.sqrt() as f32)),
+                    style: Style::Translucent { color: [0.95, 0.75, 0.30, 0.15] },
+                });
+            }
+        }
+        layers
     }
 
     /// The translucent central sphere (or plane) at vertex `v`.
@@ -773,6 +994,17 @@ impl eframe::App for App {
         self.frames += 1;
         self.handle_messages();
         self.apply_link_if_changed();
+        let requested: Vec<String> = self.download_requests.borrow_mut().drain(..).collect();
+        for name in requested {
+            match self.downloads.iter().find(|d| d.name == name) {
+                Some(d) => {
+                    if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
+                        self.error = Some(format!("could not save {name}: {e:?}"));
+                    }
+                }
+                None => self.notices.push(format!("no file named '{name}' to download yet")),
+            }
+        }
         let crashes = std::mem::take(&mut *self.crash_requests.borrow_mut());
         if crashes > 0 {
             self.send(&ToWorker::Crash, None);
@@ -842,6 +1074,36 @@ fn save_file(name: &str, mime: &str, bytes: &[u8]) -> Result<(), JsValue> {
     let window = web_sys::window().ok_or("no window")?;
     window.set_timeout_with_callback_and_timeout_and_arguments_0(release.unchecked_ref(), 10_000)?;
     Ok(())
+}
+
+/// Overlaid bar histograms (Fig. 14) over their common range.
+fn histogram(ui: &mut egui::Ui, series: &[(&Histogram, Color32)], unit: &str) {
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width().min(260.0), 70.0), Sense::hover());
+    let p = ui.painter();
+    p.rect_filled(rect, 2.0, Color32::from_gray(30));
+    let lo = series.iter().map(|(h, _)| h.lo).fold(f64::INFINITY, f64::min);
+    let hi = series.iter().map(|(h, _)| h.hi).fold(f64::NEG_INFINITY, f64::max);
+    if !(hi > lo) {
+        return;
+    }
+    let peak = series.iter().flat_map(|(h, _)| h.counts.iter().copied()).max().unwrap_or(1).max(1) as f32;
+    for (h, color) in series {
+        let n = h.counts.len().max(1) as f64;
+        let w = (h.hi - h.lo) / n;
+        for (i, &c) in h.counts.iter().enumerate() {
+            let x0 = (h.lo + w * i as f64 - lo) / (hi - lo);
+            let x1 = (h.lo + w * (i + 1) as f64 - lo) / (hi - lo);
+            let top = rect.bottom() - (c as f32 / peak) * (rect.height() - 14.0);
+            let bar = Rect::from_min_max(
+                Pos2::new(rect.left() + x0 as f32 * rect.width(), top),
+                Pos2::new(rect.left() + (x1 as f32 * rect.width()).max(x0 as f32 * rect.width() + 1.0), rect.bottom()),
+            );
+            p.rect_filled(bar, 0.0, color.gamma_multiply(0.75));
+        }
+    }
+    let font = egui::FontId::proportional(10.0);
+    p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, format!("{lo:.3}{unit}"), font.clone(), Color32::LIGHT_GRAY);
+    p.text(rect.right_top() + Vec2::new(-2.0, 1.0), egui::Align2::RIGHT_TOP, format!("{hi:.3}{unit}"), font, Color32::LIGHT_GRAY);
 }
 
 /// A two-column table of labels and values.

@@ -82,6 +82,8 @@ pub struct Layer {
 pub struct ViewerFrame {
     pub view_proj: Mat4,
     pub eye: Vec3,
+    /// World distance lines are pulled toward the eye.
+    pub line_bias: f32,
     pub layers: Vec<Layer>,
 }
 
@@ -333,6 +335,7 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
                 }
                 Style::Lines { color } => {
                     u.base_color = *color;
+                    u.scalar_range[3] = self.line_bias;
                     Kind::Lines
                 }
                 Style::Translucent { color } => {
@@ -456,8 +459,9 @@ impl OrbitCamera {
     }
 
     pub fn proj(&self, aspect: f32) -> Mat4 {
+        // Keep far/near moderate: 24-bit depth must still order lines and faces.
         let far = self.distance + 4.0 * self.scene_radius;
-        let near = (self.distance - 4.0 * self.scene_radius).max(far * 1e-4);
+        let near = (self.distance - 4.0 * self.scene_radius).max(0.01 * self.scene_radius).max(far * 1e-4);
         Mat4::perspective_rh(Self::FOV_Y, aspect.max(1e-3), near, far)
     }
 

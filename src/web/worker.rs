@@ -10,6 +10,7 @@ use web_sys::DedicatedWorkerGlobalScope;
 use super::transport;
 use crate::pipeline::protocol::{decode_to_worker, encode_from_worker, Field, FromWorker};
 use crate::pipeline::{Session, Sink};
+use crate::st_support::Clock;
 
 thread_local! {
     static SESSION: RefCell<Session> = RefCell::new(Session::new());
@@ -35,6 +36,7 @@ pub fn worker_start(cancel: JsValue) {
         post_panic(&format!("The computation crashed: {info}"));
     }));
     CANCEL.with(|c| *c.borrow_mut() = cancel.dyn_into::<Int32Array>().ok());
+    SESSION.with(|s| s.borrow_mut().clock = Clock(Some(js_sys::Date::now)));
     WorkerSink.send(FromWorker::Ready, Vec::new());
 }
 

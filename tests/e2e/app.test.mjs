@@ -4,6 +4,8 @@
 // <pre id="sf-state">, the design-link fragment and files dropped on the canvas.
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
+import path from 'node:path';
+import { spawnSync } from 'node:child_process';
 import { after, describe, test } from 'node:test';
 import {
   PROJECTS,
@@ -19,6 +21,8 @@ import {
   truncatedGlb,
   waitForState,
   withApp,
+  ARTIFACTS_DIR,
+  E2E_DIR,
 } from './helpers.mjs';
 
 const MIN_DRAWN = 0.02; // share of the viewport that must differ from the clear colour
@@ -201,6 +205,39 @@ for (const project of PROJECTS) {
         const picked = await waitForState(app, 'a vertex is selected', (s) => Number.isInteger(s.selected_vertex));
         t.diagnostic(`selected vertex ${picked.selected_vertex}`);
         assertDrawn(await measureViewport(app, picked, 'central-sphere'), 'central sphere overlay');
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] g. ST with support structure runs on the default sample and its GLB downloads`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'g-st-support', fragment: 'v=1&sample=dome&method=st-support&shading=reflective' }, async (app) => {
+        const s = await waitForState(
+          app,
+          'st-support finished (st_ready, downloads offered)',
+          (s) => s.st_ready === true && !s.busy && Array.isArray(s.downloads) && s.downloads.includes('panels.glb'),
+          { timeout: T.load },
+        );
+        assert.equal(s.method, 'st-support');
+        assert.ok(!s.error, `error: ${s.error}`);
+        assert.equal(s.panels, s.faces, 'one panel per face of the reference triangulation');
+        for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'report.json']) {
+          assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
+        }
+        assertDrawn(await measureViewport(app, s, 'st-support'), 'panels and support structure');
+        const [download] = await Promise.all([
+          app.page.waitForEvent('download', { timeout: 30_000 }),
+          app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'panels.glb' }))),
+        ]);
+        assert.equal(download.suggestedFilename(), 'panels.glb');
+        fs.mkdirSync(ARTIFACTS_DIR, { recursive: true });
+        const file = path.join(ARTIFACTS_DIR, `${project.name}-panels.glb`);
+        await download.saveAs(file);
+        const bytes = fs.readFileSync(file);
+        assert.equal(bytes.subarray(0, 4).toString('latin1'), 'glTF', 'GLB magic');
+        const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
+        t.diagnostic(`validator: ${v.stdout.slice(0, 300)}`);
+        assert.equal(v.status, 0, `the Khronos validator accepts the downloaded GLB: ${v.stdout}${v.stderr}`);
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

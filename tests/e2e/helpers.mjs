@@ -190,7 +190,7 @@ function slug(s) {
 
 /** Opens the app in a fresh context. Returns the `app` handle used by the other helpers. */
 export async function openApp(browser, server, project, { fragment = '', name = 'app' } = {}) {
-  const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1 });
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1, acceptDownloads: true });
   const page = await context.newPage();
   const app = {
     project,

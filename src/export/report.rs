@@ -1,0 +1,136 @@
+//! `report.json`: the run report shared by every method (issue 3, §6).
+//!
+//! ```json
+//! {"method": "st-support",
+//!  "input":  {"vertices": N, "faces": N},
+//!  "output": {"vertices": N, "faces": N, "panels": N},
+//!  "absolute_sphere": {"center": [x,y,z], "r2": x, "at_infinity": false, "axis": null},
+//!  "metrics": {"max_vertex_sphere_residual": x, ...},
+//!  "timings_ms": {"<stage>": x, ...}}
+//! ```
+//!
+//! Lengths in `metrics` are relative to the reference's bounding-box diagonal; angles are in
+//! degrees. Metrics a method does not compute are `None` and left out of the JSON; further
+//! method-specific metrics go to [`Metrics::extra`] (flattened into `metrics`).
+//! `absolute_sphere` is left out for methods without one. Timings are in milliseconds, keyed by
+//! stage name (sorted). Non-finite numbers are written as null.
+
+use std::collections::BTreeMap;
+use std::io;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::sphere_mesh::AbsoluteSphere;
+
+/// Vertex and face counts of the input mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputCounts {
+    pub vertices: usize,
+    pub faces: usize,
+}
+
+/// Vertex, face and panel counts of the result (the mesh with spherical faces).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OutputCounts {
+    pub vertices: usize,
+    pub faces: usize,
+    pub panels: usize,
+}
+
+/// Ω in the report. At infinity, `center` and `r2` are null and `axis` (with the plane offset
+/// `d`, ⟨x, axis⟩ = d) is set; otherwise `axis` is null and `d` is left out.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AbsoluteSphereReport {
+    pub center: Option<[f64; 3]>,
+    pub r2: Option<f64>,
+    pub at_infinity: bool,
+    pub axis: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub d: Option<f64>,
+}
+
+impl From<&AbsoluteSphere> for AbsoluteSphereReport {
+    fn from(o: &AbsoluteSphere) -> Self {
+        match *o {
+            AbsoluteSphere::Sphere { center, r2 } => {
+                Self { center: Some(center.to_array()), r2: Some(r2), at_infinity: false, axis: None, d: None }
+            }
+            AbsoluteSphere::Plane { axis, d } => {
+                Self { center: None, r2: None, at_infinity: true, axis: Some(axis.to_array()), d: Some(d) }
+            }
+        }
+    }
+}
+
+/// The named metrics (issue 3, §6); `None` when a method has no such metric.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// max over panels and their corners of | |v − c| − r |, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_vertex_sphere_residual: Option<f64>,
+    /// max |(|c − m|² − r² − R²)| / diag² (0 if Ω is at infinity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_orthogonality_residual: Option<f64>,
+    /// max distance from m to each node axis (computed from the star's spheres), relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_node_axis_offset: Option<f64>,
+    /// Node axis vs reference normal, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_axis_normal_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_axis_normal_angle_deg: Option<f64>,
+    /// Kink angle between adjacent panels, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_kink_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_kink_angle_deg: Option<f64>,
+    /// Sampled over the panel surfaces, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_distance_to_reference: Option<f64>,
+    /// Further method-specific metrics, flattened into `metrics`.
+    #[serde(flatten)]
+    pub extra: BTreeMap<String, serde_json::Value>,
+}
+
+/// The report of one run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    pub method: String,
+    pub input: InputCounts,
+    pub output: OutputCounts,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub absolute_sphere: Option<AbsoluteSphereReport>,
+    pub metrics: Metrics,
+    pub timings_ms: BTreeMap<String, f64>,
+}
+
+impl Report {
+    pub fn new(method: impl Into<String>) -> Self {
+        Self { method: method.into(), ..Self::default() }
+    }
+
+    /// Records a stage time (ms); a repeated stage adds up.
+    pub fn add_timing(&mut self, stage: impl Into<String>, ms: f64) {
+        *self.timings_ms.entry(stage.into()).or_insert(0.0) += ms;
+    }
+
+    /// Pretty-printed JSON with a trailing newline.
+    pub fn to_json(&self) -> String {
+        let mut s = serde_json::to_string_pretty(self).expect("the report serializes");
+        s.push('\n');
+        s
+    }
+
+    pub fn from_json(text: &str) -> serde_json::Result<Self> {
+        serde_json::from_str(text)
+    }
+
+    /// Writes `dir/report.json` (creating `dir`); returns the path.
+    pub fn write(&self, dir: &Path) -> io::Result<PathBuf> {
+        std::fs::create_dir_all(dir)?;
+        let path = dir.join("report.json");
+        std::fs::write(&path, self.to_json())?;
+        Ok(path)
+    }
+}

@@ -1,0 +1,302 @@
+//! The panel schedule: what a fabricator needs per panel, as CSV and JSON (issue 3, §4).
+//!
+//! Per panel: id (= face index), vertex ids and coordinates, the sphere (centre and radius, or
+//! for a plane an empty radius and its unit normal), per edge the arc's circle (centre, normal,
+//! radius; radius empty for a straight edge), area, and the maximum deviation from the reference
+//! surface. Overall: the number of distinct radii after rounding to `radius_tolerance`.
+//!
+//! Conventions:
+//! - radii are absolute values; the JSON also has the signed radius (its sign is the sphere's
+//!   orientation, see [`crate::sphere`]);
+//! - edge k runs from vertex k to vertex k+1 (mod 3), counter-clockwise about its circle normal
+//!   (see [`crate::panels`]);
+//! - deviation is the largest distance to the reference triangle mesh over the panel's
+//!   tessellation vertices and its triangle centroids projected onto the panel sphere (the true
+//!   panel surface), in model units; the schedule also gives the maximum relative to the
+//!   reference's bounding-box diagonal;
+//! - distinct radii: spherical panels are grouped by round(|r| / radius_tolerance); all planar
+//!   panels count as one more "radius" (a flat mould), reported separately as `planar_panels`.
+
+use std::collections::BTreeSet;
+use std::fmt::Write;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::closest::TriangleBvh;
+use crate::mesh::TriMesh;
+use crate::panels::{project_to_sphere, Arc, Panel};
+
+/// A panel's sphere in the schedule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SphereRecord {
+    /// Normalized coefficients of ψ(x) = a|x|² − ⟨b, x⟩ + c.
+    pub a: f64,
+    pub b: [f64; 3],
+    pub c: f64,
+    pub plane: bool,
+    /// Centre; null for a plane.
+    pub center: Option<[f64; 3]>,
+    /// |r|; null for a plane.
+    pub radius: Option<f64>,
+    pub signed_radius: Option<f64>,
+    /// Unit normal of a plane (its outward side); null for a sphere.
+    pub normal: Option<[f64; 3]>,
+}
+
+/// One edge arc in the schedule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ArcRecord {
+    /// Mesh vertex ids: the arc runs from `from` to `to`.
+    pub from: u32,
+    pub to: u32,
+    /// Circle centre (chord midpoint for a straight edge).
+    pub center: [f64; 3],
+    /// Unit normal of the circle's plane; the arc is counter-clockwise about it.
+    pub normal: [f64; 3],
+    /// Circle radius; null for a straight edge.
+    pub radius: Option<f64>,
+    pub straight: bool,
+    /// Angle swept, in degrees (0 when straight).
+    pub sweep_deg: f64,
+    pub length: f64,
+}
+
+/// One panel in the schedule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PanelRecord {
+    pub id: usize,
+    pub vertex_ids: [u32; 3],
+    pub vertices: [[f64; 3]; 3],
+    pub sphere: SphereRecord,
+    pub edges: [ArcRecord; 3],
+    pub area: f64,
+    /// Largest distance to the reference, model units.
+    pub max_deviation: f64,
+    /// Tessellation triangles of this panel.
+    pub triangles: usize,
+}
+
+/// The whole schedule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PanelSchedule {
+    pub panel_count: usize,
+    pub radius_tolerance: f64,
+    /// Distinct |r| after rounding to `radius_tolerance`, planar panels counting as one more.
+    pub distinct_radii: usize,
+    pub planar_panels: usize,
+    pub total_area: f64,
+    /// Bounding-box diagonal of the reference.
+    pub reference_diagonal: f64,
+    /// Largest panel deviation, model units.
+    pub max_deviation: f64,
+    /// `max_deviation / reference_diagonal` (the report's `max_distance_to_reference`).
+    pub max_deviation_relative: f64,
+    pub panels: Vec<PanelRecord>,
+}
+
+/// Number of distinct radii: `Some(r)` values grouped by round(|r|/tolerance) (exact |r| when
+/// tolerance ≤ 0 or not finite), plus one for any `None` (planes). Non-finite radii count as
+/// planes.
+pub fn count_distinct_radii(radii: impl IntoIterator<Item = Option<f64>>, tolerance: f64) -> usize {
+    let mut keys: BTreeSet<u64> = BTreeSet::new();
+    let mut plane = false;
+    for r in radii {
+        match r.filter(|r| r.is_finite()) {
+            None => plane = true,
+            Some(r) => {
+                let r = r.abs();
+                let key = if tolerance > 0.0 && tolerance.is_finite() { (r / tolerance).round() } else { r };
+                if key.is_finite() {
+                    keys.insert(key.to_bits());
+                } else {
+                    plane = true;
+                }
+            }
+        }
+    }
+    keys.len() + usize::from(plane)
+}
+
+/// Points sampled on a panel: its tessellation vertices and its triangle centroids projected
+/// onto the panel's sphere.
+pub fn panel_samples(panel: &Panel) -> Vec<DVec3> {
+    let mut pts = panel.positions.clone();
+    let base = panel.positions[0];
+    for t in &panel.triangles {
+        let c = (panel.positions[t[0] as usize] + panel.positions[t[1] as usize] + panel.positions[t[2] as usize]) / 3.0;
+        pts.push(project_to_sphere(&panel.sphere, base, c));
+    }
+    pts
+}
+
+/// Largest distance from the panel's samples ([`panel_samples`]) to the reference.
+pub fn max_deviation(panel: &Panel, reference: &TriangleBvh) -> f64 {
+    panel_samples(panel).into_iter().map(|p| reference.distance(p)).fold(0.0, f64::max)
+}
+
+/// Largest deviation over all panels relative to the reference's bounding-box diagonal.
+pub fn max_distance_to_reference(panels: &[Panel], reference: &TriMesh) -> f64 {
+    let bvh = TriangleBvh::new(reference);
+    let diag = reference.bbox_diagonal();
+    let d = panels.iter().map(|p| max_deviation(p, &bvh)).fold(0.0, f64::max);
+    if diag > 0.0 {
+        d / diag
+    } else {
+        d
+    }
+}
+
+fn arc_record(arc: &Arc, from: u32, to: u32) -> ArcRecord {
+    let straight = arc.is_straight();
+    ArcRecord {
+        from,
+        to,
+        center: arc.circle.center.to_array(),
+        normal: arc.circle.normal.to_array(),
+        radius: (!straight).then_some(arc.circle.radius),
+        straight,
+        sweep_deg: arc.sweep().to_degrees(),
+        length: arc.length(),
+    }
+}
+
+fn sphere_record(p: &Panel) -> SphereRecord {
+    let s = p.sphere;
+    let plane = p.is_planar();
+    let signed = if plane { None } else { s.signed_radius() };
+    SphereRecord {
+        a: s.a,
+        b: s.b.to_array(),
+        c: s.c,
+        plane,
+        center: if plane { None } else { s.center().map(|c| c.to_array()) },
+        radius: signed.map(f64::abs),
+        signed_radius: signed,
+        normal: plane.then(|| s.b.normalize_or_zero().to_array()),
+    }
+}
+
+/// Builds the schedule of `panels` against the `reference` surface.
+pub fn build_schedule(panels: &[Panel], reference: &TriMesh, radius_tolerance: f64) -> PanelSchedule {
+    let bvh = TriangleBvh::new(reference);
+    let diag = reference.bbox_diagonal();
+    let records: Vec<PanelRecord> = panels
+        .iter()
+        .map(|p| {
+            let c = p.corners;
+            PanelRecord {
+                id: p.face,
+                vertex_ids: c,
+                vertices: [p.positions[0].to_array(), p.positions[1].to_array(), p.positions[2].to_array()],
+                sphere: sphere_record(p),
+                edges: [
+                    arc_record(&p.arcs[0], c[0], c[1]),
+                    arc_record(&p.arcs[1], c[1], c[2]),
+                    arc_record(&p.arcs[2], c[2], c[0]),
+                ],
+                area: p.area,
+                max_deviation: if bvh.is_empty() { f64::NAN } else { max_deviation(p, &bvh) },
+                triangles: p.triangles.len(),
+            }
+        })
+        .collect();
+    let max_dev = records.iter().map(|r| r.max_deviation).fold(0.0, f64::max);
+    PanelSchedule {
+        panel_count: records.len(),
+        radius_tolerance,
+        distinct_radii: count_distinct_radii(records.iter().map(|r| r.sphere.radius), radius_tolerance),
+        planar_panels: records.iter().filter(|r| r.sphere.plane).count(),
+        total_area: records.iter().map(|r| r.area).sum(),
+        reference_diagonal: diag,
+        max_deviation: max_dev,
+        max_deviation_relative: if diag > 0.0 { max_dev / diag } else { max_dev },
+        panels: records,
+    }
+}
+
+fn opt(out: &mut String, v: Option<f64>) {
+    if let Some(v) = v {
+        let _ = write!(out, "{v}");
+    }
+}
+
+fn opt3(out: &mut String, v: Option<[f64; 3]>) {
+    match v {
+        Some([x, y, z]) => {
+            let _ = write!(out, "{x},{y},{z}");
+        }
+        None => out.push_str(",,"),
+    }
+}
+
+impl PanelSchedule {
+    /// CSV header (one line, no trailing newline).
+    pub fn csv_header() -> String {
+        let mut h: Vec<String> = vec!["id".into()];
+        for k in 0..3 {
+            h.push(format!("v{k}_id"));
+        }
+        for k in 0..3 {
+            for c in ["x", "y", "z"] {
+                h.push(format!("v{k}_{c}"));
+            }
+        }
+        for c in ["x", "y", "z"] {
+            h.push(format!("sphere_center_{c}"));
+        }
+        h.push("sphere_radius".into());
+        for c in ["x", "y", "z"] {
+            h.push(format!("plane_normal_{c}"));
+        }
+        for k in 0..3 {
+            for c in ["x", "y", "z"] {
+                h.push(format!("edge{k}_center_{c}"));
+            }
+            for c in ["x", "y", "z"] {
+                h.push(format!("edge{k}_normal_{c}"));
+            }
+            h.push(format!("edge{k}_radius"));
+        }
+        h.push("area".into());
+        h.push("max_deviation".into());
+        h.join(",")
+    }
+
+    /// The schedule as CSV: a header and one row per panel. Missing values (plane radius and
+    /// centre, sphere normal, straight-edge radius) are empty cells. Overall values are not in
+    /// the CSV; they are in the JSON.
+    pub fn to_csv(&self) -> String {
+        let mut out = Self::csv_header();
+        out.push('\n');
+        for r in &self.panels {
+            let _ = write!(out, "{},{},{},{}", r.id, r.vertex_ids[0], r.vertex_ids[1], r.vertex_ids[2]);
+            for v in r.vertices {
+                let _ = write!(out, ",{},{},{}", v[0], v[1], v[2]);
+            }
+            out.push(',');
+            opt3(&mut out, r.sphere.center);
+            out.push(',');
+            opt(&mut out, r.sphere.radius);
+            out.push(',');
+            opt3(&mut out, r.sphere.normal);
+            for e in &r.edges {
+                let _ = write!(
+                    out,
+                    ",{},{},{},{},{},{},",
+                    e.center[0], e.center[1], e.center[2], e.normal[0], e.normal[1], e.normal[2]
+                );
+                opt(&mut out, e.radius);
+            }
+            let _ = write!(out, ",{},", r.area);
+            opt(&mut out, Some(r.max_deviation).filter(|d| d.is_finite()));
+            out.push('\n');
+        }
+        out
+    }
+
+    /// The schedule as pretty-printed JSON (non-finite numbers become null).
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("the schedule serializes")
+    }
+}

@@ -1,0 +1,220 @@
+//! The "ST with support structure" method end to end (Sec. 4, issue 3): face spheres orthogonal
+//! to Ω, node axes, support elements, panels, exports and the shared report. Used by the worker
+//! session and by `spherical-faces st-support`.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::protocol::{field, Field};
+use crate::absolute_sphere::Histogram;
+use crate::curvature::{CurvatureField, JetParams};
+use crate::export::{self, report::InputCounts, report::OutputCounts, AbsoluteSphereReport, Metrics, Report, SupportGeometry};
+use crate::mesh::{Topology, TriMesh};
+use crate::panels::{build_panels, sphere_normal, Panel};
+use crate::sphere_mesh::AbsoluteSphere;
+use crate::st_support::{st_support_with_curvature, Clock, StSupportParams, StSupportResult};
+
+/// Panel tessellation chord error, relative to the bbox diagonal (issue 3 §4).
+pub const CHORD_TOLERANCE: f64 = 1e-4;
+
+/// The method's parameters as the design link and the CLI give them (lengths relative to the
+/// bounding-box diagonal).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StSupportRequest {
+    pub optimize_radius: bool,
+    pub support_depth: f64,
+    pub axis_length: f64,
+    /// Radii are rounded to multiples of this (× diag) before counting distinct ones.
+    pub radius_tolerance: f64,
+    pub jet: JetParams,
+}
+
+impl Default for StSupportRequest {
+    fn default() -> Self {
+        Self { optimize_radius: false, support_depth: 0.02, axis_length: 0.1, radius_tolerance: 1e-3, jet: JetParams::default() }
+    }
+}
+
+/// A file produced for download or for the CLI's output folder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExportFile {
+    pub name: String,
+    pub mime: String,
+    pub bytes: Vec<u8>,
+}
+
+/// Data for the histograms of Fig. 14 and the Ω display.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StSupportSummary {
+    pub report: Report,
+    pub omega: AbsoluteSphere,
+    pub m0: [f64; 3],
+    pub m: [f64; 3],
+    pub flipped: bool,
+    /// angle(v − m, n) in degrees, for m0 and for the optimized m.
+    pub angles_m0: Histogram,
+    pub angles_m: Histogram,
+    /// The R_i² of the central spheres (or the distances d_i when Ω is a plane).
+    pub r2: Histogram,
+    pub distinct_radii: usize,
+}
+
+
+pub struct StSupportOutput {
+    pub result: StSupportResult,
+    pub panels: Vec<Panel>,
+    pub support: SupportGeometry,
+    pub axes: Vec<(DVec3, DVec3)>,
+    pub summary: StSupportSummary,
+    pub files: Vec<ExportFile>,
+}
+
+/// Runs the method on `mesh` with its curvature `field`; `progress(stage, done, total)` returning
+/// false cancels with Err("cancelled").
+pub fn run(
+    mesh: &TriMesh,
+    topo: &Topology,
+    field: &CurvatureField,
+    req: &StSupportRequest,
+    clock: Clock,
+    progress: &mut dyn FnMut(&str, usize, usize) -> bool,
+) -> Result<StSupportOutput, String> {
+    let params = StSupportParams {
+        optimize_radius: req.optimize_radius,
+        support_depth: req.support_depth,
+        axis_length: req.axis_length,
+        jet: req.jet.clone(),
+        clock,
+        ..StSupportParams::default()
+    };
+    let result = st_support_with_curvature(mesh, topo, field, &params, progress)?;
+    let diag = result.diag;
+    let now = || clock.0.map_or(0.0, |f| f());
+
+    let t = now();
+    if !progress("panels", 0, 1) {
+        return Err("cancelled".into());
+    }
+    let panels = build_panels(&result.sphere_mesh, CHORD_TOLERANCE * diag);
+    let support = export::support_geometry(&panels, &result.support);
+    let axes = export::node_axis_segments(&result.support, result.axis_length);
+    let panels_ms = now() - t;
+
+    let t = now();
+    if !progress("export", 0, 1) {
+        return Err("cancelled".into());
+    }
+    let schedule = export::build_schedule(&panels, mesh, req.radius_tolerance * diag);
+    let mut extras = serde_json::json!({ "absolute_sphere": export::absolute_sphere_extras(&result.omega) });
+    extras["method"] = "st-support".into();
+    let glb = export::write_glb(&panels, Some(&support), Some(&axes), extras);
+    let obj = export::write_obj(&panels, Some(&support), Some(&axes));
+    let export_ms = now() - t;
+
+    let m = &result.metrics;
+    let mut report = Report::new("st-support");
+    report.input = InputCounts { vertices: mesh.vertex_count(), faces: mesh.face_count() };
+    report.output = OutputCounts {
+        vertices: result.sphere_mesh.mesh.vertex_count(),
+        faces: result.sphere_mesh.mesh.face_count(),
+        panels: panels.len(),
+    };
+    report.absolute_sphere = Some(AbsoluteSphereReport::from(&result.omega));
+    report.metrics = Metrics {
+        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
+        max_orthogonality_residual: Some(m.max_orthogonality_residual),
+        max_node_axis_offset: Some(m.max_node_axis_offset),
+        mean_axis_normal_angle_deg: Some(m.mean_axis_normal_angle_deg),
+        max_axis_normal_angle_deg: Some(m.max_axis_normal_angle_deg),
+        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
+        max_kink_angle_deg: Some(m.max_kink_angle_deg),
+        max_distance_to_reference: Some(schedule.max_deviation / diag),
+        extra: [
+            ("max_center_plane_residual", serde_json::json!(m.max_center_plane_residual)),
+            ("distinct_radii", serde_json::json!(schedule.distinct_radii)),
+            ("axes_from_spheres", serde_json::json!(m.axes_from_spheres)),
+            ("degenerate_faces", serde_json::json!(m.degenerate_faces)),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
+    };
+    for (stage, ms) in &result.timings_ms {
+        report.add_timing(stage.clone(), *ms);
+    }
+    report.add_timing("panels", panels_ms);
+    report.add_timing("export", export_ms);
+
+    let a = &result.absolute;
+    let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
+    let summary = StSupportSummary {
+        report: report.clone(),
+        omega: result.omega,
+        m0: a.m0.to_array(),
+        m: a.m.to_array(),
+        flipped: a.flipped,
+        angles_m0: Histogram::new(&a.angles_m0_deg, 36),
+        angles_m: Histogram::new(&a.angles_m_deg, 36),
+        r2: Histogram::new(r2_values, 36),
+        distinct_radii: schedule.distinct_radii,
+    };
+    let files = vec![
+        ExportFile { name: "panels.glb".into(), mime: "model/gltf-binary".into(), bytes: glb },
+        ExportFile { name: "panels.obj".into(), mime: "text/plain".into(), bytes: obj.into_bytes() },
+        ExportFile { name: "panels.csv".into(), mime: "text/csv".into(), bytes: schedule.to_csv().into_bytes() },
+        ExportFile { name: "panels.json".into(), mime: "application/json".into(), bytes: schedule.to_json().into_bytes() },
+        ExportFile { name: "report.json".into(), mime: "application/json".into(), bytes: report.to_json().into_bytes() },
+    ];
+    Ok(StSupportOutput { result, panels, support, axes, summary, files })
+}
+
+/// Well-known field names of the method's snapshot.
+pub mod fields {
+    pub const PANEL_POSITIONS: &str = "panels.positions";
+    pub const PANEL_NORMALS: &str = "panels.normals";
+    pub const PANEL_TRIANGLES: &str = "panels.triangles";
+    /// Boundary arcs of every panel as line segments over the panel positions.
+    pub const PANEL_EDGES: &str = "panels.edges";
+    pub const SUPPORT_POSITIONS: &str = "support.positions";
+    pub const SUPPORT_TRIANGLES: &str = "support.triangles";
+    pub const AXES_POSITIONS: &str = "axes.positions";
+    pub const AXES_LINES: &str = "axes.lines";
+    pub const ENVELOPE_POSITIONS: &str = "envelope2.positions";
+    pub const ENVELOPE_TRIANGLES: &str = "envelope2.triangles";
+}
+
+fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
+    points.flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()
+}
+
+/// Display fields: panels with their sphere normals and arcs, support, node axes, second envelope.
+pub fn display_fields(out: &StSupportOutput) -> Vec<Field> {
+    let (mut pos, mut nrm, mut tri, mut edges) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for p in &out.panels {
+        let base = pos.len() as u32;
+        pos.extend(p.positions.iter().copied());
+        nrm.extend(p.positions.iter().map(|&x| sphere_normal(&p.sphere, x)));
+        tri.extend(p.triangles.iter().flat_map(|t| t.map(|i| i + base)));
+        for arc in &p.arc_vertices {
+            for w in arc.windows(2) {
+                edges.extend([w[0] + base, w[1] + base]);
+            }
+        }
+    }
+    let mut fields = vec![
+        Field::f32(fields::PANEL_POSITIONS, 3, f32s(pos.into_iter())),
+        Field::f32(fields::PANEL_NORMALS, 3, f32s(nrm.into_iter())),
+        Field::u32(fields::PANEL_TRIANGLES, 3, tri),
+        Field::u32(fields::PANEL_EDGES, 2, edges),
+        Field::f32(fields::SUPPORT_POSITIONS, 3, f32s(out.support.positions.iter().copied())),
+        Field::u32(fields::SUPPORT_TRIANGLES, 3, out.support.triangles.iter().flatten().copied().collect()),
+        Field::f32(fields::AXES_POSITIONS, 3, f32s(out.axes.iter().flat_map(|&(a, b)| [a, b]))),
+        Field::u32(fields::AXES_LINES, 2, (0..2 * out.axes.len() as u32).collect()),
+    ];
+    if let Some(env) = &out.result.second_envelope {
+        fields.push(Field::f32(fields::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));
+        fields.push(Field::u32(fields::ENVELOPE_TRIANGLES, 3, env.triangles.iter().flatten().copied().collect()));
+    }
+    let _ = field::POSITIONS;
+    fields
+}
