@@ -10,6 +10,7 @@ pub mod design_link;
 pub mod import;
 pub mod mesh;
 pub mod pipeline;
+pub mod rng;
 pub mod samples;
 pub mod sphere;
 pub mod sphere_mesh;

@@ -3,36 +3,10 @@
 //! normals, inversion and power, the second common point of a vertex star. Tolerances ≈ 1e-12.
 
 use glam::DVec3;
+use spherical_faces::rng::Rng;
 use spherical_faces::sphere::dense::Svd;
 use spherical_faces::sphere::{second_common_point, star_axis, Sphere, STAR_AXIS_MIN_CONDITION};
 use spherical_faces::sphere_mesh::{AbsoluteSphere, Circle};
-
-/// xorshift64*: deterministic pseudo-random numbers without dependencies.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn vec(&mut self, s: f64) -> DVec3 {
-        DVec3::new(self.range(-s, s), self.range(-s, s), self.range(-s, s))
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = self.vec(1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-}
 
 fn assert_normalized(s: &Sphere) {
     assert!((s.discriminant() - 1.0).abs() < 1e-12, "not normalized: {s:?} ({})", s.discriminant());

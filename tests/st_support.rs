@@ -5,6 +5,7 @@
 //! `cmc1.obj`. Run with `-- --nocapture` for the metrics table.
 
 use glam::DVec3;
+use spherical_faces::rng::Rng;
 use spherical_faces::absolute_sphere::{
     center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines,
     spherical_barycenter, summary_stats, AbsoluteSphereParams, Histogram,
@@ -27,21 +28,6 @@ fn load(name: &str) -> TriMesh {
 fn run(mesh: &TriMesh, optimize_radius: bool) -> StSupportResult {
     let params = StSupportParams { optimize_radius, clock: Clock(Some(native_clock_ms)), ..Default::default() };
     st_support(mesh, &params, &mut |_, _, _| true).expect("st-support succeeds")
-}
-
-/// xorshift64* for deterministic synthetic data.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn vec(&mut self, s: f64) -> DVec3 {
-        DVec3::new(s * (2.0 * self.next() - 1.0), s * (2.0 * self.next() - 1.0), s * (2.0 * self.next() - 1.0))
-    }
 }
 
 /// A wavy patch z = f(x, y) over [−5, 5]² (points only) with normals pointing exactly away from m.

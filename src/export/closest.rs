@@ -287,20 +287,7 @@ pub fn closest_point_brute_force(mesh: &TriMesh, p: DVec3) -> Option<ClosestHit>
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A small deterministic generator (xorshift64*), to keep the crate free of dev-dependencies.
-    struct Rng(u64);
-    impl Rng {
-        fn f(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn v(&mut self) -> DVec3 {
-            DVec3::new(self.f() * 2.0 - 1.0, self.f() * 2.0 - 1.0, self.f() * 2.0 - 1.0)
-        }
-    }
+    use crate::rng::Rng;
 
     #[test]
     fn triangle_regions() {
@@ -328,11 +315,11 @@ mod tests {
     fn closest_point_on_triangle_is_a_minimum() {
         let mut rng = Rng(0x1234_5678_9abc_def1);
         for _ in 0..500 {
-            let (a, b, c, p) = (rng.v(), rng.v(), rng.v(), rng.v() * 2.0);
+            let (a, b, c, p) = (rng.vec(1.0), rng.vec(1.0), rng.vec(1.0), rng.vec(1.0) * 2.0);
             let (q, _) = closest_point_on_triangle(p, a, b, c);
             let d = q.distance(p);
             for _ in 0..40 {
-                let (mut u, mut v) = (rng.f(), rng.f());
+                let (mut u, mut v) = (rng.next(), rng.next());
                 if u + v > 1.0 {
                     (u, v) = (1.0 - u, 1.0 - v);
                 }
@@ -364,14 +351,14 @@ mod tests {
         }
         for _ in 0..50 {
             let k = positions.len() as u32;
-            positions.extend([rng.v() * 0.3, rng.v() * 0.3, rng.v() * 0.3]);
+            positions.extend([rng.vec(1.0) * 0.3, rng.vec(1.0) * 0.3, rng.vec(1.0) * 0.3]);
             triangles.push([k, k + 1, k + 2]);
         }
         let mesh = TriMesh::new(positions, triangles);
         let bvh = TriangleBvh::new(&mesh);
         assert_eq!(bvh.len(), mesh.face_count());
         for _ in 0..400 {
-            let p = rng.v() * 1.5 + DVec3::new(0.5, 0.5, 0.0);
+            let p = rng.vec(1.0) * 1.5 + DVec3::new(0.5, 0.5, 0.0);
             let h = bvh.closest_point(p).unwrap();
             let g = closest_point_brute_force(&mesh, p).unwrap();
             assert!((h.distance - g.distance).abs() < 1e-14, "{} vs {}", h.distance, g.distance);

@@ -71,21 +71,7 @@ impl Reference {
     /// Runs jet fitting, streaming progress; `None` when cancelled.
     pub fn run_curvature(&mut self, params: &JetParams, sink: &mut dyn Sink) -> Option<&CurvatureField> {
         let start = sink.now_ms();
-        let mut progress = |done: usize, total: usize| {
-            let elapsed_ms = sink.now_ms() - start;
-            sink.send(
-                FromWorker::Progress(Progress {
-                    stage: "curvature".into(),
-                    detail: String::new(),
-                    iteration: done as u32,
-                    total: total as u32,
-                    energies: Vec::new(),
-                    elapsed_ms,
-                }),
-                Vec::new(),
-            );
-            !sink.cancel_requested()
-        };
+        let mut progress = |done: usize, total: usize| report_progress(sink, "curvature", "", done, total, start);
         self.curvature = jet_fit(&self.mesh, &self.topology, params, &mut progress);
         self.curvature_params = self.curvature.as_ref().map(|_| params.clone());
         self.curvature.as_ref()
@@ -174,21 +160,8 @@ impl Session {
                     return sink.send(FromWorker::Cancelled { stage: name }, vec![]);
                 }
                 let Some(field) = reference.curvature.as_ref() else { return };
-                let mut progress = |detail: &str, done: usize, total: usize| {
-                    let elapsed_ms = sink.now_ms() - start;
-                    sink.send(
-                        FromWorker::Progress(Progress {
-                            stage: "st-support".into(),
-                            detail: detail.into(),
-                            iteration: done as u32,
-                            total: total as u32,
-                            energies: Vec::new(),
-                            elapsed_ms,
-                        }),
-                        Vec::new(),
-                    );
-                    !sink.cancel_requested()
-                };
+                let mut progress =
+                    |detail: &str, done: usize, total: usize| report_progress(sink, "st-support", detail, done, total, start);
                 match st_support::run(&reference.mesh, &reference.topology, field, &req, self.clock, &mut progress) {
                     Err(e) if e == "cancelled" => sink.send(FromWorker::Cancelled { stage: name }, vec![]),
                     Err(message) => sink.send(FromWorker::Error { message }, vec![]),
@@ -207,6 +180,21 @@ impl Session {
             }
         }
     }
+}
+
+/// Sends a progress message; returns false when the stage should stop (cancel requested).
+fn report_progress(sink: &mut dyn Sink, stage: &str, detail: &str, done: usize, total: usize, start: f64) -> bool {
+    let elapsed_ms = sink.now_ms() - start;
+    let progress = Progress {
+        stage: stage.into(),
+        detail: detail.into(),
+        iteration: done as u32,
+        total: total as u32,
+        energies: Vec::new(),
+        elapsed_ms,
+    };
+    sink.send(FromWorker::Progress(progress), Vec::new());
+    !sink.cancel_requested()
 }
 
 /// The snapshot header for `fields`.
