@@ -1,127 +1,13 @@
-//! `spherical-faces`: the native command line over the same pipeline as the browser app.
+//! `spherical-faces`: the native command line (`info`, `st-support`). Not built for wasm32,
+//! where the same pipeline runs in the browser's worker instead.
 
-use std::process::ExitCode;
+#[cfg(not(target_arch = "wasm32"))]
+mod cli;
 
-use spherical_faces::curvature::{jet_fit, JetParams};
-use spherical_faces::import::import_mesh;
-use spherical_faces::mesh::Topology;
-use spherical_faces::pipeline::st_support::{self, StSupportRequest};
-use spherical_faces::st_support::{native_clock_ms, Clock};
-
-const USAGE: &str = "usage:
-  spherical-faces info <mesh.obj|.gltf|.glb>
-  spherical-faces st-support <mesh> [--optimize-radius] [--depth D] [--axis-length L]
-                             [--radius-tolerance T] --out DIR
-      ST mesh with support structure (paper Sec. 4). Writes DIR/panels.glb, panels.obj,
-      panels.csv, panels.json and report.json. D, L and T are relative to the bbox diagonal
-      (defaults 0.02, 0.1, 0.001).";
-
-fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    match args.first().map(String::as_str) {
-        Some("info") if args.len() == 2 => match info(&args[1]) {
-            Ok(json) => {
-                println!("{json}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
-        Some("st-support") => match st_support_command(&args[1..]) {
-            Ok(summary) => {
-                println!("{summary}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
-        Some("-h" | "--help" | "help") => {
-            println!("{USAGE}");
-            ExitCode::SUCCESS
-        }
-        _ => {
-            eprintln!("{USAGE}");
-            ExitCode::from(2)
-        }
-    }
+#[cfg(not(target_arch = "wasm32"))]
+fn main() -> std::process::ExitCode {
+    cli::main()
 }
 
-/// Reads a mesh the way the app does; the error names the file.
-fn read_mesh(path: &str) -> Result<spherical_faces::import::Imported, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
-    let name = std::path::Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
-    import_mesh(&bytes, &name).map_err(|e| e.to_string())
-}
-
-/// `st-support <mesh> [options] --out DIR`: writes the panel files and report.json.
-fn st_support_command(args: &[String]) -> Result<String, String> {
-    let mut req = StSupportRequest::default();
-    let (mut mesh_path, mut out) = (None, None);
-    let mut it = args.iter();
-    let number = |flag: &str, v: Option<&String>, lo: f64, hi: f64| -> Result<f64, String> {
-        let v = v.ok_or(format!("{flag} needs a value"))?;
-        v.parse::<f64>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a number in [{lo}, {hi}]"))
-    };
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--optimize-radius" => req.optimize_radius = true,
-            "--depth" => req.support_depth = number(a, it.next(), 0.0, 1.0)?,
-            "--axis-length" => req.axis_length = number(a, it.next(), 0.0, 10.0)?,
-            "--radius-tolerance" => req.radius_tolerance = number(a, it.next(), 1e-9, 1.0)?,
-            "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-            s if mesh_path.is_none() => mesh_path = Some(s.to_string()),
-            s => return Err(format!("unexpected argument {s}")),
-        }
-    }
-    let mesh_path = mesh_path.ok_or("st-support needs a mesh file")?;
-    let out = std::path::PathBuf::from(out.ok_or("st-support needs --out DIR")?);
-    let t0 = native_clock_ms();
-    let imported = read_mesh(&mesh_path)?;
-    let import_ms = native_clock_ms() - t0;
-    let topology = Topology::new(&imported.mesh);
-    let t1 = native_clock_ms();
-    let field = jet_fit(&imported.mesh, &topology, &req.jet, &mut |_, _| true).ok_or("cancelled")?;
-    let curvature_ms = native_clock_ms() - t1;
-    let mut output = st_support::run(&imported.mesh, &topology, &field, &req, Clock(Some(native_clock_ms)), &mut |_, _, _| true)
-        .map_err(|e| format!("{mesh_path}: {e}"))?;
-    // The report's timings include reading and curvature, which the CLI did itself.
-    output.summary.report.add_timing("import", import_ms);
-    output.summary.report.add_timing("curvature", curvature_ms);
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    for f in &output.files {
-        let bytes = if f.name == "report.json" { output.summary.report.to_json().into_bytes() } else { f.bytes.clone() };
-        std::fs::write(out.join(&f.name), bytes).map_err(|e| format!("{}: {e}", out.join(&f.name).display()))?;
-    }
-    Ok(format!(
-        "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
-        output.panels.len(),
-        out.display(),
-        output.result.metrics.max_kink_angle_deg,
-        output.summary.report.metrics.max_distance_to_reference.unwrap_or(f64::NAN)
-    ))
-}
-
-/// One JSON object: counts after triangulation and welding, and the jet-fitted mean curvature.
-fn info(path: &str) -> Result<String, String> {
-    let imported = read_mesh(path)?;
-    let topology = Topology::new(&imported.mesh);
-    let field = jet_fit(&imported.mesh, &topology, &JetParams::default(), &mut |_, _| true)
-        .ok_or("curvature computation was cancelled")?;
-    let s = &imported.stats;
-    let c = &field.summary;
-    let json = serde_json::json!({
-        "vertices": s.vertices,
-        "faces": s.faces,
-        "boundary_loops": s.boundary_loops,
-        "non_manifold_edges": s.non_manifold_edges,
-        "bbox_diagonal": imported.mesh.bbox_diagonal(),
-        "mean_curvature": {"min": c.min_h, "max": c.max_h, "mean": c.mean_h},
-        "h_changes_sign": c.h_changes_sign,
-    });
-    Ok(json.to_string())
-}
+#[cfg(target_arch = "wasm32")]
+fn main() {}

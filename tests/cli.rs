@@ -1,4 +1,5 @@
 //! The `info` command: one JSON object on stdout, exit code 2 and one line on stderr on bad input.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use std::process::Command;
 

@@ -1,5 +1,6 @@
 //! Jet-fitted curvature against closed forms: sphere, torus, cylinder, plane, the Enneper minimal
 //! surface, and degenerate input. Run with `-- --nocapture` to see the measured errors.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
 use spherical_faces::curvature::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE, SIGN_CHANGE_THRESHOLD};

@@ -8,6 +8,7 @@
 //!   orthogonal to a given Ω (the null vector of the 4×5 system of the notes, by cofactors);
 //! - `flat`: a planar grid with plane "spheres";
 //! - `mixed`: an Ω mesh with one vertex moved so that one face sphere degenerates to a plane.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 #![allow(clippy::needless_range_loop)]
 

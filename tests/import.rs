@@ -1,5 +1,6 @@
 //! Import tests: OBJ triangulation and index forms, glTF/GLB buffers and node transforms,
 //! robustness against corrupt input, welding, and the shared reference meshes.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
 use spherical_faces::import::*;

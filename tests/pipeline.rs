@@ -1,4 +1,5 @@
 //! The worker protocol and session, natively: the same code the Web Worker runs.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use spherical_faces::curvature::JetParams;
 use spherical_faces::pipeline::protocol::*;

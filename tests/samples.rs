@@ -1,5 +1,6 @@
 //! Built-in samples: identity, mesh hygiene (orientation, manifoldness, sizes) and their curvature
 //! against closed forms. Run with `-- --nocapture` to see the measured numbers.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
 use spherical_faces::curvature::{jet_fit, CurvatureField, JetParams, SIGN_CHANGE_THRESHOLD};

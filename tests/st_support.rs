@@ -3,6 +3,7 @@
 //! the minimal-surface refusal) and the full construction on the reference meshes
 //! `tri_mesh.obj`, `botanic-garden-bubble-0.obj` (quads, triangulated by the importer) and
 //! `cmc1.obj`. Run with `-- --nocapture` for the metrics table.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
 use spherical_faces::rng::Rng;
