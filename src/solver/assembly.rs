@@ -1,0 +1,477 @@
+//! Evaluation buffers, the cached sparsity pattern of JᵀJ, allocation-free assembly and the
+//! faer sparse Cholesky (symbolic once per pattern, numeric every iteration).
+//!
+//! Pattern (built when the triplet structure or the fixed mask changes):
+//! - every Jacobian triplet `t` maps to an *entry* `trip_entry[t]`: a unique (row, free column)
+//!   pair (duplicates are summed; triplets on hard-fixed columns map to `NONE`);
+//! - entries are grouped by row, sorted by column: `entry_row_ptr`, `entry_col`;
+//! - for every row with k entries, the k(k+1)/2 products `J_ra J_rb` (a ≤ b) are accumulated into
+//!   the upper-triangular CSC value array of JᵀWJ at precomputed positions `pair_dest`.
+//!
+//! An iteration then costs: one scatter of triplet values into entries, one pass over the pairs,
+//! a copy with ε² added on the diagonal, faer's numeric LLᵀ and a solve. No hashing, no
+//! allocation.
+
+use super::{JacobianSink, Problem};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, MatMut, Par, Side};
+
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Residuals, activity and Jacobian triplets of all terms at one point.
+#[derive(Default)]
+pub(crate) struct EvalBuffers {
+    /// Unweighted residuals; 0 where inactive.
+    pub r: Vec<f64>,
+    pub active: Vec<bool>,
+    /// Triplets, rows global.
+    pub rows: Vec<u32>,
+    pub cols: Vec<u32>,
+    pub vals: Vec<f64>,
+    /// Row range of term t: `term_rows[t]..term_rows[t + 1]`.
+    pub term_rows: Vec<usize>,
+    /// Triplet range of term t.
+    pub term_trips: Vec<usize>,
+}
+
+/// Evaluates one term into (cleared) buffers; used by `evaluate` and the Jacobian check.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn eval_term(
+    term: &dyn super::Term,
+    x: &[f64],
+    r: &mut [f64],
+    active: &mut [bool],
+    rows: &mut Vec<u32>,
+    cols: &mut Vec<u32>,
+    vals: &mut Vec<f64>,
+    row_offset: usize,
+) {
+    r.fill(0.0);
+    active.fill(true);
+    let mut sink = JacobianSink::new(rows, cols, vals, active, row_offset);
+    term.eval(x, r, &mut sink);
+    for (ri, &a) in r.iter_mut().zip(active.iter()) {
+        if !a {
+            *ri = 0.0;
+        }
+    }
+}
+
+/// Evaluates every term at `x` (no `prepare`). Reuses the buffers' capacity.
+pub(crate) fn evaluate(problem: &Problem, x: &[f64], buf: &mut EvalBuffers) {
+    assert_eq!(x.len(), problem.num_variables(), "variable vector has the wrong length");
+    let nt = problem.terms.len();
+    buf.term_rows.clear();
+    buf.term_rows.push(0);
+    for t in &problem.terms {
+        let last = *buf.term_rows.last().unwrap();
+        buf.term_rows.push(last + t.term.residual_count());
+    }
+    let m = buf.term_rows[nt];
+    buf.r.clear();
+    buf.r.resize(m, 0.0);
+    buf.active.clear();
+    buf.active.resize(m, true);
+    buf.rows.clear();
+    buf.cols.clear();
+    buf.vals.clear();
+    buf.term_trips.clear();
+    buf.term_trips.push(0);
+    for (ti, t) in problem.terms.iter().enumerate() {
+        let (r0, r1) = (buf.term_rows[ti], buf.term_rows[ti + 1]);
+        eval_term(
+            &*t.term,
+            x,
+            &mut buf.r[r0..r1],
+            &mut buf.active[r0..r1],
+            &mut buf.rows,
+            &mut buf.cols,
+            &mut buf.vals,
+            r0,
+        );
+        buf.term_trips.push(buf.rows.len());
+    }
+}
+
+/// Σ_t w_t Σ r² (inactive residuals are already 0).
+pub(crate) fn weighted_energy(problem: &Problem, buf: &EvalBuffers) -> f64 {
+    let mut e = 0.0;
+    for (ti, t) in problem.terms.iter().enumerate() {
+        let s: f64 = buf.r[buf.term_rows[ti]..buf.term_rows[ti + 1]].iter().map(|r| r * r).sum();
+        e += t.weight * s;
+    }
+    e
+}
+
+/// The cached normal-equation system for one sparsity pattern.
+pub(crate) struct System {
+    // ---- identity of the pattern
+    n_vars: usize,
+    fixed: Vec<bool>,
+    rows: Vec<u32>,
+    cols: Vec<u32>,
+    term_rows: Vec<usize>,
+    term_trips: Vec<usize>,
+    // ---- maps
+    /// Free index → variable index.
+    pub free_to_var: Vec<u32>,
+    trip_entry: Vec<u32>,
+    entry_row_ptr: Vec<u32>,
+    entry_col: Vec<u32>,
+    pair_dest: Vec<u32>,
+    diag_pos: Vec<u32>,
+    // ---- matrices and work
+    a_sym: SymbolicSparseColMat<u32>,
+    chol: Option<SymbolicCholesky<u32>>,
+    /// JᵀWJ, upper CSC values.
+    h: Vec<f64>,
+    /// h + μ I.
+    a: Vec<f64>,
+    l: Vec<f64>,
+    /// JᵀW r over the free variables.
+    pub g: Vec<f64>,
+    /// Weighted entry values √w J.
+    ev: Vec<f64>,
+    /// Weighted residuals √w r.
+    rw: Vec<f64>,
+    sqrt_w: Vec<f64>,
+    mem: MemBuffer,
+}
+
+impl System {
+    pub fn n_free(&self) -> usize {
+        self.free_to_var.len()
+    }
+
+    /// Number of stored entries of the upper triangle of JᵀJ (including the diagonal).
+    pub fn nnz(&self) -> usize {
+        self.h.len()
+    }
+
+    /// Stored values of the Cholesky factor.
+    pub fn factor_nnz(&self) -> usize {
+        self.l.len()
+    }
+
+    /// Σ_j c_j² over the columns of L (c_j = stored entries of column j): about the flop count of
+    /// one numeric factorization.
+    pub fn factor_flops(&self) -> f64 {
+        self.chol.as_ref().map_or(0.0, factor_flops)
+    }
+
+    pub fn is_supernodal(&self) -> bool {
+        matches!(
+            self.chol.as_ref().map(|c| c.raw()),
+            Some(faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_))
+        )
+    }
+
+    /// Whether `buf`'s structure (and the problem's variables) are those of this pattern.
+    pub fn matches(&self, problem: &Problem, buf: &EvalBuffers) -> bool {
+        self.n_vars == problem.num_variables()
+            && self.fixed.as_slice() == problem.fixed_mask()
+            && self.matches_structure(buf)
+    }
+
+    pub fn matches_structure(&self, buf: &EvalBuffers) -> bool {
+        self.term_rows == buf.term_rows
+            && self.term_trips == buf.term_trips
+            && self.rows == buf.rows
+            && self.cols == buf.cols
+    }
+
+    /// Builds the pattern, the maps and the symbolic factorization from an evaluation.
+    pub fn build(problem: &Problem, buf: &EvalBuffers) -> Self {
+        let n_vars = problem.num_variables();
+        let fixed = problem.fixed_mask().to_vec();
+        let m = buf.r.len();
+        let n_trip = buf.rows.len();
+        assert!(n_vars < NONE as usize && m < NONE as usize && n_trip < NONE as usize);
+        for ti in 0..problem.terms.len() {
+            let (r0, r1) = (buf.term_rows[ti], buf.term_rows[ti + 1]);
+            for t in buf.term_trips[ti]..buf.term_trips[ti + 1] {
+                let (r, c) = (buf.rows[t] as usize, buf.cols[t] as usize);
+                assert!(
+                    r >= r0 && r < r1 && c < n_vars,
+                    "term '{}' emitted a Jacobian entry out of range: global row {} (term rows {}..{}), column {} of {}",
+                    problem.terms[ti].term.name(),
+                    r,
+                    r0,
+                    r1,
+                    c,
+                    n_vars
+                );
+            }
+        }
+
+        let mut free_index = vec![NONE; n_vars];
+        let mut free_to_var = Vec::new();
+        for v in 0..n_vars {
+            if !fixed[v] {
+                free_index[v] = free_to_var.len() as u32;
+                free_to_var.push(v as u32);
+            }
+        }
+        let nf = free_to_var.len();
+
+        // Group triplets with free columns by row (counting sort).
+        let mut row_start = vec![0u32; m + 1];
+        for t in 0..n_trip {
+            if free_index[buf.cols[t] as usize] != NONE {
+                row_start[buf.rows[t] as usize + 1] += 1;
+            }
+        }
+        for i in 0..m {
+            row_start[i + 1] += row_start[i];
+        }
+        let mut fill = row_start.clone();
+        let mut order = vec![0u32; row_start[m] as usize];
+        for t in 0..n_trip {
+            if free_index[buf.cols[t] as usize] != NONE {
+                let r = buf.rows[t] as usize;
+                order[fill[r] as usize] = t as u32;
+                fill[r] += 1;
+            }
+        }
+        drop(fill);
+
+        // Unique (row, free col) entries, sorted by column within each row.
+        let mut trip_entry = vec![NONE; n_trip];
+        let mut entry_row_ptr = Vec::with_capacity(m + 1);
+        let mut entry_col: Vec<u32> = Vec::with_capacity(order.len());
+        entry_row_ptr.push(0u32);
+        for r in 0..m {
+            let slice = &mut order[row_start[r] as usize..row_start[r + 1] as usize];
+            slice.sort_unstable_by_key(|&t| free_index[buf.cols[t as usize] as usize]);
+            let row_first = entry_col.len();
+            for &t in slice.iter() {
+                let fc = free_index[buf.cols[t as usize] as usize];
+                if entry_col.len() == row_first || *entry_col.last().unwrap() != fc {
+                    entry_col.push(fc);
+                }
+                trip_entry[t as usize] = (entry_col.len() - 1) as u32;
+            }
+            entry_row_ptr.push(entry_col.len() as u32);
+        }
+        drop(order);
+
+        // Upper-triangular pattern of JᵀJ + diagonal, as sorted keys (col j, row i).
+        let mut n_pairs = 0usize;
+        for r in 0..m {
+            let k = (entry_row_ptr[r + 1] - entry_row_ptr[r]) as usize;
+            n_pairs += k * (k + 1) / 2;
+        }
+        assert!(n_pairs < NONE as usize, "too many Jacobian products");
+        let mut keys: Vec<u64> = Vec::with_capacity(n_pairs + nf);
+        for i in 0..nf as u64 {
+            keys.push((i << 32) | i);
+        }
+        for r in 0..m {
+            let cols = &entry_col[entry_row_ptr[r] as usize..entry_row_ptr[r + 1] as usize];
+            for a in 0..cols.len() {
+                for b in a + 1..cols.len() {
+                    // cols sorted ascending and unique: row i = cols[a] < col j = cols[b].
+                    keys.push(((cols[b] as u64) << 32) | cols[a] as u64);
+                }
+            }
+        }
+        keys.sort_unstable();
+        keys.dedup();
+        let nnz = keys.len();
+        assert!(nnz < NONE as usize);
+        let mut col_ptr = vec![0u32; nf + 1];
+        let mut row_idx = Vec::with_capacity(nnz);
+        for &k in &keys {
+            col_ptr[(k >> 32) as usize + 1] += 1;
+            row_idx.push((k & 0xffff_ffff) as u32);
+        }
+        drop(keys);
+        for j in 0..nf {
+            col_ptr[j + 1] += col_ptr[j];
+        }
+        let find = |i: u32, j: u32| -> u32 {
+            let s = col_ptr[j as usize] as usize;
+            let e = col_ptr[j as usize + 1] as usize;
+            (s + row_idx[s..e].binary_search(&i).expect("pattern entry")) as u32
+        };
+        let diag_pos: Vec<u32> = (0..nf as u32).map(|i| find(i, i)).collect();
+        let mut pair_dest = Vec::with_capacity(n_pairs);
+        for r in 0..m {
+            let cols = &entry_col[entry_row_ptr[r] as usize..entry_row_ptr[r + 1] as usize];
+            for a in 0..cols.len() {
+                pair_dest.push(diag_pos[cols[a] as usize]);
+                for b in a + 1..cols.len() {
+                    pair_dest.push(find(cols[a], cols[b]));
+                }
+            }
+        }
+
+        let a_sym = SymbolicSparseColMat::<u32>::new_checked(nf, nf, col_ptr, None, row_idx);
+        let (chol, l_len, mem) = if nf > 0 {
+            let chol = factorize_symbolic_cholesky(
+                a_sym.as_ref(),
+                Side::Upper,
+                SymmetricOrdering::Amd,
+                CholeskySymbolicParams::default(),
+            )
+            .expect("symbolic Cholesky analysis");
+            let req = StackReq::or(
+                chol.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+                chol.solve_in_place_scratch::<f64>(1, Par::Seq),
+            );
+            let l_len = chol.len_val();
+            (Some(chol), l_len, MemBuffer::new(req))
+        } else {
+            (None, 0, MemBuffer::new(StackReq::EMPTY))
+        };
+
+        Self {
+            n_vars,
+            fixed,
+            rows: buf.rows.clone(),
+            cols: buf.cols.clone(),
+            term_rows: buf.term_rows.clone(),
+            term_trips: buf.term_trips.clone(),
+            free_to_var,
+            trip_entry,
+            ev: vec![0.0; entry_col.len()],
+            entry_row_ptr,
+            entry_col,
+            pair_dest,
+            diag_pos,
+            a_sym,
+            chol,
+            h: vec![0.0; nnz],
+            a: vec![0.0; nnz],
+            l: vec![0.0; l_len],
+            g: vec![0.0; nf],
+            rw: vec![0.0; m],
+            sqrt_w: Vec::with_capacity(problem.terms.len()),
+            mem,
+        }
+    }
+
+    /// Fills JᵀWJ and JᵀWr from an evaluation with this pattern's structure.
+    pub fn assemble(&mut self, problem: &Problem, buf: &EvalBuffers) {
+        self.sqrt_w.clear();
+        self.sqrt_w.extend(problem.terms.iter().map(|t| t.weight.sqrt()));
+        for ti in 0..problem.terms.len() {
+            let s = self.sqrt_w[ti];
+            let (r0, r1) = (buf.term_rows[ti], buf.term_rows[ti + 1]);
+            for (rw, &r) in self.rw[r0..r1].iter_mut().zip(&buf.r[r0..r1]) {
+                *rw = s * r;
+            }
+        }
+        self.ev.fill(0.0);
+        for ti in 0..problem.terms.len() {
+            let s = self.sqrt_w[ti];
+            let (t0, t1) = (buf.term_trips[ti], buf.term_trips[ti + 1]);
+            for (&e, &v) in self.trip_entry[t0..t1].iter().zip(&buf.vals[t0..t1]) {
+                if e != NONE {
+                    self.ev[e as usize] += s * v;
+                }
+            }
+        }
+        self.h.fill(0.0);
+        self.g.fill(0.0);
+        let h = &mut self.h[..];
+        let g = &mut self.g[..];
+        let mut dests = &self.pair_dest[..];
+        let m = self.rw.len();
+        for row in 0..m {
+            let e0 = self.entry_row_ptr[row] as usize;
+            let e1 = self.entry_row_ptr[row + 1] as usize;
+            let k = e1 - e0;
+            let np = k * (k + 1) / 2;
+            let (row_dests, rest) = dests.split_at(np);
+            dests = rest;
+            let rr = self.rw[row];
+            if !buf.active[row] || (rr == 0.0 && self.ev[e0..e1].iter().all(|&v| v == 0.0)) {
+                continue;
+            }
+            let vals = &self.ev[e0..e1];
+            let cols = &self.entry_col[e0..e1];
+            let mut d = row_dests;
+            for a in 0..k {
+                let va = vals[a];
+                g[cols[a] as usize] += va * rr;
+                let (da, rest) = d.split_at(k - a);
+                d = rest;
+                for (&dst, &vb) in da.iter().zip(&vals[a..]) {
+                    h[dst as usize] += va * vb;
+                }
+            }
+        }
+    }
+
+    /// |JᵀWr|∞.
+    pub fn gradient_inf_norm(&self) -> f64 {
+        self.g.iter().fold(0.0, |m, g| m.max(g.abs()))
+    }
+
+    /// Solves (JᵀWJ + μI) Δ = −JᵀWr into `delta` (length n_free). False if the numeric
+    /// factorization failed (not positive definite).
+    pub fn factor_solve(&mut self, mu: f64, delta: &mut [f64]) -> bool {
+        let nf = self.n_free();
+        assert_eq!(delta.len(), nf);
+        let Some(chol) = self.chol.as_ref() else {
+            return true;
+        };
+        self.a.copy_from_slice(&self.h);
+        for &p in &self.diag_pos {
+            self.a[p as usize] += mu;
+        }
+        let mat = SparseColMatRef::new(self.a_sym.as_ref(), &self.a);
+        let stack = MemStack::new(&mut self.mem);
+        let llt = match chol.factorize_numeric_llt(
+            &mut self.l,
+            mat,
+            Side::Upper,
+            LltRegularization::default(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        ) {
+            Ok(llt) => llt,
+            Err(_) => return false,
+        };
+        for (d, g) in delta.iter_mut().zip(&self.g) {
+            *d = -g;
+        }
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(delta, nf, 1),
+            Par::Seq,
+            stack,
+        );
+        delta.iter().all(|d| d.is_finite())
+    }
+}
+
+/// Σ_j c_j² over the columns of L (c_j = stored entries of column j, diagonal included).
+pub(crate) fn factor_flops(chol: &SymbolicCholesky<u32>) -> f64 {
+    use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+    match chol.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            s.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum()
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (b, e, rp) = (s.supernode_begin(), s.supernode_end(), s.col_ptr_for_row_idx());
+            let mut f = 0.0;
+            for k in 0..s.n_supernodes() {
+                let w = (e[k] - b[k]) as usize;
+                let p = (rp[k + 1] - rp[k]) as f64;
+                // column i of the supernode stores w − i + p entries
+                for i in 0..w {
+                    f += ((w - i) as f64 + p).powi(2);
+                }
+            }
+            f
+        }
+    }
+}
