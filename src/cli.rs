@@ -14,7 +14,11 @@ const USAGE: &str = "usage:
                              [--radius-tolerance T] --out DIR
       ST mesh with support structure (paper Sec. 4). Writes DIR/panels.glb, panels.obj,
       panels.csv, panels.json and report.json. D, L and T are relative to the bbox diagonal
-      (defaults 0.02, 0.1, 0.001).";
+      (defaults 0.02, 0.1, 0.001).
+  spherical-faces st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR
+      Angle-minimizing ST mesh with face size adapted to the surface (paper Sec. 3): remesh
+      with the sizing field of tolerance E (relative to the bbox diagonal) or uniformly to
+      about N faces, then optimize the face spheres. Same files and report.json schema.";
 
 pub fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -30,6 +34,16 @@ pub fn main() -> ExitCode {
             }
         },
         Some("st-support") => match st_support_command(&args[1..]) {
+            Ok(summary) => {
+                println!("{summary}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Some("st") => match st_command(&args[1..]) {
             Ok(summary) => {
                 println!("{summary}");
                 ExitCode::SUCCESS
@@ -103,6 +117,57 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
         out.display(),
         output.result.metrics.max_kink_angle_deg,
         output.summary.report.metrics.max_distance_to_reference.unwrap_or(f64::NAN)
+    ))
+}
+
+/// `st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR`.
+fn st_command(args: &[String]) -> Result<String, String> {
+    use spherical_faces::st_angle::{report_and_files, st_angle, StAngleParams, StSizing, StVariant};
+    let mut params = StAngleParams::default();
+    let (mut mesh_path, mut out) = (None, None);
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut value = || it.next().ok_or(format!("{a} needs a value"));
+        match a.as_str() {
+            "--epsilon" => {
+                let v = value()?;
+                let e = v.parse::<f64>().ok().filter(|x| *x > 0.0 && *x < 1.0).ok_or(format!("--epsilon {v}: expected a number in (0, 1)"))?;
+                params.sizing = StSizing::Adaptive { epsilon: e };
+            }
+            "--faces" => {
+                let v = value()?;
+                let n = v.parse::<usize>().ok().filter(|n| *n >= 4).ok_or(format!("--faces {v}: expected a whole number ≥ 4"))?;
+                params.sizing = StSizing::UniformFaces(n);
+            }
+            "--variant" => {
+                params.variant = match value()?.as_str() {
+                    "a" => StVariant::A,
+                    "b" => StVariant::B,
+                    v => return Err(format!("--variant {v}: expected a or b")),
+                }
+            }
+            "--out" => out = Some(value()?.clone()),
+            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
+            s if mesh_path.is_none() => mesh_path = Some(s.to_string()),
+            s => return Err(format!("unexpected argument {s}")),
+        }
+    }
+    let mesh_path = mesh_path.ok_or("st needs a mesh file")?;
+    let out = std::path::PathBuf::from(out.ok_or("st needs --out DIR")?);
+    let imported = read_mesh(&mesh_path)?;
+    let result = st_angle(&imported.mesh, &params, Some(native_clock_ms), &mut |_| true).map_err(|e| format!("{mesh_path}: {e}"))?;
+    let (report, files) = report_and_files(&imported.mesh, &result, 1e-3);
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    for f in &files {
+        std::fs::write(out.join(&f.name), &f.bytes).map_err(|e| format!("{}: {e}", out.join(&f.name).display()))?;
+    }
+    Ok(format!(
+        "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {:.2e} of the diagonal)",
+        report.output.panels,
+        out.display(),
+        result.metrics.mean_kink_angle_deg,
+        result.metrics.max_kink_angle_deg,
+        result.metrics.max_distance_to_reference
     ))
 }
 

@@ -20,6 +20,7 @@ pub mod panels;
 pub mod export;
 pub mod absolute_sphere;
 pub mod st_support;
+pub mod st_angle;
 
 #[cfg(target_arch = "wasm32")]
 pub mod web;

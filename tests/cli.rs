@@ -90,3 +90,19 @@ fn st_support_refuses_a_minimal_surface() {
     assert!(!dir.join("report.json").exists(), "nothing written");
     assert_eq!(run(&["st-support", "../shared/data/meshes/cmc1.obj"]).status.code(), Some(2), "--out is required");
 }
+
+#[test]
+fn st_writes_panels_and_report_or_refuses() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-stangle-{}", std::process::id()));
+    let out = run(&["st", "../shared/data/meshes/cmc1.obj", "--faces", "120", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["method"], "st");
+    assert!(r["metrics"]["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8);
+    assert!(r["timings_ms"]["angle_iteration_median"].is_number());
+    assert!(dir.join("panels.glb").exists() && dir.join("panels.csv").exists());
+    let bad = run(&["st", "../shared/data/meshes/enneper2.obj", "--out", dir.join("e").to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&bad.stderr).trim_end().lines().count(), 1);
+    assert_eq!(run(&["st", "../shared/data/meshes/cmc1.obj", "--variant", "c", "--out", "/tmp/x"]).status.code(), Some(2));
+}

@@ -1,0 +1,1071 @@
+//! Angle-minimizing ST meshes with adapted face size (paper Sec. 3 end, Sec. 5.2; issue 4 §4).
+//!
+//! Pipeline ([`st_angle`]): jet fit of the reference → refusal when the central spheres are
+//! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
+//! a uniform field for a face count) → pliant remeshing → jet fit of the remeshed mesh (face
+//! central spheres) → initialization → staged optimization with [`crate::solver`] → exact
+//! re-fit of every face sphere through its three vertices → metrics.
+//!
+//! **Initialization.** Every face sphere is the member of the pencil through its three vertices
+//! ([`Sphere::through_points_family`], orthonormal basis s₀ (plane), s₁) closest to the face's
+//! central sphere C (the normalized mean of its vertices' central spheres): maximizing ⟨s, C⟩
+//! over cos θ s₀ + sin θ s₁ gives θ = atan2(⟨s₁, C⟩, ⟨s₀, C⟩). It is oriented like the face
+//! (cos θ ≥ 0; else negated).
+//!
+//! **Optimization** (in a frame centred at the reference's bounding box and scaled by its
+//! diagonal, so weights are dimensionless). Variables: the face spheres (5-blocks (a, b, c),
+//! first) and the vertices (3-blocks, after). Terms ([`build_problem`]):
+//! - `sphere`: ψ_f(v) for the three corners of every face (E_sphere);
+//! - `unit`: bᵀb − 4ac − 1 (E_unit);
+//! - `angle`: ⟨s_f, s_g⟩ − 1 for every interior edge (exact bilinear Jacobian; ⟨s_f, s_g⟩ is the
+//!   cosine of the kink angle for spheres oriented alike);
+//! - `tangent_distance`: n_v·(v − q_v), q_v the closest reference point, n_v the reference normal
+//!   there (barycentric vertex normals), updated in [`Term::prepare`] (vertices glide, Sec. 5.2);
+//! - `point_distance`: v − q_v (small weight; ×[`BOUNDARY_POINT_FACTOR`] on boundary vertices so
+//!   the boundary does not slide off);
+//! - `face_distance`: ψ_f(r_f) with r_f the reference point closest to face f's centroid
+//!   ([`FaceProximity`], same weight schedule as the proximity terms): keeps the panels, not
+//!   only the vertices, near the reference;
+//! - `fairness`: uniform Laplacian v − mean(neighbours) at interior vertices (small weight);
+//! - `edge_orthogonality` (variant (a) option, off by default): for every interior edge, the
+//!   circle's plane contains the reference normal at the edge midpoint, written as
+//!   ⟨a_g b_f − a_f b_g, n_e⟩ / |…| ≈ 0 — see [`EdgeOrthogonality`].
+//!
+//! The stages ([`StAngleStage`]) scale the proximity weights (larger first, then relaxed); a last
+//! stage with E_sphere dominating is followed by the exact projection: each face sphere is
+//! replaced by the member of its vertices' pencil closest to the optimized sphere, so the
+//! vertex–sphere residual is at rounding level.
+//!
+//! **Variant (b)** (Fig. 12 bottom): the same spheres, but each interior edge arc is cut from
+//! each face sphere by the *bisecting plane* of the two face planes (the plane through the edge
+//! containing n_f + n_g). Both cut curves pass through the edge's vertices but differ in between.
+//! **Gap measure**: for 33 points x₀ = p + t (q − p), t ∈ [0, 1], on the chord, the line
+//! x₀ + h w in the bisecting plane (w ⟂ edge) meets each sphere at h_f, h_g (root nearest 0);
+//! the gap is max |h_f − h_g| over the samples and edges (relative to the diagonal). The panel
+//! exports (`build_panels`) still use the intersection circles (variant (a) arcs); only the
+//! metric differs.
+//!
+//! **Boundary arcs**: [`BoundaryArcRule::Parallel`]`(0)`: with a zero direction `build_panels`
+//! falls back to the plane through the edge and the sphere normal at its start, i.e. the plane
+//! through the edge and the face sphere's centre (a great-circle arc; straight for planes).
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::curvature::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE};
+use crate::export::closest::TriangleBvh;
+use crate::mesh::{Topology, TriMesh};
+use crate::panels::build_panels;
+use crate::remesh::{pliant_remesh, RemeshParams, SizingField, DEFAULT_EPSILON};
+use crate::solver::{
+    InversiveProduct, JacobianSink, Linear, PointOnSphere, Problem, Solver, SolverOptions, Term, TermId,
+    TermStats, UnitLength,
+};
+use crate::sphere::Sphere;
+use crate::sphere_mesh::{BoundaryArcRule, SphereMesh};
+
+/// Panel tessellation chord error for the distance metric, relative to the diagonal.
+pub const CHORD_TOLERANCE: f64 = 1e-4;
+/// Boundary vertices get this factor on their point-distance residuals.
+pub const BOUNDARY_POINT_FACTOR: f64 = 10.0;
+/// Gap samples per edge (variant (b)).
+pub const GAP_SAMPLES: usize = 33;
+
+/// Edge variant (Fig. 12).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum StVariant {
+    /// Edges are the intersection circles of adjacent spheres.
+    #[default]
+    A,
+    /// Spheres cut by the bisecting face planes (small gaps, reported).
+    B,
+}
+
+/// How the reference is remeshed first.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum StSizing {
+    /// Influence zones of the central spheres, ε relative to the bbox diagonal.
+    Adaptive { epsilon: f64 },
+    /// Uniform field for about this many faces.
+    UniformFaces(usize),
+    /// Use the reference triangulation as is (no remeshing).
+    None,
+}
+
+/// Term weights (frame scaled to diagonal 1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StAngleWeights {
+    pub sphere: f64,
+    pub unit: f64,
+    pub angle: f64,
+    pub tangent_distance: f64,
+    pub point_distance: f64,
+    /// Face sphere through the reference point closest to the face centroid (limits bulging).
+    pub face_distance: f64,
+    pub fairness: f64,
+    /// Variant (a) option: edge circles orthogonal to the reference; 0 = off.
+    pub edge_orthogonality: f64,
+}
+
+impl Default for StAngleWeights {
+    fn default() -> Self {
+        Self {
+            sphere: 1000.0,
+            unit: 1000.0,
+            angle: 1.0,
+            tangent_distance: 100.0,
+            point_distance: 10.0,
+            face_distance: 100.0,
+            fairness: 1.0,
+            edge_orthogonality: 0.0,
+        }
+    }
+}
+
+/// One optimization stage: proximity weights × `proximity_scale`, sphere/unit weights ×
+/// `sphere_scale`, at most `iterations` solver iterations.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StAngleStage {
+    pub name: String,
+    pub proximity_scale: f64,
+    pub sphere_scale: f64,
+    pub iterations: usize,
+}
+
+/// Parameters of [`st_angle`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StAngleParams {
+    pub sizing: StSizing,
+    pub variant: StVariant,
+    pub remesh: RemeshParams,
+    pub jet: JetParams,
+    pub weights: StAngleWeights,
+    pub stages: Vec<StAngleStage>,
+    /// Refuse when fewer than this fraction of reference vertices have a usable central sphere.
+    pub min_usable_fraction: f64,
+    /// A vertex is usable when |H| ≥ this × (|k₁| + |k₂|)/2 (and not planar).
+    pub min_curvature_ratio: f64,
+    /// Initial LM regularization ε of the first stage; later stages continue from the last ε.
+    pub initial_epsilon: f64,
+    /// Hard-fix the boundary vertices of the remeshed mesh (they lie on the reference boundary).
+    pub fix_boundary: bool,
+    /// Hard-fix the vertices of remeshed edges whose faces meet at more than
+    /// `remesh.feature_angle_deg` (feature curves kept by the remesher).
+    pub fix_features: bool,
+}
+
+impl StAngleParams {
+    /// Default stages with the given iteration counts per stage (proximity, angle, relax, close).
+    pub fn stages_with(iterations: [usize; 4]) -> Vec<StAngleStage> {
+        let mk = |name: &str, p: f64, s: f64, it: usize| StAngleStage {
+            name: name.into(),
+            proximity_scale: p,
+            sphere_scale: s,
+            iterations: it,
+        };
+        vec![
+            mk("proximity", 10.0, 1.0, iterations[0]),
+            mk("angle", 1.0, 1.0, iterations[1]),
+            mk("relax", 0.5, 1.0, iterations[2]),
+            mk("close", 0.5, 1000.0, iterations[3]),
+        ]
+    }
+}
+
+impl Default for StAngleParams {
+    fn default() -> Self {
+        Self {
+            sizing: StSizing::Adaptive { epsilon: DEFAULT_EPSILON },
+            variant: StVariant::A,
+            remesh: RemeshParams::default(),
+            jet: JetParams::default(),
+            weights: StAngleWeights::default(),
+            stages: Self::stages_with([5, 15, 15, 10]),
+            min_usable_fraction: 0.5,
+            min_curvature_ratio: 0.1,
+            initial_epsilon: 0.1,
+            fix_boundary: true,
+            fix_features: true,
+        }
+    }
+}
+
+/// Progress events. Returning false from the hook cancels (Err("cancelled")).
+pub enum StAngleEvent<'a> {
+    /// A pipeline stage starts ("jet_fit", "sizing", "remesh", "init", "optimize", "metrics").
+    Stage(&'a str),
+    /// After every solver iteration.
+    Iteration {
+        stage: &'a str,
+        /// Global iteration counter over all stages.
+        iteration: usize,
+        energy: f64,
+        terms: &'a [TermStats],
+        ms: Option<f64>,
+        /// Current vertices and face spheres (model coordinates) for a snapshot.
+        vertices: &'a [DVec3],
+        spheres: &'a [Sphere],
+    },
+}
+
+/// Quality of an ST mesh (lengths relative to the reference diagonal).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StAngleMetrics {
+    /// max over faces and corners of | |v − c| − r |, relative.
+    pub max_vertex_sphere_residual: f64,
+    /// Kink angles over interior edges (degrees).
+    pub mean_kink_angle_deg: f64,
+    pub max_kink_angle_deg: f64,
+    /// Sampled over the panels (export::max_distance_to_reference), relative.
+    pub max_distance_to_reference: f64,
+    /// Max vertex distance to the reference, relative.
+    pub max_vertex_distance_to_reference: f64,
+    /// Variant (b): largest gap between adjacent cut curves (see module docs), relative.
+    pub max_gap: Option<f64>,
+    pub faces: usize,
+    pub interior_edges: usize,
+    /// Faces whose normal points against the reference normal at the closest point of their
+    /// centroid (should be 0).
+    pub flipped_faces: usize,
+    /// Variant (b): the gap of `max_gap` divided by its edge's length.
+    pub max_gap_over_edge_length: Option<f64>,
+}
+
+/// Output of [`st_angle`].
+#[derive(Clone, Debug)]
+pub struct StAngleResult {
+    pub sphere_mesh: SphereMesh,
+    pub initial_sphere_mesh: SphereMesh,
+    pub remeshed: TriMesh,
+    pub initial_metrics: StAngleMetrics,
+    pub metrics: StAngleMetrics,
+    /// Solver iterations over all stages.
+    pub iterations: usize,
+    /// Per-iteration times (ms) when a clock was given.
+    pub iteration_ms: Vec<f64>,
+    /// Median of `iteration_ms`.
+    pub angle_iteration_median_ms: Option<f64>,
+    /// Stage timings (ms) when a clock was given: jet_fit, sizing, remesh, init, optimize, metrics.
+    pub timings_ms: Vec<(String, f64)>,
+    pub diag: f64,
+    pub variant: StVariant,
+    /// Final term statistics.
+    pub terms: Vec<TermStats>,
+}
+
+const CANCELLED: &str = "cancelled";
+
+// ---------------------------------------------------------------------------------------------
+// Terms
+
+/// Proximity to the reference (Sec. 5.2): per vertex either the tangent-plane distance
+/// n·(v − q) (one residual) or the point distance v − q (three residuals, scaled per vertex),
+/// with (q, n) the closest reference point and its normal, refreshed in [`Term::prepare`].
+pub struct ReferenceProximity<'a> {
+    name: String,
+    bvh: &'a TriangleBvh,
+    /// Reference vertex normals (unit) and triangles, to interpolate normals.
+    normals: &'a [DVec3],
+    triangles: &'a [[u32; 3]],
+    /// Vertex block offsets.
+    offsets: Vec<usize>,
+    /// Per-vertex residual scale.
+    scales: Vec<f64>,
+    point: bool,
+    closest: Vec<(DVec3, DVec3)>,
+}
+
+impl<'a> ReferenceProximity<'a> {
+    /// Tangent-plane distance n·(v − q).
+    pub fn tangent(bvh: &'a TriangleBvh, reference: &'a TriMesh, normals: &'a [DVec3], offsets: Vec<usize>) -> Self {
+        Self::new("tangent_distance", bvh, reference, normals, offsets, None, false)
+    }
+
+    /// Point distance v − q, residuals scaled by `scales` (per vertex).
+    pub fn point(
+        bvh: &'a TriangleBvh,
+        reference: &'a TriMesh,
+        normals: &'a [DVec3],
+        offsets: Vec<usize>,
+        scales: Vec<f64>,
+    ) -> Self {
+        Self::new("point_distance", bvh, reference, normals, offsets, Some(scales), true)
+    }
+
+    fn new(
+        name: &str,
+        bvh: &'a TriangleBvh,
+        reference: &'a TriMesh,
+        normals: &'a [DVec3],
+        offsets: Vec<usize>,
+        scales: Option<Vec<f64>>,
+        point: bool,
+    ) -> Self {
+        let n = offsets.len();
+        Self {
+            name: name.into(),
+            bvh,
+            normals,
+            triangles: &reference.triangles,
+            scales: scales.unwrap_or_else(|| vec![1.0; n]),
+            offsets,
+            point,
+            closest: vec![(DVec3::ZERO, DVec3::Z); n],
+        }
+    }
+
+    /// Closest points and normals currently used.
+    pub fn closest(&self) -> &[(DVec3, DVec3)] {
+        &self.closest
+    }
+}
+
+impl Term for ReferenceProximity<'_> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        if self.point {
+            3 * self.offsets.len()
+        } else {
+            self.offsets.len()
+        }
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        for (k, &o) in self.offsets.iter().enumerate() {
+            let v = DVec3::new(x[o], x[o + 1], x[o + 2]);
+            if !v.is_finite() {
+                continue;
+            }
+            if let Some(hit) = self.bvh.closest_point(v) {
+                let t = self.triangles[hit.triangle];
+                let w = hit.barycentric;
+                let n = (w[0] * self.normals[t[0] as usize]
+                    + w[1] * self.normals[t[1] as usize]
+                    + w[2] * self.normals[t[2] as usize])
+                    .try_normalize()
+                    .unwrap_or(self.closest[k].1);
+                self.closest[k] = (hit.point, n);
+            }
+        }
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &o) in self.offsets.iter().enumerate() {
+            let v = DVec3::new(x[o], x[o + 1], x[o + 2]);
+            let (q, n) = self.closest[k];
+            let s = self.scales[k];
+            if self.point {
+                let d = (v - q) * s;
+                for i in 0..3 {
+                    r[3 * k + i] = d[i];
+                    jac.add(3 * k + i, o + i, s);
+                }
+            } else {
+                r[k] = n.dot(v - q) * s;
+                jac.add_block(k, o, &[n.x * s, n.y * s, n.z * s]);
+            }
+        }
+    }
+}
+
+/// Face spheres near the reference: ψ_f(r_f), r_f the reference point closest to the centroid of
+/// face f's current vertices (refreshed in [`Term::prepare`]; constant in the Jacobian). For a
+/// normalized sphere ψ ≈ the signed distance of r_f to it, so this bounds the panels' bulge.
+pub struct FaceProximity<'a> {
+    name: String,
+    bvh: &'a TriangleBvh,
+    /// (sphere offset, three vertex offsets) per face.
+    faces: Vec<(usize, [usize; 3])>,
+    targets: Vec<DVec3>,
+}
+
+impl<'a> FaceProximity<'a> {
+    pub fn new(bvh: &'a TriangleBvh, faces: Vec<(usize, [usize; 3])>, x: &[f64]) -> Self {
+        let mut t = Self { name: "face_distance".into(), bvh, targets: vec![DVec3::ZERO; faces.len()], faces };
+        t.prepare(x);
+        t
+    }
+}
+
+impl Term for FaceProximity<'_> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        self.faces.len()
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        for (k, &(_, vs)) in self.faces.iter().enumerate() {
+            let c = (v3(x, vs[0]) + v3(x, vs[1]) + v3(x, vs[2])) / 3.0;
+            if let Some(hit) = c.is_finite().then(|| self.bvh.closest_point(c)).flatten() {
+                self.targets[k] = hit.point;
+            }
+        }
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &(so, _)) in self.faces.iter().enumerate() {
+            let p = self.targets[k];
+            let q = p.length_squared();
+            r[k] = x[so] * q - v3(x, so + 1).dot(p) + x[so + 4];
+            jac.add_block(k, so, &[q, -p.x, -p.y, -p.z, 1.0]);
+        }
+    }
+}
+
+/// Variant (a) option: the plane of the intersection circle of s_f and s_g (normal
+/// m = a_g b_f − a_f b_g) should contain the reference normal n_e at the edge, i.e. the edge
+/// circle is orthogonal to the reference: residual ⟨m, n_e⟩ / ℓ_e with ℓ_e = |m| at the
+/// initial state (a fixed scale, so the residual stays polynomial); n_e is refreshed in
+/// [`Term::prepare`] from the vertices' closest reference points.
+pub struct EdgeOrthogonality {
+    name: String,
+    /// (sphere f, sphere g, vertex p, vertex q) offsets.
+    items: Vec<(usize, usize, usize, usize)>,
+    scales: Vec<f64>,
+    normals: Vec<DVec3>,
+}
+
+impl EdgeOrthogonality {
+    /// `normals`: initial reference normal per edge; `x`: point for the scales.
+    pub fn new(items: Vec<(usize, usize, usize, usize)>, normals: Vec<DVec3>, x: &[f64]) -> Self {
+        let scales = items
+            .iter()
+            .map(|&(f, g, _, _)| {
+                let m = x[g] * v3(x, f + 1) - x[f] * v3(x, g + 1);
+                let l = m.length();
+                if l > 1e-12 {
+                    1.0 / l
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Self { name: "edge_orthogonality".into(), items, scales, normals }
+    }
+
+    /// Sets the per-edge reference normals.
+    pub fn set_normals(&mut self, normals: Vec<DVec3>) {
+        self.normals = normals;
+    }
+}
+
+fn v3(x: &[f64], o: usize) -> DVec3 {
+    DVec3::new(x[o], x[o + 1], x[o + 2])
+}
+
+impl Term for EdgeOrthogonality {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        self.items.len()
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &(f, g, _, _)) in self.items.iter().enumerate() {
+            let (af, bf) = (x[f], v3(x, f + 1));
+            let (ag, bg) = (x[g], v3(x, g + 1));
+            let n = self.normals[k];
+            let s = self.scales[k];
+            let m = ag * bf - af * bg;
+            r[k] = s * m.dot(n);
+            jac.add(k, f, -s * bg.dot(n));
+            jac.add_block(k, f + 1, &[s * ag * n.x, s * ag * n.y, s * ag * n.z]);
+            jac.add(k, g, s * bf.dot(n));
+            jac.add_block(k, g + 1, &[-s * af * n.x, -s * af * n.y, -s * af * n.z]);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Problem
+
+/// Handles of the terms of [`build_problem`].
+#[derive(Clone, Debug)]
+pub struct StAngleTerms {
+    pub sphere: TermId,
+    pub unit: TermId,
+    pub angle: TermId,
+    pub tangent_distance: TermId,
+    pub point_distance: TermId,
+    pub face_distance: TermId,
+    pub fairness: TermId,
+    pub edge_orthogonality: Option<TermId>,
+}
+
+/// Mesh connectivity used by the optimization.
+#[derive(Clone, Debug, Default)]
+pub struct FaceAdjacency {
+    /// Interior edges: (v_lo, v_hi, face f, face g).
+    pub interior: Vec<(u32, u32, usize, usize)>,
+    pub boundary_vertex: Vec<bool>,
+    pub neighbors: Vec<Vec<u32>>,
+}
+
+impl FaceAdjacency {
+    pub fn new(mesh: &TriMesh) -> Self {
+        let nv = mesh.vertex_count();
+        let mut edges: Vec<(u32, u32, usize)> = Vec::with_capacity(3 * mesh.face_count());
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edges.push((a.min(b), a.max(b), f));
+            }
+        }
+        edges.sort_unstable();
+        let mut interior = Vec::new();
+        let mut boundary_vertex = vec![false; nv];
+        let mut neighbors = vec![Vec::new(); nv];
+        let mut i = 0;
+        while i < edges.len() {
+            let mut j = i + 1;
+            while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
+                j += 1;
+            }
+            let (a, b) = (edges[i].0, edges[i].1);
+            neighbors[a as usize].push(b);
+            neighbors[b as usize].push(a);
+            if j - i == 2 {
+                interior.push((a, b, edges[i].2, edges[i + 1].2));
+            } else {
+                boundary_vertex[a as usize] = true;
+                boundary_vertex[b as usize] = true;
+            }
+            i = j;
+        }
+        Self { interior, boundary_vertex, neighbors }
+    }
+}
+
+/// Offset of face f's sphere block.
+pub fn sphere_offset(f: usize) -> usize {
+    5 * f
+}
+
+/// Offset of vertex v's block in a problem with `faces` faces.
+pub fn vertex_offset(faces: usize, v: usize) -> usize {
+    5 * faces + 3 * v
+}
+
+/// The variable vector: face spheres then vertices.
+pub fn pack(vertices: &[DVec3], spheres: &[Sphere]) -> Vec<f64> {
+    let mut x = Vec::with_capacity(5 * spheres.len() + 3 * vertices.len());
+    for s in spheres {
+        x.extend_from_slice(&s.to_array());
+    }
+    for v in vertices {
+        x.extend_from_slice(&v.to_array());
+    }
+    x
+}
+
+/// Inverse of [`pack`].
+pub fn unpack(x: &[f64], faces: usize, vertices: usize) -> (Vec<DVec3>, Vec<Sphere>) {
+    let spheres = (0..faces)
+        .map(|f| {
+            let o = sphere_offset(f);
+            Sphere::from_array([x[o], x[o + 1], x[o + 2], x[o + 3], x[o + 4]])
+        })
+        .collect();
+    let verts = (0..vertices).map(|v| v3(x, vertex_offset(faces, v))).collect();
+    (verts, spheres)
+}
+
+/// The optimization problem over `mesh` (faces' spheres and vertices, see [`pack`]) against the
+/// reference (`bvh` of it, its unit vertex `normals`), all in the same coordinates. `x` is the
+/// starting point (for the scales of the edge-orthogonality term).
+pub fn build_problem<'a>(
+    mesh: &TriMesh,
+    adjacency: &FaceAdjacency,
+    reference: &'a TriMesh,
+    bvh: &'a TriangleBvh,
+    normals: &'a [DVec3],
+    weights: &StAngleWeights,
+    x: &[f64],
+) -> (Problem<'a>, StAngleTerms) {
+    let nf = mesh.face_count();
+    let nv = mesh.vertex_count();
+    let mut problem = Problem::new(5 * nf + 3 * nv);
+    let pairs: Vec<(usize, usize)> = mesh
+        .triangles
+        .iter()
+        .enumerate()
+        .flat_map(|(f, t)| t.map(|v| (vertex_offset(nf, v as usize), sphere_offset(f))))
+        .collect();
+    let sphere = problem.add_term(PointOnSphere::new(pairs).with_name("sphere"), weights.sphere);
+    let unit = problem.add_term(UnitLength::spheres((0..nf).map(sphere_offset).collect()).with_name("unit"), weights.unit);
+    let edge_pairs = adjacency.interior.iter().map(|&(_, _, f, g)| (sphere_offset(f), sphere_offset(g))).collect();
+    let angle = problem.add_term(InversiveProduct::new(edge_pairs, 1.0).with_name("angle"), weights.angle);
+    let offsets: Vec<usize> = (0..nv).map(|v| vertex_offset(nf, v)).collect();
+    let tangent_distance =
+        problem.add_term(ReferenceProximity::tangent(bvh, reference, normals, offsets.clone()), weights.tangent_distance);
+    let scales = (0..nv).map(|v| if adjacency.boundary_vertex[v] { BOUNDARY_POINT_FACTOR } else { 1.0 }).collect();
+    let point_distance =
+        problem.add_term(ReferenceProximity::point(bvh, reference, normals, offsets, scales), weights.point_distance);
+    let face_items = (0..nf)
+        .map(|f| (sphere_offset(f), mesh.triangles[f].map(|v| vertex_offset(nf, v as usize))))
+        .collect();
+    let face_distance = problem.add_term(FaceProximity::new(bvh, face_items, x), weights.face_distance);
+    let mut lap = Linear::new().with_name("fairness");
+    for v in 0..nv {
+        let nb = &adjacency.neighbors[v];
+        if adjacency.boundary_vertex[v] || nb.is_empty() {
+            continue;
+        }
+        let w = 1.0 / nb.len() as f64;
+        for i in 0..3 {
+            let mut row = vec![(vertex_offset(nf, v) + i, 1.0)];
+            row.extend(nb.iter().map(|&u| (vertex_offset(nf, u as usize) + i, -w)));
+            lap.push_row(&row, 0.0);
+        }
+    }
+    let fairness = problem.add_term(lap, weights.fairness);
+    let edge_orthogonality = (weights.edge_orthogonality > 0.0).then(|| {
+        let items: Vec<_> = adjacency
+            .interior
+            .iter()
+            .map(|&(a, b, f, g)| (sphere_offset(f), sphere_offset(g), vertex_offset(nf, a as usize), vertex_offset(nf, b as usize)))
+            .collect();
+        let en: Vec<DVec3> = adjacency
+            .interior
+            .iter()
+            .map(|&(_, _, f, g)| (mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero()).normalize_or_zero())
+            .collect();
+        problem.add_term(EdgeOrthogonality::new(items, en, x), weights.edge_orthogonality)
+    });
+    (problem, StAngleTerms { sphere, unit, angle, tangent_distance, point_distance, face_distance, fairness, edge_orthogonality })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry helpers
+
+/// The member of the pencil through `p` closest to `target` (max ⟨s, target⟩), oriented like the
+/// triangle (component along the plane member ≥ 0).
+pub fn closest_family_member(p: [DVec3; 3], target: &Sphere) -> Sphere {
+    let [s0, s1] = Sphere::through_points_family(p);
+    let theta = s1.inversive_product(target).atan2(s0.inversive_product(target));
+    let (sn, cs) = theta.sin_cos();
+    let s = Sphere::combine(&s0, cs, &s1, sn);
+    if cs < 0.0 {
+        s.flipped()
+    } else {
+        s
+    }
+}
+
+/// Initial face spheres: closest pencil members to the mean of the vertices' central spheres.
+pub fn initial_spheres(mesh: &TriMesh, vertex_spheres: &[Sphere]) -> Vec<Sphere> {
+    (0..mesh.face_count())
+        .map(|f| {
+            let t = mesh.triangles[f];
+            let mut c = [0.0; 5];
+            for &v in &t {
+                let a = vertex_spheres[v as usize].to_array();
+                for i in 0..5 {
+                    c[i] += a[i] / 3.0;
+                }
+            }
+            let c = Sphere::from_array(c);
+            let c = if c.discriminant() > 0.0 { c.normalized() } else { c };
+            closest_family_member(mesh.face_points(f), &c)
+        })
+        .collect()
+}
+
+/// Replaces every sphere by the member of its vertices' pencil closest to it (max ⟨s, s_opt⟩,
+/// exact incidence), keeping the optimized sphere's orientation.
+pub fn project_spheres(mesh: &TriMesh, spheres: &[Sphere]) -> Vec<Sphere> {
+    (0..mesh.face_count())
+        .map(|f| {
+            let [s0, s1] = Sphere::through_points_family(mesh.face_points(f));
+            let target = &spheres[f];
+            let theta = s1.inversive_product(target).atan2(s0.inversive_product(target));
+            let (sn, cs) = theta.sin_cos();
+            Sphere::combine(&s0, cs, &s1, sn)
+        })
+        .collect()
+}
+
+/// Signed offset h of the sphere along x₀ + h w (root of ψ nearest 0), None if no real root.
+fn line_hit(s: &Sphere, x0: DVec3, w: DVec3) -> Option<f64> {
+    let psi = s.eval(x0);
+    let bq = (2.0 * s.a * x0 - s.b).dot(w);
+    let disc = bq * bq - 4.0 * s.a * psi;
+    if disc < 0.0 {
+        return None;
+    }
+    let den = bq + bq.signum() * disc.sqrt();
+    if den == 0.0 {
+        return if psi == 0.0 { Some(0.0) } else { None };
+    }
+    Some(-2.0 * psi / den)
+}
+
+/// Variant (b) gap (absolute): see the module docs.
+pub fn max_gap(mesh: &TriMesh, spheres: &[Sphere], adjacency: &FaceAdjacency) -> f64 {
+    max_gap_with_ratio(mesh, spheres, adjacency).0
+}
+
+/// [`max_gap`] and the largest gap / edge length.
+pub fn max_gap_with_ratio(mesh: &TriMesh, spheres: &[Sphere], adjacency: &FaceAdjacency) -> (f64, f64) {
+    let mut worst = 0.0f64;
+    let mut ratio = 0.0f64;
+    for &(a, b, f, g) in &adjacency.interior {
+        let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        let e = (q - p).normalize_or_zero();
+        let nsum = mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero();
+        // Bisecting plane: through the edge, containing n_f + n_g; w is its in-plane direction ⟂ e.
+        let w = (nsum - nsum.dot(e) * e).normalize_or_zero();
+        if w == DVec3::ZERO {
+            continue;
+        }
+        for k in 1..GAP_SAMPLES - 1 {
+            let t = k as f64 / (GAP_SAMPLES - 1) as f64;
+            let x0 = p + t * (q - p);
+            if let (Some(hf), Some(hg)) = (line_hit(&spheres[f], x0, w), line_hit(&spheres[g], x0, w)) {
+                worst = worst.max((hf - hg).abs());
+                ratio = ratio.max((hf - hg).abs() / p.distance(q));
+            }
+        }
+    }
+    (worst, ratio)
+}
+
+/// Metrics of a sphere mesh against the reference (see [`StAngleMetrics`]).
+pub fn metrics(sm: &SphereMesh, reference: &TriMesh, variant: StVariant) -> StAngleMetrics {
+    let diag = reference.bbox_diagonal().max(f64::MIN_POSITIVE);
+    let mesh = &sm.mesh;
+    let adjacency = FaceAdjacency::new(mesh);
+    let mut res = 0.0f64;
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for &v in t {
+            res = res.max(sm.face_spheres[f].distance(mesh.positions[v as usize]));
+        }
+    }
+    let kinks: Vec<f64> = adjacency
+        .interior
+        .iter()
+        .map(|&(_, _, f, g)| sm.face_spheres[f].kink_angle(&sm.face_spheres[g]).to_degrees())
+        .collect();
+    let mean = if kinks.is_empty() { 0.0 } else { kinks.iter().sum::<f64>() / kinks.len() as f64 };
+    let max = kinks.iter().copied().fold(0.0, f64::max);
+    let panels = build_panels(sm, CHORD_TOLERANCE * diag);
+    let dist = crate::export::max_distance_to_reference(&panels, reference);
+    let bvh = TriangleBvh::new(reference);
+    let vdist = mesh.positions.iter().map(|&p| bvh.distance(p)).fold(0.0, f64::max) / diag;
+    let gap = (variant == StVariant::B).then(|| max_gap_with_ratio(mesh, &sm.face_spheres, &adjacency));
+    let ref_normals = reference.vertex_normals();
+    let flipped_faces = (0..mesh.face_count())
+        .filter(|&f| {
+            let c = mesh.face_points(f).iter().sum::<DVec3>() / 3.0;
+            let Some(hit) = bvh.closest_point(c) else { return false };
+            let t = reference.triangles[hit.triangle];
+            let w = hit.barycentric;
+            let n = w[0] * ref_normals[t[0] as usize] + w[1] * ref_normals[t[1] as usize] + w[2] * ref_normals[t[2] as usize];
+            mesh.face_area_vector(f).dot(n) < 0.0
+        })
+        .count();
+    StAngleMetrics {
+        max_vertex_sphere_residual: res / diag,
+        mean_kink_angle_deg: mean,
+        max_kink_angle_deg: max,
+        max_distance_to_reference: dist,
+        max_vertex_distance_to_reference: vdist,
+        max_gap: gap.map(|g| g.0 / diag),
+        max_gap_over_edge_length: gap.map(|g| g.1),
+        faces: mesh.face_count(),
+        interior_edges: adjacency.interior.len(),
+        flipped_faces,
+    }
+}
+
+/// Whether the reference's central spheres are usable; Err with a clear message if not.
+pub fn check_central_spheres(mesh: &TriMesh, field: &CurvatureField, params: &StAngleParams) -> Result<(), String> {
+    let nv = mesh.vertex_count().min(field.vertices.len());
+    if nv == 0 {
+        return Err("the reference has no vertices".into());
+    }
+    let diag = mesh.bbox_diagonal();
+    let usable = (0..nv)
+        .filter(|&i| {
+            let c = &field.vertices[i];
+            let planar = field.planar.get(i).copied().unwrap_or(false) || c.mean.abs() * diag < PLANAR_TOLERANCE;
+            let ratio_ok = c.mean.abs() >= params.min_curvature_ratio * 0.5 * (c.k1.abs() + c.k2.abs());
+            !planar && ratio_ok && c.mean.is_finite() && c.mean != 0.0
+        })
+        .count();
+    if usable == 0 || (usable as f64) < params.min_usable_fraction * nv as f64 {
+        return Err(format!(
+            "the reference has no usable central spheres: H ≈ 0 on {} of {nv} vertices (minimal surface?); \
+             the angle-minimizing ST method initializes its face spheres from central spheres and its face size \
+             from their influence zones",
+            nv - usable
+        ));
+    }
+    Ok(())
+}
+
+fn median(v: &[f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    let n = s.len();
+    Some(if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) })
+}
+
+fn scaled(mesh: &TriMesh, t: DVec3, inv: f64) -> TriMesh {
+    TriMesh::new(mesh.positions.iter().map(|&p| (p - t) * inv).collect(), mesh.triangles.clone())
+}
+
+/// The angle-minimizing ST method end to end (see the module docs).
+pub fn st_angle(
+    reference: &TriMesh,
+    params: &StAngleParams,
+    clock: Option<fn() -> f64>,
+    hook: &mut dyn FnMut(StAngleEvent) -> bool,
+) -> Result<StAngleResult, String> {
+    let now = || clock.map_or(0.0, |c| c());
+    let mut timings: Vec<(String, f64)> = Vec::new();
+    if reference.face_count() == 0 {
+        return Err("the reference has no faces".into());
+    }
+    if reference.triangles.iter().flatten().any(|&v| v as usize >= reference.vertex_count())
+        || reference.positions.iter().any(|p| !p.is_finite())
+    {
+        return Err("the reference has invalid vertex indices or coordinates".into());
+    }
+    let diag = reference.bbox_diagonal();
+    if !(diag > 0.0) || !diag.is_finite() {
+        return Err("the reference has a degenerate bounding box".into());
+    }
+
+    // Curvature of the reference and the refusal.
+    if !hook(StAngleEvent::Stage("jet_fit")) {
+        return Err(CANCELLED.into());
+    }
+    let t0 = now();
+    let topo = Topology::new(reference);
+    let field = jet_fit(reference, &topo, &params.jet, &mut |_, _| true).ok_or("the jet fit failed")?;
+    check_central_spheres(reference, &field, params)?;
+    timings.push(("jet_fit".into(), now() - t0));
+
+    // Sizing and remeshing.
+    if !hook(StAngleEvent::Stage("remesh")) {
+        return Err(CANCELLED.into());
+    }
+    let t0 = now();
+    let sizing = match params.sizing {
+        StSizing::Adaptive { epsilon } => Some(SizingField::from_curvature(reference, &topo, &field, epsilon)),
+        StSizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(reference, n)),
+        StSizing::None => None,
+    };
+    timings.push(("sizing".into(), now() - t0));
+    let t0 = now();
+    let remeshed = match &sizing {
+        Some(s) => pliant_remesh(reference, s, &params.remesh, &mut |_, _| true).ok_or("remeshing failed")?,
+        None => reference.clone(),
+    };
+    timings.push(("remesh".into(), now() - t0));
+    if remeshed.face_count() == 0 {
+        return Err("remeshing produced no faces".into());
+    }
+
+    // Central spheres of the remeshed mesh and the initialization.
+    if !hook(StAngleEvent::Stage("init")) {
+        return Err(CANCELLED.into());
+    }
+    let t0 = now();
+    let rtopo = Topology::new(&remeshed);
+    let rfield = jet_fit(&remeshed, &rtopo, &params.jet, &mut |_, _| true).ok_or("the jet fit of the remeshed mesh failed")?;
+    let init = initial_spheres(&remeshed, &rfield.central_spheres);
+    let rule = BoundaryArcRule::Parallel(DVec3::ZERO);
+    let initial_sphere_mesh = SphereMesh { mesh: remeshed.clone(), face_spheres: init.clone(), boundary_arcs: rule };
+    timings.push(("init".into(), now() - t0));
+
+    // Optimization in the normalized frame.
+    if !hook(StAngleEvent::Stage("optimize")) {
+        return Err(CANCELLED.into());
+    }
+    let t0 = now();
+    let (lo, hi) = reference.bbox();
+    let t = 0.5 * (lo + hi);
+    let inv = 1.0 / diag;
+    let nref = scaled(reference, t, inv);
+    let bvh = TriangleBvh::new(&nref);
+    let ref_normals: Vec<DVec3> = nref.vertex_normals();
+    let nmesh = scaled(&remeshed, t, inv);
+    let nf = nmesh.face_count();
+    let nv = nmesh.vertex_count();
+    let adjacency = FaceAdjacency::new(&nmesh);
+    let nspheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
+    let mut x = pack(&nmesh.positions, &nspheres);
+    let (mut problem, ids) = build_problem(&nmesh, &adjacency, &nref, &bvh, &ref_normals, &params.weights, &x);
+    let mut fixed = vec![false; nv];
+    if params.fix_boundary {
+        for v in 0..nv {
+            fixed[v] |= adjacency.boundary_vertex[v];
+        }
+    }
+    if params.fix_features {
+        let cos_max = params.remesh.feature_angle_deg.to_radians().cos();
+        for &(a, b, f, g) in &adjacency.interior {
+            let (nf_, ng_) = (nmesh.face_area_vector(f).normalize_or_zero(), nmesh.face_area_vector(g).normalize_or_zero());
+            if nf_.dot(ng_) < cos_max {
+                fixed[a as usize] = true;
+                fixed[b as usize] = true;
+            }
+        }
+    }
+    for v in (0..nv).filter(|&v| fixed[v]) {
+        let o = vertex_offset(nf, v);
+        problem.fix_range(o..o + 3);
+    }
+    let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
+    let mut epsilon = params.initial_epsilon;
+    let mut iteration = 0usize;
+    let mut iteration_ms = Vec::new();
+    let mut cancelled = false;
+    let w = &params.weights;
+    for stage in &params.stages {
+        if stage.iterations == 0 {
+            continue;
+        }
+        problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale);
+        problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale);
+        problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale);
+        problem.set_weight(ids.sphere, w.sphere * stage.sphere_scale);
+        problem.set_weight(ids.unit, w.unit * stage.sphere_scale);
+        solver.options.max_iterations = stage.iterations;
+        solver.options.initial_epsilon = epsilon;
+        let name = stage.name.as_str();
+        let report = solver.solve(&mut problem, &mut x, |rep| {
+            iteration += 1;
+            let (verts, sph) = unpack(rep.x, nf, nv);
+            let verts: Vec<DVec3> = verts.iter().map(|&p| t + p * diag).collect();
+            let sph: Vec<Sphere> = sph.iter().map(|s| s.from_frame(t, diag).normalized()).collect();
+            let go = hook(StAngleEvent::Iteration {
+                stage: name,
+                iteration,
+                energy: rep.energy,
+                terms: rep.terms,
+                ms: rep.ms,
+                vertices: &verts,
+                spheres: &sph,
+            });
+            if !go {
+                cancelled = true;
+            }
+            go
+        });
+        iteration_ms.extend_from_slice(&report.iteration_ms);
+        epsilon = report.epsilon.max(1e-6);
+        if cancelled {
+            return Err(CANCELLED.into());
+        }
+    }
+    problem.prepare(&x);
+    let terms = problem.term_stats(&x);
+    let (verts, sph) = unpack(&x, nf, nv);
+    let mesh_out = TriMesh::new(verts.iter().map(|&p| t + p * diag).collect(), remeshed.triangles.clone());
+    let sph: Vec<Sphere> = sph.iter().map(|s| s.from_frame(t, diag).normalized()).collect();
+    // Exact incidence: the pencil member closest to each optimized sphere.
+    let face_spheres = project_spheres(&mesh_out, &sph);
+    let sphere_mesh = SphereMesh { mesh: mesh_out, face_spheres, boundary_arcs: rule };
+    timings.push(("optimize".into(), now() - t0));
+
+    if !hook(StAngleEvent::Stage("metrics")) {
+        return Err(CANCELLED.into());
+    }
+    let t0 = now();
+    let initial_metrics = metrics(&initial_sphere_mesh, reference, params.variant);
+    let final_metrics = metrics(&sphere_mesh, reference, params.variant);
+    timings.push(("metrics".into(), now() - t0));
+    let angle_iteration_median_ms = median(&iteration_ms);
+    Ok(StAngleResult {
+        sphere_mesh,
+        initial_sphere_mesh,
+        remeshed,
+        initial_metrics,
+        metrics: final_metrics,
+        iterations: iteration,
+        iteration_ms,
+        angle_iteration_median_ms,
+        timings_ms: if clock.is_some() { timings } else { Vec::new() },
+        diag,
+        variant: params.variant,
+        terms,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Report and files (mirrors `pipeline::st_support::run`, method "st")
+
+/// The report (`report.json` schema of `st-support`, method `"st"`) and the export files
+/// (panels.glb/.obj/.csv/.json, report.json) of a result. `radius_tolerance` is relative to the
+/// diagonal. `max_distance_to_reference` comes from the schedule (sampled panels), as in
+/// st-support; timings include `"angle_iteration_median"` and the stage timings; the iteration
+/// count is `metrics.angle_iterations`.
+pub fn report_and_files(
+    reference: &TriMesh,
+    result: &StAngleResult,
+    radius_tolerance: f64,
+) -> (crate::export::Report, Vec<crate::pipeline::st_support::ExportFile>) {
+    use crate::export::{self, report::InputCounts, report::OutputCounts, Metrics, Report};
+    use crate::pipeline::st_support::ExportFile;
+    let diag = result.diag;
+    let panels = build_panels(&result.sphere_mesh, CHORD_TOLERANCE * diag);
+    let schedule = export::build_schedule(&panels, reference, radius_tolerance * diag);
+    let mut extras = serde_json::json!({});
+    extras["method"] = "st".into();
+    extras["variant"] = format!("{:?}", result.variant).to_lowercase().into();
+    let glb = export::write_glb(&panels, None, None, extras);
+    let obj = export::write_obj(&panels, None, None);
+    let m = &result.metrics;
+    let mut report = Report::new("st");
+    report.input = InputCounts { vertices: reference.vertex_count(), faces: reference.face_count() };
+    report.output = OutputCounts {
+        vertices: result.sphere_mesh.mesh.vertex_count(),
+        faces: result.sphere_mesh.mesh.face_count(),
+        panels: panels.len(),
+    };
+    let mut extra: std::collections::BTreeMap<String, serde_json::Value> = [
+        ("angle_iterations", serde_json::json!(result.iterations)),
+        ("variant", serde_json::json!(format!("{:?}", result.variant).to_lowercase())),
+        ("distinct_radii", serde_json::json!(schedule.distinct_radii)),
+        ("flipped_faces", serde_json::json!(m.flipped_faces)),
+        ("max_vertex_distance_to_reference", serde_json::json!(m.max_vertex_distance_to_reference)),
+        ("initial_mean_kink_angle_deg", serde_json::json!(result.initial_metrics.mean_kink_angle_deg)),
+        ("initial_max_kink_angle_deg", serde_json::json!(result.initial_metrics.max_kink_angle_deg)),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    if let Some(g) = m.max_gap {
+        extra.insert("max_gap".into(), serde_json::json!(g));
+    }
+    report.metrics = Metrics {
+        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
+        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
+        max_kink_angle_deg: Some(m.max_kink_angle_deg),
+        max_distance_to_reference: Some(schedule.max_deviation / diag),
+        extra,
+        ..Metrics::default()
+    };
+    for (stage, ms) in &result.timings_ms {
+        report.add_timing(stage.clone(), *ms);
+    }
+    if let Some(med) = result.angle_iteration_median_ms {
+        report.add_timing("angle_iteration_median", med);
+    }
+    let files = vec![
+        ExportFile { name: "panels.glb".into(), mime: "model/gltf-binary".into(), bytes: glb },
+        ExportFile { name: "panels.obj".into(), mime: "text/plain".into(), bytes: obj.into_bytes() },
+        ExportFile { name: "panels.csv".into(), mime: "text/csv".into(), bytes: schedule.to_csv().into_bytes() },
+        ExportFile { name: "panels.json".into(), mime: "application/json".into(), bytes: schedule.to_json().into_bytes() },
+        ExportFile { name: "report.json".into(), mime: "application/json".into(), bytes: report.to_json().into_bytes() },
+    ];
+    (report, files)
+}
