@@ -1014,7 +1014,6 @@ pub fn report_and_files(
     radius_tolerance: f64,
 ) -> (crate::export::Report, Vec<crate::pipeline::st_support::ExportFile>) {
     use crate::export::{self, report::InputCounts, report::OutputCounts, Metrics, Report};
-    use crate::pipeline::st_support::ExportFile;
     let diag = result.diag;
     let panels = build_panels(&result.sphere_mesh, CHORD_TOLERANCE * diag);
     let schedule = export::build_schedule(&panels, reference, radius_tolerance * diag);
@@ -1060,12 +1059,6 @@ pub fn report_and_files(
     if let Some(med) = result.angle_iteration_median_ms {
         report.add_timing("angle_iteration_median", med);
     }
-    let files = vec![
-        ExportFile { name: "panels.glb".into(), mime: "model/gltf-binary".into(), bytes: glb },
-        ExportFile { name: "panels.obj".into(), mime: "text/plain".into(), bytes: obj.into_bytes() },
-        ExportFile { name: "panels.csv".into(), mime: "text/csv".into(), bytes: schedule.to_csv().into_bytes() },
-        ExportFile { name: "panels.json".into(), mime: "application/json".into(), bytes: schedule.to_json().into_bytes() },
-        ExportFile { name: "report.json".into(), mime: "application/json".into(), bytes: report.to_json().into_bytes() },
-    ];
+    let files = crate::pipeline::st_support::panel_files(glb, obj, &schedule, &report);
     (report, files)
 }

@@ -43,6 +43,18 @@ pub struct ExportFile {
     pub bytes: Vec<u8>,
 }
 
+/// The files every panel method writes: GLB, OBJ, the schedule as CSV and JSON, report.json.
+pub fn panel_files(glb: Vec<u8>, obj: String, schedule: &export::PanelSchedule, report: &Report) -> Vec<ExportFile> {
+    let file = |name: &str, mime: &str, bytes: Vec<u8>| ExportFile { name: name.into(), mime: mime.into(), bytes };
+    vec![
+        file("panels.glb", "model/gltf-binary", glb),
+        file("panels.obj", "text/plain", obj.into_bytes()),
+        file("panels.csv", "text/csv", schedule.to_csv().into_bytes()),
+        file("panels.json", "application/json", schedule.to_json().into_bytes()),
+        file("report.json", "application/json", report.to_json().into_bytes()),
+    ]
+}
+
 /// Data for the histograms of Fig. 14 and the Ω display.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StSupportSummary {
@@ -158,13 +170,7 @@ pub fn run(
         r2: Histogram::new(r2_values, 36),
         distinct_radii: schedule.distinct_radii,
     };
-    let files = vec![
-        ExportFile { name: "panels.glb".into(), mime: "model/gltf-binary".into(), bytes: glb },
-        ExportFile { name: "panels.obj".into(), mime: "text/plain".into(), bytes: obj.into_bytes() },
-        ExportFile { name: "panels.csv".into(), mime: "text/csv".into(), bytes: schedule.to_csv().into_bytes() },
-        ExportFile { name: "panels.json".into(), mime: "application/json".into(), bytes: schedule.to_json().into_bytes() },
-        ExportFile { name: "report.json".into(), mime: "application/json".into(), bytes: report.to_json().into_bytes() },
-    ];
+    let files = panel_files(glb, obj, &schedule, &report);
     Ok(StSupportOutput { result, panels, support, axes, summary, files })
 }
 
