@@ -109,7 +109,8 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
 
 /// `st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR`.
 fn st_command(args: &[String]) -> Result<String, String> {
-    use spherical_faces::st_angle::{report_and_files, st_angle, StAngleParams, StSizing, StVariant};
+    use spherical_faces::pipeline::st_angle::report_and_files;
+    use spherical_faces::st_angle::{st_angle, StAngleParams, StSizing, StVariant};
     let mut params = StAngleParams::default();
     let (mut mesh_path, mut out) = (None, None);
     let mut it = args.iter();

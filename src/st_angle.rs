@@ -56,7 +56,7 @@ use crate::curvature::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE};
 use crate::export::closest::TriangleBvh;
 use crate::mesh::{Topology, TriMesh};
 use crate::panels::build_panels;
-use crate::remesh::{pliant_remesh, RemeshParams, SizingField, DEFAULT_EPSILON};
+use crate::remesh::{pliant_remesh, RemeshParams, SizingBounds, SizingField, DEFAULT_EPSILON};
 use crate::solver::{
     InversiveProduct, JacobianSink, Linear, PointOnSphere, Problem, Solver, SolverOptions, Term, TermId,
     TermStats, UnitLength,
@@ -194,8 +194,16 @@ impl Default for StAngleParams {
 
 /// Progress events. Returning false from the hook cancels (Err("cancelled")).
 pub enum StAngleEvent<'a> {
-    /// A pipeline stage starts ("jet_fit", "sizing", "remesh", "init", "optimize", "metrics").
+    /// A pipeline stage starts ("jet_fit", "remesh", "init", "optimize", "metrics").
     Stage(&'a str),
+    /// Progress within a long stage ("jet_fit", "sizing", "remesh").
+    Progress { stage: &'a str, done: usize, total: usize },
+    /// The sizing field g at the reference vertices (absolute lengths), before remeshing.
+    Sizing { values: &'a [f64] },
+    /// The triangulation after remeshing.
+    Remeshed { mesh: &'a TriMesh },
+    /// The face spheres from the central spheres, before optimization.
+    Initialized { sphere_mesh: &'a SphereMesh },
     /// After every solver iteration.
     Iteration {
         stage: &'a str,
@@ -848,7 +856,16 @@ pub fn st_angle(
     }
     let t0 = now();
     let topo = Topology::new(reference);
-    let field = jet_fit(reference, &topo, &params.jet, &mut |_, _| true).ok_or("the jet fit failed")?;
+    let mut cancelled = false;
+    let field = jet_fit(reference, &topo, &params.jet, &mut |done, total| {
+        cancelled = !hook(StAngleEvent::Progress { stage: "jet_fit", done, total });
+        !cancelled
+    });
+    let field = match field {
+        Some(f) => f,
+        None if cancelled => return Err(CANCELLED.into()),
+        None => return Err("the jet fit failed".into()),
+    };
     check_central_spheres(reference, &field, params)?;
     timings.push(("jet_fit".into(), now() - t0));
 
@@ -858,19 +875,36 @@ pub fn st_angle(
     }
     let t0 = now();
     let sizing = match params.sizing {
-        StSizing::Adaptive { epsilon } => Some(SizingField::from_curvature(reference, &topo, &field, epsilon)),
+        StSizing::Adaptive { epsilon } => {
+            let bounds = SizingBounds::for_mesh(reference, &topo);
+            let sphere_of = |i: usize| field.central_spheres.get(i).copied().unwrap_or_else(|| Sphere::plane(reference.positions[i], DVec3::Z));
+            let mut progress = |done, total| hook(StAngleEvent::Progress { stage: "sizing", done, total });
+            let s = SizingField::from_sphere_fn(reference, &topo, &sphere_of, epsilon * diag, bounds, &mut progress);
+            Some(s.ok_or(CANCELLED)?)
+        }
         StSizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(reference, n)),
         StSizing::None => None,
     };
     timings.push(("sizing".into(), now() - t0));
+    if let Some(s) = &sizing {
+        if !hook(StAngleEvent::Sizing { values: s.values() }) {
+            return Err(CANCELLED.into());
+        }
+    }
     let t0 = now();
     let remeshed = match &sizing {
-        Some(s) => pliant_remesh(reference, s, &params.remesh, &mut |_, _| true).ok_or("remeshing failed")?,
+        Some(s) => {
+            let mut progress = |done, total| hook(StAngleEvent::Progress { stage: "remesh", done, total });
+            pliant_remesh(reference, s, &params.remesh, &mut progress).ok_or(CANCELLED)?
+        }
         None => reference.clone(),
     };
     timings.push(("remesh".into(), now() - t0));
     if remeshed.face_count() == 0 {
         return Err("remeshing produced no faces".into());
+    }
+    if !hook(StAngleEvent::Remeshed { mesh: &remeshed }) {
+        return Err(CANCELLED.into());
     }
 
     // Central spheres of the remeshed mesh and the initialization.
@@ -884,6 +918,9 @@ pub fn st_angle(
     let rule = BoundaryArcRule::Parallel(DVec3::ZERO);
     let initial_sphere_mesh = SphereMesh { mesh: remeshed.clone(), face_spheres: init.clone(), boundary_arcs: rule };
     timings.push(("init".into(), now() - t0));
+    if !hook(StAngleEvent::Initialized { sphere_mesh: &initial_sphere_mesh }) {
+        return Err(CANCELLED.into());
+    }
 
     // Optimization in the normalized frame.
     if !hook(StAngleEvent::Stage("optimize")) {
@@ -927,7 +964,6 @@ pub fn st_angle(
     let mut epsilon = params.initial_epsilon;
     let mut iteration = 0usize;
     let mut iteration_ms = Vec::new();
-    let mut cancelled = false;
     let w = &params.weights;
     for stage in &params.stages {
         if stage.iterations == 0 {
@@ -998,67 +1034,4 @@ pub fn st_angle(
         variant: params.variant,
         terms,
     })
-}
-
-// ---------------------------------------------------------------------------------------------
-// Report and files (mirrors `pipeline::st_support::run`, method "st")
-
-/// The report (`report.json` schema of `st-support`, method `"st"`) and the export files
-/// (panels.glb/.obj/.csv/.json, report.json) of a result. `radius_tolerance` is relative to the
-/// diagonal. `max_distance_to_reference` comes from the schedule (sampled panels), as in
-/// st-support; timings include `"angle_iteration_median"` and the stage timings; the iteration
-/// count is `metrics.angle_iterations`.
-pub fn report_and_files(
-    reference: &TriMesh,
-    result: &StAngleResult,
-    radius_tolerance: f64,
-) -> (crate::export::Report, Vec<crate::pipeline::st_support::ExportFile>) {
-    use crate::export::{self, report::InputCounts, report::OutputCounts, Metrics, Report};
-    let diag = result.diag;
-    let panels = build_panels(&result.sphere_mesh, CHORD_TOLERANCE * diag);
-    let schedule = export::build_schedule(&panels, reference, radius_tolerance * diag);
-    let mut extras = serde_json::json!({});
-    extras["method"] = "st".into();
-    extras["variant"] = format!("{:?}", result.variant).to_lowercase().into();
-    let glb = export::write_glb(&panels, None, None, extras);
-    let obj = export::write_obj(&panels, None, None);
-    let m = &result.metrics;
-    let mut report = Report::new("st");
-    report.input = InputCounts { vertices: reference.vertex_count(), faces: reference.face_count() };
-    report.output = OutputCounts {
-        vertices: result.sphere_mesh.mesh.vertex_count(),
-        faces: result.sphere_mesh.mesh.face_count(),
-        panels: panels.len(),
-    };
-    let mut extra: std::collections::BTreeMap<String, serde_json::Value> = [
-        ("angle_iterations", serde_json::json!(result.iterations)),
-        ("variant", serde_json::json!(format!("{:?}", result.variant).to_lowercase())),
-        ("distinct_radii", serde_json::json!(schedule.distinct_radii)),
-        ("flipped_faces", serde_json::json!(m.flipped_faces)),
-        ("max_vertex_distance_to_reference", serde_json::json!(m.max_vertex_distance_to_reference)),
-        ("initial_mean_kink_angle_deg", serde_json::json!(result.initial_metrics.mean_kink_angle_deg)),
-        ("initial_max_kink_angle_deg", serde_json::json!(result.initial_metrics.max_kink_angle_deg)),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    if let Some(g) = m.max_gap {
-        extra.insert("max_gap".into(), serde_json::json!(g));
-    }
-    report.metrics = Metrics {
-        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
-        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
-        max_kink_angle_deg: Some(m.max_kink_angle_deg),
-        max_distance_to_reference: Some(schedule.max_deviation / diag),
-        extra,
-        ..Metrics::default()
-    };
-    for (stage, ms) in &result.timings_ms {
-        report.add_timing(stage.clone(), *ms);
-    }
-    if let Some(med) = result.angle_iteration_median_ms {
-        report.add_timing("angle_iteration_median", med);
-    }
-    let files = crate::pipeline::st_support::panel_files(glb, obj, &schedule, &report);
-    (report, files)
 }

@@ -242,7 +242,7 @@ fn report_has_the_st_schema() {
     let mesh = load("tri_mesh");
     let p = params(StSizing::UniformFaces(120), StVariant::B, [2, 3, 3, 3]);
     let r = st_angle(&mesh, &p, Some(clock), &mut |_| true).unwrap();
-    let (report, files) = spherical_faces::st_angle::report_and_files(&mesh, &r, 1e-3);
+    let (report, files) = spherical_faces::pipeline::st_angle::report_and_files(&mesh, &r, 1e-3);
     let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
     assert_eq!(json["method"], "st");
     for k in ["max_vertex_sphere_residual", "mean_kink_angle_deg", "max_kink_angle_deg", "max_distance_to_reference", "max_gap", "angle_iterations"] {

@@ -2,6 +2,7 @@
 //! the browser; the worker (wasm) and the CLI (native) both drive a [`Session`] through a [`Sink`].
 
 pub mod protocol;
+pub mod st_angle;
 pub mod st_support;
 
 use crate::curvature::{jet_fit, CurvatureField, JetParams};
