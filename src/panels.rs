@@ -2,7 +2,8 @@
 //! display and export (issue 3, §4).
 //!
 //! # Arcs
-//! Every mesh edge gets one [`Arc`], computed once and shared by both adjacent panels:
+//! **Variant (a)** ([`EdgeArcs::Intersection`], Fig. 12 top; [`build_panels`]): every mesh edge
+//! gets one [`Arc`], computed once and shared by both adjacent panels:
 //! - an interior edge uses the intersection circle of the two face spheres. Its plane is the
 //!   radical plane a₂ψ₁ − a₁ψ₂ = 0, computed in coordinates local to the edge's first vertex
 //!   (ψᵢ(p + y) = aᵢ|y|² + ⟨gᵢ, y⟩ + ψᵢ(p), gᵢ = ∇ψᵢ(p)), so its normal is a₂g₁ − a₁g₂; it is
@@ -14,6 +15,17 @@
 //!   (`Through(m)`) or direction a (`Parallel(a)`). If m lies on the edge's line (or a is
 //!   parallel to it), the plane through the edge and the sphere normal at the first vertex is
 //!   used instead.
+//!
+//! **Variant (b)** ([`EdgeArcs::BisectingPlanes`], Fig. 12 bottom): an interior edge pq between
+//! faces f and g is cut by the *bisecting plane* of the two face planes, the plane through the
+//! edge containing n_f + n_g (unit face normals; n_f − n_g if the two faces traverse the edge in
+//! the same direction, i.e. are inconsistently oriented). This is well conditioned also for
+//! nearly coplanar faces. Each of the two panels gets its own arc: its own sphere cut by that
+//! plane. Both arcs run between the (shared) vertices p and q, but differ in between: the small
+//! gaps of variant (b), measured by [`arc_gaps`]. If n_f ± n_g is (nearly) parallel to the edge
+//! (faces folded onto each other), the plane through the edge containing n_f (else n_g) is used;
+//! if that fails too, each face gets its boundary-rule arc. Boundary and non-manifold edges are
+//! treated as in variant (a).
 //!
 //! A plane cut with a plane is a straight edge ([`Arc::is_straight`]). Of the two arcs of the
 //! circle between the vertices, the one whose midpoint is nearer the adjacent face triangle(s)
@@ -30,8 +42,9 @@
 //! # Tessellation
 //! With tolerance `tol` (absolute; callers pass 1e-4 of the bounding-box diagonal):
 //! - each arc is split into n equal-angle segments with sagitta ≤ 0.5·tol (straight edges: one
-//!   segment). The arc points of an edge are computed once, so adjacent panels share them
-//!   bit-exactly;
+//!   segment). In variant (a) the arc points of an edge are computed once, so adjacent panels
+//!   share them bit-exactly; in variant (b) each panel samples its own arc (only the two edge
+//!   vertices are shared);
 //! - the panel interior is the level-N barycentric grid of its corner triangle without its
 //!   boundary points, N ≥ 3 and ≥ the three arc segment counts (N = 1, the corner triangle
 //!   alone, when all three sides are single segments and that is fine enough). Grid points are a
@@ -51,6 +64,7 @@
 use std::collections::HashMap;
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use crate::export::closest::closest_point_on_triangle;
 use crate::sphere::Sphere;
@@ -93,7 +107,8 @@ pub struct Panel {
     /// Sum of the tessellation triangle areas.
     pub area: f64,
     /// `arc_vertices[k]`: indices into `positions` of the points of arc k, from corner k to corner
-    /// (k+1) mod 3 inclusive. The neighbour across that edge has the same points in reverse.
+    /// (k+1) mod 3 inclusive. In variant (a) the neighbour across that edge has the same points
+    /// in reverse; in variant (b) only the two end points (the mesh vertices) are shared.
     pub arc_vertices: [Vec<u32>; 3],
 }
 
@@ -207,6 +222,30 @@ impl Arc {
     pub fn sample(&self, segments: usize) -> Vec<DVec3> {
         let n = segments.max(1);
         (0..=n).map(|j| self.point(j as f64 / n as f64)).collect()
+    }
+
+    /// The arc point above the chord point `from + t (to − from)`, t ∈ [0, 1]: the arc's
+    /// intersection with the line through that chord point orthogonal to the chord in the arc's
+    /// plane (the chord point itself for a straight arc). Of the circle's two points on that line
+    /// the one on this arc is taken: with w = normal × (to − from)/|to − from| the arc lies on the
+    /// −w side of the centre, so the offset is s = h − √(h² + l²/4 − u²), h = ⟨centre − chord
+    /// midpoint, w⟩, u the signed distance from the chord midpoint (rationalized when h ≥ 0, the
+    /// minor arc, to keep precision for huge radii).
+    pub fn point_over_chord(&self, t: f64) -> DVec3 {
+        let e = self.to - self.from;
+        let x0 = self.from + t * e;
+        let l = e.length();
+        if self.is_straight() || l == 0.0 {
+            return x0;
+        }
+        let eh = e / l;
+        let w = self.circle.normal.cross(eh).normalize_or_zero();
+        let h = (self.circle.center - 0.5 * (self.from + self.to)).dot(w);
+        let u = (t - 0.5) * l;
+        let rest = ((0.5 * l - u.abs()) * (0.5 * l + u.abs())).max(0.0); // l²/4 − u²
+        let root = (h * h + rest).sqrt();
+        let s = if h >= 0.0 { -rest / (root + h) } else { h - root };
+        x0 + s * w
     }
 
     /// Sagitta of one of `segments` equal segments.
@@ -345,10 +384,28 @@ fn usable_sphere(s: &Sphere, tri: [DVec3; 3]) -> Sphere {
     Sphere::plane(tri[0], normal)
 }
 
+/// How the arcs of interior edges are cut (Fig. 12; see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum EdgeArcs {
+    /// Variant (a): the intersection circle of the two face spheres, one arc shared by both
+    /// panels (no gaps).
+    #[default]
+    Intersection,
+    /// Variant (b): each face sphere cut by the bisecting plane of the two face planes, one arc
+    /// per panel (small gaps between adjacent panels, see [`arc_gaps`]).
+    BisectingPlanes,
+}
+
 /// Builds, arcs and tessellates every panel of `sm`, with chord error ≤ `chord_tolerance`
 /// (absolute length; a non-positive or non-finite value means 1e-4 of the bounding-box
-/// diagonal). Panel i is face i.
+/// diagonal). Panel i is face i. Variant (a) edges: `build_panels_with(sm, tol,
+/// EdgeArcs::Intersection)`.
 pub fn build_panels(sm: &SphereMesh, chord_tolerance: f64) -> Vec<Panel> {
+    build_panels_with(sm, chord_tolerance, EdgeArcs::Intersection)
+}
+
+/// [`build_panels`] with the interior edge arcs of the given variant (Fig. 12).
+pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
     let mesh = &sm.mesh;
     let diag = mesh.bbox_diagonal().max(f64::MIN_POSITIVE);
     let tol = if chord_tolerance > 0.0 && chord_tolerance.is_finite() { chord_tolerance } else { 1e-4 * diag };
@@ -377,6 +434,26 @@ pub fn build_panels(sm: &SphereMesh, chord_tolerance: f64) -> Vec<Panel> {
     for key in keys {
         let inc = &edge_faces[&key];
         let (p, q) = (mesh.positions[key.0 as usize], mesh.positions[key.1 as usize]);
+        if edge_arcs == EdgeArcs::BisectingPlanes && inc.len() == 2 {
+            // Variant (b), Fig. 12 bottom: every panel cuts its own sphere with the bisecting plane.
+            let [(f, kf), (g, kg)] = [inc[0], inc[1]];
+            let consistent = (mesh.triangles[f][kf] == key.0) != (mesh.triangles[g][kg] == key.0);
+            let plane = bisecting_plane_normal(p, q, mesh.face_area_vector(f), mesh.face_area_vector(g), consistent);
+            let tris = [mesh.face_points(f), mesh.face_points(g)];
+            for &(h, k) in inc {
+                let arc = match plane {
+                    Some(n) => cut_arc(p, q, n, &spheres[h], &tris, diag),
+                    None => edge_arc(p, q, &[h], &spheres, mesh, sm.boundary_arcs, diag),
+                };
+                let pts = arc.sample(arc.segments_for(ARC_TOL_FACTOR * tol));
+                side_arcs[h][k] = Some(if mesh.triangles[h][k] == key.0 {
+                    (arc, pts)
+                } else {
+                    (arc.reversed(), pts.into_iter().rev().collect())
+                });
+            }
+            continue;
+        }
         let groups: Vec<Vec<usize>> = if inc.len() <= 2 {
             vec![inc.iter().map(|&(f, _)| f).collect()]
         } else {
@@ -405,6 +482,83 @@ pub fn build_panels(sm: &SphereMesh, chord_tolerance: f64) -> Vec<Panel> {
             tessellate(f, mesh.triangles[f], spheres[f], [s0, s1, s2], mesh.face_points(f), tol)
         })
         .collect()
+}
+
+/// The gap of one interior edge between the arcs of its two panels (variant (b), Fig. 12).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeGap {
+    /// Mesh vertex ids, lower first.
+    pub edge: [u32; 2],
+    /// Face ids of the two panels, in panel order.
+    pub faces: [usize; 2],
+    /// Largest distance between the two arcs over the sampled chord points (see [`arc_gaps`]).
+    pub gap: f64,
+}
+
+/// The gaps between the two panel arcs of every interior (two-panel) edge, sorted by edge.
+///
+/// **Definition** (the one of [`crate::st_angle::max_gap`], evaluated on the panels' arcs rather
+/// than on the spheres): for the chord points x₀ = p + t (q − p), t = j/(samples − 1),
+/// j = 1 … samples − 2, each arc's point above x₀ ([`Arc::point_over_chord`]: on the line through
+/// x₀ orthogonal to the chord in the arc's plane) is taken, and the gap is the largest distance
+/// between the two arcs' points. For variant (b) both arcs lie in the edge's bisecting plane, so
+/// this is max |h_f − h_g| of `max_gap`; with `samples` = [`crate::st_angle::GAP_SAMPLES`] the
+/// sample points are the same, and the two agree up to rounding, except where a panel-side arc is
+/// the major arc (`max_gap` takes the sphere point nearest the chord, i.e. the minor arc) or for
+/// degenerate (folded or inconsistently oriented) face pairs. Variant (a) panels give 0 (one
+/// shared arc). `samples` < 3 is taken as 3 (the chord midpoint only).
+pub fn arc_gaps(panels: &[Panel], samples: usize) -> Vec<EdgeGap> {
+    let samples = samples.max(3);
+    let mut sides: HashMap<(u32, u32), Vec<(usize, usize)>> = HashMap::new();
+    for (i, p) in panels.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (p.corners[k], p.corners[(k + 1) % 3]);
+            sides.entry((a.min(b), a.max(b))).or_default().push((i, k));
+        }
+    }
+    let mut out: Vec<EdgeGap> = sides
+        .into_iter()
+        .filter(|(_, v)| v.len() == 2)
+        .map(|(key, v)| {
+            // Both arcs from vertex key.0 to key.1, so that equal t means the same chord point.
+            let [a, b] = [v[0], v[1]].map(|(i, k)| {
+                let arc = panels[i].arcs[k];
+                if panels[i].corners[k] == key.0 {
+                    arc
+                } else {
+                    arc.reversed()
+                }
+            });
+            let gap = (1..samples - 1)
+                .map(|j| {
+                    let t = j as f64 / (samples - 1) as f64;
+                    a.point_over_chord(t).distance(b.point_over_chord(t))
+                })
+                .fold(0.0, f64::max);
+            EdgeGap { edge: [key.0, key.1], faces: [panels[v[0].0].face, panels[v[1].0].face], gap }
+        })
+        .collect();
+    out.sort_unstable_by_key(|g| g.edge);
+    out
+}
+
+/// The largest of [`arc_gaps`] (0 without interior edges); absolute, in model units.
+pub fn max_arc_gap(panels: &[Panel], samples: usize) -> f64 {
+    arc_gaps(panels, samples).iter().map(|g| g.gap).fold(0.0, f64::max)
+}
+
+/// Normal of the bisecting plane of edge p→q between two faces with area vectors `af`, `ag`
+/// (variant (b), Fig. 12): the plane through the edge containing n_f + n_g (n_f − n_g when the
+/// faces are not `consistent`ly oriented along the edge). If that direction is (nearly) along
+/// the edge, the plane containing n_f, else n_g; `None` when all are degenerate.
+pub fn bisecting_plane_normal(p: DVec3, q: DVec3, af: DVec3, ag: DVec3, consistent: bool) -> Option<DVec3> {
+    let eh = (q - p).try_normalize()?;
+    let (nf, ng) = (af.normalize_or_zero(), ag.normalize_or_zero());
+    let sum = if consistent { nf + ng } else { nf - ng };
+    [sum, nf, ng].into_iter().find_map(|d| {
+        let n = eh.cross(d);
+        (n.length() > 1e-6 && n.is_finite()).then(|| n.normalize())
+    })
 }
 
 /// The arc of edge p→q shared by `faces` (one or two faces).
