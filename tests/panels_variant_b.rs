@@ -105,8 +105,11 @@ fn panels_b(sm: &SphereMesh) -> Vec<Panel> {
     build_panels_with(sm, 1e-4 * diag(sm), EdgeArcs::BisectingPlanes)
 }
 
-/// Interior edges (lo, hi) → [(face, side)] with side k running from corner k to corner k+1.
-fn interior_edges(mesh: &TriMesh) -> Vec<((u32, u32), [(usize, usize); 2])> {
+/// An interior edge (lo, hi) and its two (face, side) pairs, side k from corner k to corner k+1.
+type InteriorEdge = ((u32, u32), [(usize, usize); 2]);
+
+/// The interior edges of `mesh`, sorted.
+fn interior_edges(mesh: &TriMesh) -> Vec<InteriorEdge> {
     let mut m: HashMap<(u32, u32), Vec<(usize, usize)>> = HashMap::new();
     for (f, t) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
