@@ -6,15 +6,19 @@ use spherical_faces::curvature::{jet_fit, JetParams};
 use spherical_faces::import::import_mesh;
 use spherical_faces::mesh::Topology;
 use spherical_faces::pipeline::st_support::{self, StSupportRequest};
+use spherical_faces::remesh::DEFAULT_EPSILON;
+use spherical_faces::st_angle::StSizing;
 use spherical_faces::st_support::{native_clock_ms, Clock};
 
 const USAGE: &str = "usage:
   spherical-faces info <mesh.obj|.gltf|.glb>
   spherical-faces st-support <mesh> [--optimize-radius] [--depth D] [--axis-length L]
-                             [--radius-tolerance T] --out DIR
+                             [--radius-tolerance T] [--adaptive --epsilon E | --faces N] --out DIR
       ST mesh with support structure (paper Sec. 4). Writes DIR/panels.glb, panels.obj,
       panels.csv, panels.json and report.json. D, L and T are relative to the bbox diagonal
-      (defaults 0.02, 0.1, 0.001).
+      (defaults 0.02, 0.1, 0.001). --adaptive --epsilon E remeshes first with the sizing field
+      of the local spheres orthogonal to Ω (Sec. 3, Fig. 16 bottom; E relative to the diagonal,
+      default 0.0004); --faces N remeshes first uniformly to about N faces.
   spherical-faces st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR
       Angle-minimizing ST mesh with face size adapted to the surface (paper Sec. 3): remesh
       with the sizing field of tolerance E (relative to the bbox diagonal) or uniformly to
@@ -62,6 +66,7 @@ fn read_mesh(path: &str) -> Result<spherical_faces::import::Imported, String> {
 fn st_support_command(args: &[String]) -> Result<String, String> {
     let mut req = StSupportRequest::default();
     let (mut mesh_path, mut out) = (None, None);
+    let (mut adaptive, mut epsilon, mut faces) = (false, None, None);
     let mut it = args.iter();
     let number = |flag: &str, v: Option<&String>, lo: f64, hi: f64| -> Result<f64, String> {
         let v = v.ok_or(format!("{flag} needs a value"))?;
@@ -73,12 +78,22 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
             "--depth" => req.support_depth = number(a, it.next(), 0.0, 1.0)?,
             "--axis-length" => req.axis_length = number(a, it.next(), 0.0, 10.0)?,
             "--radius-tolerance" => req.radius_tolerance = number(a, it.next(), 1e-9, 1.0)?,
+            "--adaptive" => adaptive = true,
+            "--epsilon" => epsilon = Some(positive_fraction(a, it.next())?),
+            "--faces" => faces = Some(face_count(a, it.next())?),
             "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s if mesh_path.is_none() => mesh_path = Some(s.to_string()),
             s => return Err(format!("unexpected argument {s}")),
         }
     }
+    req.remesh = match (adaptive, epsilon, faces) {
+        (_, _, Some(_)) if adaptive || epsilon.is_some() => return Err("use either --adaptive --epsilon E or --faces N".into()),
+        (false, Some(_), None) => return Err("--epsilon needs --adaptive (remesh with the sizing field)".into()),
+        (true, e, None) => StSizing::Adaptive { epsilon: e.unwrap_or(DEFAULT_EPSILON) },
+        (false, None, Some(n)) => StSizing::UniformFaces(n),
+        _ => StSizing::None,
+    };
     let mesh_path = mesh_path.ok_or("st-support needs a mesh file")?;
     let out = std::path::PathBuf::from(out.ok_or("st-support needs --out DIR")?);
     let t0 = native_clock_ms();
@@ -110,23 +125,15 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
 /// `st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR`.
 fn st_command(args: &[String]) -> Result<String, String> {
     use spherical_faces::pipeline::st_angle::report_and_files;
-    use spherical_faces::st_angle::{st_angle, StAngleParams, StSizing, StVariant};
+    use spherical_faces::st_angle::{st_angle, StAngleParams, StVariant};
     let mut params = StAngleParams::default();
     let (mut mesh_path, mut out) = (None, None);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut value = || it.next().ok_or(format!("{a} needs a value"));
         match a.as_str() {
-            "--epsilon" => {
-                let v = value()?;
-                let e = v.parse::<f64>().ok().filter(|x| *x > 0.0 && *x < 1.0).ok_or(format!("--epsilon {v}: expected a number in (0, 1)"))?;
-                params.sizing = StSizing::Adaptive { epsilon: e };
-            }
-            "--faces" => {
-                let v = value()?;
-                let n = v.parse::<usize>().ok().filter(|n| *n >= 4).ok_or(format!("--faces {v}: expected a whole number ≥ 4"))?;
-                params.sizing = StSizing::UniformFaces(n);
-            }
+            "--epsilon" => params.sizing = StSizing::Adaptive { epsilon: positive_fraction(a, Some(value()?))? },
+            "--faces" => params.sizing = StSizing::UniformFaces(face_count(a, Some(value()?))?),
             "--variant" => {
                 params.variant = match value()?.as_str() {
                     "a" => StVariant::A,
@@ -157,6 +164,18 @@ fn st_command(args: &[String]) -> Result<String, String> {
         result.metrics.max_kink_angle_deg,
         result.metrics.max_distance_to_reference
     ))
+}
+
+/// ε of a sizing field: a number in (0, 1), relative to the bbox diagonal.
+fn positive_fraction(flag: &str, v: Option<&String>) -> Result<f64, String> {
+    let v = v.ok_or(format!("{flag} needs a value"))?;
+    v.parse::<f64>().ok().filter(|x| *x > 0.0 && *x < 1.0).ok_or(format!("{flag} {v}: expected a number in (0, 1)"))
+}
+
+/// A target face count of a uniform remesh.
+fn face_count(flag: &str, v: Option<&String>) -> Result<usize, String> {
+    let v = v.ok_or(format!("{flag} needs a value"))?;
+    v.parse::<usize>().ok().filter(|n| *n >= 4).ok_or(format!("{flag} {v}: expected a whole number ≥ 4"))
 }
 
 /// One JSON object: counts after triangulation and welding, and the jet-fitted mean curvature.

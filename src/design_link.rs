@@ -3,7 +3,9 @@
 //! only ever used as data (enums, numbers, a file name shown as text).
 
 use crate::curvature::JetParams;
+use crate::remesh::DEFAULT_EPSILON;
 use crate::samples::Sample;
+use crate::st_angle::{StSizing, StVariant};
 
 pub const VERSION: u32 = 1;
 
@@ -13,11 +15,14 @@ pub enum ColorBy {
     K1,
     K2,
     K1MinusK2,
+    /// The sizing field g of the "ST, adapted face size" method (Sec. 3).
+    Sizing,
     None,
 }
 
 impl ColorBy {
-    pub const ALL: [ColorBy; 5] = [ColorBy::MeanCurvature, ColorBy::K1, ColorBy::K2, ColorBy::K1MinusK2, ColorBy::None];
+    pub const ALL: [ColorBy; 6] =
+        [ColorBy::MeanCurvature, ColorBy::K1, ColorBy::K2, ColorBy::K1MinusK2, ColorBy::Sizing, ColorBy::None];
 
     pub fn key(self) -> &'static str {
         match self {
@@ -25,6 +30,7 @@ impl ColorBy {
             ColorBy::K1 => "k1",
             ColorBy::K2 => "k2",
             ColorBy::K1MinusK2 => "k1-k2",
+            ColorBy::Sizing => "sizing",
             ColorBy::None => "none",
         }
     }
@@ -35,6 +41,7 @@ impl ColorBy {
             ColorBy::K1 => "κ1",
             ColorBy::K2 => "κ2",
             ColorBy::K1MinusK2 => "|κ1 − κ2|",
+            ColorBy::Sizing => "sizing field g",
             ColorBy::None => "none",
         }
     }
@@ -74,15 +81,18 @@ pub enum Method {
     Curvature,
     /// ST mesh with support structure (Sec. 4).
     StSupport,
+    /// Angle-minimizing ST mesh with face size adapted to the surface (Sec. 3).
+    St,
 }
 
 impl Method {
-    pub const ALL: [Method; 2] = [Method::Curvature, Method::StSupport];
+    pub const ALL: [Method; 3] = [Method::Curvature, Method::St, Method::StSupport];
 
     pub fn key(self) -> &'static str {
         match self {
             Method::Curvature => "curvature",
             Method::StSupport => "st-support",
+            Method::St => "st",
         }
     }
 
@@ -90,11 +100,87 @@ impl Method {
         match self {
             Method::Curvature => "Curvature (Sec. 2.6)",
             Method::StSupport => "ST with support structure (Sec. 4)",
+            Method::St => "ST, adapted face size (Sec. 3)",
         }
     }
 
     pub fn from_key(s: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.key() == s)
+    }
+}
+
+/// How the reference is remeshed before a method runs (Sec. 3): kept as is, with the sizing
+/// field of tolerance ε (relative to the bbox diagonal), or uniformly to about N faces. Both
+/// values are kept when switching, so a link can carry them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SizingDesign {
+    pub kind: SizingKind,
+    pub epsilon: f64,
+    pub faces: usize,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SizingKind {
+    None,
+    Adaptive,
+    Faces,
+}
+
+impl SizingKind {
+    pub const ALL: [SizingKind; 3] = [SizingKind::Adaptive, SizingKind::Faces, SizingKind::None];
+
+    pub fn key(self) -> &'static str {
+        match self {
+            SizingKind::None => "none",
+            SizingKind::Adaptive => "adaptive",
+            SizingKind::Faces => "faces",
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            SizingKind::None => "keep the reference triangulation",
+            SizingKind::Adaptive => "adaptive (influence zones, ε)",
+            SizingKind::Faces => "uniform, about N faces",
+        }
+    }
+
+    pub fn from_key(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.key() == s)
+    }
+}
+
+impl SizingDesign {
+    pub const DEFAULT_FACES: usize = 600;
+
+    pub fn with_kind(kind: SizingKind) -> Self {
+        Self { kind, epsilon: DEFAULT_EPSILON, faces: Self::DEFAULT_FACES }
+    }
+
+    /// The remeshing the pipeline runs.
+    pub fn to_sizing(self) -> StSizing {
+        match self.kind {
+            SizingKind::None => StSizing::None,
+            SizingKind::Adaptive => StSizing::Adaptive { epsilon: self.epsilon },
+            SizingKind::Faces => StSizing::UniformFaces(self.faces),
+        }
+    }
+
+    fn to_fragment(self, key: &str) -> String {
+        format!("&{key}={}&eps={}&faces={}", self.kind.key(), fmt_num_sig(self.epsilon), self.faces)
+    }
+}
+
+/// Parameters of the "ST, adapted face size" method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StDesign {
+    pub sizing: SizingDesign,
+    pub variant: StVariant,
+}
+
+impl Default for StDesign {
+    fn default() -> Self {
+        Self { sizing: SizingDesign::with_kind(SizingKind::Adaptive), variant: StVariant::A }
     }
 }
 
@@ -107,11 +193,19 @@ pub struct StSupportDesign {
     pub axis_length: f64,
     /// Radii closer than this count as one in the panel schedule.
     pub radius_tolerance: f64,
+    /// Remeshing before the method (Fig. 16, bottom): none by default.
+    pub remesh: SizingDesign,
 }
 
 impl Default for StSupportDesign {
     fn default() -> Self {
-        Self { optimize_radius: false, support_depth: 0.02, axis_length: 0.1, radius_tolerance: 1e-3 }
+        Self {
+            optimize_radius: false,
+            support_depth: 0.02,
+            axis_length: 0.1,
+            radius_tolerance: 1e-3,
+            remesh: SizingDesign::with_kind(SizingKind::None),
+        }
     }
 }
 
@@ -138,6 +232,7 @@ pub struct Design {
     pub method: Method,
     pub jet: JetParams,
     pub st: StSupportDesign,
+    pub st_angle: StDesign,
     pub color: ColorBy,
     pub shading: Shading,
     pub edges: bool,
@@ -152,6 +247,7 @@ impl Default for Design {
             method: Method::Curvature,
             jet: JetParams::default(),
             st: StSupportDesign::default(),
+            st_angle: StDesign::default(),
             color: ColorBy::MeanCurvature,
             shading: Shading::Smooth,
             edges: false,
@@ -179,6 +275,11 @@ impl Design {
                 fmt_num(st.axis_length),
                 fmt_num(st.radius_tolerance)
             );
+            s += &st.remesh.to_fragment("remesh");
+        }
+        if self.method == Method::St {
+            s += &self.st_angle.sizing.to_fragment("sizing");
+            s += &format!("&variant={}", if self.st_angle.variant == StVariant::B { "b" } else { "a" });
         }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
         if let Some(c) = self.camera {
@@ -218,6 +319,7 @@ impl Design {
         }
         let mut file_name = None;
         let mut wants_file = false;
+        let (mut eps, mut faces) = (None, None);
         for (k, v) in &pairs {
             let ok = match k.as_str() {
                 "v" => true,
@@ -243,6 +345,18 @@ impl Design {
                 "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st.support_depth = x).is_some(),
                 "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st.axis_length = x).is_some(),
                 "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st.radius_tolerance = x).is_some(),
+                "remesh" => SizingKind::from_key(v).map(|k| d.st.remesh.kind = k).is_some(),
+                "sizing" => SizingKind::from_key(v).map(|k| d.st_angle.sizing.kind = k).is_some(),
+                // ε and N belong to the method the link names (applied below).
+                "eps" => parse_f64_in(v, 1e-7, 0.1).map(|x| eps = Some(x)).is_some(),
+                "faces" => parse_in(v, 8, 200_000).map(|x| faces = Some(x as usize)).is_some(),
+                "variant" => match v.as_str() {
+                    "a" | "b" => {
+                        d.st_angle.variant = if v == "b" { StVariant::B } else { StVariant::A };
+                        true
+                    }
+                    _ => false,
+                },
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
                 "edges" => match v.as_str() {
@@ -261,6 +375,15 @@ impl Design {
             if !ok {
                 notices.push(format!("ignored invalid value for '{}': '{}'", clip(k), clip(v)));
             }
+        }
+        let sizing = match d.method {
+            Method::StSupport => Some(&mut d.st.remesh),
+            Method::St => Some(&mut d.st_angle.sizing),
+            Method::Curvature => None,
+        };
+        if let Some(sizing) = sizing {
+            sizing.epsilon = eps.unwrap_or(sizing.epsilon);
+            sizing.faces = faces.unwrap_or(sizing.faces);
         }
         if wants_file {
             let name = file_name.unwrap_or_else(|| "your file".into());
@@ -285,6 +408,15 @@ fn parse_camera(v: &str) -> Option<CameraState> {
         return None;
     }
     Some(CameraState { yaw: n[0], pitch: n[1].clamp(-1.55, 1.55), distance: n[2], target: [n[3], n[4], n[5]] })
+}
+
+/// Four significant digits, for small values like ε.
+fn fmt_num_sig(x: f64) -> String {
+    let s = format!("{x:.3e}");
+    match s.split_once('e') {
+        Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
+        None => s,
+    }
 }
 
 fn fmt_num(x: f64) -> String {
@@ -344,6 +476,7 @@ mod tests {
             method: Method::Curvature,
             jet: JetParams { degree: 2, max_rings: 3, ..JetParams::default() },
             st: StSupportDesign::default(),
+            st_angle: StDesign::default(),
             color: ColorBy::K1,
             shading: Shading::Flat,
             edges: true,
@@ -358,7 +491,13 @@ mod tests {
     fn st_support_parameters_round_trip() {
         let d = Design {
             method: Method::StSupport,
-            st: StSupportDesign { optimize_radius: true, support_depth: 0.035, axis_length: 0.25, radius_tolerance: 0.002 },
+            st: StSupportDesign {
+                optimize_radius: true,
+                support_depth: 0.035,
+                axis_length: 0.25,
+                radius_tolerance: 0.002,
+                remesh: SizingDesign { kind: SizingKind::Adaptive, epsilon: 2.5e-4, faces: 900 },
+            },
             ..Design::default()
         };
         let (back, notices) = Design::from_fragment(&d.to_fragment());
@@ -367,6 +506,30 @@ mod tests {
         let (bad, notices) = Design::from_fragment("#v=1&method=st-support&depth=-1&opt_r=2&rtol=nan");
         assert_eq!(bad.st, StSupportDesign::default());
         assert_eq!(notices.len(), 3);
+    }
+
+    #[test]
+    fn st_parameters_round_trip() {
+        for (kind, variant) in [(SizingKind::Adaptive, StVariant::B), (SizingKind::Faces, StVariant::A), (SizingKind::None, StVariant::A)] {
+            let d = Design {
+                method: Method::St,
+                st_angle: StDesign { sizing: SizingDesign { kind, epsilon: 1.25e-3, faces: 2000 }, variant },
+                color: ColorBy::Sizing,
+                ..Design::default()
+            };
+            let frag = d.to_fragment();
+            let (back, notices) = Design::from_fragment(&frag);
+            assert!(notices.is_empty(), "{notices:?}");
+            assert_eq!(back, d, "{frag}");
+        }
+        // ε and N go to the method the link names, wherever they stand in it.
+        let (d, _) = Design::from_fragment("#v=1&eps=0.002&faces=50&method=st");
+        assert_eq!(d.st_angle.sizing.epsilon, 0.002);
+        assert_eq!(d.st_angle.sizing.faces, 50);
+        assert_eq!(d.st.remesh, StSupportDesign::default().remesh);
+        let (bad, notices) = Design::from_fragment("#v=1&method=st&eps=2&faces=3&variant=c&sizing=cubic");
+        assert_eq!(bad.st_angle, StDesign::default());
+        assert_eq!(notices.len(), 4, "{notices:?}");
     }
 
     #[test]

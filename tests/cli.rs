@@ -106,3 +106,46 @@ fn st_writes_panels_and_report_or_refuses() {
     assert_eq!(String::from_utf8_lossy(&bad.stderr).trim_end().lines().count(), 1);
     assert_eq!(run(&["st", "../shared/data/meshes/cmc1.obj", "--variant", "c", "--out", "/tmp/x"]).status.code(), Some(2));
 }
+
+/// `st-support --adaptive --epsilon E` and `--faces N` remesh first (issue 4 §2): the adaptive
+/// sizing uses the local spheres orthogonal to Ω; the report keeps the reference's counts.
+#[test]
+fn st_support_remeshes_first() {
+    let base = std::env::temp_dir().join(format!("sf-cli-st-remesh-{}", std::process::id()));
+    let report = |dir: &std::path::Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+    };
+    let mesh = "../shared/data/meshes/botanic-garden-bubble-0.obj";
+    let (fine, coarse, uniform) = (base.join("fine"), base.join("coarse"), base.join("uniform"));
+    for (dir, args) in [
+        (&fine, vec!["--adaptive", "--epsilon", "2e-4"]),
+        (&coarse, vec!["--adaptive", "--epsilon", "2e-3"]),
+        (&uniform, vec!["--faces", "300"]),
+    ] {
+        let mut a = vec!["st-support", mesh];
+        a.extend(args);
+        a.extend(["--out", dir.to_str().unwrap()]);
+        let out = run(&a);
+        assert!(out.status.success(), "{:?}: {}", a, String::from_utf8_lossy(&out.stderr));
+    }
+    let (rf, rc, ru) = (report(&fine), report(&coarse), report(&uniform));
+    let faces = |r: &serde_json::Value| r["output"]["faces"].as_u64().unwrap();
+    assert_eq!(rf["input"], rc["input"], "input counts are the reference's");
+    assert!(faces(&rf) > faces(&rc), "smaller ε gives more faces: {} vs {}", faces(&rf), faces(&rc));
+    assert!((200..450).contains(&faces(&ru)), "about 300 faces: {}", faces(&ru));
+    assert_eq!(rc["metrics"]["remesh"]["Adaptive"]["epsilon"], 2e-3);
+    for r in [&rf, &rc, &ru] {
+        let m = &r["metrics"];
+        for k in ["max_vertex_sphere_residual", "max_orthogonality_residual", "max_node_axis_offset"] {
+            assert!(m[k].as_f64().unwrap() <= 1e-9, "{k} = {}", m[k]);
+        }
+    }
+    for bad in [vec!["--faces", "300", "--adaptive"], vec!["--epsilon", "1e-3"], vec!["--adaptive", "--epsilon", "3"]] {
+        let mut a = vec!["st-support", mesh];
+        a.extend(bad.iter().copied());
+        a.extend(["--out", base.join("bad").to_str().unwrap()]);
+        let out = run(&a);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}");
+        assert_eq!(String::from_utf8_lossy(&out.stderr).trim_end().lines().count(), 1);
+    }
+}

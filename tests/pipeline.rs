@@ -162,3 +162,85 @@ fn st_support_on_a_minimal_surface_is_refused() {
     assert!(message.contains("no usable central spheres"), "{message}");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. })));
 }
+
+/// The "ST, adapted face size" stage streams the sizing field, the remeshed triangulation,
+/// panels, per-iteration energies, the files and its summary, in that order.
+#[test]
+fn st_stage_streams_sizing_remesh_panels_and_energies() {
+    use spherical_faces::pipeline::st_angle::{fields as stf, StRequest, REMESHED_STAGE, SIZING_STAGE, STAGE};
+    use spherical_faces::pipeline::st_support::fields as pf;
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!() };
+    r.messages.clear();
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::St(StRequest::default())), None);
+    let pos = |stage: &str| r.messages.iter().position(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if s == stage));
+    let (i_sizing, i_remesh, i_panels) = (pos(SIZING_STAGE).unwrap(), pos(REMESHED_STAGE).unwrap(), pos(STAGE).unwrap());
+    assert!(i_sizing < i_remesh && i_remesh < i_panels);
+    let g = find(&r.messages[i_sizing].1, stf::SIZING).unwrap().as_f32().unwrap();
+    assert_eq!(g.len(), info.stats.vertices);
+    assert!(g.iter().all(|x| x.is_finite() && *x > 0.0));
+    let remeshed = &r.messages[i_remesh].1;
+    let rt = find(remeshed, field::TRIANGLES).unwrap().as_u32().unwrap();
+    let rp = find(remeshed, field::POSITIONS).unwrap().as_f32().unwrap();
+    assert!(rt.len() / 3 > 100 && rt.len() / 3 < 1000, "{} faces", rt.len() / 3);
+    assert!(rt.iter().all(|&i| (i as usize) < rp.len() / 3));
+    // Every iteration reports its energies; the total is the sum of the term energies.
+    let energies: Vec<&Progress> = r
+        .messages
+        .iter()
+        .filter_map(|m| match &m.0 {
+            FromWorker::Progress(p) if !p.energies.is_empty() => Some(p),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(energies.len(), 45);
+    for (k, p) in energies.iter().enumerate() {
+        assert_eq!(p.iteration as usize, k + 1);
+        assert_eq!(p.total, 45);
+        let total = p.energies[0].value;
+        let sum: f64 = p.energies[1..].iter().map(|e| e.value).sum();
+        assert!((total - sum).abs() <= 1e-9 * total.abs().max(1e-30), "{total} vs {sum}");
+    }
+    // Panels: the first (iteration 0) and the last (all iterations) snapshot.
+    let panel_snaps: Vec<u32> = r
+        .messages
+        .iter()
+        .filter_map(|m| match &m.0 {
+            FromWorker::Snapshot { stage, iteration, .. } if stage == STAGE => Some(*iteration),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(panel_snaps.first(), Some(&0));
+    assert_eq!(panel_snaps.last(), Some(&45));
+    let last = r.messages.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == STAGE)).unwrap();
+    let tri = find(&last.1, pf::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
+    assert!(tri.len() / 3 >= rt.len() / 3);
+    let files = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap();
+    let names: Vec<&str> = files.1.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
+    let Some((FromWorker::Finished { result: StageResult::St(summary), .. }, _)) = r.messages.last() else { panic!() };
+    assert_eq!(summary.report.method, "st");
+    assert_eq!(summary.iterations, 45);
+    assert_eq!(summary.remeshed_faces, rt.len() / 3);
+    assert!(summary.metrics.max_vertex_sphere_residual <= 1e-8);
+    assert!(summary.metrics.max_kink_angle_deg < summary.initial.max_kink_angle_deg);
+    let (lo, hi) = summary.sizing_range.unwrap();
+    assert!(lo > 0.0 && lo <= hi);
+}
+
+/// A cancel during the optimization stops the stage with Cancelled, and the design stays.
+#[test]
+fn st_stage_cancels_between_iterations() {
+    use spherical_faces::pipeline::st_angle::StRequest;
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    r.messages.clear();
+    r.cancel_after = Some(25);
+    send(&mut s, &mut r, ToWorker::Run(StageRequest::St(StRequest::default())), None);
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "st"), "{:?}", r.messages.last().unwrap().0);
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
+    assert!(s.reference.is_some());
+}

@@ -169,18 +169,33 @@ impl Session {
                     Ok(out) => {
                         let fields = st_support::display_fields(&out);
                         sink.send(snapshot(&name, 1, &fields), fields);
-                        let files: Vec<Field> = out.files.iter().map(|f| Field::bytes(&f.name, f.bytes.clone())).collect();
-                        let mime = out.files.iter().map(|f| f.mime.clone()).collect();
-                        let headers = files.iter().map(Field::header).collect();
-                        sink.send(FromWorker::Files { stage: name.clone(), fields: headers, mime }, files);
+                        send_files(sink, &name, out.files);
                         let elapsed_ms = sink.now_ms() - start;
                         let result = StageResult::StSupport(Box::new(out.summary));
                         sink.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
                     }
                 }
             }
+            StageRequest::St(req) => match st_angle::run(&reference.mesh, &req, self.clock, sink) {
+                Err(e) if e == "cancelled" => sink.send(FromWorker::Cancelled { stage: name }, vec![]),
+                Err(message) => sink.send(FromWorker::Error { message }, vec![]),
+                Ok((_, summary, files)) => {
+                    send_files(sink, &name, files);
+                    let elapsed_ms = sink.now_ms() - start;
+                    let result = StageResult::St(Box::new(summary));
+                    sink.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
+                }
+            },
         }
     }
+}
+
+/// Offers `files` for download, as byte fields with their MIME types.
+fn send_files(sink: &mut dyn Sink, stage: &str, files: Vec<st_support::ExportFile>) {
+    let mime = files.iter().map(|f| f.mime.clone()).collect();
+    let fields: Vec<Field> = files.into_iter().map(|f| Field::bytes(&f.name, f.bytes)).collect();
+    let headers = fields.iter().map(Field::header).collect();
+    sink.send(FromWorker::Files { stage: stage.into(), fields: headers, mime }, fields);
 }
 
 /// Sends a progress message; returns false when the stage should stop (cancel requested).

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::st_angle::{StRequest, StSummary};
 use super::st_support::{StSupportRequest, StSupportSummary};
 use crate::curvature::{CurvatureSummary, JetParams};
 use crate::import::Format;
@@ -33,6 +34,9 @@ pub enum StageRequest {
     Curvature(JetParams),
     /// ST mesh with support structure (Sec. 4), with panels and exports.
     StSupport(StSupportRequest),
+    /// Angle-minimizing ST mesh with face size adapted to the surface (Sec. 3), with panels
+    /// and exports.
+    St(StRequest),
 }
 
 impl StageRequest {
@@ -40,6 +44,7 @@ impl StageRequest {
         match self {
             StageRequest::Curvature(_) => "curvature",
             StageRequest::StSupport(_) => "st-support",
+            StageRequest::St(_) => super::st_angle::STAGE,
         }
     }
 }
@@ -90,6 +95,7 @@ pub struct ReferenceInfo {
 pub enum StageResult {
     Curvature(CurvatureSummary),
     StSupport(Box<StSupportSummary>),
+    St(Box<StSummary>),
 }
 
 /// Worker to main thread.

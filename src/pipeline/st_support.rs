@@ -5,9 +5,12 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::protocol::{field, Field};
+use super::protocol::Field;
 use crate::absolute_sphere::Histogram;
-use crate::curvature::{CurvatureField, JetParams};
+use crate::absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereParams};
+use crate::curvature::{jet_fit, CurvatureField, JetParams};
+use crate::remesh::{local_spheres_orthogonal, pliant_remesh, RemeshParams, SizingBounds, SizingField};
+use crate::st_angle::StSizing;
 use crate::export::{self, report::InputCounts, report::OutputCounts, AbsoluteSphereReport, Metrics, Report, SupportGeometry};
 use crate::mesh::{Topology, TriMesh};
 use crate::panels::{build_panels, sphere_normal, Panel};
@@ -26,13 +29,67 @@ pub struct StSupportRequest {
     pub axis_length: f64,
     /// Radii are rounded to multiples of this (× diag) before counting distinct ones.
     pub radius_tolerance: f64,
+    /// Remesh first (issue 4 §2): with the sizing field of the local spheres orthogonal to Ω
+    /// (Fig. 16, bottom; ε × diag), uniformly to about N faces, or not at all.
+    #[serde(default = "no_remesh")]
+    pub remesh: StSizing,
     pub jet: JetParams,
+}
+
+fn no_remesh() -> StSizing {
+    StSizing::None
 }
 
 impl Default for StSupportRequest {
     fn default() -> Self {
-        Self { optimize_radius: false, support_depth: 0.02, axis_length: 0.1, radius_tolerance: 1e-3, jet: JetParams::default() }
+        Self {
+            optimize_radius: false,
+            support_depth: 0.02,
+            axis_length: 0.1,
+            radius_tolerance: 1e-3,
+            remesh: StSizing::None,
+            jet: JetParams::default(),
+        }
     }
+}
+
+/// Neighbours of a local sphere orthogonal to Ω (`remesh::local_spheres_orthogonal`).
+pub const LOCAL_SPHERE_POINTS: usize = 16;
+
+/// The reference remeshed as `req.remesh` asks, with its topology and curvature; `None` when no
+/// remeshing is asked for. The sizing field of the adaptive variant uses local least-squares
+/// spheres orthogonal to the Ω estimated on the reference (Sec. 3, Fig. 16 bottom).
+fn remeshed_reference(
+    mesh: &TriMesh,
+    topo: &Topology,
+    field: &CurvatureField,
+    req: &StSupportRequest,
+    progress: &mut dyn FnMut(&str, usize, usize) -> bool,
+) -> Result<Option<(TriMesh, Topology, CurvatureField)>, String> {
+    let sizing = match req.remesh {
+        StSizing::None => return Ok(None),
+        StSizing::UniformFaces(n) => SizingField::uniform_for_face_count(mesh, n),
+        StSizing::Adaptive { epsilon } => {
+            if !progress("sizing", 0, 1) {
+                return Err("cancelled".into());
+            }
+            let estimate = estimate_absolute_sphere(mesh, field, &AbsoluteSphereParams::default())?;
+            let spheres = local_spheres_orthogonal(mesh, topo, &estimate.omega, LOCAL_SPHERE_POINTS);
+            let bounds = SizingBounds::for_mesh(mesh, topo);
+            let sphere_of = |i: usize| spheres[i];
+            let mut p = |done, total| progress("sizing", done, total);
+            SizingField::from_sphere_fn(mesh, topo, &sphere_of, epsilon * mesh.bbox_diagonal(), bounds, &mut p)
+                .ok_or("cancelled")?
+        }
+    };
+    let remeshed = pliant_remesh(mesh, &sizing, &RemeshParams::default(), &mut |done, total| progress("remesh", done, total))
+        .ok_or("cancelled")?;
+    if remeshed.face_count() == 0 {
+        return Err("remeshing produced no faces".into());
+    }
+    let rtopo = Topology::new(&remeshed);
+    let rfield = jet_fit(&remeshed, &rtopo, &req.jet, &mut |d, t| progress("curvature", d, t)).ok_or("cancelled")?;
+    Ok(Some((remeshed, rtopo, rfield)))
 }
 
 /// A file produced for download or for the CLI's output folder.
@@ -99,7 +156,12 @@ pub fn run(
         clock,
         ..StSupportParams::default()
     };
-    let result = st_support_with_curvature(mesh, topo, field, &params, progress)?;
+    let remeshed = remeshed_reference(mesh, topo, field, req, progress)?;
+    let (work, work_topo, work_field) = match &remeshed {
+        Some((m, t, f)) => (m, t, f),
+        None => (mesh, topo, field),
+    };
+    let result = st_support_with_curvature(work, work_topo, work_field, &params, progress)?;
     let diag = result.diag;
     let now = || clock.0.map_or(0.0, |f| f());
 
@@ -146,6 +208,7 @@ pub fn run(
             ("distinct_radii", serde_json::json!(schedule.distinct_radii)),
             ("axes_from_spheres", serde_json::json!(m.axes_from_spheres)),
             ("degenerate_faces", serde_json::json!(m.degenerate_faces)),
+            ("remesh", serde_json::to_value(req.remesh).unwrap_or_default()),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
@@ -189,14 +252,15 @@ pub mod fields {
     pub const ENVELOPE_TRIANGLES: &str = "envelope2.triangles";
 }
 
-fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
+pub(crate) fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
     points.flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()
 }
 
-/// Display fields: panels with their sphere normals and arcs, support, node axes, second envelope.
-pub fn display_fields(out: &StSupportOutput) -> Vec<Field> {
+/// The panels as display fields: positions with their sphere normals, triangles, and the
+/// boundary arcs as line segments.
+pub fn panel_fields(panels: &[Panel]) -> Vec<Field> {
     let (mut pos, mut nrm, mut tri, mut edges) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for p in &out.panels {
+    for p in panels {
         let base = pos.len() as u32;
         pos.extend(p.positions.iter().copied());
         nrm.extend(p.positions.iter().map(|&x| sphere_normal(&p.sphere, x)));
@@ -207,20 +271,26 @@ pub fn display_fields(out: &StSupportOutput) -> Vec<Field> {
             }
         }
     }
-    let mut fields = vec![
+    vec![
         Field::f32(fields::PANEL_POSITIONS, 3, f32s(pos.into_iter())),
         Field::f32(fields::PANEL_NORMALS, 3, f32s(nrm.into_iter())),
         Field::u32(fields::PANEL_TRIANGLES, 3, tri),
         Field::u32(fields::PANEL_EDGES, 2, edges),
+    ]
+}
+
+/// Display fields: panels, support, node axes, second envelope.
+pub fn display_fields(out: &StSupportOutput) -> Vec<Field> {
+    let mut fields = panel_fields(&out.panels);
+    fields.extend([
         Field::f32(fields::SUPPORT_POSITIONS, 3, f32s(out.support.positions.iter().copied())),
         Field::u32(fields::SUPPORT_TRIANGLES, 3, out.support.triangles.iter().flatten().copied().collect()),
         Field::f32(fields::AXES_POSITIONS, 3, f32s(out.axes.iter().flat_map(|&(a, b)| [a, b]))),
         Field::u32(fields::AXES_LINES, 2, (0..2 * out.axes.len() as u32).collect()),
-    ];
+    ]);
     if let Some(env) = &out.result.second_envelope {
         fields.push(Field::f32(fields::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));
         fields.push(Field::u32(fields::ENVELOPE_TRIANGLES, 3, env.triangles.iter().flatten().copied().collect()));
     }
-    let _ = field::POSITIONS;
     fields
 }

@@ -13,8 +13,10 @@ use super::colormap;
 use super::viewer::{ColorMap, Geometry, Layer, MeshData, OrbitCamera, ScalarData, Style, ViewerFrame, ViewerResources};
 use super::worker_client::{Incoming, WorkerClient};
 use crate::curvature::CurvatureSummary;
-use crate::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading};
+use crate::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading, SizingKind};
+use crate::pipeline::st_angle::{self as st_stage, StRequest, StSummary};
 use crate::pipeline::st_support::{fields as stf, StSupportRequest, StSupportSummary};
+use crate::st_angle::StVariant;
 use crate::absolute_sphere::Histogram;
 use crate::sphere_mesh::AbsoluteSphere;
 use crate::pipeline::protocol::{field, find, Field, FieldData, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
@@ -30,6 +32,23 @@ struct Loaded {
     radius: f32,
     curvature: Option<CurvatureView>,
     st: Option<StView>,
+    angle: Option<AngleView>,
+}
+
+/// The "ST, adapted face size" run as it streams in: sizing field, remeshed triangulation,
+/// the latest panels and the energy of every iteration.
+#[derive(Default)]
+struct AngleView {
+    /// g at the reference vertices.
+    sizing: Option<Vec<f32>>,
+    remeshed: Option<Arc<MeshData>>,
+    panels: Option<Arc<MeshData>>,
+    /// Iteration of the panels shown, and how many panel snapshots arrived.
+    panel_iteration: u32,
+    panel_snapshots: u32,
+    /// (iteration, optimizer stage, total energy).
+    energy: Vec<(u32, String, f64)>,
+    summary: Option<StSummary>,
 }
 
 /// The ST-with-support-structure result as display meshes.
@@ -41,17 +60,29 @@ struct StView {
     summary: Option<StSupportSummary>,
 }
 
+/// A display mesh from snapshot fields (missing fields are empty).
+fn mesh_from_fields(fields: &[Field], generation: &mut u64, names: [&str; 4]) -> Arc<MeshData> {
+    let f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
+    let u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+    *generation += 1;
+    Arc::new(MeshData { generation: *generation, positions: f(names[0]), normals: f(names[1]), triangles: u(names[2]), edges: u(names[3]) })
+}
+
+const PANEL_FIELDS: [&str; 4] = [stf::PANEL_POSITIONS, stf::PANEL_NORMALS, stf::PANEL_TRIANGLES, stf::PANEL_EDGES];
+const MESH_FIELDS: [&str; 4] = [field::POSITIONS, field::NORMALS, field::TRIANGLES, field::EDGES];
+
 impl StView {
     fn from_fields(fields: &[Field], generation: &mut u64) -> Self {
         let f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
         let u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+        let env_pos = f(stf::ENVELOPE_POSITIONS);
+        let panels = mesh_from_fields(fields, generation, PANEL_FIELDS);
         let mut mesh = |positions: Vec<f32>, normals: Vec<f32>, triangles: Vec<u32>, edges: Vec<u32>| {
             *generation += 1;
             Arc::new(MeshData { generation: *generation, positions, normals, triangles, edges })
         };
-        let env_pos = f(stf::ENVELOPE_POSITIONS);
         Self {
-            panels: mesh(f(stf::PANEL_POSITIONS), f(stf::PANEL_NORMALS), u(stf::PANEL_TRIANGLES), u(stf::PANEL_EDGES)),
+            panels,
             support: mesh(f(stf::SUPPORT_POSITIONS), Vec::new(), u(stf::SUPPORT_TRIANGLES), Vec::new()),
             axes: mesh(f(stf::AXES_POSITIONS), Vec::new(), Vec::new(), u(stf::AXES_LINES)),
             envelope: (!env_pos.is_empty())
@@ -102,6 +133,7 @@ pub struct App {
     st_dirty: bool,
     show_reference: bool,
     show_envelope: bool,
+    show_remeshed: bool,
     /// A fresh worker is being given the current design back: keep the view and the message.
     restoring: bool,
     camera: OrbitCamera,
@@ -117,7 +149,9 @@ pub struct App {
     last_state: String,
     picked_files: Rc<RefCell<Vec<web_sys::File>>>,
     crash_requests: Rc<RefCell<u32>>,
-    _crash_listener: Option<Closure<dyn FnMut()>>,
+    _crash_listener: Closure<dyn FnMut()>,
+    cancel_requests: Rc<RefCell<u32>>,
+    _cancel_listener: Closure<dyn FnMut()>,
     download_requests: Rc<RefCell<Vec<String>>>,
     _download_listener: Option<Closure<dyn FnMut(web_sys::CustomEvent)>>,
     file_input: Option<web_sys::HtmlInputElement>,
@@ -147,16 +181,9 @@ impl App {
         let picked_files = Rc::new(RefCell::new(Vec::new()));
         let (file_input, closure) = make_file_input(picked_files.clone(), cc.egui_ctx.clone());
         // Diagnostics: `window.dispatchEvent(new Event('sf-crash-worker'))` makes the worker panic.
-        let crash_requests = Rc::new(RefCell::new(0));
-        let crash_listener = {
-            let (count, ctx) = (crash_requests.clone(), cc.egui_ctx.clone());
-            let c = Closure::<dyn FnMut()>::new(move || {
-                *count.borrow_mut() += 1;
-                ctx.request_repaint();
-            });
-            web_sys::window().map(|w| w.add_event_listener_with_callback("sf-crash-worker", c.as_ref().unchecked_ref()));
-            Some(c)
-        };
+        let (crash_requests, crash_listener) = count_events("sf-crash-worker", &cc.egui_ctx);
+        // Automation: `new Event('sf-cancel')` presses Cancel.
+        let (cancel_requests, cancel_listener) = count_events("sf-cancel", &cc.egui_ctx);
         // Automation: `new CustomEvent('sf-download', {detail: 'panels.glb'})` saves that file.
         let download_requests = Rc::new(RefCell::new(Vec::new()));
         let download_listener = {
@@ -184,6 +211,7 @@ impl App {
             st_dirty: false,
             show_reference: false,
             show_envelope: false,
+            show_remeshed: true,
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -198,6 +226,8 @@ impl App {
             picked_files,
             crash_requests,
             _crash_listener: crash_listener,
+            cancel_requests,
+            _cancel_listener: cancel_listener,
             download_requests,
             _download_listener: download_listener,
             file_input,
@@ -242,18 +272,35 @@ impl App {
         }
         // Curvature first (its colour maps and central spheres); methods reuse it in the worker.
         let mut stages = vec![StageRequest::Curvature(self.design.jet.clone())];
-        if self.design.method == Method::StSupport {
-            let st = self.design.st;
-            stages.push(StageRequest::StSupport(StSupportRequest {
-                optimize_radius: st.optimize_radius,
-                support_depth: st.support_depth,
-                axis_length: st.axis_length,
-                radius_tolerance: st.radius_tolerance,
-                jet: self.design.jet.clone(),
-            }));
+        match self.design.method {
+            Method::Curvature => {}
+            Method::StSupport => {
+                let st = self.design.st;
+                stages.push(StageRequest::StSupport(StSupportRequest {
+                    optimize_radius: st.optimize_radius,
+                    support_depth: st.support_depth,
+                    axis_length: st.axis_length,
+                    radius_tolerance: st.radius_tolerance,
+                    remesh: st.remesh.to_sizing(),
+                    jet: self.design.jet.clone(),
+                }));
+            }
+            Method::St => {
+                let a = self.design.st_angle;
+                stages.push(StageRequest::St(StRequest {
+                    sizing: a.sizing.to_sizing(),
+                    variant: a.variant,
+                    radius_tolerance: self.design.st.radius_tolerance,
+                    jet: self.design.jet.clone(),
+                }));
+            }
         }
         if let Some(l) = self.loaded.as_mut() {
             l.st = None;
+            l.angle = (self.design.method == Method::St).then(AngleView::default);
+        }
+        if self.design.color == ColorBy::Sizing {
+            self.scalars = None;
         }
         self.downloads.clear();
         let last = stages.last().map(|s| s.name().to_string()).unwrap_or_default();
@@ -324,7 +371,15 @@ impl App {
                 for n in &info.notes {
                     self.notices.push(n.clone());
                 }
-                self.loaded = Some(Loaded { info, mesh: Arc::new(empty_mesh()), center: Vec3::ZERO, radius: 1.0, curvature: None, st: None });
+                self.loaded = Some(Loaded {
+                    info,
+                    mesh: Arc::new(empty_mesh()),
+                    center: Vec3::ZERO,
+                    radius: 1.0,
+                    curvature: None,
+                    st: None,
+                    angle: None,
+                });
             }
             FromWorker::Snapshot { stage, .. } if stage == "reference" => self.install_geometry(&fields),
             FromWorker::Files { mime, .. } => {
@@ -342,6 +397,19 @@ impl App {
                     l.st = Some(StView::from_fields(&fields, &mut self.generation));
                 }
             }
+            FromWorker::Snapshot { stage, iteration, .. } if stage.starts_with(st_stage::STAGE) && stage != "st-support" => {
+                let Some(a) = self.loaded.as_mut().and_then(|l| l.angle.as_mut()) else { return };
+                if stage == st_stage::SIZING_STAGE {
+                    a.sizing = find(&fields, st_stage::fields::SIZING).and_then(Field::as_f32).map(<[f32]>::to_vec);
+                    self.scalars = None;
+                } else if stage == st_stage::REMESHED_STAGE {
+                    a.remeshed = Some(mesh_from_fields(&fields, &mut self.generation, MESH_FIELDS));
+                } else {
+                    a.panels = Some(mesh_from_fields(&fields, &mut self.generation, PANEL_FIELDS));
+                    a.panel_iteration = iteration;
+                    a.panel_snapshots += 1;
+                }
+            }
             FromWorker::Snapshot { .. } => {
                 if let Some(l) = self.loaded.as_mut() {
                     let summary = l.curvature.take().and_then(|c| c.summary);
@@ -350,6 +418,11 @@ impl App {
                 }
             }
             FromWorker::Progress(p) => {
+                if let (Some(a), Some(total)) = (self.loaded.as_mut().and_then(|l| l.angle.as_mut()), p.energies.first()) {
+                    if p.stage == st_stage::STAGE {
+                        a.energy.push((p.iteration, p.detail.clone(), total.value));
+                    }
+                }
                 if let Some(b) = self.busy.as_mut() {
                     b.progress = Some(p);
                 }
@@ -367,6 +440,11 @@ impl App {
                     StageResult::StSupport(summary) => {
                         if let Some(st) = self.loaded.as_mut().and_then(|l| l.st.as_mut()) {
                             st.summary = Some(*summary);
+                        }
+                    }
+                    StageResult::St(summary) => {
+                        if let Some(a) = self.loaded.as_mut().and_then(|l| l.angle.as_mut()) {
+                            a.summary = Some(*summary);
                         }
                     }
                 }
@@ -405,6 +483,7 @@ impl App {
         l.mesh = Arc::new(mesh);
         l.curvature = None;
         l.st = None;
+        l.angle = None;
         self.scalars = None;
         if !self.restoring {
             self.selected = None;
@@ -430,15 +509,20 @@ impl App {
         let fresh = self.scalars.as_ref().is_some_and(|s| s.color == color);
         if !fresh {
             self.scalars = None;
-            let c = self.loaded.as_ref()?.curvature.as_ref()?;
+            let l = self.loaded.as_ref()?;
             let key = match color {
                 ColorBy::None => return None,
+                ColorBy::Sizing => "",
                 ColorBy::MeanCurvature => field::MEAN_CURVATURE,
                 ColorBy::K1 => field::K1,
                 ColorBy::K2 => field::K2,
                 ColorBy::K1MinusK2 => field::K1_MINUS_K2,
             };
-            let values = find(&c.fields, key)?.as_f32()?.to_vec();
+            let values = if color == ColorBy::Sizing {
+                l.angle.as_ref()?.sizing.clone()?
+            } else {
+                find(&l.curvature.as_ref()?.fields, key)?.as_f32()?.to_vec()
+            };
             let (range, diverging) = colormap::robust_range(&values);
             self.generation += 1;
             self.scalars = Some(ScalarView {
@@ -461,7 +545,9 @@ impl App {
         let (design, notices) = Design::from_fragment(&hash);
         self.notices = notices;
         let reference_changed = design.reference != self.design.reference;
-        let jet_changed = design.jet != self.design.jet || design.method != self.design.method || design.st != self.design.st;
+        let jet_changed = design.jet != self.design.jet || design.method != self.design.method
+            || design.st != self.design.st
+            || design.st_angle != self.design.st_angle;
         self.camera_from_link = design.camera;
         self.design = design;
         if reference_changed {
@@ -550,6 +636,16 @@ impl App {
             "st_ready": self.loaded.as_ref().and_then(|l| l.st.as_ref()).is_some_and(|s| s.summary.is_some()),
             "panels": self.loaded.as_ref().and_then(|l| l.st.as_ref()).and_then(|s| s.summary.as_ref()).map_or(0, |s| s.report.output.panels),
             "downloads": self.downloads.iter().map(|d| d.name.clone()).collect::<Vec<_>>(),
+            "st_angle": self.loaded.as_ref().and_then(|l| l.angle.as_ref()).map(|a| serde_json::json!({
+                "sizing": a.sizing.as_ref().map_or(0, Vec::len),
+                "remeshed_faces": a.remeshed.as_ref().map_or(0, |m| m.triangles.len() / 3),
+                "panel_iteration": a.panel_iteration,
+                "panel_snapshots": a.panel_snapshots,
+                "panel_triangles": a.panels.as_ref().map_or(0, |m| m.triangles.len() / 3),
+                "energies": a.energy.len(),
+                "ready": a.summary.is_some(),
+                "panels": a.summary.as_ref().map_or(0, |s| s.report.output.panels),
+            })),
         })
         .to_string();
         if state != self.last_state {
@@ -617,6 +713,11 @@ impl App {
             });
             if method != self.design.method {
                 self.design.method = method;
+                if method == Method::St && self.design.color == ColorBy::MeanCurvature {
+                    self.design.color = ColorBy::Sizing;
+                } else if method != Method::St && self.design.color == ColorBy::Sizing {
+                    self.design.color = ColorBy::MeanCurvature;
+                }
                 self.run_method();
             }
             ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
@@ -636,6 +737,8 @@ impl App {
                 ui.add(egui::Slider::new(&mut st.axis_length, 0.0..=0.5).text("axis length"));
                 ui.add(egui::Slider::new(&mut st.radius_tolerance, 1e-5..=1e-1).logarithmic(true).text("radius tolerance"));
                 ui.label(RichText::new("lengths relative to the bbox diagonal").small());
+                ui.label(RichText::new("Remesh first (Fig. 16, bottom)").small());
+                sizing_controls(ui, "st-remesh", &mut st.remesh, &[SizingKind::None, SizingKind::Adaptive, SizingKind::Faces]);
                 let changed = st != self.design.st;
                 let released = !ui.input(|i| i.pointer.any_down());
                 self.design.st = st;
@@ -648,6 +751,27 @@ impl App {
                 }
                 ui.checkbox(&mut self.show_reference, "show reference surface");
                 ui.checkbox(&mut self.show_envelope, "show second envelope");
+            }
+            if self.design.method == Method::St {
+                let mut a = self.design.st_angle;
+                sizing_controls(ui, "st-sizing", &mut a.sizing, &SizingKind::ALL);
+                ui.horizontal(|ui| {
+                    ui.label("edges");
+                    ui.radio_value(&mut a.variant, StVariant::A, "(a) sphere intersections")
+                        .on_hover_text("Fig. 12 (a): edges are the intersection circles of adjacent face spheres");
+                    ui.radio_value(&mut a.variant, StVariant::B, "(b) bisecting planes")
+                        .on_hover_text("Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain");
+                });
+                if a != self.design.st_angle {
+                    self.st_dirty = true;
+                }
+                self.design.st_angle = a;
+                if self.st_dirty && !ui.input(|i| i.pointer.any_down()) {
+                    self.st_dirty = false;
+                    self.run_method();
+                }
+                ui.checkbox(&mut self.show_reference, "show reference surface (sizing colours)");
+                ui.checkbox(&mut self.show_remeshed, "show remeshed triangulation");
             }
             ui.separator();
             ui.strong("Display");
@@ -665,6 +789,7 @@ impl App {
             ui.separator();
             self.info_section(ui);
             self.st_section(ui);
+            self.st_angle_section(ui);
             if !self.downloads.is_empty() {
                 ui.separator();
                 ui.strong("Downloads");
@@ -786,6 +911,47 @@ impl App {
         histogram(ui, &[(&sum.r2, Color32::from_rgb(110, 150, 230))], "");
     }
 
+    /// The live energy plot and, when done, the report metrics of the "st" method.
+    fn st_angle_section(&self, ui: &mut egui::Ui) {
+        if self.design.method != Method::St {
+            return;
+        }
+        let Some(a) = self.loaded.as_ref().and_then(|l| l.angle.as_ref()) else { return };
+        ui.separator();
+        ui.strong("ST mesh, adapted face size");
+        if let Some(m) = &a.remeshed {
+            ui.label(RichText::new(format!("remeshed: {} faces; panels at iteration {}", m.triangles.len() / 3, a.panel_iteration)).small());
+        }
+        if !a.energy.is_empty() {
+            ui.label(RichText::new("energy per iteration (log scale; weights change between stages)").small());
+            energy_plot(ui, &a.energy);
+        }
+        let Some(sum) = &a.summary else { return };
+        let m = &sum.report.metrics;
+        let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3e}"));
+        let mut rows = vec![
+            ("panels", sum.report.output.panels.to_string()),
+            ("iterations", sum.iterations.to_string()),
+            ("kink mean, initial → final", format!("{:.3}° → {:.3}°", sum.initial.mean_kink_angle_deg, sum.metrics.mean_kink_angle_deg)),
+            ("kink max, initial → final", format!("{:.3}° → {:.3}°", sum.initial.max_kink_angle_deg, sum.metrics.max_kink_angle_deg)),
+            ("vertex–sphere residual", g(m.max_vertex_sphere_residual)),
+            ("distance to reference", g(m.max_distance_to_reference)),
+        ];
+        if let Some(gap) = sum.metrics.max_gap {
+            rows.push(("max gap (b)", format!("{gap:.3e}")));
+        }
+        if let Some((lo, hi)) = sum.sizing_range {
+            rows.push(("sizing g min / max", format!("{lo:.4} / {hi:.4}")));
+        }
+        if let Some(ms) = sum.report.timings_ms.get("angle_iteration_median") {
+            rows.push(("median iteration", format!("{ms:.2} ms")));
+        }
+        key_values(ui, "st-angle-metrics", &rows);
+        if sum.metrics.flipped_faces > 0 {
+            ui.colored_label(Color32::from_rgb(240, 180, 80), format!("{} faces ended flipped against the reference.", sum.metrics.flipped_faces));
+        }
+    }
+
     fn selected_vertex_text(&self, v: usize) -> Option<String> {
         let c = self.loaded.as_ref()?.curvature.as_ref()?;
         let val = |k| find(&c.fields, k).and_then(Field::as_f32).and_then(|x| x.get(v).copied());
@@ -859,9 +1025,12 @@ impl App {
         };
         let color_map = self.scalar_view().map(|s| ColorMap { scalars: s.data.clone(), range: s.range, diverging: s.diverging });
         let st = self.loaded.as_ref().and_then(|l| l.st.as_ref()).filter(|_| self.design.method == Method::StSupport);
+        let angle = self.loaded.as_ref().and_then(|l| l.angle.as_ref()).filter(|_| self.design.method == Method::St);
+        let angle_shown = angle.is_some_and(|a| a.panels.is_some() || a.remeshed.is_some());
         let edge_color = [0.05, 0.06, 0.08, 1.0];
         let mut layers = Vec::new();
-        if st.is_none() || self.show_reference {
+        let reference_shown = (st.is_none() && !angle_shown) || self.show_reference;
+        if reference_shown {
             layers.push(Layer {
                 geometry: Geometry::Mesh(mesh.clone()),
                 model: Mat4::IDENTITY,
@@ -874,6 +1043,22 @@ impl App {
         if let Some(st) = st {
             layers.extend(self.st_layers(st, shading, edge_color));
         }
+        if let Some(a) = angle {
+            let id = Mat4::IDENTITY;
+            match (&a.panels, &a.remeshed) {
+                (Some(p), _) => {
+                    layers.push(Layer { geometry: Geometry::Mesh(p.clone()), model: id, style: Style::Surface { shading, color: [0.70, 0.80, 0.88, 1.0], color_map: None } });
+                    layers.push(Layer { geometry: Geometry::Mesh(p.clone()), model: id, style: Style::Lines { color: edge_color } });
+                }
+                (None, Some(r)) => {
+                    layers.push(Layer { geometry: Geometry::Mesh(r.clone()), model: id, style: Style::Surface { shading, color: [0.70, 0.80, 0.88, 1.0], color_map: None } });
+                }
+                (None, None) => {}
+            }
+            if let Some(r) = a.remeshed.as_ref().filter(|_| self.show_remeshed) {
+                layers.push(Layer { geometry: Geometry::Mesh(r.clone()), model: id, style: Style::Lines { color: [0.95, 0.55, 0.20, 1.0] } });
+            }
+        }
         layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
         let frame = ViewerFrame {
             view_proj: self.camera.proj(aspect) * self.camera.view(),
@@ -883,15 +1068,12 @@ impl App {
         };
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, frame));
         self.drawn = true;
-        let reference_shown = self.design.method != Method::StSupport
-            || self.show_reference
-            || self.loaded.as_ref().is_some_and(|l| l.st.is_none());
         if let Some(s) = self.scalars.as_ref().filter(|_| reference_shown) {
             colormap::legend(ui.painter(), rect, self.design.color.label(), s.range, s.diverging);
         }
         if let Some(b) = &self.busy {
             let text = match &b.progress {
-                Some(p) if p.total > 0 => format!("{}: {}/{} · {:.0} ms", b.stage, p.iteration, p.total, p.elapsed_ms),
+                Some(p) if p.total > 0 => format!("{} {}: {}/{} · {:.0} ms", b.stage, p.detail, p.iteration, p.total, p.elapsed_ms),
                 _ => format!("{}…", b.stage),
             };
             ui.painter().text(rect.left_top() + Vec2::new(10.0, 10.0), egui::Align2::LEFT_TOP, text, egui::FontId::proportional(13.0), Color32::LIGHT_GRAY);
@@ -1009,6 +1191,9 @@ impl eframe::App for App {
         if crashes > 0 {
             self.send(&ToWorker::Crash, None);
         }
+        if std::mem::take(&mut *self.cancel_requests.borrow_mut()) > 0 && self.busy.is_some() {
+            self.cancel();
+        }
 
         // Dropped files (eframe) and picked files (the Open… dialog).
         let dropped: Vec<web_sys::File> =
@@ -1023,7 +1208,7 @@ impl eframe::App for App {
             egui::Panel::bottom("progress").show(ui, |ui| {
                 ui.horizontal(|ui| {
                     let (frac, text) = match self.busy.as_ref().and_then(|b| b.progress.as_ref()) {
-                        Some(p) if p.total > 0 => (p.iteration as f32 / p.total as f32, format!("{} {}/{}", p.stage, p.iteration, p.total)),
+                        Some(p) if p.total > 0 => (p.iteration as f32 / p.total as f32, format!("{} {} {}/{}", p.stage, p.detail, p.iteration, p.total)),
                         _ => (0.0, self.busy.as_ref().map(|b| b.stage.clone()).unwrap_or_default()),
                     };
                     if ui.button("Cancel").clicked() {
@@ -1106,6 +1291,55 @@ fn histogram(ui: &mut egui::Ui, series: &[(&Histogram, Color32)], unit: &str) {
     p.text(rect.right_top() + Vec2::new(-2.0, 1.0), egui::Align2::RIGHT_TOP, format!("{hi:.3}{unit}"), font, Color32::LIGHT_GRAY);
 }
 
+/// Remeshing controls: kind, ε (log slider) and the face count.
+fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut crate::design_link::SizingDesign, kinds: &[SizingKind]) {
+    egui::ComboBox::from_id_salt(id).selected_text(sizing.kind.label()).show_ui(ui, |ui| {
+        for &k in kinds {
+            ui.selectable_value(&mut sizing.kind, k, k.label());
+        }
+    });
+    match sizing.kind {
+        SizingKind::Adaptive => {
+            ui.add(egui::Slider::new(&mut sizing.epsilon, 2e-5..=1e-2).logarithmic(true).text("ε").custom_formatter(|x, _| format!("{x:.2e}")))
+                .on_hover_text("Distance tolerance of the influence zones, relative to the bbox diagonal (Sec. 3): smaller ε, smaller faces");
+        }
+        SizingKind::Faces => {
+            ui.add(egui::Slider::new(&mut sizing.faces, 50..=8000).logarithmic(true).text("faces"));
+        }
+        SizingKind::None => {}
+    }
+}
+
+/// Total energy against iteration on a log scale, one colour per optimizer stage.
+fn energy_plot(ui: &mut egui::Ui, series: &[(u32, String, f64)]) {
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width().min(260.0), 110.0), Sense::hover());
+    let p = ui.painter();
+    p.rect_filled(rect, 2.0, Color32::from_gray(30));
+    let logs: Vec<f64> = series.iter().map(|(_, _, e)| e.max(1e-300).log10()).collect();
+    let (lo, hi) = logs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+    let (lo, hi) = if hi - lo < 1e-9 { (lo - 0.5, hi + 0.5) } else { (lo, hi) };
+    let last = series.last().map_or(1, |s| s.0).max(1) as f32;
+    let inner = rect.shrink2(Vec2::new(4.0, 14.0));
+    let at = |it: u32, y: f64| Pos2::new(inner.left() + inner.width() * it as f32 / last, inner.bottom() - inner.height() * ((y - lo) / (hi - lo)) as f32);
+    let palette = [Color32::from_rgb(110, 150, 230), Color32::from_rgb(90, 190, 90), Color32::from_rgb(230, 170, 60), Color32::from_rgb(220, 80, 70)];
+    let mut stage_index = 0;
+    for k in 1..series.len() {
+        if series[k].1 != series[k - 1].1 {
+            stage_index += 1;
+            let x = at(series[k].0, lo).x;
+            p.line_segment([Pos2::new(x, rect.top()), Pos2::new(x, rect.bottom())], egui::Stroke::new(1.0, Color32::from_gray(60)));
+            continue;
+        }
+        let color = palette[stage_index % palette.len()];
+        p.line_segment([at(series[k - 1].0, logs[k - 1]), at(series[k].0, logs[k])], egui::Stroke::new(1.5, color));
+    }
+    let font = egui::FontId::proportional(10.0);
+    let (it, stage, e) = series.last().map(|(i, s, e)| (*i, s.as_str(), *e)).unwrap_or((0, "", 0.0));
+    p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, format!("1e{hi:.1}"), font.clone(), Color32::LIGHT_GRAY);
+    p.text(rect.left_bottom() + Vec2::new(2.0, -1.0), egui::Align2::LEFT_BOTTOM, format!("1e{lo:.1}"), font.clone(), Color32::LIGHT_GRAY);
+    p.text(rect.right_top() + Vec2::new(-2.0, 1.0), egui::Align2::RIGHT_TOP, format!("{stage} · it {it} · E {e:.3e}"), font, Color32::LIGHT_GRAY);
+}
+
 /// A two-column table of labels and values.
 fn key_values(ui: &mut egui::Ui, id: &str, rows: &[(&str, String)]) {
     egui::Grid::new(id).num_columns(2).show(ui, |ui| {
@@ -1156,6 +1390,20 @@ fn ray_triangle(o: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f32> {
     }
     let s = e2.dot(q) * inv;
     (s > 0.0).then_some(s)
+}
+
+/// Counts `event`s dispatched on the window (automation and diagnostics hooks).
+fn count_events(event: &str, ctx: &egui::Context) -> (Rc<RefCell<u32>>, Closure<dyn FnMut()>) {
+    let count = Rc::new(RefCell::new(0));
+    let (c2, ctx) = (count.clone(), ctx.clone());
+    let c = Closure::<dyn FnMut()>::new(move || {
+        *c2.borrow_mut() += 1;
+        ctx.request_repaint();
+    });
+    if let Some(w) = web_sys::window() {
+        let _ = w.add_event_listener_with_callback(event, c.as_ref().unchecked_ref());
+    }
+    (count, c)
 }
 
 fn location_hash() -> String {

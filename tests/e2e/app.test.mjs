@@ -241,5 +241,76 @@ for (const project of PROJECTS) {
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });
+
+    test(`[${project.name}] h. ST with adapted face size streams sizing, remesh, panels and energies, and its GLB validates`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=dome&method=st&sizing=adaptive&eps=0.0004&variant=a&color=sizing';
+      await withApp(t, browser, server, project, { name: 'h-st-angle', fragment }, async (app) => {
+        const running = await waitForState(
+          app,
+          'sizing field and remeshed triangulation arrived',
+          (s) => s.st_angle && s.st_angle.sizing > 0 && s.st_angle.remeshed_faces > 0,
+          { timeout: T.load },
+        );
+        assert.equal(running.st_angle.sizing, running.vertices, 'one sizing value per reference vertex');
+        const s = await waitForState(
+          app,
+          'st finished (st_angle.ready, downloads offered)',
+          (s) => s.st_angle && s.st_angle.ready && !s.busy && s.downloads.includes('panels.glb'),
+          { timeout: T.load },
+        );
+        t.diagnostic(`st: ${JSON.stringify(s.st_angle)}`);
+        assert.equal(s.method, 'st');
+        assert.ok(!s.error, `error: ${s.error}`);
+        assert.equal(s.st_angle.energies, 45, 'one energy per optimizer iteration');
+        assert.equal(s.st_angle.panel_iteration, 45, 'the final panels are those of the last iteration');
+        assert.ok(s.st_angle.panel_snapshots >= 2, `panels arrived at the start and the end at least (${s.st_angle.panel_snapshots})`);
+        assert.equal(s.st_angle.panels, s.st_angle.remeshed_faces, 'one panel per remeshed face');
+        assert.ok(s.st_angle.remeshed_faces > 100 && s.st_angle.remeshed_faces < 1000, `faces ${s.st_angle.remeshed_faces}`);
+        assert.ok(s.design_link.includes('method=st&') && s.design_link.includes('eps=4e-4'), s.design_link);
+        assertDrawn(await measureViewport(app, s, 'st-angle'), 'ST panels');
+        const [download] = await Promise.all([
+          app.page.waitForEvent('download', { timeout: 30_000 }),
+          app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'panels.glb' }))),
+        ]);
+        fs.mkdirSync(ARTIFACTS_DIR, { recursive: true });
+        const file = path.join(ARTIFACTS_DIR, `${project.name}-st-panels.glb`);
+        await download.saveAs(file);
+        const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
+        assert.equal(v.status, 0, `the Khronos validator accepts the ST GLB: ${v.stdout}${v.stderr}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] i. the UI stays above 30 fps while a 2k-face ST optimizes, and Cancel stops it`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=dome&method=st&sizing=faces&faces=2000&variant=a';
+      await withApp(t, browser, server, project, { name: 'i-st-fps-cancel', fragment }, async (app) => {
+        const first = await waitForState(
+          app,
+          'the optimizer is running (energies arriving)',
+          (s) => s.busy && s.st_angle && s.st_angle.energies > 0,
+          { timeout: T.load, interval: 50 },
+        );
+        assert.ok(first.st_angle.remeshed_faces > 1500, `about 2000 faces: ${first.st_angle.remeshed_faces}`);
+        const t0 = Date.now();
+        await sleep(2000);
+        const mid = await readState(app.page);
+        const fps = ((mid.frames - first.frames) * 1000) / (Date.now() - t0);
+        t.diagnostic(`fps while optimizing ${first.st_angle.remeshed_faces} faces: ${fps.toFixed(1)}; energies ${first.st_angle.energies} -> ${mid.st_angle.energies}; panel snapshots ${mid.st_angle.panel_snapshots}`);
+        assert.ok(mid.busy && mid.st_angle.energies > first.st_angle.energies, 'still optimizing during the measurement');
+        assert.ok(fps > 30, `UI frame rate while optimizing: ${fps.toFixed(1)} fps`);
+        await app.page.evaluate(() => window.dispatchEvent(new Event('sf-cancel')));
+        const c = await waitForState(app, 'not busy after Cancel', (s) => !s.busy, { timeout: 15_000 });
+        const stopped = c.st_angle.energies;
+        await sleep(1500);
+        const later = await readState(app.page);
+        t.diagnostic(`energies at cancel ${stopped}, 1.5 s later ${later.st_angle.energies}; notices ${JSON.stringify(later.notices)}`);
+        assert.ok(later.st_angle.energies < 45 && !later.st_angle.ready, 'the run did not finish');
+        assert.ok(later.st_angle.energies - stopped <= 2, 'no iterations after the cancel');
+        assert.ok(later.notices.some((n) => /cancel/i.test(String(n))), `a notice says cancelled: ${JSON.stringify(later.notices)}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
   });
 }
