@@ -140,10 +140,11 @@ fn st_support_remeshes_first() {
             assert!(m[k].as_f64().unwrap() <= 1e-9, "{k} = {}", m[k]);
         }
     }
+    let bad_dir = base.join("bad");
     for bad in [vec!["--faces", "300", "--adaptive"], vec!["--epsilon", "1e-3"], vec!["--adaptive", "--epsilon", "3"]] {
         let mut a = vec!["st-support", mesh];
         a.extend(bad.iter().copied());
-        a.extend(["--out", base.join("bad").to_str().unwrap()]);
+        a.extend(["--out", bad_dir.to_str().unwrap()]);
         let out = run(&a);
         assert_eq!(out.status.code(), Some(2), "{bad:?}");
         assert_eq!(String::from_utf8_lossy(&out.stderr).trim_end().lines().count(), 1);
