@@ -19,6 +19,8 @@ pub mod sphere_mesh;
 pub mod panels;
 pub mod export;
 pub mod absolute_sphere;
+/// Benchmark workloads shared by `cargo bench` (divan) and the wasm bench in the browser.
+pub mod bench_workloads;
 pub mod st_support;
 pub mod st_angle;
 

@@ -1,0 +1,105 @@
+//! Native benchmarks (divan) of the workloads in `spherical_faces::bench_workloads`, the same ones
+//! `tests/wasm_bench.rs` times in the browser:
+//!
+//!     cargo bench --bench pipeline
+//!
+//! After divan's table, one line per benchmark in the format the wasm runner prints,
+//! `bench <name>: <ms> ms/iter (n=<samples>)`, the median of the samples timed here (for the
+//! angle benchmarks: of the solver's per-iteration times); `bash www/dev.sh bench` compares those.
+//!
+//! Under `cargo test --all-targets` (no `--bench` argument) divan runs every benchmark once, and
+//! the workloads are tiny ([`Scale::Tiny`]), so that this only checks that they run.
+
+use std::sync::{Mutex, OnceLock};
+use std::time::Instant;
+
+use divan::Bencher;
+use spherical_faces::bench_workloads::{
+    result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
+    REMESH_SAMPLES,
+};
+
+static SCALE: OnceLock<Scale> = OnceLock::new();
+static START: OnceLock<Instant> = OnceLock::new();
+/// (benchmark, milliseconds) of every timed sample, in order.
+static RESULTS: Mutex<Vec<(String, f64)>> = Mutex::new(Vec::new());
+
+fn scale() -> Scale {
+    *SCALE.get().unwrap_or(&Scale::Tiny)
+}
+
+/// Milliseconds since the first call (the solver's clock).
+fn clock_ms() -> f64 {
+    START.get_or_init(Instant::now).elapsed().as_secs_f64() * 1e3
+}
+
+fn record(name: &str, ms: impl IntoIterator<Item = f64>) {
+    let mut r = RESULTS.lock().unwrap();
+    r.extend(ms.into_iter().map(|ms| (name.to_string(), ms)));
+}
+
+fn timed<T>(name: &str, f: impl FnOnce() -> T) -> T {
+    let t = clock_ms();
+    let out = f();
+    record(name, [clock_ms() - t]);
+    out
+}
+
+fn remesh_workload() -> &'static RemeshWorkload {
+    static W: OnceLock<RemeshWorkload> = OnceLock::new();
+    W.get_or_init(|| RemeshWorkload::new(scale()))
+}
+
+fn main() {
+    let bench_mode = std::env::args().any(|a| a == "--bench");
+    SCALE.set(if bench_mode { Scale::Full } else { Scale::Tiny }).unwrap();
+    clock_ms();
+    divan::main();
+    if bench_mode {
+        let results = RESULTS.lock().unwrap();
+        let mut names: Vec<&str> = Vec::new();
+        for (n, _) in results.iter() {
+            if !names.contains(&n.as_str()) {
+                names.push(n);
+            }
+        }
+        println!();
+        for name in names {
+            let ms: Vec<f64> = results.iter().filter(|(n, _)| n == name).map(|&(_, ms)| ms).collect();
+            println!("{}", result_line(name, &ms));
+        }
+    }
+}
+
+/// `jet_fit` on the ~100k-vertex dome.
+#[divan::bench(sample_count = JET_SAMPLES as u32, sample_size = 1)]
+fn jet_fit(bencher: Bencher) {
+    let w = JetWorkload::new(scale());
+    bencher.bench_local(|| timed("jet_fit", || w.run()));
+}
+
+/// One pliant remeshing round of the ~100k-triangle dome (fresh remesher per sample, not timed).
+#[divan::bench(args = [Sizing::Uniform, Sizing::Adaptive], sample_count = REMESH_SAMPLES as u32, sample_size = 1)]
+fn remesh_round(bencher: Bencher, sizing: Sizing) {
+    let w = remesh_workload();
+    let name = match sizing {
+        Sizing::Uniform => "remesh_round_uniform",
+        Sizing::Adaptive => "remesh_round_adaptive",
+    };
+    bencher.with_inputs(|| w.remesher(sizing)).bench_local_values(|mut r| {
+        timed(name, || RemeshWorkload::round(&mut r));
+        r // dropped outside the timing
+    });
+}
+
+/// `ANGLE_ITERATIONS_PER_SAMPLE` LM iterations from the initial point (divan times the whole
+/// call; the `bench` line is the median of the solver's per-iteration times).
+#[divan::bench(args = ANGLE_FACES, sample_count = ANGLE_SAMPLES as u32, sample_size = 1)]
+fn angle_iterations(bencher: Bencher, faces: usize) {
+    let w = AngleWorkload::new(faces, scale());
+    let mut problem = w.problem();
+    let mut solver = w.solver(Some(clock_ms));
+    w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
+    let name = format!("angle_iteration_{faces}");
+    bencher.bench_local(|| record(&name, w.sample(&mut problem, &mut solver)));
+}

@@ -1,0 +1,323 @@
+//! Benchmark workloads, shared by the native divan benches (`benches/pipeline.rs`, `cargo bench`)
+//! and the wasm runner in the browser (`tests/wasm_bench.rs`), so that both time exactly the same
+//! work. Everything is generated in code and deterministic.
+//!
+//! - `jet_fit`: [`jet_fit`] with default [`JetParams`] on the free-form dome sampled with about
+//!   100 000 vertices;
+//! - `remesh_round_uniform` / `remesh_round_adaptive`: one pliant remeshing round
+//!   ([`Remesher::round`], after [`Remesher::new`], which is not timed) of the dome with about
+//!   100 000 triangles, for the uniform field g = mean edge length of the reference and for the
+//!   adaptive field of the central spheres' influence zones ([`SizingField::from_curvature`]);
+//! - `angle_iteration_600` / `angle_iteration_6000`: single Levenberg–Marquardt iterations of the
+//!   angle-minimizing ST problem ([`st_angle::build_problem`], set up as [`st_angle::st_angle`]
+//!   does) on the dome remeshed uniformly to about 600 and 6000 faces. Each sample restarts from the
+//!   same initial point and runs [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations; the solver's own
+//!   per-iteration times (`SolverOptions::clock`) are the measurement.
+//!
+//! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
+
+use glam::DVec3;
+
+use crate::curvature::{jet_fit, CurvatureField, JetParams};
+use crate::export::closest::TriangleBvh;
+use crate::mesh::{Topology, TriMesh};
+use crate::remesh::pliant::Remesher;
+use crate::remesh::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
+use crate::samples;
+use crate::solver::{Problem, Solver, SolverOptions};
+use crate::sphere::Sphere;
+use crate::st_angle::{self, build_problem, initial_spheres, pack, FaceAdjacency, StAngleParams};
+
+/// A clock in milliseconds (`performance.now()` in the browser, an `Instant` natively).
+pub type Clock = fn() -> f64;
+
+/// Workload size: `Full` for benchmarking, `Tiny` to exercise the code quickly (`cargo test`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scale {
+    Full,
+    Tiny,
+}
+
+/// Dome rings for the jet-fit mesh: 1 + 3·182·183 = 99 919 vertices.
+pub const JET_RINGS: usize = 182;
+/// Dome rings for the remeshing reference: 6·129² = 99 846 triangles.
+pub const REMESH_RINGS: usize = 129;
+/// Relative tolerance ε of the adaptive sizing field (the app's default, 4e-4 of the diagonal).
+pub const ADAPTIVE_EPSILON: f64 = crate::remesh::DEFAULT_EPSILON;
+/// Target face counts of the angle-optimization benchmarks.
+pub const ANGLE_FACES: [usize; 2] = [600, 6000];
+/// LM iterations per angle-optimization sample (each sample restarts from the initial point).
+pub const ANGLE_ITERATIONS_PER_SAMPLE: usize = 5;
+
+/// The free-form dome with `rings` rings ([`samples::dome`]), `Tiny` → 8 rings.
+pub fn dome(rings: usize, scale: Scale) -> TriMesh {
+    samples::dome(match scale {
+        Scale::Full => rings,
+        Scale::Tiny => 8,
+    })
+}
+
+/// Median of `v` (NaN when empty).
+pub fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// The one-line result both runners print: `bench <name>: <ms> ms/iter (n=<samples>)`, the
+/// median over the samples.
+pub fn result_line(name: &str, samples_ms: &[f64]) -> String {
+    format!("bench {name}: {:.3} ms/iter (n={})", median(samples_ms), samples_ms.len())
+}
+
+/// Times `f` `n` times with `clock`, in milliseconds.
+pub fn time_n(clock: Clock, n: usize, mut f: impl FnMut()) -> Vec<f64> {
+    (0..n)
+        .map(|_| {
+            let t = clock();
+            f();
+            clock() - t
+        })
+        .collect()
+}
+
+// --- 1. jet fitting ------------------------------------------------------------------------------
+
+/// The jet-fit workload: mesh, topology, default parameters.
+pub struct JetWorkload {
+    pub mesh: TriMesh,
+    pub topo: Topology,
+    pub params: JetParams,
+}
+
+impl JetWorkload {
+    pub fn new(scale: Scale) -> Self {
+        let mesh = dome(JET_RINGS, scale);
+        let topo = Topology::new(&mesh);
+        Self { mesh, topo, params: JetParams::default() }
+    }
+
+    /// The timed work: one jet fit of every vertex.
+    pub fn run(&self) -> CurvatureField {
+        jet_fit(&self.mesh, &self.topo, &self.params, &mut |_, _| true).expect("jet fit")
+    }
+}
+
+// --- 2. one pliant remeshing round ---------------------------------------------------------------
+
+/// Which sizing field the remeshing round uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sizing {
+    /// g = the reference's mean edge length.
+    Uniform,
+    /// Influence zones of the reference's central spheres, ε = [`ADAPTIVE_EPSILON`].
+    Adaptive,
+}
+
+/// The remeshing workload: reference, sizing fields, default parameters.
+pub struct RemeshWorkload {
+    pub reference: TriMesh,
+    pub uniform: SizingField,
+    pub adaptive: SizingField,
+    pub params: RemeshParams,
+}
+
+impl RemeshWorkload {
+    /// Builds the reference and both sizing fields (the adaptive one needs a jet fit and the
+    /// influence zones: a few seconds at full scale).
+    pub fn new(scale: Scale) -> Self {
+        let reference = dome(REMESH_RINGS, scale);
+        let topo = Topology::new(&reference);
+        let uniform = SizingField::uniform(&reference, mean_edge_length(&reference, &topo));
+        let field = jet_fit(&reference, &topo, &JetParams::default(), &mut |_, _| true).expect("jet fit");
+        let adaptive = SizingField::from_curvature(&reference, &topo, &field, ADAPTIVE_EPSILON);
+        Self { reference, uniform, adaptive, params: RemeshParams::default() }
+    }
+
+    pub fn sizing(&self, sizing: Sizing) -> &SizingField {
+        match sizing {
+            Sizing::Uniform => &self.uniform,
+            Sizing::Adaptive => &self.adaptive,
+        }
+    }
+
+    /// Untimed setup of one sample: a fresh remesher on the reference.
+    pub fn remesher(&self, sizing: Sizing) -> Remesher<'_> {
+        Remesher::new(&self.reference, self.sizing(sizing), &self.params)
+    }
+
+    /// The timed work: one round.
+    pub fn round(remesher: &mut Remesher<'_>) -> RoundStats {
+        remesher.round()
+    }
+
+    /// Times `n` rounds, each on a fresh remesher (built and dropped outside the timing).
+    pub fn time_rounds(&self, sizing: Sizing, clock: Clock, n: usize) -> (Vec<f64>, RoundStats) {
+        let mut stats = RoundStats::default();
+        let ms = (0..n)
+            .map(|_| {
+                let mut r = self.remesher(sizing);
+                let t = clock();
+                stats = Self::round(&mut r);
+                let ms = clock() - t;
+                drop(r);
+                ms
+            })
+            .collect();
+        (ms, stats)
+    }
+}
+
+// --- 3. angle-optimization iterations -----------------------------------------------------------
+
+/// The angle-minimizing ST problem in the normalized frame, set up as [`st_angle::st_angle`] does
+/// (uniform remeshing to about `target_faces` faces, initial spheres from the central spheres of
+/// the remeshed mesh, boundary and feature vertices fixed), "angle" stage weights.
+pub struct AngleWorkload {
+    /// The reference scaled to diagonal 1, its BVH and unit vertex normals.
+    pub reference: TriMesh,
+    pub bvh: TriangleBvh,
+    pub normals: Vec<DVec3>,
+    /// The remeshed mesh, normalized frame.
+    pub mesh: TriMesh,
+    pub adjacency: FaceAdjacency,
+    /// The initial point (see [`st_angle::pack`]).
+    pub x0: Vec<f64>,
+    /// Fixed vertices.
+    pub fixed: Vec<usize>,
+    pub params: StAngleParams,
+}
+
+impl AngleWorkload {
+    pub fn new(target_faces: usize, scale: Scale) -> Self {
+        let target_faces = match scale {
+            Scale::Full => target_faces,
+            Scale::Tiny => 60,
+        };
+        let params = StAngleParams::default();
+        let reference = samples::Sample::Dome.mesh();
+        let sizing = SizingField::uniform_for_face_count(&reference, target_faces);
+        let remeshed = pliant_remesh(&reference, &sizing, &params.remesh, &mut |_, _| true).expect("remesh");
+        let rtopo = Topology::new(&remeshed);
+        let rfield = jet_fit(&remeshed, &rtopo, &params.jet, &mut |_, _| true).expect("jet fit");
+        let init = initial_spheres(&remeshed, &rfield.central_spheres);
+
+        let diag = reference.bbox_diagonal();
+        let (lo, hi) = reference.bbox();
+        let t = 0.5 * (lo + hi);
+        let scaled = |m: &TriMesh| TriMesh::new(m.positions.iter().map(|&p| (p - t) / diag).collect(), m.triangles.clone());
+        let nref = scaled(&reference);
+        let bvh = TriangleBvh::new(&nref);
+        let normals = nref.vertex_normals();
+        let mesh = scaled(&remeshed);
+        let adjacency = FaceAdjacency::new(&mesh);
+        let spheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
+        let x0 = pack(&mesh.positions, &spheres);
+
+        let nv = mesh.vertex_count();
+        let mut fixed = vec![false; nv];
+        for v in 0..nv {
+            fixed[v] |= params.fix_boundary && adjacency.boundary_vertex[v];
+        }
+        if params.fix_features {
+            let cos_max = params.remesh.feature_angle_deg.to_radians().cos();
+            for &(a, b, f, g) in &adjacency.interior {
+                let (nf, ng) = (mesh.face_area_vector(f).normalize_or_zero(), mesh.face_area_vector(g).normalize_or_zero());
+                if nf.dot(ng) < cos_max {
+                    fixed[a as usize] = true;
+                    fixed[b as usize] = true;
+                }
+            }
+        }
+        let fixed = (0..nv).filter(|&v| fixed[v]).collect();
+        Self { reference: nref, bvh, normals, mesh, adjacency, x0, fixed, params }
+    }
+
+    pub fn faces(&self) -> usize {
+        self.mesh.face_count()
+    }
+
+    /// The problem at the initial point with the fixed vertices fixed.
+    pub fn problem(&self) -> Problem<'_> {
+        let (mut problem, _ids) = build_problem(
+            &self.mesh,
+            &self.adjacency,
+            &self.reference,
+            &self.bvh,
+            &self.normals,
+            &self.params.weights,
+            &self.x0,
+        );
+        let nf = self.mesh.face_count();
+        for &v in &self.fixed {
+            let o = st_angle::vertex_offset(nf, v);
+            problem.fix_range(o..o + 3);
+        }
+        problem
+    }
+
+    /// A solver for [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations, timing each one with `clock`.
+    pub fn solver(&self, clock: Option<Clock>) -> Solver {
+        Solver::new(SolverOptions {
+            max_iterations: ANGLE_ITERATIONS_PER_SAMPLE,
+            initial_epsilon: self.params.initial_epsilon,
+            clock,
+            ..SolverOptions::default()
+        })
+    }
+
+    /// The timed work of one sample: [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations from the initial
+    /// point; returns the per-iteration times (empty without a clock).
+    pub fn sample(&self, problem: &mut Problem<'_>, solver: &mut Solver) -> Vec<f64> {
+        let mut x = self.x0.clone();
+        solver.solve(problem, &mut x, |_| true).iteration_ms
+    }
+
+    /// `n` samples; the per-iteration times of all of them. A first, untimed sample does the
+    /// symbolic analysis, which later samples reuse.
+    pub fn time_iterations(&self, clock: Clock, n: usize) -> Vec<f64> {
+        let mut problem = self.problem();
+        let mut solver = self.solver(Some(clock));
+        self.sample(&mut problem, &mut solver);
+        (0..n).flat_map(|_| self.sample(&mut problem, &mut solver)).collect()
+    }
+}
+
+// --- the whole suite, as the wasm runner runs it -------------------------------------------------
+
+/// Samples per benchmark for [`run_suite`] (the divan bench uses the same workloads).
+pub const JET_SAMPLES: usize = 5;
+pub const REMESH_SAMPLES: usize = 5;
+pub const ANGLE_SAMPLES: usize = 6;
+
+/// Runs every benchmark with `clock` and passes one [`result_line`] per benchmark to `out`, plus
+/// informational lines starting with `#`.
+pub fn run_suite(clock: Clock, scale: Scale, out: &mut dyn FnMut(&str)) {
+    let jet = JetWorkload::new(scale);
+    out(&format!("# jet_fit: {} vertices", jet.mesh.vertex_count()));
+    jet.run(); // warm-up
+    out(&result_line("jet_fit", &time_n(clock, JET_SAMPLES, || drop(jet.run()))));
+    drop(jet);
+
+    let remesh = RemeshWorkload::new(scale);
+    for (name, sizing) in [("remesh_round_uniform", Sizing::Uniform), ("remesh_round_adaptive", Sizing::Adaptive)] {
+        let (ms, st) = remesh.time_rounds(sizing, clock, REMESH_SAMPLES);
+        out(&format!("# {name}: {} faces, {st:?}", remesh.reference.face_count()));
+        out(&result_line(name, &ms));
+    }
+    drop(remesh);
+
+    for faces in ANGLE_FACES {
+        let w = AngleWorkload::new(faces, scale);
+        out(&format!("# angle_iteration_{faces}: {} faces, {} vertices", w.faces(), w.mesh.vertex_count()));
+        out(&result_line(&format!("angle_iteration_{faces}"), &w.time_iterations(clock, ANGLE_SAMPLES)));
+    }
+}
