@@ -347,24 +347,15 @@ impl HalfedgeMesh {
 
     /// Neighbours of `v` (targets of its outgoing halfedges, plus the last boundary neighbour).
     pub fn one_ring_into(&self, v: u32, out: &mut Vec<u32>) {
-        out.clear();
-        let start = self.vhe[v as usize];
-        if start == NONE {
-            return;
+        self.outgoing_into(v, out);
+        let Some(&last) = out.last() else { return };
+        let p = prev(last);
+        let boundary = self.twin[p as usize] == NONE;
+        for h in out.iter_mut() {
+            *h = self.to(*h);
         }
-        let mut h = start;
-        loop {
-            out.push(self.to(h));
-            let p = prev(h);
-            let t = self.twin[p as usize];
-            if t == NONE {
-                out.push(self.from(p));
-                break;
-            }
-            if t == start || out.len() > 1_000_000 {
-                break;
-            }
-            h = t;
+        if boundary {
+            out.push(self.from(p));
         }
     }
 
