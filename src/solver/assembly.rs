@@ -18,7 +18,9 @@ use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
 };
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use super::ordering::{BlockGraph, Ordering};
+use faer::perm::PermRef;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
 pub(crate) const NONE: u32 = u32::MAX;
@@ -110,6 +112,8 @@ pub(crate) fn weighted_energy(problem: &Problem, buf: &EvalBuffers) -> f64 {
 
 /// The cached normal-equation system for one sparsity pattern.
 pub(crate) struct System {
+    /// The ordering used (never `Auto`).
+    pub ordering: Ordering,
     // ---- identity of the pattern
     n_vars: usize,
     fixed: Vec<bool>,
@@ -186,7 +190,7 @@ impl System {
     }
 
     /// Builds the pattern, the maps and the symbolic factorization from an evaluation.
-    pub fn build(problem: &Problem, buf: &EvalBuffers) -> Self {
+    pub fn build(problem: &Problem, buf: &EvalBuffers, ordering: Ordering) -> Self {
         let n_vars = problem.num_variables();
         let fixed = problem.fixed_mask().to_vec();
         let m = buf.r.len();
@@ -311,26 +315,23 @@ impl System {
             }
         }
 
+        let groups = problem.variable_groups();
+        let group: Vec<u32> = free_to_var.iter().map(|&v| groups[v as usize]).collect();
         let a_sym = SymbolicSparseColMat::<u32>::new_checked(nf, nf, col_ptr, None, row_idx);
-        let (chol, l_len, mem) = if nf > 0 {
-            let chol = factorize_symbolic_cholesky(
-                a_sym.as_ref(),
-                Side::Upper,
-                SymmetricOrdering::Amd,
-                CholeskySymbolicParams::default(),
-            )
-            .expect("symbolic Cholesky analysis");
+        let (chol, l_len, mem, chosen) = if nf > 0 {
+            let (chol, chosen) = symbolic_with_ordering(a_sym.as_ref(), &group, ordering);
             let req = StackReq::or(
                 chol.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
                 chol.solve_in_place_scratch::<f64>(1, Par::Seq),
             );
             let l_len = chol.len_val();
-            (Some(chol), l_len, MemBuffer::new(req))
+            (Some(chol), l_len, MemBuffer::new(req), chosen)
         } else {
-            (None, 0, MemBuffer::new(StackReq::EMPTY))
+            (None, 0, MemBuffer::new(StackReq::EMPTY), ordering)
         };
 
         Self {
+            ordering: chosen,
             n_vars,
             fixed,
             rows: buf.rows.clone(),
@@ -450,6 +451,40 @@ impl System {
             stack,
         );
         delta.iter().all(|d| d.is_finite())
+    }
+}
+
+/// The symbolic Cholesky factorization of the upper pattern `a` with the requested ordering;
+/// `Auto` tries block AMD and nested dissection and keeps the one with fewer flops.
+fn symbolic_with_ordering(
+    a: SymbolicSparseColMatRef<'_, u32>,
+    group: &[u32],
+    ordering: Ordering,
+) -> (SymbolicCholesky<u32>, Ordering) {
+    let analyze = |ord: SymmetricOrdering<'_, u32>| {
+        factorize_symbolic_cholesky(a, Side::Upper, ord, CholeskySymbolicParams::default())
+            .expect("symbolic Cholesky analysis")
+    };
+    if ordering == Ordering::Amd {
+        return (analyze(SymmetricOrdering::Amd), Ordering::Amd);
+    }
+    let graph = BlockGraph::new(group, a.col_ptr(), a.row_idx());
+    let with_nodes = |nodes: Vec<u32>| {
+        let (fwd, inv) = graph.expand(&nodes);
+        analyze(SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, fwd.len())))
+    };
+    match ordering {
+        Ordering::BlockAmd => (with_nodes(graph.amd_order()), Ordering::BlockAmd),
+        Ordering::NestedDissection => (with_nodes(graph.nested_dissection_order()), Ordering::NestedDissection),
+        _ => {
+            let amd = with_nodes(graph.amd_order());
+            let nd = with_nodes(graph.nested_dissection_order());
+            if factor_flops(&nd) < factor_flops(&amd) {
+                (nd, Ordering::NestedDissection)
+            } else {
+                (amd, Ordering::BlockAmd)
+            }
+        }
     }
 }
 

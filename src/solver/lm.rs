@@ -1,7 +1,7 @@
 //! The Levenberg–Marquardt / guided-projection iteration, its options and reports.
 
 use super::assembly::{evaluate, weighted_energy, EvalBuffers, System};
-use super::Problem;
+use super::{Ordering, Problem};
 use serde::{Deserialize, Serialize};
 
 /// Solver settings. All tolerances are absolute unless stated.
@@ -28,6 +28,8 @@ pub struct SolverOptions {
     /// iteration is timed (`IterationReport::ms`, `SolveReport::iteration_ms`).
     #[serde(skip)]
     pub clock: Option<fn() -> f64>,
+    /// Fill-reducing ordering of the normal matrix (computed once per sparsity pattern).
+    pub ordering: Ordering,
 }
 
 impl Default for SolverOptions {
@@ -42,6 +44,7 @@ impl Default for SolverOptions {
             gradient_tolerance: 0.0,
             relative_decrease_tolerance: 1e-14,
             clock: None,
+            ordering: Ordering::BlockAmd,
         }
     }
 }
@@ -140,6 +143,8 @@ pub struct SolveReport {
     pub factor_nnz: usize,
     /// Whether faer chose the supernodal (else simplicial) factorization.
     pub supernodal: bool,
+    /// The fill-reducing ordering in use (never `Auto`).
+    pub ordering: Ordering,
     /// Σ c_j² over the columns of L: about the flops of one numeric factorization.
     pub factor_flops: f64,
     /// Per-iteration durations (when `SolverOptions::clock` is set).
@@ -269,6 +274,7 @@ impl Solver {
             normal_matrix_nnz: 0,
             factor_nnz: 0,
             supernodal: false,
+            ordering: opts.ordering,
             factor_flops: 0.0,
             iteration_ms: Vec::with_capacity(if clock.is_some() { opts.max_iterations } else { 0 }),
             phase_ms: PhaseTimes::default(),
@@ -281,7 +287,7 @@ impl Solver {
         if !self.system.as_ref().is_some_and(|s| s.matches(problem, &self.cur)) {
             let t = tick();
             self.system = None; // free the old pattern first
-            self.system = Some(System::build(problem, &self.cur));
+            self.system = Some(System::build(problem, &self.cur, opts.ordering));
             self.symbolic_analyses += 1;
             phase.symbolic += tick() - t;
         }
@@ -312,6 +318,7 @@ impl Solver {
             report.normal_matrix_nnz = sys.nnz();
             report.factor_nnz = sys.factor_nnz();
             report.supernodal = sys.is_supernodal();
+            report.ordering = sys.ordering;
             report.factor_flops = sys.factor_flops();
             report.phase_ms = phase;
             report
@@ -368,7 +375,7 @@ impl Solver {
                         // A term changed its structure: new pattern, new symbolic analysis.
                         let t = tick();
                         self.system = None;
-                        self.system = Some(System::build(problem, &self.cur));
+                        self.system = Some(System::build(problem, &self.cur, opts.ordering));
                         self.symbolic_analyses += 1;
                         phase.symbolic += tick() - t;
                     }

@@ -31,9 +31,11 @@
 mod assembly;
 mod check;
 mod lm;
+pub mod ordering;
 pub mod terms;
 
 pub use check::{check_jacobian, check_jacobian_report, JacobianCheck};
+pub use ordering::Ordering;
 pub use lm::{
     IterationReport, PhaseTimes, SolveReport, Solver, SolverOptions, TermStats, Termination,
 };
@@ -137,13 +139,15 @@ pub(crate) struct TermSlot<'a> {
 pub struct Problem<'a> {
     n_vars: usize,
     fixed: Vec<bool>,
+    /// Ordering group key per variable (see [`Problem::group_variables`]).
+    groups: Vec<u32>,
     pub(crate) terms: Vec<TermSlot<'a>>,
 }
 
 impl<'a> Problem<'a> {
     /// A problem over `n_vars` free variables and no terms.
     pub fn new(n_vars: usize) -> Self {
-        Self { n_vars, fixed: vec![false; n_vars], terms: Vec::new() }
+        Self { n_vars, fixed: vec![false; n_vars], groups: (0..n_vars as u32).collect(), terms: Vec::new() }
     }
 
     /// Appends `count` (auxiliary) variables and returns their index range.
@@ -151,7 +155,24 @@ impl<'a> Problem<'a> {
         let start = self.n_vars;
         self.n_vars += count;
         self.fixed.resize(self.n_vars, false);
+        self.groups.extend(start as u32..self.n_vars as u32);
         start..self.n_vars
+    }
+
+    /// Declares the variables of `range` one block (e.g. the 5 coefficients of a sphere, the 3
+    /// coordinates of a vertex): the fill-reducing ordering ([`Ordering`]) keeps them together
+    /// and orders blocks instead of variables. Only a hint: it changes the ordering, hence the
+    /// rounding, not the problem. Groups may not overlap (a later call wins).
+    pub fn group_variables(&mut self, range: Range<usize>) {
+        let key = range.start as u32;
+        for g in &mut self.groups[range] {
+            *g = key;
+        }
+    }
+
+    /// The ordering group key of every variable (equal keys = one block).
+    pub fn variable_groups(&self) -> &[u32] {
+        &self.groups
     }
 
     pub fn num_variables(&self) -> usize {
