@@ -53,13 +53,15 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::curvature::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE};
-use crate::export::closest::TriangleBvh;
+use crate::export::closest::{ClosestHit, TriangleBvh};
+use std::cell::RefCell;
+use std::rc::Rc;
 use crate::mesh::{Topology, TriMesh};
 use crate::panels::build_panels;
 use crate::remesh::{pliant_remesh, RemeshParams, SizingBounds, SizingField, DEFAULT_EPSILON};
 use crate::solver::{
-    InversiveProduct, JacobianSink, Linear, PointOnSphere, Problem, Solver, SolverOptions, Term, TermId,
-    TermStats, UnitLength,
+    InversiveProduct, IterationReport, JacobianSink, Linear, PhaseTimes, PointOnSphere, Problem, SolveReport, Solver,
+    SolverOptions, Term, TermId, TermStats, Termination, UnitLength,
 };
 use crate::sphere::Sphere;
 use crate::sphere_mesh::{BoundaryArcRule, SphereMesh};
@@ -268,9 +270,30 @@ const CANCELLED: &str = "cancelled";
 // ---------------------------------------------------------------------------------------------
 // Terms
 
+/// Closest reference points of the vertices, shared by the proximity terms so that each moved
+/// vertex is looked up once per evaluation point (see [`ReferenceProximity::share_closest_with`]).
+#[derive(Debug, Default)]
+struct ClosestCache {
+    /// Position each entry was computed for (NaN: never).
+    pos: Vec<DVec3>,
+    /// (closest point, interpolated unit normal).
+    hits: Vec<(DVec3, DVec3)>,
+}
+
+/// Closest point on the reference, searched only within the distance to `previous` (a point on
+/// the reference, so the closest one is at most that far): the same hit as an unbounded search,
+/// visiting a small part of the BVH.
+fn closest_near(bvh: &TriangleBvh, p: DVec3, previous: Option<DVec3>) -> Option<ClosestHit> {
+    previous
+        .and_then(|q| bvh.closest_point_within(p, p.distance(q) * (1.0 + 1e-9) + 1e-300))
+        .or_else(|| bvh.closest_point(p))
+}
+
 /// Proximity to the reference (Sec. 5.2): per vertex either the tangent-plane distance
 /// n·(v − q) (one residual) or the point distance v − q (three residuals, scaled per vertex),
 /// with (q, n) the closest reference point and its normal, refreshed in [`Term::prepare`].
+/// Vertices that did not move since the last lookup are not looked up again, and two terms
+/// over the same vertices can share their lookups ([`Self::share_closest_with`]).
 pub struct ReferenceProximity<'a> {
     name: String,
     bvh: &'a TriangleBvh,
@@ -283,6 +306,7 @@ pub struct ReferenceProximity<'a> {
     scales: Vec<f64>,
     point: bool,
     closest: Vec<(DVec3, DVec3)>,
+    cache: Rc<RefCell<ClosestCache>>,
 }
 
 impl<'a> ReferenceProximity<'a> {
@@ -312,6 +336,7 @@ impl<'a> ReferenceProximity<'a> {
         point: bool,
     ) -> Self {
         let n = offsets.len();
+        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n] };
         Self {
             name: name.into(),
             bvh,
@@ -321,7 +346,15 @@ impl<'a> ReferenceProximity<'a> {
             offsets,
             point,
             closest: vec![(DVec3::ZERO, DVec3::Z); n],
+            cache: Rc::new(RefCell::new(cache)),
         }
+    }
+
+    /// Shares the closest-point lookups with `other` (same reference and vertex offsets): the
+    /// first of the two to prepare at a point looks the moved vertices up, the other reuses them.
+    pub fn share_closest_with(&mut self, other: &Self) {
+        assert!(self.offsets == other.offsets && std::ptr::eq(self.bvh, other.bvh), "different vertices or reference");
+        self.cache = other.cache.clone();
     }
 
     /// Closest points and normals currently used.
@@ -342,20 +375,29 @@ impl Term for ReferenceProximity<'_> {
         }
     }
     fn prepare(&mut self, x: &[f64]) {
+        let mut cache = self.cache.borrow_mut();
+        let cache = &mut *cache;
         for (k, &o) in self.offsets.iter().enumerate() {
             let v = DVec3::new(x[o], x[o + 1], x[o + 2]);
             if !v.is_finite() {
                 continue;
             }
-            if let Some(hit) = self.bvh.closest_point(v) {
-                let t = self.triangles[hit.triangle];
-                let w = hit.barycentric;
-                let n = (w[0] * self.normals[t[0] as usize]
-                    + w[1] * self.normals[t[1] as usize]
-                    + w[2] * self.normals[t[2] as usize])
-                    .try_normalize()
-                    .unwrap_or(self.closest[k].1);
-                self.closest[k] = (hit.point, n);
+            if cache.pos[k] != v {
+                let previous = cache.pos[k].is_finite().then_some(cache.hits[k].0);
+                if let Some(hit) = closest_near(self.bvh, v, previous) {
+                    let t = self.triangles[hit.triangle];
+                    let w = hit.barycentric;
+                    let n = (w[0] * self.normals[t[0] as usize]
+                        + w[1] * self.normals[t[1] as usize]
+                        + w[2] * self.normals[t[2] as usize])
+                        .try_normalize()
+                        .unwrap_or(cache.hits[k].1);
+                    cache.hits[k] = (hit.point, n);
+                    cache.pos[k] = v;
+                }
+            }
+            if cache.pos[k] == v {
+                self.closest[k] = cache.hits[k];
             }
         }
     }
@@ -387,11 +429,20 @@ pub struct FaceProximity<'a> {
     /// (sphere offset, three vertex offsets) per face.
     faces: Vec<(usize, [usize; 3])>,
     targets: Vec<DVec3>,
+    /// Centroid each target was computed for (NaN: never).
+    centroids: Vec<DVec3>,
 }
 
 impl<'a> FaceProximity<'a> {
     pub fn new(bvh: &'a TriangleBvh, faces: Vec<(usize, [usize; 3])>, x: &[f64]) -> Self {
-        let mut t = Self { name: "face_distance".into(), bvh, targets: vec![DVec3::ZERO; faces.len()], faces };
+        let n = faces.len();
+        let mut t = Self {
+            name: "face_distance".into(),
+            bvh,
+            targets: vec![DVec3::ZERO; n],
+            centroids: vec![DVec3::NAN; n],
+            faces,
+        };
         t.prepare(x);
         t
     }
@@ -407,8 +458,13 @@ impl Term for FaceProximity<'_> {
     fn prepare(&mut self, x: &[f64]) {
         for (k, &(_, vs)) in self.faces.iter().enumerate() {
             let c = (v3(x, vs[0]) + v3(x, vs[1]) + v3(x, vs[2])) / 3.0;
-            if let Some(hit) = c.is_finite().then(|| self.bvh.closest_point(c)).flatten() {
+            if !c.is_finite() || c == self.centroids[k] {
+                continue;
+            }
+            let previous = self.centroids[k].is_finite().then_some(self.targets[k]);
+            if let Some(hit) = closest_near(self.bvh, c, previous) {
                 self.targets[k] = hit.point;
+                self.centroids[k] = c;
             }
         }
     }
@@ -595,6 +651,13 @@ pub fn build_problem<'a>(
     let nf = mesh.face_count();
     let nv = mesh.vertex_count();
     let mut problem = Problem::new(5 * nf + 3 * nv);
+    // Spheres and vertices are the blocks of the fill-reducing ordering.
+    for f in 0..nf {
+        problem.group_variables(sphere_offset(f)..sphere_offset(f) + 5);
+    }
+    for v in 0..nv {
+        problem.group_variables(vertex_offset(nf, v)..vertex_offset(nf, v) + 3);
+    }
     let pairs: Vec<(usize, usize)> = mesh
         .triangles
         .iter()
@@ -606,11 +669,12 @@ pub fn build_problem<'a>(
     let edge_pairs = adjacency.interior.iter().map(|&(_, _, f, g)| (sphere_offset(f), sphere_offset(g))).collect();
     let angle = problem.add_term(InversiveProduct::new(edge_pairs, 1.0).with_name("angle"), weights.angle);
     let offsets: Vec<usize> = (0..nv).map(|v| vertex_offset(nf, v)).collect();
-    let tangent_distance =
-        problem.add_term(ReferenceProximity::tangent(bvh, reference, normals, offsets.clone()), weights.tangent_distance);
     let scales = (0..nv).map(|v| if adjacency.boundary_vertex[v] { BOUNDARY_POINT_FACTOR } else { 1.0 }).collect();
-    let point_distance =
-        problem.add_term(ReferenceProximity::point(bvh, reference, normals, offsets, scales), weights.point_distance);
+    let tangent = ReferenceProximity::tangent(bvh, reference, normals, offsets.clone());
+    let mut point = ReferenceProximity::point(bvh, reference, normals, offsets, scales);
+    point.share_closest_with(&tangent);
+    let tangent_distance = problem.add_term(tangent, weights.tangent_distance);
+    let point_distance = problem.add_term(point, weights.point_distance);
     let face_items = (0..nf)
         .map(|f| (sphere_offset(f), mesh.triangles[f].map(|v| vertex_offset(nf, v as usize))))
         .collect();
@@ -814,6 +878,69 @@ pub fn check_central_spheres(mesh: &TriMesh, field: &CurvatureField, params: &St
     Ok(())
 }
 
+/// What [`run_stages`] did.
+#[derive(Clone, Debug, Default)]
+pub struct StageRun {
+    /// Solver iterations over all stages.
+    pub iterations: usize,
+    /// Per-iteration times (ms) when the solver has a clock.
+    pub iteration_ms: Vec<f64>,
+    /// Phase times summed over the stages (when the solver has a clock).
+    pub phase_ms: PhaseTimes,
+    /// Numeric factorizations over all stages.
+    pub numeric_factorizations: usize,
+    /// Whether the hook cancelled.
+    pub cancelled: bool,
+    /// The last stage's report.
+    pub last: Option<SolveReport>,
+}
+
+/// Runs the optimization stages of `params` on a problem from [`build_problem`] (weights set per
+/// stage, ε carried from stage to stage), starting at `x` (updated). `hook(stage, report)` is
+/// called after every iteration; returning false cancels.
+pub fn run_stages(
+    problem: &mut Problem,
+    ids: &StAngleTerms,
+    x: &mut [f64],
+    params: &StAngleParams,
+    solver: &mut Solver,
+    hook: &mut dyn FnMut(&str, &IterationReport) -> bool,
+) -> StageRun {
+    let mut run = StageRun::default();
+    let mut epsilon = params.initial_epsilon;
+    let w = &params.weights;
+    for stage in &params.stages {
+        if stage.iterations == 0 {
+            continue;
+        }
+        problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale);
+        problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale);
+        problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale);
+        problem.set_weight(ids.sphere, w.sphere * stage.sphere_scale);
+        problem.set_weight(ids.unit, w.unit * stage.sphere_scale);
+        solver.options.max_iterations = stage.iterations;
+        solver.options.initial_epsilon = epsilon;
+        let name = stage.name.as_str();
+        let report = solver.solve(problem, x, |rep| hook(name, rep));
+        run.iterations += report.iterations;
+        run.iteration_ms.extend_from_slice(&report.iteration_ms);
+        run.numeric_factorizations += report.numeric_factorizations;
+        let p = &report.phase_ms;
+        run.phase_ms.symbolic += p.symbolic;
+        run.phase_ms.evaluate += p.evaluate;
+        run.phase_ms.assemble += p.assemble;
+        run.phase_ms.factorize_solve += p.factorize_solve;
+        epsilon = report.epsilon.max(1e-6);
+        let cancelled = report.termination == Termination::Cancelled;
+        run.last = Some(report);
+        if cancelled {
+            run.cancelled = true;
+            break;
+        }
+    }
+    run
+}
+
 fn median(v: &[f64]) -> Option<f64> {
     if v.is_empty() {
         return None;
@@ -961,47 +1088,30 @@ pub fn st_angle(
         problem.fix_range(o..o + 3);
     }
     let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
-    let mut epsilon = params.initial_epsilon;
     let mut iteration = 0usize;
-    let mut iteration_ms = Vec::new();
-    let w = &params.weights;
-    for stage in &params.stages {
-        if stage.iterations == 0 {
-            continue;
-        }
-        problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale);
-        problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale);
-        problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale);
-        problem.set_weight(ids.sphere, w.sphere * stage.sphere_scale);
-        problem.set_weight(ids.unit, w.unit * stage.sphere_scale);
-        solver.options.max_iterations = stage.iterations;
-        solver.options.initial_epsilon = epsilon;
-        let name = stage.name.as_str();
-        let report = solver.solve(&mut problem, &mut x, |rep| {
-            iteration += 1;
-            let (verts, sph) = unpack(rep.x, nf, nv);
-            let verts: Vec<DVec3> = verts.iter().map(|&p| t + p * diag).collect();
-            let sph: Vec<Sphere> = sph.iter().map(|s| s.from_frame(t, diag).normalized()).collect();
-            let go = hook(StAngleEvent::Iteration {
-                stage: name,
-                iteration,
-                energy: rep.energy,
-                terms: rep.terms,
-                ms: rep.ms,
-                vertices: &verts,
-                spheres: &sph,
-            });
-            if !go {
-                cancelled = true;
-            }
-            go
+    let run = run_stages(&mut problem, &ids, &mut x, params, &mut solver, &mut |name, rep| {
+        iteration += 1;
+        let (verts, sph) = unpack(rep.x, nf, nv);
+        let verts: Vec<DVec3> = verts.iter().map(|&p| t + p * diag).collect();
+        let sph: Vec<Sphere> = sph.iter().map(|s| s.from_frame(t, diag).normalized()).collect();
+        let go = hook(StAngleEvent::Iteration {
+            stage: name,
+            iteration,
+            energy: rep.energy,
+            terms: rep.terms,
+            ms: rep.ms,
+            vertices: &verts,
+            spheres: &sph,
         });
-        iteration_ms.extend_from_slice(&report.iteration_ms);
-        epsilon = report.epsilon.max(1e-6);
-        if cancelled {
-            return Err(CANCELLED.into());
+        if !go {
+            cancelled = true;
         }
+        go
+    });
+    if cancelled {
+        return Err(CANCELLED.into());
     }
+    let iteration_ms = run.iteration_ms;
     problem.prepare(&x);
     let terms = problem.term_stats(&x);
     let (verts, sph) = unpack(&x, nf, nv);
