@@ -41,9 +41,10 @@
 //! containing n_f + n_g). Both cut curves pass through the edge's vertices but differ in between.
 //! **Gap measure**: for 33 points x₀ = p + t (q − p), t ∈ [0, 1], on the chord, the line
 //! x₀ + h w in the bisecting plane (w ⟂ edge) meets each sphere at h_f, h_g (root nearest 0);
-//! the gap is max |h_f − h_g| over the samples and edges (relative to the diagonal). The panel
-//! exports (`build_panels`) still use the intersection circles (variant (a) arcs); only the
-//! metric differs.
+//! the gap is max |h_f − h_g| over the samples and edges (relative to the diagonal). The panels
+//! and exports of variant (b) cut each sphere the same way
+//! ([`crate::panels::EdgeArcs::BisectingPlanes`]); `panels::arc_gaps` measures the same gap on
+//! the panels' own arcs.
 //!
 //! **Boundary arcs**: [`BoundaryArcRule::Parallel`]`(0)`: with a zero direction `build_panels`
 //! falls back to the plane through the edge and the sphere normal at its start, i.e. the plane
@@ -57,7 +58,7 @@ use crate::export::closest::{ClosestHit, TriangleBvh};
 use std::cell::RefCell;
 use std::rc::Rc;
 use crate::mesh::{Topology, TriMesh};
-use crate::panels::build_panels;
+use crate::panels::{build_panels_with, EdgeArcs};
 use crate::remesh::{pliant_remesh, RemeshParams, SizingBounds, SizingField, DEFAULT_EPSILON};
 use crate::solver::{
     InversiveProduct, IterationReport, JacobianSink, Linear, PhaseTimes, PointOnSphere, Problem, SolveReport, Solver,
@@ -81,6 +82,16 @@ pub enum StVariant {
     A,
     /// Spheres cut by the bisecting face planes (small gaps, reported).
     B,
+}
+
+impl StVariant {
+    /// The panel edges of the variant.
+    pub fn edge_arcs(self) -> EdgeArcs {
+        match self {
+            StVariant::A => EdgeArcs::Intersection,
+            StVariant::B => EdgeArcs::BisectingPlanes,
+        }
+    }
 }
 
 /// How the reference is remeshed first.
@@ -822,7 +833,7 @@ pub fn metrics(sm: &SphereMesh, reference: &TriMesh, variant: StVariant) -> StAn
         .collect();
     let mean = if kinks.is_empty() { 0.0 } else { kinks.iter().sum::<f64>() / kinks.len() as f64 };
     let max = kinks.iter().copied().fold(0.0, f64::max);
-    let panels = build_panels(sm, CHORD_TOLERANCE * diag);
+    let panels = build_panels_with(sm, CHORD_TOLERANCE * diag, variant.edge_arcs());
     let dist = crate::export::max_distance_to_reference(&panels, reference);
     let bvh = TriangleBvh::new(reference);
     let vdist = mesh.positions.iter().map(|&p| bvh.distance(p)).fold(0.0, f64::max) / diag;

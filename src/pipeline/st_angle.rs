@@ -11,7 +11,7 @@ use super::{snapshot, Sink};
 use crate::curvature::JetParams;
 use crate::export::{self, report::InputCounts, report::OutputCounts, Metrics, Report};
 use crate::mesh::{Topology, TriMesh};
-use crate::panels::{build_panels_with, EdgeArcs, Panel};
+use crate::panels::{build_panels_with, Panel};
 use crate::sphere_mesh::SphereMesh;
 use crate::st_angle::{
     project_spheres, st_angle, StAngleEvent, StAngleMetrics, StAngleParams, StAngleResult, StSizing, StVariant,
@@ -131,14 +131,6 @@ pub fn run(
     Ok((result, summary, files))
 }
 
-/// The panel edges of an edge variant (Fig. 12).
-pub fn edge_arcs(variant: StVariant) -> EdgeArcs {
-    match variant {
-        StVariant::A => EdgeArcs::Intersection,
-        StVariant::B => EdgeArcs::BisectingPlanes,
-    }
-}
-
 /// The boundary-arc rule of the method's sphere meshes.
 fn live_rule() -> crate::sphere_mesh::BoundaryArcRule {
     crate::sphere_mesh::BoundaryArcRule::Parallel(DVec3::ZERO)
@@ -169,7 +161,7 @@ pub fn mesh_fields(mesh: &TriMesh) -> Vec<Field> {
 
 /// A panel snapshot of the method's stage at `iteration`.
 pub fn send_panels(sink: &mut dyn Sink, sm: &SphereMesh, iteration: u32, chord_tolerance: f64, variant: StVariant) {
-    let fields = panel_fields(&build_panels_with(sm, chord_tolerance, edge_arcs(variant)));
+    let fields = panel_fields(&build_panels_with(sm, chord_tolerance, variant.edge_arcs()));
     sink.send(snapshot(STAGE, iteration, &fields), fields);
 }
 
@@ -190,7 +182,7 @@ pub fn export_result(
     radius_tolerance: f64,
 ) -> (Report, Vec<ExportFile>, Vec<Panel>) {
     let diag = result.diag;
-    let panels = build_panels_with(&result.sphere_mesh, CHORD_TOLERANCE * diag, edge_arcs(result.variant));
+    let panels = build_panels_with(&result.sphere_mesh, CHORD_TOLERANCE * diag, result.variant.edge_arcs());
     let schedule = export::build_schedule(&panels, reference, radius_tolerance * diag);
     let mut extras = serde_json::json!({});
     extras["method"] = "st".into();
