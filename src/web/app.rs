@@ -22,6 +22,24 @@ use crate::sphere_mesh::AbsoluteSphere;
 use crate::pipeline::protocol::{field, find, Field, FieldData, FromWorker, Progress, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 use crate::samples::Sample;
 
+/// How many frames' `ui` times are kept for the state's percentiles.
+const UI_TIMES: usize = 120;
+
+/// Milliseconds from the page's time origin.
+fn now_ms() -> f64 {
+    web_sys::window().and_then(|w| w.performance()).map_or(0.0, |p| p.now())
+}
+
+/// The q-quantile (nearest rank) of `values`; 0 when empty.
+fn percentile(values: &std::collections::VecDeque<f64>, q: f64) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
+}
+
 /// Viewport background, also reported to tests.
 pub const CLEAR_COLOR: Color32 = Color32::from_rgb(28, 30, 36);
 
@@ -143,6 +161,8 @@ pub struct App {
     generation: u64,
     backend: String,
     frames: u64,
+    /// Main-thread time of the last frames' `ui` (ms), newest last.
+    ui_ms: std::collections::VecDeque<f64>,
     drawn: bool,
     viewport: Rect,
     last_fragment: String,
@@ -219,6 +239,7 @@ impl App {
             generation: 0,
             backend,
             frames: 0,
+            ui_ms: std::collections::VecDeque::with_capacity(UI_TIMES),
             drawn: false,
             viewport: Rect::NOTHING,
             last_fragment: fragment,
@@ -631,6 +652,9 @@ impl App {
             "clear_color": [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],
             "viewport": [vp.min.x, vp.min.y, vp.width(), vp.height()],
             "worker_restarts": self.worker.as_ref().map_or(0, |w| w.restarts),
+            "ui_ms_median": percentile(&self.ui_ms, 0.5),
+            "ui_ms_p95": percentile(&self.ui_ms, 0.95),
+            "ui_ms_max": self.ui_ms.iter().copied().fold(0.0, f64::max),
             "selected_vertex": self.selected,
             "method": self.design.method.key(),
             "st_ready": self.loaded.as_ref().and_then(|l| l.st.as_ref()).is_some_and(|s| s.summary.is_some()),
@@ -1173,6 +1197,7 @@ impl App {
 
 impl eframe::App for App {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let started = now_ms();
         self.frames += 1;
         self.handle_messages();
         self.apply_link_if_changed();
@@ -1230,6 +1255,10 @@ impl eframe::App for App {
         let dragging = ui.input(|i| i.pointer.any_down());
         self.write_link(dragging);
         self.publish_state();
+        if self.ui_ms.len() == UI_TIMES {
+            self.ui_ms.pop_front();
+        }
+        self.ui_ms.push_back(now_ms() - started);
         if self.busy.is_some() || !self.drawn {
             ui.ctx().request_repaint();
         }
