@@ -23,6 +23,16 @@ static SCALE: OnceLock<Scale> = OnceLock::new();
 static START: OnceLock<Instant> = OnceLock::new();
 /// (benchmark, milliseconds) of every timed sample, in order.
 static RESULTS: Mutex<Vec<(String, f64)>> = Mutex::new(Vec::new());
+/// Informational lines (`# ...`, as the wasm runner prints them), one per benchmark.
+static INFO: Mutex<Vec<(String, String)>> = Mutex::new(Vec::new());
+
+fn info(name: &str, line: String) {
+    let mut i = INFO.lock().unwrap();
+    match i.iter_mut().find(|(n, _)| n == name) {
+        Some(e) => e.1 = line,
+        None => i.push((name.to_string(), line)),
+    }
+}
 
 fn scale() -> Scale {
     *SCALE.get().unwrap_or(&Scale::Tiny)
@@ -64,6 +74,9 @@ fn main() {
             }
         }
         println!();
+        for (_, line) in INFO.lock().unwrap().iter() {
+            println!("{line}");
+        }
         for name in names {
             let ms: Vec<f64> = results.iter().filter(|(n, _)| n == name).map(|&(_, ms)| ms).collect();
             println!("{}", result_line(name, &ms));
@@ -75,6 +88,7 @@ fn main() {
 #[divan::bench(sample_count = JET_SAMPLES as u32, sample_size = 1)]
 fn jet_fit(bencher: Bencher) {
     let w = JetWorkload::new(scale());
+    info("jet_fit", format!("# jet_fit: {} vertices", w.mesh.vertex_count()));
     bencher.bench_local(|| timed("jet_fit", || w.run()));
 }
 
@@ -87,7 +101,8 @@ fn remesh_round(bencher: Bencher, sizing: Sizing) {
         Sizing::Adaptive => "remesh_round_adaptive",
     };
     bencher.with_inputs(|| w.remesher(sizing)).bench_local_values(|mut r| {
-        timed(name, || RemeshWorkload::round(&mut r));
+        let st = timed(name, || RemeshWorkload::round(&mut r));
+        info(name, format!("# {name}: {} faces, {st:?}", w.reference.face_count()));
         r // dropped outside the timing
     });
 }
@@ -101,5 +116,6 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     let mut solver = w.solver(Some(clock_ms));
     w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
     let name = format!("angle_iteration_{faces}");
+    info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.mesh.vertex_count()));
     bencher.bench_local(|| record(&name, w.sample(&mut problem, &mut solver)));
 }

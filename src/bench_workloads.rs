@@ -42,8 +42,11 @@ pub enum Scale {
 pub const JET_RINGS: usize = 182;
 /// Dome rings for the remeshing reference: 6·129² = 99 846 triangles.
 pub const REMESH_RINGS: usize = 129;
-/// Relative tolerance ε of the adaptive sizing field (the app's default, 4e-4 of the diagonal).
-pub const ADAPTIVE_EPSILON: f64 = crate::remesh::DEFAULT_EPSILON;
+/// Relative tolerance ε of the adaptive sizing field. Not the app's default (4e-4, which asks
+/// for about 500 faces, so a round would mostly collapse): 2e-6 gives a field of about the
+/// reference's density (median g ≈ its mean edge length), so the round splits, collapses, flips
+/// and smooths at about 100k triangles.
+pub const ADAPTIVE_EPSILON: f64 = 2e-6;
 /// Target face counts of the angle-optimization benchmarks.
 pub const ANGLE_FACES: [usize; 2] = [600, 6000];
 /// LM iterations per angle-optimization sample (each sample restarts from the initial point).
@@ -299,17 +302,35 @@ pub const REMESH_SAMPLES: usize = 5;
 pub const ANGLE_SAMPLES: usize = 6;
 
 /// Runs every benchmark with `clock` and passes one [`result_line`] per benchmark to `out`, plus
-/// informational lines starting with `#`.
-pub fn run_suite(clock: Clock, scale: Scale, out: &mut dyn FnMut(&str)) {
+/// informational lines starting with `#`. Awaits `pause()` between benchmarks (the browser runner
+/// yields to the event loop there, so that the page stays responsive and the output streams).
+pub async fn run_suite<P, F>(clock: Clock, scale: Scale, out: &mut dyn FnMut(&str), pause: P)
+where
+    P: Fn() -> F,
+    F: std::future::Future<Output = ()>,
+{
     let jet = JetWorkload::new(scale);
     out(&format!("# jet_fit: {} vertices", jet.mesh.vertex_count()));
     jet.run(); // warm-up
-    out(&result_line("jet_fit", &time_n(clock, JET_SAMPLES, || drop(jet.run()))));
+    pause().await;
+    let mut ms = Vec::new();
+    for _ in 0..JET_SAMPLES {
+        ms.extend(time_n(clock, 1, || drop(jet.run())));
+        pause().await;
+    }
+    out(&result_line("jet_fit", &ms));
     drop(jet);
 
     let remesh = RemeshWorkload::new(scale);
+    pause().await;
     for (name, sizing) in [("remesh_round_uniform", Sizing::Uniform), ("remesh_round_adaptive", Sizing::Adaptive)] {
-        let (ms, st) = remesh.time_rounds(sizing, clock, REMESH_SAMPLES);
+        let (mut ms, mut st) = (Vec::new(), RoundStats::default());
+        for _ in 0..REMESH_SAMPLES {
+            let (m, s) = remesh.time_rounds(sizing, clock, 1);
+            ms.extend(m);
+            st = s;
+            pause().await;
+        }
         out(&format!("# {name}: {} faces, {st:?}", remesh.reference.face_count()));
         out(&result_line(name, &ms));
     }
@@ -318,6 +339,16 @@ pub fn run_suite(clock: Clock, scale: Scale, out: &mut dyn FnMut(&str)) {
     for faces in ANGLE_FACES {
         let w = AngleWorkload::new(faces, scale);
         out(&format!("# angle_iteration_{faces}: {} faces, {} vertices", w.faces(), w.mesh.vertex_count()));
-        out(&result_line(&format!("angle_iteration_{faces}"), &w.time_iterations(clock, ANGLE_SAMPLES)));
+        pause().await;
+        let mut problem = w.problem();
+        let mut solver = w.solver(Some(clock));
+        w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
+        pause().await;
+        let mut ms = Vec::new();
+        for _ in 0..ANGLE_SAMPLES {
+            ms.extend(w.sample(&mut problem, &mut solver));
+            pause().await;
+        }
+        out(&result_line(&format!("angle_iteration_{faces}"), &ms));
     }
 }
