@@ -2,6 +2,8 @@
 # Spherical Faces developer entry point.
 #   bash www/dev.sh serve   install what is missing, build the release wasm, serve on 127.0.0.1:8080
 #   bash www/dev.sh test    install what is missing, run native, wasm-pack and browser end-to-end tests
+#   bash www/dev.sh bench   native benches (cargo bench, divan) and the same workloads in release wasm in
+#                           headless Chromium, then a native-vs-wasm table (target/bench/)
 # Both are idempotent: installs are skipped when present, target/ is reused.
 # The install recipe is ../shared/toolchain.md: nothing is downloaded outside crates.io, npm and Debian.
 set -euo pipefail
@@ -126,10 +128,39 @@ cmd_test() {
   (cd tests/e2e && SF_DIST="$DIST" node --test --test-concurrency=1 *.test.mjs)
 }
 
+# Native (cargo bench, divan) and wasm (release, headless Chromium) runs of the workloads in
+# src/bench_workloads.rs; both print `bench <name>: <ms> ms/iter (n=..)` lines, compared here.
+cmd_bench() {
+  cmd_setup
+  apt_install chromium chromium-driver
+  local out="${CARGO_TARGET_DIR:-$ROOT/target}/bench"
+  mkdir -p "$out"
+  log "native benches: cargo bench --bench pipeline"
+  cargo bench --bench pipeline 2>&1 | tee "$out/native.txt"
+  log "wasm benches (release) in headless Chromium: tests/wasm_bench.rs"
+  WASM_BINDGEN_TEST_TIMEOUT="${WASM_BINDGEN_TEST_TIMEOUT:-1800}" \
+    wasm-pack test --release --headless --chrome --chromedriver /usr/bin/chromedriver . --test wasm_bench -- --nocapture \
+    2>&1 | tee "$out/wasm.txt"
+  local pat='bench [A-Za-z0-9_]+: [0-9.]+ ms/iter'
+  {
+    printf '%-24s %14s %14s %8s\n' benchmark "native ms/iter" "wasm ms/iter" wasm/nat
+    grep -oE "$pat" "$out/native.txt" | while read -r _ name ms _; do
+      name="${name%:}"
+      local w
+      w="$(grep -oE "bench $name: [0-9.]+ ms/iter" "$out/wasm.txt" | awk '{print $3}' | tail -1 || true)"
+      awk -v n="$name" -v a="$ms" -v b="${w:-nan}" \
+        'BEGIN { r = (b == "nan" || a == 0) ? "-" : sprintf("%.2f", b / a); printf "%-24s %14.3f %14s %8s\n", n, a, b, r }'
+    done
+    echo "load: $(uptime | sed 's/.*load average/load average/')  ($(nproc) cores)"
+  } | tee "$out/table.txt"
+  log "results in $out (native.txt, wasm.txt, table.txt)"
+}
+
 case "${1:-}" in
   setup) cmd_setup ;;
   build) cmd_setup; build_web "${2:-release}" ;;
   serve) cmd_serve ;;
   test) cmd_test ;;
-  *) echo "usage: bash www/dev.sh serve|test   (also: setup, build [release|dev])" >&2; exit 2 ;;
+  bench) cmd_bench ;;
+  *) echo "usage: bash www/dev.sh serve|test|bench   (also: setup, build [release|dev])" >&2; exit 2 ;;
 esac
