@@ -132,6 +132,9 @@ fn st_support_remeshes_first() {
     let faces = |r: &serde_json::Value| r["output"]["faces"].as_u64().unwrap();
     assert_eq!(rf["input"], rc["input"], "input counts are the reference's");
     assert!(faces(&rf) > faces(&rc), "smaller ε gives more faces: {} vs {}", faces(&rf), faces(&rc));
+    // g never goes below the reference's mean edge length: no faces finer than its facets.
+    let input_faces = rf["input"]["faces"].as_u64().unwrap();
+    assert!(faces(&rf) <= 3 * input_faces / 2, "{} faces from a {input_faces}-face reference", faces(&rf));
     assert!((200..450).contains(&faces(&ru)), "about 300 faces: {}", faces(&ru));
     assert_eq!(rc["metrics"]["remesh"]["Adaptive"]["epsilon"], 2e-3);
     for r in [&rf, &rc, &ru] {

@@ -9,7 +9,7 @@ use super::protocol::Field;
 use crate::absolute_sphere::Histogram;
 use crate::absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereParams};
 use crate::curvature::{jet_fit, CurvatureField, JetParams};
-use crate::remesh::{local_spheres_orthogonal, pliant_remesh, RemeshParams, SizingBounds, SizingField};
+use crate::remesh::{local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshParams, SizingBounds, SizingField};
 use crate::st_angle::StSizing;
 use crate::export::{self, report::InputCounts, report::OutputCounts, AbsoluteSphereReport, Metrics, Report, SupportGeometry};
 use crate::mesh::{Topology, TriMesh};
@@ -75,7 +75,9 @@ fn remeshed_reference(
             }
             let estimate = estimate_absolute_sphere(mesh, field, &AbsoluteSphereParams::default())?;
             let spheres = local_spheres_orthogonal(mesh, topo, &estimate.omega, LOCAL_SPHERE_POINTS);
-            let bounds = SizingBounds::for_mesh(mesh, topo);
+            // Faces finer than the reference's facets would fit its creases, not the surface.
+            let mut bounds = SizingBounds::for_mesh(mesh, topo);
+            bounds.g_min = mean_edge_length(mesh, topo).min(bounds.g_max);
             let sphere_of = |i: usize| spheres[i];
             let mut p = |done, total| progress("sizing", done, total);
             SizingField::from_sphere_fn(mesh, topo, &sphere_of, epsilon * mesh.bbox_diagonal(), bounds, &mut p)
