@@ -231,7 +231,7 @@ impl App {
             st_dirty: false,
             show_reference: false,
             show_envelope: false,
-            show_remeshed: true,
+            show_remeshed: false,
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -795,7 +795,7 @@ impl App {
                     self.run_method();
                 }
                 ui.checkbox(&mut self.show_reference, "show reference surface (sizing colours)");
-                ui.checkbox(&mut self.show_remeshed, "show remeshed triangulation");
+                ui.checkbox(&mut self.show_remeshed, "overlay the remeshed triangulation (before optimization)");
             }
             ui.separator();
             ui.strong("Display");
@@ -1079,7 +1079,8 @@ impl App {
                 }
                 (None, None) => {}
             }
-            if let Some(r) = a.remeshed.as_ref().filter(|_| self.show_remeshed) {
+            // The remeshed triangulation: alone until the first panels arrive, then on request.
+            if let Some(r) = a.remeshed.as_ref().filter(|_| self.show_remeshed || a.panels.is_none()) {
                 layers.push(Layer { geometry: Geometry::Mesh(r.clone()), model: id, style: Style::Lines { color: [0.95, 0.55, 0.20, 1.0] } });
             }
         }
