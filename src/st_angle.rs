@@ -62,7 +62,7 @@ use crate::panels::{build_panels_with, EdgeArcs};
 use crate::remesh::{pliant_remesh, RemeshParams, SizingBounds, SizingField, DEFAULT_EPSILON};
 use crate::solver::{
     InversiveProduct, IterationReport, JacobianSink, Linear, PhaseTimes, PointOnSphere, Problem, SolveReport, Solver,
-    SolverOptions, Term, TermId, TermStats, Termination, UnitLength,
+    Hinge, SolverOptions, Term, TermId, TermStats, Termination, UnitLength,
 };
 use crate::sphere::Sphere;
 use crate::sphere_mesh::{BoundaryArcRule, SphereMesh};
@@ -119,6 +119,8 @@ pub struct StAngleWeights {
     pub fairness: f64,
     /// Variant (a) option: edge circles orthogonal to the reference; 0 = off.
     pub edge_orthogonality: f64,
+    /// Barrier against folded faces ([`FaceOrientation`] under a hinge).
+    pub orientation: f64,
 }
 
 impl Default for StAngleWeights {
@@ -132,6 +134,7 @@ impl Default for StAngleWeights {
             face_distance: 100.0,
             fairness: 1.0,
             edge_orthogonality: 0.0,
+            orientation: 1000.0,
         }
     }
 }
@@ -491,6 +494,64 @@ impl Term for FaceProximity<'_> {
 
 /// Variant (a) option: the plane of the intersection circle of s_f and s_g (normal
 /// m = a_g b_f − a_f b_g) should contain the reference normal n_e at the edge, i.e. the edge
+/// Least oriented area a face keeps, as a fraction of its initial area ([`FaceOrientation`]).
+pub const MIN_AREA_FRACTION: f64 = 0.2;
+
+/// Face orientation (no folded panels while vertices glide): per face, the residual
+/// g = τ − ((b − a) × (c − a))·n / A₀ with n the face's initial unit normal and A₀ its initial
+/// |(b − a) × (c − a)|. Under [`Hinge`] it is the inequality "oriented area ≥ τ × initial area".
+pub struct FaceOrientation {
+    items: Vec<[usize; 3]>,
+    normals: Vec<DVec3>,
+    inv_areas: Vec<f64>,
+    tau: f64,
+}
+
+impl FaceOrientation {
+    /// `items`: the offsets of each face's three vertices in `x`, counter-clockwise.
+    pub fn new(items: Vec<[usize; 3]>, x: &[f64], tau: f64) -> Self {
+        let (mut normals, mut inv_areas) = (Vec::with_capacity(items.len()), Vec::with_capacity(items.len()));
+        for o in &items {
+            let [a, b, c] = o.map(|k| DVec3::new(x[k], x[k + 1], x[k + 2]));
+            let area = (b - a).cross(c - a);
+            let len = area.length();
+            normals.push(if len > 0.0 { area / len } else { DVec3::ZERO });
+            inv_areas.push(if len > 0.0 { 1.0 / len } else { 0.0 });
+        }
+        Self { items, normals, inv_areas, tau }
+    }
+}
+
+impl Term for FaceOrientation {
+    fn name(&self) -> &str {
+        "orientation"
+    }
+    fn residual_count(&self) -> usize {
+        self.items.len()
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, o) in self.items.iter().enumerate() {
+            let (n, inv) = (self.normals[k], self.inv_areas[k]);
+            if inv == 0.0 {
+                r[k] = -1.0; // a degenerate initial face has no orientation to keep
+                continue;
+            }
+            let [a, b, c] = o.map(|i| DVec3::new(x[i], x[i + 1], x[i + 2]));
+            let (u, w) = (b - a, c - a);
+            r[k] = self.tau - u.cross(w).dot(n) * inv;
+            // ∂/∂b (u × w)·n = w × n, ∂/∂c = n × u, ∂/∂a = −(both).
+            let db = -w.cross(n) * inv;
+            let dc = -n.cross(u) * inv;
+            let da = -(db + dc);
+            for (off, d) in [(o[0], da), (o[1], db), (o[2], dc)] {
+                for i in 0..3 {
+                    jac.add(k, off + i, d[i]);
+                }
+            }
+        }
+    }
+}
+
 /// circle is orthogonal to the reference: residual ⟨m, n_e⟩ / ℓ_e with ℓ_e = |m| at the
 /// initial state (a fixed scale, so the residual stays polynomial); n_e is refreshed in
 /// [`Term::prepare`] from the vertices' closest reference points.
@@ -567,6 +628,7 @@ pub struct StAngleTerms {
     pub face_distance: TermId,
     pub fairness: TermId,
     pub edge_orthogonality: Option<TermId>,
+    pub orientation: TermId,
 }
 
 /// Mesh connectivity used by the optimization.
@@ -704,6 +766,9 @@ pub fn build_problem<'a>(
         }
     }
     let fairness = problem.add_term(lap, weights.fairness);
+    let corners = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(nf, v as usize))).collect();
+    let orientation =
+        problem.add_term(Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"), weights.orientation);
     let edge_orthogonality = (weights.edge_orthogonality > 0.0).then(|| {
         let items: Vec<_> = adjacency
             .interior
@@ -717,7 +782,7 @@ pub fn build_problem<'a>(
             .collect();
         problem.add_term(EdgeOrthogonality::new(items, en, x), weights.edge_orthogonality)
     });
-    (problem, StAngleTerms { sphere, unit, angle, tangent_distance, point_distance, face_distance, fairness, edge_orthogonality })
+    (problem, StAngleTerms { sphere, unit, angle, tangent_distance, point_distance, face_distance, fairness, edge_orthogonality, orientation })
 }
 
 // ---------------------------------------------------------------------------------------------

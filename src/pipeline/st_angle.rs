@@ -202,6 +202,7 @@ pub fn export_result(
         ("variant", serde_json::json!(format!("{:?}", result.variant).to_lowercase())),
         ("distinct_radii", serde_json::json!(schedule.distinct_radii)),
         ("flipped_faces", serde_json::json!(m.flipped_faces)),
+        ("initial_flipped_faces", serde_json::json!(result.initial_metrics.flipped_faces)),
         ("max_vertex_distance_to_reference", serde_json::json!(m.max_vertex_distance_to_reference)),
         ("initial_mean_kink_angle_deg", serde_json::json!(result.initial_metrics.mean_kink_angle_deg)),
         ("initial_max_kink_angle_deg", serde_json::json!(result.initial_metrics.max_kink_angle_deg)),
