@@ -116,6 +116,6 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     let mut solver = w.solver(Some(clock_ms));
     w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
     let name = format!("angle_iteration_{faces}");
-    info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.mesh.vertex_count()));
+    info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
     bencher.bench_local(|| record(&name, w.sample(&mut problem, &mut solver)));
 }

@@ -16,17 +16,14 @@
 //!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
-use glam::DVec3;
 
 use crate::curvature::{jet_fit, CurvatureField, JetParams};
-use crate::export::closest::TriangleBvh;
 use crate::mesh::{Topology, TriMesh};
 use crate::remesh::pliant::Remesher;
 use crate::remesh::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
 use crate::samples;
 use crate::solver::{Problem, Solver, SolverOptions};
-use crate::sphere::Sphere;
-use crate::st_angle::{self, build_problem, initial_spheres, pack, FaceAdjacency, StAngleParams};
+use crate::st_angle::{initial_spheres, OptimizationFrame, StAngleParams};
 
 /// A clock in milliseconds (`performance.now()` in the browser, an `Instant` natively).
 pub type Clock = fn() -> f64;
@@ -185,17 +182,9 @@ impl RemeshWorkload {
 /// (uniform remeshing to about `target_faces` faces, initial spheres from the central spheres of
 /// the remeshed mesh, boundary and feature vertices fixed), "angle" stage weights.
 pub struct AngleWorkload {
-    /// The reference scaled to diagonal 1, its BVH and unit vertex normals.
-    pub reference: TriMesh,
-    pub bvh: TriangleBvh,
-    pub normals: Vec<DVec3>,
-    /// The remeshed mesh, normalized frame.
-    pub mesh: TriMesh,
-    pub adjacency: FaceAdjacency,
-    /// The initial point (see [`st_angle::pack`]).
-    pub x0: Vec<f64>,
-    /// Fixed vertices.
-    pub fixed: Vec<usize>,
+    /// The reference (the default dome) and the remeshed mesh in the optimization's frame, the
+    /// initial point and the fixed vertices.
+    pub frame: OptimizationFrame,
     pub params: StAngleParams,
 }
 
@@ -212,59 +201,17 @@ impl AngleWorkload {
         let rtopo = Topology::new(&remeshed);
         let rfield = jet_fit(&remeshed, &rtopo, &params.jet, &mut |_, _| true).expect("jet fit");
         let init = initial_spheres(&remeshed, &rfield.central_spheres);
-
-        let diag = reference.bbox_diagonal();
-        let (lo, hi) = reference.bbox();
-        let t = 0.5 * (lo + hi);
-        let scaled = |m: &TriMesh| TriMesh::new(m.positions.iter().map(|&p| (p - t) / diag).collect(), m.triangles.clone());
-        let nref = scaled(&reference);
-        let bvh = TriangleBvh::new(&nref);
-        let normals = nref.vertex_normals();
-        let mesh = scaled(&remeshed);
-        let adjacency = FaceAdjacency::new(&mesh);
-        let spheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
-        let x0 = pack(&mesh.positions, &spheres);
-
-        let nv = mesh.vertex_count();
-        let mut fixed = vec![false; nv];
-        for v in 0..nv {
-            fixed[v] |= params.fix_boundary && adjacency.boundary_vertex[v];
-        }
-        if params.fix_features {
-            let cos_max = params.remesh.feature_angle_deg.to_radians().cos();
-            for &(a, b, f, g) in &adjacency.interior {
-                let (nf, ng) = (mesh.face_area_vector(f).normalize_or_zero(), mesh.face_area_vector(g).normalize_or_zero());
-                if nf.dot(ng) < cos_max {
-                    fixed[a as usize] = true;
-                    fixed[b as usize] = true;
-                }
-            }
-        }
-        let fixed = (0..nv).filter(|&v| fixed[v]).collect();
-        Self { reference: nref, bvh, normals, mesh, adjacency, x0, fixed, params }
+        let frame = OptimizationFrame::new(&reference, &remeshed, &init, &params);
+        Self { frame, params }
     }
 
     pub fn faces(&self) -> usize {
-        self.mesh.face_count()
+        self.frame.mesh.face_count()
     }
 
     /// The problem at the initial point with the fixed vertices fixed.
     pub fn problem(&self) -> Problem<'_> {
-        let (mut problem, _ids) = build_problem(
-            &self.mesh,
-            &self.adjacency,
-            &self.reference,
-            &self.bvh,
-            &self.normals,
-            &self.params.weights,
-            &self.x0,
-        );
-        let nf = self.mesh.face_count();
-        for &v in &self.fixed {
-            let o = st_angle::vertex_offset(nf, v);
-            problem.fix_range(o..o + 3);
-        }
-        problem
+        self.frame.problem(&self.params.weights).0
     }
 
     /// A solver for [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations, timing each one with `clock`.
@@ -280,7 +227,7 @@ impl AngleWorkload {
     /// The timed work of one sample: [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations from the initial
     /// point; returns the per-iteration times (empty without a clock).
     pub fn sample(&self, problem: &mut Problem<'_>, solver: &mut Solver) -> Vec<f64> {
-        let mut x = self.x0.clone();
+        let mut x = self.frame.x0.clone();
         solver.solve(problem, &mut x, |_| true).iteration_ms
     }
 
@@ -338,7 +285,7 @@ where
 
     for faces in ANGLE_FACES {
         let w = AngleWorkload::new(faces, scale);
-        out(&format!("# angle_iteration_{faces}: {} faces, {} vertices", w.faces(), w.mesh.vertex_count()));
+        out(&format!("# angle_iteration_{faces}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
         pause().await;
         let mut problem = w.problem();
         let mut solver = w.solver(Some(clock));

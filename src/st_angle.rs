@@ -1031,6 +1031,78 @@ fn scaled(mesh: &TriMesh, t: DVec3, inv: f64) -> TriMesh {
     TriMesh::new(mesh.positions.iter().map(|&p| (p - t) * inv).collect(), mesh.triangles.clone())
 }
 
+/// The optimization in its normalized frame: the reference and the remeshed mesh moved by the
+/// reference's bbox centre `t` and scaled to diagonal 1, with the reference's BVH and normals,
+/// the initial point and the vertices `params` hard-fixes (boundary, feature curves).
+pub struct OptimizationFrame {
+    pub t: DVec3,
+    pub diag: f64,
+    pub reference: TriMesh,
+    pub bvh: TriangleBvh,
+    pub normals: Vec<DVec3>,
+    pub mesh: TriMesh,
+    pub adjacency: FaceAdjacency,
+    /// The initial point ([`pack`]).
+    pub x0: Vec<f64>,
+    /// Hard-fixed vertices.
+    pub fixed: Vec<usize>,
+}
+
+impl OptimizationFrame {
+    /// `init`: one face sphere per face of `remeshed`, model coordinates.
+    pub fn new(reference: &TriMesh, remeshed: &TriMesh, init: &[Sphere], params: &StAngleParams) -> Self {
+        let diag = reference.bbox_diagonal();
+        let (lo, hi) = reference.bbox();
+        let t = 0.5 * (lo + hi);
+        let nref = scaled(reference, t, 1.0 / diag);
+        let bvh = TriangleBvh::new(&nref);
+        let normals = nref.vertex_normals();
+        let mesh = scaled(remeshed, t, 1.0 / diag);
+        let adjacency = FaceAdjacency::new(&mesh);
+        let spheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
+        let x0 = pack(&mesh.positions, &spheres);
+        let nv = mesh.vertex_count();
+        let mut fixed = vec![false; nv];
+        if params.fix_boundary {
+            for v in 0..nv {
+                fixed[v] |= adjacency.boundary_vertex[v];
+            }
+        }
+        if params.fix_features {
+            let cos_max = params.remesh.feature_angle_deg.to_radians().cos();
+            for &(a, b, f, g) in &adjacency.interior {
+                let (nf, ng) = (mesh.face_area_vector(f).normalize_or_zero(), mesh.face_area_vector(g).normalize_or_zero());
+                if nf.dot(ng) < cos_max {
+                    fixed[a as usize] = true;
+                    fixed[b as usize] = true;
+                }
+            }
+        }
+        let fixed = (0..nv).filter(|&v| fixed[v]).collect();
+        Self { t, diag, reference: nref, bvh, normals, mesh, adjacency, x0, fixed }
+    }
+
+    /// [`build_problem`] at the initial point, with the fixed vertices fixed.
+    pub fn problem(&self, weights: &StAngleWeights) -> (Problem<'_>, StAngleTerms) {
+        let (mut problem, ids) =
+            build_problem(&self.mesh, &self.adjacency, &self.reference, &self.bvh, &self.normals, weights, &self.x0);
+        let nf = self.mesh.face_count();
+        for &v in &self.fixed {
+            let o = vertex_offset(nf, v);
+            problem.fix_range(o..o + 3);
+        }
+        (problem, ids)
+    }
+
+    /// Vertices and face spheres of `x`, in model coordinates.
+    pub fn to_model(&self, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
+        let (verts, sph) = unpack(x, self.mesh.face_count(), self.mesh.vertex_count());
+        let verts = verts.iter().map(|&p| self.t + p * self.diag).collect();
+        let sph = sph.iter().map(|s| s.from_frame(self.t, self.diag).normalized()).collect();
+        (verts, sph)
+    }
+}
+
 /// The angle-minimizing ST method end to end (see the module docs).
 pub fn st_angle(
     reference: &TriMesh,
@@ -1130,46 +1202,14 @@ pub fn st_angle(
         return Err(CANCELLED.into());
     }
     let t0 = now();
-    let (lo, hi) = reference.bbox();
-    let t = 0.5 * (lo + hi);
-    let inv = 1.0 / diag;
-    let nref = scaled(reference, t, inv);
-    let bvh = TriangleBvh::new(&nref);
-    let ref_normals: Vec<DVec3> = nref.vertex_normals();
-    let nmesh = scaled(&remeshed, t, inv);
-    let nf = nmesh.face_count();
-    let nv = nmesh.vertex_count();
-    let adjacency = FaceAdjacency::new(&nmesh);
-    let nspheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
-    let mut x = pack(&nmesh.positions, &nspheres);
-    let (mut problem, ids) = build_problem(&nmesh, &adjacency, &nref, &bvh, &ref_normals, &params.weights, &x);
-    let mut fixed = vec![false; nv];
-    if params.fix_boundary {
-        for v in 0..nv {
-            fixed[v] |= adjacency.boundary_vertex[v];
-        }
-    }
-    if params.fix_features {
-        let cos_max = params.remesh.feature_angle_deg.to_radians().cos();
-        for &(a, b, f, g) in &adjacency.interior {
-            let (nf_, ng_) = (nmesh.face_area_vector(f).normalize_or_zero(), nmesh.face_area_vector(g).normalize_or_zero());
-            if nf_.dot(ng_) < cos_max {
-                fixed[a as usize] = true;
-                fixed[b as usize] = true;
-            }
-        }
-    }
-    for v in (0..nv).filter(|&v| fixed[v]) {
-        let o = vertex_offset(nf, v);
-        problem.fix_range(o..o + 3);
-    }
+    let frame = OptimizationFrame::new(reference, &remeshed, &init, params);
+    let mut x = frame.x0.clone();
+    let (mut problem, ids) = frame.problem(&params.weights);
     let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
     let mut iteration = 0usize;
     let run = run_stages(&mut problem, &ids, &mut x, params, &mut solver, &mut |name, rep| {
         iteration += 1;
-        let (verts, sph) = unpack(rep.x, nf, nv);
-        let verts: Vec<DVec3> = verts.iter().map(|&p| t + p * diag).collect();
-        let sph: Vec<Sphere> = sph.iter().map(|s| s.from_frame(t, diag).normalized()).collect();
+        let (verts, sph) = frame.to_model(rep.x);
         let go = hook(StAngleEvent::Iteration {
             stage: name,
             iteration,
@@ -1190,9 +1230,8 @@ pub fn st_angle(
     let iteration_ms = run.iteration_ms;
     problem.prepare(&x);
     let terms = problem.term_stats(&x);
-    let (verts, sph) = unpack(&x, nf, nv);
-    let mesh_out = TriMesh::new(verts.iter().map(|&p| t + p * diag).collect(), remeshed.triangles.clone());
-    let sph: Vec<Sphere> = sph.iter().map(|s| s.from_frame(t, diag).normalized()).collect();
+    let (verts, sph) = frame.to_model(&x);
+    let mesh_out = TriMesh::new(verts, remeshed.triangles.clone());
     // Exact incidence: the pencil member closest to each optimized sphere.
     let face_spheres = project_spheres(&mesh_out, &sph);
     let sphere_mesh = SphereMesh { mesh: mesh_out, face_spheres, boundary_arcs: rule };

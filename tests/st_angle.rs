@@ -297,7 +297,7 @@ fn report_has_the_st_schema() {
 fn profile_optimization() {
     use spherical_faces::remesh::{pliant_remesh, SizingField};
     use spherical_faces::solver::{Ordering, Solver, SolverOptions};
-    use spherical_faces::st_angle::{project_spheres, run_stages, unpack, vertex_offset};
+    use spherical_faces::st_angle::{project_spheres, run_stages, unpack, OptimizationFrame};
     let cases = std::env::var("ST_ANGLE_CASES").unwrap_or_else(|_| "tri_mesh:600,dome:600,dome:6000".into());
     let repeats: usize = std::env::var("ST_ANGLE_REPEATS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
     for case in cases.split(',') {
@@ -309,31 +309,10 @@ fn profile_optimization() {
         let remeshed = pliant_remesh(&reference, &sizing, &params.remesh, &mut |_, _| true).unwrap();
         let rfield = jet_fit(&remeshed, &Topology::new(&remeshed), &params.jet, &mut |_, _| true).unwrap();
         let init = initial_spheres(&remeshed, &rfield.central_spheres);
-        let diag = reference.bbox_diagonal();
-        let (lo, hi) = reference.bbox();
-        let t = 0.5 * (lo + hi);
-        let scaled = |m: &TriMesh| TriMesh::new(m.positions.iter().map(|&p| (p - t) / diag).collect(), m.triangles.clone());
-        let nref = scaled(&reference);
-        let bvh = TriangleBvh::new(&nref);
-        let normals = nref.vertex_normals();
-        let mesh = scaled(&remeshed);
-        let adjacency = FaceAdjacency::new(&mesh);
-        let spheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
-        let x0 = pack(&mesh.positions, &spheres);
+        let frame = OptimizationFrame::new(&reference, &remeshed, &init, &params);
+        let (mesh, adjacency, x0) = (&frame.mesh, &frame.adjacency, &frame.x0);
         let (nf, nv) = (mesh.face_count(), mesh.vertex_count());
-        let (mut problem, ids) = build_problem(&mesh, &adjacency, &nref, &bvh, &normals, &params.weights, &x0);
-        let cos_max = params.remesh.feature_angle_deg.to_radians().cos();
-        let mut fixed = adjacency.boundary_vertex.clone();
-        for &(a, b, f, g) in &adjacency.interior {
-            if mesh.face_area_vector(f).normalize_or_zero().dot(mesh.face_area_vector(g).normalize_or_zero()) < cos_max {
-                fixed[a as usize] = true;
-                fixed[b as usize] = true;
-            }
-        }
-        for v in (0..nv).filter(|&v| fixed[v]) {
-            let o = vertex_offset(nf, v);
-            problem.fix_range(o..o + 3);
-        }
+        let (mut problem, ids) = frame.problem(&params.weights);
         let ordering = match std::env::var("ST_ANGLE_ORDERING").as_deref() {
             Ok("amd") => Ordering::Amd,
             Ok("block_amd") => Ordering::BlockAmd,
