@@ -110,6 +110,14 @@ impl Report {
         Self { method: method.into(), ..Self::default() }
     }
 
+    /// A report of `method` with the counts of the reference, the sphere mesh and its panels.
+    pub fn for_panels(method: &str, reference: &crate::mesh::TriMesh, output: &crate::mesh::TriMesh, panels: usize) -> Self {
+        let mut r = Self::new(method);
+        r.input = InputCounts { vertices: reference.vertex_count(), faces: reference.face_count() };
+        r.output = OutputCounts { vertices: output.vertex_count(), faces: output.face_count(), panels };
+        r
+    }
+
     /// Records a stage time (ms); a repeated stage adds up.
     pub fn add_timing(&mut self, stage: impl Into<String>, ms: f64) {
         *self.timings_ms.entry(stage.into()).or_insert(0.0) += ms;

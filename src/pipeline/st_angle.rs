@@ -9,7 +9,7 @@ use super::protocol::{field, Energy, Field, FromWorker, Progress};
 use super::st_support::{f32s, panel_fields, panel_files, ExportFile};
 use super::{snapshot, Sink};
 use crate::curvature::JetParams;
-use crate::export::{self, report::InputCounts, report::OutputCounts, Metrics, Report};
+use crate::export::{self, Metrics, Report};
 use crate::mesh::{Topology, TriMesh};
 use crate::panels::{build_panels_with, Panel};
 use crate::sphere_mesh::SphereMesh;
@@ -190,13 +190,7 @@ pub fn export_result(
     let glb = export::write_glb(&panels, None, None, extras);
     let obj = export::write_obj(&panels, None, None);
     let m = &result.metrics;
-    let mut report = Report::new("st");
-    report.input = InputCounts { vertices: reference.vertex_count(), faces: reference.face_count() };
-    report.output = OutputCounts {
-        vertices: result.sphere_mesh.mesh.vertex_count(),
-        faces: result.sphere_mesh.mesh.face_count(),
-        panels: panels.len(),
-    };
+    let mut report = Report::for_panels("st", reference, &result.sphere_mesh.mesh, panels.len());
     let mut extra: std::collections::BTreeMap<String, serde_json::Value> = [
         ("angle_iterations", serde_json::json!(result.iterations)),
         ("variant", serde_json::json!(format!("{:?}", result.variant).to_lowercase())),

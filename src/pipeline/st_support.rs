@@ -11,7 +11,7 @@ use crate::absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereParams};
 use crate::curvature::{jet_fit, CurvatureField, JetParams};
 use crate::remesh::{local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshParams, SizingBounds, SizingField};
 use crate::st_angle::StSizing;
-use crate::export::{self, report::InputCounts, report::OutputCounts, AbsoluteSphereReport, Metrics, Report, SupportGeometry};
+use crate::export::{self, AbsoluteSphereReport, Metrics, Report, SupportGeometry};
 use crate::mesh::{Topology, TriMesh};
 use crate::panels::{build_panels, sphere_normal, Panel};
 use crate::sphere_mesh::AbsoluteSphere;
@@ -188,13 +188,7 @@ pub fn run(
     let export_ms = now() - t;
 
     let m = &result.metrics;
-    let mut report = Report::new("st-support");
-    report.input = InputCounts { vertices: mesh.vertex_count(), faces: mesh.face_count() };
-    report.output = OutputCounts {
-        vertices: result.sphere_mesh.mesh.vertex_count(),
-        faces: result.sphere_mesh.mesh.face_count(),
-        panels: panels.len(),
-    };
+    let mut report = Report::for_panels("st-support", mesh, &result.sphere_mesh.mesh, panels.len());
     report.absolute_sphere = Some(AbsoluteSphereReport::from(&result.omega));
     report.metrics = Metrics {
         max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
