@@ -12,6 +12,7 @@ use spherical_faces::st_support::{native_clock_ms, Clock};
 
 const USAGE: &str = "usage:
   spherical-faces info <mesh.obj|.gltf|.glb>
+      <mesh> is a file or sample:NAME, a built-in sample (dome, torus, sphere-cap, wave-roof).
   spherical-faces st-support <mesh> [--optimize-radius] [--depth D] [--axis-length L]
                              [--radius-tolerance T] [--adaptive --epsilon E | --faces N] --out DIR
       ST mesh with support structure (paper Sec. 4). Writes DIR/panels.glb, panels.obj,
@@ -55,11 +56,35 @@ fn finish(result: Result<String, String>) -> ExitCode {
     }
 }
 
-/// Reads a mesh the way the app does; the error names the file.
+/// Reads a mesh the way the app does; the error names the file. `sample:NAME` is a built-in
+/// sample (the app's sample menu: dome, torus, sphere-cap, wave-roof).
 fn read_mesh(path: &str) -> Result<spherical_faces::import::Imported, String> {
+    if let Some(key) = path.strip_prefix("sample:") {
+        return sample_mesh(key);
+    }
     let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
     let name = std::path::Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
     import_mesh(&bytes, &name).map_err(|e| e.to_string())
+}
+
+/// A built-in sample as if imported.
+fn sample_mesh(key: &str) -> Result<spherical_faces::import::Imported, String> {
+    use spherical_faces::samples::Sample;
+    let sample = Sample::from_key(key).ok_or_else(|| {
+        let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
+        format!("sample:{key}: no such sample (samples: {})", names.join(", "))
+    })?;
+    let mesh = sample.mesh();
+    let stats = Topology::new(&mesh).stats(&mesh);
+    Ok(spherical_faces::import::Imported {
+        source_polygons: mesh.face_count(),
+        mesh,
+        stats,
+        format: spherical_faces::import::Format::Obj,
+        merged_vertices: 0,
+        dropped_faces: 0,
+        notes: Vec::new(),
+    })
 }
 
 /// `st-support <mesh> [options] --out DIR`: writes the panel files and report.json.

@@ -153,3 +153,15 @@ fn st_support_remeshes_first() {
         assert_eq!(String::from_utf8_lossy(&out.stderr).trim_end().lines().count(), 1);
     }
 }
+
+#[test]
+fn built_in_samples_are_inputs() {
+    let out = run(&["info", "sample:torus"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["faces"].as_u64().unwrap() > 1000);
+    let out = run(&["info", "sample:nope"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("dome") && err.contains("wave-roof"), "{err}");
+}
