@@ -9,21 +9,27 @@
 //!   100 000 triangles, for the uniform field g = mean edge length of the reference and for the
 //!   adaptive field of the central spheres' influence zones ([`SizingField::from_curvature`]);
 //! - `angle_iteration_600` / `angle_iteration_6000`: single Levenberg–Marquardt iterations of the
-//!   angle-minimizing ST problem ([`st_angle::build_problem`], set up as [`st_angle::st_angle`]
-//!   does) on the dome remeshed uniformly to about 600 and 6000 faces. Each sample restarts from the
+//!   angle-minimizing ST problem (`st_adapted::terms::build_problem`, set up as
+//!   `st_adapted::compute` does) on the dome remeshed uniformly to about 600 and 6000 faces. Each sample restarts from the
 //!   same initial point and runs [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations; the solver's own
 //!   per-iteration times (`SolverOptions::clock`) are the measurement.
 //!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
 
-use crate::curvature::{jet_fit, CurvatureField, JetParams};
-use crate::mesh::{Topology, TriMesh};
-use crate::remesh::pliant::Remesher;
-use crate::remesh::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
+use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
+use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
+use crate::progress::ignore;
+use crate::reference::Reference;
+use crate::remeshing::pliant::Remesher;
+use crate::remeshing::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
 use crate::samples;
 use crate::solver::{Problem, Solver, SolverOptions};
-use crate::st_angle::{initial_spheres, OptimizationFrame, StAngleParams};
+use crate::st_adapted::initialization::initial_spheres;
+use crate::st_adapted::optimization::OptimizationFrame;
+use crate::st_adapted::params::StAdaptedParams;
+use crate::stats;
 
 /// A clock in milliseconds (`performance.now()` in the browser, an `Instant` natively).
 pub type Clock = fn() -> f64;
@@ -59,17 +65,7 @@ pub fn dome(rings: usize, scale: Scale) -> TriMesh {
 
 /// Median of `v` (NaN when empty).
 pub fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
+    stats::median(v).unwrap_or(f64::NAN)
 }
 
 /// The one-line result both runners print: `bench <name>: <ms> ms/iter (n=<samples>)`, the
@@ -107,7 +103,7 @@ impl JetWorkload {
 
     /// The timed work: one jet fit of every vertex.
     pub fn run(&self) -> CurvatureField {
-        jet_fit(&self.mesh, &self.topo, &self.params, &mut |_, _| true).expect("jet fit")
+        jet_fit(&self.mesh, &self.topo, &self.params, &mut ignore).expect("jet fit")
     }
 }
 
@@ -137,7 +133,7 @@ impl RemeshWorkload {
         let reference = dome(REMESH_RINGS, scale);
         let topo = Topology::new(&reference);
         let uniform = SizingField::uniform(&reference, mean_edge_length(&reference, &topo));
-        let field = jet_fit(&reference, &topo, &JetParams::default(), &mut |_, _| true).expect("jet fit");
+        let field = jet_fit(&reference, &topo, &JetParams::default(), &mut ignore).expect("jet fit");
         let adaptive = SizingField::from_curvature(&reference, &topo, &field, ADAPTIVE_EPSILON);
         Self { reference, uniform, adaptive, params: RemeshParams::default() }
     }
@@ -178,14 +174,14 @@ impl RemeshWorkload {
 
 // --- 3. angle-optimization iterations -----------------------------------------------------------
 
-/// The angle-minimizing ST problem in the normalized frame, set up as [`st_angle::st_angle`] does
+/// The angle-minimizing ST problem in the normalized frame, set up as `st_adapted::compute` does
 /// (uniform remeshing to about `target_faces` faces, initial spheres from the central spheres of
 /// the remeshed mesh, boundary and feature vertices fixed), "angle" stage weights.
 pub struct AngleWorkload {
     /// The reference (the default dome) and the remeshed mesh in the optimization's frame, the
     /// initial point and the fixed vertices.
     pub frame: OptimizationFrame,
-    pub params: StAngleParams,
+    pub params: StAdaptedParams,
 }
 
 impl AngleWorkload {
@@ -194,12 +190,12 @@ impl AngleWorkload {
             Scale::Full => target_faces,
             Scale::Tiny => 60,
         };
-        let params = StAngleParams::default();
-        let reference = samples::Sample::Dome.mesh();
-        let sizing = SizingField::uniform_for_face_count(&reference, target_faces);
-        let remeshed = pliant_remesh(&reference, &sizing, &params.remesh, &mut |_, _| true).expect("remesh");
+        let params = StAdaptedParams::default();
+        let reference = Reference::from_triangles(samples::Sample::Dome.mesh());
+        let sizing = SizingField::uniform_for_face_count(reference.mesh(), target_faces);
+        let remeshed = pliant_remesh(reference.mesh(), &sizing, &params.remesh, &mut ignore).expect("remesh");
         let rtopo = Topology::new(&remeshed);
-        let rfield = jet_fit(&remeshed, &rtopo, &params.jet, &mut |_, _| true).expect("jet fit");
+        let rfield = jet_fit(&remeshed, &rtopo, &params.jet, &mut ignore).expect("jet fit");
         let init = initial_spheres(&remeshed, &rfield.central_spheres);
         let frame = OptimizationFrame::new(&reference, &remeshed, &init, &params);
         Self { frame, params }

@@ -2,13 +2,18 @@
 
 use std::process::ExitCode;
 
-use spherical_faces::curvature::{jet_fit, JetParams};
+use spherical_faces::congruence::central_spheres::JetParams;
+use spherical_faces::export::ExportFile;
+use spherical_faces::geometry::mesh::Face;
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::import::import_mesh;
-use spherical_faces::mesh::Topology;
-use spherical_faces::pipeline::st_support::{self, StSupportRequest};
-use spherical_faces::remesh::DEFAULT_EPSILON;
-use spherical_faces::st_angle::StSizing;
-use spherical_faces::st_support::{native_clock_ms, Clock};
+use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::pipeline::stages;
+use spherical_faces::progress::{ignore, Clock};
+use spherical_faces::reference::Reference;
+use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON};
+use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_support::StSupportParams;
 
 const USAGE: &str = "usage:
   spherical-faces info <mesh.obj|.gltf|.glb>
@@ -78,6 +83,7 @@ fn sample_mesh(key: &str) -> Result<spherical_faces::import::Imported, String> {
     let stats = Topology::new(&mesh).stats(&mesh);
     Ok(spherical_faces::import::Imported {
         source_polygons: mesh.face_count(),
+        faces: mesh.triangles.iter().map(|&t| Face::triangle(t)).collect(),
         mesh,
         stats,
         format: spherical_faces::import::Format::Obj,
@@ -89,7 +95,7 @@ fn sample_mesh(key: &str) -> Result<spherical_faces::import::Imported, String> {
 
 /// `st-support <mesh> [options] --out DIR`: writes the panel files and report.json.
 fn st_support_command(args: &[String]) -> Result<String, String> {
-    let mut req = StSupportRequest::default();
+    let mut params = StSupportParams::default();
     let (mut mesh_path, mut out) = (None, None);
     let (mut adaptive, mut epsilon, mut faces) = (false, None, None);
     let mut it = args.iter();
@@ -99,10 +105,10 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
     };
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--optimize-radius" => req.optimize_radius = true,
-            "--depth" => req.support_depth = number(a, it.next(), 0.0, 1.0)?,
-            "--axis-length" => req.axis_length = number(a, it.next(), 0.0, 10.0)?,
-            "--radius-tolerance" => req.radius_tolerance = number(a, it.next(), 1e-9, 1.0)?,
+            "--optimize-radius" => params.optimize_radius = true,
+            "--depth" => params.support_depth = number(a, it.next(), 0.0, 1.0)?,
+            "--axis-length" => params.axis_length = number(a, it.next(), 0.0, 10.0)?,
+            "--radius-tolerance" => params.radius_tolerance = number(a, it.next(), 1e-9, 1.0)?,
             "--adaptive" => adaptive = true,
             "--epsilon" => epsilon = Some(positive_fraction(a, it.next())?),
             "--faces" => faces = Some(face_count(a, it.next())?),
@@ -112,59 +118,51 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
             s => return Err(format!("unexpected argument {s}")),
         }
     }
-    req.remesh = match (adaptive, epsilon, faces) {
+    params.remesh = match (adaptive, epsilon, faces) {
         (_, _, Some(_)) if adaptive || epsilon.is_some() => return Err("use either --adaptive --epsilon E or --faces N".into()),
         (false, Some(_), None) => return Err("--epsilon needs --adaptive (remesh with the sizing field)".into()),
-        (true, e, None) => StSizing::Adaptive { epsilon: e.unwrap_or(DEFAULT_EPSILON) },
-        (false, None, Some(n)) => StSizing::UniformFaces(n),
-        _ => StSizing::None,
+        (true, e, None) => Sizing::Adaptive { epsilon: e.unwrap_or(DEFAULT_EPSILON) },
+        (false, None, Some(n)) => Sizing::UniformFaces(n),
+        _ => Sizing::None,
     };
     let mesh_path = mesh_path.ok_or("st-support needs a mesh file")?;
     let out = std::path::PathBuf::from(out.ok_or("st-support needs --out DIR")?);
-    let t0 = native_clock_ms();
-    let imported = read_mesh(&mesh_path)?;
-    let import_ms = native_clock_ms() - t0;
-    let topology = Topology::new(&imported.mesh);
-    let t1 = native_clock_ms();
-    let field = jet_fit(&imported.mesh, &topology, &req.jet, &mut |_, _| true).ok_or("cancelled")?;
-    let curvature_ms = native_clock_ms() - t1;
-    let mut output = st_support::run(&imported.mesh, &topology, &field, &req, Clock(Some(native_clock_ms)), &mut |_, _, _| true)
+    let clock = Clock::native();
+    let t0 = clock.now();
+    let reference = read_reference(&mesh_path)?;
+    let import_ms = clock.now() - t0;
+    let t1 = clock.now();
+    reference.curvature(&params.jet, &mut ignore).map_err(|e| e.to_string())?;
+    let curvature_ms = clock.now() - t1;
+    let mut result = spherical_faces::st_support::compute(&reference, &params, clock, &mut ignore)
         .map_err(|e| format!("{mesh_path}: {e}"))?;
     // The report's timings include reading and curvature, which the CLI did itself.
-    output.summary.report.add_timing("import", import_ms);
-    output.summary.report.add_timing("curvature", curvature_ms);
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    for f in &output.files {
-        let bytes = if f.name == "report.json" { output.summary.report.to_json().into_bytes() } else { f.bytes.clone() };
-        std::fs::write(out.join(&f.name), bytes).map_err(|e| format!("{}: {e}", out.join(&f.name).display()))?;
-    }
+    result.timings_ms.insert(0, ("curvature".into(), curvature_ms));
+    result.timings_ms.insert(0, ("import".into(), import_ms));
+    let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
+    write_files(&out, &files)?;
     Ok(format!(
         "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
-        output.panels.len(),
+        result.panels.len(),
         out.display(),
-        output.result.metrics.max_kink_angle_deg,
-        output.summary.report.metrics.max_distance_to_reference.unwrap_or(f64::NAN)
+        result.metrics.max_kink_angle_deg,
+        report.metrics.max_distance_to_reference.unwrap_or(f64::NAN)
     ))
 }
 
 /// `st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR`.
 fn st_command(args: &[String]) -> Result<String, String> {
-    use spherical_faces::pipeline::st_angle::report_and_files;
-    use spherical_faces::st_angle::{st_angle, StAngleParams, StVariant};
-    let mut params = StAngleParams::default();
+    let mut params = StAdaptedParams::default();
     let (mut mesh_path, mut out) = (None, None);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut value = || it.next().ok_or(format!("{a} needs a value"));
         match a.as_str() {
-            "--epsilon" => params.sizing = StSizing::Adaptive { epsilon: positive_fraction(a, Some(value()?))? },
-            "--faces" => params.sizing = StSizing::UniformFaces(face_count(a, Some(value()?))?),
+            "--epsilon" => params.sizing = Sizing::Adaptive { epsilon: positive_fraction(a, Some(value()?))? },
+            "--faces" => params.sizing = Sizing::UniformFaces(face_count(a, Some(value()?))?),
             "--variant" => {
-                params.variant = match value()?.as_str() {
-                    "a" => StVariant::A,
-                    "b" => StVariant::B,
-                    v => return Err(format!("--variant {v}: expected a or b")),
-                }
+                let v = value()?;
+                params.variant = EdgeArcs::from_key(v).ok_or(format!("--variant {v}: expected a or b"))?;
             }
             "--out" => out = Some(value()?.clone()),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
@@ -174,13 +172,12 @@ fn st_command(args: &[String]) -> Result<String, String> {
     }
     let mesh_path = mesh_path.ok_or("st needs a mesh file")?;
     let out = std::path::PathBuf::from(out.ok_or("st needs --out DIR")?);
-    let imported = read_mesh(&mesh_path)?;
-    let result = st_angle(&imported.mesh, &params, Some(native_clock_ms), &mut |_| true).map_err(|e| format!("{mesh_path}: {e}"))?;
-    let (report, files) = report_and_files(&imported.mesh, &result, 1e-3);
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    for f in &files {
-        std::fs::write(out.join(&f.name), &f.bytes).map_err(|e| format!("{}: {e}", out.join(&f.name).display()))?;
-    }
+    let reference = read_reference(&mesh_path)?;
+    let clock = Clock::native();
+    let result = spherical_faces::st_adapted::compute(&reference, &params, clock, &mut |_| Ok(()))
+        .map_err(|e| format!("{mesh_path}: {e}"))?;
+    let (report, files) = stages::st_adapted::export(&reference, &result, &params, clock);
+    write_files(&out, &files)?;
     Ok(format!(
         "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {:.2e} of the diagonal)",
         report.output.panels,
@@ -189,6 +186,16 @@ fn st_command(args: &[String]) -> Result<String, String> {
         result.metrics.max_kink_angle_deg,
         result.metrics.max_distance_to_reference
     ))
+}
+
+/// Writes `files` into `dir` (created if missing).
+fn write_files(dir: &std::path::Path, files: &[ExportFile]) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    for f in files {
+        let path = dir.join(&f.name);
+        std::fs::write(&path, &f.bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
 }
 
 /// ε of a sizing field: a number in (0, 1), relative to the bbox diagonal.
@@ -203,12 +210,17 @@ fn face_count(flag: &str, v: Option<&String>) -> Result<usize, String> {
     v.parse::<usize>().ok().filter(|n| *n >= 4).ok_or(format!("{flag} {v}: expected a whole number ≥ 4"))
 }
 
+/// The reference surface in a file (or a sample).
+fn read_reference(path: &str) -> Result<Reference, String> {
+    Ok(Reference::new(read_mesh(path)?.surface()))
+}
+
 /// One JSON object: counts after triangulation and welding, and the jet-fitted mean curvature.
 fn info(path: &str) -> Result<String, String> {
     let imported = read_mesh(path)?;
     let topology = Topology::new(&imported.mesh);
-    let field = jet_fit(&imported.mesh, &topology, &JetParams::default(), &mut |_, _| true)
-        .ok_or("curvature computation was cancelled")?;
+    let field = spherical_faces::congruence::central_spheres::jet_fit(&imported.mesh, &topology, &JetParams::default(), &mut ignore)
+        .map_err(|_| "curvature computation was cancelled".to_string())?;
     let s = &imported.stats;
     let c = &field.summary;
     let json = serde_json::json!({

@@ -2,10 +2,13 @@
 //! Parsing never fails: unknown or invalid fields are dropped and reported as notices. Values are
 //! only ever used as data (enums, numbers, a file name shown as text).
 
-use crate::curvature::JetParams;
-use crate::remesh::DEFAULT_EPSILON;
+use crate::congruence::central_spheres::JetParams;
+use crate::panels::edge_arcs::EdgeArcs;
+use crate::pipeline::protocol::StageRequest;
+use crate::remeshing::{Sizing, DEFAULT_EPSILON};
 use crate::samples::Sample;
-use crate::st_angle::{StSizing, StVariant};
+use crate::st_adapted::params::StAdaptedParams;
+use crate::st_support::StSupportParams;
 
 pub const VERSION: u32 = 1;
 
@@ -74,33 +77,34 @@ impl Shading {
     }
 }
 
-/// The methods of the pipeline. Later methods add variants and their parameters.
+/// The methods of the pipeline: one entry per method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
     /// Jet-fitted curvature and central spheres only (Sec. 2.6).
     Curvature,
+    /// Angle-minimizing ST mesh with face size adapted to the surface (Sec. 3).
+    StAdapted,
     /// ST mesh with support structure (Sec. 4).
     StSupport,
-    /// Angle-minimizing ST mesh with face size adapted to the surface (Sec. 3).
-    St,
 }
 
 impl Method {
-    pub const ALL: [Method; 3] = [Method::Curvature, Method::St, Method::StSupport];
+    pub const ALL: [Method; 3] = [Method::Curvature, Method::StAdapted, Method::StSupport];
 
+    /// The link key (`method=…`).
     pub fn key(self) -> &'static str {
         match self {
             Method::Curvature => "curvature",
+            Method::StAdapted => "st",
             Method::StSupport => "st-support",
-            Method::St => "st",
         }
     }
 
     pub fn title(self) -> &'static str {
         match self {
             Method::Curvature => "Curvature (Sec. 2.6)",
+            Method::StAdapted => "ST, adapted face size (Sec. 3)",
             Method::StSupport => "ST with support structure (Sec. 4)",
-            Method::St => "ST, adapted face size (Sec. 3)",
         }
     }
 
@@ -109,16 +113,7 @@ impl Method {
     }
 }
 
-/// How the reference is remeshed before a method runs (Sec. 3): kept as is, with the sizing
-/// field of tolerance ε (relative to the bbox diagonal), or uniformly to about N faces. Both
-/// values are kept when switching, so a link can carry them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SizingDesign {
-    pub kind: SizingKind,
-    pub epsilon: f64,
-    pub faces: usize,
-}
-
+/// The kind of a [`Sizing`], as links name it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SizingKind {
     None,
@@ -128,6 +123,14 @@ pub enum SizingKind {
 
 impl SizingKind {
     pub const ALL: [SizingKind; 3] = [SizingKind::Adaptive, SizingKind::Faces, SizingKind::None];
+
+    pub fn of(sizing: Sizing) -> Self {
+        match sizing {
+            Sizing::None => SizingKind::None,
+            Sizing::Adaptive { .. } => SizingKind::Adaptive,
+            Sizing::UniformFaces(_) => SizingKind::Faces,
+        }
+    }
 
     pub fn key(self) -> &'static str {
         match self {
@@ -148,64 +151,27 @@ impl SizingKind {
     pub fn from_key(s: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|k| k.key() == s)
     }
-}
 
-impl SizingDesign {
-    pub const DEFAULT_FACES: usize = 600;
-
-    pub fn with_kind(kind: SizingKind) -> Self {
-        Self { kind, epsilon: DEFAULT_EPSILON, faces: Self::DEFAULT_FACES }
-    }
-
-    /// The remeshing the pipeline runs.
-    pub fn to_sizing(self) -> StSizing {
-        match self.kind {
-            SizingKind::None => StSizing::None,
-            SizingKind::Adaptive => StSizing::Adaptive { epsilon: self.epsilon },
-            SizingKind::Faces => StSizing::UniformFaces(self.faces),
+    /// The sizing of this kind with ε and N (the one the kind uses).
+    pub fn sizing(self, epsilon: f64, faces: usize) -> Sizing {
+        match self {
+            SizingKind::None => Sizing::None,
+            SizingKind::Adaptive => Sizing::Adaptive { epsilon },
+            SizingKind::Faces => Sizing::UniformFaces(faces),
         }
     }
-
-    fn to_fragment(self, key: &str) -> String {
-        format!("&{key}={}&eps={}&faces={}", self.kind.key(), fmt_num_sig(self.epsilon), self.faces)
-    }
 }
 
-/// Parameters of the "ST, adapted face size" method.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StDesign {
-    pub sizing: SizingDesign,
-    pub variant: StVariant,
-}
+/// Default face count of uniform remeshing.
+pub const DEFAULT_FACES: usize = 600;
 
-impl Default for StDesign {
-    fn default() -> Self {
-        Self { sizing: SizingDesign::with_kind(SizingKind::Adaptive), variant: StVariant::A }
-    }
-}
-
-/// Parameters of the ST-with-support-structure method; lengths relative to the bbox diagonal.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StSupportDesign {
-    /// Choose R² to minimize the intersection angles (Fig. 16, right).
-    pub optimize_radius: bool,
-    pub support_depth: f64,
-    pub axis_length: f64,
-    /// Radii closer than this count as one in the panel schedule.
-    pub radius_tolerance: f64,
-    /// Remeshing before the method (Fig. 16, bottom): none by default.
-    pub remesh: SizingDesign,
-}
-
-impl Default for StSupportDesign {
-    fn default() -> Self {
-        Self {
-            optimize_radius: false,
-            support_depth: 0.02,
-            axis_length: 0.1,
-            radius_tolerance: 1e-3,
-            remesh: SizingDesign::with_kind(SizingKind::None),
-        }
+/// `&{key}=kind` and the value the kind uses (`&eps=…` or `&faces=…`).
+fn sizing_fragment(key: &str, sizing: Sizing) -> String {
+    let kind = SizingKind::of(sizing).key();
+    match sizing {
+        Sizing::None => format!("&{key}={kind}"),
+        Sizing::Adaptive { epsilon } => format!("&{key}={kind}&eps={}", fmt_num_sig(epsilon)),
+        Sizing::UniformFaces(n) => format!("&{key}={kind}&faces={n}"),
     }
 }
 
@@ -230,9 +196,10 @@ pub struct CameraState {
 pub struct Design {
     pub reference: Reference,
     pub method: Method,
+    /// The jet fit of every method (their own `jet` follows this one).
     pub jet: JetParams,
-    pub st: StSupportDesign,
-    pub st_angle: StDesign,
+    pub st_adapted: StAdaptedParams,
+    pub st_support: StSupportParams,
     pub color: ColorBy,
     pub shading: Shading,
     pub edges: bool,
@@ -246,8 +213,8 @@ impl Default for Design {
             reference: Reference::Sample(Sample::Dome),
             method: Method::Curvature,
             jet: JetParams::default(),
-            st: StSupportDesign::default(),
-            st_angle: StDesign::default(),
+            st_adapted: StAdaptedParams::default(),
+            st_support: StSupportParams::default(),
             color: ColorBy::MeanCurvature,
             shading: Shading::Smooth,
             edges: false,
@@ -266,20 +233,23 @@ impl Design {
         }
         s += &format!("&method={}", self.method.key());
         s += &format!("&jet_degree={}&jet_rings={}", self.jet.degree, self.jet.max_rings);
-        if self.method == Method::StSupport {
-            let st = &self.st;
-            s += &format!(
-                "&opt_r={}&depth={}&axis={}&rtol={}",
-                st.optimize_radius as u8,
-                fmt_num(st.support_depth),
-                fmt_num(st.axis_length),
-                fmt_num(st.radius_tolerance)
-            );
-            s += &st.remesh.to_fragment("remesh");
-        }
-        if self.method == Method::St {
-            s += &self.st_angle.sizing.to_fragment("sizing");
-            s += &format!("&variant={}", if self.st_angle.variant == StVariant::B { "b" } else { "a" });
+        match self.method {
+            Method::Curvature => {}
+            Method::StAdapted => {
+                s += &sizing_fragment("sizing", self.st_adapted.sizing);
+                s += &format!("&variant={}", self.st_adapted.variant.key());
+            }
+            Method::StSupport => {
+                let st = &self.st_support;
+                s += &format!(
+                    "&opt_r={}&depth={}&axis={}&rtol={}",
+                    st.optimize_radius as u8,
+                    fmt_num(st.support_depth),
+                    fmt_num(st.axis_length),
+                    fmt_num(st.radius_tolerance)
+                );
+                s += &sizing_fragment("remesh", st.remesh);
+            }
         }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
         if let Some(c) = self.camera {
@@ -294,6 +264,18 @@ impl Design {
             );
         }
         s
+    }
+
+    /// The stages that compute the design: the curvature (its colour maps and central spheres;
+    /// the methods reuse it), then the method's stage.
+    pub fn stage_requests(&self) -> Vec<StageRequest> {
+        let mut stages = vec![StageRequest::Curvature(self.jet.clone())];
+        match self.method {
+            Method::Curvature => {}
+            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams { jet: self.jet.clone(), ..self.st_adapted.clone() })),
+            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams { jet: self.jet.clone(), ..self.st_support.clone() })),
+        }
+        stages
     }
 
     /// Parses a fragment (with or without '#'). Returns the design and notices for the user.
@@ -320,6 +302,7 @@ impl Design {
         let mut file_name = None;
         let mut wants_file = false;
         let (mut eps, mut faces) = (None, None);
+        let (mut adapted_sizing, mut support_remesh) = (None, None);
         for (k, v) in &pairs {
             let ok = match k.as_str() {
                 "v" => true,
@@ -327,7 +310,17 @@ impl Design {
                     wants_file = true;
                     true
                 }
-                "sample" => Sample::from_key(v).map(|s| d.reference = Reference::Sample(s)).is_some(),
+                "sample" => match Sample::from_key(v) {
+                    Some(s) => {
+                        d.reference = Reference::Sample(s);
+                        true
+                    }
+                    None => {
+                        let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
+                        notices.push(format!("ignored unknown sample '{}' (samples: {})", clip(v), names.join(", ")));
+                        continue;
+                    }
+                },
                 "file" => {
                     file_name = Some(clip(v));
                     !v.is_empty()
@@ -337,26 +330,20 @@ impl Design {
                 "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
                 "opt_r" => match v.as_str() {
                     "0" | "1" => {
-                        d.st.optimize_radius = v == "1";
+                        d.st_support.optimize_radius = v == "1";
                         true
                     }
                     _ => false,
                 },
-                "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st.support_depth = x).is_some(),
-                "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st.axis_length = x).is_some(),
-                "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st.radius_tolerance = x).is_some(),
-                "remesh" => SizingKind::from_key(v).map(|k| d.st.remesh.kind = k).is_some(),
-                "sizing" => SizingKind::from_key(v).map(|k| d.st_angle.sizing.kind = k).is_some(),
+                "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st_support.support_depth = x).is_some(),
+                "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st_support.axis_length = x).is_some(),
+                "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st_support.radius_tolerance = x).is_some(),
+                "remesh" => SizingKind::from_key(v).map(|k| support_remesh = Some(k)).is_some(),
+                "sizing" => SizingKind::from_key(v).map(|k| adapted_sizing = Some(k)).is_some(),
                 // ε and N belong to the method the link names (applied below).
                 "eps" => parse_f64_in(v, 1e-7, 0.1).map(|x| eps = Some(x)).is_some(),
                 "faces" => parse_in(v, 8, 200_000).map(|x| faces = Some(x as usize)).is_some(),
-                "variant" => match v.as_str() {
-                    "a" | "b" => {
-                        d.st_angle.variant = if v == "b" { StVariant::B } else { StVariant::A };
-                        true
-                    }
-                    _ => false,
-                },
+                "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
                 "edges" => match v.as_str() {
@@ -376,15 +363,29 @@ impl Design {
                 notices.push(format!("ignored invalid value for '{}': '{}'", clip(k), clip(v)));
             }
         }
-        let sizing = match d.method {
-            Method::StSupport => Some(&mut d.st.remesh),
-            Method::St => Some(&mut d.st_angle.sizing),
-            Method::Curvature => None,
+        // A sizing kind takes ε and N from the link when it names the method they belong to.
+        let applies = |m: Method| d.method == m;
+        let sizing_of = |kind: SizingKind, current: Sizing, mine: bool| {
+            let eps = if mine { eps } else { None }.unwrap_or(match current {
+                Sizing::Adaptive { epsilon } => epsilon,
+                _ => DEFAULT_EPSILON,
+            });
+            let n = if mine { faces } else { None }.unwrap_or(match current {
+                Sizing::UniformFaces(n) => n,
+                _ => DEFAULT_FACES,
+            });
+            kind.sizing(eps, n)
         };
-        if let Some(sizing) = sizing {
-            sizing.epsilon = eps.unwrap_or(sizing.epsilon);
-            sizing.faces = faces.unwrap_or(sizing.faces);
+        let mine = applies(Method::StAdapted);
+        if let Some(kind) = adapted_sizing.or(mine.then(|| SizingKind::of(d.st_adapted.sizing))) {
+            d.st_adapted.sizing = sizing_of(kind, d.st_adapted.sizing, mine);
         }
+        let mine = applies(Method::StSupport);
+        if let Some(kind) = support_remesh.or(mine.then(|| SizingKind::of(d.st_support.remesh))) {
+            d.st_support.remesh = sizing_of(kind, d.st_support.remesh, mine);
+        }
+        d.st_adapted.jet = d.jet.clone();
+        d.st_support.jet = d.jet.clone();
         if wants_file {
             let name = file_name.unwrap_or_else(|| "your file".into());
             notices.push(format!("this design uses the file '{name}': drop it on the viewport to continue"));
@@ -463,102 +464,4 @@ fn percent_decode(s: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).into_owned()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn round_trip() {
-        let d = Design {
-            reference: Reference::Sample(Sample::TorusPatch),
-            method: Method::Curvature,
-            jet: JetParams { degree: 2, max_rings: 3, ..JetParams::default() },
-            st: StSupportDesign::default(),
-            st_angle: StDesign::default(),
-            color: ColorBy::K1,
-            shading: Shading::Flat,
-            edges: true,
-            camera: Some(CameraState { yaw: 0.5, pitch: -0.25, distance: 6.0, target: [1.0, -2.0, 0.125] }),
-        };
-        let (back, notices) = Design::from_fragment(&d.to_fragment());
-        assert!(notices.is_empty(), "{notices:?}");
-        assert_eq!(back, d);
-    }
-
-    #[test]
-    fn st_support_parameters_round_trip() {
-        let d = Design {
-            method: Method::StSupport,
-            st: StSupportDesign {
-                optimize_radius: true,
-                support_depth: 0.035,
-                axis_length: 0.25,
-                radius_tolerance: 0.002,
-                remesh: SizingDesign { kind: SizingKind::Adaptive, epsilon: 2.5e-4, faces: 900 },
-            },
-            ..Design::default()
-        };
-        let (back, notices) = Design::from_fragment(&d.to_fragment());
-        assert!(notices.is_empty(), "{notices:?}");
-        assert_eq!(back, d);
-        let (bad, notices) = Design::from_fragment("#v=1&method=st-support&depth=-1&opt_r=2&rtol=nan");
-        assert_eq!(bad.st, StSupportDesign::default());
-        assert_eq!(notices.len(), 3);
-    }
-
-    #[test]
-    fn st_parameters_round_trip() {
-        for (kind, variant) in [(SizingKind::Adaptive, StVariant::B), (SizingKind::Faces, StVariant::A), (SizingKind::None, StVariant::A)] {
-            let d = Design {
-                method: Method::St,
-                st_angle: StDesign { sizing: SizingDesign { kind, epsilon: 1.25e-3, faces: 2000 }, variant },
-                color: ColorBy::Sizing,
-                ..Design::default()
-            };
-            let frag = d.to_fragment();
-            let (back, notices) = Design::from_fragment(&frag);
-            assert!(notices.is_empty(), "{notices:?}");
-            assert_eq!(back, d, "{frag}");
-        }
-        // ε and N go to the method the link names, wherever they stand in it.
-        let (d, _) = Design::from_fragment("#v=1&eps=0.002&faces=50&method=st");
-        assert_eq!(d.st_angle.sizing.epsilon, 0.002);
-        assert_eq!(d.st_angle.sizing.faces, 50);
-        assert_eq!(d.st.remesh, StSupportDesign::default().remesh);
-        let (bad, notices) = Design::from_fragment("#v=1&method=st&eps=2&faces=3&variant=c&sizing=cubic");
-        assert_eq!(bad.st_angle, StDesign::default());
-        assert_eq!(notices.len(), 4, "{notices:?}");
-    }
-
-    #[test]
-    fn unknown_and_invalid_fields_are_reported() {
-        let (d, notices) = Design::from_fragment("#v=1&sample=torus&bogus=7&color=purple&jet_degree=9&cam=1,2");
-        assert_eq!(d.reference, Reference::Sample(Sample::TorusPatch));
-        assert_eq!(d.color, ColorBy::MeanCurvature);
-        assert_eq!(d.jet.degree, JetParams::default().degree);
-        assert_eq!(d.camera, None);
-        assert_eq!(notices.len(), 4, "{notices:?}");
-        assert!(notices[0].contains("bogus"));
-    }
-
-    #[test]
-    fn file_names_are_data() {
-        let d = Design { reference: Reference::OwnFile("<img src=x onerror=alert(1)>.obj".into()), ..Design::default() };
-        let frag = d.to_fragment();
-        assert!(!frag.contains('<') && !frag.contains(' '));
-        let (back, notices) = Design::from_fragment(&frag);
-        assert_eq!(back.reference, d.reference);
-        assert_eq!(notices.len(), 1);
-    }
-
-    #[test]
-    fn empty_and_garbage_fragments_give_defaults() {
-        assert_eq!(Design::from_fragment("").0, Design::default());
-        assert_eq!(Design::from_fragment("#").0, Design::default());
-        let (d, n) = Design::from_fragment("#%%%&&==&v=1&%zz=1");
-        assert_eq!(d, Design::default());
-        assert!(!n.is_empty());
-    }
 }

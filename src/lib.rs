@@ -1,28 +1,42 @@
 //! Spherical Faces: approximation of free-form surfaces by meshes with spherical faces.
 //!
-//! Layers, one direction:
-//! - pure geometry and numerics ([`mesh`], [`import`], [`sphere`], [`curvature`], [`samples`]),
-//! - the pipeline and its worker protocol ([`pipeline`], [`design_link`]),
-//! - the browser app ([`web`], wasm32 only), which consumes snapshots.
+//! The layers, lowest first (`ARCHITECTURE.md` is the map; `tests/architecture.rs` keeps the
+//! imports pointing down):
 
-pub mod curvature;
-pub mod design_link;
-pub mod import;
-pub mod mesh;
-pub mod pipeline;
-pub mod remesh;
+/// Progress events, the typed `Cancelled` and the caller's clock, taken by every method.
+pub mod progress;
+/// Mean, median, percentiles and histograms of samples.
+pub mod stats;
+/// A small deterministic random generator for tests and samples.
 pub mod rng;
+/// Sparse Levenberg–Marquardt on faer: residual terms, finite-difference checks, ordering.
 pub mod solver;
+/// Generalized spheres, circles, the absolute sphere Ω, closest points, meshes.
+pub mod geometry;
+/// OBJ, glTF and GLB import with typed errors.
+pub mod import;
+/// The built-in reference surfaces.
 pub mod samples;
-pub mod sphere;
-pub mod sphere_mesh;
+/// Sphere congruences (Sec. 2): central spheres, node axes and support elements.
+pub mod congruence;
+/// The reference surface R with its cached derived data, and the glide terms.
+pub mod reference;
+/// Sizing fields from influence zones and pliant remeshing (Sec. 3).
+pub mod remeshing;
+/// Sphere meshes and their panels: arcs, gaps, tessellation, deviation.
 pub mod panels;
+/// Sec. 3: ST meshes with adapted face size (the angle-minimizing ST mesh).
+pub mod st_adapted;
+/// Sec. 4: ST meshes with support structure.
+pub mod st_support;
+/// Writers: GLB, OBJ, the panel schedule and the typed report.
 pub mod export;
-pub mod absolute_sphere;
+/// The session, its stages and the typed worker protocol.
+pub mod pipeline;
 /// Benchmark workloads shared by `cargo bench` (divan) and the wasm bench in the browser.
 pub mod bench_workloads;
-pub mod st_support;
-pub mod st_angle;
-
+/// Design links: the versioned URL fragment.
+pub mod design_link;
+/// The browser app (wasm32 only): egui UI, wgpu viewer, the worker.
 #[cfg(target_arch = "wasm32")]
 pub mod web;

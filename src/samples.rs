@@ -3,7 +3,7 @@
 //!
 //! Units are metres for the architectural samples.
 
-use crate::mesh::TriMesh;
+use crate::geometry::mesh::TriMesh;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};

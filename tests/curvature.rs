@@ -2,9 +2,13 @@
 //! surface, and degenerate input. Run with `-- --nocapture` to see the measured errors.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
+mod common;
+
 use glam::DVec3;
-use spherical_faces::curvature::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE, SIGN_CHANGE_THRESHOLD};
-use spherical_faces::mesh::{Topology, TriMesh};
+use spherical_faces::progress::Cancelled;
+use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE, SIGN_CHANGE_THRESHOLD};
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::samples::{cylinder_patch, plane_patch, sphere_patch, torus_closed_form, torus_patch};
 
 fn fit(mesh: &TriMesh) -> CurvatureField {
@@ -13,7 +17,7 @@ fn fit(mesh: &TriMesh) -> CurvatureField {
 
 fn fit_with(mesh: &TriMesh, params: &JetParams) -> CurvatureField {
     let topo = Topology::new(mesh);
-    let field = jet_fit(mesh, &topo, params, &mut |_, _| true).expect("not cancelled");
+    let field = jet_fit(mesh, &topo, params, &mut spherical_faces::progress::ignore).expect("not cancelled");
     assert_all_finite(&field);
     field
 }
@@ -219,13 +223,6 @@ fn plane_is_flat() {
     println!("plane: max |k|·diag = {worst:.2e}");
 }
 
-/// A mesh from `../shared/data/meshes`, through the crate's importer (welds, triangulates quads).
-fn shared_mesh(name: &str) -> Option<TriMesh> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes").join(name);
-    let bytes = std::fs::read(path).ok()?;
-    Some(spherical_faces::import::import_mesh(&bytes, name).expect("importable").mesh)
-}
-
 /// Distance from `p` to Enneper's surface s (u − u³/3 + uv², v − v³/3 + u²v, u² − v²) by Gauss–Newton
 /// on (u, v) from a few starts.
 fn distance_to_enneper(p: DVec3, s: f64) -> f64 {
@@ -257,10 +254,7 @@ fn distance_to_enneper(p: DVec3, s: f64) -> f64 {
 
 #[test]
 fn enneper_minimal_surface_has_small_mean_curvature() {
-    let Some(mesh) = shared_mesh("enneper2.obj") else {
-        eprintln!("enneper2.obj not found; skipped");
-        return;
-    };
+    let mesh = common::load("enneper2");
     let field = fit(&mesh);
     let diag = mesh.bbox_diagonal();
     let topo = Topology::new(&mesh);
@@ -366,21 +360,22 @@ fn progress_and_cancel() {
     let mesh = torus_patch(3.0, 1.0, (0.0, 6.0), (0.0, 6.0), 60, 40);
     let topo = Topology::new(&mesh);
     let mut calls = Vec::new();
-    let field = jet_fit(&mesh, &topo, &JetParams::default(), &mut |d, t| {
-        calls.push((d, t));
-        true
+    let field = jet_fit(&mesh, &topo, &JetParams::default(), &mut |p| {
+        assert_eq!(p.step, "jet_fit");
+        calls.push((p.done, p.total));
+        Ok(())
     });
-    assert!(field.is_some());
+    assert!(field.is_ok());
     let n = mesh.vertex_count();
     assert_eq!(calls.last(), Some(&(n, n)));
     assert!(calls.len() > n / 1024);
     assert!(calls.windows(2).all(|w| w[0].0 < w[1].0));
     let mut count = 0;
-    let cancelled = jet_fit(&mesh, &topo, &JetParams::default(), &mut |_, _| {
+    let cancelled = jet_fit(&mesh, &topo, &JetParams::default(), &mut |_| {
         count += 1;
-        false
+        Err(Cancelled)
     });
-    assert!(cancelled.is_none());
+    assert_eq!(cancelled.err(), Some(Cancelled));
     assert_eq!(count, 1);
 }
 
@@ -405,7 +400,7 @@ fn timing_100k_vertices() {
     for degree in [2, 3, 4] {
         let params = JetParams::with_degree(degree);
         let t = std::time::Instant::now();
-        let field = jet_fit(&mesh, &topo, &params, &mut |_, _| true).unwrap();
+        let field = jet_fit(&mesh, &topo, &params, &mut spherical_faces::progress::ignore).unwrap();
         let dt = t.elapsed();
         println!("jet_fit degree {degree} on {} vertices: {:.1} ms", mesh.vertex_count(), dt.as_secs_f64() * 1e3);
         assert_eq!(field.summary.failed_fits, 0);

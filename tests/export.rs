@@ -1,4 +1,4 @@
-//! Panels out (issue 3, §4) and the run report (§6): panel arcs and tessellation, GLB (with the
+//! Panels out and the run report: panel arcs and tessellation, the support strips, GLB (with the
 //! Khronos glTF validator), OBJ, the panel schedule (CSV/JSON), closest-point queries and
 //! `report.json`.
 //!
@@ -12,22 +12,42 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use std::collections::HashMap;
+
+use common::{khronos_validate, temp_dir};
 use glam::DVec3;
 use serde_json::Value;
-use spherical_faces::export::closest::{closest_point_brute_force, TriangleBvh};
+use spherical_faces::congruence::support_structure::{
+    support_element, support_strips, SupportElement, SupportGeometry, SupportStructure,
+};
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::report::{InputCounts, OutputCounts};
 use spherical_faces::export::schedule::PanelSchedule;
 use spherical_faces::export::*;
+use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
+use spherical_faces::geometry::closest::{closest_point_brute_force, TriangleBvh};
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::import::import_mesh;
-use spherical_faces::mesh::TriMesh;
+use spherical_faces::panels::deviation::{max_deviation, max_distance_to_reference, panel_samples};
+use spherical_faces::panels::panel::Panel;
+use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+use spherical_faces::panels::tessellate::triangle_chord_error;
 use spherical_faces::panels::*;
-use spherical_faces::sphere::Sphere;
-use spherical_faces::sphere_mesh::{AbsoluteSphere, BoundaryArcRule, SphereMesh, SupportStructure};
+use spherical_faces::reference::Reference;
+
+/// The corners of triangle face `f`.
+fn tri(sm: &SphereMesh, f: usize) -> [DVec3; 3] {
+    let p = sm.mesh.face_points(f);
+    [p[0], p[1], p[2]]
+}
+
+/// The sphere mesh's own triangles as a reference surface.
+fn reference_of(sm: &SphereMesh) -> Reference {
+    Reference::from_triangles(sm.mesh.triangulated())
+}
 
 // ---------------------------------------------------------------------------------------------
 // Fixtures
@@ -139,7 +159,7 @@ fn omega_mesh(omega: AbsoluteSphere, rule: BoundaryArcRule) -> SphereMesh {
     let mesh = grid(6, bumpy);
     let face_spheres =
         (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
-    SphereMesh { mesh, face_spheres, boundary_arcs: rule }
+    SphereMesh::new(mesh, face_spheres, rule)
 }
 
 /// Ω real (R² > 0), centre below the surface (on its convex side): face radii about 1.5–2.5.
@@ -172,13 +192,13 @@ fn cap() -> SphereMesh {
     for f in 0..mesh.face_count() {
         assert_eq!(orient(s, &mesh, f), s, "cap orientation");
     }
-    SphereMesh { mesh, face_spheres, boundary_arcs: BoundaryArcRule::Through(DVec3::ZERO) }
+    SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(DVec3::ZERO))
 }
 
 fn flat() -> SphereMesh {
     let mesh = grid(4, |x, y| DVec3::new(x, 0.5 * y, 0.0));
     let face_spheres = (0..mesh.face_count()).map(|f| Sphere::plane(mesh.face_points(f)[0], DVec3::Z)).collect();
-    SphereMesh { mesh, face_spheres, boundary_arcs: BoundaryArcRule::Through(DVec3::new(0.0, 0.0, 2.0)) }
+    SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(DVec3::new(0.0, 0.0, 2.0)))
 }
 
 const PLANAR_FACE: usize = 0;
@@ -203,7 +223,7 @@ fn mixed() -> SphereMesh {
     assert!(face_spheres[PLANAR_FACE].a.abs() < 1e-9, "{:?}", face_spheres[PLANAR_FACE]);
     let p = mesh.face_points(PLANAR_FACE);
     face_spheres[PLANAR_FACE] = Sphere::plane(p[0], face_normal(&mesh, PLANAR_FACE));
-    SphereMesh { mesh, face_spheres, boundary_arcs: BoundaryArcRule::Through(M_IMAG) }
+    SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(M_IMAG))
 }
 
 fn all_fixtures() -> Vec<(&'static str, SphereMesh)> {
@@ -247,12 +267,6 @@ fn arc_points(p: &Panel, k: usize) -> Vec<DVec3> {
     p.arc_vertices[k].iter().map(|&i| p.positions[i as usize]).collect()
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sf-export-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn support_for(sm: &SphereMesh, m: DVec3, depth: f64) -> SupportStructure {
     SupportStructure {
@@ -295,7 +309,7 @@ fn fixtures_are_what_they_claim() {
         for f in 0..sm.mesh.face_count() {
             let s = sm.face_spheres[f];
             assert!((s.discriminant() - 1.0).abs() < 1e-12, "{name}: face {f} not normalized");
-            for v in sm.mesh.face_points(f) {
+            for v in tri(&sm, f) {
                 assert!(dist(&s, v) < 1e-12 * diag, "{name}: face {f} sphere misses a vertex");
             }
         }
@@ -319,8 +333,8 @@ fn panel_vertices_lie_on_their_spheres() {
         assert_eq!(panels.len(), sm.mesh.face_count());
         for (i, p) in panels.iter().enumerate() {
             assert_eq!(p.face, i);
-            assert_eq!(p.corners, sm.mesh.triangles[i]);
-            assert_eq!(&p.positions[0..3], &sm.mesh.face_points(i));
+            assert_eq!(p.corners, sm.mesh.faces[i].corners());
+            assert_eq!(p.positions[0..3].to_vec(), sm.mesh.face_points(i));
             assert!(!p.triangles.is_empty());
             for &x in &p.positions {
                 let d = dist(&p.sphere, x);
@@ -552,7 +566,7 @@ fn nearly_flat_spheres_keep_precision() {
     let omega = AbsoluteSphere::Sphere { center: m, r2: 0.0 };
     let face_spheres =
         (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
-    let sm = SphereMesh { mesh, face_spheres, boundary_arcs: BoundaryArcRule::Through(m) };
+    let sm = SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(m));
     let diag = sm.mesh.bbox_diagonal();
     let panels = build_panels(&sm, tol_for(&sm));
     for p in &panels {
@@ -570,7 +584,7 @@ fn nearly_flat_spheres_keep_precision() {
 #[test]
 fn closest_point_queries_match_brute_force() {
     let sm = omega_real();
-    let bvh = TriangleBvh::new(&sm.mesh);
+    let bvh = TriangleBvh::new(&sm.mesh.triangulated());
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
     let mut rnd = || {
         state ^= state << 13;
@@ -581,19 +595,50 @@ fn closest_point_queries_match_brute_force() {
     for _ in 0..500 {
         let p = DVec3::new(1.5 * rnd(), 1.5 * rnd(), 0.3 + rnd());
         let h = bvh.closest_point(p).unwrap();
-        let g = closest_point_brute_force(&sm.mesh, p).unwrap();
+        let g = closest_point_brute_force(&sm.mesh.triangulated(), p).unwrap();
         assert!((h.distance - g.distance).abs() <= 1e-15, "{} vs {}", h.distance, g.distance);
         assert!((h.distance - h.point.distance(p)).abs() < 1e-15);
     }
     // Points on the mesh are at distance 0.
     for f in 0..sm.mesh.face_count() {
-        let [a, b, c] = sm.mesh.face_points(f);
+        let [a, b, c] = tri(&sm, f);
         assert!(bvh.distance((a + b + c) / 3.0) < 1e-15);
     }
 }
 
 // ---------------------------------------------------------------------------------------------
 // Support structure
+
+/// The support elements of a sphere mesh with the given node axes, cut from its panels' arcs.
+fn elements(sm: &SphereMesh, panels: &[Panel], support: &SupportStructure) -> Vec<SupportElement> {
+    let topo = sm.topology();
+    topo.edges()
+        .iter()
+        .enumerate()
+        .filter_map(|(e, &[a, b])| {
+            let (f, k) = topo.edge_faces(e)[0];
+            let arc = panels[f as usize].arcs[k as usize];
+            let (p, q) = (sm.mesh.positions[a as usize], sm.mesh.positions[b as usize]);
+            let dirs = [support.node_axes[a as usize].1, support.node_axes[b as usize].1];
+            (!arc.is_straight()).then(|| support_element([a, b], arc.circle, [p, q], dirs, support.depth)).flatten()
+        })
+        .collect()
+}
+
+/// The strips of `elements` along the panels' own arc points.
+fn strips(sm: &SphereMesh, panels: &[Panel], elements: &[SupportElement]) -> SupportGeometry {
+    let topo = sm.topology();
+    support_strips(elements, |el| {
+        let e = topo.edge_index(el.edge[0], el.edge[1])?;
+        let (f, k) = topo.edge_faces(e)[0];
+        let p = &panels[f as usize];
+        let mut points = p.arc_points(k as usize);
+        if p.corners[k as usize] != el.edge[0] {
+            points.reverse();
+        }
+        Some(points)
+    })
+}
 
 #[test]
 fn support_strips_are_planar_and_bounded_by_the_node_axes() {
@@ -602,12 +647,14 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
     let depth = 0.03 * diag;
     let support = support_for(&sm, M_REAL, depth);
     let panels = build_panels(&sm, tol_for(&sm));
-    let geo = support_geometry(&panels, &support);
+    let els = elements(&sm, &panels, &support);
+    assert_eq!(els.len(), sm.topology().edges().len(), "every edge has its element");
+    let geo = strips(&sm, &panels, &els);
     let edges = edge_map(&panels);
     let expected: usize = edges.values().map(|inc| 2 * (panels[inc[0].0].arc_vertices[inc[0].1].len() - 1)).sum();
     assert_eq!(geo.triangles.len(), expected);
     assert!(geo.triangles.iter().flatten().all(|&v| (v as usize) < geo.positions.len()));
-    // Every arc point of the panels and every inner node-axis point appears.
+    // Every arc point of the panels appears: the strips meet the panels exactly.
     let has = |x: DVec3| geo.positions.contains(&x);
     for p in &panels {
         for k in 0..3 {
@@ -615,11 +662,22 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
                 assert!(has(x));
             }
         }
-        for &v in &p.corners {
+    }
+    // Each element is bounded by the two node axes: its inner corners lie on them, toward the
+    // support side, on the inner circle, and the strip reaches them.
+    for el in &els {
+        for (k, &v) in el.edge.iter().enumerate() {
             let (pv, d) = support.node_axes[v as usize];
-            let inner = pv + depth * d;
-            assert!(geo.positions.iter().any(|&y| y.distance(inner) < 1e-15 * diag), "inner node-axis point missing");
+            let inner = el.corners[3 - k];
+            assert!((inner - pv).cross(d).length() < 1e-9 * diag, "inner corner off the node axis");
+            assert!((inner - pv).dot(d) > 0.0, "inner corner on the wrong side");
+            let ic = el.inner_circle;
+            assert!(((inner - ic.center).length() - ic.radius).abs() < 1e-9 * diag, "inner corner off the inner circle");
+            assert!(has(inner));
         }
+        // The inner arc is the concentric circle a depth inside the outer one.
+        assert!((el.inner_circle.center - el.circle.center).length() < 1e-9 * diag);
+        assert!(((el.circle.radius - el.inner_circle.radius).abs() - depth).abs() < 1e-9 * diag);
     }
     // Planarity: every triangle lies in the plane of the arc it hangs from (which contains m).
     for t in &geo.triangles {
@@ -630,8 +688,9 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
             assert!((M_REAL - a).dot(n).abs() < 1e-9 * diag, "support strip not in a plane through m");
         }
     }
-    assert!(support_geometry(&panels, &SupportStructure { depth: 0.0, ..support.clone() }).triangles.is_empty());
-    let segs = node_axis_segments(&support, 0.1);
+    // No depth, no elements.
+    assert!(elements(&sm, &panels, &SupportStructure { depth: 0.0, ..support.clone() }).is_empty());
+    let segs = support.axis_segments(0.1);
     assert_eq!(segs.len(), sm.mesh.vertex_count());
     for (s, (v, _)) in segs.iter().zip(&support.node_axes) {
         assert!((s.0.distance(s.1) - 0.1).abs() < 1e-12 && s.0 == *v);
@@ -654,8 +713,8 @@ fn scene() -> Scene {
     let diag = sm.mesh.bbox_diagonal();
     let panels = build_panels(&sm, tol_for(&sm));
     let st = support_for(&sm, M_REAL, 0.03 * diag);
-    let support = support_geometry(&panels, &st);
-    let axes = node_axis_segments(&st, 0.1 * diag);
+    let support = strips(&sm, &panels, &elements(&sm, &panels, &st));
+    let axes = st.axis_segments(0.1 * diag);
     let extras = absolute_sphere_extras(&AbsoluteSphere::Sphere { center: M_REAL, r2: R2_REAL });
     Scene { sm, panels, support, axes, extras }
 }
@@ -769,31 +828,6 @@ fn glb_reimports_with_the_panel_triangles() {
     assert_eq!(j["meshes"][panels_mesh]["primitives"].as_array().unwrap().len(), s.sm.mesh.face_count());
 }
 
-fn e2e_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join("e2e")
-}
-
-/// Runs tests/e2e/validate-gltf.mjs on `file`; returns its JSON summary. Panics (test failure)
-/// when the validator is not installed.
-fn khronos_validate(file: &Path) -> (bool, Value) {
-    let e2e = e2e_dir();
-    assert!(
-        e2e.join("node_modules").join("gltf-validator").is_dir(),
-        "the Khronos glTF validator is not installed: run `npm ci` in tests/e2e (it is a devDependency there)"
-    );
-    let out = Command::new("node")
-        .arg(e2e.join("validate-gltf.mjs"))
-        .arg(file)
-        .current_dir(&e2e)
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run `node` ({e}); install Node.js and run `npm ci` in tests/e2e"));
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let summary: Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
-        panic!("validate-gltf.mjs printed no JSON ({e}); stdout: {stdout}; stderr: {}", String::from_utf8_lossy(&out.stderr))
-    });
-    (out.status.success(), summary)
-}
-
 #[test]
 fn glb_passes_the_khronos_validator() {
     let s = scene();
@@ -869,7 +903,7 @@ fn schedule_csv_and_json() {
     let sm = mixed();
     let diag = sm.mesh.bbox_diagonal();
     let panels = build_panels(&sm, tol_for(&sm));
-    let sched = build_schedule(&panels, &sm.mesh, 1e-3);
+    let sched = build_schedule(&panels, &reference_of(&sm), 1e-3);
     assert_eq!(sched.panel_count, panels.len());
     assert_eq!(sched.planar_panels, 1);
 
@@ -877,7 +911,7 @@ fn schedule_csv_and_json() {
     let csv = sched.to_csv();
     let rows: Vec<&str> = csv.lines().collect();
     assert_eq!(rows.len(), panels.len() + 1);
-    assert_eq!(rows[0], PanelSchedule::csv_header());
+    assert_eq!(rows[0], PanelSchedule::csv_header(3));
     let header: Vec<&str> = rows[0].split(',').collect();
     for col in ["id", "v0_id", "v2_z", "sphere_center_x", "sphere_radius", "plane_normal_z", "edge0_radius", "edge2_normal_z", "area", "max_deviation"] {
         assert!(header.contains(&col), "{col}");
@@ -923,12 +957,12 @@ fn schedule_csv_and_json() {
     // Deviation: positive, small, and matching a brute-force evaluation.
     assert!(sched.max_deviation > 0.0 && sched.max_deviation_relative < 0.05);
     assert_eq!(sched.max_deviation_relative, sched.max_deviation / diag);
-    assert_eq!(max_distance_to_reference(&panels, &sm.mesh), sched.max_deviation_relative);
-    let bvh = TriangleBvh::new(&sm.mesh);
+    assert_eq!(max_distance_to_reference(&panels, &TriangleBvh::new(&sm.mesh.triangulated()), diag), sched.max_deviation_relative);
+    let bvh = TriangleBvh::new(&sm.mesh.triangulated());
     let p = &panels[5];
-    let brute = spherical_faces::export::schedule::panel_samples(p)
+    let brute = panel_samples(p)
         .into_iter()
-        .map(|x| closest_point_brute_force(&sm.mesh, x).unwrap().distance)
+        .map(|x| closest_point_brute_force(&sm.mesh.triangulated(), x).unwrap().distance)
         .fold(0.0, f64::max);
     assert_eq!(max_deviation(p, &bvh), brute);
     assert_eq!(sched.panels[5].max_deviation, brute);
@@ -939,18 +973,18 @@ fn deviation_from_the_reference() {
     // A flat panel set against its own reference: 0.
     let f = flat();
     let panels = build_panels(&f, tol_for(&f));
-    assert!(max_distance_to_reference(&panels, &f.mesh) < 1e-15);
+    assert!(max_distance_to_reference(&panels, &TriangleBvh::new(&f.mesh.triangulated()), f.mesh.bbox_diagonal()) < 1e-15);
     // The cap against its inscribed triangle mesh: the panels bulge out by about the face
     // sagitta, never more than the largest face chord error.
     let sm = cap();
     let panels = build_panels(&sm, tol_for(&sm));
     let bound = (0..sm.mesh.face_count())
         .map(|f| {
-            let [a, b, c] = sm.mesh.face_points(f);
+            let [a, b, c] = tri(&sm, f);
             triangle_chord_error(&sm.face_spheres[f], a, b, c)
         })
         .fold(0.0, f64::max);
-    let bvh = TriangleBvh::new(&sm.mesh);
+    let bvh = TriangleBvh::new(&sm.mesh.triangulated());
     let dev = panels.iter().map(|p| max_deviation(p, &bvh)).fold(0.0, f64::max);
     assert!(dev > 0.2 * bound && dev <= bound * (1.0 + 1e-9), "{dev} vs {bound}");
 }
@@ -965,42 +999,32 @@ fn distinct_radii_counting() {
     // The cap: one radius; Ω meshes: many, fewer with a coarser tolerance.
     let sm = cap();
     let panels = build_panels(&sm, tol_for(&sm));
-    assert_eq!(build_schedule(&panels, &sm.mesh, 1e-6).distinct_radii, 1);
+    assert_eq!(build_schedule(&panels, &reference_of(&sm), 1e-6).distinct_radii, 1);
     let sm = omega_real();
     let panels = build_panels(&sm, tol_for(&sm));
-    let fine = build_schedule(&panels, &sm.mesh, 1e-9).distinct_radii;
-    let coarse = build_schedule(&panels, &sm.mesh, 0.5).distinct_radii;
+    let fine = build_schedule(&panels, &reference_of(&sm), 1e-9).distinct_radii;
+    let coarse = build_schedule(&panels, &reference_of(&sm), 0.5).distinct_radii;
     assert!(fine > coarse && coarse >= 1 && fine <= panels.len(), "{fine} {coarse}");
     let f = flat();
-    assert_eq!(build_schedule(&build_panels(&f, tol_for(&f)), &f.mesh, 1e-3).distinct_radii, 1);
+    assert_eq!(build_schedule(&build_panels(&f, tol_for(&f)), &reference_of(&f), 1e-3).distinct_radii, 1);
 }
 
 #[test]
-fn write_panel_files_writes_all_four() {
+fn panel_files_are_the_five_files() {
     let s = scene();
-    let dir = temp_dir("files");
-    let sched = write_panel_files(
-        &dir,
-        &ExportInput {
-            panels: &s.panels,
-            support: Some(&s.support),
-            node_axes: Some(&s.axes),
-            extras: s.extras.clone(),
-            reference: &s.sm.mesh,
-            radius_tolerance: 1e-4,
-        },
-    )
-    .unwrap();
-    for f in ["panels.glb", "panels.obj", "panels.csv", "panels.json"] {
-        assert!(std::fs::metadata(dir.join(f)).unwrap().len() > 0, "{f}");
-    }
-    let json: Value = serde_json::from_slice(&std::fs::read(dir.join("panels.json")).unwrap()).unwrap();
+    let sched = build_schedule(&s.panels, &reference_of(&s.sm), 1e-4);
+    let glb = write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone());
+    let obj = write_obj(&s.panels, Some(&s.support), Some(&s.axes));
+    let files = panel_files(glb, obj, &sched, &Report::new("st-support"));
+    let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
+    assert!(files.iter().all(|f| !f.bytes.is_empty()));
+    let json: Value = serde_json::from_slice(&files[3].bytes).unwrap();
     assert_close(&json, &serde_json::to_value(&sched).unwrap());
-    let csv = std::fs::read_to_string(dir.join("panels.csv")).unwrap();
+    let csv = std::str::from_utf8(&files[2].bytes).unwrap();
     assert_eq!(csv.lines().count(), s.panels.len() + 1);
-    let glb = std::fs::read(dir.join("panels.glb")).unwrap();
-    assert_eq!(glb_json(&glb).unwrap()["nodes"].as_array().unwrap().len(), 3);
-    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(glb_json(&files[0].bytes).unwrap()["nodes"].as_array().unwrap().len(), 3);
+    assert_eq!(Report::from_json(std::str::from_utf8(&files[4].bytes).unwrap()).unwrap().method, "st-support");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1015,7 +1039,7 @@ fn report_schema() {
     r.metrics.max_vertex_sphere_residual = Some(1e-13);
     r.metrics.max_kink_angle_deg = Some(3.5);
     r.metrics.max_distance_to_reference = Some(2e-3);
-    r.metrics.extra.insert("mean_radius".into(), serde_json::json!(1.5));
+    r.metrics.distinct_radii = Some(15);
     r.add_timing("absolute_sphere", 1.5);
     r.add_timing("panels", 2.0);
     r.add_timing("panels", 1.0);
@@ -1034,7 +1058,7 @@ fn report_schema() {
     let m = v["metrics"].as_object().unwrap();
     assert_eq!(m.len(), 4, "None metrics are left out: {m:?}");
     assert_eq!(m["max_kink_angle_deg"], 3.5);
-    assert_eq!(m["mean_radius"], 1.5);
+    assert_eq!(m["distinct_radii"], 15);
     assert!(!m.contains_key("max_node_axis_offset"));
     assert_eq!(v["timings_ms"]["panels"], 3.0);
     assert_close(&serde_json::to_value(Report::from_json(&text).unwrap()).unwrap(), &serde_json::to_value(&r).unwrap());

@@ -99,7 +99,7 @@ fn compare(path: &str, want: &Value, got: &Value, scale: f64, errors: &mut Vec<S
         (Value::Number(a), Value::Number(b)) => {
             let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
             let tol = TOLERANCE * scale.max(a.abs()).max(1.0);
-            if !((a - b).abs() <= tol) {
+            if (a - b).abs() > tol || (a - b).is_nan() {
                 errors.push(format!("{path}: {a:e} recorded, {b:e} now (tolerance {tol:e})"));
             }
         }

@@ -2,11 +2,12 @@
 //! robustness against corrupt input, welding, and the shared reference meshes.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
+mod common;
+
 use glam::DVec3;
 use spherical_faces::import::*;
-use spherical_faces::mesh::weld::{weld, WeldReport};
-use spherical_faces::mesh::TriMesh;
-use std::path::PathBuf;
+use spherical_faces::geometry::mesh::weld::{weld, WeldReport};
+use spherical_faces::geometry::mesh::TriMesh;
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
@@ -140,8 +141,7 @@ impl Lcg {
 }
 
 fn shared_mesh(name: &str) -> Vec<u8> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes").join(name);
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    common::shared_bytes(&format!("data/meshes/{name}"))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1048,4 +1048,32 @@ fn fuzz_mutations_long() {
         }
     }
     println!("ok results: {oks}");
+}
+
+/// OBJ quads stay quads (faces of 4 corners) beside the triangulation the algorithms use, and
+/// triangulating them gives that triangulation back, triangle for triangle.
+#[test]
+fn quads_stay_quads() {
+    use spherical_faces::geometry::mesh::topology::Topology;
+    let q = import_mesh(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n", "q.obj").unwrap();
+    assert_eq!(q.faces.iter().map(|f| f.len()).collect::<Vec<_>>(), [4, 3]);
+    assert_eq!(q.mesh.face_count(), 3);
+    assert_eq!(q.surface().triangulated(), q.mesh);
+    // The quad's drawn edges: 4 of its own and the triangle's 2 others, no diagonal.
+    assert_eq!(Topology::new(&q.surface()).edges().len(), 6);
+    // A quad whose other diagonal is the valid one is stored from that diagonal's corner.
+    let concave = import_mesh(b"v 0 0 0\nv 2 0 0\nv 0.5 0.5 0\nv 0 2 0\nf 1 2 3 4\n", "c.obj").unwrap();
+    assert_eq!(concave.faces.len(), 1);
+    assert_eq!(concave.surface().triangulated(), concave.mesh);
+    // A quad that welds into a triangle is a triangle.
+    let welded = import_mesh(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 1 1 0\nf 1 2 3 4\n", "w.obj").unwrap();
+    assert_eq!(welded.faces.iter().map(|f| f.len()).collect::<Vec<_>>(), [3]);
+    // The bubble is made of quads.
+    let bubble = import_mesh(&shared_mesh("botanic-garden-bubble-0.obj"), "bubble.obj").unwrap();
+    assert_eq!(bubble.faces.len(), 1076);
+    assert!(bubble.faces.iter().all(|f| f.len() == 4));
+    assert_eq!(bubble.surface().triangulated(), bubble.mesh);
+    let dome = import_mesh(&shared_mesh("tri_dome.obj"), "tri_dome.obj").unwrap();
+    assert!(dome.faces.iter().all(|f| f.len() == 3));
+    assert_eq!(dome.surface().triangulated(), dome.mesh);
 }

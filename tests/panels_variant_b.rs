@@ -1,4 +1,4 @@
-#![cfg(not(target_arch = "wasm32"))] // native: optional real data from ../shared
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared
 //! Panels for edge variant (b) (paper Fig. 12 bottom): every face sphere is cut by the bisecting
 //! planes of the adjacent face planes, one arc per panel, small gaps between panels.
 //!
@@ -11,19 +11,73 @@
 
 #![allow(clippy::needless_range_loop)]
 
+mod common;
+
 use std::collections::HashMap;
 
 use glam::DVec3;
 use serde_json::Value;
 use spherical_faces::export::{build_schedule, write_glb, write_obj};
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::import::import_mesh;
-use spherical_faces::mesh::TriMesh;
+use spherical_faces::panels::arc::Arc;
+use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::panels::gaps::{arc_gaps, max_arc_gap, EdgeGap, GAP_SAMPLES};
+use spherical_faces::panels::panel::Panel;
+use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use spherical_faces::panels::*;
+use spherical_faces::reference::Reference;
 use spherical_faces::rng::Rng;
 use spherical_faces::samples;
-use spherical_faces::sphere::Sphere;
-use spherical_faces::sphere_mesh::{BoundaryArcRule, SphereMesh};
-use spherical_faces::st_angle::{max_gap, FaceAdjacency, GAP_SAMPLES};
+
+/// The gaps of the panels of `sm` ([`arc_gaps`]).
+fn gaps_of(sm: &SphereMesh, panels: &[Panel], samples: usize) -> Vec<EdgeGap> {
+    arc_gaps(panels, sm.topology(), samples)
+}
+
+/// The largest gap of the panels of `sm` ([`max_arc_gap`]).
+fn max_gap_of(sm: &SphereMesh, panels: &[Panel], samples: usize) -> f64 {
+    max_arc_gap(panels, sm.topology(), samples).0
+}
+
+/// The test's own measure of the variant (b) gap, from the spheres alone: at 31 chord points
+/// x₀ = p + t (q − p) of every interior edge, the line x₀ + h w in the bisecting plane (w ⟂ edge)
+/// meets each sphere at the root h nearest the chord; the gap is the largest |h_f − h_g|.
+fn gap_along_bisecting_lines(sm: &SphereMesh) -> f64 {
+    let mesh = sm.mesh.triangulated();
+    let hit = |s: &Sphere, x0: DVec3, w: DVec3| -> Option<f64> {
+        let psi = s.eval(x0);
+        let bq = (2.0 * s.a * x0 - s.b).dot(w);
+        let disc = bq * bq - 4.0 * s.a * psi;
+        if disc < 0.0 {
+            return None;
+        }
+        let den = bq + bq.signum() * disc.sqrt();
+        if den == 0.0 {
+            return (psi == 0.0).then_some(0.0);
+        }
+        Some(-2.0 * psi / den)
+    };
+    let mut worst = 0.0f64;
+    for ((a, b), [(f, _), (g, _)]) in interior_edges(&mesh) {
+        let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        let e = (q - p).normalize_or_zero();
+        let nsum = mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero();
+        let w = (nsum - nsum.dot(e) * e).normalize_or_zero();
+        if w == DVec3::ZERO {
+            continue;
+        }
+        for k in 1..GAP_SAMPLES - 1 {
+            let x0 = p + (k as f64 / (GAP_SAMPLES - 1) as f64) * (q - p);
+            if let (Some(hf), Some(hg)) = (hit(&sm.face_spheres[f], x0, w), hit(&sm.face_spheres[g], x0, w)) {
+                worst = worst.max((hf - hg).abs());
+            }
+        }
+    }
+    worst
+}
 
 // ---------------------------------------------------------------------------------------------
 // Fixtures
@@ -55,7 +109,7 @@ fn spheres_toward(mesh: &TriMesh, target: &Sphere) -> Vec<Sphere> {
 }
 
 fn sphere_mesh(mesh: TriMesh, face_spheres: Vec<Sphere>) -> SphereMesh {
-    SphereMesh { mesh, face_spheres, boundary_arcs: BoundaryArcRule::Parallel(DVec3::ZERO) }
+    SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Parallel(DVec3::ZERO))
 }
 
 fn common() -> SphereMesh {
@@ -66,11 +120,11 @@ fn common() -> SphereMesh {
 
 fn perturbed() -> SphereMesh {
     let (mut mesh, s) = cap();
-    let adj = FaceAdjacency::new(&mesh);
+    let topo = Topology::new(&mesh);
     let mut rng = Rng(7);
     for v in 0..mesh.vertex_count() {
         let d = rng.vec(0.04);
-        if !adj.boundary_vertex[v] {
+        if !topo.is_boundary_vertex(v) {
             mesh.positions[v] += d;
         }
     }
@@ -81,7 +135,7 @@ fn perturbed() -> SphereMesh {
 fn mixed() -> SphereMesh {
     let mut sm = perturbed();
     for f in (0..sm.mesh.face_count()).step_by(5) {
-        let [p0, ..] = sm.mesh.face_points(f);
+        let p0 = sm.mesh.face_points(f)[0];
         sm.face_spheres[f] = Sphere::plane(p0, sm.mesh.face_area_vector(f).normalize());
     }
     sm
@@ -131,7 +185,7 @@ fn bisecting_normal(mesh: &TriMesh, e: (u32, u32), f: usize, g: usize) -> DVec3 
 }
 
 fn max_residual(s: &Sphere, pts: impl IntoIterator<Item = DVec3>) -> f64 {
-    pts.into_iter().map(|x| distance_to_sphere(s, x)).fold(0.0, f64::max)
+    pts.into_iter().map(|x| s.distance(x)).fold(0.0, f64::max)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -162,7 +216,7 @@ fn tessellation_lies_on_the_face_spheres() {
 fn interior_arcs_lie_in_the_bisecting_planes_and_end_at_the_vertices() {
     for (name, sm) in fixtures() {
         let d = diag(&sm);
-        let mesh = &sm.mesh;
+        let mesh = &sm.mesh.triangulated();
         let panels = panels_b(&sm);
         let mut worst = 0.0f64;
         for (e, sides) in interior_edges(mesh) {
@@ -227,7 +281,7 @@ fn plane_faces_give_straight_edges() {
         assert_eq!(p.triangles.len(), 1);
     }
     // A spherical panel next to a plane one keeps its curved arc: the edge has a gap.
-    let gaps = arc_gaps(&panels, GAP_SAMPLES);
+    let gaps = gaps_of(&sm, &panels, GAP_SAMPLES);
     let plane_sphere: Vec<f64> =
         gaps.iter().filter(|g| panels[g.faces[0]].is_planar() != panels[g.faces[1]].is_planar()).map(|g| g.gap).collect();
     assert!(plane_sphere.len() >= 10, "{}", plane_sphere.len());
@@ -238,7 +292,7 @@ fn plane_faces_give_straight_edges() {
     let flat = flat();
     let panels = panels_b(&flat);
     assert!(panels.iter().all(|p| p.arcs.iter().all(Arc::is_straight) && p.triangles.len() == 1));
-    assert_eq!(max_arc_gap(&panels, GAP_SAMPLES), 0.0);
+    assert_eq!(max_gap_of(&flat, &panels, GAP_SAMPLES), 0.0);
     let area: f64 = panels.iter().map(|p| p.area).sum();
     assert!((area - 2.0).abs() < 1e-12, "{area}");
 }
@@ -251,23 +305,23 @@ fn gap_is_zero_when_the_faces_share_one_sphere() {
     let sm = common();
     let d = diag(&sm);
     let panels = panels_b(&sm);
-    let ours = max_arc_gap(&panels, GAP_SAMPLES);
-    let theirs = max_gap(&sm.mesh, &sm.face_spheres, &FaceAdjacency::new(&sm.mesh));
-    println!("common sphere: max arc gap = {:.3e} · diag, st_angle::max_gap = {:.3e} · diag", ours / d, theirs / d);
+    let ours = max_gap_of(&sm, &panels, GAP_SAMPLES);
+    let theirs = gap_along_bisecting_lines(&sm);
+    println!("common sphere: max arc gap = {:.3e} · diag, line measure = {:.3e} · diag", ours / d, theirs / d);
     assert!(ours <= 1e-9 * d, "{ours:e}");
     assert!(theirs <= 1e-9 * d, "{theirs:e}");
     // Variant (b) arcs are genuinely per panel (the bisecting plane, not the intersection
     // circle, which does not exist for identical spheres).
-    assert_eq!(arc_gaps(&panels, GAP_SAMPLES).len(), interior_edges(&sm.mesh).len());
+    assert_eq!(gaps_of(&sm, &panels, GAP_SAMPLES).len(), interior_edges(&sm.mesh.triangulated()).len());
 }
 
 #[test]
-fn gap_is_positive_where_the_spheres_differ_and_agrees_with_st_angle_max_gap() {
+fn gap_is_positive_where_the_spheres_differ_and_agrees_with_the_line_measure() {
     for (name, sm) in [("perturbed", perturbed()), ("mixed", mixed())] {
         let d = diag(&sm);
         let panels = panels_b(&sm);
-        let gaps = arc_gaps(&panels, GAP_SAMPLES);
-        assert_eq!(gaps.len(), interior_edges(&sm.mesh).len());
+        let gaps = gaps_of(&sm, &panels, GAP_SAMPLES);
+        assert_eq!(gaps.len(), interior_edges(&sm.mesh.triangulated()).len());
         let mut smallest = f64::INFINITY;
         for g in &gaps {
             let [f, h] = g.faces;
@@ -279,11 +333,11 @@ fn gap_is_positive_where_the_spheres_differ_and_agrees_with_st_angle_max_gap() {
                 assert!(g.gap > 0.0, "{name}: edge {:?} kink {kink} but no gap", g.edge);
             }
         }
-        let ours = max_arc_gap(&panels, GAP_SAMPLES);
-        let theirs = max_gap(&sm.mesh, &sm.face_spheres, &FaceAdjacency::new(&sm.mesh));
-        let fine = max_arc_gap(&panels, 1001);
+        let ours = max_gap_of(&sm, &panels, GAP_SAMPLES);
+        let theirs = gap_along_bisecting_lines(&sm);
+        let fine = max_gap_of(&sm, &panels, 1001);
         println!(
-            "{name}: max arc gap = {:.6e} · diag (33 samples), {:.6e} · diag (1001 samples); st_angle::max_gap = {:.6e} · diag; |diff| = {:.3e} · diag; smallest gap at kink > 1e-4: {:.3e} · diag",
+            "{name}: max arc gap = {:.6e} · diag (33 samples), {:.6e} · diag (1001 samples); line measure = {:.6e} · diag; |diff| = {:.3e} · diag; smallest gap at kink > 1e-4: {:.3e} · diag",
             ours / d,
             fine / d,
             theirs / d,
@@ -297,7 +351,7 @@ fn gap_is_positive_where_the_spheres_differ_and_agrees_with_st_angle_max_gap() {
 
         // The same spheres with variant (a) arcs: one shared arc per edge, no gap at all.
         let a = build_panels(&sm, 1e-4 * d);
-        assert_eq!(max_arc_gap(&a, GAP_SAMPLES), 0.0);
+        assert_eq!(max_gap_of(&sm, &a, GAP_SAMPLES), 0.0);
     }
 }
 
@@ -306,9 +360,9 @@ fn gap_per_edge_matches_a_direct_sphere_computation() {
     // Independent of `Arc`: on the line x₀ + s w in the bisecting plane (w ⟂ edge), solve
     // ψ(x₀ + s w) = 0 for the root nearest the chord, for both spheres.
     let sm = perturbed();
-    let mesh = &sm.mesh;
+    let mesh = &sm.mesh.triangulated();
     let panels = panels_b(&sm);
-    let gaps: HashMap<[u32; 2], f64> = arc_gaps(&panels, 9).into_iter().map(|g| (g.edge, g.gap)).collect();
+    let gaps: HashMap<[u32; 2], f64> = gaps_of(&sm, &panels, 9).into_iter().map(|g| (g.edge, g.gap)).collect();
     let root = |s: &Sphere, x0: DVec3, w: DVec3| -> f64 {
         // a s² + β s + ψ(x₀) = 0, β = ⟨2a x₀ − b, w⟩.
         let (a, beta, c) = (s.a, (2.0 * s.a * x0 - s.b).dot(w), s.eval(x0));
@@ -342,7 +396,7 @@ fn gap_per_edge_matches_a_direct_sphere_computation() {
 
 #[test]
 fn point_over_chord_on_known_arcs() {
-    use spherical_faces::sphere_mesh::Circle;
+    use spherical_faces::geometry::circle::Circle;
     // Circle of radius 2 about the origin in the xy-plane; chord from (2,0,0) to (0,2,0).
     let c = Circle { center: DVec3::ZERO, normal: DVec3::Z, radius: 2.0 };
     let minor = Arc { circle: c, from: DVec3::new(2.0, 0.0, 0.0), to: DVec3::new(0.0, 2.0, 0.0) };
@@ -417,7 +471,7 @@ fn exports_accept_variant_b_panels() {
             im_a.mesh.vertex_count(),
             im_a.stats.boundary_vertices
         );
-        let interior_arc_points: usize = interior_edges(&sm.mesh)
+        let interior_arc_points: usize = interior_edges(&sm.mesh.triangulated())
             .iter()
             .map(|(_, [(f, k), (g, l)])| panels[*f].arc_vertices[*k].len() + panels[*g].arc_vertices[*l].len() - 4)
             .sum();
@@ -429,21 +483,15 @@ fn exports_accept_variant_b_panels() {
         let im = import_mesh(obj.as_bytes(), "variant-b.obj").unwrap();
         assert_eq!(im.mesh.face_count(), total, "{name}");
 
-        let schedule = build_schedule(&panels, &sm.mesh, 1e-3);
+        let schedule = build_schedule(&panels, &Reference::from_triangles(sm.mesh.triangulated()), 1e-3);
         assert_eq!(schedule.panel_count, sm.mesh.face_count());
         assert!(schedule.panels.iter().all(|r| r.triangles > 0 && r.area > 0.0));
     }
 }
 
 #[test]
-fn real_mesh_if_available() {
-    // Optional: a real triangulation from ../shared/data/meshes (skipped when absent).
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/meshes/tri_dome.obj");
-    let Ok(bytes) = std::fs::read(&path) else {
-        println!("skipped: {} not found", path.display());
-        return;
-    };
-    let mesh = import_mesh(&bytes, "tri_dome.obj").unwrap().mesh;
+fn tri_dome_panels() {
+    let mesh = common::load("tri_dome");
     // Face spheres fitted per face: the member of the vertices' pencil (cos θ s₀ + sin θ s₁,
     // normalized for every θ) minimizing Σ ψ² over the opposite vertices of the neighbours
     // (smallest eigenvector of a 2 × 2 matrix), oriented like the face.
@@ -472,8 +520,8 @@ fn real_mesh_if_available() {
     let d = diag(&sm);
     let panels = panels_b(&sm);
     let folded: usize = panels.iter().map(Panel::folded_triangles).sum();
-    let ours = max_arc_gap(&panels, GAP_SAMPLES);
-    let theirs = max_gap(&sm.mesh, &sm.face_spheres, &FaceAdjacency::new(&sm.mesh));
+    let ours = max_gap_of(&sm, &panels, GAP_SAMPLES);
+    let theirs = gap_along_bisecting_lines(&sm);
     let res = panels.iter().map(|p| max_residual(&p.sphere, p.positions.iter().copied())).fold(0.0, f64::max);
     println!(
         "tri_dome: {} faces, folded {folded}, residual {:.3e} · diag, max arc gap {:.6e} · diag, max_gap {:.6e} · diag",

@@ -1,10 +1,14 @@
 //! The worker protocol and session, natively: the same code the Web Worker runs.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
-use spherical_faces::curvature::JetParams;
+use spherical_faces::congruence::central_spheres::JetParams;
+use spherical_faces::pipeline::fields::{field, find, Field, StageProgress};
 use spherical_faces::pipeline::protocol::*;
-use spherical_faces::pipeline::{Session, Sink};
+use spherical_faces::pipeline::stages::st_adapted;
+use spherical_faces::pipeline::{Outbox, Session};
 use spherical_faces::samples::Sample;
+use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_support::StSupportParams;
 
 /// Records messages, round-tripping each through the wire encoding; cancels after `cancel_after`
 /// progress messages.
@@ -15,7 +19,7 @@ struct Recorder {
     progress_seen: usize,
 }
 
-impl Sink for Recorder {
+impl Outbox for Recorder {
     fn send(&mut self, msg: FromWorker, fields: Vec<Field>) {
         if matches!(msg, FromWorker::Progress(_)) {
             self.progress_seen += 1;
@@ -32,6 +36,10 @@ impl Sink for Recorder {
     fn now_ms(&self) -> f64 {
         0.0
     }
+}
+
+fn run(stage: StageRequest) -> ToWorker {
+    ToWorker::Run(Box::new(stage))
 }
 
 fn send(session: &mut Session, sink: &mut Recorder, msg: ToWorker, bytes: Option<Vec<u8>>) {
@@ -58,7 +66,7 @@ fn load_sample_then_curvature_streams_snapshots() {
     assert!(tri.iter().all(|&i| (i as usize) < info.stats.vertices));
 
     r.messages.clear();
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(matches!(r.messages[0].0, FromWorker::Progress(_)));
     let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "curvature")).unwrap();
     let h = find(&snap.1, field::MEAN_CURVATURE).unwrap().as_f32().unwrap();
@@ -83,7 +91,7 @@ fn a_bad_file_reports_an_error_and_keeps_the_design() {
     assert_eq!(s.reference.as_ref().unwrap().info.source, Source::Sample(Sample::TorusPatch));
     // The previous reference still computes.
     r.messages.clear();
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(matches!(r.messages.last().unwrap().0, FromWorker::Finished { .. }));
 }
 
@@ -102,7 +110,7 @@ fn a_file_loads_through_the_session() {
 fn running_without_a_reference_is_an_error() {
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(matches!(&r.messages[0].0, FromWorker::Error { .. }));
 }
 
@@ -114,7 +122,7 @@ fn cancel_takes_effect_within_one_iteration() {
     r.messages.clear();
     r.cancel_after = Some(1);
     r.progress_seen = 0;
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::Curvature(JetParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     let kinds: Vec<_> = r.messages.iter().map(|m| std::mem::discriminant(&m.0)).collect();
     assert_eq!(r.progress_seen, 1, "stopped at the first iteration boundary");
     assert!(matches!(r.messages.last().unwrap().0, FromWorker::Cancelled { .. }), "{kinds:?}");
@@ -123,17 +131,16 @@ fn cancel_takes_effect_within_one_iteration() {
 
 #[test]
 fn st_support_streams_panels_files_and_a_report() {
-    use spherical_faces::pipeline::st_support::{fields as stf, StSupportRequest};
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     r.messages.clear();
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::StSupport(StSupportRequest::default())), None);
+    send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
     let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "st-support")).unwrap();
-    let tri = find(&snap.1, stf::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
-    let pos = find(&snap.1, stf::PANEL_POSITIONS).unwrap().as_f32().unwrap();
+    let tri = find(&snap.1, field::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
+    let pos = find(&snap.1, field::PANEL_POSITIONS).unwrap().as_f32().unwrap();
     assert!(!tri.is_empty() && tri.iter().all(|&i| (i as usize) < pos.len() / 3));
-    assert!(!find(&snap.1, stf::AXES_LINES).unwrap().as_u32().unwrap().is_empty());
+    assert!(!find(&snap.1, field::AXES_LINES).unwrap().as_u32().unwrap().is_empty());
     let (FromWorker::Files { fields, mime, .. }, bodies) = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap() else { panic!() };
     let names: Vec<_> = fields.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
@@ -151,13 +158,12 @@ fn st_support_streams_panels_files_and_a_report() {
 
 #[test]
 fn st_support_on_a_minimal_surface_is_refused() {
-    use spherical_faces::pipeline::st_support::StSupportRequest;
     let bytes = std::fs::read("../shared/data/meshes/enneper2.obj").unwrap();
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadFile { name: "enneper2.obj".into() }, Some(bytes));
     r.messages.clear();
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::StSupport(StSupportRequest::default())), None);
+    send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
     let Some((FromWorker::Error { message }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
     assert!(message.contains("no usable central spheres"), "{message}");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. })));
@@ -167,18 +173,18 @@ fn st_support_on_a_minimal_surface_is_refused() {
 /// panels, per-iteration energies, the files and its summary, in that order.
 #[test]
 fn st_stage_streams_sizing_remesh_panels_and_energies() {
-    use spherical_faces::pipeline::st_angle::{fields as stf, StRequest, REMESHED_STAGE, SIZING_STAGE, STAGE};
-    use spherical_faces::pipeline::st_support::fields as pf;
+    use st_adapted::{REMESHED_STAGE, SIZING_STAGE, STAGE};
+    let (stf, pf) = (field::SIZING, field::PANEL_TRIANGLES);
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!() };
     r.messages.clear();
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::St(StRequest::default())), None);
+    send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
     let pos = |stage: &str| r.messages.iter().position(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if s == stage));
     let (i_sizing, i_remesh, i_panels) = (pos(SIZING_STAGE).unwrap(), pos(REMESHED_STAGE).unwrap(), pos(STAGE).unwrap());
     assert!(i_sizing < i_remesh && i_remesh < i_panels);
-    let g = find(&r.messages[i_sizing].1, stf::SIZING).unwrap().as_f32().unwrap();
+    let g = find(&r.messages[i_sizing].1, stf).unwrap().as_f32().unwrap();
     assert_eq!(g.len(), info.stats.vertices);
     assert!(g.iter().all(|x| x.is_finite() && *x > 0.0));
     let remeshed = &r.messages[i_remesh].1;
@@ -187,7 +193,7 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     assert!(rt.len() / 3 > 100 && rt.len() / 3 < 1000, "{} faces", rt.len() / 3);
     assert!(rt.iter().all(|&i| (i as usize) < rp.len() / 3));
     // Every iteration reports its energies; the total is the sum of the term energies.
-    let energies: Vec<&Progress> = r
+    let energies: Vec<&StageProgress> = r
         .messages
         .iter()
         .filter_map(|m| match &m.0 {
@@ -215,12 +221,12 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     assert_eq!(panel_snaps.first(), Some(&0));
     assert_eq!(panel_snaps.last(), Some(&45));
     let last = r.messages.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == STAGE)).unwrap();
-    let tri = find(&last.1, pf::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
+    let tri = find(&last.1, pf).unwrap().as_u32().unwrap();
     assert!(tri.len() / 3 >= rt.len() / 3);
     let files = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap();
     let names: Vec<&str> = files.1.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
-    let Some((FromWorker::Finished { result: StageResult::St(summary), .. }, _)) = r.messages.last() else { panic!() };
+    let Some((FromWorker::Finished { result: StageResult::StAdapted(summary), .. }, _)) = r.messages.last() else { panic!() };
     assert_eq!(summary.report.method, "st");
     assert_eq!(summary.iterations, 45);
     assert_eq!(summary.remeshed_faces, rt.len() / 3);
@@ -230,17 +236,31 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     assert!(lo > 0.0 && lo <= hi);
 }
 
-/// A cancel during the optimization stops the stage with Cancelled, and the design stays.
+/// A cancel during the optimization stops the stage within the iteration: no iteration, panels or
+/// files after the cancel request, Cancelled, and the loaded design is intact (it computes again).
 #[test]
-fn st_stage_cancels_between_iterations() {
-    use spherical_faces::pipeline::st_angle::StRequest;
+fn st_stage_cancels_within_one_iteration() {
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!() };
     r.messages.clear();
     r.cancel_after = Some(25);
-    send(&mut s, &mut r, ToWorker::Run(StageRequest::St(StRequest::default())), None);
+    r.progress_seen = 0;
+    send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
     assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "st"), "{:?}", r.messages.last().unwrap().0);
+    // The cancel was requested once 25 progress messages had been sent: the 25th is the last.
+    let progress: Vec<usize> = r.messages.iter().enumerate().filter(|(_, m)| matches!(m.0, FromWorker::Progress(_))).map(|(i, _)| i).collect();
+    assert_eq!(progress.len(), 25, "progress after the cancel request");
+    let after = &r.messages[progress[24] + 1..];
+    assert_eq!(after.len(), 1, "only Cancelled follows: {:?}", after.iter().map(|m| &m.0).collect::<Vec<_>>());
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
-    assert!(s.reference.is_some());
+    // The design is what was loaded, and runs again to the end.
+    let loaded = s.reference.as_ref().expect("the reference is kept");
+    assert_eq!(loaded.info, info);
+    assert_eq!(loaded.surface.mesh().face_count(), info.stats.faces);
+    r.messages.clear();
+    r.cancel_after = None;
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(matches!(r.messages.last().unwrap().0, FromWorker::Finished { .. }));
 }

@@ -2,28 +2,27 @@
 //! `-- --nocapture` to see the measured numbers; `-- --ignored` runs the 100k-triangle timing.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared
 
+mod common;
+
+use common::load;
 use glam::DVec3;
-use spherical_faces::curvature::{jet_fit, CurvatureField, JetParams};
-use spherical_faces::export::closest::TriangleBvh;
-use spherical_faces::import::import_mesh;
-use spherical_faces::mesh::{Topology, TriMesh};
-use spherical_faces::remesh::halfedge::{HalfedgeMesh, Stamp};
-use spherical_faces::remesh::{
+use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
+use spherical_faces::geometry::closest::TriangleBvh;
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::halfedge::{HalfedgeMesh, Stamp};
+use spherical_faces::remeshing::{
     influence_zone, local_spheres_orthogonal, mean_edge_length, pliant_remesh, pliant_remesh_with_stats, RemeshParams,
     SizingBounds, SizingField, DEFAULT_EPSILON,
 };
 use spherical_faces::samples::{cylinder_patch, sphere_patch, Sample};
-use spherical_faces::sphere::Sphere;
-use spherical_faces::sphere_mesh::AbsoluteSphere;
+use spherical_faces::geometry::sphere::Sphere;
+use spherical_faces::progress::Cancelled;
+use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
 
-fn load(name: &str) -> TriMesh {
-    let path = format!("{}/../shared/data/meshes/{name}.obj", env!("CARGO_MANIFEST_DIR"));
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    import_mesh(&bytes, &format!("{name}.obj")).expect("imports").mesh
-}
 
 fn fit(mesh: &TriMesh, topo: &Topology) -> CurvatureField {
-    jet_fit(mesh, topo, &JetParams::default(), &mut |_, _| true).expect("not cancelled")
+    jet_fit(mesh, topo, &JetParams::default(), &mut spherical_faces::progress::ignore).expect("not cancelled")
 }
 
 fn adaptive(mesh: &TriMesh, eps_rel: f64) -> SizingField {
@@ -34,7 +33,7 @@ fn adaptive(mesh: &TriMesh, eps_rel: f64) -> SizingField {
 
 fn remesh(mesh: &TriMesh, sizing: &SizingField, rounds: usize) -> TriMesh {
     let params = RemeshParams { rounds, ..Default::default() };
-    pliant_remesh(mesh, sizing, &params, &mut |_, _| true).expect("not cancelled")
+    pliant_remesh(mesh, sizing, &params, &mut spherical_faces::progress::ignore).expect("not cancelled")
 }
 
 /// Boundary loops and Euler characteristic V − E + F.
@@ -129,7 +128,7 @@ fn uniform_sizing_on_tri_mesh_reaches_target_lengths() {
     let sizing = SizingField::uniform(&reference, g);
     let params = RemeshParams::default();
     assert_eq!(params.rounds, 10);
-    let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut |_, _| true).unwrap();
+    let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut spherical_faces::progress::ignore).unwrap();
     let (frac, edges) = fraction_within(&out.mesh, 0.8 * g, 4.0 / 3.0 * g);
     let min_angle = assert_valid("tri_mesh uniform", &reference, &out.mesh);
     println!(
@@ -226,7 +225,7 @@ fn local_spheres_orthogonal_to_omega_reproduce_a_sphere_orthogonal_to_it() {
     let diag = mesh.bbox_diagonal();
     let bounds = SizingBounds::for_mesh(&mesh, &topo);
     let sizing =
-        SizingField::from_sphere_fn(&mesh, &topo, &|i| spheres[i], 1e-4 * diag, bounds, &mut |_, _| true).unwrap();
+        SizingField::from_sphere_fn(&mesh, &topo, &|i| spheres[i], 1e-4 * diag, bounds, &mut spherical_faces::progress::ignore).unwrap();
     assert!(sizing.values().iter().all(|&g| g == bounds.g_max));
     // And on a surface that is not spherical the zones are finite.
     let cyl = cylinder_patch(2.0, 1.5, 8.0, 24, 48);
@@ -238,7 +237,7 @@ fn local_spheres_orthogonal_to_omega_reproduce_a_sphere_orthogonal_to_it() {
         16,
     );
     let cb = SizingBounds::for_mesh(&cyl, &ctopo);
-    let cz = SizingField::from_sphere_fn(&cyl, &ctopo, &|i| cs[i], 1e-3 * cyl.bbox_diagonal(), cb, &mut |_, _| true)
+    let cz = SizingField::from_sphere_fn(&cyl, &ctopo, &|i| cs[i], 1e-3 * cyl.bbox_diagonal(), cb, &mut spherical_faces::progress::ignore)
         .unwrap();
     let (lo, mean, hi) = cz.summary();
     println!("cylinder, spheres ⟂ Ω: g ∈ [{lo:.3}, {hi:.3}], mean {mean:.3}, bounds {cb:?}");
@@ -414,22 +413,26 @@ fn noisy_and_non_manifold_input_is_handled() {
 }
 
 #[test]
-fn cancelling_returns_none() {
+fn cancelling_stops_with_cancelled() {
     let mesh = Sample::Dome.mesh();
     let sizing = SizingField::uniform(&mesh, 2.0);
     let mut calls = 0;
-    let r = pliant_remesh(&mesh, &sizing, &RemeshParams::default(), &mut |round, of| {
-        assert_eq!(of, 10);
+    let r = pliant_remesh(&mesh, &sizing, &RemeshParams::default(), &mut |p| {
+        assert_eq!((p.step, p.total), ("remesh", 10));
         calls += 1;
-        round < 2
+        if p.done < 2 {
+            Ok(())
+        } else {
+            Err(Cancelled)
+        }
     });
-    assert!(r.is_none());
+    assert_eq!(r.err(), Some(spherical_faces::remeshing::RemeshError::Cancelled));
     assert_eq!(calls, 3);
     let topo = Topology::new(&mesh);
     let field = fit(&mesh, &topo);
     let bounds = SizingBounds::for_mesh(&mesh, &topo);
-    let s = SizingField::from_sphere_fn(&mesh, &topo, &|i| field.central_spheres[i], 0.01, bounds, &mut |_, _| false);
-    assert!(s.is_none());
+    let s = SizingField::from_sphere_fn(&mesh, &topo, &|i| field.central_spheres[i], 0.01, bounds, &mut |_| Err(Cancelled));
+    assert!(s.is_err());
 }
 
 #[test]
@@ -506,7 +509,7 @@ fn one_round_at_100k_triangles() {
     ] {
         let params = RemeshParams { rounds: 1, ..Default::default() };
         let t = now();
-        let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut |_, _| true).unwrap();
+        let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut spherical_faces::progress::ignore).unwrap();
         println!(
             "{label}: one round {:.0} ms, {} faces, {:?}",
             t.elapsed().as_secs_f64() * 1e3,
@@ -523,7 +526,7 @@ fn one_round_at_100k_triangles() {
     let t_sizing = t.elapsed().as_secs_f64() * 1e3;
     let params = RemeshParams { rounds: 1, ..Default::default() };
     let t = now();
-    let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut |_, _| true).unwrap();
+    let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut spherical_faces::progress::ignore).unwrap();
     println!(
         "adaptive ε = {DEFAULT_EPSILON:e}: jet fit {t_fit:.0} ms, sizing {t_sizing:.0} ms, one round {:.0} ms → {} faces",
         t.elapsed().as_secs_f64() * 1e3,

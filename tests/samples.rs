@@ -3,14 +3,15 @@
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
-use spherical_faces::curvature::{jet_fit, CurvatureField, JetParams, SIGN_CHANGE_THRESHOLD};
-use spherical_faces::mesh::{Topology, TriMesh};
+use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams, SIGN_CHANGE_THRESHOLD};
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::samples::{dome_height, torus_closed_form, Sample};
 use std::collections::HashMap;
 
 fn fit(mesh: &TriMesh) -> CurvatureField {
     let topo = Topology::new(mesh);
-    jet_fit(mesh, &topo, &JetParams::default(), &mut |_, _| true).unwrap()
+    jet_fit(mesh, &topo, &JetParams::default(), &mut spherical_faces::progress::ignore).unwrap()
 }
 
 #[test]

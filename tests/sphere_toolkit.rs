@@ -5,9 +5,11 @@
 
 use glam::DVec3;
 use spherical_faces::rng::Rng;
-use spherical_faces::sphere::dense::Svd;
-use spherical_faces::sphere::{second_common_point, star_axis, Sphere, STAR_AXIS_MIN_CONDITION};
-use spherical_faces::sphere_mesh::{AbsoluteSphere, Circle};
+use spherical_faces::geometry::linalg::Svd;
+use spherical_faces::congruence::support_structure::{second_common_point, star_axis, STAR_AXIS_MIN_CONDITION};
+use spherical_faces::geometry::sphere::Sphere;
+use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
+use spherical_faces::geometry::circle::Circle;
 
 fn assert_normalized(s: &Sphere) {
     assert!((s.discriminant() - 1.0).abs() < 1e-12, "not normalized: {s:?} ({})", s.discriminant());
@@ -65,7 +67,7 @@ fn frame_round_trip_and_distance() {
     let mut rng = Rng(11);
     for _ in 0..50 {
         let s =
-            Sphere::from_center_radius(rng.vec(5.0), rng.range(0.3, 4.0) * if rng.next() < 0.5 { -1.0 } else { 1.0 });
+            Sphere::from_center_radius(rng.vec(5.0), rng.range(0.3, 4.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 });
         let (t, sigma) = (rng.vec(3.0), rng.range(0.1, 10.0));
         let local = s.in_frame(t, sigma);
         // Same set, same orientation.
@@ -163,13 +165,13 @@ fn member_orthogonal_to_omega_recovers_a_known_sphere() {
             r2 = 0.0;
             let omega = AbsoluteSphere::Sphere { center: m0, r2 };
             let p = [c + rng.unit() * r.abs(), c + rng.unit() * r.abs(), c + rng.unit() * r.abs()];
-            let s = Sphere::through_points_orthogonal(p, &omega).unwrap();
+            let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
             assert!(s.distance(m0) < 1e-11 * r.abs(), "passes through m: {}", s.distance(m0));
             continue;
         }
         let omega = AbsoluteSphere::Sphere { center: m, r2 };
         let p = [c + rng.unit() * r.abs(), c + rng.unit() * r.abs(), c + rng.unit() * r.abs()];
-        let s = Sphere::through_points_orthogonal(p, &omega).unwrap();
+        let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
         assert_normalized(&s);
         check_orthogonal(&s, &omega, r.abs() + (c - m).length());
         for q in p {
@@ -198,7 +200,7 @@ fn member_orthogonal_to_plane_omega_and_plane_members() {
         let d = rng.range(-3.0, 3.0);
         let omega = AbsoluteSphere::Plane { axis, d };
         let p = triangle(&mut rng, 1.0);
-        let s = Sphere::through_points_orthogonal(p, &omega).unwrap();
+        let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
         assert_normalized(&s);
         let c = s.center().unwrap();
         assert!((c.dot(axis) - d).abs() < 1e-10 * (1.0 + c.length()), "centre off the plane: {}", c.dot(axis) - d);
@@ -213,20 +215,20 @@ fn member_orthogonal_to_plane_omega_and_plane_members() {
         let m = DVec3::new(0.3, -0.2, 0.0);
         let omega = AbsoluteSphere::Sphere { center: m, r2 };
         let p = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 2.0, 0.0), DVec3::new(-1.0, -1.0, 0.0)];
-        let s = Sphere::through_points_orthogonal(p, &omega).unwrap();
+        let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
         assert!(s.a.abs() < 1e-14, "{s:?}");
         assert!((s.b - DVec3::Z).length() < 1e-14);
         assert!(s.c.abs() < 1e-14);
         // Nearly so: a huge sphere, continuously.
         let q = [p[0], p[1], DVec3::new(-1.0, -1.0, 1e-9)];
-        let s = Sphere::through_points_orthogonal(q, &omega).unwrap();
+        let s = Sphere::through_points_orthogonal(q, &omega.coefficients()).unwrap();
         assert!(s.a.abs() < 1e-8 && s.a != 0.0, "{s:?}");
         check_orthogonal(&s, &omega, 1.0 / s.a.abs());
     }
     // Degenerate: R² = 0 with m on the points' circle: every member passes through m.
     let p = [DVec3::X, DVec3::Y, -DVec3::X];
     let omega = AbsoluteSphere::Sphere { center: -DVec3::Y, r2: 0.0 };
-    assert!(Sphere::through_points_orthogonal(p, &omega).is_none());
+    assert!(Sphere::through_points_orthogonal(p, &omega.coefficients()).is_none());
 }
 
 #[test]
@@ -334,7 +336,7 @@ fn inversion_and_power() {
         // A sphere orthogonal to Ω is mapped onto itself (also for R² < 0).
         if r2 != 0.0 {
             let p = [rng.vec(3.0), rng.vec(3.0), rng.vec(3.0)];
-            let s = Sphere::through_points_orthogonal(p, &omega).unwrap();
+            let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
             for q in p {
                 let y = omega.invert(q).unwrap();
                 assert!(s.distance(y) < 1e-11 * (1.0 + y.length()), "{}", s.distance(y));
@@ -367,7 +369,7 @@ fn star(rng: &mut Rng, v: DVec3, omega: &AbsoluteSphere, count: usize) -> Vec<Sp
     (0..count)
         .map(|_| {
             let p = [v, v + rng.vec(1.0), v + rng.vec(1.0)];
-            Sphere::through_points_orthogonal(p, omega).unwrap()
+            Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap()
         })
         .collect()
 }
@@ -380,7 +382,7 @@ fn second_common_point_of_a_star() {
         let omega = AbsoluteSphere::Sphere { center: m, r2 };
         for _ in 0..50 {
             let v = rng.vec(2.0);
-            let k = 3 + (rng.next() * 5.0) as usize;
+            let k = 3 + (rng.uniform() * 5.0) as usize;
             let spheres = star(&mut rng, v, &omega, k);
             let expected = omega.invert(v).unwrap();
             let got = second_common_point(&spheres, v).expect("determined");

@@ -1,34 +1,38 @@
-//! ST meshes with support structure (issue 3 §2, §3, §6): the absolute sphere Ω (synthetic
-//! recovery of m, the LM Jacobian, the orientation flip, the trivial sphere and the plane case,
-//! the minimal-surface refusal) and the full construction on the reference meshes
-//! `tri_mesh.obj`, `botanic-garden-bubble-0.obj` (quads, triangulated by the importer) and
-//! `cmc1.obj`. Run with `-- --nocapture` for the metrics table.
+//! ST meshes with support structure (Sec. 4): the absolute sphere Ω (synthetic recovery of m,
+//! the LM Jacobian, the orientation flip, the trivial sphere and the plane case, the
+//! minimal-surface refusal) and the full construction on the reference meshes `tri_mesh.obj`,
+//! `botanic-garden-bubble-0.obj` (quads, triangulated by the importer) and `cmc1.obj`.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
+mod common;
+
+use common::load;
 use glam::DVec3;
+use spherical_faces::congruence::central_spheres::{jet_fit, JetParams};
+use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
+use spherical_faces::geometry::mesh::{PolyMesh, TriMesh};
+use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::panels::sphere_mesh::BoundaryArcRule;
+use spherical_faces::progress::{ignore, Cancelled, Clock, OnProgress};
+use spherical_faces::reference::Reference;
 use spherical_faces::rng::Rng;
-use spherical_faces::absolute_sphere::{
-    center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines,
-    spherical_barycenter, summary_stats, AbsoluteSphereParams, Histogram,
-};
-use spherical_faces::curvature::{jet_fit, JetParams};
-use spherical_faces::import::import_mesh;
-use spherical_faces::mesh::{Topology, TriMesh};
 use spherical_faces::samples::{sphere_cap, Sample};
-use spherical_faces::sphere_mesh::{AbsoluteSphere, BoundaryArcRule};
-use spherical_faces::st_support::{native_clock_ms, st_support, Clock, StSupportParams, StSupportResult};
+use spherical_faces::st_support::absolute_sphere::{
+    center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines,
+    spherical_barycenter, AbsoluteSphereParams,
+};
+use spherical_faces::st_support::{compute, StSupportError, StSupportParams, StSupportResult};
+use spherical_faces::stats::{summary_stats, Histogram};
 
 const MESHES: [&str; 3] = ["tri_mesh", "botanic-garden-bubble-0", "cmc1"];
 
-fn load(name: &str) -> TriMesh {
-    let path = format!("{}/../shared/data/meshes/{name}.obj", env!("CARGO_MANIFEST_DIR"));
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    import_mesh(&bytes, &format!("{name}.obj")).expect("imports").mesh
+fn st_support(mesh: &TriMesh, params: &StSupportParams, progress: &mut OnProgress) -> Result<StSupportResult, StSupportError> {
+    compute(&Reference::from_triangles(mesh.clone()), params, Clock::native(), progress)
 }
 
 fn run(mesh: &TriMesh, optimize_radius: bool) -> StSupportResult {
-    let params = StSupportParams { optimize_radius, clock: Clock(Some(native_clock_ms)), ..Default::default() };
-    st_support(mesh, &params, &mut |_, _, _| true).expect("st-support succeeds")
+    let params = StSupportParams { optimize_radius, ..Default::default() };
+    st_support(mesh, &params, &mut ignore).expect("st-support succeeds")
 }
 
 /// A wavy patch z = f(x, y) over [−5, 5]² (points only) with normals pointing exactly away from m.
@@ -186,15 +190,15 @@ fn distant_centre_makes_omega_a_plane() {
 #[test]
 fn minimal_surface_is_refused_with_a_clear_message() {
     let mesh = load("enneper2");
-    let err = st_support(&mesh, &StSupportParams::default(), &mut |_, _, _| true).unwrap_err();
+    let err = st_support(&mesh, &StSupportParams::default(), &mut ignore).unwrap_err().to_string();
     assert!(
         err.contains("no usable central spheres") && err.contains("H ≈ 0 on") && err.contains("minimal surface"),
         "{err}"
     );
     // The same from the estimate itself, with the counts.
     let topo = Topology::new(&mesh);
-    let field = jet_fit(&mesh, &topo, &JetParams::default(), &mut |_, _| true).unwrap();
-    let err = estimate_absolute_sphere(&mesh, &field, &AbsoluteSphereParams::default()).unwrap_err();
+    let field = jet_fit(&mesh, &topo, &JetParams::default(), &mut spherical_faces::progress::ignore).unwrap();
+    let err = estimate_absolute_sphere(&mesh, &field, &AbsoluteSphereParams::default()).unwrap_err().to_string();
     assert!(err.contains(&format!("of {} vertices", mesh.vertex_count())), "{err}");
 }
 
@@ -202,13 +206,20 @@ fn minimal_surface_is_refused_with_a_clear_message() {
 fn cancellation_stops_the_run() {
     let mesh = Sample::SphereCap.mesh();
     let mut seen = Vec::new();
-    let err = st_support(&mesh, &StSupportParams::default(), &mut |stage, _, _| {
-        seen.push(stage.to_string());
-        stage != "face_spheres"
+    let err = st_support(&mesh, &StSupportParams::default(), &mut |p| {
+        seen.push(p.step.to_string());
+        if p.step == "face_spheres" {
+            Err(Cancelled)
+        } else {
+            Ok(())
+        }
     })
     .unwrap_err();
-    assert_eq!(err, "cancelled");
-    assert!(seen.iter().any(|s| s == "curvature") && seen.iter().any(|s| s == "absolute_sphere"));
+    assert_eq!(err, StSupportError::Cancelled);
+    // It stopped at the first face-sphere report: nothing after it ran.
+    assert!(seen.iter().any(|s| s == "jet_fit") && seen.iter().any(|s| s == "absolute_sphere"));
+    assert_eq!(seen.last().map(String::as_str), Some("face_spheres"));
+    assert_eq!(seen.iter().filter(|s| *s == "face_spheres").count(), 1);
 }
 
 /// The full method on the three reference meshes: the bounds of issue 3, the inversion property
@@ -247,13 +258,14 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
     assert_eq!(r.support_elements.len(), topo.edges().len());
     // Face spheres are oriented like the (working) faces.
     for (f, s) in sm.face_spheres.iter().enumerate() {
-        let [a, b, c] = sm.mesh.face_points(f);
+        let p = sm.mesh.face_points(f);
+        let [a, b, c] = [p[0], p[1], p[2]];
         let n = (b - a).cross(c - a);
         assert!(s.normal_at(a).dot(n) > 0.0, "{name}: face {f} misoriented");
         assert!((s.discriminant() - 1.0).abs() < 1e-12);
     }
     // Working orientation: reversed winding iff flipped.
-    let same = sm.mesh.triangles == mesh.triangles;
+    let same = sm.mesh.faces == PolyMesh::from(mesh).faces;
     assert_eq!(same, !r.absolute.flipped, "{name}");
     match r.omega {
         AbsoluteSphere::Sphere { center, r2 } => {
@@ -312,53 +324,6 @@ fn m_dist(x: DVec3, p: DVec3, n: DVec3) -> f64 {
     (x - p).dot(n).abs()
 }
 
-/// The metrics table for the closing note (`cargo test --release --test st_support metrics_table
-/// -- --nocapture`).
-#[test]
-fn metrics_table() {
-    println!();
-    for name in MESHES {
-        let mesh = load(name);
-        for opt in [false, true] {
-            let r = run(&mesh, opt);
-            let est = &r.absolute;
-            let (a0, m0med, m0max) = summary_stats(&est.angles_m0_deg);
-            let (a1, m1med, m1max) = summary_stats(&est.angles_m_deg);
-            let (r2mean, r2med, _) = summary_stats(&est.r2_samples);
-            let m = &r.metrics;
-            let omega = match r.omega {
-                AbsoluteSphere::Sphere { center, r2 } => {
-                    format!("m = {:.4?}, R² = {r2:.4} ({:.4} diag²)", center.to_array(), r2 / (r.diag * r.diag))
-                }
-                AbsoluteSphere::Plane { axis, d } => format!("plane a = {:.4?}, d = {d:.4}", axis.to_array()),
-            };
-            println!(
-                "== {name} (V {}, F {}, diag {:.4}) optimize_radius = {opt}",
-                mesh.vertex_count(),
-                mesh.face_count(),
-                r.diag
-            );
-            println!(
-                "   Ω: {omega}; at_infinity {}; flipped {}; mean-R² estimate {:?}",
-                est.at_infinity, est.flipped, est.omega
-            );
-            println!(
-                "   m0 = {:.4?}  angle(v−m0, n) mean/median/max = {a0:.3}/{m0med:.3}/{m0max:.3}°",
-                est.m0.to_array()
-            );
-            println!("   m  = {:.4?}  angle(v−m,  n) mean/median/max = {a1:.3}/{m1med:.3}/{m1max:.3}°  (E_center {:.4} → {:.4}, E_∞ {:.4}, {} LM its)", est.m.to_array(), est.e_center_m0, est.e_center_m, est.e_center_infinity, est.lm_iterations);
-            println!(
-                "   R_i²: mean {r2mean:.4}, median {r2med:.4} over {} usable central spheres ({} skipped)",
-                est.usable_spheres, est.skipped_spheres
-            );
-            println!("   metrics: vertex_sphere {:.2e}, orthogonality {:.2e}, node_axis_offset {:.2e}, axis–normal mean/max {:.3}/{:.3}°, kink mean/max {:.3}/{:.3}° ({} interior edges; estimate's mean kink {:.3}°), axes from stars {}",
-                m.max_vertex_sphere_residual, m.max_orthogonality_residual, m.max_node_axis_offset, m.mean_axis_normal_angle_deg, m.max_axis_normal_angle_deg, m.mean_kink_angle_deg, m.max_kink_angle_deg, m.interior_edges, r.mean_kink_estimate_deg, m.axes_from_spheres);
-            let t: Vec<String> = r.timings_ms.iter().map(|(s, t)| format!("{s} {t:.1}")).collect();
-            println!("   timings ms: {}", t.join(", "));
-        }
-    }
-}
-
 /// Every built-in sample runs (the app's default is the Dome) with sane output.
 #[test]
 fn samples_run() {
@@ -381,4 +346,26 @@ fn samples_run() {
             assert!(m.mean_kink_angle_deg.is_finite() && m.mean_axis_normal_angle_deg.is_finite());
         }
     }
+}
+
+/// With remeshing first, the distances in the report and the schedule are measured to the
+/// reference as loaded, not to the remesh the method ran on.
+#[test]
+fn remeshed_runs_measure_distances_to_the_original_reference() {
+    use spherical_faces::panels::deviation::max_deviation;
+    use spherical_faces::pipeline::stages::st_support::export;
+    use spherical_faces::remeshing::Sizing;
+    let reference = common::load_reference("tri_mesh");
+    let params = StSupportParams { remesh: Sizing::UniformFaces(300), ..Default::default() };
+    let result = compute(&reference, &params, Clock::default(), &mut ignore).unwrap();
+    assert_ne!(result.sphere_mesh.mesh.face_count(), reference.mesh().face_count(), "remeshed");
+    let (report, files) = export(&reference, &result, &params, Clock::default());
+    let to_original = result.panels.iter().map(|p| max_deviation(p, reference.bvh())).fold(0.0, f64::max);
+    let remesh = Reference::from_triangles(result.sphere_mesh.mesh.triangulated());
+    let to_remesh = result.panels.iter().map(|p| max_deviation(p, remesh.bvh())).fold(0.0, f64::max);
+    assert_eq!(report.metrics.max_distance_to_reference, Some(to_original / result.diag));
+    assert!((to_original - to_remesh).abs() > 1e-3 * to_original, "{to_original} vs {to_remesh}: the two measures should differ");
+    let schedule: serde_json::Value = serde_json::from_slice(&files[3].bytes).unwrap();
+    assert_eq!(schedule["reference_diagonal"], reference.diagonal());
+    assert_eq!(report.input.faces, reference.mesh().face_count());
 }

@@ -19,9 +19,9 @@
 use glam::DVec3;
 use serde_json::{json, Map, Value};
 
-use super::SupportGeometry;
-use crate::panels::Panel;
-use crate::sphere_mesh::AbsoluteSphere;
+use crate::congruence::support_structure::SupportGeometry;
+use crate::panels::panel::Panel;
+use crate::geometry::absolute_sphere::AbsoluteSphere;
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -126,7 +126,7 @@ fn panel_extras(p: &Panel) -> Value {
 }
 
 /// Writes a GLB. `node_axes` are line segments (start, end), e.g. from
-/// [`super::node_axis_segments`]; `extras` goes to `asset.extras` (omitted when null).
+/// `SupportStructure::axis_segments`; `extras` goes to `asset.extras` (omitted when null).
 /// Empty parts are left out (an empty `panels` node is still written).
 pub fn write_glb(
     panels: &[Panel],

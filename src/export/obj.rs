@@ -20,8 +20,8 @@ use std::fmt::Write;
 
 use glam::DVec3;
 
-use super::SupportGeometry;
-use crate::panels::Panel;
+use crate::congruence::support_structure::SupportGeometry;
+use crate::panels::panel::Panel;
 
 fn vertex(out: &mut String, p: DVec3) {
     let _ = writeln!(out, "v {} {} {}", p.x, p.y, p.z);

@@ -1,4 +1,4 @@
-//! `report.json`: the run report shared by every method (issue 3, §6).
+//! `report.json`: the run report every method writes, typed.
 //!
 //! ```json
 //! {"method": "st-support",
@@ -10,8 +10,7 @@
 //! ```
 //!
 //! Lengths in `metrics` are relative to the reference's bounding-box diagonal; angles are in
-//! degrees. Metrics a method does not compute are `None` and left out of the JSON; further
-//! method-specific metrics go to [`Metrics::extra`] (flattened into `metrics`).
+//! degrees. Metrics a method does not compute are `None` and left out of the JSON.
 //! `absolute_sphere` is left out for methods without one. Timings are in milliseconds, keyed by
 //! stage name (sorted). Non-finite numbers are written as null.
 
@@ -21,7 +20,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::sphere_mesh::AbsoluteSphere;
+use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::remeshing::Sizing;
 
 /// Vertex and face counts of the input mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,7 +63,7 @@ impl From<&AbsoluteSphere> for AbsoluteSphereReport {
     }
 }
 
-/// The named metrics (issue 3, §6); `None` when a method has no such metric.
+/// The metrics of a run; `None` when a method has no such metric.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Metrics {
     /// max over panels and their corners of | |v − c| − r |, relative.
@@ -88,9 +88,46 @@ pub struct Metrics {
     /// Sampled over the panel surfaces, relative.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_distance_to_reference: Option<f64>,
-    /// Further method-specific metrics, flattened into `metrics`.
-    #[serde(flatten)]
-    pub extra: BTreeMap<String, serde_json::Value>,
+    /// Solver iterations of the angle optimization.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle_iterations: Option<usize>,
+    /// Vertices whose node axis comes from their star's spheres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes_from_spheres: Option<usize>,
+    /// Faces whose sphere could not be made orthogonal to Ω.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub degenerate_faces: Option<usize>,
+    /// Distinct panel radii after rounding to the radius tolerance (planes count as one more).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distinct_radii: Option<usize>,
+    /// Faces whose normal points against the reference normal at their centroid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flipped_faces: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_flipped_faces: Option<usize>,
+    /// Kink angles before optimizing, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_max_kink_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_mean_kink_angle_deg: Option<f64>,
+    /// Ω a plane: max distance of a face sphere's centre from it, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_center_plane_residual: Option<f64>,
+    /// Variant (b): the largest gap between the two arcs of an edge, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_gap: Option<f64>,
+    /// Variant (b): the same gap, measured on the exported panels' arcs, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_panel_arc_gap: Option<f64>,
+    /// Largest vertex distance to the reference, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_vertex_distance_to_reference: Option<f64>,
+    /// How the reference was remeshed first.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub remesh: Option<Sizing>,
+    /// Edge variant (Fig. 12): "a" or "b".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variant: Option<String>,
 }
 
 /// The report of one run.
@@ -110,11 +147,24 @@ impl Report {
         Self { method: method.into(), ..Self::default() }
     }
 
-    /// A report of `method` with the counts of the reference, the sphere mesh and its panels.
-    pub fn for_panels(method: &str, reference: &crate::mesh::TriMesh, output: &crate::mesh::TriMesh, panels: usize) -> Self {
+    /// The report of a panel method: the counts of its input and output, Ω if it has one, its
+    /// metrics and its step timings (ms, in order; a repeated step adds up).
+    pub fn for_panels(
+        method: &str,
+        input: InputCounts,
+        output: OutputCounts,
+        absolute_sphere: Option<&AbsoluteSphere>,
+        metrics: Metrics,
+        timings: &[(String, f64)],
+    ) -> Self {
         let mut r = Self::new(method);
-        r.input = InputCounts { vertices: reference.vertex_count(), faces: reference.face_count() };
-        r.output = OutputCounts { vertices: output.vertex_count(), faces: output.face_count(), panels };
+        r.input = input;
+        r.output = output;
+        r.absolute_sphere = absolute_sphere.map(AbsoluteSphereReport::from);
+        r.metrics = metrics;
+        for (step, ms) in timings {
+            r.add_timing(step.clone(), *ms);
+        }
         r
     }
 

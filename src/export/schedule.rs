@@ -1,4 +1,4 @@
-//! The panel schedule: what a fabricator needs per panel, as CSV and JSON (issue 3, §4).
+//! The panel schedule: what a fabricator needs per panel, as CSV and JSON.
 //!
 //! Per panel: id (= face index), vertex ids and coordinates, the sphere (centre and radius, or
 //! for a plane an empty radius and its unit normal), per edge the arc's circle (centre, normal,
@@ -8,8 +8,9 @@
 //! Conventions:
 //! - radii are absolute values; the JSON also has the signed radius (its sign is the sphere's
 //!   orientation, see [`crate::sphere`]);
-//! - edge k runs from vertex k to vertex k+1 (mod 3), counter-clockwise about its circle normal
-//!   (see [`crate::panels`]);
+//! - a panel has 3 or 4 corners; edge k runs from vertex k to vertex k+1 (mod the corner count),
+//!   counter-clockwise about its circle normal (see [`crate::panels`]). The CSV has columns for
+//!   as many corners as the largest panel (cells of missing corners are empty);
 //! - deviation is the largest distance to the reference triangle mesh over the panel's
 //!   tessellation vertices and its triangle centroids projected onto the panel sphere (the true
 //!   panel surface), in model units; the schedule also gives the maximum relative to the
@@ -20,12 +21,12 @@
 use std::collections::BTreeSet;
 use std::fmt::Write;
 
-use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::closest::TriangleBvh;
-use crate::mesh::TriMesh;
-use crate::panels::{project_to_sphere, Arc, Panel};
+use crate::panels::arc::Arc;
+use crate::panels::deviation::max_deviation;
+use crate::panels::panel::Panel;
+use crate::reference::Reference;
 
 /// A panel's sphere in the schedule.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -66,10 +67,12 @@ pub struct ArcRecord {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PanelRecord {
     pub id: usize,
-    pub vertex_ids: [u32; 3],
-    pub vertices: [[f64; 3]; 3],
+    /// The corners (3 or 4), in order.
+    pub vertex_ids: Vec<u32>,
+    pub vertices: Vec<[f64; 3]>,
     pub sphere: SphereRecord,
-    pub edges: [ArcRecord; 3],
+    /// Edge k from corner k to corner k + 1.
+    pub edges: Vec<ArcRecord>,
     pub area: f64,
     /// Largest distance to the reference, model units.
     pub max_deviation: f64,
@@ -118,35 +121,6 @@ pub fn count_distinct_radii(radii: impl IntoIterator<Item = Option<f64>>, tolera
     keys.len() + usize::from(plane)
 }
 
-/// Points sampled on a panel: its tessellation vertices and its triangle centroids projected
-/// onto the panel's sphere.
-pub fn panel_samples(panel: &Panel) -> Vec<DVec3> {
-    let mut pts = panel.positions.clone();
-    let base = panel.positions[0];
-    for t in &panel.triangles {
-        let c = (panel.positions[t[0] as usize] + panel.positions[t[1] as usize] + panel.positions[t[2] as usize]) / 3.0;
-        pts.push(project_to_sphere(&panel.sphere, base, c));
-    }
-    pts
-}
-
-/// Largest distance from the panel's samples ([`panel_samples`]) to the reference.
-pub fn max_deviation(panel: &Panel, reference: &TriangleBvh) -> f64 {
-    panel_samples(panel).into_iter().map(|p| reference.distance(p)).fold(0.0, f64::max)
-}
-
-/// Largest deviation over all panels relative to the reference's bounding-box diagonal.
-pub fn max_distance_to_reference(panels: &[Panel], reference: &TriMesh) -> f64 {
-    let bvh = TriangleBvh::new(reference);
-    let diag = reference.bbox_diagonal();
-    let d = panels.iter().map(|p| max_deviation(p, &bvh)).fold(0.0, f64::max);
-    if diag > 0.0 {
-        d / diag
-    } else {
-        d
-    }
-}
-
 fn arc_record(arc: &Arc, from: u32, to: u32) -> ArcRecord {
     let straight = arc.is_straight();
     ArcRecord {
@@ -178,25 +152,22 @@ fn sphere_record(p: &Panel) -> SphereRecord {
 }
 
 /// Builds the schedule of `panels` against the `reference` surface.
-pub fn build_schedule(panels: &[Panel], reference: &TriMesh, radius_tolerance: f64) -> PanelSchedule {
-    let bvh = TriangleBvh::new(reference);
-    let diag = reference.bbox_diagonal();
+pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance: f64) -> PanelSchedule {
+    let bvh = reference.bvh();
+    let diag = reference.diagonal();
     let records: Vec<PanelRecord> = panels
         .iter()
         .map(|p| {
-            let c = p.corners;
+            let c = &p.corners;
+            let n = c.len();
             PanelRecord {
                 id: p.face,
-                vertex_ids: c,
-                vertices: [p.positions[0].to_array(), p.positions[1].to_array(), p.positions[2].to_array()],
+                vertex_ids: c.clone(),
+                vertices: p.positions[..n].iter().map(|x| x.to_array()).collect(),
                 sphere: sphere_record(p),
-                edges: [
-                    arc_record(&p.arcs[0], c[0], c[1]),
-                    arc_record(&p.arcs[1], c[1], c[2]),
-                    arc_record(&p.arcs[2], c[2], c[0]),
-                ],
+                edges: (0..n).map(|k| arc_record(&p.arcs[k], c[k], c[(k + 1) % n])).collect(),
                 area: p.area,
-                max_deviation: if bvh.is_empty() { f64::NAN } else { max_deviation(p, &bvh) },
+                max_deviation: if bvh.is_empty() { f64::NAN } else { max_deviation(p, bvh) },
                 triangles: p.triangles.len(),
             }
         })
@@ -231,13 +202,18 @@ fn opt3(out: &mut String, v: Option<[f64; 3]>) {
 }
 
 impl PanelSchedule {
-    /// CSV header (one line, no trailing newline).
-    pub fn csv_header() -> String {
+    /// Corners of the largest panel (3 when there are none).
+    pub fn max_corners(&self) -> usize {
+        self.panels.iter().map(|r| r.vertex_ids.len()).max().unwrap_or(3)
+    }
+
+    /// CSV header for panels of up to `corners` corners (one line, no trailing newline).
+    pub fn csv_header(corners: usize) -> String {
         let mut h: Vec<String> = vec!["id".into()];
-        for k in 0..3 {
+        for k in 0..corners {
             h.push(format!("v{k}_id"));
         }
-        for k in 0..3 {
+        for k in 0..corners {
             for c in ["x", "y", "z"] {
                 h.push(format!("v{k}_{c}"));
             }
@@ -249,7 +225,7 @@ impl PanelSchedule {
         for c in ["x", "y", "z"] {
             h.push(format!("plane_normal_{c}"));
         }
-        for k in 0..3 {
+        for k in 0..corners {
             for c in ["x", "y", "z"] {
                 h.push(format!("edge{k}_center_{c}"));
             }
@@ -263,16 +239,31 @@ impl PanelSchedule {
         h.join(",")
     }
 
-    /// The schedule as CSV: a header and one row per panel. Missing values (plane radius and
-    /// centre, sphere normal, straight-edge radius) are empty cells. Overall values are not in
-    /// the CSV; they are in the JSON.
+    /// The schedule as CSV: a header and one row per panel, with columns for the largest
+    /// panel's corners. Missing values (plane radius and centre, sphere normal, straight-edge
+    /// radius, the corners and edges a triangle lacks among quads) are empty cells. Overall
+    /// values are not in the CSV; they are in the JSON.
     pub fn to_csv(&self) -> String {
-        let mut out = Self::csv_header();
+        let corners = self.max_corners();
+        let mut out = Self::csv_header(corners);
         out.push('\n');
         for r in &self.panels {
-            let _ = write!(out, "{},{},{},{}", r.id, r.vertex_ids[0], r.vertex_ids[1], r.vertex_ids[2]);
-            for v in r.vertices {
-                let _ = write!(out, ",{},{},{}", v[0], v[1], v[2]);
+            let _ = write!(out, "{}", r.id);
+            for k in 0..corners {
+                match r.vertex_ids.get(k) {
+                    Some(v) => {
+                        let _ = write!(out, ",{v}");
+                    }
+                    None => out.push(','),
+                }
+            }
+            for k in 0..corners {
+                match r.vertices.get(k) {
+                    Some(v) => {
+                        let _ = write!(out, ",{},{},{}", v[0], v[1], v[2]);
+                    }
+                    None => out.push_str(",,,"),
+                }
             }
             out.push(',');
             opt3(&mut out, r.sphere.center);
@@ -280,13 +271,18 @@ impl PanelSchedule {
             opt(&mut out, r.sphere.radius);
             out.push(',');
             opt3(&mut out, r.sphere.normal);
-            for e in &r.edges {
-                let _ = write!(
-                    out,
-                    ",{},{},{},{},{},{},",
-                    e.center[0], e.center[1], e.center[2], e.normal[0], e.normal[1], e.normal[2]
-                );
-                opt(&mut out, e.radius);
+            for k in 0..corners {
+                match r.edges.get(k) {
+                    Some(e) => {
+                        let _ = write!(
+                            out,
+                            ",{},{},{},{},{},{},",
+                            e.center[0], e.center[1], e.center[2], e.normal[0], e.normal[1], e.normal[2]
+                        );
+                        opt(&mut out, e.radius);
+                    }
+                    None => out.push_str(",,,,,,,"),
+                }
             }
             let _ = write!(out, ",{},", r.area);
             opt(&mut out, Some(r.max_deviation).filter(|d| d.is_finite()));

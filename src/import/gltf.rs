@@ -6,7 +6,8 @@
 //! default scene (or scene 0; or every mesh once if there are no scenes) are merged, with node
 //! transforms accumulated in f64.
 
-use super::{base64, Ctx, ImportError, RawMesh, MAX_TRIANGLES, MAX_VERTICES};
+use super::base64;
+use super::raw::{Ctx, ImportError, RawMesh, MAX_TRIANGLES, MAX_VERTICES};
 use ::gltf::json;
 use glam::{DMat4, DQuat, DVec3};
 use json::accessor::{ComponentType, Type};

@@ -1,26 +1,23 @@
 //! Mesh import: Wavefront OBJ, glTF 2.0 (`.gltf` with embedded `data:` buffers) and GLB.
 //!
 //! [`import_mesh`] detects the format, parses it into triangles (OBJ polygons are triangulated,
-//! glTF node transforms applied), welds coincident vertices ([`crate::mesh::weld`]), drops
+//! glTF node transforms applied), welds coincident vertices ([`crate::geometry::mesh::weld`]), drops
 //! degenerate faces and reports [`MeshStats`]. Every failure is an [`ImportError`] whose message
 //! starts with the file name and says what to fix; no input can make the importer panic.
 
 mod base64;
 mod gltf;
 mod obj;
+mod raw;
 
-use crate::mesh::weld::weld;
-use crate::mesh::{MeshStats, Topology, TriMesh};
-use glam::DVec3;
+use crate::geometry::mesh::weld::weld_with_face_map;
+use crate::geometry::mesh::{Face, PolyMesh, TriMesh};
+use crate::geometry::mesh::topology::{MeshStats, Topology};
 use serde::{Deserialize, Serialize};
-use std::fmt;
 
-/// Largest accepted triangle count (after triangulation, before welding).
-pub const MAX_TRIANGLES: usize = 2_000_000;
-/// Largest accepted input size in bytes (512 MiB).
-pub const MAX_BYTES: usize = 512 << 20;
-/// Largest accepted vertex count before welding: three per triangle.
-pub const MAX_VERTICES: usize = 3 * MAX_TRIANGLES;
+pub use raw::{ImportError, MAX_BYTES, MAX_TRIANGLES, MAX_VERTICES};
+use raw::{Ctx, RawMesh};
+
 /// Vertices closer than this fraction of the bounding-box diagonal are merged.
 pub const WELD_TOLERANCE: f64 = 1e-7;
 
@@ -32,11 +29,15 @@ pub enum Format {
     Glb,
 }
 
-/// A cleaned triangle mesh ready for the pipeline.
+/// A cleaned mesh ready for the pipeline.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Imported {
     /// Welded triangle mesh without degenerate faces or unreferenced vertices.
     pub mesh: TriMesh,
+    /// The faces as in the file, over the same vertices: quads where both of a quad's
+    /// triangles were kept, else triangles. Triangulating them (a quad from its corner 0) gives
+    /// `mesh.triangles`, in order.
+    pub faces: Vec<Face>,
     pub stats: MeshStats,
     pub format: Format,
     /// Faces in the source: OBJ `f` statements, glTF triangles (per node instance).
@@ -49,114 +50,11 @@ pub struct Imported {
     pub notes: Vec<String>,
 }
 
-/// Why a file could not be imported. `Display` starts with the file name.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ImportError {
-    /// Nothing to import: empty file, no faces, or only degenerate faces.
-    Empty { file: String, reason: String },
-    /// Over a limit: `count` `what` (e.g. "triangles", "bytes") exceed `limit`.
-    TooLarge { file: String, what: String, count: u64, limit: u64 },
-    /// Broken syntax or structure; `line` is 1-based for text formats.
-    Malformed { file: String, line: Option<usize>, message: String },
-    /// Valid input using something this importer does not handle.
-    Unsupported { file: String, message: String },
-}
-
-impl ImportError {
-    /// The file name the error refers to.
-    pub fn file(&self) -> &str {
-        match self {
-            ImportError::Empty { file, .. }
-            | ImportError::TooLarge { file, .. }
-            | ImportError::Malformed { file, .. }
-            | ImportError::Unsupported { file, .. } => file,
-        }
+impl Imported {
+    /// The surface with its faces as in the file (3 or 4 corners).
+    pub fn surface(&self) -> PolyMesh {
+        PolyMesh::new(self.mesh.positions.clone(), self.faces.clone())
     }
-
-    /// The 1-based line of a malformed text file, when known.
-    pub fn line(&self) -> Option<usize> {
-        match self {
-            ImportError::Malformed { line, .. } => *line,
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for ImportError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ImportError::Empty { file, reason } => write!(f, "{file}: {reason}"),
-            ImportError::TooLarge { file, what, count, limit } => {
-                write!(f, "{file}: {count} {what} exceed the limit of {limit}")?;
-                if what == "bytes" {
-                    write!(f, " ({} MiB)", limit >> 20)?;
-                }
-                Ok(())
-            }
-            ImportError::Malformed { file, line: Some(line), message } => {
-                write!(f, "{file}: line {line}: {message}")
-            }
-            ImportError::Malformed { file, line: None, message } => write!(f, "{file}: {message}"),
-            ImportError::Unsupported { file, message } => write!(f, "{file}: {message}"),
-        }
-    }
-}
-
-impl std::error::Error for ImportError {}
-
-/// Error construction for the parsers: carries the display file name.
-pub(crate) struct Ctx {
-    pub file: String,
-}
-
-impl Ctx {
-    pub fn malformed(&self, line: Option<usize>, message: impl Into<String>) -> ImportError {
-        ImportError::Malformed { file: self.file.clone(), line, message: message.into() }
-    }
-
-    pub fn unsupported(&self, message: impl Into<String>) -> ImportError {
-        ImportError::Unsupported { file: self.file.clone(), message: message.into() }
-    }
-
-    pub fn empty(&self, reason: impl Into<String>) -> ImportError {
-        ImportError::Empty { file: self.file.clone(), reason: reason.into() }
-    }
-
-    pub fn too_large(&self, what: &str, count: u64, limit: usize) -> ImportError {
-        ImportError::TooLarge { file: self.file.clone(), what: what.into(), count, limit: limit as u64 }
-    }
-
-    /// Rejects counts over [`MAX_TRIANGLES`] / [`MAX_VERTICES`].
-    pub fn check_limits(&self, triangles: u64, vertices: u64) -> Result<(), ImportError> {
-        if triangles > MAX_TRIANGLES as u64 {
-            return Err(self.too_large("triangles", triangles, MAX_TRIANGLES));
-        }
-        if vertices > MAX_VERTICES as u64 {
-            return Err(self.too_large("vertices", vertices, MAX_VERTICES));
-        }
-        Ok(())
-    }
-}
-
-/// What a format parser produces: raw triangles before welding.
-#[derive(Debug, Default)]
-pub(crate) struct RawMesh {
-    pub positions: Vec<DVec3>,
-    pub triangles: Vec<[u32; 3]>,
-    pub source_polygons: usize,
-    /// Faces the parser dropped already (fewer than three distinct vertices).
-    pub dropped_faces: usize,
-    pub notes: Vec<String>,
-}
-
-/// Shortens user-provided text for an error message.
-pub(crate) fn excerpt(bytes: &[u8]) -> String {
-    let s = String::from_utf8_lossy(bytes);
-    let mut out: String = s.chars().take(40).collect();
-    if s.chars().nth(40).is_some() {
-        out.push('…');
-    }
-    out
 }
 
 /// The base name of a path, for messages ("dir/a.obj" -> "a.obj").
@@ -233,7 +131,7 @@ pub fn import_mesh(bytes: &[u8], file_name: &str) -> Result<Imported, ImportErro
 
 /// Welds, validates and measures a parsed mesh.
 fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportError> {
-    let RawMesh { positions, triangles, source_polygons, dropped_faces, mut notes } = raw;
+    let RawMesh { positions, triangles, source_polygons, dropped_faces, mut notes, quads } = raw;
     if triangles.is_empty() {
         let mut reason = "no faces found".to_string();
         if !notes.is_empty() {
@@ -250,7 +148,7 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
     }
     let raw_mesh = TriMesh::new(positions, triangles);
     let diag = raw_mesh.referenced_diagonal();
-    let (mesh, report) = weld(&raw_mesh, WELD_TOLERANCE * diag);
+    let (mesh, report, face_map) = weld_with_face_map(&raw_mesh, WELD_TOLERANCE * diag);
     let total_faces = raw_mesh.triangles.len();
     drop(raw_mesh);
     if mesh.triangles.is_empty() {
@@ -266,8 +164,10 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
         notes.push(format!("removed {} unused vertices", report.removed_unreferenced));
     }
     let stats = Topology::new(&mesh).stats(&mesh);
+    let faces = polygon_faces(&mesh, &quads, &face_map);
     Ok(Imported {
         mesh,
+        faces,
         stats,
         format,
         source_polygons,
@@ -277,3 +177,33 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
     })
 }
 
+
+/// The faces of the welded `mesh`: a quad where both triangles of an input quad survived
+/// next to each other and still form a quad (4 distinct corners, split from corner 0), else
+/// triangles.
+fn polygon_faces(mesh: &TriMesh, quads: &[usize], face_map: &[u32]) -> Vec<Face> {
+    let mut quad_at = vec![false; mesh.face_count()];
+    for &q in quads {
+        let (a, b) = (face_map[q], face_map[q + 1]);
+        if a == u32::MAX || b != a.wrapping_add(1) {
+            continue;
+        }
+        let ([p, q1, r], [p2, r2, s]) = (mesh.triangles[a as usize], mesh.triangles[b as usize]);
+        if p == p2 && r == r2 && s != q1 {
+            quad_at[a as usize] = true;
+        }
+    }
+    let mut faces = Vec::with_capacity(mesh.face_count());
+    let mut f = 0;
+    while f < mesh.face_count() {
+        let t = mesh.triangles[f];
+        if quad_at[f] {
+            faces.push(Face::quad([t[0], t[1], t[2], mesh.triangles[f + 1][2]]));
+            f += 2;
+        } else {
+            faces.push(Face::triangle(t));
+            f += 1;
+        }
+    }
+    faces
+}

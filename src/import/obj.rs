@@ -4,9 +4,10 @@
 //! are rejected before anything large is allocated; the second parses. Faces are triangulated
 //! after all vertices are read (so forward references work): triangles as-is, quads along the
 //! shorter valid diagonal, larger polygons by ear clipping in their best-fit (Newell) plane,
-//! with a fan as the fallback.
+//! with a fan as the fallback. Quads are remembered as quads (faces of 4 corners), starting at
+//! the corner their diagonal leaves from.
 
-use super::{excerpt, Ctx, ImportError, RawMesh};
+use super::raw::{excerpt, Ctx, ImportError, RawMesh};
 use glam::{DVec2, DVec3};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -213,11 +214,16 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
             short += 1;
             continue;
         }
+        let first = raw.triangles.len();
         if poly.len() > EAR_CLIP_MAX {
             big += 1;
             fan(&poly, &mut raw.triangles);
         } else if !tri.triangulate(&positions, &poly, &mut raw.triangles) {
             fans += 1;
+        }
+        if poly.len() == 4 {
+            // A quad stays a quad: its two triangles share its corner 0 (see `RawMesh::quads`).
+            raw.quads.push(first);
         }
     }
     raw.dropped_faces = short;

@@ -12,7 +12,7 @@
 //! a copy with ε² added on the diagonal, faer's numeric LLᵀ and a solve. No hashing, no
 //! allocation.
 
-use super::{JacobianSink, Problem};
+use super::problem::{JacobianSink, Problem};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
@@ -44,7 +44,7 @@ pub(crate) struct EvalBuffers {
 /// Evaluates one term into (cleared) buffers; used by `evaluate` and the Jacobian check.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn eval_term(
-    term: &dyn super::Term,
+    term: &dyn super::problem::Term,
     x: &[f64],
     r: &mut [f64],
     active: &mut [bool],

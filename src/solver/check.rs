@@ -1,7 +1,7 @@
 //! Finite-difference check of a term's Jacobian.
 
 use super::assembly::eval_term;
-use super::Term;
+use super::problem::Term;
 use serde::{Deserialize, Serialize};
 
 /// Worst disagreement between the analytic Jacobian and central differences.
@@ -71,4 +71,49 @@ pub fn check_jacobian_report(term: &dyn Term, x: &[f64], h: f64) -> JacobianChec
         }
     }
     best
+}
+
+/// The analytic and the central-difference Jacobian of a term at `x`, dense and column-major
+/// (entry (i, j) at `j * m + i`, m = `term.residual_count()`). With `moving`, the term is
+/// prepared at every perturbed point (its targets move with the variables, as between two
+/// solver iterations) and again at `x` after; without it the targets stay those of `x`.
+/// Inactive residuals count as 0 with a zero Jacobian row.
+pub fn jacobians(term: &mut dyn Term, x: &[f64], h: f64, moving: bool) -> (Vec<f64>, Vec<f64>) {
+    let m = term.residual_count();
+    let n = x.len();
+    let mut r = vec![0.0; m];
+    let mut active = vec![true; m];
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    term.prepare(x);
+    eval_term(&*term, x, &mut r, &mut active, &mut rows, &mut cols, &mut vals, 0);
+    let mut analytic = vec![0.0; m * n];
+    for ((&i, &j), &v) in rows.iter().zip(&cols).zip(&vals) {
+        if active[i as usize] {
+            analytic[j as usize * m + i as usize] += v;
+        }
+    }
+    let mut numeric = vec![0.0; m * n];
+    let mut xp = x.to_vec();
+    let (mut rp, mut rm) = (vec![0.0; m], vec![0.0; m]);
+    for j in 0..n {
+        for (sign, out) in [(1.0, &mut rp), (-1.0, &mut rm)] {
+            xp[j] = x[j] + sign * h;
+            if moving {
+                term.prepare(&xp);
+            }
+            rows.clear();
+            cols.clear();
+            vals.clear();
+            eval_term(&*term, &xp, out, &mut active, &mut rows, &mut cols, &mut vals, 0);
+        }
+        xp[j] = x[j];
+        let dh = (x[j] + h) - (x[j] - h);
+        for i in 0..m {
+            numeric[j * m + i] = (rp[i] - rm[i]) / dh;
+        }
+    }
+    if moving {
+        term.prepare(x);
+    }
+    (analytic, numeric)
 }

@@ -1,7 +1,8 @@
 //! The Levenberg–Marquardt / guided-projection iteration, its options and reports.
 
 use super::assembly::{evaluate, weighted_energy, EvalBuffers, System};
-use super::{Ordering, Problem};
+use super::ordering::Ordering;
+use super::problem::Problem;
 use serde::{Deserialize, Serialize};
 
 /// Solver settings. All tolerances are absolute unless stated.
@@ -478,5 +479,21 @@ pub(crate) fn fill_stats(problem: &Problem, buf: &EvalBuffers, stats: &mut [Term
         s.mean_abs = if n > 0 { sum / n as f64 } else { 0.0 };
         s.max_abs = max;
         s.energy = t.weight * sq;
+    }
+}
+
+impl Problem<'_> {
+    /// Per-term statistics at `x` (does not call `prepare`).
+    pub fn term_stats(&self, x: &[f64]) -> Vec<TermStats> {
+        let mut buf = EvalBuffers::default();
+        evaluate(self, x, &mut buf);
+        let mut stats = empty_stats(self);
+        fill_stats(self, &buf, &mut stats);
+        stats
+    }
+
+    /// Total weighted energy Σ w Σ r² at `x` (does not call `prepare`).
+    pub fn energy(&self, x: &[f64]) -> f64 {
+        self.term_stats(x).iter().map(|s| s.energy).sum()
     }
 }

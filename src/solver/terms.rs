@@ -3,17 +3,18 @@
 //! Block conventions (offsets into the variable vector):
 //! - point / vector: 3 consecutive variables (x, y, z);
 //! - generalized sphere: 5 consecutive variables (a, b₁, b₂, b₃, c) of
-//!   ψ(p) = a|p|² − ⟨b, p⟩ + c (the convention of `crate::sphere::Sphere::to_array`), normalized
+//!   ψ(p) = a|p|² − ⟨b, p⟩ + c (the convention of `crate::geometry::sphere::Sphere::to_array`), normalized
 //!   when bᵀb − 4ac = 1;
 //! - plane: unit normal n (3-block) and offset d (1 variable): n·p − d = 0.
 //!
 //! Every term has a default name and a `with_name` builder.
 
-use super::{JacobianSink, Term};
+use super::problem::{JacobianSink, Term};
 use glam::DVec3;
 
+/// The 3-block of `x` at offset `o` (a vertex, a normal, the b of a sphere).
 #[inline]
-fn v3(x: &[f64], o: usize) -> DVec3 {
+pub fn v3(x: &[f64], o: usize) -> DVec3 {
     DVec3::new(x[o], x[o + 1], x[o + 2])
 }
 

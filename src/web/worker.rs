@@ -8,9 +8,11 @@ use wasm_bindgen::prelude::*;
 use web_sys::DedicatedWorkerGlobalScope;
 
 use super::transport;
-use crate::pipeline::protocol::{decode_to_worker, encode_from_worker, Field, FromWorker};
-use crate::pipeline::{Session, Sink};
-use crate::st_support::Clock;
+use super::worker_client::{CANCEL_SLOT, POSTED_SLOT};
+use crate::pipeline::fields::Field;
+use crate::pipeline::protocol::{decode_to_worker, encode_from_worker, FromWorker};
+use crate::pipeline::{Outbox, Session};
+use crate::progress::Clock;
 
 thread_local! {
     static SESSION: RefCell<Session> = RefCell::new(Session::new());
@@ -37,7 +39,7 @@ pub fn worker_start(cancel: JsValue) {
     }));
     CANCEL.with(|c| *c.borrow_mut() = cancel.dyn_into::<Int32Array>().ok());
     SESSION.with(|s| s.borrow_mut().clock = Clock(Some(js_sys::Date::now)));
-    WorkerSink.send(FromWorker::Ready, Vec::new());
+    WorkerOutbox.send(FromWorker::Ready, Vec::new());
 }
 
 /// Handles one message `{json, bodies}` from the main thread.
@@ -45,26 +47,31 @@ pub fn worker_start(cancel: JsValue) {
 pub fn worker_handle(data: JsValue) {
     let env = match transport::from_js(&data) {
         Ok(e) => e,
-        Err(message) => return WorkerSink.send(FromWorker::Error { message }, Vec::new()),
+        Err(message) => return WorkerOutbox.send(FromWorker::Error { message }, Vec::new()),
     };
     match decode_to_worker(&env) {
-        Ok((msg, bytes)) => SESSION.with(|s| s.borrow_mut().handle(msg, bytes, &mut WorkerSink)),
-        Err(message) => WorkerSink.send(FromWorker::Error { message }, Vec::new()),
+        Ok((msg, bytes)) => SESSION.with(|s| s.borrow_mut().handle(msg, bytes, &mut WorkerOutbox)),
+        Err(e) => WorkerOutbox.send(FromWorker::Error { message: e.to_string() }, Vec::new()),
     }
 }
 
-struct WorkerSink;
+struct WorkerOutbox;
 
-impl Sink for WorkerSink {
+impl Outbox for WorkerOutbox {
     fn send(&mut self, msg: FromWorker, fields: Vec<Field>) {
         let (obj, transfer) = transport::to_js(&encode_from_worker(&msg, &fields));
+        CANCEL.with(|c| {
+            if let Some(a) = c.borrow().as_ref() {
+                let _ = Atomics::add(a, POSTED_SLOT, 1);
+            }
+        });
         if let Err(e) = scope().post_message_with_transfer(&obj, &transfer) {
             web_sys::console::error_2(&"postMessage failed".into(), &e);
         }
     }
 
     fn cancel_requested(&mut self) -> bool {
-        CANCEL.with(|c| c.borrow().as_ref().is_some_and(|a| Atomics::load(a, 0).unwrap_or(0) != 0))
+        CANCEL.with(|c| c.borrow().as_ref().is_some_and(|a| Atomics::load(a, CANCEL_SLOT).unwrap_or(0) != 0))
     }
 
     fn now_ms(&self) -> f64 {

@@ -1,7 +1,7 @@
 //! The main thread's handle on the pipeline worker: typed messages out, decoded messages in.
 //! A crashed worker is replaced; the app re-sends its design so nothing is lost.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
 use std::rc::Rc;
 
@@ -10,7 +10,8 @@ use wasm_bindgen::prelude::*;
 use web_sys::{MessageEvent, Worker, WorkerOptions, WorkerType};
 
 use super::transport;
-use crate::pipeline::protocol::{decode_from_worker, encode_to_worker, Field, FromWorker, ToWorker};
+use crate::pipeline::fields::Field;
+use crate::pipeline::protocol::{decode_from_worker, encode_to_worker, FromWorker, ToWorker};
 
 pub enum Incoming {
     Message(FromWorker, Vec<Field>),
@@ -20,10 +21,17 @@ pub enum Incoming {
 
 type Inbox = Rc<RefCell<VecDeque<Incoming>>>;
 
+/// The shared memory between the page and the worker (cross-origin isolated pages only): the
+/// cancel flag, and the number of messages the worker has posted.
+pub const CANCEL_SLOT: u32 = 0;
+pub const POSTED_SLOT: u32 = 1;
+
 pub struct WorkerClient {
     worker: Worker,
     inbox: Inbox,
     cancel_flag: Option<Int32Array>,
+    /// Worker messages handed to the app by [`Self::poll`].
+    polled: Cell<u32>,
     repaint: Rc<dyn Fn()>,
     _on_message: Closure<dyn FnMut(MessageEvent)>,
     _on_error: Closure<dyn FnMut(web_sys::ErrorEvent)>,
@@ -46,7 +54,7 @@ impl WorkerClient {
                 let item = if let Some(p) = Reflect::get(&data, &"panic".into()).ok().and_then(|p| p.as_string()) {
                     Incoming::Crashed(p)
                 } else {
-                    match transport::from_js(&data).and_then(|env| decode_from_worker(&env)) {
+                    match transport::from_js(&data).and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string())) {
                         Ok((msg, fields)) => Incoming::Message(msg, fields),
                         Err(message) => Incoming::Message(FromWorker::Error { message }, Vec::new()),
                     }
@@ -71,19 +79,28 @@ impl WorkerClient {
             .ok()
             .and_then(|v| v.as_bool())
             .unwrap_or(false);
-        let cancel_flag = isolated.then(|| Int32Array::new(&SharedArrayBuffer::new(4)));
+        let cancel_flag = isolated.then(|| Int32Array::new(&SharedArrayBuffer::new(8)));
         let init = Object::new();
         let flag: JsValue = cancel_flag.as_ref().map_or(JsValue::UNDEFINED, |a| a.clone().into());
         let _ = Reflect::set(&init, &"init".into(), &flag);
         worker.post_message(&init).map_err(|e| format!("cannot start the pipeline worker: {e:?}"))?;
-        Ok(Self { worker, inbox, cancel_flag, repaint, _on_message: on_message, _on_error: on_error, restarts: 0 })
+        Ok(Self {
+            worker,
+            inbox,
+            cancel_flag,
+            polled: Cell::new(0),
+            repaint,
+            _on_message: on_message,
+            _on_error: on_error,
+            restarts: 0,
+        })
     }
 
     /// Sends a message; a `LoadFile` carries the browser `File` (read inside the worker).
     pub fn send(&self, msg: &ToWorker, file: Option<&web_sys::File>) {
         if matches!(msg, ToWorker::Run(_)) {
             if let Some(a) = &self.cancel_flag {
-                let _ = Atomics::store(a, 0, 0);
+                let _ = Atomics::store(a, CANCEL_SLOT, 0);
             }
         }
         let (obj, transfer) = transport::to_js(&encode_to_worker(msg, None));
@@ -98,20 +115,27 @@ impl WorkerClient {
         }
     }
 
-    /// Requests a cancel. With shared memory the running stage stops at its next iteration;
-    /// without it, the worker is replaced (the caller re-sends its design).
-    pub fn cancel(&mut self) -> bool {
+    /// Requests a cancel. With shared memory the running stage stops at its next iteration, and
+    /// this returns how many messages the worker had posted at the request (compare with
+    /// [`Self::polled`]); without it, the worker is replaced (the caller re-sends its design).
+    pub fn cancel(&mut self) -> Option<u32> {
         match &self.cancel_flag {
             Some(a) => {
-                let _ = Atomics::store(a, 0, 1);
+                let _ = Atomics::store(a, CANCEL_SLOT, 1);
+                let posted = Atomics::load(a, POSTED_SLOT).unwrap_or(0) as u32;
                 self.send(&ToWorker::Cancel, None);
-                true
+                Some(posted)
             }
             None => {
                 self.restart();
-                false
+                None
             }
         }
+    }
+
+    /// Worker messages polled so far (crash notices excluded).
+    pub fn polled(&self) -> u32 {
+        self.polled.get()
     }
 
     /// Replaces the worker with a fresh one.
@@ -129,7 +153,11 @@ impl WorkerClient {
     }
 
     pub fn poll(&self) -> Option<Incoming> {
-        self.inbox.borrow_mut().pop_front()
+        let item = self.inbox.borrow_mut().pop_front();
+        if let Some(Incoming::Message(..)) = item {
+            self.polled.set(self.polled.get() + 1);
+        }
+        item
     }
 }
 

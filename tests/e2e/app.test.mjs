@@ -11,6 +11,7 @@ import {
   PROJECTS,
   T,
   TRI_DOME,
+  changedFraction,
   dropFile,
   isSettled,
   launchBrowser,
@@ -41,6 +42,20 @@ function assertDrawn(m, what) {
     `${what}: clear_color is almost nowhere in the viewport (${(100 * m.backgroundFraction).toFixed(2)}%): ` +
       `is state.clear_color the sRGB 0-255 background and state.viewport right? screenshot ${m.file}`,
   );
+}
+
+/**
+ * Scrolls the side panel (wheel over it) until the bottom of the method's results shows, as a
+ * user would at 1280×800; returns the last state.
+ */
+async function scrollResultsIntoView(app, s) {
+  for (let k = 0; k < 25 && !(s.side_panel && s.side_panel.results_visible); k++) {
+    await app.page.mouse.move(120, 450);
+    await app.page.mouse.wheel(0, 300);
+    await sleep(250);
+    s = await readState(app.page);
+  }
+  return s;
 }
 
 const settledDefault = (app) =>
@@ -200,11 +215,17 @@ for (const project of PROJECTS) {
         assert.equal(s.edges, true);
         const m = await measureViewport(app, s, 'reflective-edges');
         assertDrawn(m, 'reflective sphere cap with edges');
+        assert.equal(s.selected_vertex, null, 'no vertex selected before the click');
         const [x, y, w, h] = s.viewport;
         await app.page.mouse.click(x + w / 2, y + h / 2);
         const picked = await waitForState(app, 'a vertex is selected', (s) => Number.isInteger(s.selected_vertex));
-        t.diagnostic(`selected vertex ${picked.selected_vertex}`);
-        assertDrawn(await measureViewport(app, picked, 'central-sphere'), 'central sphere overlay');
+        await sleep(500);
+        const after = await measureViewport(app, picked, 'central-sphere');
+        const changed = changedFraction(m, after);
+        t.diagnostic(`selected vertex ${picked.selected_vertex}; ${(100 * changed).toFixed(2)}% of the viewport changed`);
+        assertDrawn(after, 'central sphere overlay');
+        // The translucent central sphere covers part of the view: the picture changed there.
+        assert.ok(changed > 0.005, `the click changed only ${(100 * changed).toFixed(3)}% of the viewport`);
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });
@@ -214,13 +235,16 @@ for (const project of PROJECTS) {
       await withApp(t, browser, server, project, { name: 'g-st-support', fragment: 'v=1&sample=dome&method=st-support&shading=reflective' }, async (app) => {
         const s = await waitForState(
           app,
-          'st-support finished (st_ready, downloads offered)',
-          (s) => s.st_ready === true && !s.busy && Array.isArray(s.downloads) && s.downloads.includes('panels.glb'),
+          'st-support finished (st_support.ready, downloads offered)',
+          (s) => s.st_support && s.st_support.ready === true && !s.busy && Array.isArray(s.downloads) && s.downloads.includes('panels.glb'),
           { timeout: T.load },
         );
         assert.equal(s.method, 'st-support');
         assert.ok(!s.error, `error: ${s.error}`);
-        assert.equal(s.panels, s.faces, 'one panel per face of the reference triangulation');
+        assert.equal(s.st_support.panels, s.faces, 'one panel per face of the reference triangulation');
+        const shown = await scrollResultsIntoView(app, s);
+        t.diagnostic(`side panel: ${JSON.stringify(shown.side_panel)}`);
+        assert.equal(shown.side_panel.results_visible, true, 'the metrics and histograms can be scrolled into view at 1280×800');
         for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'report.json']) {
           assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
         }
@@ -245,30 +269,33 @@ for (const project of PROJECTS) {
     test(`[${project.name}] h. ST with adapted face size streams sizing, remesh, panels and energies, and its GLB validates`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
       const fragment = 'v=1&sample=dome&method=st&sizing=adaptive&eps=0.0004&variant=a&color=sizing';
-      await withApp(t, browser, server, project, { name: 'h-st-angle', fragment }, async (app) => {
+      await withApp(t, browser, server, project, { name: 'h-st-adapted', fragment }, async (app) => {
         const running = await waitForState(
           app,
           'sizing field and remeshed triangulation arrived',
-          (s) => s.st_angle && s.st_angle.sizing > 0 && s.st_angle.remeshed_faces > 0,
+          (s) => s.st_adapted && s.st_adapted.sizing > 0 && s.st_adapted.remeshed_faces > 0,
           { timeout: T.load },
         );
-        assert.equal(running.st_angle.sizing, running.vertices, 'one sizing value per reference vertex');
+        assert.equal(running.st_adapted.sizing, running.vertices, 'one sizing value per reference vertex');
         const s = await waitForState(
           app,
-          'st finished (st_angle.ready, downloads offered)',
-          (s) => s.st_angle && s.st_angle.ready && !s.busy && s.downloads.includes('panels.glb'),
+          'st finished (st_adapted.ready, downloads offered)',
+          (s) => s.st_adapted && s.st_adapted.ready && !s.busy && s.downloads.includes('panels.glb'),
           { timeout: T.load },
         );
-        t.diagnostic(`st: ${JSON.stringify(s.st_angle)}`);
+        t.diagnostic(`st: ${JSON.stringify(s.st_adapted)}`);
         assert.equal(s.method, 'st');
         assert.ok(!s.error, `error: ${s.error}`);
-        assert.equal(s.st_angle.energies, 45, 'one energy per optimizer iteration');
-        assert.equal(s.st_angle.panel_iteration, 45, 'the final panels are those of the last iteration');
-        assert.ok(s.st_angle.panel_snapshots >= 2, `panels arrived at the start and the end at least (${s.st_angle.panel_snapshots})`);
-        assert.equal(s.st_angle.panels, s.st_angle.remeshed_faces, 'one panel per remeshed face');
-        assert.ok(s.st_angle.remeshed_faces > 100 && s.st_angle.remeshed_faces < 1000, `faces ${s.st_angle.remeshed_faces}`);
+        assert.equal(s.st_adapted.energies, 45, 'one energy per optimizer iteration');
+        assert.equal(s.st_adapted.panel_iteration, 45, 'the final panels are those of the last iteration');
+        assert.ok(s.st_adapted.panel_snapshots >= 2, `panels arrived at the start and the end at least (${s.st_adapted.panel_snapshots})`);
+        assert.equal(s.st_adapted.panels, s.st_adapted.remeshed_faces, 'one panel per remeshed face');
+        assert.ok(s.st_adapted.remeshed_faces > 100 && s.st_adapted.remeshed_faces < 1000, `faces ${s.st_adapted.remeshed_faces}`);
         assert.ok(s.design_link.includes('method=st&') && s.design_link.includes('eps=4e-4'), s.design_link);
-        assertDrawn(await measureViewport(app, s, 'st-angle'), 'ST panels');
+        const shown = await scrollResultsIntoView(app, s);
+        t.diagnostic(`side panel: ${JSON.stringify(shown.side_panel)}`);
+        assert.equal(shown.side_panel.results_visible, true, 'the energy plot and the run metrics can be scrolled into view at 1280×800');
+        assertDrawn(await measureViewport(app, s, 'st-adapted'), 'ST panels');
         const [download] = await Promise.all([
           app.page.waitForEvent('download', { timeout: 30_000 }),
           app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'panels.glb' }))),
@@ -282,63 +309,101 @@ for (const project of PROJECTS) {
       });
     });
 
-    test(`[${project.name}] i. the UI keeps drawing while a 2k-face ST optimizes, and Cancel stops it`, { timeout: T.test }, async (t) => {
+    test(`[${project.name}] i. the UI keeps drawing while a 2k-face ST optimizes, and Cancel stops it within one iteration`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
       const fragment = 'v=1&sample=dome&method=st&sizing=faces&faces=2000&variant=a';
-      await withApp(t, browser, server, project, { name: 'i-st-fps-cancel', fragment }, async (app) => {
-        // Main-thread tasks over 50 ms (decoding snapshots, the UI, uploads) are what could make
-        // the UI stutter; the optimizer itself runs in the worker.
-        await app.page.evaluate(() => {
-          window.__sfLongTasks = [];
-          new PerformanceObserver((list) => window.__sfLongTasks.push(...list.getEntries().map((e) => e.duration)))
-            .observe({ type: 'longtask', buffered: false });
-        });
+      await withApp(t, browser, server, project, { name: 'i-st-draw-cancel', fragment }, async (app) => {
         const first = await waitForState(
           app,
           'the optimizer is running (energies arriving)',
-          (s) => s.busy && s.st_angle && s.st_angle.energies > 0,
+          (s) => s.busy && s.st_adapted && s.st_adapted.energies > 0,
           { timeout: T.load, interval: 50 },
         );
-        assert.ok(first.st_angle.remeshed_faces > 1500, `about 2000 faces: ${first.st_angle.remeshed_faces}`);
-        await app.page.evaluate(() => { window.__sfLongTasks = []; });
-        // Orbit the view meanwhile, as a user would: every frame then redraws the scene.
+        assert.ok(first.st_adapted.remeshed_faces > 1500, `about 2000 faces: ${first.st_adapted.remeshed_faces}`);
+        // Orbit the view meanwhile, as a user would: every frame then redraws the scene. Frame
+        // rates are measured by the benchmarks, not here (the GPU is software on these machines).
         const [x, y, w, h] = first.viewport;
         await app.page.mouse.move(x + w / 2, y + h / 2);
         await app.page.mouse.down();
-        const t0 = Date.now();
-        for (let k = 0; Date.now() - t0 < 2000; k++) {
+        // Until the view has redrawn and the optimizer has sent an iteration and a panel
+        // snapshot more (at most 400 moves), so the cancel below still finds it running.
+        let mid = first;
+        for (let k = 0; k < 400; k++) {
           await app.page.mouse.move(x + w / 2 + 80 * Math.sin(k / 8), y + h / 2 + 40 * Math.cos(k / 8));
           await sleep(15);
+          if (k % 4 === 3) {
+            mid = await readState(app.page);
+            const moved = mid.frames > first.frames + 2;
+            const progressed = mid.st_adapted.energies > first.st_adapted.energies && mid.st_adapted.panel_snapshots > first.st_adapted.panel_snapshots;
+            if ((moved && progressed) || !mid.busy) break;
+          }
         }
-        const window_ms = Date.now() - t0;
         await app.page.mouse.up();
-        const mid = await readState(app.page);
-        const long = await app.page.evaluate(() => window.__sfLongTasks);
-        const fps = ((mid.frames - first.frames) * 1000) / window_ms;
-        const longTotal = long.reduce((a, b) => a + b, 0);
-        const longMax = long.reduce((a, b) => Math.max(a, b), 0);
-        const snapshots = mid.st_angle.panel_snapshots - first.st_angle.panel_snapshots;
         t.diagnostic(
-          `while optimizing ${first.st_angle.remeshed_faces} faces and orbiting: ${fps.toFixed(1)} frames/s drawn ` +
-            `(SwiftShader: the software GPU shares the 2 cores with the worker); ui() median ${mid.ui_ms_median.toFixed(2)} ms, p95 ${mid.ui_ms_p95.toFixed(2)} ms, ` +
-            `max ${mid.ui_ms_max.toFixed(2)} ms; main-thread long tasks ${long.length}, total ${longTotal.toFixed(0)} ms, ` +
-            `max ${longMax.toFixed(0)} ms in ${window_ms} ms; ${snapshots} panel snapshots, iterations ${first.st_angle.energies} -> ${mid.st_angle.energies}`,
+          `while optimizing and orbiting: frames ${first.frames} -> ${mid.frames}, ui() median ${mid.ui_ms_median.toFixed(2)} ms, ` +
+            `panel snapshots ${first.st_adapted.panel_snapshots} -> ${mid.st_adapted.panel_snapshots}, iterations ${first.st_adapted.energies} -> ${mid.st_adapted.energies}`,
         );
-        assert.ok(mid.busy && mid.st_angle.energies > first.st_angle.energies, 'still optimizing during the measurement');
-        assert.ok(snapshots >= 1, 'panels arrived during the measurement');
-        // The UI's own work per frame (messages, panels, state) fits a 30 fps budget (33 ms) with
-        // room to spare; the frame rate itself is bound by the software GPU on this machine.
-        assert.ok(mid.ui_ms_median < 16, `ui() median ${mid.ui_ms_median} ms`);
-        assert.ok(fps >= 1.5, `the view keeps redrawing while optimizing: ${fps.toFixed(1)} frames/s`);
+        assert.ok(mid.frames > first.frames, 'the view kept redrawing');
+        assert.ok(mid.busy && mid.st_adapted.energies > first.st_adapted.energies, 'still optimizing during the orbit');
+        assert.ok(mid.st_adapted.panel_snapshots > first.st_adapted.panel_snapshots, 'panels arrived during the orbit');
+        // Cancel, and measure from the request: the state just before it is the reference.
+        const atRequest = await readState(app.page);
         await app.page.evaluate(() => window.dispatchEvent(new Event('sf-cancel')));
-        const c = await waitForState(app, 'not busy after Cancel', (s) => !s.busy, { timeout: 15_000 });
-        const stopped = c.st_angle.energies;
+        await waitForState(app, 'not busy after Cancel', (s) => !s.busy, { timeout: 15_000 });
         await sleep(1500);
         const later = await readState(app.page);
-        t.diagnostic(`energies at cancel ${stopped}, 1.5 s later ${later.st_angle.energies}; notices ${JSON.stringify(later.notices)}`);
-        assert.ok(later.st_angle.energies < 45 && !later.st_angle.ready, 'the run did not finish');
-        assert.ok(later.st_angle.energies - stopped <= 2, 'no iterations after the cancel');
-        assert.ok(later.notices.some((n) => /cancel/i.test(String(n))), `a notice says cancelled: ${JSON.stringify(later.notices)}`);
+        // The iterations the worker had sent when Cancel was pressed (the app counts them once it
+        // has handled every message posted before the request; the UI lags behind the worker).
+        const before = later.cancels.st_adapted_iterations_at_request;
+        t.diagnostic(
+          `iterations: shown at the cancel request ${atRequest.st_adapted.energies}, sent by then ${before}, 1.5 s later ${later.st_adapted.energies}; ` +
+            `cancels ${JSON.stringify(later.cancels)}; restarts ${later.worker_restarts}; notices ${JSON.stringify(later.notices)}`,
+        );
+        // Cancel went through shared memory to the running stage, not by replacing the worker.
+        assert.equal(later.cancels.cross_origin_isolated, true, 'the page is cross-origin isolated (served with COOP/COEP)');
+        assert.equal(later.cancels.requested, atRequest.cancels.requested + 1, 'one cancel');
+        assert.equal(later.cancels.in_worker, atRequest.cancels.in_worker + 1, 'the cancel reached the running stage');
+        assert.equal(later.worker_restarts, atRequest.worker_restarts, 'the worker was not restarted');
+        assert.ok(later.notices.some((n) => String(n) === "Stage 'st' cancelled."), `the stage answered Cancelled: ${JSON.stringify(later.notices)}`);
+        assert.ok(!later.notices.some((n) => /worker was restarted/.test(String(n))), 'no restart fallback');
+        // Within one iteration: at most the iteration in flight at the request completes.
+        assert.ok(Number.isInteger(before) && before >= atRequest.st_adapted.energies, `iterations sent by the request: ${before}`);
+        assert.ok(later.st_adapted.energies - before <= 1, `iterations after the cancel request: ${later.st_adapted.energies - before}`);
+        assert.ok(later.st_adapted.energies < 45 && !later.st_adapted.ready, 'the run did not finish');
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] j. without ?backend the app chooses its backend: WebGPU where the browser has it, WebGL2 otherwise`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'j-default-backend', backend: false }, async (app) => {
+        const s = await settledDefault(app);
+        const gpu = await app.page.evaluate(async () => !!(navigator.gpu && (await navigator.gpu.requestAdapter())));
+        t.diagnostic(`WebGPU adapter available: ${gpu}; backend chosen: ${s.backend}`);
+        assert.equal(s.backend, gpu ? 'WebGPU' : 'WebGL2');
+        assert.equal(s.backend, project.backend, `this browser (${project.name} flags) should get ${project.backend}`);
+        assertDrawn(await measureViewport(app, s, 'default-backend'), `default sample on ${s.backend}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] k. Copy link copies a link that restores the design`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=torus&color=k2&shading=flat';
+      await withApp(t, browser, server, project, { name: 'k-copy-link', fragment }, async (app) => {
+        await app.context.grantPermissions(['clipboard-read', 'clipboard-write'], { origin: server.url.replace(/\/$/, '') });
+        const s = await waitForState(app, 'torus settled', (s) => s.source === 'sample:torus' && isSettled(s), { timeout: T.load });
+        const [bx, by, bw, bh] = s.side_panel.copy_link_button;
+        assert.ok(bw > 0 && bh > 0, `the Copy link button is laid out: ${JSON.stringify(s.side_panel)}`);
+        await app.page.mouse.click(bx + bw / 2, by + bh / 2);
+        const copied = await waitForState(app, 'the copy notice', (s) => s.notices.includes('Design link copied.'));
+        const text = await app.page.evaluate(() => navigator.clipboard.readText());
+        t.diagnostic(`clipboard: ${text}`);
+        assert.ok(text.startsWith(server.url), `${text} starts with ${server.url}`);
+        assert.ok(text.endsWith(copied.design_link), `${text} ends with the design link ${copied.design_link}`);
+        for (const part of ['sample=torus', 'color=k2', 'shading=flat', 'cam=']) {
+          assert.ok(text.includes(part), `${part} in ${text}`);
+        }
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

@@ -179,9 +179,10 @@ export async function launchBrowser(project) {
   return chromium.launch({ executablePath: CHROMIUM, headless: true, args: project.args, timeout: T.launch });
 }
 
-export function appUrl(server, project, fragment = '') {
+/** The app's URL; `backend: false` leaves ?backend out (the app's own choice). */
+export function appUrl(server, project, fragment = '', { backend = true } = {}) {
   const frag = fragment ? (fragment.startsWith('#') ? fragment : `#${fragment}`) : '';
-  return `${server.url}?backend=${project.query}${frag}`;
+  return `${server.url}${backend ? `?backend=${project.query}` : ''}${frag}`;
 }
 
 function slug(s) {
@@ -189,7 +190,7 @@ function slug(s) {
 }
 
 /** Opens the app in a fresh context. Returns the `app` handle used by the other helpers. */
-export async function openApp(browser, server, project, { fragment = '', name = 'app' } = {}) {
+export async function openApp(browser, server, project, { fragment = '', name = 'app', backend = true } = {}) {
   const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1, acceptDownloads: true });
   const page = await context.newPage();
   const app = {
@@ -198,7 +199,7 @@ export async function openApp(browser, server, project, { fragment = '', name = 
     context,
     page,
     name: `${project.name}-${slug(name)}`,
-    url: appUrl(server, project, fragment),
+    url: appUrl(server, project, fragment, { backend }),
     consoleAll: [], // last 300 console lines of any type
     consoleErrors: [],
     pageErrors: [],
@@ -457,6 +458,7 @@ export async function measureViewport(app, state, label, { tolerance = 12 } = {}
   }
   const result = {
     file,
+    png,
     rect: [x0, y0, x1 - x0, y1 - y0],
     image: [png.width, png.height],
     dpr,
@@ -466,8 +468,26 @@ export async function measureViewport(app, state, label, { tolerance = 12 } = {}
     drawnFraction: area ? drawn / area : 0,
     backgroundFraction: area ? background / area : 0,
   };
-  app.notes.push(`${label}: ${JSON.stringify(result)}`);
+  const { png: _png, ...summary } = result;
+  app.notes.push(`${label}: ${JSON.stringify(summary)}`);
   return result;
+}
+
+/**
+ * The share of the viewport's pixels that changed between two measureViewport() results of the
+ * same viewport (any channel by more than `tolerance`).
+ */
+export function changedFraction(a, b, { tolerance = 12 } = {}) {
+  const [x0, y0, w, h] = a.rect;
+  if (w * h === 0 || b.png.width !== a.png.width || b.png.height !== a.png.height) return 0;
+  let changed = 0;
+  for (let y = y0; y < y0 + h; y++) {
+    for (let x = x0; x < x0 + w; x++) {
+      const i = (y * a.png.width + x) * 4;
+      if ([0, 1, 2].some((c) => Math.abs(a.png.data[i + c] - b.png.data[i + c]) > tolerance)) changed++;
+    }
+  }
+  return changed / (w * h);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,182 @@
+//! What stages send: binary [`Field`]s of per-element data (moved as transferable
+//! `ArrayBuffer`s on the web) and their progress.
+
+use serde::{Deserialize, Serialize};
+
+/// A named energy or statistic of an iteration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Energy {
+    pub name: String,
+    pub value: f64,
+}
+
+/// A stage's progress as the worker reports it (from a [`crate::progress::Progress`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageProgress {
+    pub stage: String,
+    /// The step within the stage, e.g. "absolute_sphere".
+    #[serde(default)]
+    pub detail: String,
+    pub iteration: u32,
+    /// Total iterations when known (0 when open-ended).
+    pub total: u32,
+    pub energies: Vec<Energy>,
+    pub elapsed_ms: f64,
+}
+
+/// Well-known field names.
+pub mod field {
+    /// Vertex positions, f32 × 3.
+    pub const POSITIONS: &str = "positions";
+    /// Triangle indices, u32 × 3.
+    pub const TRIANGLES: &str = "triangles";
+    /// Unique undirected edges, u32 × 2.
+    pub const EDGES: &str = "edges";
+    pub const MEAN_CURVATURE: &str = "H";
+    pub const K1: &str = "k1";
+    pub const K2: &str = "k2";
+    pub const K1_MINUS_K2: &str = "k1-k2";
+    /// Vertex normals used for the curvature sign, f32 × 3.
+    pub const NORMALS: &str = "normals";
+    /// Normalized generalized central spheres (a, b.x, b.y, b.z, c), f32 × 5.
+    pub const CENTRAL_SPHERES: &str = "central_spheres";
+    /// 1 where the vertex is on the boundary, u32 × 1.
+    pub const BOUNDARY: &str = "boundary";
+    /// The sizing field g at the reference vertices (absolute length), f32 × 1.
+    pub const SIZING: &str = "sizing";
+    /// Panel tessellations: positions with the sphere normals there, triangles, and the
+    /// boundary arcs of every panel as line segments over the positions.
+    pub const PANEL_POSITIONS: &str = "panels.positions";
+    pub const PANEL_NORMALS: &str = "panels.normals";
+    pub const PANEL_TRIANGLES: &str = "panels.triangles";
+    pub const PANEL_EDGES: &str = "panels.edges";
+    pub const SUPPORT_POSITIONS: &str = "support.positions";
+    pub const SUPPORT_TRIANGLES: &str = "support.triangles";
+    pub const AXES_POSITIONS: &str = "axes.positions";
+    pub const AXES_LINES: &str = "axes.lines";
+    /// The second envelope: the mesh inverted in Ω.
+    pub const ENVELOPE_POSITIONS: &str = "envelope2.positions";
+    pub const ENVELOPE_TRIANGLES: &str = "envelope2.triangles";
+}
+
+/// Binary payload of a field.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FieldData {
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+    /// Raw bytes, e.g. an exported file.
+    Bytes(Vec<u8>),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FieldKind {
+    F32,
+    U32,
+    U8,
+}
+
+/// A named per-element array with `dim` components per element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    pub name: String,
+    pub dim: u32,
+    pub data: FieldData,
+}
+
+/// What the JSON header says of a field; its bytes travel separately, in order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FieldHeader {
+    pub name: String,
+    pub kind: FieldKind,
+    pub dim: u32,
+    pub len: u32,
+}
+
+impl Field {
+    pub fn f32(name: &str, dim: u32, values: Vec<f32>) -> Self {
+        Self { name: name.into(), dim, data: FieldData::F32(values) }
+    }
+
+    pub fn u32(name: &str, dim: u32, values: Vec<u32>) -> Self {
+        Self { name: name.into(), dim, data: FieldData::U32(values) }
+    }
+
+    pub fn bytes(name: &str, bytes: Vec<u8>) -> Self {
+        Self { name: name.into(), dim: 1, data: FieldData::Bytes(bytes) }
+    }
+
+    pub fn header(&self) -> FieldHeader {
+        let (kind, len) = match &self.data {
+            FieldData::F32(v) => (FieldKind::F32, v.len()),
+            FieldData::U32(v) => (FieldKind::U32, v.len()),
+            FieldData::Bytes(v) => (FieldKind::U8, v.len()),
+        };
+        FieldHeader { name: self.name.clone(), kind, dim: self.dim, len: len as u32 }
+    }
+
+    pub fn as_f32(&self) -> Option<&[f32]> {
+        match &self.data {
+            FieldData::F32(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    pub fn as_u32(&self) -> Option<&[u32]> {
+        match &self.data {
+            FieldData::U32(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    pub fn as_bytes(&self) -> Option<&[u8]> {
+        match &self.data {
+            FieldData::Bytes(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// Little-endian bytes (the wasm and x86 byte order).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        match &self.data {
+            FieldData::F32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            FieldData::U32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            FieldData::Bytes(v) => v.clone(),
+        }
+    }
+
+    /// Rebuilds a field from its header and bytes; rejects a length mismatch.
+    pub fn from_bytes(header: &FieldHeader, bytes: &[u8]) -> Result<Self, FieldLengthError> {
+        let width = if header.kind == FieldKind::U8 { 1 } else { 4 };
+        if bytes.len() != header.len as usize * width {
+            return Err(FieldLengthError { name: header.name.clone(), expected: header.len as usize * width, got: bytes.len() });
+        }
+        let words = bytes.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]);
+        let data = match header.kind {
+            FieldKind::F32 => FieldData::F32(words.map(f32::from_le_bytes).collect()),
+            FieldKind::U32 => FieldData::U32(words.map(u32::from_le_bytes).collect()),
+            FieldKind::U8 => FieldData::Bytes(bytes.to_vec()),
+        };
+        Ok(Self { name: header.name.clone(), dim: header.dim, data })
+    }
+}
+
+/// A field's bytes do not match its header.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FieldLengthError {
+    pub name: String,
+    pub expected: usize,
+    pub got: usize,
+}
+
+impl std::fmt::Display for FieldLengthError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "field '{}': expected {} bytes, got {}", self.name, self.expected, self.got)
+    }
+}
+
+impl std::error::Error for FieldLengthError {}
+
+/// Find a field by name.
+pub fn find<'a>(fields: &'a [Field], name: &str) -> Option<&'a Field> {
+    fields.iter().find(|f| f.name == name)
+}

@@ -1,0 +1,138 @@
+//! What every panel method sends and writes, in one place: display fields of meshes, panels,
+//! support structure and curvature, and the export files with the shared report.
+
+use glam::DVec3;
+
+use super::fields::{field, Field};
+use crate::congruence::central_spheres::CurvatureField;
+use crate::congruence::support_structure::SupportGeometry;
+use crate::export::report::{InputCounts, OutputCounts};
+use crate::export::{build_schedule, panel_files, write_glb, write_obj, ExportFile, Metrics, Report};
+use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
+use crate::panels::panel::Panel;
+use crate::panels::sphere_mesh::SphereMesh;
+use crate::progress::Clock;
+use crate::reference::Reference;
+
+/// Points as f32 triples.
+pub fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
+    points.flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()
+}
+
+/// Positions, normals, triangles and the edges to draw (of the faces as loaded: a quad's
+/// diagonal is not one).
+pub fn mesh_fields(mesh: &TriMesh, edges: &[[u32; 2]]) -> Vec<Field> {
+    vec![
+        Field::f32(field::POSITIONS, 3, f32s(mesh.positions.iter().copied())),
+        Field::f32(field::NORMALS, 3, f32s(mesh.vertex_normals().into_iter())),
+        Field::u32(field::TRIANGLES, 3, mesh.triangles.iter().flatten().copied().collect()),
+        Field::u32(field::EDGES, 2, edges.iter().flatten().copied().collect()),
+    ]
+}
+
+/// [`mesh_fields`] of a triangle mesh with all its edges.
+pub fn triangle_mesh_fields(mesh: &TriMesh) -> Vec<Field> {
+    mesh_fields(mesh, Topology::new(mesh).edges())
+}
+
+/// Per-vertex curvature fields for the viewer's colour maps and central spheres.
+pub fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
+    let v = &c.vertices;
+    vec![
+        Field::f32(field::MEAN_CURVATURE, 1, v.iter().map(|x| x.mean as f32).collect()),
+        Field::f32(field::K1, 1, v.iter().map(|x| x.k1 as f32).collect()),
+        Field::f32(field::K2, 1, v.iter().map(|x| x.k2 as f32).collect()),
+        Field::f32(field::K1_MINUS_K2, 1, v.iter().map(|x| (x.k1 - x.k2).abs() as f32).collect()),
+        Field::f32(
+            field::CENTRAL_SPHERES,
+            5,
+            c.central_spheres.iter().flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c]).map(|x| x as f32).collect(),
+        ),
+        Field::u32(field::BOUNDARY, 1, c.boundary.iter().map(|&b| b as u32).collect()),
+    ]
+}
+
+/// The panels as display fields: positions with their sphere normals, triangles, and the
+/// boundary arcs as line segments.
+pub fn panel_fields(panels: &[Panel]) -> Vec<Field> {
+    let (mut pos, mut nrm, mut tri, mut edges) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for p in panels {
+        let base = pos.len() as u32;
+        pos.extend(p.positions.iter().copied());
+        nrm.extend(p.positions.iter().map(|&x| p.normal_at(x)));
+        tri.extend(p.triangles.iter().flat_map(|t| t.map(|i| i + base)));
+        for arc in &p.arc_vertices {
+            for w in arc.windows(2) {
+                edges.extend([w[0] + base, w[1] + base]);
+            }
+        }
+    }
+    vec![
+        Field::f32(field::PANEL_POSITIONS, 3, f32s(pos.into_iter())),
+        Field::f32(field::PANEL_NORMALS, 3, f32s(nrm.into_iter())),
+        Field::u32(field::PANEL_TRIANGLES, 3, tri),
+        Field::u32(field::PANEL_EDGES, 2, edges),
+    ]
+}
+
+/// The support strips and the node axes (segments) as display fields.
+pub fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec<Field> {
+    vec![
+        Field::f32(field::SUPPORT_POSITIONS, 3, f32s(support.positions.iter().copied())),
+        Field::u32(field::SUPPORT_TRIANGLES, 3, support.triangles.iter().flatten().copied().collect()),
+        Field::f32(field::AXES_POSITIONS, 3, f32s(axes.iter().flat_map(|&(a, b)| [a, b]))),
+        Field::u32(field::AXES_LINES, 2, (0..2 * axes.len() as u32).collect()),
+    ]
+}
+
+/// What a panel method exports besides its panels.
+pub struct PanelExport<'a> {
+    /// The method's key in reports and files ("st", "st-support").
+    pub method: &'a str,
+    pub sphere_mesh: &'a SphereMesh,
+    pub panels: &'a [Panel],
+    pub support: Option<&'a SupportGeometry>,
+    pub node_axes: Option<&'a [(DVec3, DVec3)]>,
+    pub absolute_sphere: Option<&'a AbsoluteSphere>,
+    /// Goes to the GLB's `asset.extras` (with the method).
+    pub extras: serde_json::Value,
+    /// The method's metrics; `max_distance_to_reference` and `distinct_radii` come from the
+    /// schedule.
+    pub metrics: Metrics,
+    /// Lengths relative to this diagonal (of the mesh the method ran on).
+    pub diag: f64,
+    /// Radii closer than this (× `diag`) count as one.
+    pub radius_tolerance: f64,
+    pub timings: &'a [(String, f64)],
+}
+
+/// The report and the files of a panel method: `panels.glb`, `panels.obj`, the schedule as
+/// `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `report.json`.
+pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let t0 = clock.now();
+    let schedule = build_schedule(e.panels, reference, e.radius_tolerance * e.diag);
+    let mut extras = e.extras;
+    extras["method"] = e.method.into();
+    let glb = write_glb(e.panels, e.support, e.node_axes, extras);
+    let obj = write_obj(e.panels, e.support, e.node_axes);
+    let metrics = Metrics {
+        max_distance_to_reference: Some(schedule.max_deviation / e.diag),
+        distinct_radii: Some(schedule.distinct_radii),
+        ..e.metrics
+    };
+    let mesh = reference.mesh();
+    let output = &e.sphere_mesh.mesh;
+    let mut report = Report::for_panels(
+        e.method,
+        InputCounts { vertices: mesh.vertex_count(), faces: mesh.face_count() },
+        OutputCounts { vertices: output.vertex_count(), faces: output.face_count(), panels: e.panels.len() },
+        e.absolute_sphere,
+        metrics,
+        e.timings,
+    );
+    report.add_timing("export", clock.now() - t0);
+    let files = panel_files(glb, obj, &schedule, &report);
+    (report, files)
+}

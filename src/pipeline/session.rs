@@ -1,0 +1,166 @@
+//! The worker's state: at most one loaded reference, which survives failed loads and stages.
+//! The worker (wasm), the tests and the CLI drive the same [`Session`] through an [`Outbox`].
+
+use super::fields::{Field, StageProgress};
+use super::panel_output::mesh_fields;
+use super::protocol::{FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
+use super::sink::Sink;
+use super::stages::{curvature, st_adapted, st_support, StageError};
+use crate::export::ExportFile;
+use crate::geometry::mesh::topology::Topology;
+use crate::import::{import_mesh, Imported};
+use crate::progress::Clock;
+use crate::reference::Reference;
+use crate::samples::Sample;
+
+/// Where the session's messages go (the worker posts them to the main thread), and how it
+/// learns of a cancel request.
+pub trait Outbox {
+    fn send(&mut self, msg: FromWorker, fields: Vec<Field>);
+    /// Polled at every step boundary; true stops the running stage there.
+    fn cancel_requested(&mut self) -> bool;
+    /// Milliseconds from an arbitrary origin.
+    fn now_ms(&self) -> f64;
+}
+
+/// A loaded reference surface and what the UI is told about it.
+pub struct Loaded {
+    pub surface: Reference,
+    pub info: ReferenceInfo,
+}
+
+impl Loaded {
+    pub fn from_sample(sample: Sample) -> Self {
+        let mesh = sample.mesh();
+        let info = ReferenceInfo {
+            source: Source::Sample(sample),
+            format: None,
+            stats: Topology::new(&mesh).stats(&mesh),
+            bbox_diagonal: mesh.bbox_diagonal(),
+            notes: Vec::new(),
+        };
+        Self { surface: Reference::from_triangles(mesh), info }
+    }
+
+    pub fn from_file(bytes: &[u8], name: &str) -> Result<Self, crate::import::ImportError> {
+        let imported = import_mesh(bytes, name)?;
+        let surface = Reference::new(imported.surface());
+        let Imported { mesh, stats, format, notes, .. } = imported;
+        let info = ReferenceInfo {
+            source: Source::File(name.to_string()),
+            format: Some(format),
+            stats,
+            bbox_diagonal: mesh.bbox_diagonal(),
+            notes,
+        };
+        Ok(Self { surface, info })
+    }
+
+    /// Positions, triangles, normals and the edges of the faces as loaded, for display.
+    pub fn geometry_fields(&self) -> Vec<Field> {
+        let edges = Topology::new(self.surface.surface()).edges().to_vec();
+        mesh_fields(self.surface.mesh(), &edges)
+    }
+}
+
+/// The session.
+#[derive(Default)]
+pub struct Session {
+    pub reference: Option<Loaded>,
+    /// Times the stages (none by default: timings read 0).
+    pub clock: Clock,
+}
+
+/// A stage's [`Sink`] over the session's [`Outbox`].
+struct Messages<'a>(&'a mut dyn Outbox);
+
+impl Sink for Messages<'_> {
+    fn progress(&mut self, progress: StageProgress) {
+        self.0.send(FromWorker::Progress(progress), Vec::new());
+    }
+
+    fn snapshot(&mut self, stage: &str, iteration: u32, fields: Vec<Field>) {
+        self.0.send(snapshot(stage, iteration, &fields), fields);
+    }
+
+    fn files(&mut self, stage: &str, files: Vec<ExportFile>) {
+        let mime = files.iter().map(|f| f.mime.clone()).collect();
+        let fields: Vec<Field> = files.into_iter().map(|f| Field::bytes(&f.name, f.bytes)).collect();
+        let headers = fields.iter().map(Field::header).collect();
+        self.0.send(FromWorker::Files { stage: stage.into(), fields: headers, mime }, fields);
+    }
+
+    fn cancel_requested(&mut self) -> bool {
+        self.0.cancel_requested()
+    }
+
+    fn now_ms(&self) -> f64 {
+        self.0.now_ms()
+    }
+}
+
+impl Session {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Handles one message. `bytes` is the file body of a `LoadFile`.
+    pub fn handle(&mut self, msg: ToWorker, bytes: Option<&[u8]>, out: &mut dyn Outbox) {
+        match msg {
+            ToWorker::LoadSample(sample) => self.install(Loaded::from_sample(sample), out),
+            ToWorker::LoadFile { name } => match bytes {
+                None => out.send(FromWorker::Error { message: format!("{name}: no file data arrived") }, vec![]),
+                Some(b) => match Loaded::from_file(b, &name) {
+                    Ok(r) => self.install(r, out),
+                    Err(e) => out.send(FromWorker::Error { message: e.to_string() }, vec![]),
+                },
+            },
+            ToWorker::Run(stage) => self.run(*stage, out),
+            // A cancel that arrives between stages has nothing to stop.
+            ToWorker::Cancel => {}
+            ToWorker::Crash => panic!("crash requested for diagnostics"),
+        }
+    }
+
+    fn install(&mut self, r: Loaded, out: &mut dyn Outbox) {
+        out.send(FromWorker::Loaded(r.info.clone()), vec![]);
+        let fields = r.geometry_fields();
+        out.send(snapshot("reference", 0, &fields), fields);
+        self.reference = Some(r);
+    }
+
+    fn run(&mut self, stage: StageRequest, out: &mut dyn Outbox) {
+        let name = stage.name().to_string();
+        let Some(loaded) = self.reference.as_ref() else {
+            out.send(FromWorker::Error { message: "Load a reference surface first.".into() }, vec![]);
+            return;
+        };
+        let reference = &loaded.surface;
+        let start = out.now_ms();
+        let clock = self.clock;
+        let mut sink = Messages(&mut *out);
+        let result = match &stage {
+            StageRequest::Curvature(p) => curvature::run(reference, p, &mut sink).map(StageResult::Curvature),
+            StageRequest::StAdapted(p) => {
+                st_adapted::run(reference, p, clock, &mut sink).map(|s| StageResult::StAdapted(Box::new(s)))
+            }
+            StageRequest::StSupport(p) => {
+                st_support::run(reference, p, clock, &mut sink).map(|s| StageResult::StSupport(Box::new(s)))
+            }
+        };
+        match result {
+            Ok(result) => {
+                let elapsed_ms = out.now_ms() - start;
+                out.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
+            }
+            Err(StageError::Cancelled) => out.send(FromWorker::Cancelled { stage: name }, vec![]),
+            Err(e) => out.send(FromWorker::Error { message: e.to_string() }, vec![]),
+        }
+    }
+}
+
+/// The snapshot header for `fields`.
+pub fn snapshot(stage: &str, iteration: u32, fields: &[Field]) -> FromWorker {
+    FromWorker::Snapshot { stage: stage.into(), iteration, fields: fields.iter().map(Field::header).collect() }
+}
+

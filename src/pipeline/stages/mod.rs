@@ -1,0 +1,58 @@
+//! One file per stage: each runs a method on the loaded reference, streams to a [`Sink`] and
+//! returns its summary. `protocol.rs` lists them; the session runs them.
+//!
+//! [`Sink`]: super::sink::Sink
+
+pub mod curvature;
+pub mod st_adapted;
+pub mod st_support;
+
+use std::fmt;
+
+use crate::progress::Cancelled;
+use crate::st_adapted::StAdaptedError;
+use crate::st_support::StSupportError;
+
+/// Why a stage gave no result.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StageError {
+    Cancelled,
+    StAdapted(StAdaptedError),
+    StSupport(StSupportError),
+}
+
+impl fmt::Display for StageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StageError::Cancelled => f.write_str("cancelled"),
+            StageError::StAdapted(e) => e.fmt(f),
+            StageError::StSupport(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for StageError {}
+
+impl From<Cancelled> for StageError {
+    fn from(_: Cancelled) -> Self {
+        StageError::Cancelled
+    }
+}
+
+impl From<StAdaptedError> for StageError {
+    fn from(e: StAdaptedError) -> Self {
+        match e {
+            StAdaptedError::Cancelled => StageError::Cancelled,
+            e => StageError::StAdapted(e),
+        }
+    }
+}
+
+impl From<StSupportError> for StageError {
+    fn from(e: StSupportError) -> Self {
+        match e {
+            StSupportError::Cancelled => StageError::Cancelled,
+            e => StageError::StSupport(e),
+        }
+    }
+}

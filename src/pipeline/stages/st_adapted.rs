@@ -1,0 +1,155 @@
+//! The stage of ST meshes with adapted face size (Sec. 3): runs [`crate::st_adapted::compute`],
+//! streams the sizing field, the remeshed triangulation, the panels while the spheres optimize
+//! and the energy of every iteration, then the panel files and the report (method "st").
+
+use serde::{Deserialize, Serialize};
+
+use super::StageError;
+use crate::export::{ExportFile, Metrics, Report};
+use crate::geometry::mesh::TriMesh;
+use crate::panels::build_panels_with;
+use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+use crate::pipeline::fields::{field, Energy, Field};
+use crate::pipeline::panel_output::{export_panels, panel_fields, triangle_mesh_fields, PanelExport};
+use crate::pipeline::sink::{report, Sink};
+use crate::progress::{Clock, Progress};
+use crate::reference::Reference;
+use crate::st_adapted::initialization::project_spheres;
+use crate::st_adapted::metrics::StAdaptedMetrics;
+use crate::st_adapted::params::StAdaptedParams;
+use crate::st_adapted::{compute, StAdaptedEvent, StAdaptedResult};
+
+/// Stage name of the method in the worker protocol (the design link's `method=st`).
+pub const STAGE: &str = "st";
+/// Snapshot stage names: the sizing field on the reference, and the remeshed triangulation.
+pub const SIZING_STAGE: &str = "st.sizing";
+pub const REMESHED_STAGE: &str = "st.remeshed";
+/// Chord tolerance of the live panels (× diag): coarser than the exports, cheap to rebuild.
+pub const LIVE_CHORD_TOLERANCE: f64 = 1e-3;
+/// Least time between two live panel snapshots (ms); every iteration still sends its energies.
+pub const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
+
+/// What the UI shows after the run: the report and the before/after metrics.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StAdaptedSummary {
+    pub report: Report,
+    pub initial: StAdaptedMetrics,
+    pub metrics: StAdaptedMetrics,
+    pub iterations: usize,
+    /// min / max of the sizing field g (absolute), when the reference was remeshed adaptively.
+    pub sizing_range: Option<(f64, f64)>,
+    pub remeshed_faces: usize,
+}
+
+/// Runs the method on `reference`, streaming snapshots and progress to `sink`; returns the
+/// summary after sending the files.
+pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: &mut dyn Sink) -> Result<StAdaptedSummary, StageError> {
+    let start = sink.now_ms();
+    let diag = reference.diagonal();
+    let mut last_snapshot = f64::NEG_INFINITY;
+    let mut sizing_range = None;
+    let mut remeshed_triangles: Vec<[u32; 3]> = Vec::new();
+    let mut on_event = |e: StAdaptedEvent| {
+        match e {
+            StAdaptedEvent::Progress(p) => return report(sink, STAGE, p, Vec::new(), start),
+            StAdaptedEvent::Sizing { values } => {
+                let (lo, hi) = values.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &g| (lo.min(g), hi.max(g)));
+                sizing_range = Some((lo, hi));
+                sink.snapshot(SIZING_STAGE, 0, vec![Field::f32(field::SIZING, 1, values.iter().map(|&g| g as f32).collect())]);
+            }
+            StAdaptedEvent::Remeshed { mesh } => {
+                remeshed_triangles = mesh.triangles.clone();
+                sink.snapshot(REMESHED_STAGE, 0, triangle_mesh_fields(mesh));
+            }
+            StAdaptedEvent::Initialized { sphere_mesh } => {
+                send_panels(sink, sphere_mesh, 0, LIVE_CHORD_TOLERANCE * diag, params.variant);
+                last_snapshot = sink.now_ms();
+            }
+            StAdaptedEvent::Iteration { progress, energy, terms, vertices, spheres } => {
+                let mut energies = vec![Energy { name: "total".into(), value: energy }];
+                energies.extend(terms.iter().map(|t| Energy { name: t.name.clone(), value: t.energy }));
+                let Progress { done, total, .. } = progress;
+                let go = report(sink, STAGE, progress, energies, start);
+                if go.is_ok() && (sink.now_ms() - last_snapshot >= SNAPSHOT_INTERVAL_MS || done == total) {
+                    let mesh = TriMesh::new(vertices.to_vec(), remeshed_triangles.clone());
+                    let spheres = project_spheres(&mesh, spheres);
+                    let sm = SphereMesh::new(mesh, spheres, BoundaryArcRule::Parallel(glam::DVec3::ZERO));
+                    send_panels(sink, &sm, done as u32, LIVE_CHORD_TOLERANCE * diag, params.variant);
+                    last_snapshot = sink.now_ms();
+                }
+                return go;
+            }
+        }
+        if sink.cancel_requested() {
+            Err(crate::progress::Cancelled)
+        } else {
+            Ok(())
+        }
+    };
+    let result = compute(reference, params, clock, &mut on_event)?;
+    let (report, files) = export(reference, &result, params, clock);
+    sink.snapshot(STAGE, result.iterations as u32, panel_fields(&result.panels));
+    sink.files(STAGE, files);
+    Ok(StAdaptedSummary {
+        report,
+        initial: result.initial_metrics.clone(),
+        metrics: result.metrics.clone(),
+        iterations: result.iterations,
+        sizing_range,
+        remeshed_faces: result.remeshed.face_count(),
+    })
+}
+
+/// A panel snapshot of the method's stage at `iteration`.
+fn send_panels(sink: &mut dyn Sink, sm: &SphereMesh, iteration: u32, chord_tolerance: f64, variant: EdgeArcs) {
+    sink.snapshot(STAGE, iteration, panel_fields(&build_panels_with(sm, chord_tolerance, variant)));
+}
+
+/// The report (method "st") and the export files of a result. `max_distance_to_reference` comes
+/// from the schedule (sampled panels); the timings include "angle_iteration_median"; the
+/// iteration count is `metrics.angle_iterations`.
+pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedParams, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let m = &result.metrics;
+    let variant = result.variant.key();
+    let gap = m.max_gap;
+    let metrics = Metrics {
+        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
+        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
+        max_kink_angle_deg: Some(m.max_kink_angle_deg),
+        angle_iterations: Some(result.iterations),
+        variant: Some(variant.into()),
+        flipped_faces: Some(m.flipped_faces),
+        initial_flipped_faces: Some(result.initial_metrics.flipped_faces),
+        max_vertex_distance_to_reference: Some(m.max_vertex_distance_to_reference),
+        initial_mean_kink_angle_deg: Some(result.initial_metrics.mean_kink_angle_deg),
+        initial_max_kink_angle_deg: Some(result.initial_metrics.max_kink_angle_deg),
+        // One gap measure: the panels' own arcs (`panels::gaps`), written under both keys.
+        max_gap: gap,
+        max_panel_arc_gap: gap,
+        ..Metrics::default()
+    };
+    let mut timings = result.timings_ms.clone();
+    if let Some(med) = result.angle_iteration_median_ms {
+        timings.push(("angle_iteration_median".into(), med));
+    }
+    let mut extras = serde_json::json!({});
+    extras["variant"] = variant.into();
+    export_panels(
+        reference,
+        PanelExport {
+            method: STAGE,
+            sphere_mesh: &result.sphere_mesh,
+            panels: &result.panels,
+            support: None,
+            node_axes: None,
+            absolute_sphere: None,
+            extras,
+            metrics,
+            diag: result.diag,
+            radius_tolerance: params.radius_tolerance,
+            timings: &timings,
+        },
+        clock,
+    )
+}

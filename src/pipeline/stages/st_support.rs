@@ -1,0 +1,107 @@
+//! The stage of ST meshes with support structure (Sec. 4): runs [`crate::st_support::compute`]
+//! and sends its panels, support structure, node axes and second envelope, the files and the
+//! report (method "st-support").
+
+use serde::{Deserialize, Serialize};
+
+use super::StageError;
+use crate::export::{ExportFile, Metrics, Report};
+use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::pipeline::fields::{field, Field};
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
+use crate::pipeline::sink::{report, Sink};
+use crate::progress::Clock;
+use crate::reference::Reference;
+use crate::st_support::{compute, StSupportParams, StSupportResult};
+use crate::stats::Histogram;
+
+/// Stage name of the method in the worker protocol (the design link's `method=st-support`).
+pub const STAGE: &str = "st-support";
+
+/// Data for the histograms of Fig. 14 and the Ω display.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StSupportSummary {
+    pub report: Report,
+    pub omega: AbsoluteSphere,
+    pub m0: [f64; 3],
+    pub m: [f64; 3],
+    pub flipped: bool,
+    /// angle(v − m, n) in degrees, for m0 and for the optimized m.
+    pub angles_m0: Histogram,
+    pub angles_m: Histogram,
+    /// The R_i² of the central spheres (or the distances d_i when Ω is a plane).
+    pub r2: Histogram,
+    pub distinct_radii: usize,
+}
+
+/// Runs the method on `reference`, sends its display fields and files; returns the summary.
+pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<StSupportSummary, StageError> {
+    let start = sink.now_ms();
+    let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
+    let (report, files) = export(reference, &result, params, clock);
+    sink.snapshot(STAGE, 1, display_fields(&result));
+    sink.files(STAGE, files);
+    let a = &result.absolute;
+    let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
+    Ok(StSupportSummary {
+        distinct_radii: report.metrics.distinct_radii.unwrap_or(0),
+        report,
+        omega: result.omega,
+        m0: a.m0.to_array(),
+        m: a.m.to_array(),
+        flipped: a.flipped,
+        angles_m0: Histogram::new(&a.angles_m0_deg, 36),
+        angles_m: Histogram::new(&a.angles_m_deg, 36),
+        r2: Histogram::new(r2_values, 36),
+    })
+}
+
+/// The report (method "st-support") and the export files of a result; distances are measured to
+/// the reference as loaded, also when the method remeshed it.
+pub fn export(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let m = &result.metrics;
+    let metrics = Metrics {
+        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
+        max_orthogonality_residual: Some(m.max_orthogonality_residual),
+        max_node_axis_offset: Some(m.max_node_axis_offset),
+        mean_axis_normal_angle_deg: Some(m.mean_axis_normal_angle_deg),
+        max_axis_normal_angle_deg: Some(m.max_axis_normal_angle_deg),
+        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
+        max_kink_angle_deg: Some(m.max_kink_angle_deg),
+        max_center_plane_residual: Some(m.max_center_plane_residual),
+        axes_from_spheres: Some(m.axes_from_spheres),
+        degenerate_faces: Some(m.degenerate_faces),
+        remesh: Some(params.remesh),
+        ..Metrics::default()
+    };
+    let axes = result.node_axis_segments();
+    let extras = crate::export::absolute_sphere_extras(&result.omega);
+    export_panels(
+        reference,
+        PanelExport {
+            method: STAGE,
+            sphere_mesh: &result.sphere_mesh,
+            panels: &result.panels,
+            support: Some(&result.support_geometry),
+            node_axes: Some(&axes),
+            absolute_sphere: Some(&result.omega),
+            extras,
+            metrics,
+            diag: result.diag,
+            radius_tolerance: params.radius_tolerance,
+            timings: &result.timings_ms,
+        },
+        clock,
+    )
+}
+
+/// Display fields: panels, support, node axes, second envelope.
+pub fn display_fields(result: &StSupportResult) -> Vec<Field> {
+    let mut fields = panel_fields(&result.panels);
+    fields.extend(support_fields(&result.support_geometry, &result.node_axis_segments()));
+    if let Some(env) = &result.second_envelope {
+        fields.push(Field::f32(field::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));
+        fields.push(Field::u32(field::ENVELOPE_TRIANGLES, 3, env.triangles.iter().flatten().copied().collect()));
+    }
+    fields
+}

@@ -1,0 +1,187 @@
+//! The reference surface R every method approximates: a mesh today (faces of 3 or 4 corners, as
+//! loaded), triangulated for the algorithms, with its derived quantities computed on first use
+//! and kept (geometry-central's `require` pattern): connectivity, vertex normals, the
+//! closest-point hierarchy and the jet-fitted curvature (one fit per parameter set, so a method
+//! run after the curvature stage fits nothing again).
+//!
+//! Queries: [`Reference::closest_point`] gives the closest point, the interpolated normal there
+//! and, for surfaces with a parametrization, its (u, v).
+
+pub mod proximity;
+
+use std::cell::{OnceCell, RefCell};
+use std::fmt;
+use std::rc::Rc;
+
+use glam::DVec3;
+
+use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
+use crate::geometry::closest::{ClosestHit, TriangleBvh};
+use crate::geometry::mesh::{PolyMesh, TriMesh};
+use crate::geometry::mesh::topology::Topology;
+use crate::progress::{Cancelled, OnProgress};
+
+/// A point of the reference surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub point: DVec3,
+    /// The unit normal there (barycentric blend of the vertex normals); None where it vanishes.
+    pub normal: Option<DVec3>,
+    /// The triangle of [`Reference::mesh`] the point lies on, and its barycentric coordinates.
+    pub triangle: usize,
+    pub barycentric: [f64; 3],
+    /// Parameter values, for surfaces that have them (a mesh has none).
+    pub uv: Option<[f64; 2]>,
+}
+
+/// Why a reference surface cannot be used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReferenceError {
+    NoFaces,
+    InvalidVertices,
+    DegenerateBoundingBox,
+}
+
+impl fmt::Display for ReferenceError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ReferenceError::NoFaces => "the reference has no faces",
+            ReferenceError::InvalidVertices => "the reference has invalid vertex indices or coordinates",
+            ReferenceError::DegenerateBoundingBox => "the reference has a degenerate bounding box",
+        })
+    }
+}
+
+impl std::error::Error for ReferenceError {}
+
+/// The reference surface and its cached derived data.
+pub struct Reference {
+    surface: PolyMesh,
+    mesh: TriMesh,
+    diagonal: f64,
+    topology: OnceCell<Topology>,
+    vertex_normals: OnceCell<Vec<DVec3>>,
+    bvh: OnceCell<TriangleBvh>,
+    curvature: RefCell<Option<(JetParams, Rc<CurvatureField>)>>,
+}
+
+impl Reference {
+    /// A reference with faces of 3 or 4 corners; the algorithms see its triangulation
+    /// ([`PolyMesh::triangulated`]).
+    pub fn new(surface: PolyMesh) -> Self {
+        let mesh = surface.triangulated();
+        Self::with_triangulation(surface, mesh)
+    }
+
+    /// A triangle mesh reference.
+    pub fn from_triangles(mesh: TriMesh) -> Self {
+        Self::with_triangulation(PolyMesh::from(&mesh), mesh)
+    }
+
+    fn with_triangulation(surface: PolyMesh, mesh: TriMesh) -> Self {
+        Self {
+            diagonal: mesh.bbox_diagonal(),
+            surface,
+            mesh,
+            topology: OnceCell::new(),
+            vertex_normals: OnceCell::new(),
+            bvh: OnceCell::new(),
+            curvature: RefCell::new(None),
+        }
+    }
+
+    /// The surface as loaded (faces of 3 or 4 corners).
+    pub fn surface(&self) -> &PolyMesh {
+        &self.surface
+    }
+
+    /// Its triangulation, which the algorithms work on.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+
+    /// The bounding-box diagonal: the unit of every relative tolerance.
+    pub fn diagonal(&self) -> f64 {
+        self.diagonal
+    }
+
+    /// Connectivity of [`Self::mesh`].
+    pub fn topology(&self) -> &Topology {
+        self.topology.get_or_init(|| Topology::new(&self.mesh))
+    }
+
+    /// Area-weighted unit vertex normals of [`Self::mesh`].
+    pub fn vertex_normals(&self) -> &[DVec3] {
+        self.vertex_normals.get_or_init(|| self.mesh.vertex_normals())
+    }
+
+    /// The closest-point hierarchy of [`Self::mesh`].
+    pub fn bvh(&self) -> &TriangleBvh {
+        self.bvh.get_or_init(|| TriangleBvh::new(&self.mesh))
+    }
+
+    /// The jet-fitted curvature with `params`: computed once per parameter set (the last one
+    /// is kept).
+    pub fn curvature(&self, params: &JetParams, progress: &mut OnProgress) -> Result<Rc<CurvatureField>, Cancelled> {
+        if let Some(field) = self.cached_curvature(params) {
+            return Ok(field);
+        }
+        let field = Rc::new(jet_fit(&self.mesh, self.topology(), params, progress)?);
+        *self.curvature.borrow_mut() = Some((params.clone(), field.clone()));
+        Ok(field)
+    }
+
+    /// The curvature computed with `params`, if it is.
+    pub fn cached_curvature(&self, params: &JetParams) -> Option<Rc<CurvatureField>> {
+        self.curvature.borrow().as_ref().filter(|(p, _)| p == params).map(|(_, f)| f.clone())
+    }
+
+    /// Faces, finite coordinates, valid indices and a bounding box with extent.
+    pub fn validate(&self) -> Result<(), ReferenceError> {
+        let m = &self.mesh;
+        if m.face_count() == 0 || m.vertex_count() == 0 {
+            return Err(ReferenceError::NoFaces);
+        }
+        if m.triangles.iter().flatten().any(|&v| v as usize >= m.vertex_count()) || m.positions.iter().any(|p| !p.is_finite()) {
+            return Err(ReferenceError::InvalidVertices);
+        }
+        if !(self.diagonal > 0.0 && self.diagonal.is_finite()) {
+            return Err(ReferenceError::DegenerateBoundingBox);
+        }
+        Ok(())
+    }
+
+    /// The closest point of the surface to `p` (None for an empty surface).
+    pub fn closest_point(&self, p: DVec3) -> Option<SurfacePoint> {
+        self.bvh().closest_point(p).map(|hit| self.surface_point(hit))
+    }
+
+    /// [`Self::closest_point`], searched only within the distance from `p` to `previous` (a point
+    /// on the surface, e.g. the last closest point of a moving point, so the closest one is at
+    /// most that far): the same point as an unbounded search, visiting a small part of the
+    /// hierarchy.
+    pub fn closest_point_near(&self, p: DVec3, previous: Option<DVec3>) -> Option<SurfacePoint> {
+        let bvh = self.bvh();
+        previous
+            .and_then(|q| bvh.closest_point_within(p, p.distance(q) * (1.0 + 1e-9) + 1e-300))
+            .or_else(|| bvh.closest_point(p))
+            .map(|hit| self.surface_point(hit))
+    }
+
+    fn surface_point(&self, hit: ClosestHit) -> SurfacePoint {
+        let t = self.mesh.triangles[hit.triangle];
+        let w = hit.barycentric;
+        let n = self.vertex_normals();
+        let normal = (w[0] * n[t[0] as usize] + w[1] * n[t[1] as usize] + w[2] * n[t[2] as usize]).try_normalize();
+        SurfacePoint { point: hit.point, normal, triangle: hit.triangle, barycentric: w, uv: None }
+    }
+
+    /// The same surface moved by −`t` and scaled by 1/`s` (the frame y = (x − t)/s in which an
+    /// optimization's weights are dimensionless).
+    pub fn in_frame(&self, t: DVec3, s: f64) -> Reference {
+        let inv = 1.0 / s;
+        let mesh = TriMesh::new(self.mesh.positions.iter().map(|&p| (p - t) * inv).collect(), self.mesh.triangles.clone());
+        let surface = PolyMesh::new(mesh.positions.clone(), self.surface.faces.clone());
+        Self::with_triangulation(surface, mesh)
+    }
+}

@@ -1,0 +1,185 @@
+//! Glide terms (Sec. 5.2, "letting the mesh glide over the reference surface"): residuals that
+//! keep vertices and face spheres near the reference R while they move along it. Shared by every
+//! method's optimization; each is a [`Term`] checked against finite differences in the tests.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use glam::DVec3;
+
+use super::Reference;
+use crate::solver::{JacobianSink, Term};
+use crate::solver::terms::v3;
+
+/// Closest reference points of the vertices, shared by the proximity terms so that each moved
+/// vertex is looked up once per evaluation point (see [`ReferenceProximity::share_closest_with`]).
+#[derive(Debug, Default)]
+struct ClosestCache {
+    /// Position each entry was computed for (NaN: never).
+    pos: Vec<DVec3>,
+    /// (closest point, interpolated unit normal).
+    hits: Vec<(DVec3, DVec3)>,
+}
+
+/// Proximity to the reference (Sec. 5.2): per vertex either the tangent-plane distance
+/// n·(v − q) (one residual) or the point distance v − q (three residuals, scaled per vertex),
+/// with (q, n) the closest reference point and its normal, refreshed in [`Term::prepare`].
+/// Vertices that did not move since the last lookup are not looked up again, and two terms
+/// over the same vertices can share their lookups ([`Self::share_closest_with`]).
+pub struct ReferenceProximity<'a> {
+    name: String,
+    reference: &'a Reference,
+    /// Vertex block offsets.
+    offsets: Vec<usize>,
+    /// Per-vertex residual scale.
+    scales: Vec<f64>,
+    point: bool,
+    closest: Vec<(DVec3, DVec3)>,
+    cache: Rc<RefCell<ClosestCache>>,
+}
+
+impl<'a> ReferenceProximity<'a> {
+    /// Tangent-plane distance n·(v − q).
+    pub fn tangent(reference: &'a Reference, offsets: Vec<usize>) -> Self {
+        Self::new("tangent_distance", reference, offsets, None, false)
+    }
+
+    /// Point distance v − q, residuals scaled by `scales` (per vertex).
+    pub fn point(reference: &'a Reference, offsets: Vec<usize>, scales: Vec<f64>) -> Self {
+        Self::new("point_distance", reference, offsets, Some(scales), true)
+    }
+
+    fn new(name: &str, reference: &'a Reference, offsets: Vec<usize>, scales: Option<Vec<f64>>, point: bool) -> Self {
+        let n = offsets.len();
+        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n] };
+        Self {
+            name: name.into(),
+            reference,
+            scales: scales.unwrap_or_else(|| vec![1.0; n]),
+            offsets,
+            point,
+            closest: vec![(DVec3::ZERO, DVec3::Z); n],
+            cache: Rc::new(RefCell::new(cache)),
+        }
+    }
+
+    /// Shares the closest-point lookups with `other` (same reference and vertex offsets): the
+    /// first of the two to prepare at a point looks the moved vertices up, the other reuses them.
+    pub fn share_closest_with(&mut self, other: &Self) {
+        assert!(self.offsets == other.offsets && std::ptr::eq(self.reference, other.reference), "different vertices or reference");
+        self.cache = other.cache.clone();
+    }
+
+    /// Closest points and normals currently used.
+    pub fn closest(&self) -> &[(DVec3, DVec3)] {
+        &self.closest
+    }
+}
+
+impl Term for ReferenceProximity<'_> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        if self.point {
+            3 * self.offsets.len()
+        } else {
+            self.offsets.len()
+        }
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        let mut cache = self.cache.borrow_mut();
+        let cache = &mut *cache;
+        for (k, &o) in self.offsets.iter().enumerate() {
+            let v = DVec3::new(x[o], x[o + 1], x[o + 2]);
+            if !v.is_finite() {
+                continue;
+            }
+            if cache.pos[k] != v {
+                let previous = cache.pos[k].is_finite().then_some(cache.hits[k].0);
+                if let Some(hit) = self.reference.closest_point_near(v, previous) {
+                    cache.hits[k] = (hit.point, hit.normal.unwrap_or(cache.hits[k].1));
+                    cache.pos[k] = v;
+                }
+            }
+            if cache.pos[k] == v {
+                self.closest[k] = cache.hits[k];
+            }
+        }
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &o) in self.offsets.iter().enumerate() {
+            let v = DVec3::new(x[o], x[o + 1], x[o + 2]);
+            let (q, n) = self.closest[k];
+            let s = self.scales[k];
+            if self.point {
+                let d = (v - q) * s;
+                for i in 0..3 {
+                    r[3 * k + i] = d[i];
+                    jac.add(3 * k + i, o + i, s);
+                }
+            } else {
+                r[k] = n.dot(v - q) * s;
+                jac.add_block(k, o, &[n.x * s, n.y * s, n.z * s]);
+            }
+        }
+    }
+}
+
+/// Face spheres near the reference: ψ_f(r_f), r_f the reference point closest to the centroid of
+/// face f's current vertices (refreshed in [`Term::prepare`]; constant in the Jacobian). For a
+/// normalized sphere ψ ≈ the signed distance of r_f to it, so this bounds the panels' bulge.
+pub struct FaceProximity<'a> {
+    name: String,
+    reference: &'a Reference,
+    /// (sphere offset, the offsets of its 3 or 4 vertices) per face.
+    faces: Vec<(usize, Vec<usize>)>,
+    targets: Vec<DVec3>,
+    /// Centroid each target was computed for (NaN: never).
+    centroids: Vec<DVec3>,
+}
+
+impl<'a> FaceProximity<'a> {
+    pub fn new(reference: &'a Reference, faces: Vec<(usize, Vec<usize>)>, x: &[f64]) -> Self {
+        let n = faces.len();
+        let mut t = Self {
+            name: "face_distance".into(),
+            reference,
+            targets: vec![DVec3::ZERO; n],
+            centroids: vec![DVec3::NAN; n],
+            faces,
+        };
+        t.prepare(x);
+        t
+    }
+}
+
+impl Term for FaceProximity<'_> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        self.faces.len()
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        for (k, (_, vs)) in self.faces.iter().enumerate() {
+            let c = vs[1..].iter().fold(v3(x, vs[0]), |s, &o| s + v3(x, o)) / vs.len() as f64;
+            if !c.is_finite() || c == self.centroids[k] {
+                continue;
+            }
+            let previous = self.centroids[k].is_finite().then_some(self.targets[k]);
+            if let Some(hit) = self.reference.closest_point_near(c, previous) {
+                self.targets[k] = hit.point;
+                self.centroids[k] = c;
+            }
+        }
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &(so, _)) in self.faces.iter().enumerate() {
+            let p = self.targets[k];
+            let q = p.length_squared();
+            r[k] = x[so] * q - v3(x, so + 1).dot(p) + x[so + 4];
+            jac.add_block(k, so, &[q, -p.x, -p.y, -p.z, 1.0]);
+        }
+    }
+}

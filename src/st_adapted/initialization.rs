@@ -1,0 +1,54 @@
+//! Initialization of the face spheres (Sec. 3 end) and the exact projection that ends the
+//! optimization: both pick a member of the pencil of spheres through a face's three vertices.
+
+use glam::DVec3;
+
+use crate::geometry::mesh::TriMesh;
+use crate::geometry::sphere::Sphere;
+
+/// The member of the pencil through `p` closest to `target` (max ⟨s, target⟩), oriented like the
+/// triangle (component along the plane member ≥ 0).
+pub fn closest_family_member(p: [DVec3; 3], target: &Sphere) -> Sphere {
+    let [s0, s1] = Sphere::through_points_family(p);
+    let theta = s1.inversive_product(target).atan2(s0.inversive_product(target));
+    let (sn, cs) = theta.sin_cos();
+    let s = Sphere::combine(&s0, cs, &s1, sn);
+    if cs < 0.0 {
+        s.flipped()
+    } else {
+        s
+    }
+}
+
+/// Initial face spheres: closest pencil members to the mean of the vertices' central spheres.
+pub fn initial_spheres(mesh: &TriMesh, vertex_spheres: &[Sphere]) -> Vec<Sphere> {
+    (0..mesh.face_count())
+        .map(|f| {
+            let t = mesh.triangles[f];
+            let mut c = [0.0; 5];
+            for &v in &t {
+                let a = vertex_spheres[v as usize].to_array();
+                for i in 0..5 {
+                    c[i] += a[i] / 3.0;
+                }
+            }
+            let c = Sphere::from_array(c);
+            let c = if c.discriminant() > 0.0 { c.normalized() } else { c };
+            closest_family_member(mesh.face_points(f), &c)
+        })
+        .collect()
+}
+
+/// Replaces every sphere by the member of its vertices' pencil closest to it (max ⟨s, s_opt⟩,
+/// exact incidence), keeping the optimized sphere's orientation.
+pub fn project_spheres(mesh: &TriMesh, spheres: &[Sphere]) -> Vec<Sphere> {
+    (0..mesh.face_count())
+        .map(|f| {
+            let [s0, s1] = Sphere::through_points_family(mesh.face_points(f));
+            let target = &spheres[f];
+            let theta = s1.inversive_product(target).atan2(s0.inversive_product(target));
+            let (sn, cs) = theta.sin_cos();
+            Sphere::combine(&s0, cs, &s1, sn)
+        })
+        .collect()
+}

@@ -1,0 +1,283 @@
+//! ST meshes with adapted face size (Sec. 3): the angle-minimizing ST mesh (Sec. 3 end, Sec. 5.2).
+//!
+//! Steps ([`compute`]): jet fit of the reference → refusal when the central spheres are
+//! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
+//! a uniform field for a face count) → pliant remeshing → jet fit of the remeshed mesh (face
+//! central spheres) → initialization → staged optimization with [`crate::solver`] → exact
+//! re-fit of every face sphere through its three vertices → metrics.
+//!
+//! **Initialization.** Every face sphere is the member of the pencil through its three vertices
+//! ([`Sphere::through_points_family`], orthonormal basis s₀ (plane), s₁) closest to the face's
+//! central sphere C (the normalized mean of its vertices' central spheres): maximizing ⟨s, C⟩
+//! over cos θ s₀ + sin θ s₁ gives θ = atan2(⟨s₁, C⟩, ⟨s₀, C⟩). It is oriented like the face
+//! (cos θ ≥ 0; else negated).
+//!
+//! **Optimization** (in a frame centred at the reference's bounding box and scaled by its
+//! diagonal, so weights are dimensionless). Variables: the face spheres (5-blocks (a, b, c),
+//! first) and the vertices (3-blocks, after). Terms ([`terms::build_problem`]):
+//! - `sphere`: ψ_f(v) for the three corners of every face (E_sphere);
+//! - `unit`: bᵀb − 4ac − 1 (E_unit);
+//! - `angle`: ⟨s_f, s_g⟩ − 1 for every interior edge (exact bilinear Jacobian; ⟨s_f, s_g⟩ is the
+//!   cosine of the kink angle for spheres oriented alike);
+//! - `tangent_distance`: n_v·(v − q_v), q_v the closest reference point, n_v the reference normal
+//!   there (barycentric vertex normals), updated in `Term::prepare` (vertices glide, Sec. 5.2);
+//! - `point_distance`: v − q_v (small weight; ×[`terms::BOUNDARY_POINT_FACTOR`] on boundary vertices so
+//!   the boundary does not slide off);
+//! - `face_distance`: ψ_f(r_f) with r_f the reference point closest to face f's centroid
+//!   ([`crate::reference::proximity::FaceProximity`], same weight schedule as the proximity terms): keeps the panels, not
+//!   only the vertices, near the reference;
+//! - `fairness`: uniform Laplacian v − mean(neighbours) at interior vertices (small weight);
+//! - `edge_orthogonality` (variant (a) option, off by default): for every interior edge, the
+//!   circle's plane contains the reference normal at the edge midpoint, written as
+//!   ⟨a_g b_f − a_f b_g, n_e⟩ / |…| ≈ 0 — see [`terms::EdgeOrthogonality`];
+//! - `orientation`: each face keeps an oriented area of at least 0.2 × its initial one (a hinge
+//!   barrier, [`terms::FaceOrientation`]), so gliding vertices never fold a face.
+//!
+//! The stages ([`params::OptimizationStage`]) scale the proximity weights (larger first, then relaxed); a last
+//! stage with E_sphere dominating is followed by the exact projection: each face sphere is
+//! replaced by the member of its vertices' pencil closest to the optimized sphere, so the
+//! vertex–sphere residual is at rounding level.
+//!
+//! **Variant (b)** (Fig. 12 bottom): the same spheres, but each interior edge arc is cut from
+//! each face sphere by the *bisecting plane* of the two face planes (the plane through the edge
+//! containing n_f + n_g). Both cut curves pass through the edge's vertices but differ in between.
+//! The panels and exports of variant (b) cut each sphere the same way
+//! ([`EdgeArcs::BisectingPlanes`]); the gap between the two arcs of an edge is measured on the
+//! panels' own arcs ([`crate::panels::gaps::arc_gaps`]).
+//!
+//! **Boundary arcs**: [`BoundaryArcRule::Parallel`]`(0)`: with a zero direction the panels
+//! falls back to the plane through the edge and the sphere normal at its start, i.e. the plane
+//! through the edge and the face sphere's centre (a great-circle arc; straight for planes).
+
+
+// Negated float comparisons are deliberate: they also reject NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod initialization;
+pub mod metrics;
+pub mod optimization;
+pub mod params;
+pub mod terms;
+
+use std::fmt;
+
+use glam::DVec3;
+
+use crate::congruence::central_spheres::UnusableCentralSpheres;
+use crate::congruence::central_spheres::jet_fit;
+use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
+use crate::geometry::sphere::Sphere;
+use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::panel::Panel;
+use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+use crate::progress::{Cancelled, Clock, Progress, Timings};
+use crate::reference::{Reference, ReferenceError};
+use crate::remeshing::{pliant_remesh, RemeshError, SizingBounds};
+use crate::solver::{Solver, SolverOptions, TermStats};
+use crate::stats::median;
+use initialization::{initial_spheres, project_spheres};
+use metrics::{metrics, StAdaptedMetrics};
+use optimization::{run_stages, OptimizationFrame};
+use params::StAdaptedParams;
+
+/// What the method reports while it runs; answering `Err(Cancelled)` stops it.
+pub enum StAdaptedEvent<'a> {
+    /// Progress of a step ("jet_fit", "sizing", "remesh", "init", "optimize", "metrics"); a step
+    /// starts with 0 of 0.
+    Progress(Progress<'a>),
+    /// The sizing field g at the reference vertices (absolute lengths), before remeshing.
+    Sizing { values: &'a [f64] },
+    /// The triangulation after remeshing.
+    Remeshed { mesh: &'a TriMesh },
+    /// The face spheres from the central spheres, before optimization.
+    Initialized { sphere_mesh: &'a SphereMesh },
+    /// After every solver iteration: the optimizer stage, the iteration over all stages (`done`
+    /// of `total`), its energy and per-term statistics, and the current vertices and face
+    /// spheres (model coordinates).
+    Iteration { progress: Progress<'a>, energy: f64, terms: &'a [TermStats], vertices: &'a [DVec3], spheres: &'a [Sphere] },
+}
+
+/// Why the method gave no mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StAdaptedError {
+    Cancelled,
+    Reference(ReferenceError),
+    /// H ≈ 0 on most of the surface: no central spheres to start from or to size faces by.
+    NoCentralSpheres(UnusableCentralSpheres),
+    NoFaces,
+}
+
+impl fmt::Display for StAdaptedError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StAdaptedError::Cancelled => f.write_str("cancelled"),
+            StAdaptedError::Reference(e) => e.fmt(f),
+            StAdaptedError::NoCentralSpheres(e) => write!(
+                f,
+                "{e}; the angle-minimizing ST method initializes its face spheres from central spheres and its face \
+                 size from their influence zones"
+            ),
+            StAdaptedError::NoFaces => f.write_str("remeshing produced no faces"),
+        }
+    }
+}
+
+impl std::error::Error for StAdaptedError {}
+
+impl From<Cancelled> for StAdaptedError {
+    fn from(_: Cancelled) -> Self {
+        StAdaptedError::Cancelled
+    }
+}
+
+impl From<RemeshError> for StAdaptedError {
+    fn from(e: RemeshError) -> Self {
+        match e {
+            RemeshError::Cancelled => StAdaptedError::Cancelled,
+            RemeshError::NoFaces => StAdaptedError::NoFaces,
+        }
+    }
+}
+
+/// What the method makes.
+#[derive(Clone, Debug)]
+pub struct StAdaptedResult {
+    pub sphere_mesh: SphereMesh,
+    /// The panels of `sphere_mesh` for the variant, tessellated to
+    /// [`crate::panels::DEFAULT_CHORD_TOLERANCE`] of the diagonal.
+    pub panels: Vec<Panel>,
+    pub initial_sphere_mesh: SphereMesh,
+    pub remeshed: TriMesh,
+    pub initial_metrics: StAdaptedMetrics,
+    pub metrics: StAdaptedMetrics,
+    /// Solver iterations over all stages.
+    pub iterations: usize,
+    /// Per-iteration times (ms) when a clock was given.
+    pub iteration_ms: Vec<f64>,
+    /// Median of `iteration_ms`.
+    pub angle_iteration_median_ms: Option<f64>,
+    /// Step timings (ms) when a clock was given: jet_fit, sizing, remesh, init, optimize, metrics.
+    pub timings_ms: Vec<(String, f64)>,
+    pub diag: f64,
+    pub variant: EdgeArcs,
+    /// Final term statistics.
+    pub terms: Vec<TermStats>,
+}
+
+/// The angle-minimizing ST method end to end (see the module docs).
+pub fn compute(
+    reference: &Reference,
+    params: &StAdaptedParams,
+    clock: Clock,
+    on_event: &mut dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled>,
+) -> Result<StAdaptedResult, StAdaptedError> {
+    reference.validate().map_err(StAdaptedError::Reference)?;
+    let diag = reference.diagonal();
+    let mesh = reference.mesh();
+    let step = |on_event: &mut dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled>, name: &str| {
+        on_event(StAdaptedEvent::Progress(Progress::new(name, 0, 0)))
+    };
+    let mut timings = Timings::start(clock);
+
+    // Curvature of the reference and the refusal.
+    step(on_event, "jet_fit")?;
+    timings.skip();
+    let field = reference.curvature(&params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
+    field
+        .usable_central_spheres(mesh.vertex_count(), diag, params.min_curvature_ratio, params.min_usable_fraction)
+        .map_err(StAdaptedError::NoCentralSpheres)?;
+    timings.lap("jet_fit");
+
+    // Sizing and remeshing.
+    step(on_event, "remesh")?;
+    timings.skip();
+    let topo = reference.topology();
+    let sphere_of =
+        |i: usize| field.central_spheres.get(i).copied().unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z));
+    let bounds = SizingBounds::for_mesh(mesh, topo);
+    let sizing = params.sizing.field(mesh, topo, &sphere_of, bounds, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
+    timings.lap("sizing");
+    if let Some(s) = &sizing {
+        on_event(StAdaptedEvent::Sizing { values: s.values() })?;
+    }
+    timings.skip();
+    let remeshed = match &sizing {
+        Some(s) => pliant_remesh(mesh, s, &params.remesh, &mut |p| on_event(StAdaptedEvent::Progress(p)))?,
+        None => mesh.clone(),
+    };
+    timings.lap("remesh");
+    on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
+
+    // Central spheres of the remeshed mesh and the initialization.
+    step(on_event, "init")?;
+    timings.skip();
+    let central_spheres = match sizing {
+        Some(_) => {
+            let topo = Topology::new(&remeshed);
+            jet_fit(&remeshed, &topo, &params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?.central_spheres
+        }
+        None => field.central_spheres.clone(),
+    };
+    let init = initial_spheres(&remeshed, &central_spheres);
+    let rule = BoundaryArcRule::Parallel(DVec3::ZERO);
+    let initial_sphere_mesh = SphereMesh::new(&remeshed, init.clone(), rule);
+    timings.lap("init");
+    on_event(StAdaptedEvent::Initialized { sphere_mesh: &initial_sphere_mesh })?;
+
+    // Optimization in the normalized frame.
+    step(on_event, "optimize")?;
+    timings.skip();
+    let frame = OptimizationFrame::new(reference, &remeshed, &init, params);
+    let mut x = frame.x0.clone();
+    let (mut problem, ids) = frame.problem(&params.weights);
+    let mut solver = Solver::new(SolverOptions { clock: clock.0, ..SolverOptions::default() });
+    let total = params.total_iterations();
+    let mut iteration = 0usize;
+    let run = run_stages(&mut problem, &ids, &mut x, params, &mut solver, &mut |name, rep| {
+        iteration += 1;
+        let (vertices, spheres) = frame.to_model(rep.x);
+        on_event(StAdaptedEvent::Iteration {
+            progress: Progress::new(name, iteration, total),
+            energy: rep.energy,
+            terms: rep.terms,
+            vertices: &vertices,
+            spheres: &spheres,
+        })
+    });
+    if run.cancelled {
+        return Err(StAdaptedError::Cancelled);
+    }
+    let iteration_ms = run.iteration_ms;
+    problem.prepare(&x);
+    let terms = problem.term_stats(&x);
+    let (verts, sph) = frame.to_model(&x);
+    let mesh_out = TriMesh::new(verts, remeshed.triangles.clone());
+    // Exact incidence: the pencil member closest to each optimized sphere.
+    let face_spheres = project_spheres(&mesh_out, &sph);
+    let sphere_mesh = SphereMesh::new(mesh_out, face_spheres, rule);
+    timings.lap("optimize");
+
+    step(on_event, "metrics")?;
+    timings.skip();
+    let (initial_metrics, _) = metrics(&initial_sphere_mesh, reference, params.variant);
+    let (final_metrics, panels) = metrics(&sphere_mesh, reference, params.variant);
+    timings.lap("metrics");
+    let angle_iteration_median_ms = median(&iteration_ms);
+    Ok(StAdaptedResult {
+        sphere_mesh,
+        panels,
+        initial_sphere_mesh,
+        remeshed,
+        initial_metrics,
+        metrics: final_metrics,
+        iterations: iteration,
+        iteration_ms,
+        angle_iteration_median_ms,
+        timings_ms: if clock.0.is_some() { timings.laps } else { Vec::new() },
+        diag,
+        variant: params.variant,
+        terms,
+    })
+}
+

@@ -1,0 +1,120 @@
+//! The parameters of the angle-minimizing ST method, with their defaults (the one place they
+//! are written).
+
+use serde::{Deserialize, Serialize};
+
+use crate::congruence::central_spheres::JetParams;
+use crate::panels::edge_arcs::EdgeArcs;
+use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
+
+/// Term weights (frame scaled to diagonal 1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StAdaptedWeights {
+    pub sphere: f64,
+    pub unit: f64,
+    pub angle: f64,
+    pub tangent_distance: f64,
+    pub point_distance: f64,
+    /// Face sphere through the reference point closest to the face centroid (limits bulging).
+    pub face_distance: f64,
+    pub fairness: f64,
+    /// Variant (a) option: edge circles orthogonal to the reference; 0 = off.
+    pub edge_orthogonality: f64,
+    /// Barrier against folded faces (`FaceOrientation` under a hinge).
+    pub orientation: f64,
+}
+
+impl Default for StAdaptedWeights {
+    fn default() -> Self {
+        Self {
+            sphere: 1000.0,
+            unit: 1000.0,
+            angle: 1.0,
+            tangent_distance: 100.0,
+            point_distance: 10.0,
+            face_distance: 100.0,
+            fairness: 1.0,
+            edge_orthogonality: 0.0,
+            orientation: 1000.0,
+        }
+    }
+}
+
+/// One optimization stage: proximity weights × `proximity_scale`, sphere/unit weights ×
+/// `sphere_scale`, at most `iterations` solver iterations.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OptimizationStage {
+    pub name: String,
+    pub proximity_scale: f64,
+    pub sphere_scale: f64,
+    pub iterations: usize,
+}
+
+/// Parameters of the method ([`super::compute`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StAdaptedParams {
+    pub sizing: Sizing,
+    /// Edge variant (Fig. 12): intersection circles (a) or bisecting planes (b).
+    pub variant: EdgeArcs,
+    pub remesh: RemeshParams,
+    pub jet: JetParams,
+    pub weights: StAdaptedWeights,
+    pub stages: Vec<OptimizationStage>,
+    /// Refuse when fewer than this fraction of reference vertices have a usable central sphere.
+    pub min_usable_fraction: f64,
+    /// A vertex is usable when |H| ≥ this × (|k₁| + |k₂|)/2 (and not planar).
+    pub min_curvature_ratio: f64,
+    /// Initial LM regularization ε of the first stage; later stages continue from the last ε.
+    pub initial_epsilon: f64,
+    /// Hard-fix the boundary vertices of the remeshed mesh (they lie on the reference boundary).
+    pub fix_boundary: bool,
+    /// Hard-fix the vertices of remeshed edges whose faces meet at more than
+    /// `remesh.feature_angle_deg` (feature curves kept by the remesher).
+    pub fix_features: bool,
+    /// Radii closer than this (× the bbox diagonal) count as one in the panel schedule.
+    pub radius_tolerance: f64,
+}
+
+impl StAdaptedParams {
+    /// Default stages with the given iteration counts per stage (proximity, angle, relax, close).
+    pub fn stages_with(iterations: [usize; 4]) -> Vec<OptimizationStage> {
+        let mk = |name: &str, p: f64, s: f64, it: usize| OptimizationStage {
+            name: name.into(),
+            proximity_scale: p,
+            sphere_scale: s,
+            iterations: it,
+        };
+        vec![
+            mk("proximity", 10.0, 1.0, iterations[0]),
+            mk("angle", 1.0, 1.0, iterations[1]),
+            mk("relax", 0.5, 1.0, iterations[2]),
+            mk("close", 0.5, 1000.0, iterations[3]),
+        ]
+    }
+
+    /// Solver iterations over all stages.
+    pub fn total_iterations(&self) -> usize {
+        self.stages.iter().map(|s| s.iterations).sum()
+    }
+}
+
+impl Default for StAdaptedParams {
+    fn default() -> Self {
+        Self {
+            sizing: Sizing::Adaptive { epsilon: DEFAULT_EPSILON },
+            variant: EdgeArcs::Intersection,
+            remesh: RemeshParams::default(),
+            jet: JetParams::default(),
+            weights: StAdaptedWeights::default(),
+            stages: Self::stages_with([5, 15, 15, 10]),
+            min_usable_fraction: 0.5,
+            min_curvature_ratio: 0.1,
+            initial_epsilon: 0.1,
+            fix_boundary: true,
+            fix_features: true,
+            radius_tolerance: 1e-3,
+        }
+    }
+}

@@ -1,0 +1,208 @@
+//! The reducer: what each worker message does to the app's state.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::state::{mesh_from_fields, CurvatureView, Download, Loaded, StSupportView, MESH_FIELDS, PANEL_FIELDS};
+use super::App;
+use crate::design_link::Reference;
+use crate::pipeline::fields::{field, find, Field, FieldData};
+use crate::pipeline::protocol::{FromWorker, Source, StageResult, ToWorker};
+use crate::pipeline::stages::{st_adapted, st_support};
+use crate::web::viewer::camera::OrbitCamera;
+use crate::web::viewer::MeshData;
+use crate::web::worker_client::Incoming;
+
+impl App {
+    pub(super) fn handle_messages(&mut self) {
+        loop {
+            let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) else { break };
+            match item {
+                Incoming::Crashed(message) => {
+                    self.error = Some(format!("{message}. The worker was restarted; your design is kept."));
+                    self.busy = None;
+                    if let Some(w) = self.worker.as_mut() {
+                        w.restart();
+                    }
+                }
+                Incoming::Message(msg, fields) => {
+                    self.handle_message(msg, fields);
+                    self.note_cancel_point();
+                }
+            }
+        }
+    }
+
+    /// Once every message the worker had posted before the last cancel request is handled: the
+    /// ST iterations received by then (what "stops within one iteration" is measured from).
+    pub(super) fn note_cancel_point(&mut self) {
+        let polled = self.worker.as_ref().map_or(0, |w| w.polled());
+        if self.cancel_posted.is_some_and(|posted| polled >= posted) {
+            self.cancel_posted = None;
+            let energies = self.loaded.as_ref().and_then(|l| l.st_adapted.as_ref()).map_or(0, |a| a.energy.len());
+            self.iterations_at_cancel = Some(energies);
+        }
+    }
+
+    fn handle_message(&mut self, msg: FromWorker, fields: Vec<Field>) {
+        match msg {
+            FromWorker::Ready => {
+                // A fresh worker (first start or after a crash): restore the design in it.
+                if let Some(l) = &self.loaded {
+                    self.restoring = true;
+                    match l.info.source.clone() {
+                        Source::Sample(s) => self.send(&ToWorker::LoadSample(s), None),
+                        Source::File(_) => {
+                            if let Some(f) = self.file.clone() {
+                                self.send(&ToWorker::LoadFile { name: f.name() }, Some(&f));
+                            }
+                        }
+                    }
+                }
+            }
+            FromWorker::Loaded(info) => {
+                if !self.restoring {
+                    self.error = None;
+                }
+                match &info.source {
+                    Source::Sample(s) => {
+                        self.design.reference = Reference::Sample(*s);
+                        self.file = None;
+                    }
+                    Source::File(name) => {
+                        self.design.reference = Reference::OwnFile(name.clone());
+                        if let Some(f) = self.file_in_flight.take() {
+                            self.file = Some(f);
+                        }
+                    }
+                }
+                for n in &info.notes {
+                    self.notices.push(n.clone());
+                }
+                self.loaded = Some(Loaded::new(info));
+            }
+            FromWorker::Snapshot { stage, .. } if stage == "reference" => self.install_geometry(&fields),
+            FromWorker::Files { mime, .. } => {
+                self.downloads = fields
+                    .into_iter()
+                    .zip(mime)
+                    .filter_map(|(f, m)| match f.data {
+                        FieldData::Bytes(b) => Some(Download { name: f.name, mime: m, bytes: b }),
+                        _ => None,
+                    })
+                    .collect();
+            }
+            FromWorker::Snapshot { stage, .. } if stage == st_support::STAGE => {
+                if let Some(l) = self.loaded.as_mut() {
+                    l.st_support = Some(StSupportView::from_fields(&fields, &mut self.generation));
+                }
+            }
+            FromWorker::Snapshot { stage, iteration, .. }
+                if [st_adapted::STAGE, st_adapted::SIZING_STAGE, st_adapted::REMESHED_STAGE].contains(&stage.as_str()) =>
+            {
+                let Some(a) = self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()) else { return };
+                if stage == st_adapted::SIZING_STAGE {
+                    a.sizing = find(&fields, field::SIZING).and_then(Field::as_f32).map(<[f32]>::to_vec);
+                    self.scalars = None;
+                } else if stage == st_adapted::REMESHED_STAGE {
+                    a.remeshed = Some(mesh_from_fields(&fields, &mut self.generation, MESH_FIELDS));
+                } else {
+                    a.panels = Some(mesh_from_fields(&fields, &mut self.generation, PANEL_FIELDS));
+                    a.panel_iteration = iteration;
+                    a.panel_snapshots += 1;
+                }
+            }
+            FromWorker::Snapshot { .. } => {
+                if let Some(l) = self.loaded.as_mut() {
+                    let summary = l.curvature.take().and_then(|c| c.summary);
+                    l.curvature = Some(CurvatureView { fields, summary });
+                    self.scalars = None;
+                }
+            }
+            FromWorker::Progress(p) => {
+                if let (Some(a), Some(total)) = (self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()), p.energies.first()) {
+                    if p.stage == st_adapted::STAGE {
+                        a.energy.push((p.iteration, p.detail.clone(), total.value));
+                    }
+                }
+                if let Some(b) = self.busy.as_mut() {
+                    b.progress = Some(p);
+                }
+            }
+            FromWorker::Finished { stage, result, .. } => {
+                if self.busy.as_ref().is_some_and(|b| b.stage == stage) {
+                    self.busy = None;
+                }
+                match result {
+                    StageResult::Curvature(summary) => {
+                        if let Some(c) = self.loaded.as_mut().and_then(|l| l.curvature.as_mut()) {
+                            c.summary = Some(summary);
+                        }
+                    }
+                    StageResult::StSupport(summary) => {
+                        if let Some(st) = self.loaded.as_mut().and_then(|l| l.st_support.as_mut()) {
+                            st.summary = Some(*summary);
+                        }
+                    }
+                    StageResult::StAdapted(summary) => {
+                        if let Some(a) = self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()) {
+                            a.summary = Some(*summary);
+                        }
+                    }
+                }
+            }
+            FromWorker::Cancelled { stage } => {
+                self.busy = None;
+                self.notices.push(format!("Stage '{stage}' cancelled."));
+            }
+            FromWorker::Error { message } => {
+                // A failed stage also ends the stages queued after it.
+                self.busy = None;
+                self.file_in_flight = None;
+                self.error = Some(message);
+            }
+        }
+    }
+
+    fn install_geometry(&mut self, fields: &[Field]) {
+        let Some(l) = self.loaded.as_mut() else { return };
+        let get_f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
+        let get_u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+        self.generation += 1;
+        let mesh = MeshData {
+            generation: self.generation,
+            positions: get_f(field::POSITIONS),
+            normals: get_f(field::NORMALS),
+            triangles: get_u(field::TRIANGLES),
+            edges: get_u(field::EDGES),
+        };
+        let (lo, hi) = mesh.positions.chunks_exact(3).fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(Vec3::from_slice(p)), hi.max(Vec3::from_slice(p))),
+        );
+        l.center = (lo + hi) * 0.5;
+        l.radius = ((hi - lo).length() * 0.5).max(1e-6);
+        l.mesh = Arc::new(mesh);
+        l.curvature = None;
+        l.st_support = None;
+        l.st_adapted = None;
+        self.scalars = None;
+        if !self.restoring {
+            self.selected = None;
+        }
+        if std::mem::take(&mut self.restoring) {
+            self.camera.scene_radius = l.radius;
+        } else {
+            self.camera = OrbitCamera::framing(l.center, l.radius);
+        }
+        if let Some(c) = self.camera_from_link.take() {
+            self.camera.yaw = c.yaw as f32;
+            self.camera.pitch = c.pitch as f32;
+            self.camera.distance = c.distance as f32;
+            self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
+        }
+        self.busy = None;
+        self.run_method();
+    }
+}

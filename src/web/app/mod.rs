@@ -1,0 +1,503 @@
+//! The main-thread app: an immediate-mode egui UI over the wgpu viewport. It never computes
+//! geometry; it sends the design to the worker and draws the snapshots that come back.
+//!
+//! - [`state`]: what the app holds of the worker's results;
+//! - [`messages`]: the reducer of worker messages;
+//! - [`panels`]: the side panel's sections, one file per method;
+//! - [`view`]: the viewport (camera, layers, picking);
+//! - [`link`]: the design link in the URL;
+//! - [`automation`]: the state JSON the end-to-end tests read;
+//! - [`plots`], [`dom`]: painted plots and the page around the app.
+
+mod automation;
+mod dom;
+mod link;
+mod messages;
+pub mod panels;
+mod plots;
+mod state;
+mod view;
+
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::rc::Rc;
+
+use egui::{Color32, Rect, RichText};
+use glam::Vec3;
+use wasm_bindgen::prelude::*;
+
+use crate::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading};
+use crate::pipeline::protocol::ToWorker;
+use crate::samples::Sample;
+use crate::web::viewer::camera::OrbitCamera;
+use crate::web::viewer::ViewerResources;
+use crate::web::worker_client::WorkerClient;
+use dom::{count_events, make_file_input, now_ms, save_file};
+use panels::SizingMemory;
+use state::{Busy, Download, Loaded, ScalarView, StAdaptedView};
+
+/// How many frames' `ui` times are kept for the state's percentiles.
+const UI_TIMES: usize = 120;
+
+/// Viewport background, also reported to tests.
+pub const CLEAR_COLOR: Color32 = Color32::from_rgb(28, 30, 36);
+
+pub struct App {
+    design: Design,
+    notices: Vec<String>,
+    error: Option<String>,
+    worker: Option<WorkerClient>,
+    loaded: Option<Loaded>,
+    /// The file behind the loaded design, kept to restore it in a fresh worker.
+    file: Option<web_sys::File>,
+    /// A file sent to the worker but not yet confirmed as loaded.
+    file_in_flight: Option<web_sys::File>,
+    busy: Option<Busy>,
+    downloads: Vec<Download>,
+    /// Method parameters changed while a slider is held: rerun on release.
+    params_dirty: bool,
+    /// ε and N of each method's remeshing, kept while the kind changes.
+    st_adapted_sizing: SizingMemory,
+    st_support_remesh: SizingMemory,
+    show_reference: bool,
+    show_envelope: bool,
+    show_remeshed: bool,
+    /// A fresh worker is being given the current design back: keep the view and the message.
+    restoring: bool,
+    camera: OrbitCamera,
+    camera_from_link: Option<CameraState>,
+    selected: Option<usize>,
+    scalars: Option<ScalarView>,
+    generation: u64,
+    backend: String,
+    frames: u64,
+    /// Main-thread time of the last frames' `ui` (ms), newest last.
+    ui_ms: VecDeque<f64>,
+    drawn: bool,
+    viewport: Rect,
+    last_fragment: String,
+    last_state: String,
+    picked_files: Rc<RefCell<Vec<web_sys::File>>>,
+    crash_requests: Rc<RefCell<u32>>,
+    _crash_listener: Closure<dyn FnMut()>,
+    cancel_requests: Rc<RefCell<u32>>,
+    _cancel_listener: Closure<dyn FnMut()>,
+    /// Whether the bottom of the method's results shows in the side panel (the panel scrolls), and
+    /// the panel's content and visible heights.
+    results_visible: bool,
+    side_panel_heights: (f32, f32),
+    /// Where the Copy link button is (for the tests, which click it).
+    copy_link_rect: Rect,
+    /// Cancels asked for (Cancel button or automation), and how each was carried out.
+    cancels: u32,
+    cancels_in_worker: u32,
+    /// The last cancel carried by shared memory: the worker's posted-message count at the
+    /// request, until the app has handled those messages; then the ST iterations received by
+    /// then, i.e. done before the request.
+    cancel_posted: Option<u32>,
+    iterations_at_cancel: Option<usize>,
+    download_requests: Rc<RefCell<Vec<String>>>,
+    _download_listener: Option<Closure<dyn FnMut(web_sys::CustomEvent)>>,
+    file_input: Option<web_sys::HtmlInputElement>,
+    _file_input_closure: Option<Closure<dyn FnMut()>>,
+}
+
+impl App {
+    pub fn new(cc: &eframe::CreationContext<'_>) -> Self {
+        let mut backend = String::new();
+        if let Some(rs) = cc.wgpu_render_state.as_ref() {
+            rs.renderer.write().callback_resources.insert(ViewerResources::new(&rs.device, rs.target_format));
+            backend = match rs.adapter.get_info().backend {
+                egui_wgpu::wgpu::Backend::BrowserWebGpu => "WebGPU".into(),
+                egui_wgpu::wgpu::Backend::Gl => "WebGL2".into(),
+                other => format!("{other:?}"),
+            };
+        }
+        cc.egui_ctx.set_theme(egui::Theme::Dark);
+        let fragment = dom::location_hash();
+        let (design, notices) = Design::from_fragment(&fragment);
+        let ctx = cc.egui_ctx.clone();
+        let repaint: Rc<dyn Fn()> = Rc::new(move || ctx.request_repaint());
+        let (worker, error) = match WorkerClient::spawn(repaint) {
+            Ok(w) => (Some(w), None),
+            Err(e) => (None, Some(e)),
+        };
+        let picked_files = Rc::new(RefCell::new(Vec::new()));
+        let (file_input, closure) = make_file_input(picked_files.clone(), cc.egui_ctx.clone());
+        // Diagnostics: `window.dispatchEvent(new Event('sf-crash-worker'))` makes the worker panic.
+        let (crash_requests, crash_listener) = count_events("sf-crash-worker", &cc.egui_ctx);
+        // Automation: `new Event('sf-cancel')` presses Cancel.
+        let (cancel_requests, cancel_listener) = count_events("sf-cancel", &cc.egui_ctx);
+        // Automation: `new CustomEvent('sf-download', {detail: 'panels.glb'})` saves that file.
+        let download_requests = Rc::new(RefCell::new(Vec::new()));
+        let download_listener = {
+            let (queue, ctx) = (download_requests.clone(), cc.egui_ctx.clone());
+            let c = Closure::<dyn FnMut(web_sys::CustomEvent)>::new(move |ev: web_sys::CustomEvent| {
+                if let Some(name) = ev.detail().as_string() {
+                    queue.borrow_mut().push(name);
+                    ctx.request_repaint();
+                }
+            });
+            web_sys::window().map(|w| w.add_event_listener_with_callback("sf-download", c.as_ref().unchecked_ref()));
+            Some(c)
+        };
+        let mut app = Self {
+            camera_from_link: design.camera,
+            st_adapted_sizing: SizingMemory::of(design.st_adapted.sizing),
+            st_support_remesh: SizingMemory::of(design.st_support.remesh),
+            design,
+            notices,
+            error,
+            worker,
+            loaded: None,
+            file: None,
+            file_in_flight: None,
+            busy: None,
+            downloads: Vec::new(),
+            params_dirty: false,
+            show_reference: false,
+            show_envelope: false,
+            show_remeshed: false,
+            restoring: false,
+            camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
+            selected: None,
+            scalars: None,
+            generation: 0,
+            backend,
+            frames: 0,
+            ui_ms: VecDeque::with_capacity(UI_TIMES),
+            drawn: false,
+            viewport: Rect::NOTHING,
+            last_fragment: fragment,
+            last_state: String::new(),
+            picked_files,
+            crash_requests,
+            _crash_listener: crash_listener,
+            cancel_requests,
+            _cancel_listener: cancel_listener,
+            cancels: 0,
+            cancels_in_worker: 0,
+            cancel_posted: None,
+            iterations_at_cancel: None,
+            results_visible: false,
+            side_panel_heights: (0.0, 0.0),
+            copy_link_rect: Rect::NOTHING,
+            download_requests,
+            _download_listener: download_listener,
+            file_input,
+            _file_input_closure: closure,
+        };
+        app.load_design_reference();
+        app
+    }
+
+    /// Sends the design's reference surface to the worker (own files need the file itself).
+    fn load_design_reference(&mut self) {
+        let sample = match &self.design.reference {
+            Reference::Sample(s) => *s,
+            Reference::OwnFile(_) => match self.file.clone() {
+                Some(f) => return self.load_file(f),
+                // The link names a file we do not have: open on the default sample meanwhile.
+                None => Sample::Dome,
+            },
+        };
+        self.send(&ToWorker::LoadSample(sample), None);
+    }
+
+    fn load_file(&mut self, file: web_sys::File) {
+        self.send(&ToWorker::LoadFile { name: file.name() }, Some(&file));
+        self.file_in_flight = Some(file);
+        self.busy = Some(Busy { stage: "import".into(), progress: None });
+    }
+
+    fn send(&mut self, msg: &ToWorker, file: Option<&web_sys::File>) {
+        match &self.worker {
+            Some(w) => w.send(msg, file),
+            None => self.error = Some("The pipeline worker is not running; reload the page.".into()),
+        }
+    }
+
+    /// Runs the design's stages in the worker (the curvature first; the method reuses it).
+    fn run_method(&mut self) {
+        if self.loaded.is_none() {
+            return;
+        }
+        if self.busy.as_ref().is_some_and(|b| b.stage != "import") {
+            self.cancel();
+        }
+        let stages = self.design.stage_requests();
+        if let Some(l) = self.loaded.as_mut() {
+            l.st_support = None;
+            l.st_adapted = (self.design.method == Method::StAdapted).then(StAdaptedView::default);
+        }
+        if self.design.color == ColorBy::Sizing {
+            self.scalars = None;
+        }
+        self.downloads.clear();
+        let last = stages.last().map(|s| s.name().to_string()).unwrap_or_default();
+        self.busy = Some(Busy { stage: last, progress: None });
+        for stage in stages {
+            self.send(&ToWorker::Run(Box::new(stage)), None);
+        }
+    }
+
+    fn cancel(&mut self) {
+        self.cancels += 1;
+        if let Some(w) = self.worker.as_mut() {
+            if let Some(posted) = w.cancel() {
+                self.cancels_in_worker += 1;
+                self.cancel_posted = Some(posted);
+                self.iterations_at_cancel = None;
+                self.note_cancel_point();
+            } else {
+                // Without shared memory the worker was replaced; its Ready reloads the design.
+                self.notices.push("Cancelled (the worker was restarted).".into());
+            }
+        }
+        self.busy = None;
+    }
+
+    // --- UI --------------------------------------------------------------------------------
+
+    fn top_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.heading("Spherical Faces");
+            ui.separator();
+            let current = match &self.design.reference {
+                Reference::Sample(s) => s.title().to_string(),
+                Reference::OwnFile(name) => name.clone(),
+            };
+            egui::ComboBox::from_id_salt("sample").selected_text(current).show_ui(ui, |ui| {
+                for s in Sample::ALL {
+                    let selected = self.design.reference == Reference::Sample(s);
+                    if ui.selectable_label(selected, s.title()).on_hover_text(s.description()).clicked() && !selected {
+                        self.send(&ToWorker::LoadSample(s), None);
+                        self.busy = Some(Busy { stage: "import".into(), progress: None });
+                    }
+                }
+            });
+            if ui.button("Open…").on_hover_text("OBJ, glTF (.gltf with embedded data) or GLB; or drop a file on the view").clicked() {
+                if let Some(input) = &self.file_input {
+                    input.set_value("");
+                    input.click();
+                }
+            }
+            let copy = ui.button("Copy link").on_hover_text("Copy a link that restores this design");
+            self.copy_link_rect = copy.rect;
+            if copy.clicked() {
+                let url = self.share_url();
+                ui.ctx().copy_text(url);
+                self.notices.push("Design link copied.".into());
+            }
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                let label = if self.backend.is_empty() { "no GPU backend".to_string() } else { self.backend.clone() };
+                ui.label(RichText::new(label).monospace()).on_hover_text("Graphics backend in use");
+            });
+        });
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        let out = egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+            if let Some(err) = self.error.clone() {
+                egui::Frame::new().fill(Color32::from_rgb(90, 24, 24)).inner_margin(6.0).corner_radius(4.0).show(ui, |ui| {
+                    ui.label(RichText::new(err).color(Color32::WHITE));
+                    if ui.small_button("Dismiss").clicked() {
+                        self.error = None;
+                    }
+                });
+                ui.add_space(6.0);
+            }
+            ui.strong("Method");
+            let mut method = self.design.method;
+            egui::ComboBox::from_id_salt("method").selected_text(method.title()).show_ui(ui, |ui| {
+                for m in Method::ALL {
+                    ui.selectable_value(&mut method, m, m.title());
+                }
+            });
+            if method != self.design.method {
+                self.design.method = method;
+                if method == Method::StAdapted && self.design.color == ColorBy::MeanCurvature {
+                    self.design.color = ColorBy::Sizing;
+                } else if method != Method::StAdapted && self.design.color == ColorBy::Sizing {
+                    self.design.color = ColorBy::MeanCurvature;
+                }
+                self.run_method();
+            }
+            ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
+            let mut jet = self.design.jet.clone();
+            let mut degree = jet.degree as u32;
+            ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
+            jet.degree = degree as u8;
+            ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
+            if jet != self.design.jet {
+                self.design.jet = jet;
+                self.run_method();
+            }
+            let changed = match self.design.method {
+                Method::Curvature => false,
+                Method::StAdapted => panels::st_adapted::controls(
+                    ui,
+                    &mut self.design.st_adapted,
+                    &mut self.st_adapted_sizing,
+                    &mut self.show_reference,
+                    &mut self.show_remeshed,
+                ),
+                Method::StSupport => panels::st_support::controls(
+                    ui,
+                    &mut self.design.st_support,
+                    &mut self.st_support_remesh,
+                    &mut self.show_reference,
+                    &mut self.show_envelope,
+                ),
+            };
+            self.params_dirty |= changed;
+            if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
+                self.params_dirty = false;
+                self.run_method();
+            }
+            ui.separator();
+            ui.strong("Display");
+            ui.horizontal(|ui| {
+                for s in Shading::ALL {
+                    ui.radio_value(&mut self.design.shading, s, s.key());
+                }
+            });
+            ui.checkbox(&mut self.design.edges, "edges");
+            egui::ComboBox::from_label("colour by").selected_text(self.design.color.label()).show_ui(ui, |ui| {
+                for c in ColorBy::ALL {
+                    ui.selectable_value(&mut self.design.color, c, c.label());
+                }
+            });
+            ui.separator();
+            panels::info::show(ui, self.loaded.as_ref(), self.selected);
+            if let Some(l) = &self.loaded {
+                let results = ui.scope(|ui| match self.design.method {
+                    Method::Curvature => {}
+                    Method::StAdapted => {
+                        if let Some(v) = &l.st_adapted {
+                            panels::st_adapted::results(ui, v);
+                        }
+                    }
+                    Method::StSupport => {
+                        if let Some(v) = &l.st_support {
+                            panels::st_support::results(ui, v);
+                        }
+                    }
+                });
+                let bottom = results.response.rect.left_bottom() + egui::vec2(1.0, -1.0);
+                self.results_visible = ui.clip_rect().contains(bottom);
+            }
+            if !self.downloads.is_empty() {
+                ui.separator();
+                ui.strong("Downloads");
+                ui.horizontal_wrapped(|ui| {
+                    for d in &self.downloads {
+                        if ui.button(&d.name).on_hover_text(format!("{} bytes", d.bytes.len())).clicked() {
+                            if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
+                                self.error = Some(format!("could not save {}: {e:?}", d.name));
+                            }
+                        }
+                    }
+                });
+            }
+            if !self.notices.is_empty() {
+                ui.separator();
+                ui.horizontal(|ui| {
+                    ui.strong("Notices");
+                    if ui.small_button("clear").clicked() {
+                        self.notices.clear();
+                    }
+                });
+                for n in self.notices.iter().rev().take(8) {
+                    ui.label(RichText::new(n).small());
+                }
+            }
+        });
+        self.side_panel_heights = (out.content_size.y, out.inner_rect.height());
+    }
+
+    /// What the tests read of the side panel and the buttons they click.
+    fn side_panel_state(&self) -> serde_json::Value {
+        let r = self.copy_link_rect;
+        serde_json::json!({
+            "results_visible": self.results_visible,
+            "content_height": self.side_panel_heights.0,
+            "visible_height": self.side_panel_heights.1,
+            "copy_link_button": [r.min.x, r.min.y, r.width(), r.height()],
+        })
+    }
+}
+
+impl eframe::App for App {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let started = now_ms();
+        self.frames += 1;
+        self.handle_messages();
+        self.apply_link_if_changed();
+        let requested: Vec<String> = self.download_requests.borrow_mut().drain(..).collect();
+        for name in requested {
+            match self.downloads.iter().find(|d| d.name == name) {
+                Some(d) => {
+                    if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
+                        self.error = Some(format!("could not save {name}: {e:?}"));
+                    }
+                }
+                None => self.notices.push(format!("no file named '{name}' to download yet")),
+            }
+        }
+        let crashes = std::mem::take(&mut *self.crash_requests.borrow_mut());
+        if crashes > 0 {
+            self.send(&ToWorker::Crash, None);
+        }
+        if std::mem::take(&mut *self.cancel_requests.borrow_mut()) > 0 && self.busy.is_some() {
+            self.cancel();
+        }
+
+        // Dropped files (eframe) and picked files (the Open… dialog).
+        let dropped: Vec<web_sys::File> =
+            ui.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.web_file().cloned()).collect());
+        let picked: Vec<web_sys::File> = self.picked_files.borrow_mut().drain(..).collect();
+        if let Some(f) = dropped.into_iter().chain(picked).last() {
+            self.load_file(f);
+        }
+
+        egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
+        if self.busy.is_some() {
+            egui::Panel::bottom("progress").show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let (frac, text) = match self.busy.as_ref().and_then(|b| b.progress.as_ref()) {
+                        Some(p) if p.total > 0 => (p.iteration as f32 / p.total as f32, format!("{} {} {}/{}", p.stage, p.detail, p.iteration, p.total)),
+                        _ => (0.0, self.busy.as_ref().map(|b| b.stage.clone()).unwrap_or_default()),
+                    };
+                    if ui.button("Cancel").clicked() {
+                        self.cancel();
+                    }
+                    ui.add(egui::ProgressBar::new(frac).text(text).animate(true));
+                });
+            });
+        }
+        egui::Panel::left("side").default_size(290.0).resizable(true).show(ui, |ui| self.side_panel(ui));
+        let hovering = ui.input(|i| !i.raw.hovered_files.is_empty());
+        egui::CentralPanel::no_frame().show(ui, |ui| {
+            self.viewport(ui);
+            if hovering {
+                ui.painter().rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
+                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF or GLB to load", egui::FontId::proportional(22.0), Color32::WHITE);
+            }
+        });
+        let dragging = ui.input(|i| i.pointer.any_down());
+        self.write_link(dragging);
+        self.publish_state();
+        if self.ui_ms.len() == UI_TIMES {
+            self.ui_ms.pop_front();
+        }
+        self.ui_ms.push_back(now_ms() - started);
+        if self.busy.is_some() || !self.drawn {
+            ui.ctx().request_repaint();
+        }
+    }
+
+    fn clear_color(&self, _visuals: &egui::Visuals) -> [f32; 4] {
+        CLEAR_COLOR.to_normalized_gamma_f32()
+    }
+}

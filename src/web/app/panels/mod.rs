@@ -1,0 +1,56 @@
+//! The side panel's sections, one file per method: its controls (they edit the method's
+//! parameters and say whether they changed) and its results.
+
+pub mod info;
+pub mod st_adapted;
+pub mod st_support;
+
+use crate::design_link::{SizingKind, DEFAULT_FACES};
+use crate::remeshing::{Sizing, DEFAULT_EPSILON};
+
+/// ε and N as last set, so that switching the sizing kind back and forth keeps them.
+#[derive(Clone, Copy, Debug)]
+pub struct SizingMemory {
+    pub epsilon: f64,
+    pub faces: usize,
+}
+
+impl SizingMemory {
+    /// Remembers the values of `sizing`, defaults for the others.
+    pub fn of(sizing: Sizing) -> Self {
+        let mut m = Self { epsilon: DEFAULT_EPSILON, faces: DEFAULT_FACES };
+        m.remember(sizing);
+        m
+    }
+
+    pub fn remember(&mut self, sizing: Sizing) {
+        match sizing {
+            Sizing::Adaptive { epsilon } => self.epsilon = epsilon,
+            Sizing::UniformFaces(n) => self.faces = n,
+            Sizing::None => {}
+        }
+    }
+}
+
+/// Remeshing controls: kind, ε (log slider) or the face count.
+pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory: &mut SizingMemory, kinds: &[SizingKind]) {
+    let mut kind = SizingKind::of(*sizing);
+    egui::ComboBox::from_id_salt(id).selected_text(kind.label()).show_ui(ui, |ui| {
+        for &k in kinds {
+            ui.selectable_value(&mut kind, k, k.label());
+        }
+    });
+    let (mut epsilon, mut faces) = (memory.epsilon, memory.faces);
+    match kind {
+        SizingKind::Adaptive => {
+            ui.add(egui::Slider::new(&mut epsilon, 2e-5..=1e-2).logarithmic(true).text("ε").custom_formatter(|x, _| format!("{x:.2e}")))
+                .on_hover_text("Distance tolerance of the influence zones, relative to the bbox diagonal (Sec. 3): smaller ε, smaller faces");
+        }
+        SizingKind::Faces => {
+            ui.add(egui::Slider::new(&mut faces, 50..=8000).logarithmic(true).text("faces"));
+        }
+        SizingKind::None => {}
+    }
+    *sizing = kind.sizing(epsilon, faces);
+    memory.remember(*sizing);
+}

@@ -1,0 +1,345 @@
+//! The layers of ARCHITECTURE.md, enforced: every `crate::` path (and `super::`, `self::`, a child
+//! module) in `src/` is resolved to the file it names; an import must not run against the
+//! documented layer order, and no files may import each other around a cycle.
+//!
+//! `cargo test --test architecture -- --nocapture print_graph` prints the file graph.
+#![cfg(not(target_arch = "wasm32"))] // native: reads the source tree
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// Source files by path relative to `src/` ("geometry/sphere.rs").
+type Files = BTreeMap<String, String>;
+
+fn read_tree(dir: &Path, prefix: &str, out: &mut Files) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    entries.sort();
+    for p in entries {
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        if p.is_dir() {
+            read_tree(&p, &format!("{prefix}{name}/"), out);
+        } else if name.ends_with(".rs") {
+            out.insert(format!("{prefix}{name}"), std::fs::read_to_string(&p).unwrap());
+        }
+    }
+}
+
+fn source_files() -> Files {
+    let mut files = Files::new();
+    read_tree(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"), "", &mut files);
+    files
+}
+
+/// The layer table of ARCHITECTURE.md: module → row (lowest 0).
+fn layers(markdown: &str) -> BTreeMap<String, usize> {
+    let start = markdown.find("<!-- layers").expect("ARCHITECTURE.md has the layer table");
+    let end = markdown.find("<!-- /layers -->").expect("the layer table ends");
+    let mut out = BTreeMap::new();
+    let rows = markdown[start..end].lines().filter(|l| l.starts_with('|') && !l.starts_with("|---") && !l.starts_with("| layer"));
+    for (row, line) in rows.enumerate() {
+        let modules = line.split('|').nth(2).expect("a modules column");
+        for m in modules.split(',') {
+            let m = m.trim().trim_matches('`');
+            assert!(!m.is_empty(), "empty module name in: {line}");
+            out.insert(m.to_string(), row);
+        }
+    }
+    out
+}
+
+/// The code of a file without comments, string literals and its trailing `#[cfg(test)]` module.
+fn code(text: &str) -> String {
+    let text = match text.find("#[cfg(test)]\nmod tests") {
+        Some(i) => &text[..i],
+        None => text,
+    };
+    let (mut out, mut chars) = (String::new(), text.chars().peekable());
+    while let Some(c) = chars.next() {
+        match c {
+            '/' if chars.peek() == Some(&'/') => {
+                for c in chars.by_ref() {
+                    if c == '\n' {
+                        out.push('\n');
+                        break;
+                    }
+                }
+            }
+            '/' if chars.peek() == Some(&'*') => {
+                let mut prev = ' ';
+                for c in chars.by_ref() {
+                    if prev == '*' && c == '/' {
+                        break;
+                    }
+                    prev = c;
+                }
+            }
+            '"' => {
+                let mut escaped = false;
+                for c in chars.by_ref() {
+                    if !escaped && c == '"' {
+                        break;
+                    }
+                    escaped = !escaped && c == '\\';
+                }
+                out.push_str("\"\"");
+            }
+            // A char literal ('x', '\n', '"'), not a lifetime.
+            '\'' => {
+                let rest: String = chars.clone().take(3).collect();
+                let len = if rest.starts_with('\\') { rest.find('\'').map_or(0, |i| i + 1) } else if rest.chars().nth(1) == Some('\'') { 2 } else { 0 };
+                for _ in 0..len {
+                    chars.next();
+                }
+                out.push('\'');
+            }
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The module path of a file: "a/b.rs" → [a, b], "a/mod.rs" → [a], "lib.rs" → [].
+fn module_path(file: &str) -> Vec<String> {
+    let mut parts: Vec<String> = file.trim_end_matches(".rs").split('/').map(String::from).collect();
+    if matches!(parts.last().map(String::as_str), Some("mod" | "lib")) {
+        parts.pop();
+    }
+    parts
+}
+
+/// The file defining the longest prefix of `path` that is a module.
+fn resolve(files: &Files, path: &[String]) -> Option<String> {
+    (1..=path.len()).rev().find_map(|n| {
+        let p = path[..n].join("/");
+        [format!("{p}.rs"), format!("{p}/mod.rs")].into_iter().find(|f| files.contains_key(f))
+    })
+}
+
+fn is_ident(c: char) -> bool {
+    c.is_alphanumeric() || c == '_'
+}
+
+/// The paths of the use-tree starting at `s` (after a `::`): `a::b`, `a::{b, c::d}`, `*`.
+fn use_tree(s: &str) -> Vec<Vec<String>> {
+    let s = s.trim_start();
+    if let Some(rest) = s.strip_prefix('{') {
+        let (mut depth, mut item, mut out) = (0, String::new(), Vec::new());
+        for c in rest.chars() {
+            match c {
+                '{' => depth += 1,
+                '}' if depth == 0 => break,
+                '}' => depth -= 1,
+                ',' if depth == 0 => {
+                    out.extend(use_tree(&item));
+                    item.clear();
+                    continue;
+                }
+                _ => {}
+            }
+            item.push(c);
+        }
+        out.extend(use_tree(&item));
+        return out.into_iter().filter(|p| !p.is_empty()).collect();
+    }
+    let ident: String = s.chars().take_while(|&c| is_ident(c)).collect();
+    if ident.is_empty() || ident == "self" {
+        return vec![vec![]];
+    }
+    let rest = &s[ident.len()..];
+    match rest.trim_start().strip_prefix("::") {
+        Some(more) => use_tree(more).into_iter().map(|p| [vec![ident.clone()], p].concat()).collect(),
+        None => vec![vec![ident]],
+    }
+}
+
+/// Every module path a file refers to, absolute from the crate root.
+fn references(file: &str, text: &str) -> Vec<Vec<String>> {
+    let code = code(text);
+    let here = module_path(file);
+    // `mod name;` declarations: a `use name::…` refers to the child.
+    let children: BTreeSet<String> = code
+        .lines()
+        .filter_map(|l| l.trim().trim_start_matches("pub ").strip_prefix("mod ").and_then(|r| r.strip_suffix(';')).map(String::from))
+        .collect();
+    // `super` is the module above this one; `self` and child modules are this one's.
+    let above: Vec<String> = here[..here.len().saturating_sub(1)].to_vec();
+    let mut out = Vec::new();
+    let bytes = code.as_bytes();
+    let mut i = 0;
+    while i < code.len() {
+        let at_word = i == 0 || !is_ident(bytes[i - 1] as char) && bytes[i - 1] != b':';
+        let rest = &code[i..];
+        let base: Option<(usize, Vec<String>)> = if !at_word {
+            None
+        } else if rest.starts_with("crate::") {
+            Some((7, vec![]))
+        } else if rest.starts_with("spherical_faces::") && (file == "cli.rs" || file == "main.rs") {
+            Some((17, vec![]))
+        } else if rest.starts_with("super::") {
+            let mut base = above.clone();
+            let mut skip = 7;
+            while code[i + skip..].starts_with("super::") {
+                base.pop();
+                skip += 7;
+            }
+            Some((skip, base))
+        } else if rest.starts_with("self::") {
+            Some((6, here.clone()))
+        } else {
+            let ident: String = rest.chars().take_while(|&c| is_ident(c)).collect();
+            (children.contains(&ident) && rest[ident.len()..].starts_with("::")).then(|| (0, here.clone()))
+        };
+        match base {
+            Some((skip, base)) => {
+                for p in use_tree(&code[i + skip..]) {
+                    out.push([base.clone(), p].concat());
+                }
+                i += skip.max(1);
+            }
+            None => i += rest.chars().next().map_or(1, char::len_utf8),
+        }
+    }
+    out
+}
+
+/// The file graph: file → files it imports.
+fn graph(files: &Files) -> BTreeMap<String, BTreeSet<String>> {
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (file, text) in files {
+        let entry = g.entry(file.clone()).or_default();
+        for path in references(file, text) {
+            if let Some(target) = resolve(files, &path) {
+                if &target != file {
+                    entry.insert(target);
+                }
+            }
+        }
+    }
+    g
+}
+
+/// The top-level module of a file ("geometry/mesh/mod.rs" → "geometry", "cli.rs" → "cli").
+fn top(file: &str) -> String {
+    file.split('/').next().unwrap().trim_end_matches(".rs").to_string()
+}
+
+/// Everything wrong with the imports of `files` against `layers`.
+fn violations(files: &Files, layers: &BTreeMap<String, usize>) -> Vec<String> {
+    let g = graph(files);
+    let mut out = Vec::new();
+    for (from, targets) in &g {
+        let Some(&lf) = layers.get(&top(from)) else {
+            out.push(format!("{from}: module `{}` is not in the layer table", top(from)));
+            continue;
+        };
+        for to in targets {
+            if top(to) == top(from) {
+                continue;
+            }
+            match layers.get(&top(to)) {
+                Some(&lt) if lt < lf => {}
+                Some(_) => out.push(format!("{from} -> {to}: `{}` may not import `{}` (not on a lower layer)", top(from), top(to))),
+                None => out.push(format!("{from} -> {to}: module `{}` is not in the layer table", top(to))),
+            }
+        }
+    }
+    // Cycles: a depth-first search that reports every back edge.
+    let mut state: BTreeMap<&str, u8> = BTreeMap::new();
+    fn visit<'a>(n: &'a str, g: &'a BTreeMap<String, BTreeSet<String>>, state: &mut BTreeMap<&'a str, u8>, stack: &mut Vec<&'a str>, out: &mut Vec<String>) {
+        state.insert(n, 1);
+        stack.push(n);
+        for m in g.get(n).into_iter().flatten() {
+            match state.get(m.as_str()) {
+                Some(1) => {
+                    let start = stack.iter().position(|s| s == m).unwrap();
+                    out.push(format!("import cycle: {} -> {m}", stack[start..].join(" -> ")));
+                }
+                Some(_) => {}
+                None => visit(m, g, state, stack, out),
+            }
+        }
+        stack.pop();
+        state.insert(n, 2);
+    }
+    for n in g.keys() {
+        if !state.contains_key(n.as_str()) {
+            visit(n, &g, &mut state, &mut Vec::new(), &mut out);
+        }
+    }
+    out
+}
+
+fn documented_layers() -> BTreeMap<String, usize> {
+    layers(&std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md")).unwrap())
+}
+
+#[test]
+fn imports_follow_the_documented_layers_without_cycles() {
+    let files = source_files();
+    let layers = documented_layers();
+    // Every top-level module of src/ has its row.
+    for file in files.keys() {
+        assert!(layers.contains_key(&top(file)), "{file}: module `{}` is missing from ARCHITECTURE.md's layer table", top(file));
+    }
+    let edges: usize = graph(&files).values().map(BTreeSet::len).sum();
+    assert!(edges > 200, "only {edges} imports found: the scanner is broken");
+    let v = violations(&files, &layers);
+    assert!(v.is_empty(), "{} violations:\n{}", v.len(), v.join("\n"));
+}
+
+/// The toolkit never imports a method, the writers, the pipeline or a front end.
+#[test]
+fn the_toolkit_imports_no_method() {
+    let layers = documented_layers();
+    let methods = layers["st_adapted"];
+    for m in ["geometry", "reference", "congruence", "solver", "remeshing", "panels"] {
+        assert!(layers[m] < methods, "{m} is not below the methods");
+    }
+    for m in ["st_adapted", "st_support"] {
+        assert!(layers[m] < layers["export"] && layers[m] < layers["pipeline"] && layers[m] < layers["web"]);
+    }
+}
+
+/// The checker itself: it finds an upward import, a cycle between files, an import through a
+/// `use` group and through `super::`, and it does not flag what is allowed.
+#[test]
+fn the_checker_catches_forbidden_imports() {
+    let layers: BTreeMap<String, usize> = [("geometry", 0), ("panels", 1), ("st_adapted", 2)].map(|(m, l)| (m.to_string(), l)).into_iter().collect();
+    let file = |p: &str, s: &str| (p.to_string(), s.to_string());
+    let clean: Files = [
+        file("geometry/mod.rs", "pub mod sphere;\n"),
+        file("geometry/sphere.rs", "pub struct Sphere;\n"),
+        file("panels/mod.rs", "pub mod arc;\nuse crate::geometry::sphere::Sphere;\n// use crate::st_adapted::X; (a comment)\n"),
+        file("panels/arc.rs", "use super::mod_item;\nfn f() -> &'static str { \"crate::st_adapted::x\" }\n"),
+        file("st_adapted/mod.rs", "use crate::{geometry::sphere::Sphere, panels::arc};\n#[cfg(test)]\nmod tests {\n    use crate::st_adapted::x;\n}\n"),
+    ]
+    .into_iter()
+    .collect();
+    assert!(violations(&clean, &layers).is_empty(), "{:?}", violations(&clean, &layers));
+    // A method import from the toolkit, inside a use group.
+    let mut upward = clean.clone();
+    upward.insert("panels/arc.rs".into(), "use crate::{geometry::sphere::Sphere, st_adapted::Result};\n".into());
+    let v = violations(&upward, &layers);
+    assert!(v.iter().any(|s| s.contains("panels/arc.rs -> st_adapted/mod.rs") && s.contains("may not import")), "{v:?}");
+    // Two files importing each other.
+    let mut cycle = clean.clone();
+    cycle.insert("geometry/sphere.rs".into(), "use super::circle::Circle;\n".into());
+    cycle.insert("geometry/circle.rs".into(), "use crate::geometry::sphere::Sphere;\n".into());
+    let v = violations(&cycle, &layers);
+    assert!(v.iter().any(|s| s.contains("import cycle") && s.contains("geometry/sphere.rs") && s.contains("geometry/circle.rs")), "{v:?}");
+    // A module missing from the table.
+    let mut unknown = clean;
+    unknown.insert("web.rs".into(), "use crate::panels::arc::Arc;\n".into());
+    let v = violations(&unknown, &layers);
+    assert!(v.iter().any(|s| s.contains("`web` is not in the layer table")), "{v:?}");
+}
+
+#[test]
+fn print_graph() {
+    let files = source_files();
+    for (from, targets) in graph(&files) {
+        for to in targets {
+            println!("{from} -> {to}");
+        }
+    }
+}

@@ -1,0 +1,160 @@
+//! Design links: round trips, links written before the methods were renamed in code, notices
+//! for unknown and invalid fields, and file names as data.
+
+use spherical_faces::congruence::central_spheres::JetParams;
+use spherical_faces::design_link::*;
+use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::remeshing::Sizing;
+use spherical_faces::samples::Sample;
+use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_support::StSupportParams;
+
+#[test]
+fn round_trip() {
+    let d = Design {
+        reference: Reference::Sample(Sample::TorusPatch),
+        method: Method::Curvature,
+        jet: JetParams { degree: 2, max_rings: 3, ..JetParams::default() },
+        color: ColorBy::K1,
+        shading: Shading::Flat,
+        edges: true,
+        camera: Some(CameraState { yaw: 0.5, pitch: -0.25, distance: 6.0, target: [1.0, -2.0, 0.125] }),
+        ..Design::default()
+    };
+    let d = Design {
+        st_adapted: StAdaptedParams { jet: d.jet.clone(), ..StAdaptedParams::default() },
+        st_support: StSupportParams { jet: d.jet.clone(), ..StSupportParams::default() },
+        ..d
+    };
+    let (back, notices) = Design::from_fragment(&d.to_fragment());
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(back, d);
+}
+
+#[test]
+fn st_support_parameters_round_trip() {
+    let d = Design {
+        method: Method::StSupport,
+        st_support: StSupportParams {
+            optimize_radius: true,
+            support_depth: 0.035,
+            axis_length: 0.25,
+            radius_tolerance: 0.002,
+            remesh: Sizing::Adaptive { epsilon: 2.5e-4 },
+            ..StSupportParams::default()
+        },
+        ..Design::default()
+    };
+    let (back, notices) = Design::from_fragment(&d.to_fragment());
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(back, d);
+    let (bad, notices) = Design::from_fragment("#v=1&method=st-support&depth=-1&opt_r=2&rtol=nan");
+    assert_eq!(bad.st_support, StSupportParams::default());
+    assert_eq!(notices.len(), 3);
+}
+
+#[test]
+fn st_adapted_parameters_round_trip() {
+    for (sizing, variant) in [
+        (Sizing::Adaptive { epsilon: 1.25e-3 }, EdgeArcs::BisectingPlanes),
+        (Sizing::UniformFaces(2000), EdgeArcs::Intersection),
+        (Sizing::None, EdgeArcs::Intersection),
+    ] {
+        let d = Design {
+            method: Method::StAdapted,
+            st_adapted: StAdaptedParams { sizing, variant, ..StAdaptedParams::default() },
+            color: ColorBy::Sizing,
+            ..Design::default()
+        };
+        let frag = d.to_fragment();
+        let (back, notices) = Design::from_fragment(&frag);
+        assert!(notices.is_empty(), "{notices:?}");
+        assert_eq!(back, d, "{frag}");
+    }
+    // ε and N go to the method the link names, wherever they stand in it.
+    let (d, _) = Design::from_fragment("#v=1&eps=0.002&faces=50&method=st");
+    assert_eq!(d.st_adapted.sizing, Sizing::Adaptive { epsilon: 0.002 });
+    assert_eq!(d.st_support.remesh, StSupportParams::default().remesh);
+    let (d, _) = Design::from_fragment("#v=1&eps=0.002&faces=50&method=st&sizing=faces");
+    assert_eq!(d.st_adapted.sizing, Sizing::UniformFaces(50));
+    let (bad, notices) = Design::from_fragment("#v=1&method=st&eps=2&faces=3&variant=c&sizing=cubic");
+    assert_eq!(bad.st_adapted, StAdaptedParams::default());
+    assert_eq!(notices.len(), 4, "{notices:?}");
+}
+
+/// Links written before the methods were renamed in code open the same designs.
+#[test]
+fn old_links_open_the_same_designs() {
+    let (d, notices) = Design::from_fragment(
+        "#v=1&sample=dome&method=st&jet_degree=3&jet_rings=4&sizing=adaptive&eps=4e-4&faces=600&variant=a&color=sizing&shading=smooth&edges=0",
+    );
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(d.method, Method::StAdapted);
+    assert_eq!(d.st_adapted.sizing, Sizing::Adaptive { epsilon: 4e-4 });
+    assert_eq!(d.st_adapted.variant, EdgeArcs::Intersection);
+    assert_eq!(d.color, ColorBy::Sizing);
+    let (d, notices) = Design::from_fragment("#v=1&sample=dome&method=st&sizing=faces&faces=2000&variant=b");
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(d.st_adapted.sizing, Sizing::UniformFaces(2000));
+    assert_eq!(d.st_adapted.variant, EdgeArcs::BisectingPlanes);
+    let (d, notices) = Design::from_fragment(
+        "#v=1&sample=torus&method=st-support&jet_degree=3&jet_rings=4&opt_r=1&depth=0.03&axis=0.2&rtol=0.002&remesh=faces&eps=4e-4&faces=300&color=H&shading=reflective&edges=1&cam=0.5,0.3,6,0,0,0",
+    );
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(d.reference, Reference::Sample(Sample::TorusPatch));
+    assert_eq!(d.method, Method::StSupport);
+    let st = &d.st_support;
+    assert!(st.optimize_radius && st.support_depth == 0.03 && st.axis_length == 0.2 && st.radius_tolerance == 0.002);
+    assert_eq!(st.remesh, Sizing::UniformFaces(300));
+    assert!(d.camera.is_some() && d.edges);
+    // The README's links.
+    for link in [
+        "#v=1&sample=dome&method=st&color=sizing",
+        "#v=1&sample=dome&method=st-support&shading=reflective",
+        "#v=1&sample=torus&color=k1&shading=flat&jet_degree=2&cam=0.5,0.3,6,0,0,0",
+    ] {
+        let (_, notices) = Design::from_fragment(link);
+        assert!(notices.is_empty(), "{link}: {notices:?}");
+    }
+}
+
+#[test]
+fn unknown_and_invalid_fields_are_reported() {
+    let (d, notices) = Design::from_fragment("#v=1&sample=torus&bogus=7&color=purple&jet_degree=9&cam=1,2");
+    assert_eq!(d.reference, Reference::Sample(Sample::TorusPatch));
+    assert_eq!(d.color, ColorBy::MeanCurvature);
+    assert_eq!(d.jet.degree, JetParams::default().degree);
+    assert_eq!(d.camera, None);
+    assert_eq!(notices.len(), 4, "{notices:?}");
+    assert!(notices[0].contains("bogus"));
+}
+
+#[test]
+fn an_unknown_sample_lists_the_samples() {
+    let (d, notices) = Design::from_fragment("#v=1&sample=cathedral");
+    assert_eq!(d.reference, Design::default().reference);
+    assert_eq!(notices.len(), 1, "{notices:?}");
+    for s in Sample::ALL {
+        assert!(notices[0].contains(s.key()), "{notices:?}");
+    }
+    assert!(notices[0].contains("cathedral"));
+}
+
+#[test]
+fn file_names_are_data() {
+    let d = Design { reference: Reference::OwnFile("<img src=x onerror=alert(1)>.obj".into()), ..Design::default() };
+    let frag = d.to_fragment();
+    assert!(!frag.contains('<') && !frag.contains(' '));
+    let (back, notices) = Design::from_fragment(&frag);
+    assert_eq!(back.reference, d.reference);
+    assert_eq!(notices.len(), 1);
+}
+
+#[test]
+fn empty_and_garbage_fragments_give_defaults() {
+    assert_eq!(Design::from_fragment("").0, Design::default());
+    assert_eq!(Design::from_fragment("#").0, Design::default());
+    let (d, n) = Design::from_fragment("#%%%&&==&v=1&%zz=1");
+    assert_eq!(d, Design::default());
+    assert!(!n.is_empty());
+}
