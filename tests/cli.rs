@@ -107,7 +107,7 @@ fn st_writes_panels_and_report_or_refuses() {
     assert_eq!(run(&["st", "../shared/data/meshes/cmc1.obj", "--variant", "c", "--out", "/tmp/x"]).status.code(), Some(2));
 }
 
-/// `st-support --adaptive --epsilon E` and `--faces N` remesh first (issue 4 §2): the adaptive
+/// `st-support --adaptive --epsilon E` and `--faces N` remesh first (Fig. 16, bottom): the adaptive
 /// sizing uses the local spheres orthogonal to Ω; the report keeps the reference's counts.
 #[test]
 fn st_support_remeshes_first() {

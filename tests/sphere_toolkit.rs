@@ -1,4 +1,4 @@
-//! The sphere toolkit of issue 3 §1 against explicit geometry: the pencil through three points, the
+//! The sphere toolkit (Sec. 2.4, Sec. 4) against explicit geometry: the pencil through three points, the
 //! member orthogonal to Ω (R² > 0, < 0, = 0, plane), orientation, kink angles vs explicit
 //! normals, inversion and power, the second common point of a vertex star. Tolerances ≈ 1e-12.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes

@@ -222,7 +222,7 @@ fn cancellation_stops_the_run() {
     assert_eq!(seen.iter().filter(|s| *s == "face_spheres").count(), 1);
 }
 
-/// The full method on the three reference meshes: the bounds of issue 3, the inversion property
+/// The full method on the three reference meshes: the residual bounds of Sec. 4, the inversion property
 /// for R² > 0, the support-element geometry, and the R optimization.
 #[test]
 fn reference_meshes_meet_the_bounds() {
