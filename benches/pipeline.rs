@@ -11,16 +11,15 @@
 //! the workloads are tiny ([`Scale::Tiny`]), so that this only checks that they run.
 
 use std::sync::{Mutex, OnceLock};
-use std::time::Instant;
 
 use divan::Bencher;
+use spherical_faces::progress::{native_clock_ms, Clock};
 use spherical_faces::bench_workloads::{
     result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
     REMESH_SAMPLES,
 };
 
 static SCALE: OnceLock<Scale> = OnceLock::new();
-static START: OnceLock<Instant> = OnceLock::new();
 /// (benchmark, milliseconds) of every timed sample, in order.
 static RESULTS: Mutex<Vec<(String, f64)>> = Mutex::new(Vec::new());
 /// Informational lines (`# ...`, as the wasm runner prints them), one per benchmark.
@@ -38,10 +37,6 @@ fn scale() -> Scale {
     *SCALE.get().unwrap_or(&Scale::Tiny)
 }
 
-/// Milliseconds since the first call (the solver's clock).
-fn clock_ms() -> f64 {
-    START.get_or_init(Instant::now).elapsed().as_secs_f64() * 1e3
-}
 
 fn record(name: &str, ms: impl IntoIterator<Item = f64>) {
     let mut r = RESULTS.lock().unwrap();
@@ -49,9 +44,9 @@ fn record(name: &str, ms: impl IntoIterator<Item = f64>) {
 }
 
 fn timed<T>(name: &str, f: impl FnOnce() -> T) -> T {
-    let t = clock_ms();
+    let t = native_clock_ms();
     let out = f();
-    record(name, [clock_ms() - t]);
+    record(name, [native_clock_ms() - t]);
     out
 }
 
@@ -63,7 +58,7 @@ fn remesh_workload() -> &'static RemeshWorkload {
 fn main() {
     let bench_mode = std::env::args().any(|a| a == "--bench");
     SCALE.set(if bench_mode { Scale::Full } else { Scale::Tiny }).unwrap();
-    clock_ms();
+    native_clock_ms();
     divan::main();
     if bench_mode {
         let results = RESULTS.lock().unwrap();
@@ -113,7 +108,7 @@ fn remesh_round(bencher: Bencher, sizing: Sizing) {
 fn angle_iterations(bencher: Bencher, faces: usize) {
     let w = AngleWorkload::new(faces, scale());
     let mut problem = w.problem();
-    let mut solver = w.solver(Some(clock_ms));
+    let mut solver = w.solver(Clock(Some(native_clock_ms)));
     w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
     let name = format!("angle_iteration_{faces}");
     info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));

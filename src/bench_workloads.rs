@@ -29,10 +29,8 @@ use crate::solver::{Problem, Solver, SolverOptions};
 use crate::st_adapted::initialization::initial_spheres;
 use crate::st_adapted::optimization::OptimizationFrame;
 use crate::st_adapted::params::StAdaptedParams;
+use crate::progress::Clock;
 use crate::stats;
-
-/// A clock in milliseconds (`performance.now()` in the browser, an `Instant` natively).
-pub type Clock = fn() -> f64;
 
 /// Workload size: `Full` for benchmarking, `Tiny` to exercise the code quickly (`cargo test`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,9 +76,9 @@ pub fn result_line(name: &str, samples_ms: &[f64]) -> String {
 pub fn time_n(clock: Clock, n: usize, mut f: impl FnMut()) -> Vec<f64> {
     (0..n)
         .map(|_| {
-            let t = clock();
+            let t = clock.now();
             f();
-            clock() - t
+            clock.now() - t
         })
         .collect()
 }
@@ -161,9 +159,9 @@ impl RemeshWorkload {
         let ms = (0..n)
             .map(|_| {
                 let mut r = self.remesher(sizing);
-                let t = clock();
+                let t = clock.now();
                 stats = Self::round(&mut r);
-                let ms = clock() - t;
+                let ms = clock.now() - t;
                 drop(r);
                 ms
             })
@@ -211,11 +209,11 @@ impl AngleWorkload {
     }
 
     /// A solver for [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations, timing each one with `clock`.
-    pub fn solver(&self, clock: Option<Clock>) -> Solver {
+    pub fn solver(&self, clock: Clock) -> Solver {
         Solver::new(SolverOptions {
             max_iterations: ANGLE_ITERATIONS_PER_SAMPLE,
             initial_epsilon: self.params.initial_epsilon,
-            clock,
+            clock: clock.0,
             ..SolverOptions::default()
         })
     }
@@ -231,7 +229,7 @@ impl AngleWorkload {
     /// symbolic analysis, which later samples reuse.
     pub fn time_iterations(&self, clock: Clock, n: usize) -> Vec<f64> {
         let mut problem = self.problem();
-        let mut solver = self.solver(Some(clock));
+        let mut solver = self.solver(clock);
         self.sample(&mut problem, &mut solver);
         (0..n).flat_map(|_| self.sample(&mut problem, &mut solver)).collect()
     }
@@ -284,7 +282,7 @@ where
         out(&format!("# angle_iteration_{faces}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
         pause().await;
         let mut problem = w.problem();
-        let mut solver = w.solver(Some(clock));
+        let mut solver = w.solver(clock);
         w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
         pause().await;
         let mut ms = Vec::new();

@@ -588,12 +588,7 @@ fn st_like(n: usize, fairness: bool) -> (Problem<'static>, Vec<f64>) {
     (problem, x)
 }
 
-fn now_ms() -> f64 {
-    use std::sync::OnceLock;
-    use std::time::Instant;
-    static T0: OnceLock<Instant> = OnceLock::new();
-    T0.get_or_init(Instant::now).elapsed().as_secs_f64() * 1e3
-}
+use spherical_faces::progress::native_clock_ms as now_ms;
 
 #[test]
 fn st_like_problem_converges_small() {

@@ -10,6 +10,7 @@
 #![cfg(target_arch = "wasm32")]
 
 use spherical_faces::bench_workloads::{run_suite, Scale};
+use spherical_faces::progress::Clock;
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::*;
 
@@ -34,5 +35,5 @@ async fn yield_to_event_loop() {
 #[wasm_bindgen_test]
 async fn bench_pipeline() {
     console_log!("wasm bench: release build, performance.now() timing");
-    run_suite(now_ms, Scale::Full, &mut |line| console_log!("{line}"), yield_to_event_loop).await;
+    run_suite(Clock(Some(now_ms)), Scale::Full, &mut |line| console_log!("{line}"), yield_to_event_loop).await;
 }

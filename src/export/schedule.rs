@@ -210,28 +210,17 @@ impl PanelSchedule {
     /// CSV header for panels of up to `corners` corners (one line, no trailing newline).
     pub fn csv_header(corners: usize) -> String {
         let mut h: Vec<String> = vec!["id".into()];
+        let xyz = |h: &mut Vec<String>, name: &str| h.extend(["x", "y", "z"].map(|c| format!("{name}_{c}")));
+        h.extend((0..corners).map(|k| format!("v{k}_id")));
         for k in 0..corners {
-            h.push(format!("v{k}_id"));
+            xyz(&mut h, &format!("v{k}"));
         }
-        for k in 0..corners {
-            for c in ["x", "y", "z"] {
-                h.push(format!("v{k}_{c}"));
-            }
-        }
-        for c in ["x", "y", "z"] {
-            h.push(format!("sphere_center_{c}"));
-        }
+        xyz(&mut h, "sphere_center");
         h.push("sphere_radius".into());
-        for c in ["x", "y", "z"] {
-            h.push(format!("plane_normal_{c}"));
-        }
+        xyz(&mut h, "plane_normal");
         for k in 0..corners {
-            for c in ["x", "y", "z"] {
-                h.push(format!("edge{k}_center_{c}"));
-            }
-            for c in ["x", "y", "z"] {
-                h.push(format!("edge{k}_normal_{c}"));
-            }
+            xyz(&mut h, &format!("edge{k}_center"));
+            xyz(&mut h, &format!("edge{k}_normal"));
             h.push(format!("edge{k}_radius"));
         }
         h.push("area".into());

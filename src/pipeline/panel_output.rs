@@ -87,25 +87,48 @@ pub fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec
     ]
 }
 
-/// What a panel method exports besides its panels.
+/// What a panel method exports: see [`PanelExport::new`].
 pub struct PanelExport<'a> {
-    /// The method's key in reports and files ("st", "st-support").
     pub method: &'a str,
     pub sphere_mesh: &'a SphereMesh,
     pub panels: &'a [Panel],
+    pub diag: f64,
+    pub radius_tolerance: f64,
+    pub metrics: Metrics,
+    pub timings: &'a [(String, f64)],
+    /// Goes to the GLB's `asset.extras` (with the method).
+    pub extras: serde_json::Value,
     pub support: Option<&'a SupportGeometry>,
     pub node_axes: Option<&'a [(DVec3, DVec3)]>,
     pub absolute_sphere: Option<&'a AbsoluteSphere>,
-    /// Goes to the GLB's `asset.extras` (with the method).
-    pub extras: serde_json::Value,
-    /// The method's metrics; `max_distance_to_reference` and `distinct_radii` come from the
-    /// schedule.
-    pub metrics: Metrics,
-    /// Lengths relative to this diagonal (of the mesh the method ran on).
-    pub diag: f64,
-    /// Radii closer than this (× `diag`) count as one.
-    pub radius_tolerance: f64,
-    pub timings: &'a [(String, f64)],
+}
+
+impl<'a> PanelExport<'a> {
+    /// The export of a panel method (its key in reports and files: "st", "st-support"): its
+    /// sphere mesh and panels, lengths relative to `diag` (of the mesh the method ran on), radii
+    /// closer than `radius_tolerance` × `diag` counted as one, and its metrics
+    /// (`max_distance_to_reference` and `distinct_radii` come from the schedule) and timings.
+    pub fn new(
+        method: &'a str,
+        sphere_mesh: &'a SphereMesh,
+        panels: &'a [Panel],
+        diag: f64,
+        radius_tolerance: f64,
+        metrics: Metrics,
+        timings: &'a [(String, f64)],
+    ) -> Self {
+        let extras = serde_json::json!({});
+        Self { method, sphere_mesh, panels, diag, radius_tolerance, metrics, timings, extras, support: None, node_axes: None, absolute_sphere: None }
+    }
+
+    pub fn with_extras(self, extras: serde_json::Value) -> Self {
+        Self { extras, ..self }
+    }
+
+    /// The support structure, the node axes and the Ω they pass through (Sec. 4).
+    pub fn with_support(self, support: &'a SupportGeometry, node_axes: &'a [(DVec3, DVec3)], omega: &'a AbsoluteSphere) -> Self {
+        Self { support: Some(support), node_axes: Some(node_axes), absolute_sphere: Some(omega), ..self }
+    }
 }
 
 /// The report and the files of a panel method: `panels.glb`, `panels.obj`, the schedule as

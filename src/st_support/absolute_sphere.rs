@@ -38,7 +38,7 @@ use serde::{Deserialize, Serialize};
 use crate::congruence::central_spheres::{CurvatureField, UnusableCentralSpheres};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::linalg::sym3_eigen;
-use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::{bbox, TriMesh};
 
 /// Parameters of [`estimate_absolute_sphere`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -157,12 +157,7 @@ pub fn e_center_residuals(points: &[DVec3], normals: &[DVec3], m: DVec3) -> (Vec
 
 /// Bounding-box centre and diagonal of points (diag 1 when degenerate).
 fn frame(points: &[DVec3]) -> (DVec3, f64) {
-    let (lo, hi) = points
-        .iter()
-        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(l, h), p| (l.min(*p), h.max(*p)));
-    if lo.x > hi.x {
-        return (DVec3::ZERO, 1.0);
-    }
+    let (lo, hi) = bbox(points);
     let d = (hi - lo).length();
     (0.5 * (lo + hi), if d > 0.0 && d.is_finite() { d } else { 1.0 })
 }
@@ -228,6 +223,11 @@ pub fn center_from_normals(
 /// Small dense LM on the 3 unknowns of m, in the frame y = (m − t)/s. Stops when a step changes
 /// E by less than 1e-15 relative, the step is below 1e-13 (relative), the damping exceeds 1e16,
 /// m runs beyond `2 far_factor` diagonals, or after `max_iterations`.
+///
+/// Not [`crate::solver`]: a 3 × 3 system solved in closed form needs no sparse factorization,
+/// and E_center is so flat at its minimum that the two iterations (Marquardt's diag(JᵀJ)
+/// damping here, ε²I there) reach the same E to 2e-15 but m 1e-9 of the diagonal apart on
+/// `tri_mesh.obj`, which moves the face spheres by 1e-7.
 fn levenberg_marquardt(
     points: &[DVec3],
     normals: &[DVec3],

@@ -405,47 +405,49 @@ impl HalfedgeMesh {
     /// halfedge m → b (`h` itself becomes a → m).
     pub fn split(&mut self, h: u32, p: DVec3) -> (u32, u32) {
         let t = self.twin[h as usize];
-        let (hn, hp) = (next(h), prev(h));
-        let (a, b, c) = (self.from(h), self.to(h), self.from(hp));
+        let (a, b, c) = (self.from(h), self.to(h), self.from(prev(h)));
         let flag = self.edge_flag[h as usize];
         let kind = if self.is_constrained(h) { VertexKind::Slide } else { VertexKind::Free };
         let m = self.add_vertex(p, kind);
         self.normal[m as usize] = (self.normal[a as usize] + self.normal[b as usize]).normalize_or_zero();
         // (a, b, c) → (a, m, c) + (m, b, c).
-        self.set_corner(hn, m);
-        let t_bc = self.twin[hn as usize];
-        let f2 = self.add_face([m, b, c]);
-        let (g0, g1, g2) = (3 * f2, 3 * f2 + 1, 3 * f2 + 2);
-        self.link(g1, t_bc);
-        self.edge_flag[g1 as usize] = self.edge_flag[hn as usize];
-        self.edge_flag[hn as usize] = 0;
-        self.link(g2, hn);
+        let g0 = self.split_face(h, m);
         self.edge_flag[g0 as usize] = flag;
         if t != NONE {
             // (b, a, d) → (b, m, d) + (m, a, d).
-            let tn = next(t);
-            let d = self.to(tn);
-            self.set_corner(tn, m);
-            let t_ad = self.twin[tn as usize];
-            let f3 = self.add_face([m, a, d]);
-            let (q0, q1, q2) = (3 * f3, 3 * f3 + 1, 3 * f3 + 2);
-            self.link(q1, t_ad);
-            self.edge_flag[q1 as usize] = self.edge_flag[tn as usize];
-            self.edge_flag[tn as usize] = 0;
-            self.link(q2, tn);
+            let d = self.to(next(t));
+            let q0 = self.split_face(t, m);
             self.link(h, q0);
             self.link(t, g0);
             self.edge_flag[q0 as usize] = flag;
-            self.fix_vhe(d, q2);
+            self.fix_vhe(d, q0 + 2);
         } else {
             self.twin[h as usize] = NONE;
             self.twin[g0 as usize] = NONE;
         }
         self.fix_vhe(m, g0);
         self.fix_vhe(a, h);
-        self.fix_vhe(b, g1);
-        self.fix_vhe(c, g2);
+        self.fix_vhe(b, g0 + 1);
+        self.fix_vhe(c, g0 + 2);
         (m, g0)
+    }
+
+    /// One side of [`Self::split`]: the face (u, v, w) of halfedge `x` (u → v) becomes
+    /// (u, m, w) + a new face (m, v, w), whose halfedge v → w takes over the outer twin and flag
+    /// of v → w, and whose w → m is twinned with the old face's new m → w. Returns the new
+    /// face's m → v (twin and flag still to set).
+    fn split_face(&mut self, x: u32, m: u32) -> u32 {
+        let xn = next(x);
+        let (v, w) = (self.to(x), self.to(xn));
+        self.set_corner(xn, m);
+        let outer = self.twin[xn as usize];
+        let f = self.add_face([m, v, w]);
+        let (q0, q1, q2) = (3 * f, 3 * f + 1, 3 * f + 2);
+        self.link(q1, outer);
+        self.edge_flag[q1 as usize] = self.edge_flag[xn as usize];
+        self.edge_flag[xn as usize] = 0;
+        self.link(q2, xn);
+        q0
     }
 
     /// Collapses the edge of halfedge `h` (a → b), removing `remove` (a or b) into the other vertex,

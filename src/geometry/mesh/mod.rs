@@ -39,8 +39,7 @@ impl TriMesh {
 
     /// Bounding-box diagonal: the unit of every relative tolerance.
     pub fn bbox_diagonal(&self) -> f64 {
-        let (lo, hi) = self.bbox();
-        (hi - lo).length()
+        bbox_diagonal(&self.positions)
     }
 
     /// Bounding-box diagonal of the vertices faces refer to (stray and out-of-range indices
@@ -90,6 +89,12 @@ pub fn bbox(points: &[DVec3]) -> (DVec3, DVec3) {
     points
         .iter()
         .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+}
+
+/// The diagonal of [`bbox`]: the unit of every relative tolerance.
+pub fn bbox_diagonal(points: &[DVec3]) -> f64 {
+    let (lo, hi) = bbox(points);
+    (hi - lo).length()
 }
 
 /// The faces of a mesh as corner lists: what connectivity ([`topology::Topology`]) is built from.
@@ -186,13 +191,8 @@ impl PolyMesh {
         self.faces.len()
     }
 
-    pub fn bbox(&self) -> (DVec3, DVec3) {
-        bbox(&self.positions)
-    }
-
     pub fn bbox_diagonal(&self) -> f64 {
-        let (lo, hi) = self.bbox();
-        (hi - lo).length()
+        bbox_diagonal(&self.positions)
     }
 
     /// Corner positions of face `f`, in order.

@@ -133,23 +133,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
     if let Some(med) = result.angle_iteration_median_ms {
         timings.push(("angle_iteration_median".into(), med));
     }
-    let mut extras = serde_json::json!({});
-    extras["variant"] = variant.into();
-    export_panels(
-        reference,
-        PanelExport {
-            method: STAGE,
-            sphere_mesh: &result.sphere_mesh,
-            panels: &result.panels,
-            support: None,
-            node_axes: None,
-            absolute_sphere: None,
-            extras,
-            metrics,
-            diag: result.diag,
-            radius_tolerance: params.radius_tolerance,
-            timings: &timings,
-        },
-        clock,
-    )
+    let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &timings)
+        .with_extras(serde_json::json!({ "variant": variant }));
+    export_panels(reference, export, clock)
 }

@@ -75,24 +75,10 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
         ..Metrics::default()
     };
     let axes = result.node_axis_segments();
-    let extras = crate::export::absolute_sphere_extras(&result.omega);
-    export_panels(
-        reference,
-        PanelExport {
-            method: STAGE,
-            sphere_mesh: &result.sphere_mesh,
-            panels: &result.panels,
-            support: Some(&result.support_geometry),
-            node_axes: Some(&axes),
-            absolute_sphere: Some(&result.omega),
-            extras,
-            metrics,
-            diag: result.diag,
-            radius_tolerance: params.radius_tolerance,
-            timings: &result.timings_ms,
-        },
-        clock,
-    )
+    let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &result.timings_ms)
+        .with_extras(crate::export::absolute_sphere_extras(&result.omega))
+        .with_support(&result.support_geometry, &axes, &result.omega);
+    export_panels(reference, export, clock)
 }
 
 /// Display fields: panels, support, node axes, second envelope.
