@@ -588,7 +588,6 @@ fn st_like(n: usize, fairness: bool) -> (Problem<'static>, Vec<f64>) {
     (problem, x)
 }
 
-use spherical_faces::progress::native_clock_ms as now_ms;
 
 #[test]
 fn st_like_problem_converges_small() {
@@ -636,9 +635,11 @@ fn orderings_agree() {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))] // a native clock
 #[test]
 #[ignore]
 fn timing_synthetic_600_faces() {
+    use spherical_faces::progress::native_clock_ms as now_ms;
     for (n, fairness) in [(18usize, true), (18, false), (56, true), (56, false)] {
         let (mut problem, mut x) = st_like(n, fairness);
         let mut solver = Solver::new(SolverOptions {
