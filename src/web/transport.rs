@@ -21,17 +21,35 @@ pub fn to_js(env: &Envelope) -> (Object, Array) {
     (obj, transfer)
 }
 
-/// Reads `{json, bodies}` back; anything else is an error message.
-pub fn from_js(value: &JsValue) -> Result<Envelope, String> {
+/// A `postMessage` payload that is not `{json, bodies}`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportError {
+    NoJsonHeader,
+    BodyNotArrayBuffer,
+}
+
+impl std::fmt::Display for TransportError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TransportError::NoJsonHeader => "message without a json header",
+            TransportError::BodyNotArrayBuffer => "a message body is not an ArrayBuffer",
+        })
+    }
+}
+
+impl std::error::Error for TransportError {}
+
+/// Reads `{json, bodies}` back.
+pub fn from_js(value: &JsValue) -> Result<Envelope, TransportError> {
     let json = Reflect::get(value, &"json".into())
         .ok()
         .and_then(|j| j.as_string())
-        .ok_or("message without a json header")?;
+        .ok_or(TransportError::NoJsonHeader)?;
     let mut bodies = Vec::new();
     if let Ok(list) = Reflect::get(value, &"bodies".into()) {
         if let Some(list) = list.dyn_ref::<Array>() {
             for b in list.iter() {
-                let buf = b.dyn_into::<ArrayBuffer>().map_err(|_| "a message body is not an ArrayBuffer")?;
+                let buf = b.dyn_into::<ArrayBuffer>().map_err(|_| TransportError::BodyNotArrayBuffer)?;
                 bodies.push(Uint8Array::new(&buf).to_vec());
             }
         }

@@ -47,7 +47,7 @@ pub fn worker_start(cancel: JsValue) {
 pub fn worker_handle(data: JsValue) {
     let env = match transport::from_js(&data) {
         Ok(e) => e,
-        Err(message) => return WorkerOutbox.send(FromWorker::Error { message }, Vec::new()),
+        Err(e) => return WorkerOutbox.send(FromWorker::Error { message: e.to_string() }, Vec::new()),
     };
     match decode_to_worker(&env) {
         Ok((msg, bytes)) => SESSION.with(|s| s.borrow_mut().handle(msg, bytes, &mut WorkerOutbox)),

@@ -21,6 +21,25 @@ pub enum Incoming {
 
 type Inbox = Rc<RefCell<VecDeque<Incoming>>>;
 
+/// The pipeline worker could not be started (the browser's reason).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum WorkerStartError {
+    /// `new Worker("./worker.js")` failed.
+    Spawn(String),
+    /// The init message could not be posted.
+    Init(String),
+}
+
+impl std::fmt::Display for WorkerStartError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WorkerStartError::Spawn(e) | WorkerStartError::Init(e) => write!(f, "cannot start the pipeline worker: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for WorkerStartError {}
+
 /// The shared memory between the page and the worker (cross-origin isolated pages only): the
 /// cancel flag, and the number of messages the worker has posted.
 pub const CANCEL_SLOT: u32 = 0;
@@ -40,12 +59,12 @@ pub struct WorkerClient {
 
 impl WorkerClient {
     /// Spawns `worker.js` next to the page. `repaint` wakes the UI when a message arrives.
-    pub fn spawn(repaint: Rc<dyn Fn()>) -> Result<Self, String> {
+    pub fn spawn(repaint: Rc<dyn Fn()>) -> Result<Self, WorkerStartError> {
         let inbox: Inbox = Rc::new(RefCell::new(VecDeque::new()));
         let opts = WorkerOptions::new();
         opts.set_type(WorkerType::Module);
         let worker = Worker::new_with_options("./worker.js", &opts)
-            .map_err(|e| format!("cannot start the pipeline worker: {e:?}"))?;
+            .map_err(|e| WorkerStartError::Spawn(format!("{e:?}")))?;
         let on_message = {
             let inbox = inbox.clone();
             let repaint = repaint.clone();
@@ -54,7 +73,10 @@ impl WorkerClient {
                 let item = if let Some(p) = Reflect::get(&data, &"panic".into()).ok().and_then(|p| p.as_string()) {
                     Incoming::Crashed(p)
                 } else {
-                    match transport::from_js(&data).and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string())) {
+                    let decoded = transport::from_js(&data)
+                        .map_err(|e| e.to_string())
+                        .and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string()));
+                    match decoded {
                         Ok((msg, fields)) => Incoming::Message(msg, fields),
                         Err(message) => Incoming::Message(FromWorker::Error { message }, Vec::new()),
                     }
@@ -83,7 +105,7 @@ impl WorkerClient {
         let init = Object::new();
         let flag: JsValue = cancel_flag.as_ref().map_or(JsValue::UNDEFINED, |a| a.clone().into());
         let _ = Reflect::set(&init, &"init".into(), &flag);
-        worker.post_message(&init).map_err(|e| format!("cannot start the pipeline worker: {e:?}"))?;
+        worker.post_message(&init).map_err(|e| WorkerStartError::Init(format!("{e:?}")))?;
         Ok(Self {
             worker,
             inbox,
@@ -148,7 +170,7 @@ impl WorkerClient {
                 *self = w;
                 self.restarts = restarts;
             }
-            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(FromWorker::Error { message: e }, Vec::new())),
+            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(FromWorker::Error { message: e.to_string() }, Vec::new())),
         }
     }
 

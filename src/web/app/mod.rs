@@ -120,7 +120,7 @@ impl App {
         let repaint: Rc<dyn Fn()> = Rc::new(move || ctx.request_repaint());
         let (worker, error) = match WorkerClient::spawn(repaint) {
             Ok(w) => (Some(w), None),
-            Err(e) => (None, Some(e)),
+            Err(e) => (None, Some(e.to_string())),
         };
         let picked_files = Rc::new(RefCell::new(Vec::new()));
         let (file_input, closure) = make_file_input(picked_files.clone(), cc.egui_ctx.clone());
