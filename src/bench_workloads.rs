@@ -61,15 +61,11 @@ pub fn dome(rings: usize, scale: Scale) -> TriMesh {
     })
 }
 
-/// Median of `v` (NaN when empty).
-pub fn median(v: &[f64]) -> f64 {
-    stats::median(v).unwrap_or(f64::NAN)
-}
-
 /// The one-line result both runners print: `bench <name>: <ms> ms/iter (n=<samples>)`, the
 /// median over the samples.
 pub fn result_line(name: &str, samples_ms: &[f64]) -> String {
-    format!("bench {name}: {:.3} ms/iter (n={})", median(samples_ms), samples_ms.len())
+    let median = stats::median(samples_ms).unwrap_or(f64::NAN);
+    format!("bench {name}: {median:.3} ms/iter (n={})", samples_ms.len())
 }
 
 /// Times `f` `n` times with `clock`, in milliseconds.

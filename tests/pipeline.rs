@@ -264,3 +264,41 @@ fn st_stage_cancels_within_one_iteration() {
     send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(matches!(r.messages.last().unwrap().0, FromWorker::Finished { .. }));
 }
+
+/// One jet fit per reference: the curvature stage fits the reference's jets, and the methods
+/// that follow (with the same jet parameters) reuse them; new parameters fit again. (The ST
+/// method also fits the jets of its remeshed mesh, after its "remesh" step: another mesh.)
+#[test]
+fn a_reference_fits_its_jets_once() {
+    // Progress of a jet fit (total > 0; a step marker has total 0) before any "remesh" step.
+    let reference_fits = |r: &Recorder| {
+        r.messages
+            .iter()
+            .filter_map(|m| match &m.0 {
+                FromWorker::Progress(p) => Some(p),
+                _ => None,
+            })
+            .take_while(|p| p.detail != "remesh")
+            .filter(|p| p.detail == "jet_fit" && p.total > 0)
+            .count()
+    };
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::SphereCap), None);
+    r.messages.clear();
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(reference_fits(&r) > 0, "the curvature stage reports its jet fit");
+    for stage in [
+        StageRequest::StSupport(StSupportParams::default()),
+        StageRequest::StAdapted(StAdaptedParams { stages: StAdaptedParams::default().stages[..1].to_vec(), ..Default::default() }),
+    ] {
+        r.messages.clear();
+        send(&mut s, &mut r, run(stage.clone()), None);
+        assert!(r.messages.iter().any(|m| matches!(m.0, FromWorker::Finished { .. })), "{:?}", r.messages.last().map(|m| &m.0));
+        assert_eq!(reference_fits(&r), 0, "{} fitted the reference's jets again", stage.name());
+    }
+    r.messages.clear();
+    let other = JetParams { degree: 2, ..JetParams::default() };
+    send(&mut s, &mut r, run(StageRequest::Curvature(other)), None);
+    assert!(reference_fits(&r) > 0, "other jet parameters fit again");
+}
