@@ -1,8 +1,9 @@
 //! The geometric toolkit no method owns: generalized spheres ([`sphere`]), circles, the absolute
-//! sphere Ω, closest points on triangle meshes, small dense linear algebra and the meshes
+//! sphere Ω, B-spline surfaces and functions ([`bspline`]), closest points on triangle meshes, small dense linear algebra and the meshes
 //! themselves.
 
 pub mod absolute_sphere;
+pub mod bspline;
 pub mod circle;
 pub mod closest;
 pub mod linalg;

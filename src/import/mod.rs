@@ -1,4 +1,6 @@
-//! Mesh import: Wavefront OBJ, glTF 2.0 (`.gltf` with embedded `data:` buffers) and GLB.
+//! Import: meshes from Wavefront OBJ, glTF 2.0 (`.gltf` with embedded `data:` buffers) and GLB,
+//! and B-spline surfaces from the authors' JSON format ([`bspline`]); [`import_file`] takes
+//! either.
 //!
 //! [`import_mesh`] detects the format, parses it into triangles (OBJ polygons are triangulated,
 //! glTF node transforms applied), welds coincident vertices ([`crate::geometry::mesh::weld`]), drops
@@ -6,10 +8,12 @@
 //! starts with the file name and says what to fix; no input can make the importer panic.
 
 mod base64;
+pub mod bspline;
 mod gltf;
 mod obj;
 mod raw;
 
+use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::weld::weld_with_face_map;
 use crate::geometry::mesh::{Face, PolyMesh, TriMesh};
 use crate::geometry::mesh::topology::{MeshStats, Topology};
@@ -27,6 +31,22 @@ pub enum Format {
     Obj,
     Gltf,
     Glb,
+    /// A B-spline surface in the authors' JSON format.
+    BSplineJson,
+}
+
+/// A B-spline surface read from a file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedBSpline {
+    pub surface: BSplineSurface,
+    pub notes: Vec<String>,
+}
+
+/// What a file holds.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ImportedFile {
+    Mesh(Imported),
+    BSpline(ImportedBSpline),
 }
 
 /// A cleaned mesh ready for the pipeline.
@@ -81,12 +101,13 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Option<Format> {
     }
     let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     if text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
-        return Some(Format::Gltf);
+        return Some(if bspline::looks_like_bspline(text) { Format::BSplineJson } else { Format::Gltf });
     }
     match extension(file_name).as_str() {
         "obj" => Some(Format::Obj),
         "gltf" => Some(Format::Gltf),
         "glb" => Some(Format::Glb),
+        "json" => Some(Format::BSplineJson),
         _ => None,
     }
 }
@@ -100,33 +121,55 @@ fn looks_like_obj(bytes: &[u8]) -> bool {
     })
 }
 
+/// Imports a mesh (OBJ, glTF, GLB) or a B-spline surface (JSON) from memory. `file_name` is used
+/// for format detection (after the content) and error messages.
+pub fn import_file(bytes: &[u8], file_name: &str) -> Result<ImportedFile, ImportError> {
+    let ctx = Ctx { file: display_name(file_name) };
+    let format = file_format(bytes, file_name, &ctx)?;
+    if format == Format::BSplineJson {
+        let (surface, notes) = bspline::parse(bytes, &ctx)?;
+        return Ok(ImportedFile::BSpline(ImportedBSpline { surface, notes }));
+    }
+    mesh_of_format(bytes, format, &ctx).map(ImportedFile::Mesh)
+}
+
 /// Imports an OBJ, glTF or GLB file from memory. `file_name` is used for format detection
 /// (after the content) and error messages.
 pub fn import_mesh(bytes: &[u8], file_name: &str) -> Result<Imported, ImportError> {
     let ctx = Ctx { file: display_name(file_name) };
+    let format = file_format(bytes, file_name, &ctx)?;
+    mesh_of_format(bytes, format, &ctx)
+}
+
+/// The format of a non-empty file within the size limit.
+fn file_format(bytes: &[u8], file_name: &str, ctx: &Ctx) -> Result<Format, ImportError> {
     if bytes.len() > MAX_BYTES {
         return Err(ctx.too_large("bytes", bytes.len() as u64, MAX_BYTES));
     }
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(ctx.empty("file is empty"));
     }
-    let format = match detect_format(bytes, file_name) {
-        Some(f) => f,
-        None if looks_like_obj(bytes) => Format::Obj,
+    match detect_format(bytes, file_name) {
+        Some(f) => Ok(f),
+        None if looks_like_obj(bytes) => Ok(Format::Obj),
         None => {
             let ext = extension(file_name);
             let what = if ext.is_empty() { "this file".to_string() } else { format!("'.{ext}' files") };
-            return Err(ctx.unsupported(format!(
-                "cannot import {what}; expected a Wavefront .obj, a glTF 2.0 .gltf or a .glb file"
-            )));
+            Err(ctx.unsupported(format!(
+                "cannot import {what}; expected a Wavefront .obj, a glTF 2.0 .gltf, a .glb or a B-spline surface .json file"
+            )))
         }
-    };
+    }
+}
+
+fn mesh_of_format(bytes: &[u8], format: Format, ctx: &Ctx) -> Result<Imported, ImportError> {
     let raw = match format {
-        Format::Obj => obj::parse(bytes, &ctx)?,
-        Format::Gltf => self::gltf::parse_gltf(bytes, &ctx)?,
-        Format::Glb => self::gltf::parse_glb(bytes, &ctx)?,
+        Format::Obj => obj::parse(bytes, ctx)?,
+        Format::Gltf => self::gltf::parse_gltf(bytes, ctx)?,
+        Format::Glb => self::gltf::parse_glb(bytes, ctx)?,
+        Format::BSplineJson => return Err(ctx.unsupported("this is a B-spline surface, not a mesh")),
     };
-    finish(raw, format, &ctx)
+    finish(raw, format, ctx)
 }
 
 /// Welds, validates and measures a parsed mesh.
