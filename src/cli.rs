@@ -4,28 +4,28 @@ use std::process::ExitCode;
 
 use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::export::ExportFile;
-use spherical_faces::geometry::mesh::Face;
-use spherical_faces::geometry::mesh::topology::Topology;
-use spherical_faces::import::import_mesh;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{ignore, Clock};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON};
+use spherical_faces::samples::Sample;
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
 
 const USAGE: &str = "usage:
-  spherical-faces info <mesh.obj|.gltf|.glb>
-      <mesh> is a file or sample:NAME, a built-in sample (dome, torus, sphere-cap, wave-roof).
-  spherical-faces st-support <mesh> [--optimize-radius] [--depth D] [--axis-length L]
+  spherical-faces info <surface>
+      <surface> is a mesh (.obj, .gltf, .glb), a B-spline surface (.json, the paper authors'
+      format) or sample:NAME, a built-in sample (dome, torus, sphere-cap, wave-roof, vault).
+  spherical-faces st-support <surface> [--optimize-radius] [--depth D] [--axis-length L]
                              [--radius-tolerance T] [--adaptive --epsilon E | --faces N] --out DIR
       ST mesh with support structure (paper Sec. 4). Writes DIR/panels.glb, panels.obj,
       panels.csv, panels.json and report.json. D, L and T are relative to the bbox diagonal
       (defaults 0.02, 0.1, 0.001). --adaptive --epsilon E remeshes first with the sizing field
       of the local spheres orthogonal to Ω (Sec. 3, Fig. 16 bottom; E relative to the diagonal,
       default 0.0004); --faces N remeshes first uniformly to about N faces.
-  spherical-faces st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR
+  spherical-faces st <surface> [--epsilon E | --faces N] [--variant a|b] --out DIR
       Angle-minimizing ST mesh with face size adapted to the surface (paper Sec. 3): remesh
       with the sizing field of tolerance E (relative to the bbox diagonal) or uniformly to
       about N faces, then optimize the face spheres. Same files and report.json schema.";
@@ -61,36 +61,19 @@ fn finish(result: Result<String, String>) -> ExitCode {
     }
 }
 
-/// Reads a mesh the way the app does; the error names the file. `sample:NAME` is a built-in
-/// sample (the app's sample menu: dome, torus, sphere-cap, wave-roof).
-fn read_mesh(path: &str) -> Result<spherical_faces::import::Imported, String> {
+/// Loads a file or a sample the way the app does; the error names the file. `sample:NAME` is a
+/// built-in sample (the app's sample menu).
+fn load(path: &str) -> Result<Loaded, String> {
     if let Some(key) = path.strip_prefix("sample:") {
-        return sample_mesh(key);
+        let sample = Sample::from_key(key).ok_or_else(|| {
+            let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
+            format!("sample:{key}: no such sample (samples: {})", names.join(", "))
+        })?;
+        return Ok(Loaded::from_sample(sample));
     }
     let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
     let name = std::path::Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
-    import_mesh(&bytes, &name).map_err(|e| e.to_string())
-}
-
-/// A built-in sample as if imported.
-fn sample_mesh(key: &str) -> Result<spherical_faces::import::Imported, String> {
-    use spherical_faces::samples::Sample;
-    let sample = Sample::from_key(key).ok_or_else(|| {
-        let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-        format!("sample:{key}: no such sample (samples: {})", names.join(", "))
-    })?;
-    let mesh = sample.mesh();
-    let stats = Topology::new(&mesh).stats(&mesh);
-    Ok(spherical_faces::import::Imported {
-        source_polygons: mesh.face_count(),
-        faces: mesh.triangles.iter().map(|&t| Face::triangle(t)).collect(),
-        mesh,
-        stats,
-        format: spherical_faces::import::Format::Obj,
-        merged_vertices: 0,
-        dropped_faces: 0,
-        notes: Vec::new(),
-    })
+    Loaded::from_file(&bytes, &name).map_err(|e| e.to_string())
 }
 
 /// `st-support <mesh> [options] --out DIR`: writes the panel files and report.json.
@@ -212,25 +195,36 @@ fn face_count(flag: &str, v: Option<&String>) -> Result<usize, String> {
 
 /// The reference surface in a file (or a sample).
 fn read_reference(path: &str) -> Result<Reference, String> {
-    Ok(Reference::new(read_mesh(path)?.surface()))
+    Ok(load(path)?.surface)
 }
 
-/// One JSON object: counts after triangulation and welding, and the jet-fitted mean curvature.
+/// One JSON object: counts after triangulation and welding (of a B-spline: its tessellation),
+/// and the mean curvature (jet-fitted on a mesh, exact on a B-spline, at the vertices); for a
+/// B-spline also its degrees, control grid, domain and the ranges of H and K.
 fn info(path: &str) -> Result<String, String> {
-    let imported = read_mesh(path)?;
-    let topology = Topology::new(&imported.mesh);
-    let field = spherical_faces::congruence::central_spheres::jet_fit(&imported.mesh, &topology, &JetParams::default(), &mut ignore)
-        .map_err(|_| "curvature computation was cancelled".to_string())?;
-    let s = &imported.stats;
+    let loaded = load(path)?;
+    let field = loaded.surface.curvature(&JetParams::default(), &mut ignore).map_err(|_| "curvature computation was cancelled".to_string())?;
+    let s = &loaded.info.stats;
     let c = &field.summary;
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "vertices": s.vertices,
         "faces": s.faces,
         "boundary_loops": s.boundary_loops,
         "non_manifold_edges": s.non_manifold_edges,
-        "bbox_diagonal": imported.mesh.bbox_diagonal(),
+        "bbox_diagonal": loaded.info.bbox_diagonal,
         "mean_curvature": {"min": c.min_h, "max": c.max_h, "mean": c.mean_h},
         "h_changes_sign": c.h_changes_sign,
     });
+    if let Some(b) = &loaded.info.bspline {
+        json["bspline"] = serde_json::json!({
+            "degree": b.degree,
+            "control_points": b.control,
+            "domain": b.domain,
+            "rational": b.rational,
+            "tessellation": b.tessellation,
+            "mean_curvature": {"min": b.mean_curvature[0], "max": b.mean_curvature[1]},
+            "gauss_curvature": {"min": b.gauss_curvature[0], "max": b.gauss_curvature[1]},
+        });
+    }
     Ok(json.to_string())
 }

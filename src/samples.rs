@@ -3,6 +3,8 @@
 //!
 //! Units are metres for the architectural samples.
 
+use crate::geometry::bspline::surface::TESSELLATION_TOLERANCE;
+use crate::geometry::bspline::{BSplineBasis, BSplineSurface};
 use crate::geometry::mesh::TriMesh;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -16,10 +18,12 @@ pub enum Sample {
     TorusPatch,
     SphereCap,
     WaveRoof,
+    /// A B-spline surface: the SQ method's sample.
+    Vault,
 }
 
 impl Sample {
-    pub const ALL: [Sample; 4] = [Sample::Dome, Sample::TorusPatch, Sample::SphereCap, Sample::WaveRoof];
+    pub const ALL: [Sample; 5] = [Sample::Dome, Sample::TorusPatch, Sample::SphereCap, Sample::WaveRoof, Sample::Vault];
 
     /// Stable key for URLs and the CLI.
     pub fn key(self) -> &'static str {
@@ -28,6 +32,7 @@ impl Sample {
             Sample::TorusPatch => "torus",
             Sample::SphereCap => "sphere-cap",
             Sample::WaveRoof => "wave-roof",
+            Sample::Vault => "vault",
         }
     }
 
@@ -41,6 +46,7 @@ impl Sample {
             Sample::TorusPatch => "Curved barrel vault (torus patch)",
             Sample::SphereCap => "Spherical cap",
             Sample::WaveRoof => "Wave roof",
+            Sample::Vault => "Bulging vault (B-spline)",
         }
     }
 
@@ -64,6 +70,20 @@ impl Sample {
                 "A 32 m × 20 m canopy with gentle undulations: the mean curvature changes sign, so \
                  central spheres pass through planes. 1519 vertices, 2880 triangles."
             }
+            Sample::Vault => {
+                "A barrel vault 18 m long, 14 m wide and 5.2 m high at its ends, bulging to 15.9 m wide \
+                 and 5.9 m high at mid-length: a degree-5 B-spline surface with 9 × 8 control points. \
+                 Its mean curvature keeps one sign, so the SQ method (Sec. 5) runs on it. Tessellated \
+                 with 2520 vertices, 4840 triangles."
+            }
+        }
+    }
+
+    /// The B-spline surface of a B-spline sample (the vault); None for the mesh samples.
+    pub fn bspline(self) -> Option<BSplineSurface> {
+        match self {
+            Sample::Vault => Some(vault()),
+            _ => None,
         }
     }
 
@@ -74,8 +94,51 @@ impl Sample {
             Sample::TorusPatch => torus_patch(16.0, 5.0, (-0.7, 0.7), (0.0, PI), 56, 36),
             Sample::SphereCap => sphere_cap(20.0, 12.0, 24),
             Sample::WaveRoof => wave_roof(48, 30),
+            Sample::Vault => {
+                let v = vault();
+                v.tessellate(v.tessellation_segments(TESSELLATION_TOLERANCE)).0.triangulated()
+            }
         }
     }
+}
+
+/// The vault's half-span, height and length, metres, and its bulge at mid-length (relative).
+const VAULT_HALF_SPAN: f64 = 7.0;
+const VAULT_HEIGHT: f64 = 5.5;
+const VAULT_LENGTH: f64 = 18.0;
+const VAULT_BULGE: [f64; 2] = [0.15, 0.15];
+
+/// The vault: degree 5 × 5, 9 control points across (U, a convex arch polygon standing on the
+/// ground) and 8 along (V), the arch scaled by (1 + b sin(π t)) in width and height at t along
+/// the length. Convex arch polygons and a concave scale profile keep both principal curvatures of
+/// one sign (normal S_u × S_v up and outward, H < 0).
+pub fn vault() -> BSplineSurface {
+    const ACROSS: usize = 9;
+    const ALONG: usize = 8;
+    // Unit arch polygon: straight up from the ground, then around a half-ellipse.
+    let arch: Vec<(f64, f64)> = (0..ACROSS)
+        .map(|i| match i {
+            0 => (-1.0, 0.0),
+            1 => (-1.0, 0.35),
+            i if i == ACROSS - 2 => (1.0, 0.35),
+            i if i == ACROSS - 1 => (1.0, 0.0),
+            i => {
+                let t = PI * (i - 1) as f64 / (ACROSS - 3) as f64;
+                (-t.cos(), 0.35 + 0.65 * t.sin())
+            }
+        })
+        .collect();
+    let mut control = Vec::with_capacity(ACROSS * ALONG);
+    for j in 0..ALONG {
+        let t = j as f64 / (ALONG - 1) as f64;
+        let (sx, sz) = (1.0 + VAULT_BULGE[0] * (PI * t).sin(), 1.0 + VAULT_BULGE[1] * (PI * t).sin());
+        for &(x, z) in &arch {
+            control.push(DVec3::new(VAULT_HALF_SPAN * sx * x, VAULT_LENGTH * t, VAULT_HEIGHT * sz * z));
+        }
+    }
+    let u = BSplineBasis::clamped_uniform(5, ACROSS, (0.0, 1.0)).expect("a valid basis");
+    let v = BSplineBasis::clamped_uniform(5, ALONG, (0.0, 1.0)).expect("a valid basis");
+    BSplineSurface::new(u, v, control, vec![1.0; ACROSS * ALONG]).expect("a valid surface")
 }
 
 // --- Architectural samples -------------------------------------------------------------------

@@ -17,7 +17,7 @@ fn fit(mesh: &TriMesh) -> CurvatureField {
 #[test]
 fn keys_round_trip() {
     let mut keys: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-    assert_eq!(keys, ["dome", "torus", "sphere-cap", "wave-roof"]);
+    assert_eq!(keys, ["dome", "torus", "sphere-cap", "wave-roof", "vault"]);
     for s in Sample::ALL {
         assert_eq!(Sample::from_key(s.key()), Some(s));
         assert!(!s.title().is_empty() && !s.description().is_empty());
@@ -25,7 +25,7 @@ fn keys_round_trip() {
         assert_eq!(serde_json::from_str::<Sample>(&json).unwrap(), s);
     }
     keys.dedup();
-    assert_eq!(keys.len(), 4);
+    assert_eq!(keys.len(), 5);
     assert_eq!(Sample::from_key("Dome"), None);
     assert_eq!(Sample::from_key(""), None);
     assert_eq!(Sample::default(), Sample::Dome);

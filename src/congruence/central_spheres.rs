@@ -258,6 +258,24 @@ pub fn jet_fit(
     Ok(CurvatureField { vertices, central_spheres, boundary, planar, summary })
 }
 
+impl CurvatureField {
+    /// The field of curvatures known exactly at the vertices `positions` (a parametric reference
+    /// surface): central spheres, planar flags and summary as [`jet_fit`] makes them.
+    pub fn from_vertex_curvatures(positions: &[DVec3], vertices: Vec<VertexCurvature>, boundary: Vec<bool>, diag: f64) -> Self {
+        let central_spheres = positions
+            .iter()
+            .zip(&vertices)
+            .map(|(&f, c)| {
+                let s = Sphere::from_point_normal_curvature(f, c.normal, c.mean);
+                if s.is_finite() { s } else { Sphere::plane(DVec3::ZERO, c.normal) }
+            })
+            .collect();
+        let planar: Vec<bool> = vertices.iter().map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE).collect();
+        let summary = summarize(&vertices, &vec![false; vertices.len()], &boundary, &planar, diag, 0);
+        Self { vertices, central_spheres, boundary, planar, summary }
+    }
+}
+
 fn summarize(
     vertices: &[VertexCurvature],
     failed: &[bool],

@@ -24,11 +24,11 @@ pub const MAX_CONTROL_POINTS: usize = 1_000_000;
 /// The five keys of the format.
 pub const KEYS: [&str; 5] = ["degreeU", "degreeV", "knotsU", "knotsV", "controlPoints"];
 
-/// Whether JSON text looks like this format (it names its keys).
+/// Whether JSON text looks like this format: it names one of its keys (no glTF key is one).
 pub fn looks_like_bspline(bytes: &[u8]) -> bool {
     let head = &bytes[..bytes.len().min(1 << 20)];
     let has = |key: &str| head.windows(key.len() + 2).any(|w| w[0] == b'"' && &w[1..=key.len()] == key.as_bytes() && w[key.len() + 1] == b'"');
-    has("degreeU") && has("controlPoints")
+    KEYS.iter().any(|k| has(k))
 }
 
 /// Parses a B-spline surface file.

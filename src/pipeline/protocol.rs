@@ -10,6 +10,7 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::fields::{Field, FieldHeader, FieldLengthError, StageProgress};
+use crate::reference::bspline::BSplineInfo;
 use super::stages::{curvature, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::geometry::mesh::topology::MeshStats;
@@ -74,9 +75,13 @@ pub enum ToWorker {
 pub struct ReferenceInfo {
     pub source: Source,
     pub format: Option<Format>,
+    /// Of the mesh (a B-spline's tessellation).
     pub stats: MeshStats,
     pub bbox_diagonal: f64,
     pub notes: Vec<String>,
+    /// Degrees, control grid, domain and curvature ranges of a B-spline reference.
+    #[serde(default)]
+    pub bspline: Option<BSplineInfo>,
 }
 
 /// The summary a finished stage returns (bulk data arrives as snapshot fields).

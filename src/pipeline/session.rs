@@ -8,7 +8,9 @@ use super::sink::Sink;
 use super::stages::{curvature, st_adapted, st_support, StageError};
 use crate::export::ExportFile;
 use crate::geometry::mesh::topology::Topology;
-use crate::import::{import_mesh, Imported};
+use crate::geometry::bspline::BSplineSurface;
+use crate::import::{import_file, Format, ImportError, ImportedFile};
+use crate::reference::bspline::SplineReferenceError;
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::samples::Sample;
@@ -29,31 +31,64 @@ pub struct Loaded {
     pub info: ReferenceInfo,
 }
 
+/// Why a file could not be loaded.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LoadError {
+    Import(ImportError),
+    /// A B-spline surface that cannot be a reference (in file `file`).
+    Spline { file: String, error: SplineReferenceError },
+}
+
+impl std::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LoadError::Import(e) => e.fmt(f),
+            LoadError::Spline { file, error } => write!(f, "{file}: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for LoadError {}
+
 impl Loaded {
     pub fn from_sample(sample: Sample) -> Self {
-        let mesh = sample.mesh();
-        let info = ReferenceInfo {
-            source: Source::Sample(sample),
-            format: None,
-            stats: Topology::new(&mesh).stats(&mesh),
-            bbox_diagonal: mesh.bbox_diagonal(),
-            notes: Vec::new(),
-        };
-        Self { surface: Reference::from_triangles(mesh), info }
+        let source = Source::Sample(sample);
+        match sample.bspline() {
+            Some(s) => Self::of_bspline(source, None, s, Vec::new()).expect("the built-in B-spline samples are regular"),
+            None => Self::of_mesh(source, None, Reference::from_triangles(sample.mesh()), Vec::new()),
+        }
     }
 
-    pub fn from_file(bytes: &[u8], name: &str) -> Result<Self, crate::import::ImportError> {
-        let imported = import_mesh(bytes, name)?;
-        let surface = Reference::new(imported.surface());
-        let Imported { mesh, stats, format, notes, .. } = imported;
+    pub fn from_file(bytes: &[u8], name: &str) -> Result<Self, LoadError> {
+        let source = Source::File(name.to_string());
+        match import_file(bytes, name).map_err(LoadError::Import)? {
+            ImportedFile::Mesh(imported) => {
+                let surface = Reference::new(imported.surface());
+                Ok(Self::of_mesh(source, Some(imported.format), surface, imported.notes))
+            }
+            ImportedFile::BSpline(b) => Self::of_bspline(source, Some(Format::BSplineJson), b.surface, b.notes)
+                .map_err(|error| LoadError::Spline { file: name.rsplit(['/', '\\']).next().unwrap_or(name).to_string(), error }),
+        }
+    }
+
+    fn of_mesh(source: Source, format: Option<Format>, surface: Reference, notes: Vec<String>) -> Self {
+        let mesh = surface.mesh();
         let info = ReferenceInfo {
-            source: Source::File(name.to_string()),
-            format: Some(format),
-            stats,
-            bbox_diagonal: mesh.bbox_diagonal(),
+            source,
+            format,
+            stats: surface.topology().stats(mesh),
+            bbox_diagonal: surface.diagonal(),
             notes,
+            bspline: None,
         };
-        Ok(Self { surface, info })
+        Self { surface, info }
+    }
+
+    fn of_bspline(source: Source, format: Option<Format>, spline: BSplineSurface, notes: Vec<String>) -> Result<Self, SplineReferenceError> {
+        let surface = Reference::from_bspline(spline)?;
+        let mut loaded = Self::of_mesh(source, format, surface, notes);
+        loaded.info.bspline = loaded.surface.spline_reference().map(|s| s.info());
+        Ok(loaded)
     }
 
     /// Positions, triangles, normals and the edges of the faces as loaded, for display.

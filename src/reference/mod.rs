@@ -1,12 +1,14 @@
-//! The reference surface R every method approximates: a mesh today (faces of 3 or 4 corners, as
-//! loaded), triangulated for the algorithms, with its derived quantities computed on first use
-//! and kept (geometry-central's `require` pattern): connectivity, vertex normals, the
-//! closest-point hierarchy and the jet-fitted curvature (one fit per parameter set, so a method
-//! run after the curvature stage fits nothing again).
+//! The reference surface R every method approximates: a mesh (faces of 3 or 4 corners, as
+//! loaded) or a B-spline surface f(u, v) with its tessellation ([`bspline`]), triangulated for
+//! the algorithms, with its derived quantities computed on first use and kept
+//! (geometry-central's `require` pattern): connectivity, vertex normals, the closest-point
+//! hierarchy and the curvature (jet-fitted on a mesh, one fit per parameter set, so a method run
+//! after the curvature stage fits nothing again; exact on a B-spline).
 //!
-//! Queries: [`Reference::closest_point`] gives the closest point, the interpolated normal there
-//! and, for surfaces with a parametrization, its (u, v).
+//! Queries: [`Reference::closest_point`] gives the closest point, the normal there (interpolated
+//! on a mesh, exact on a B-spline) and, on a B-spline, its (u, v).
 
+pub mod bspline;
 pub mod proximity;
 
 use std::cell::{OnceCell, RefCell};
@@ -15,7 +17,9 @@ use std::rc::Rc;
 
 use glam::DVec3;
 
+use self::bspline::{SplineReference, SplineReferenceError};
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
+use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
 use crate::geometry::mesh::{PolyMesh, TriMesh};
 use crate::geometry::mesh::topology::Topology;
@@ -25,12 +29,14 @@ use crate::progress::{Cancelled, OnProgress};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
     pub point: DVec3,
-    /// The unit normal there (barycentric blend of the vertex normals); None where it vanishes.
+    /// The unit normal there (barycentric blend of the vertex normals on a mesh, exact on a
+    /// B-spline); None where it vanishes.
     pub normal: Option<DVec3>,
-    /// The triangle of [`Reference::mesh`] the point lies on, and its barycentric coordinates.
+    /// The triangle of [`Reference::mesh`] the point lies on (nearest to it on a B-spline), and
+    /// its barycentric coordinates.
     pub triangle: usize,
     pub barycentric: [f64; 3],
-    /// Parameter values, for surfaces that have them (a mesh has none).
+    /// Parameter values on a B-spline (a mesh has none).
     pub uv: Option<[f64; 2]>,
 }
 
@@ -63,6 +69,7 @@ pub struct Reference {
     vertex_normals: OnceCell<Vec<DVec3>>,
     bvh: OnceCell<TriangleBvh>,
     curvature: RefCell<Option<(JetParams, Rc<CurvatureField>)>>,
+    spline: Option<SplineReference>,
 }
 
 impl Reference {
@@ -78,6 +85,13 @@ impl Reference {
         Self::with_triangulation(PolyMesh::from(&mesh), mesh)
     }
 
+    /// A B-spline reference with its tessellation ([`SplineReference::new`]).
+    pub fn from_bspline(surface: BSplineSurface) -> Result<Self, SplineReferenceError> {
+        let (spline, tessellation) = SplineReference::new(surface)?;
+        let mesh = tessellation.triangulated();
+        Ok(Self { spline: Some(spline), ..Self::with_triangulation(tessellation, mesh) })
+    }
+
     fn with_triangulation(surface: PolyMesh, mesh: TriMesh) -> Self {
         Self {
             diagonal: mesh.bbox_diagonal(),
@@ -87,7 +101,18 @@ impl Reference {
             vertex_normals: OnceCell::new(),
             bvh: OnceCell::new(),
             curvature: RefCell::new(None),
+            spline: None,
         }
+    }
+
+    /// The B-spline surface, when the reference is one.
+    pub fn spline(&self) -> Option<&BSplineSurface> {
+        self.spline.as_ref().map(|s| &s.surface)
+    }
+
+    /// The B-spline surface with its tessellation's parameters.
+    pub fn spline_reference(&self) -> Option<&SplineReference> {
+        self.spline.as_ref()
     }
 
     /// The surface as loaded (faces of 3 or 4 corners).
@@ -126,7 +151,14 @@ impl Reference {
         if let Some(field) = self.cached_curvature(params) {
             return Ok(field);
         }
-        let field = Rc::new(jet_fit(&self.mesh, self.topology(), params, progress)?);
+        let field = Rc::new(match &self.spline {
+            Some(spline) => {
+                let topology = self.topology();
+                let boundary = (0..self.mesh.vertex_count()).map(|v| topology.is_boundary_vertex(v)).collect();
+                spline.curvature(&self.mesh.positions, boundary, self.diagonal)
+            }
+            None => jet_fit(&self.mesh, self.topology(), params, progress)?,
+        });
         *self.curvature.borrow_mut() = Some((params.clone(), field.clone()));
         Ok(field)
     }
@@ -153,7 +185,7 @@ impl Reference {
 
     /// The closest point of the surface to `p` (None for an empty surface).
     pub fn closest_point(&self, p: DVec3) -> Option<SurfacePoint> {
-        self.bvh().closest_point(p).map(|hit| self.surface_point(hit))
+        self.bvh().closest_point(p).map(|hit| self.surface_point_of(p, hit))
     }
 
     /// [`Self::closest_point`], searched only within the distance from `p` to `previous` (a point
@@ -165,7 +197,18 @@ impl Reference {
         previous
             .and_then(|q| bvh.closest_point_within(p, p.distance(q) * (1.0 + 1e-9) + 1e-300))
             .or_else(|| bvh.closest_point(p))
-            .map(|hit| self.surface_point(hit))
+            .map(|hit| self.surface_point_of(p, hit))
+    }
+
+    /// [`Self::closest_point`] on the B-spline, started from a hit on the tessellation (the
+    /// point `p` it was the closest to).
+    fn surface_point_of(&self, p: DVec3, hit: ClosestHit) -> SurfacePoint {
+        let Some(spline) = &self.spline else { return self.surface_point(hit) };
+        let t = self.mesh.triangles[hit.triangle];
+        let w = hit.barycentric;
+        let start = [0, 1].map(|k| (0..3).map(|c| w[c] * spline.uv[t[c] as usize][k]).sum::<f64>());
+        let (uv, point, normal) = spline.closest_point(p, start);
+        SurfacePoint { point, normal, triangle: hit.triangle, barycentric: w, uv: Some(uv) }
     }
 
     fn surface_point(&self, hit: ClosestHit) -> SurfacePoint {
@@ -182,6 +225,7 @@ impl Reference {
         let inv = 1.0 / s;
         let mesh = TriMesh::new(self.mesh.positions.iter().map(|&p| (p - t) * inv).collect(), self.mesh.triangles.clone());
         let surface = PolyMesh::new(mesh.positions.clone(), self.surface.faces.clone());
-        Self::with_triangulation(surface, mesh)
+        let spline = self.spline.as_ref().map(|sp| SplineReference { surface: sp.surface.in_frame(t, s), ..sp.clone() });
+        Self { spline, ..Self::with_triangulation(surface, mesh) }
     }
 }

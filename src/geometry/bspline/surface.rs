@@ -15,6 +15,16 @@ use std::fmt;
 use glam::DVec3;
 
 use super::basis::{BSplineBasis, BasisValues};
+use crate::geometry::mesh::{bbox_diagonal, Face, PolyMesh};
+
+/// Largest chord deviation of a reference's tessellation, relative to the bounding-box diagonal
+/// of the control net ([`BSplineSurface::tessellation_segments`]).
+pub const TESSELLATION_TOLERANCE: f64 = 5e-4;
+/// Segments per parameter direction of a tessellation, at least and at most.
+pub const MIN_SEGMENTS: usize = 8;
+/// A tessellation's edges are at most this fraction of the diagonal long.
+pub const EDGES_PER_DIAGONAL: f64 = 60.0;
+pub const MAX_SEGMENTS: usize = 160;
 
 /// Why control points cannot make a surface with the given bases.
 #[derive(Clone, Debug, PartialEq)]
@@ -186,6 +196,67 @@ impl BSplineSurface {
     /// The differential geometry at (u, v); None where S_u × S_v vanishes.
     pub fn frame(&self, u: f64, v: f64) -> Option<SurfaceFrame> {
         self.derivatives(u, v).frame()
+    }
+
+    /// A uniform grid of `segments` in (u, v): quads (i, j), (i+1, j), (i+1, j+1), (i, j+1)
+    /// (counter-clockwise about S_u × S_v; vertex i + (s_u + 1) j), and every vertex's (u, v).
+    pub fn tessellate(&self, [su, sv]: [usize; 2]) -> (PolyMesh, Vec<[f64; 2]>) {
+        let ((u0, u1), (v0, v1)) = self.domain();
+        let param = |a: f64, b: f64, k: usize, n: usize| if k == n { b } else { a + (b - a) * k as f64 / n as f64 };
+        let uv: Vec<[f64; 2]> = (0..=sv).flat_map(|j| (0..=su).map(move |i| [param(u0, u1, i, su), param(v0, v1, j, sv)])).collect();
+        let positions = uv.iter().map(|p| self.point(p[0], p[1])).collect();
+        let id = |i: usize, j: usize| (i + (su + 1) * j) as u32;
+        let faces = (0..sv).flat_map(|j| (0..su).map(move |i| Face::quad([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))).collect();
+        (PolyMesh::new(positions, faces), uv)
+    }
+
+    /// Segments per direction for chords within `tolerance` × d of the surface (d: the control
+    /// net's bounding-box diagonal): along every parameter line of a coarse sample grid, Σ over
+    /// its cells of length · √(|κ| / (8 τ)) (a chord of length h on a curve of curvature κ
+    /// deviates by about κh²/8 ≤ τ), the largest over the lines. Edges then get one length h
+    /// in both directions, the smaller of the two so found and d / [`EDGES_PER_DIAGONAL`], within
+    /// [`MIN_SEGMENTS`]..=[`MAX_SEGMENTS`] segments per direction.
+    pub fn tessellation_segments(&self, tolerance: f64) -> [usize; 2] {
+        let diag = bbox_diagonal(&self.control).max(f64::MIN_POSITIVE);
+        let tol = tolerance * diag;
+        let ((u0, u1), (v0, v1)) = self.domain();
+        let (nu, nv) = ((4 * self.u.count()).clamp(16, 64), (4 * self.v.count()).clamp(16, 64));
+        let mut samples = Vec::with_capacity((nu + 1) * (nv + 1));
+        for j in 0..=nv {
+            for i in 0..=nu {
+                let d = self.derivatives(u0 + (u1 - u0) * i as f64 / nu as f64, v0 + (v1 - v0) * j as f64 / nv as f64);
+                // Normal curvatures along S_u and S_v: L/E and N/G.
+                let (ku, kv) = match d.normal() {
+                    Some(n) => (d.suu.dot(n) / d.su.length_squared(), d.svv.dot(n) / d.sv.length_squared()),
+                    None => (0.0, 0.0),
+                };
+                samples.push((d.s, ku.abs(), kv.abs()));
+            }
+        }
+        let at = |i: usize, j: usize| samples[i + (nu + 1) * j];
+        let need = |len: f64, k: f64| if k.is_finite() { len * (k / (8.0 * tol)).sqrt() } else { 0.0 };
+        // (segments for the sagitta, length) of the longest-needing and of the longest line.
+        let fold = |lines: Vec<(f64, f64)>| lines.into_iter().fold((0.0f64, 0.0f64), |a, l| (a.0.max(l.0), a.1.max(l.1)));
+        let (need_u, len_u) = fold(
+            (0..=nv)
+                .map(|j| (0..nu).fold((0.0, 0.0), |a, i| {
+                    let l = at(i, j).0.distance(at(i + 1, j).0);
+                    (a.0 + need(l, at(i, j).1.max(at(i + 1, j).1)), a.1 + l)
+                }))
+                .collect(),
+        );
+        let (need_v, len_v) = fold(
+            (0..=nu)
+                .map(|i| (0..nv).fold((0.0, 0.0), |a, j| {
+                    let l = at(i, j).0.distance(at(i, j + 1).0);
+                    (a.0 + need(l, at(i, j).2.max(at(i, j + 1).2)), a.1 + l)
+                }))
+                .collect(),
+        );
+        let h = [len_u / need_u.max(1.0), len_v / need_v.max(1.0), diag / EDGES_PER_DIAGONAL].into_iter().fold(f64::INFINITY, f64::min);
+        let (along_u, along_v) = (len_u / h, len_v / h);
+        let clamp = |x: f64| if x.is_finite() { (x.ceil() as usize).clamp(MIN_SEGMENTS, MAX_SEGMENTS) } else { MAX_SEGMENTS };
+        [clamp(along_u), clamp(along_v)]
     }
 }
 
