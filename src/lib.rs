@@ -29,6 +29,8 @@ pub mod panels;
 pub mod st_adapted;
 /// Sec. 4: ST meshes with support structure.
 pub mod st_support;
+/// Sec. 5: SQ meshes with support structure (the congruence and its torsal directions).
+pub mod sq;
 /// Writers: GLB, OBJ, the panel schedule and the typed report.
 pub mod export;
 /// The session, its stages and the typed worker protocol.

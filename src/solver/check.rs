@@ -73,6 +73,16 @@ pub fn check_jacobian_report(term: &dyn Term, x: &[f64], h: f64) -> JacobianChec
     best
 }
 
+/// The residuals of a term at `x` (inactive ones 0; no `prepare`).
+pub fn residuals(term: &dyn Term, x: &[f64]) -> Vec<f64> {
+    let m = term.residual_count();
+    let mut r = vec![0.0; m];
+    let mut active = vec![true; m];
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    eval_term(term, x, &mut r, &mut active, &mut rows, &mut cols, &mut vals, 0);
+    r
+}
+
 /// The analytic and the central-difference Jacobian of a term at `x`, dense and column-major
 /// (entry (i, j) at `j * m + i`, m = `term.residual_count()`). With `moving`, the term is
 /// prepared at every perturbed point (its targets move with the variables, as between two

@@ -35,13 +35,13 @@ pub mod ordering;
 pub mod problem;
 pub mod terms;
 
-pub use check::{check_jacobian, check_jacobian_report, jacobians, JacobianCheck};
+pub use check::{check_jacobian, check_jacobian_report, jacobians, residuals, JacobianCheck};
 pub use ordering::Ordering;
 pub use lm::{
     IterationReport, PhaseTimes, SolveReport, Solver, SolverOptions, TermStats, Termination,
 };
 pub use terms::{
     Anchor, FnTerm, Hinge, InversiveProduct, InversiveProductFixed, Linear, PointOnPlane,
-    PointOnSphere, SphereFit, UnitLength,
+    PointOnSphere, Proximal, SphereFit, UnitLength,
 };
 pub use problem::{JacobianSink, Problem, Term, TermId};

@@ -153,6 +153,47 @@ impl Term for Anchor {
 
 // ---------------------------------------------------------------------------------------------
 
+/// The regularizer E_reg of Tang et al. 2014: x_i − x_i⁰ for the listed variables, with x⁰ the
+/// point the solver evaluates (set in [`Term::prepare`]). Its residuals are zero and its Jacobian
+/// rows are the identity, so it damps those variables in every step (weight w adds w·I to their
+/// block of the normal equations) without changing the energy.
+#[derive(Clone, Debug)]
+pub struct Proximal {
+    name: String,
+    indices: Vec<usize>,
+    at: Vec<f64>,
+}
+named!(Proximal);
+
+impl Proximal {
+    pub fn new(indices: Vec<usize>) -> Self {
+        let at = vec![0.0; indices.len()];
+        Self { name: "regularization".into(), indices, at }
+    }
+}
+
+impl Term for Proximal {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        self.indices.len()
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        for (a, &i) in self.at.iter_mut().zip(&self.indices) {
+            *a = x[i];
+        }
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &i) in self.indices.iter().enumerate() {
+            r[k] = x[i] - self.at[k];
+            jac.add(k, i, 1.0);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
 /// One-sided wrapper: residual max(0, g) for every residual g of the inner term; residuals with
 /// g ≤ 0 are switched off (zero residual, Jacobian row ignored). Use it for inequalities
 /// g(x) ≤ 0. A NaN g stays active (so the solver rejects the point).

@@ -1,0 +1,132 @@
+//! The parameters of the SQ method (Sec. 5) with their defaults, written once: Tables 1 and 2 for
+//! the weights, the authors' radius basis for Eq. 8.
+
+use serde::{Deserialize, Serialize};
+
+/// How an inequality (∠(l, n) ≤ θ, torsal planes meeting at ≥ α) enters the energy. Measured on
+/// `tunnel_arch` and the vault (θ 20°, α 75°): with slacks, step 1 stalls at E_LC ≈ 4e-5 per term
+/// (the slacks stick at 0, as the authors found); with hinges it reaches 1e-30.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Inequality {
+    /// One-sided residual max(0, g), as the authors' later code does.
+    #[default]
+    Hinge,
+    /// The paper's dummy variable: g + μ² (a residual, μ a variable).
+    Slack,
+}
+
+/// The radius function's basis (Eq. 8): clamped, uniform, `controls` × `controls` coefficients.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RadiusBasis {
+    pub degree: usize,
+    pub controls: usize,
+}
+
+impl Default for RadiusBasis {
+    /// The authors' code: degree 5, 6 × 6 coefficients.
+    fn default() -> Self {
+        Self { degree: 5, controls: 6 }
+    }
+}
+
+/// Weights of the line-congruence step (Sec. 5.1, Table 1).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct LineCongruenceWeights {
+    pub lc: f64,
+    pub lc_orth: f64,
+    /// |l| = 1.
+    pub unit: f64,
+}
+
+impl Default for LineCongruenceWeights {
+    fn default() -> Self {
+        Self { lc: 1.0, lc_orth: 2.0, unit: 1.0 }
+    }
+}
+
+/// Weights of the torsal step (Sec. 5.1, Table 2, except w_LC_orth: with Table 2's 0.01 the
+/// lines of `tunnel_arch` leave the θ cone by 0.6°–1.6° during the torsal step; 1 keeps them in).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TorsalWeights {
+    pub lc: f64,
+    pub lc_orth: f64,
+    pub torsal: f64,
+    pub angle: f64,
+    pub fair: f64,
+    pub reg: f64,
+    /// |l| = 1, |t| = 1 and |n*| = 1.
+    pub unit: f64,
+}
+
+impl Default for TorsalWeights {
+    fn default() -> Self {
+        Self { lc: 1.0, lc_orth: 1.0, torsal: 1.0, angle: 2.0, fair: 0.1, reg: 0.05, unit: 1.0 }
+    }
+}
+
+/// The SQ method's parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SqParams {
+    /// Grid points per parameter direction of the sampling grid G.
+    pub grid: usize,
+    /// Largest angle between a line of the congruence and the surface normal (degrees).
+    pub theta_deg: f64,
+    /// Smallest angle between the two torsal planes (degrees).
+    pub alpha_deg: f64,
+    /// The optimization aims at θ − margins[0] and α + margins[1] (degrees): the soft terms
+    /// (w_angle = 0 in the final iterations) let the result drift back by about that much, and θ
+    /// and α are to be met.
+    pub margins_deg: [f64; 2],
+    pub radius_basis: RadiusBasis,
+    pub inequality: Inequality,
+    /// Iterations of the line-congruence step (at most; it stops when converged).
+    pub lc_iterations: usize,
+    pub lc_weights: LineCongruenceWeights,
+    /// Iterations of the torsal step.
+    pub torsal_iterations: usize,
+    /// RS: the torsal directions and plane normals are recomputed every this many iterations.
+    pub recompute_every: usize,
+    /// The last iterations run with w_angle = w_fair = 0.
+    pub final_iterations: usize,
+    pub torsal_weights: TorsalWeights,
+}
+
+impl Default for SqParams {
+    fn default() -> Self {
+        Self {
+            grid: 20,
+            theta_deg: 20.0,
+            alpha_deg: 75.0,
+            margins_deg: [1.0, 3.0],
+            radius_basis: RadiusBasis::default(),
+            inequality: Inequality::default(),
+            lc_iterations: 100,
+            lc_weights: LineCongruenceWeights::default(),
+            torsal_iterations: 100,
+            recompute_every: 10,
+            final_iterations: 10,
+            torsal_weights: TorsalWeights::default(),
+        }
+    }
+}
+
+impl SqParams {
+    /// The angle the line-normal term aims at: θ − margins[0] (at least half of θ).
+    pub fn target_theta_deg(&self) -> f64 {
+        (self.theta_deg - self.margins_deg[0]).max(0.5 * self.theta_deg)
+    }
+
+    /// The angle the torsal-angle term aims at: α + margins[1] (at most 90°).
+    pub fn target_alpha_deg(&self) -> f64 {
+        (self.alpha_deg + self.margins_deg[1]).min(90.0)
+    }
+}
+
+/// The accepted ranges, for the CLI, the design link and the app.
+pub const GRID_RANGE: (usize, usize) = (4, 100);
+pub const THETA_RANGE: (f64, f64) = (1.0, 89.0);
+pub const ALPHA_RANGE: (f64, f64) = (1.0, 90.0);
+pub const RECOMPUTE_RANGE: (usize, usize) = (1, 1000);

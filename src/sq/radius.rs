@@ -1,0 +1,167 @@
+//! The sampling grid G, the mean-curvature check of Sec. 6.3, and the radius function of Eq. 8.
+//!
+//! - **G**: n × n parameters, uniform over the domain with both ends; point (i, j) (i along U) at
+//!   i + n j; quad (i, j) has corners (i, j), (i+1, j), (i+1, j+1), (i, j+1).
+//! - **Sign of H** (Sec. 6.3: the method is limited to shapes without a sign change of the mean
+//!   curvature, since it starts from the central spheres, whose radius 1/H is unbounded where
+//!   H = 0). H is sampled on a fine grid of cell midpoints (area-weighted shares of each sign) and
+//!   on G. A wrong sign or |H| · diag < [`MIN_MEAN_CURVATURE`] inside the strip between the
+//!   boundary and G's second row is a warning (CAD surfaces often curl at their edges), and those
+//!   grid points are left out of the fit; anywhere else it is a refusal.
+//! - **Radius**: r_ij = 1/H at the points of G, fitted by least squares with a clamped uniform
+//!   B-spline basis ([`crate::sq::params::RadiusBasis`]; Eq. 8 puts r on f's basis, which would
+//!   have as many coefficients as G has points; the authors' code fits 36).
+
+// Negated float comparisons are deliberate: they also reject NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use crate::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame};
+use crate::sq::params::RadiusBasis;
+
+use super::SqError;
+
+/// Smallest |H| · diag accepted at a point of G.
+pub const MIN_MEAN_CURVATURE: f64 = 1e-2;
+/// Cells per direction of the fine grid that measures the sign of H.
+pub const SIGN_GRID: usize = 200;
+
+/// The sampling grid G with the surface's frames.
+#[derive(Clone, Debug)]
+pub struct SamplingGrid {
+    pub n: usize,
+    pub uv: Vec<[f64; 2]>,
+    pub frames: Vec<SurfaceFrame>,
+}
+
+impl SamplingGrid {
+    pub fn new(surface: &BSplineSurface, n: usize) -> Result<Self, SqError> {
+        let ((u0, u1), (v0, v1)) = surface.domain();
+        let at = |a: f64, b: f64, k: usize| if k + 1 == n { b } else { a + (b - a) * k as f64 / (n - 1) as f64 };
+        let uv: Vec<[f64; 2]> = (0..n).flat_map(|j| (0..n).map(move |i| [at(u0, u1, i), at(v0, v1, j)])).collect();
+        let frames = uv
+            .iter()
+            .map(|p| surface.frame(p[0], p[1]).ok_or(SqError::Singular { uv: *p }))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self { n, uv, frames })
+    }
+
+    pub fn point_count(&self) -> usize {
+        self.n * self.n
+    }
+
+    pub fn quad_count(&self) -> usize {
+        (self.n - 1) * (self.n - 1)
+    }
+
+    /// The corners of quad q = i + (n − 1) j.
+    pub fn quad(&self, q: usize) -> [usize; 4] {
+        let (i, j, n) = (q % (self.n - 1), q / (self.n - 1), self.n);
+        [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)]
+    }
+
+    /// Whether point p lies on G's outer ring.
+    pub fn on_boundary(&self, p: usize) -> bool {
+        let (i, j) = (p % self.n, p / self.n);
+        i == 0 || j == 0 || i + 1 == self.n || j + 1 == self.n
+    }
+}
+
+/// How the mean curvature's sign looks over the surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeanCurvatureSigns {
+    /// Area shares of H > 0 and H < 0 (fine grid).
+    pub positive_share: f64,
+    pub negative_share: f64,
+    /// +1 or −1: the sign over most of the area.
+    pub sign: f64,
+    /// Points of G with the other sign or |H| · diag < [`MIN_MEAN_CURVATURE`] (left out of the
+    /// fit; all in the boundary strip, else the check refuses).
+    pub excluded: Vec<usize>,
+    /// A warning when H turns in the boundary strip.
+    pub warning: Option<String>,
+}
+
+/// The sign check of the module docs; `diag` is the bounding-box diagonal.
+pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64) -> Result<MeanCurvatureSigns, SqError> {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let n = grid.n;
+    // The strip between the boundary and G's second row, in parameters.
+    let (su, sv) = ((u1 - u0) / (n - 1) as f64, (v1 - v0) / (n - 1) as f64);
+    let in_strip = |u: f64, v: f64| u < u0 + su || u > u1 - su || v < v0 + sv || v > v1 - sv;
+    let (mut pos, mut neg) = (0.0, 0.0);
+    let mut cells = Vec::with_capacity(SIGN_GRID * SIGN_GRID);
+    for j in 0..SIGN_GRID {
+        for i in 0..SIGN_GRID {
+            let (u, v) = (u0 + (u1 - u0) * (i as f64 + 0.5) / SIGN_GRID as f64, v0 + (v1 - v0) * (j as f64 + 0.5) / SIGN_GRID as f64);
+            let d = surface.derivatives(u, v);
+            let area = d.su.cross(d.sv).length();
+            let h = d.frame().map_or(0.0, |f| f.mean);
+            if h > 0.0 {
+                pos += area;
+            } else if h < 0.0 {
+                neg += area;
+            }
+            cells.push((u, v, h));
+        }
+    }
+    let total = (pos + neg).max(f64::MIN_POSITIVE);
+    let (positive_share, negative_share) = (pos / total, neg / total);
+    let sign = if pos >= neg { 1.0 } else { -1.0 };
+    let wrong = |h: f64| !(h * sign * diag >= MIN_MEAN_CURVATURE);
+    let flipped_inside = cells.iter().any(|&(u, v, h)| h * sign < 0.0 && !in_strip(u, v));
+    if flipped_inside {
+        return Err(SqError::MeanCurvatureSignChange { positive_share, negative_share });
+    }
+    let mut excluded = Vec::new();
+    for (p, f) in grid.frames.iter().enumerate() {
+        if wrong(f.mean) {
+            let uv = grid.uv[p];
+            if !in_strip(uv[0], uv[1]) {
+                return Err(if f.mean * sign < 0.0 {
+                    SqError::MeanCurvatureSignChange { positive_share, negative_share }
+                } else {
+                    SqError::MeanCurvatureNearZero { uv, h_diag: f.mean * diag }
+                });
+            }
+            excluded.push(p);
+        }
+    }
+    if excluded.len() == grid.point_count() {
+        return Err(SqError::MeanCurvatureSignChange { positive_share, negative_share });
+    }
+    let strip_flips = cells.iter().any(|&(_, _, h)| h * sign < 0.0) || !excluded.is_empty();
+    let warning = strip_flips.then(|| {
+        format!(
+            "the mean curvature turns near the boundary (H {} 0 on {:.2} % of the area, within one grid row of the edge); \
+             {} of the {} grid points there are left out of the radius fit",
+            if sign > 0.0 { "<" } else { ">" },
+            100.0 * if sign > 0.0 { negative_share } else { positive_share },
+            excluded.len(),
+            grid.point_count()
+        )
+    });
+    Ok(MeanCurvatureSigns { positive_share, negative_share, sign, excluded, warning })
+}
+
+/// The fitted radius function and how well it matches r = 1/H on G.
+#[derive(Clone, Debug)]
+pub struct RadiusFit {
+    pub function: BSplineFunction,
+    pub error: FitError,
+    /// `error.max` divided by the mean |r| of the samples.
+    pub relative_error: f64,
+    /// Samples used (G's points minus the excluded ones).
+    pub samples: usize,
+}
+
+/// Fits r = 1/H over G (minus `excluded`) with the basis `basis` on the surface's domain.
+pub fn fit_radius(surface: &BSplineSurface, grid: &SamplingGrid, basis: RadiusBasis, excluded: &[usize]) -> Result<RadiusFit, SqError> {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let make = |lo: f64, hi: f64| BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi)).map_err(|e| SqError::RadiusBasis(e.to_string()));
+    let (bu, bv) = (make(u0, u1)?, make(v0, v1)?);
+    let samples: Vec<([f64; 2], f64)> =
+        (0..grid.point_count()).filter(|p| !excluded.contains(p)).map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean)).collect();
+    let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit { samples: samples.len(), coefficients: basis.controls * basis.controls })?;
+    let mean = samples.iter().map(|s| s.1.abs()).sum::<f64>() / samples.len() as f64;
+    Ok(RadiusFit { function, error, relative_error: error.max / mean, samples: samples.len() })
+}
