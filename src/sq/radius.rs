@@ -18,7 +18,7 @@
 use crate::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame};
 use crate::sq::params::RadiusBasis;
 
-use super::SqError;
+use super::error::SqError;
 
 /// Smallest |H| · diag accepted at a point of G.
 pub const MIN_MEAN_CURVATURE: f64 = 1e-2;
