@@ -167,6 +167,16 @@ pub struct PhaseTimes {
     pub factorize_solve: f64,
 }
 
+impl PhaseTimes {
+    /// Adds another call's times.
+    pub fn add(&mut self, other: &PhaseTimes) {
+        self.symbolic += other.symbolic;
+        self.evaluate += other.evaluate;
+        self.assemble += other.assemble;
+        self.factorize_solve += other.factorize_solve;
+    }
+}
+
 /// Levenberg–Marquardt in the regularized guided-projection form of Tang et al. 2014.
 ///
 /// Each iteration solves `(JᵀWJ + ε²I) Δ = −JᵀW r` over the free variables with a sparse

@@ -21,12 +21,12 @@ use crate::congruence::torsal::{quadratic_roots, torsal_quadratic};
 use crate::geometry::bspline::{BSplineFunction, FunctionRow};
 use crate::progress::Clock;
 use crate::solver::terms::v3;
-use crate::solver::{Hinge, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength};
+use crate::solver::{Hinge, PhaseTimes, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength};
 
 use super::params::{Inequality, SqParams};
 use super::radius::SamplingGrid;
 use super::terms::{line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalPlane};
-use super::SqError;
+use super::error::SqError;
 
 /// The two steps, as reported to the hook.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,6 +54,8 @@ pub struct StepOutcome {
     pub iterations: usize,
     /// Per-iteration times (ms) with a clock.
     pub iteration_ms: Vec<f64>,
+    /// Where the time went (with a clock).
+    pub phase_ms: PhaseTimes,
     pub cancelled: bool,
 }
 
@@ -191,6 +193,7 @@ impl CongruenceProblem {
         StepOutcome {
             iterations: report.iterations,
             iteration_ms: report.iteration_ms,
+            phase_ms: report.phase_ms,
             cancelled: report.termination == crate::solver::Termination::Cancelled,
         }
     }
@@ -308,6 +311,7 @@ impl CongruenceProblem {
             let offset = done;
             let report = solver.solve(&mut problem, x, |it| hook(SqStep::Torsal, offset + it.iteration, it.terms, it.x));
             outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
+            outcome.phase_ms.add(&report.phase_ms);
             if report.termination == crate::solver::Termination::Cancelled {
                 outcome.iterations = done + report.iterations;
                 outcome.cancelled = true;

@@ -59,11 +59,7 @@ pub fn run_stages(
         run.iterations += report.iterations;
         run.iteration_ms.extend_from_slice(&report.iteration_ms);
         run.numeric_factorizations += report.numeric_factorizations;
-        let p = &report.phase_ms;
-        run.phase_ms.symbolic += p.symbolic;
-        run.phase_ms.evaluate += p.evaluate;
-        run.phase_ms.assemble += p.assemble;
-        run.phase_ms.factorize_solve += p.factorize_solve;
+        run.phase_ms.add(&report.phase_ms);
         epsilon = report.epsilon.max(1e-6);
         let cancelled = report.termination == Termination::Cancelled;
         run.last = Some(report);
