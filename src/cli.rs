@@ -11,6 +11,7 @@ use spherical_faces::progress::{ignore, Clock};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON};
 use spherical_faces::samples::Sample;
+use spherical_faces::sq::params::{SqParams, ALPHA_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
 
@@ -28,7 +29,15 @@ const USAGE: &str = "usage:
   spherical-faces st <surface> [--epsilon E | --faces N] [--variant a|b] --out DIR
       Angle-minimizing ST mesh with face size adapted to the surface (paper Sec. 3): remesh
       with the sizing field of tolerance E (relative to the bbox diagonal) or uniformly to
-      about N faces, then optimize the face spheres. Same files and report.json schema.";
+      about N faces, then optimize the face spheres. Same files and report.json schema.
+  spherical-faces sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K]
+                     [--until congruence] --out DIR
+      SQ mesh with support structure (paper Sec. 5), up to the torsal cross field (Sec. 5.1):
+      fit the radius function on an N × N grid (default 20), optimize the line congruence to
+      within θ of the normals (default 20°) and its torsal planes to meet at ≥ α (default 75°),
+      recomputing the torsal directions every K iterations (default 10). Writes
+      DIR/congruence.json, congruence.glb and report.json. This version stops after the
+      congruence stage (quad remeshing and the final optimization follow).";
 
 pub fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -36,6 +45,7 @@ pub fn main() -> ExitCode {
         Some("info") if args.len() == 2 => finish(info(&args[1])),
         Some("st-support") => finish(st_support_command(&args[1..])),
         Some("st") => finish(st_command(&args[1..])),
+        Some("sq") => finish(sq_command(&args[1..])),
         Some("-h" | "--help" | "help") => {
             println!("{USAGE}");
             ExitCode::SUCCESS
@@ -169,6 +179,63 @@ fn st_command(args: &[String]) -> Result<String, String> {
         result.metrics.max_kink_angle_deg,
         result.metrics.max_distance_to_reference
     ))
+}
+
+/// `sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K] [--until congruence] --out DIR`.
+fn sq_command(args: &[String]) -> Result<String, String> {
+    let mut params = SqParams::default();
+    let (mut path, mut out) = (None, None);
+    let mut it = args.iter();
+    let number = |flag: &str, v: Option<&String>, (lo, hi): (f64, f64)| -> Result<f64, String> {
+        let v = v.ok_or(format!("{flag} needs a value"))?;
+        v.parse::<f64>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a number in [{lo}, {hi}]"))
+    };
+    let whole = |flag: &str, v: Option<&String>, (lo, hi): (usize, usize)| -> Result<usize, String> {
+        let v = v.ok_or(format!("{flag} needs a value"))?;
+        v.parse::<usize>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a whole number in [{lo}, {hi}]"))
+    };
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--theta" => params.theta_deg = number(a, it.next(), THETA_RANGE)?,
+            "--alpha" => params.alpha_deg = number(a, it.next(), ALPHA_RANGE)?,
+            "--grid" => params.grid = whole(a, it.next(), GRID_RANGE)?,
+            "--rs" => params.recompute_every = whole(a, it.next(), RECOMPUTE_RANGE)?,
+            "--until" => match it.next().map(String::as_str) {
+                Some(stages::sq::STOPS_AFTER) => {}
+                Some(v) => return Err(format!("--until {v}: this version computes up to the congruence stage (--until congruence)")),
+                None => return Err("--until needs a stage (congruence)".into()),
+            },
+            "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
+            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
+            s if path.is_none() => path = Some(s.to_string()),
+            s => return Err(format!("unexpected argument {s}")),
+        }
+    }
+    let path = path.ok_or("sq needs a B-spline surface (.json) or sample:vault")?;
+    let out = std::path::PathBuf::from(out.ok_or("sq needs --out DIR")?);
+    let reference = read_reference(&path)?;
+    let clock = Clock::native();
+    let result = spherical_faces::sq::compute(&reference, &params, clock, &mut |_| Ok(())).map_err(|e| format!("{path}: {e}"))?;
+    let segments = spherical_faces::export::congruence::CongruenceSegments::of(&result);
+    let (report, files) = stages::sq::export(&reference, &result, &params, &segments);
+    write_files(&out, &files)?;
+    let m = &report.metrics;
+    let mut text = format!(
+        "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, α = {}°; \
+         {} quads without real torsal directions; E_LC per term {:.2e}). SQ stops after the congruence stage in this version.",
+        out.display(),
+        m.max_line_normal_angle_deg.unwrap_or(f64::NAN),
+        params.theta_deg,
+        m.min_torsal_plane_angle_deg.unwrap_or(f64::NAN),
+        params.alpha_deg,
+        m.quads_without_real_torsal_directions.unwrap_or(0),
+        m.lc_residual.unwrap_or(f64::NAN),
+        n = params.grid,
+    );
+    for w in &report.warnings {
+        text += &format!("\nwarning: {w}");
+    }
+    Ok(text)
 }
 
 /// Writes `files` into `dir` (created if missing).

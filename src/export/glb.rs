@@ -22,6 +22,7 @@ use serde_json::{json, Map, Value};
 use crate::congruence::support_structure::SupportGeometry;
 use crate::panels::panel::Panel;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::geometry::mesh::TriMesh;
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -125,6 +126,39 @@ fn panel_extras(p: &Panel) -> Value {
     })
 }
 
+/// Named line segments of a GLB (a LINES primitive in one colour).
+pub struct LineSet<'a> {
+    pub name: &'a str,
+    pub color: [f32; 4],
+    pub segments: &'a [(DVec3, DVec3)],
+}
+
+/// Writes a GLB of a surface (node `surface`: triangles with vertex normals) and line sets (one
+/// node each, named by the set; empty sets are left out); `extras` goes to `asset.extras`.
+pub fn write_lines_glb(surface: &TriMesh, line_sets: &[LineSet], extras: Value) -> Vec<u8> {
+    let mut b = Builder { views: Vec::new(), accessors: Vec::new() };
+    let (mut meshes, mut materials, mut nodes) = (Vec::new(), Vec::new(), Vec::new());
+    if !surface.triangles.is_empty() {
+        let (vp, vn, vi) = (b.view(Some(12), ARRAY_BUFFER), b.view(Some(12), ARRAY_BUFFER), b.view(None, ELEMENT_ARRAY_BUFFER));
+        let pos = b.vec3(vp, surface.positions.iter().copied(), true);
+        let nrm = b.vec3(vn, surface.vertex_normals().into_iter(), false);
+        let idx = b.indices(vi, &surface.triangles);
+        materials.push(json!({
+            "name": "surface",
+            "pbrMetallicRoughness": { "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6 },
+            "doubleSided": true
+        }));
+        meshes.push(json!({ "name": "surface", "primitives": [{
+            "attributes": { "POSITION": pos, "NORMAL": nrm }, "indices": idx, "mode": MODE_TRIANGLES, "material": materials.len() - 1
+        }]}));
+        nodes.push(json!({ "name": "surface", "mesh": meshes.len() - 1 }));
+    }
+    for set in line_sets.iter().filter(|s| !s.segments.is_empty()) {
+        nodes.push(b.lines_node(set, &mut meshes, &mut materials));
+    }
+    b.finish(nodes, meshes, materials, extras)
+}
+
 /// Writes a GLB. `node_axes` are line segments (start, end), e.g. from
 /// `SupportStructure::axis_segments`; `extras` goes to `asset.extras` (omitted when null).
 /// Empty parts are left out (an empty `panels` node is still written).
@@ -190,75 +224,88 @@ pub fn write_glb(
 
     // Node axes.
     if let Some(axes) = node_axes.filter(|a| !a.is_empty()) {
-        let vp = b.view(Some(12), ARRAY_BUFFER);
-        let pos = b.vec3(vp, axes.iter().flat_map(|&(s, e)| [s, e]), true);
-        materials.push(json!({
-            "name": "node_axes",
-            "pbrMetallicRoughness": { "baseColorFactor": [0.85, 0.15, 0.1, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0 }
-        }));
-        meshes.push(json!({ "name": "node_axes", "primitives": [{
-            "attributes": { "POSITION": pos }, "mode": MODE_LINES, "material": materials.len() - 1
-        }]}));
-        nodes.push(json!({ "name": "node_axes", "mesh": meshes.len() - 1 }));
+        let set = LineSet { name: "node_axes", color: [0.85, 0.15, 0.1, 1.0], segments: axes };
+        nodes.push(b.lines_node(&set, &mut meshes, &mut materials));
     }
 
-    // Buffer: views back to back, each 4-byte aligned (all data is 4-byte elements anyway).
-    let mut bin: Vec<u8> = Vec::new();
-    let mut buffer_views: Vec<Value> = Vec::new();
-    for v in &b.views {
+    b.finish(nodes, meshes, materials, extras)
+}
+
+impl Builder {
+    /// A node of LINES (two points per segment) with its own mesh and unlit material.
+    fn lines_node(&mut self, set: &LineSet, meshes: &mut Vec<Value>, materials: &mut Vec<Value>) -> Value {
+        let vp = self.view(Some(12), ARRAY_BUFFER);
+        let pos = self.vec3(vp, set.segments.iter().flat_map(|&(s, e)| [s, e]), true);
+        materials.push(json!({
+            "name": set.name,
+            "pbrMetallicRoughness": { "baseColorFactor": set.color, "metallicFactor": 0.0, "roughnessFactor": 1.0 }
+        }));
+        meshes.push(json!({ "name": set.name, "primitives": [{
+            "attributes": { "POSITION": pos }, "mode": MODE_LINES, "material": materials.len() - 1
+        }]}));
+        json!({ "name": set.name, "mesh": meshes.len() - 1 })
+    }
+
+    /// The GLB bytes: JSON chunk and BIN chunk.
+    fn finish(self, nodes: Vec<Value>, meshes: Vec<Value>, materials: Vec<Value>, extras: Value) -> Vec<u8> {
+        // Buffer: views back to back, each 4-byte aligned (all data is 4-byte elements anyway).
+        let mut bin: Vec<u8> = Vec::new();
+        let mut buffer_views: Vec<Value> = Vec::new();
+        for v in &self.views {
+            while !bin.len().is_multiple_of(4) {
+                bin.push(0);
+            }
+            let mut view = json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": v.bytes.len(), "target": v.target });
+            if let Some(s) = v.stride {
+                view["byteStride"] = json!(s);
+            }
+            buffer_views.push(view);
+            bin.extend_from_slice(&v.bytes);
+        }
+
+        let mut asset = json!({
+            "version": "2.0",
+            "generator": concat!("spherical-faces ", env!("CARGO_PKG_VERSION")),
+        });
+        if !extras.is_null() {
+            asset["extras"] = extras;
+        }
+        let mut root = Map::new();
+        root.insert("asset".into(), asset);
+        root.insert("scene".into(), json!(0));
+        root.insert("scenes".into(), json!([{ "name": "spherical-faces", "nodes": (0..nodes.len()).collect::<Vec<_>>() }]));
+        root.insert("nodes".into(), Value::Array(nodes));
+        if !meshes.is_empty() {
+            root.insert("meshes".into(), Value::Array(meshes));
+            root.insert("materials".into(), Value::Array(materials));
+            root.insert("accessors".into(), Value::Array(self.accessors));
+            root.insert("bufferViews".into(), Value::Array(buffer_views));
+            root.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
+        }
+        let mut json_bytes = serde_json::to_vec(&Value::Object(root)).expect("JSON values serialize");
+        while !json_bytes.len().is_multiple_of(4) {
+            json_bytes.push(b' ');
+        }
         while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
-        let mut view = json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": v.bytes.len(), "target": v.target });
-        if let Some(s) = v.stride {
-            view["byteStride"] = json!(s);
+
+        let has_bin = !bin.is_empty();
+        let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + bin.len() } else { 0 };
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json_bytes);
+        if has_bin {
+            out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+            out.extend_from_slice(b"BIN\0");
+            out.extend_from_slice(&bin);
         }
-        buffer_views.push(view);
-        bin.extend_from_slice(&v.bytes);
+        out
     }
-
-    let mut asset = json!({
-        "version": "2.0",
-        "generator": concat!("spherical-faces ", env!("CARGO_PKG_VERSION")),
-    });
-    if !extras.is_null() {
-        asset["extras"] = extras;
-    }
-    let mut root = Map::new();
-    root.insert("asset".into(), asset);
-    root.insert("scene".into(), json!(0));
-    root.insert("scenes".into(), json!([{ "name": "spherical-faces", "nodes": (0..nodes.len()).collect::<Vec<_>>() }]));
-    root.insert("nodes".into(), Value::Array(nodes));
-    if !meshes.is_empty() {
-        root.insert("meshes".into(), Value::Array(meshes));
-        root.insert("materials".into(), Value::Array(materials));
-        root.insert("accessors".into(), Value::Array(b.accessors));
-        root.insert("bufferViews".into(), Value::Array(buffer_views));
-        root.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
-    }
-    let mut json_bytes = serde_json::to_vec(&Value::Object(root)).expect("JSON values serialize");
-    while !json_bytes.len().is_multiple_of(4) {
-        json_bytes.push(b' ');
-    }
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-
-    let has_bin = !bin.is_empty();
-    let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + bin.len() } else { 0 };
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json_bytes);
-    if has_bin {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-    }
-    out
 }
 
 /// The JSON chunk of a GLB (for tests and tools); None if `glb` is not a GLB.

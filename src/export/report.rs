@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::remeshing::Sizing;
+use crate::sq::params::RadiusBasis;
 
 /// Vertex and face counts of the input mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -128,6 +129,40 @@ pub struct Metrics {
     /// Edge variant (Fig. 12): "a" or "b".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variant: Option<String>,
+    /// SQ (Sec. 5.1): the largest angle between a line of the congruence and the normal on G,
+    /// degrees; before the optimization (the central congruence of the fitted r) and after.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_line_normal_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_max_line_normal_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_line_normal_angle_deg: Option<f64>,
+    /// SQ: the smallest angle between the two torsal planes of a grid quad, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_torsal_plane_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_min_torsal_plane_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_torsal_plane_angle_deg: Option<f64>,
+    /// SQ: grid quads whose torsal directions are not real.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quads_without_real_torsal_directions: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_quads_without_real_torsal_directions: Option<usize>,
+    /// SQ: E_LC per term (dimensionless, c_u and c_v normalized) after both steps, and after
+    /// step 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lc_residual: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lc_residual_step1: Option<f64>,
+    /// SQ: largest |r − 1/H| of the radius fit on G, relative to the mean |1/H|.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_fit_error: Option<f64>,
+    /// SQ: solver iterations of the line-congruence and the torsal step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line_congruence_iterations: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torsal_iterations: Option<usize>,
 }
 
 /// The report of one run.
@@ -140,6 +175,23 @@ pub struct Report {
     pub absolute_sphere: Option<AbsoluteSphereReport>,
     pub metrics: Metrics,
     pub timings_ms: BTreeMap<String, f64>,
+    /// SQ (Sec. 5): the parameters of the run: solver iterations in all, points per direction of
+    /// G, θ and α (degrees), the basis of r, and the stage the run stopped after.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grid: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub theta_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_basis: Option<RadiusBasis>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_after: Option<String>,
+    /// What a user should know about the run (e.g. a boundary strip of the other sign of H).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 impl Report {

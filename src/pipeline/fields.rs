@@ -57,6 +57,15 @@ pub mod field {
     /// The second envelope: the mesh inverted in Ω.
     pub const ENVELOPE_POSITIONS: &str = "envelope2.positions";
     pub const ENVELOPE_TRIANGLES: &str = "envelope2.triangles";
+    /// SQ (Sec. 5.1): line segments as point pairs, f32 × 3: the optimized lines over the
+    /// surface, the lines of the central congruence, the torsal cross field (two arms per quad)
+    /// and the outlines of the quads without real torsal directions.
+    pub const SQ_LINES: &str = "sq.lines";
+    pub const SQ_INITIAL_LINES: &str = "sq.initial_lines";
+    pub const SQ_CROSS_FIELD: &str = "sq.cross_field";
+    /// The torsal-plane angle (degrees) of each cross-field arm, f32 × 1.
+    pub const SQ_CROSS_FIELD_ANGLE: &str = "sq.cross_field.angle";
+    pub const SQ_NO_REAL_QUADS: &str = "sq.no_real_quads";
 }
 
 /// Binary payload of a field.

@@ -11,11 +11,12 @@ use serde::{Deserialize, Serialize};
 
 use super::fields::{Field, FieldHeader, FieldLengthError, StageProgress};
 use crate::reference::bspline::BSplineInfo;
-use super::stages::{curvature, st_adapted, st_support};
+use super::stages::{curvature, sq, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::geometry::mesh::topology::MeshStats;
 use crate::import::Format;
 use crate::samples::Sample;
+use crate::sq::params::SqParams;
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
@@ -46,6 +47,9 @@ pub enum StageRequest {
     StAdapted(StAdaptedParams),
     /// ST mesh with support structure (Sec. 4), with panels and exports.
     StSupport(StSupportParams),
+    /// SQ mesh with support structure (Sec. 5): up to the torsal cross field (Sec. 5.1), with
+    /// its files.
+    Sq(SqParams),
 }
 
 impl StageRequest {
@@ -55,6 +59,7 @@ impl StageRequest {
             StageRequest::Curvature(_) => curvature::STAGE,
             StageRequest::StAdapted(_) => st_adapted::STAGE,
             StageRequest::StSupport(_) => st_support::STAGE,
+            StageRequest::Sq(_) => sq::STAGE,
         }
     }
 }
@@ -90,6 +95,7 @@ pub enum StageResult {
     Curvature(CurvatureSummary),
     StAdapted(Box<st_adapted::StAdaptedSummary>),
     StSupport(Box<st_support::StSupportSummary>),
+    Sq(Box<sq::SqSummary>),
 }
 
 /// Worker to main thread.

@@ -5,7 +5,7 @@ use super::fields::{Field, StageProgress};
 use super::panel_output::mesh_fields;
 use super::protocol::{FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 use super::sink::Sink;
-use super::stages::{curvature, st_adapted, st_support, StageError};
+use super::stages::{curvature, sq, st_adapted, st_support, StageError};
 use crate::export::ExportFile;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::bspline::BSplineSurface;
@@ -182,6 +182,7 @@ impl Session {
             StageRequest::StSupport(p) => {
                 st_support::run(reference, p, clock, &mut sink).map(|s| StageResult::StSupport(Box::new(s)))
             }
+            StageRequest::Sq(p) => sq::run(reference, p, clock, &mut sink).map(|s| StageResult::Sq(Box::new(s))),
         };
         match result {
             Ok(result) => {

@@ -23,6 +23,7 @@ pub mod metrics;
 pub mod optimization;
 pub mod params;
 pub mod radius;
+pub mod segments;
 pub mod terms;
 
 use glam::DVec3;
@@ -43,6 +44,9 @@ use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
 /// What the method reports while it runs.
 pub enum SqEvent<'a> {
     Progress(Progress<'a>),
+    /// Once, before the optimization: the points of G (model units) and the unit lines of the
+    /// fitted central congruence.
+    Started { points: &'a [DVec3], lines: &'a [DVec3] },
     /// After every solver iteration: the step, the iteration within it, the term statistics and
     /// the current unit lines of G.
     Iteration { step: SqStep, iteration: usize, terms: &'a [TermStats], lines: Vec<DVec3> },
@@ -146,6 +150,8 @@ pub fn compute(
     let initial_torsal = torsal_pairs(grid, &initial_lines);
     let initial_figures = CongruenceFigures::of(grid, &initial_lines, &initial_torsal);
     timings.lap("radius");
+    let model_points: Vec<DVec3> = grid.frames.iter().map(|f| t + s * f.point).collect();
+    on_event(SqEvent::Started { points: &model_points, lines: &initial_lines })?;
 
     let mut hook = |step: SqStep, iteration: usize, terms: &[TermStats], x: &[f64]| {
         on_event(SqEvent::Iteration { step, iteration, terms, lines: problem.lines(x) }).is_ok()
@@ -192,7 +198,7 @@ pub fn compute(
     Ok(SqCongruence {
         grid: n,
         uv: grid.uv.clone(),
-        points: grid.frames.iter().map(|f| t + s * f.point).collect(),
+        points: model_points,
         normals: grid.frames.iter().map(|f| f.normal).collect(),
         radii,
         radius,

@@ -25,6 +25,12 @@ pub const MIN_MEAN_CURVATURE: f64 = 1e-2;
 /// Cells per direction of the fine grid that measures the sign of H.
 pub const SIGN_GRID: usize = 200;
 
+/// The corners of quad q = i + (n − 1) j of an n × n grid: (i, j), (i+1, j), (i+1, j+1), (i, j+1).
+pub fn grid_quad(n: usize, q: usize) -> [usize; 4] {
+    let (i, j) = (q % (n - 1), q / (n - 1));
+    [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)]
+}
+
 /// The sampling grid G with the surface's frames.
 #[derive(Clone, Debug)]
 pub struct SamplingGrid {
@@ -55,8 +61,7 @@ impl SamplingGrid {
 
     /// The corners of quad q = i + (n − 1) j.
     pub fn quad(&self, q: usize) -> [usize; 4] {
-        let (i, j, n) = (q % (self.n - 1), q / (self.n - 1), self.n);
-        [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)]
+        grid_quad(self.n, q)
     }
 
     /// Whether point p lies on G's outer ring.

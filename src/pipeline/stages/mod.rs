@@ -4,12 +4,14 @@
 //! [`Sink`]: super::sink::Sink
 
 pub mod curvature;
+pub mod sq;
 pub mod st_adapted;
 pub mod st_support;
 
 use std::fmt;
 
 use crate::progress::Cancelled;
+use crate::sq::SqError;
 use crate::st_adapted::StAdaptedError;
 use crate::st_support::StSupportError;
 
@@ -19,6 +21,7 @@ pub enum StageError {
     Cancelled,
     StAdapted(StAdaptedError),
     StSupport(StSupportError),
+    Sq(SqError),
 }
 
 impl fmt::Display for StageError {
@@ -27,6 +30,7 @@ impl fmt::Display for StageError {
             StageError::Cancelled => f.write_str("cancelled"),
             StageError::StAdapted(e) => e.fmt(f),
             StageError::StSupport(e) => e.fmt(f),
+            StageError::Sq(e) => e.fmt(f),
         }
     }
 }
@@ -53,6 +57,15 @@ impl From<StSupportError> for StageError {
         match e {
             StSupportError::Cancelled => StageError::Cancelled,
             e => StageError::StSupport(e),
+        }
+    }
+}
+
+impl From<SqError> for StageError {
+    fn from(e: SqError) -> Self {
+        match e {
+            SqError::Cancelled => StageError::Cancelled,
+            e => StageError::Sq(e),
         }
     }
 }
