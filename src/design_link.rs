@@ -7,6 +7,7 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON};
 use crate::samples::Sample;
+use crate::sq::params::{SqParams, ALPHA_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
@@ -86,10 +87,13 @@ pub enum Method {
     StAdapted,
     /// ST mesh with support structure (Sec. 4).
     StSupport,
+    /// SQ mesh with support structure (Sec. 5): a B-spline reference, up to the torsal cross
+    /// field (Sec. 5.1).
+    Sq,
 }
 
 impl Method {
-    pub const ALL: [Method; 3] = [Method::Curvature, Method::StAdapted, Method::StSupport];
+    pub const ALL: [Method; 4] = [Method::Curvature, Method::StAdapted, Method::StSupport, Method::Sq];
 
     /// The link key (`method=…`).
     pub fn key(self) -> &'static str {
@@ -97,6 +101,7 @@ impl Method {
             Method::Curvature => "curvature",
             Method::StAdapted => "st",
             Method::StSupport => "st-support",
+            Method::Sq => "sq",
         }
     }
 
@@ -105,6 +110,7 @@ impl Method {
             Method::Curvature => "Curvature (Sec. 2.6)",
             Method::StAdapted => "ST, adapted face size (Sec. 3)",
             Method::StSupport => "ST with support structure (Sec. 4)",
+            Method::Sq => "SQ with support structure (Sec. 5)",
         }
     }
 
@@ -200,6 +206,7 @@ pub struct Design {
     pub jet: JetParams,
     pub st_adapted: StAdaptedParams,
     pub st_support: StSupportParams,
+    pub sq: SqParams,
     pub color: ColorBy,
     pub shading: Shading,
     pub edges: bool,
@@ -215,6 +222,7 @@ impl Default for Design {
             jet: JetParams::default(),
             st_adapted: StAdaptedParams::default(),
             st_support: StSupportParams::default(),
+            sq: SqParams::default(),
             color: ColorBy::MeanCurvature,
             shading: Shading::Smooth,
             edges: false,
@@ -250,6 +258,10 @@ impl Design {
                 );
                 s += &sizing_fragment("remesh", st.remesh);
             }
+            Method::Sq => {
+                let sq = &self.sq;
+                s += &format!("&theta={}&alpha={}&grid={}&rs={}", fmt_num(sq.theta_deg), fmt_num(sq.alpha_deg), sq.grid, sq.recompute_every);
+            }
         }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
         if let Some(c) = self.camera {
@@ -274,6 +286,7 @@ impl Design {
             Method::Curvature => {}
             Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams { jet: self.jet.clone(), ..self.st_adapted.clone() })),
             Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams { jet: self.jet.clone(), ..self.st_support.clone() })),
+            Method::Sq => stages.push(StageRequest::Sq(self.sq.clone())),
         }
         stages
     }
@@ -343,6 +356,10 @@ impl Design {
                 // ε and N belong to the method the link names (applied below).
                 "eps" => parse_f64_in(v, 1e-7, 0.1).map(|x| eps = Some(x)).is_some(),
                 "faces" => parse_in(v, 8, 200_000).map(|x| faces = Some(x as usize)).is_some(),
+                "theta" => parse_f64_in(v, THETA_RANGE.0, THETA_RANGE.1).map(|x| d.sq.theta_deg = x).is_some(),
+                "alpha" => parse_f64_in(v, ALPHA_RANGE.0, ALPHA_RANGE.1).map(|x| d.sq.alpha_deg = x).is_some(),
+                "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64).map(|x| d.sq.grid = x as usize).is_some(),
+                "rs" => parse_in(v, RECOMPUTE_RANGE.0 as i64, RECOMPUTE_RANGE.1 as i64).map(|x| d.sq.recompute_every = x as usize).is_some(),
                 "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),

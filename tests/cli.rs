@@ -165,3 +165,70 @@ fn built_in_samples_are_inputs() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("dome") && err.contains("wave-roof"), "{err}");
 }
+
+/// `sq` on tunnel_arch: the report keys of Sec. 5.1, congruence.json per grid point and quad,
+/// congruence.glb with its nodes; θ and α are met.
+#[test]
+fn sq_writes_the_congruence_and_its_report() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-sq-{}", std::process::id()));
+    let out = run(&["sq", "../shared/data/bsplines/tunnel_arch.json", "--theta", "20", "--alpha", "75", "--grid", "12", "--until", "congruence", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("stops after the congruence stage"), "{stdout}");
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["method"], "sq");
+    assert_eq!(r["grid"], 12);
+    assert_eq!(r["theta_deg"], 20.0);
+    assert_eq!(r["alpha_deg"], 75.0);
+    assert_eq!(r["stopped_after"], "congruence");
+    let m = &r["metrics"];
+    assert!(m["max_line_normal_angle_deg"].as_f64().unwrap() <= 20.0, "{m}");
+    assert!(m["min_torsal_plane_angle_deg"].as_f64().unwrap() >= 75.0, "{m}");
+    assert_eq!(m["quads_without_real_torsal_directions"], 0);
+    assert!(m["lc_residual"].as_f64().unwrap().is_finite());
+    assert!(m["radius_fit_error"].as_f64().unwrap() < 0.1);
+    for k in ["lc_iteration_median", "torsal_iteration_median", "total"] {
+        assert!(r["timings_ms"][k].as_f64().unwrap() > 0.0, "timings_ms.{k}");
+    }
+    assert_eq!(r["iterations"].as_u64().unwrap(), m["line_congruence_iterations"].as_u64().unwrap() + m["torsal_iterations"].as_u64().unwrap());
+    let c: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("congruence.json")).unwrap()).unwrap();
+    let points = c["points"].as_array().unwrap();
+    assert_eq!(points.len(), 144);
+    let quads = c["quads"].as_array().unwrap();
+    assert_eq!(quads.len(), 121);
+    for p in points {
+        let (n, l) = (&p["n"], &p["l"]);
+        let dot: f64 = (0..3).map(|k| n[k].as_f64().unwrap() * l[k].as_f64().unwrap()).sum();
+        assert!(dot >= 20f64.to_radians().cos() - 1e-9, "lines on the side of n, within θ: {p}");
+        assert!(p["r"].as_f64().unwrap().is_finite() && p["uv"][1].is_number() && p["f"][2].is_number());
+    }
+    for q in quads {
+        let t = q["torsal"].as_array().unwrap();
+        assert_eq!(t.len(), 2);
+        for d in t {
+            let uv = &d["uv"];
+            assert!((uv[0].as_f64().unwrap().hypot(uv[1].as_f64().unwrap()) - 1.0).abs() < 1e-12);
+        }
+        assert!(q["torsal_plane_angle_deg"].as_f64().unwrap() >= 75.0);
+    }
+    let glb = std::fs::read(dir.join("congruence.glb")).unwrap();
+    let json = spherical_faces::export::glb::glb_json(&glb).expect("a GLB");
+    let names: Vec<&str> = json["nodes"].as_array().unwrap().iter().map(|n| n["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["surface", "lines", "initial_lines", "cross_field"]);
+}
+
+#[test]
+fn sq_refuses_bad_input_with_one_line() {
+    for (args, needle) in [
+        (vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--out", "/tmp/sf-sq-x"], "mean curvature of one sign"),
+        (vec!["sq", "../shared/data/meshes/tri_dome.obj", "--out", "/tmp/sf-sq-x"], "B-spline reference"),
+        (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "--theta 95"),
+        (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "--until panels"),
+        (vec!["sq", "sample:vault"], "--out"),
+    ] {
+        let out = run(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle) && err.lines().count() == 1, "{args:?}: {err}");
+    }
+}

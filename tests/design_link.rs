@@ -6,6 +6,8 @@ use spherical_faces::design_link::*;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
+use spherical_faces::pipeline::protocol::StageRequest;
+use spherical_faces::sq::params::SqParams;
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
 
@@ -157,4 +159,23 @@ fn empty_and_garbage_fragments_give_defaults() {
     let (d, n) = Design::from_fragment("#%%%&&==&v=1&%zz=1");
     assert_eq!(d, Design::default());
     assert!(!n.is_empty());
+}
+
+#[test]
+fn sq_parameters_round_trip() {
+    let d = Design {
+        reference: Reference::Sample(Sample::Vault),
+        method: Method::Sq,
+        sq: SqParams { theta_deg: 17.5, alpha_deg: 80.0, grid: 24, recompute_every: 5, ..SqParams::default() },
+        ..Design::default()
+    };
+    let fragment = d.to_fragment();
+    assert!(fragment.contains("&method=sq&") && fragment.contains("&theta=17.5&alpha=80&grid=24&rs=5"), "{fragment}");
+    let (back, notices) = Design::from_fragment(&fragment);
+    assert!(notices.is_empty(), "{notices:?}");
+    assert_eq!(back, d);
+    assert!(matches!(back.stage_requests().last(), Some(StageRequest::Sq(p)) if *p == d.sq));
+    let (bad, notices) = Design::from_fragment("#v=1&sample=vault&method=sq&theta=95&alpha=0&grid=2&rs=x");
+    assert_eq!(bad.sq, SqParams::default());
+    assert_eq!(notices.len(), 4, "{notices:?}");
 }

@@ -302,3 +302,67 @@ fn a_reference_fits_its_jets_once() {
     send(&mut s, &mut r, run(StageRequest::Curvature(other)), None);
     assert!(reference_fits(&r) > 0, "other jet parameters fit again");
 }
+
+/// SQ in the session: live lines and one energy report per solver iteration, then the cross
+/// field, the files and the summary; θ and α met on the vault sample.
+#[test]
+fn sq_streams_lines_and_energies_then_files() {
+    use spherical_faces::pipeline::stages::sq;
+    use spherical_faces::sq::params::SqParams;
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Vault), None);
+    r.messages.clear();
+    let params = SqParams { grid: 12, ..SqParams::default() };
+    send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
+    let energies = r.messages.iter().filter(|(m, _)| matches!(m, FromWorker::Progress(p) if !p.energies.is_empty())).count();
+    let Some((FromWorker::Finished { result: StageResult::Sq(summary), .. }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
+    let report = &summary.report;
+    assert_eq!(Some(energies), report.iterations, "one energy report per iteration");
+    assert!(summary.figures.max_line_normal_angle_deg <= 20.0 && summary.figures.min_torsal_plane_angle_deg >= 75.0, "{:?}", summary.figures);
+    let snapshots: Vec<&Vec<Field>> = r.messages.iter().filter_map(|(m, f)| matches!(m, FromWorker::Snapshot { stage, .. } if stage == sq::STAGE).then_some(f)).collect();
+    let first = snapshots.first().unwrap();
+    assert_eq!(find(first, field::SQ_INITIAL_LINES).and_then(Field::as_f32).unwrap().len(), 144 * 6, "two points per line");
+    let last = snapshots.last().unwrap();
+    assert_eq!(find(last, field::SQ_CROSS_FIELD).and_then(Field::as_f32).unwrap().len(), 121 * 2 * 6, "two arms per quad");
+    assert_eq!(find(last, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32).unwrap().len(), 121 * 2);
+    assert!(find(last, field::SQ_NO_REAL_QUADS).and_then(Field::as_f32).unwrap().is_empty());
+    let files: Vec<&str> = r
+        .messages
+        .iter()
+        .find_map(|(m, _)| match m {
+            FromWorker::Files { fields, .. } => Some(fields.iter().map(|h| h.name.as_str()).collect()),
+            _ => None,
+        })
+        .unwrap();
+    assert_eq!(files, ["congruence.glb", "congruence.json", "report.json"]);
+}
+
+/// SQ refuses a sign change of H and sends H at the vertices first; on a mesh it says that it
+/// needs a B-spline.
+#[test]
+fn sq_refusals_reach_the_app() {
+    use spherical_faces::pipeline::stages::sq;
+    use spherical_faces::sq::params::SqParams;
+    let bytes = std::fs::read("../shared/data/bsplines/saddle_sign_change.json").unwrap();
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "saddle_sign_change.json".into() }, Some(bytes));
+    let FromWorker::Loaded(info) = &r.messages[0].0 else { panic!() };
+    let vertices = info.stats.vertices;
+    r.messages.clear();
+    send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
+    let n = r.messages.len();
+    let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[n - 2] else { panic!("{:?}", r.messages[n - 2].0) };
+    assert_eq!(stage, sq::REFUSED_STAGE);
+    let h = find(fields, field::MEAN_CURVATURE).and_then(Field::as_f32).unwrap();
+    assert_eq!(h.len(), vertices);
+    assert!(h.iter().any(|&x| x > 0.0) && h.iter().any(|&x| x < 0.0));
+    let FromWorker::Error { message } = &r.messages[n - 1].0 else { panic!() };
+    assert!(message.contains("mean curvature of one sign") && message.contains("ST method"), "{message}");
+
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
+    send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
+    let FromWorker::Error { message } = &r.messages.last().unwrap().0 else { panic!() };
+    assert!(message.contains("B-spline reference"), "{message}");
+}

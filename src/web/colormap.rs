@@ -76,3 +76,29 @@ pub fn legend(painter: &Painter, viewport: Rect, label: &str, range: (f32, f32),
     }
     painter.text(bar.center_top() - Vec2::new(0.0, 6.0), egui::Align2::CENTER_BOTTOM, label, font, text);
 }
+
+/// The colour of bin `k` of `bins` (viridis at the bin's centre), as the viewer draws it.
+pub fn bin_color(k: usize, bins: usize) -> [f32; 4] {
+    let c = viridis((k as f32 + 0.5) / bins as f32);
+    [c[0], c[1], c[2], 1.0]
+}
+
+/// A legend of `bins` colour bins over `range` (lowest at the bottom), in the viewport's
+/// top-right corner.
+pub fn binned_legend(painter: &Painter, viewport: Rect, label: &str, range: (f32, f32), bins: usize) {
+    let size = Vec2::new(18.0, 160.0);
+    let min = Pos2::new(viewport.max.x - 90.0, viewport.min.y + 36.0);
+    let bar = Rect::from_min_size(min, size);
+    let font = egui::FontId::proportional(12.0);
+    let text = Color32::from_gray(220);
+    let h = size.y / bins as f32;
+    for k in 0..bins {
+        let top = bar.max.y - (k + 1) as f32 * h;
+        let c = bin_color(k, bins);
+        painter.rect_filled(Rect::from_min_size(Pos2::new(bar.min.x, top), Vec2::new(size.x, h - 1.0)), 0.0, to_color([c[0], c[1], c[2]]));
+        let value = range.0 + (range.1 - range.0) * k as f32 / bins as f32;
+        painter.text(Pos2::new(bar.max.x + 4.0, top + h), egui::Align2::LEFT_BOTTOM, format!("{value:.1}"), font.clone(), text);
+    }
+    painter.text(bar.right_top() + Vec2::new(4.0, 0.0), egui::Align2::LEFT_TOP, format!("{:.1}", range.1), font.clone(), text);
+    painter.text(bar.center_top() - Vec2::new(0.0, 6.0), egui::Align2::CENTER_BOTTOM, label, font, text);
+}

@@ -11,6 +11,7 @@ import {
   PROJECTS,
   T,
   TRI_DOME,
+  SADDLE,
   changedFraction,
   dropFile,
   isSettled,
@@ -404,6 +405,70 @@ for (const project of PROJECTS) {
         for (const part of ['sample=torus', 'color=k2', 'shading=flat', 'cam=']) {
           assert.ok(text.includes(part), `${part} in ${text}`);
         }
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] l. SQ (Sec. 5.1) on the vault sample streams lines and term energies, meets θ and α, and its congruence GLB validates`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10';
+      await withApp(t, browser, server, project, { name: 'l-sq', fragment }, async (app) => {
+        const s = await waitForState(
+          app,
+          'sq finished (sq.ready, downloads offered)',
+          (s) => s.sq && s.sq.ready && !s.busy && s.downloads.includes('congruence.glb'),
+          { timeout: T.load },
+        );
+        const r = s.sq.report;
+        t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; metrics ${JSON.stringify(r.metrics)}`);
+        assert.equal(s.method, 'sq');
+        assert.ok(!s.error, `error: ${s.error}`);
+        assert.equal(s.source, 'sample:vault');
+        assert.ok(s.design_link.includes('method=sq&theta=20&alpha=75&grid=20&rs=10'), s.design_link);
+        assert.equal(r.grid, 20);
+        assert.equal(r.stopped_after, 'congruence');
+        assert.ok(r.metrics.max_line_normal_angle_deg <= 20, `max ∠(l, n) ${r.metrics.max_line_normal_angle_deg}° ≤ θ`);
+        assert.ok(r.metrics.min_torsal_plane_angle_deg >= 75, `min torsal-plane angle ${r.metrics.min_torsal_plane_angle_deg}° ≥ α`);
+        assert.equal(r.metrics.quads_without_real_torsal_directions, 0);
+        assert.ok(r.metrics.lc_residual_step1 <= 1e-12, `E_LC per term after step 1: ${r.metrics.lc_residual_step1}`);
+        assert.ok(Number.isFinite(r.metrics.lc_residual), 'E_LC after step 2 reported');
+        assert.equal(s.sq.lines, 400, 'one line segment per grid point');
+        assert.equal(s.sq.initial_lines, 400);
+        assert.equal(s.sq.cross_field_arms, 2 * 361, 'two torsal arms per grid quad');
+        assert.equal(s.sq.energies, r.iterations, 'one energy report per solver iteration');
+        for (const term of ['total', 'line_congruence', 'line_normal_angle', 'torsal_plane', 'torsal_angle', 'line_fairness']) {
+          assert.ok(s.sq.terms.some((n) => n.startsWith(term)), `term ${term} plotted (${s.sq.terms})`);
+        }
+        for (const f of ['congruence.glb', 'congruence.json', 'report.json']) {
+          assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
+        }
+        const shown = await scrollResultsIntoView(app, s);
+        assert.equal(shown.side_panel.results_visible, true, 'the energy plot and the figures can be scrolled into view at 1280×800');
+        assertDrawn(await measureViewport(app, s, 'sq'), 'surface, lines and cross field');
+        const [download] = await Promise.all([
+          app.page.waitForEvent('download', { timeout: 30_000 }),
+          app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'congruence.glb' }))),
+        ]);
+        fs.mkdirSync(ARTIFACTS_DIR, { recursive: true });
+        const file = path.join(ARTIFACTS_DIR, `${project.name}-congruence.glb`);
+        await download.saveAs(file);
+        const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
+        assert.equal(v.status, 0, `the Khronos validator accepts the congruence GLB: ${v.stdout}${v.stderr}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] m. SQ refuses a B-spline whose mean curvature changes sign and shows the sign of H`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'm-sq-refusal', fragment: 'v=1&sample=vault&method=sq' }, async (app) => {
+        await waitForState(app, 'vault settled', (s) => s.source === 'sample:vault' && s.sq && !s.busy, { timeout: T.load });
+        await dropFile(app, 'saddle_sign_change.json', fs.readFileSync(SADDLE), 'application/json');
+        const s = await waitForState(app, 'the refusal', (s) => s.source === 'file:saddle_sign_change.json' && s.sq && s.sq.refused && !s.busy, { timeout: T.load });
+        t.diagnostic(`error: ${s.error}`);
+        assert.match(String(s.error), /mean curvature of one sign/);
+        assert.match(String(s.error), /ST method/);
+        assert.equal(s.sq.ready, false);
+        assertDrawn(await measureViewport(app, s, 'sq-refused'), 'the surface coloured by the sign of H');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

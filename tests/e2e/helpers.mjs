@@ -494,6 +494,7 @@ export function changedFraction(a, b, { tolerance = 12 } = {}) {
 // Test files
 
 export const TRI_DOME = path.resolve(REPO_ROOT, '../shared/data/meshes/tri_dome.obj');
+export const SADDLE = path.resolve(REPO_ROOT, '../shared/data/bsplines/saddle_sign_change.json');
 
 /** A GLB that claims 1000 bytes and a JSON chunk but stops in the middle of it. */
 export function truncatedGlb() {

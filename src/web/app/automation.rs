@@ -72,6 +72,18 @@ impl App {
             "ready": a.summary.is_some(),
             "panels": a.summary.as_ref().map_or(0, |s| s.report.output.panels),
         })));
+        state["sq"] = serde_json::json!(self.loaded.as_ref().and_then(|l| l.sq.as_ref()).map(|v| serde_json::json!({
+            "line_snapshots": v.line_snapshots,
+            "line_iteration": v.line_iteration,
+            "lines": v.lines.as_ref().map_or(0, |m| m.edges.len() / 2),
+            "initial_lines": v.initial_lines.as_ref().map_or(0, |m| m.edges.len() / 2),
+            "cross_field_arms": v.cross_field_arms,
+            "energies": v.energy.len(),
+            "terms": v.energy.last().map(|(_, _, e)| e.iter().map(|e| e.name.clone()).collect::<Vec<_>>()).unwrap_or_default(),
+            "refused": v.refused_h.is_some(),
+            "ready": v.summary.is_some(),
+            "report": v.summary.as_ref().map(|s| &s.report),
+        })));
         let state = state.to_string();
         if state != self.last_state {
             if let Some(el) = web_sys::window().and_then(|w| w.document()).and_then(|d| d.get_element_by_id("sf-state")) {

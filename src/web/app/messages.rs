@@ -9,7 +9,7 @@ use super::App;
 use crate::design_link::Reference;
 use crate::pipeline::fields::{field, find, Field, FieldData};
 use crate::pipeline::protocol::{FromWorker, Source, StageResult, ToWorker};
-use crate::pipeline::stages::{st_adapted, st_support};
+use crate::pipeline::stages::{sq, st_adapted, st_support};
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::MeshData;
 use crate::web::worker_client::Incoming;
@@ -113,6 +113,18 @@ impl App {
                     a.panel_snapshots += 1;
                 }
             }
+            FromWorker::Snapshot { stage, iteration, .. } if stage == sq::STAGE => {
+                if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
+                    v.install(&fields, iteration, &mut self.generation);
+                }
+            }
+            FromWorker::Snapshot { stage, .. } if stage == sq::REFUSED_STAGE => {
+                if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
+                    let values = find(&fields, field::MEAN_CURVATURE).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
+                    self.generation += 1;
+                    v.refused_h = Some(Arc::new(crate::web::viewer::ScalarData { generation: self.generation, values }));
+                }
+            }
             FromWorker::Snapshot { .. } => {
                 if let Some(l) = self.loaded.as_mut() {
                     let summary = l.curvature.take().and_then(|c| c.summary);
@@ -125,6 +137,9 @@ impl App {
                     if p.stage == st_adapted::STAGE {
                         a.energy.push((p.iteration, p.detail.clone(), total.value));
                     }
+                }
+                if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()).filter(|_| p.stage == sq::STAGE && !p.energies.is_empty()) {
+                    v.energy.push((p.iteration, p.detail.clone(), p.energies.clone()));
                 }
                 if let Some(b) = self.busy.as_mut() {
                     b.progress = Some(p);
@@ -143,6 +158,11 @@ impl App {
                     StageResult::StSupport(summary) => {
                         if let Some(st) = self.loaded.as_mut().and_then(|l| l.st_support.as_mut()) {
                             st.summary = Some(*summary);
+                        }
+                    }
+                    StageResult::Sq(summary) => {
+                        if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
+                            v.summary = Some(*summary);
                         }
                     }
                     StageResult::StAdapted(summary) => {
@@ -187,6 +207,7 @@ impl App {
         l.curvature = None;
         l.st_support = None;
         l.st_adapted = None;
+        l.sq = None;
         self.scalars = None;
         if !self.restoring {
             self.selected = None;

@@ -34,7 +34,7 @@ use crate::web::viewer::ViewerResources;
 use crate::web::worker_client::WorkerClient;
 use dom::{count_events, make_file_input, now_ms, save_file};
 use panels::SizingMemory;
-use state::{Busy, Download, Loaded, ScalarView, StAdaptedView};
+use state::{Busy, Download, Loaded, ScalarView, SqView, StAdaptedView};
 
 /// How many frames' `ui` times are kept for the state's percentiles.
 const UI_TIMES: usize = 120;
@@ -62,6 +62,8 @@ pub struct App {
     show_reference: bool,
     show_envelope: bool,
     show_remeshed: bool,
+    /// What the SQ view shows.
+    sq_display: panels::sq::SqDisplay,
     /// A fresh worker is being given the current design back: keep the view and the message.
     restoring: bool,
     camera: OrbitCamera,
@@ -158,6 +160,7 @@ impl App {
             show_reference: false,
             show_envelope: false,
             show_remeshed: false,
+            sq_display: panels::sq::SqDisplay::default(),
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -229,6 +232,7 @@ impl App {
         if let Some(l) = self.loaded.as_mut() {
             l.st_support = None;
             l.st_adapted = (self.design.method == Method::StAdapted).then(StAdaptedView::default);
+            l.sq = (self.design.method == Method::Sq).then(SqView::default);
         }
         if self.design.color == ColorBy::Sizing {
             self.scalars = None;
@@ -276,7 +280,7 @@ impl App {
                     }
                 }
             });
-            if ui.button("Open…").on_hover_text("OBJ, glTF (.gltf with embedded data) or GLB; or drop a file on the view").clicked() {
+            if ui.button("Open…").on_hover_text("OBJ, glTF (.gltf with embedded data), GLB, or a B-spline surface (.json); or drop a file on the view").clicked() {
                 if let Some(input) = &self.file_input {
                     input.set_value("");
                     input.click();
@@ -349,6 +353,7 @@ impl App {
                     &mut self.show_reference,
                     &mut self.show_envelope,
                 ),
+                Method::Sq => panels::sq::controls(ui, &mut self.design.sq, &mut self.sq_display),
             };
             self.params_dirty |= changed;
             if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
@@ -381,6 +386,11 @@ impl App {
                     Method::StSupport => {
                         if let Some(v) = &l.st_support {
                             panels::st_support::results(ui, v);
+                        }
+                    }
+                    Method::Sq => {
+                        if let Some(v) = &l.sq {
+                            panels::sq::results(ui, v, &self.design.sq);
                         }
                     }
                 });
@@ -482,7 +492,7 @@ impl eframe::App for App {
             self.viewport(ui);
             if hovering {
                 ui.painter().rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
-                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF or GLB to load", egui::FontId::proportional(22.0), Color32::WHITE);
+                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF, GLB or a B-spline .json to load", egui::FontId::proportional(22.0), Color32::WHITE);
             }
         });
         let dragging = ui.input(|i| i.pointer.any_down());

@@ -1,7 +1,8 @@
 //! Small painted plots: overlaid histograms (Fig. 14), the energy per iteration, key–value tables.
 
-use egui::{Color32, Pos2, Rect, Sense, Vec2};
+use egui::{Color32, Pos2, Rect, RichText, Sense, Vec2};
 
+use crate::pipeline::fields::Energy;
 use crate::stats::Histogram;
 
 /// Overlaid bar histograms (Fig. 14) over their common range.
@@ -62,6 +63,60 @@ pub fn energy_plot(ui: &mut egui::Ui, series: &[(u32, String, f64)]) {
     p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, format!("1e{hi:.1}"), font.clone(), Color32::LIGHT_GRAY);
     p.text(rect.left_bottom() + Vec2::new(2.0, -1.0), egui::Align2::LEFT_BOTTOM, format!("1e{lo:.1}"), font.clone(), Color32::LIGHT_GRAY);
     p.text(rect.right_top() + Vec2::new(-2.0, 1.0), egui::Align2::RIGHT_TOP, format!("{stage} · it {it} · E {e:.3e}"), font, Color32::LIGHT_GRAY);
+}
+
+/// The energy of every term against iteration on a log scale, one colour per term, with a key;
+/// a vertical rule where the step changes.
+pub fn term_plot(ui: &mut egui::Ui, series: &[(u32, String, Vec<Energy>)]) {
+    let names: Vec<&str> = series.last().map(|(_, _, e)| e.iter().map(|e| e.name.as_str()).collect()).unwrap_or_default();
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width().min(260.0), 120.0), Sense::hover());
+    let p = ui.painter();
+    p.rect_filled(rect, 2.0, Color32::from_gray(30));
+    let log = |e: f64| e.max(1e-30).log10();
+    let (lo, hi) = series.iter().flat_map(|(_, _, e)| e.iter().map(|e| log(e.value))).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    if !(hi >= lo) {
+        return;
+    }
+    let (lo, hi) = if hi - lo < 1e-9 { (lo - 0.5, hi + 0.5) } else { (lo, hi) };
+    let last = series.iter().map(|s| s.0).max().unwrap_or(1).max(1) as f32;
+    let inner = rect.shrink2(Vec2::new(4.0, 14.0));
+    let at = |it: u32, y: f64| Pos2::new(inner.left() + inner.width() * it as f32 / last, inner.bottom() - inner.height() * ((y - lo) / (hi - lo)) as f32);
+    let palette = [
+        Color32::WHITE,
+        Color32::from_rgb(110, 150, 230),
+        Color32::from_rgb(90, 190, 90),
+        Color32::from_rgb(230, 170, 60),
+        Color32::from_rgb(220, 80, 70),
+        Color32::from_rgb(180, 110, 220),
+        Color32::from_rgb(80, 200, 200),
+        Color32::from_rgb(200, 200, 90),
+        Color32::from_rgb(160, 160, 160),
+    ];
+    let color = |name: &str| {
+        let k = names.iter().position(|n| *n == name).unwrap_or(names.len());
+        palette[k % palette.len()]
+    };
+    for k in 1..series.len() {
+        let (a, b) = (&series[k - 1], &series[k]);
+        if a.1 != b.1 {
+            let x = at(b.0, lo).x;
+            p.line_segment([Pos2::new(x, rect.top()), Pos2::new(x, rect.bottom())], egui::Stroke::new(1.0, Color32::from_gray(70)));
+            continue;
+        }
+        for e in &b.2 {
+            if let Some(prev) = a.2.iter().find(|x| x.name == e.name) {
+                p.line_segment([at(a.0, log(prev.value)), at(b.0, log(e.value))], egui::Stroke::new(1.2, color(&e.name)));
+            }
+        }
+    }
+    let font = egui::FontId::proportional(10.0);
+    p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, format!("1e{hi:.1}"), font.clone(), Color32::LIGHT_GRAY);
+    p.text(rect.left_bottom() + Vec2::new(2.0, -1.0), egui::Align2::LEFT_BOTTOM, format!("1e{lo:.1}"), font.clone(), Color32::LIGHT_GRAY);
+    ui.horizontal_wrapped(|ui| {
+        for n in &names {
+            ui.label(RichText::new(format!("■ {n}")).small().color(color(n)));
+        }
+    });
 }
 
 /// A two-column table of labels and values.

@@ -9,6 +9,8 @@ use crate::congruence::central_spheres::CurvatureSummary;
 use crate::design_link::ColorBy;
 use crate::pipeline::fields::{field, find, Field, StageProgress};
 use crate::pipeline::protocol::ReferenceInfo;
+use crate::pipeline::fields::Energy;
+use crate::pipeline::stages::sq::SqSummary;
 use crate::pipeline::stages::st_adapted::StAdaptedSummary;
 use crate::pipeline::stages::st_support::StSupportSummary;
 use crate::web::viewer::{MeshData, ScalarData};
@@ -22,6 +24,7 @@ pub struct Loaded {
     pub curvature: Option<CurvatureView>,
     pub st_support: Option<StSupportView>,
     pub st_adapted: Option<StAdaptedView>,
+    pub sq: Option<SqView>,
 }
 
 impl Loaded {
@@ -34,6 +37,7 @@ impl Loaded {
             curvature: None,
             st_support: None,
             st_adapted: None,
+            sq: None,
         }
     }
 }
@@ -67,6 +71,76 @@ pub struct StSupportView {
     pub axes: Arc<MeshData>,
     pub envelope: Option<Arc<MeshData>>,
     pub summary: Option<StSupportSummary>,
+}
+
+/// The SQ run (Sec. 5.1) as it streams in: the lines of the central congruence, the lines as
+/// they optimize, the energy of every term per iteration; when done, the torsal cross field by
+/// angle bins, the quads without real torsal directions and the summary. On a refusal for the
+/// sign of H, H at the reference vertices.
+#[derive(Default)]
+pub struct SqView {
+    pub initial_lines: Option<Arc<MeshData>>,
+    pub lines: Option<Arc<MeshData>>,
+    pub line_iteration: u32,
+    pub line_snapshots: u32,
+    /// The cross field's arms, one mesh per angle bin ([`CROSS_FIELD_BINS`] over [lo, 90°]).
+    pub cross_field: Vec<Arc<MeshData>>,
+    pub cross_field_range: (f32, f32),
+    pub cross_field_arms: usize,
+    pub no_real_quads: Option<Arc<MeshData>>,
+    /// (iteration, step, energy of every term and the total).
+    pub energy: Vec<(u32, String, Vec<Energy>)>,
+    pub refused_h: Option<Arc<ScalarData>>,
+    pub summary: Option<SqSummary>,
+}
+
+/// Colour bins of the cross field by torsal-plane angle.
+pub const CROSS_FIELD_BINS: usize = 6;
+
+/// Line segments (point pairs) of field `name` as a display mesh of edges.
+pub fn segments_mesh(fields: &[Field], name: &str, generation: &mut u64) -> Option<Arc<MeshData>> {
+    let positions = find(fields, name).and_then(Field::as_f32)?.to_vec();
+    *generation += 1;
+    let edges = (0..(positions.len() / 3) as u32).collect();
+    Some(Arc::new(MeshData { generation: *generation, positions, normals: Vec::new(), triangles: Vec::new(), edges }))
+}
+
+impl SqView {
+    /// Takes what a snapshot of the stage carries (live snapshots carry the lines only).
+    pub fn install(&mut self, fields: &[Field], iteration: u32, generation: &mut u64) {
+        if let Some(m) = segments_mesh(fields, field::SQ_INITIAL_LINES, generation) {
+            self.initial_lines = Some(m);
+        }
+        if let Some(m) = segments_mesh(fields, field::SQ_LINES, generation) {
+            self.lines = Some(m);
+            self.line_iteration = iteration;
+            self.line_snapshots += 1;
+        }
+        if let Some(m) = segments_mesh(fields, field::SQ_NO_REAL_QUADS, generation) {
+            self.no_real_quads = Some(m);
+        }
+        let (Some(arms), Some(angles)) =
+            (find(fields, field::SQ_CROSS_FIELD).and_then(Field::as_f32), find(fields, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32))
+        else {
+            return;
+        };
+        let lo = angles.iter().copied().fold(90.0f32, f32::min).floor().min(89.0);
+        let mut bins = vec![Vec::new(); CROSS_FIELD_BINS];
+        for (k, &a) in angles.iter().enumerate() {
+            let b = (((a - lo) / (90.0 - lo) * CROSS_FIELD_BINS as f32) as usize).min(CROSS_FIELD_BINS - 1);
+            bins[b].extend_from_slice(&arms[6 * k..6 * k + 6]);
+        }
+        self.cross_field = bins
+            .into_iter()
+            .map(|positions| {
+                *generation += 1;
+                let edges = (0..(positions.len() / 3) as u32).collect();
+                Arc::new(MeshData { generation: *generation, positions, normals: Vec::new(), triangles: Vec::new(), edges })
+            })
+            .collect();
+        self.cross_field_range = (lo, 90.0);
+        self.cross_field_arms = angles.len();
+    }
 }
 
 /// The field names of a display mesh: positions, normals, triangles, edges.

@@ -6,7 +6,7 @@ use egui::{Color32, Pos2, Rect, Sense, Vec2};
 use glam::{Mat4, Vec3};
 
 use super::panels::info::{center_radius, central_sphere};
-use super::state::{ScalarView, StSupportView};
+use super::state::{ScalarView, SqView, StSupportView, CROSS_FIELD_BINS};
 use super::{App, CLEAR_COLOR};
 use crate::design_link::{ColorBy, Method, Shading};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
@@ -14,7 +14,7 @@ use crate::pipeline::fields::{field, find};
 use crate::web::colormap;
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::picking::pick_vertex;
-use crate::web::viewer::{ColorMap, Geometry, Layer, ScalarData, Style, ViewerFrame};
+use crate::web::viewer::{ColorMap, Geometry, Layer, MeshData, ScalarData, Style, ViewerFrame};
 
 impl App {
     /// Scalars for the current colour choice, with a robust range (2nd to 98th percentile).
@@ -104,13 +104,22 @@ impl App {
             Shading::Smooth => 1,
             Shading::Reflective => 2,
         };
-        let color_map = self.scalar_view().map(|s| ColorMap { scalars: s.data.clone(), range: s.range, diverging: s.diverging });
+        let mut color_map = self.scalar_view().map(|s| ColorMap { scalars: s.data.clone(), range: s.range, diverging: s.diverging });
         let st = self.loaded.as_ref().and_then(|l| l.st_support.as_ref()).filter(|_| self.design.method == Method::StSupport);
         let angle = self.loaded.as_ref().and_then(|l| l.st_adapted.as_ref()).filter(|_| self.design.method == Method::StAdapted);
         let angle_shown = angle.is_some_and(|a| a.panels.is_some() || a.remeshed.is_some());
+        let sq = self.loaded.as_ref().and_then(|l| l.sq.as_ref()).filter(|_| self.design.method == Method::Sq);
+        // SQ refused for the sign of H (Sec. 6.3): the surface shows where H > 0 and H < 0.
+        let refused_h = sq.and_then(|v| v.refused_h.clone()).map(|h| {
+            let m = h.values.iter().fold(0.0f32, |m, x| m.max(x.abs())).max(1e-12);
+            ColorMap { scalars: h, range: (-m, m), diverging: true }
+        });
+        if refused_h.is_some() {
+            color_map = refused_h.clone();
+        }
         let edge_color = [0.05, 0.06, 0.08, 1.0];
         let mut layers = Vec::new();
-        let reference_shown = (st.is_none() && !angle_shown) || self.show_reference;
+        let reference_shown = if sq.is_some() { self.sq_display.surface || refused_h.is_some() } else { (st.is_none() && !angle_shown) || self.show_reference };
         if reference_shown {
             layers.push(Layer {
                 geometry: Geometry::Mesh(mesh.clone()),
@@ -141,6 +150,9 @@ impl App {
                 layers.push(Layer { geometry: Geometry::Mesh(r.clone()), model: id, style: Style::Lines { color: [0.95, 0.55, 0.20, 1.0] } });
             }
         }
+        if let Some(v) = sq {
+            layers.extend(self.sq_layers(v));
+        }
         layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
         let frame = ViewerFrame {
             view_proj: self.camera.proj(aspect) * self.camera.view(),
@@ -150,7 +162,12 @@ impl App {
         };
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, frame));
         self.drawn = true;
-        if let Some(s) = self.scalars.as_ref().filter(|_| reference_shown) {
+        let cross_legend = sq.filter(|v| self.sq_display.cross_field && v.cross_field_arms > 0).map(|v| v.cross_field_range);
+        if let Some(cm) = &refused_h {
+            colormap::legend(ui.painter(), rect, "H (SQ needs one sign)", cm.range, true);
+        } else if let Some(range) = cross_legend {
+            colormap::binned_legend(ui.painter(), rect, "torsal-plane angle (°)", range, CROSS_FIELD_BINS);
+        } else if let Some(s) = self.scalars.as_ref().filter(|_| reference_shown) {
             colormap::legend(ui.painter(), rect, self.design.color.label(), s.range, s.diverging);
         }
         if let Some(b) = &self.busy {
@@ -203,6 +220,27 @@ impl App {
                 });
             }
         }
+        layers
+    }
+
+    /// The SQ congruence: lines (Fig. 21), the cross field by angle bins (Fig. 23) and the quads
+    /// without real torsal directions in red.
+    fn sq_layers(&self, v: &SqView) -> Vec<Layer> {
+        let id = Mat4::IDENTITY;
+        let lines = |m: &Arc<MeshData>, color| Layer { geometry: Geometry::Mesh(m.clone()), model: id, style: Style::Lines { color } };
+        let d = self.sq_display;
+        let mut layers = Vec::new();
+        if d.initial_lines {
+            layers.extend(v.initial_lines.as_ref().map(|m| lines(m, [0.55, 0.55, 0.60, 1.0])));
+        }
+        if d.lines {
+            layers.extend(v.lines.as_ref().map(|m| lines(m, [0.15, 0.40, 0.95, 1.0])));
+        }
+        if d.cross_field {
+            let bins = v.cross_field.len();
+            layers.extend(v.cross_field.iter().enumerate().filter(|(_, m)| !m.edges.is_empty()).map(|(k, m)| lines(m, colormap::bin_color(k, bins))));
+        }
+        layers.extend(v.no_real_quads.as_ref().filter(|m| !m.edges.is_empty()).map(|m| lines(m, [0.95, 0.10, 0.10, 1.0])));
         layers
     }
 

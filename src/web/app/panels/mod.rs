@@ -2,6 +2,7 @@
 //! parameters and say whether they changed) and its results.
 
 pub mod info;
+pub mod sq;
 pub mod st_adapted;
 pub mod st_support;
 
