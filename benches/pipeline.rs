@@ -15,8 +15,8 @@ use std::sync::{Mutex, OnceLock};
 use divan::Bencher;
 use spherical_faces::progress::{native_clock_ms, Clock};
 use spherical_faces::bench_workloads::{
-    result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
-    REMESH_SAMPLES,
+    result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
+    REMESH_SAMPLES, SQ_SAMPLES,
 };
 
 static SCALE: OnceLock<Scale> = OnceLock::new();
@@ -113,4 +113,20 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     let name = format!("angle_iteration_{faces}");
     info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
     bencher.bench_local(|| record(&name, w.sample(&mut problem, &mut solver)));
+}
+
+/// One SQ congruence run on tunnel_arch (20×20) per sample; the `bench` lines are the medians of
+/// the solver's per-iteration times of step 1 (`sq_lc_iteration`) and step 2
+/// (`sq_torsal_iteration`).
+#[divan::bench(sample_count = SQ_SAMPLES as u32, sample_size = 1)]
+fn sq_iterations(bencher: Bencher) {
+    let w = SqWorkload::new(scale());
+    let clock = Clock(Some(native_clock_ms));
+    w.sample(clock); // warm-up
+    info("sq", w.describe());
+    bencher.bench_local(|| {
+        let (lc, torsal) = w.sample(clock);
+        record("sq_lc_iteration", lc);
+        record("sq_torsal_iteration", torsal);
+    });
 }

@@ -14,6 +14,11 @@
 //!   same initial point and runs [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations; the solver's own
 //!   per-iteration times (`SolverOptions::clock`) are the measurement.
 //!
+//! - `sq_lc_iteration` / `sq_torsal_iteration`: iterations of the two steps of the SQ congruence
+//!   optimization (Sec. 5.1, [`crate::sq::compute`] with default parameters: θ 20°, α 75°) on
+//!   `tunnel_arch` with a 20×20 grid (400 lines, 361 quads); one sample is one whole run, and the
+//!   solver's per-iteration times of each step are the measurement.
+//!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
 
@@ -24,7 +29,10 @@ use crate::progress::ignore;
 use crate::reference::Reference;
 use crate::remeshing::pliant::Remesher;
 use crate::remeshing::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
+use crate::import::{import_file, ImportedFile};
 use crate::samples;
+use crate::sq;
+use crate::sq::params::SqParams;
 use crate::solver::{Problem, Solver, SolverOptions};
 use crate::st_adapted::initialization::initial_spheres;
 use crate::st_adapted::optimization::OptimizationFrame;
@@ -231,12 +239,49 @@ impl AngleWorkload {
     }
 }
 
+// --- 4. SQ congruence iterations ----------------------------------------------------------------
+
+/// `tunnel_arch.json` (benches/data, a copy of ../shared/data/bsplines).
+pub const TUNNEL_ARCH: &str = include_str!("../benches/data/tunnel_arch.json");
+
+/// The SQ congruence optimization on `tunnel_arch` (grid 20, or 6 when tiny).
+pub struct SqWorkload {
+    pub reference: Reference,
+    pub params: SqParams,
+}
+
+impl SqWorkload {
+    pub fn new(scale: Scale) -> Self {
+        let ImportedFile::BSpline(b) = import_file(TUNNEL_ARCH.as_bytes(), "tunnel_arch.json").expect("tunnel_arch imports") else {
+            unreachable!("tunnel_arch.json is a B-spline")
+        };
+        let reference = Reference::from_bspline(b.surface).expect("tunnel_arch is regular");
+        let params = match scale {
+            Scale::Full => SqParams::default(),
+            Scale::Tiny => SqParams { grid: 6, lc_iterations: 3, torsal_iterations: 3, final_iterations: 1, ..SqParams::default() },
+        };
+        Self { reference, params }
+    }
+
+    /// The timed work: one run; the per-iteration times (ms) of step 1 and step 2.
+    pub fn sample(&self, clock: Clock) -> (Vec<f64>, Vec<f64>) {
+        let c = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
+        (c.lc_iteration_ms, c.torsal_iteration_ms)
+    }
+
+    pub fn describe(&self) -> String {
+        let n = self.params.grid;
+        format!("# sq: tunnel_arch, {n}×{n} grid ({} lines, {} quads), θ {}°, α {}°", n * n, (n - 1) * (n - 1), self.params.theta_deg, self.params.alpha_deg)
+    }
+}
+
 // --- the whole suite, as the wasm runner runs it -------------------------------------------------
 
 /// Samples per benchmark for [`run_suite`] (the divan bench uses the same workloads).
 pub const JET_SAMPLES: usize = 5;
 pub const REMESH_SAMPLES: usize = 5;
 pub const ANGLE_SAMPLES: usize = 6;
+pub const SQ_SAMPLES: usize = 5;
 
 /// Runs every benchmark with `clock` and passes one [`result_line`] per benchmark to `out`, plus
 /// informational lines starting with `#`. Awaits `pause()` between benchmarks (the browser runner
@@ -288,4 +333,18 @@ where
         }
         out(&result_line(&format!("angle_iteration_{faces}"), &ms));
     }
+
+    let sq = SqWorkload::new(scale);
+    out(&sq.describe());
+    sq.sample(clock);
+    pause().await;
+    let (mut lc, mut torsal) = (Vec::new(), Vec::new());
+    for _ in 0..SQ_SAMPLES {
+        let (a, b) = sq.sample(clock);
+        lc.extend(a);
+        torsal.extend(b);
+        pause().await;
+    }
+    out(&result_line("sq_lc_iteration", &lc));
+    out(&result_line("sq_torsal_iteration", &torsal));
 }

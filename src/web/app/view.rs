@@ -114,7 +114,8 @@ impl App {
             let m = h.values.iter().fold(0.0f32, |m, x| m.max(x.abs())).max(1e-12);
             ColorMap { scalars: h, range: (-m, m), diverging: true }
         });
-        if refused_h.is_some() {
+        if sq.is_some() {
+            // The cross field has the legend; the surface shows H only to explain a refusal.
             color_map = refused_h.clone();
         }
         let edge_color = [0.05, 0.06, 0.08, 1.0];
