@@ -20,6 +20,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use super::ordering::{BlockGraph, Ordering};
 use faer::perm::PermRef;
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -190,7 +191,7 @@ impl System {
     }
 
     /// Builds the pattern, the maps and the symbolic factorization from an evaluation.
-    pub fn build(problem: &Problem, buf: &EvalBuffers, ordering: Ordering) -> Self {
+    pub fn build(problem: &Problem, buf: &EvalBuffers, ordering: Ordering, supernodal: bool) -> Self {
         let n_vars = problem.num_variables();
         let fixed = problem.fixed_mask().to_vec();
         let m = buf.r.len();
@@ -319,7 +320,7 @@ impl System {
         let group: Vec<u32> = free_to_var.iter().map(|&v| groups[v as usize]).collect();
         let a_sym = SymbolicSparseColMat::<u32>::new_checked(nf, nf, col_ptr, None, row_idx);
         let (chol, l_len, mem, chosen) = if nf > 0 {
-            let (chol, chosen) = symbolic_with_ordering(a_sym.as_ref(), &group, ordering);
+            let (chol, chosen) = symbolic_with_ordering(a_sym.as_ref(), &group, ordering, supernodal);
             let req = StackReq::or(
                 chol.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
                 chol.solve_in_place_scratch::<f64>(1, Par::Seq),
@@ -455,14 +456,17 @@ impl System {
 }
 
 /// The symbolic Cholesky factorization of the upper pattern `a` with the requested ordering;
-/// `Auto` tries block AMD and nested dissection and keeps the one with fewer flops.
+/// `Auto` tries block AMD and nested dissection and keeps the one with fewer flops; `supernodal`
+/// forces the supernodal factorization.
 fn symbolic_with_ordering(
     a: SymbolicSparseColMatRef<'_, u32>,
     group: &[u32],
     ordering: Ordering,
+    supernodal: bool,
 ) -> (SymbolicCholesky<u32>, Ordering) {
+    let threshold = if supernodal { SupernodalThreshold::FORCE_SUPERNODAL } else { SupernodalThreshold::AUTO };
     let analyze = |ord: SymmetricOrdering<'_, u32>| {
-        factorize_symbolic_cholesky(a, Side::Upper, ord, CholeskySymbolicParams::default())
+        factorize_symbolic_cholesky(a, Side::Upper, ord, CholeskySymbolicParams { supernodal_flop_ratio_threshold: threshold, ..Default::default() })
             .expect("symbolic Cholesky analysis")
     };
     if ordering == Ordering::Amd {

@@ -31,6 +31,11 @@ pub struct SolverOptions {
     pub clock: Option<fn() -> f64>,
     /// Fill-reducing ordering of the normal matrix (computed once per sparsity pattern).
     pub ordering: Ordering,
+    /// Always factorize supernodally; otherwise faer chooses by flops per factor entry. An
+    /// arrow-shaped normal matrix (small blocks and a dense border, as in the SQ line-congruence
+    /// step) runs faster supernodal although faer's heuristic picks simplicial.
+    #[serde(default)]
+    pub supernodal: bool,
 }
 
 impl Default for SolverOptions {
@@ -46,6 +51,7 @@ impl Default for SolverOptions {
             relative_decrease_tolerance: 1e-14,
             clock: None,
             ordering: Ordering::BlockAmd,
+            supernodal: false,
         }
     }
 }
@@ -298,7 +304,7 @@ impl Solver {
         if !self.system.as_ref().is_some_and(|s| s.matches(problem, &self.cur)) {
             let t = tick();
             self.system = None; // free the old pattern first
-            self.system = Some(System::build(problem, &self.cur, opts.ordering));
+            self.system = Some(System::build(problem, &self.cur, opts.ordering, opts.supernodal));
             self.symbolic_analyses += 1;
             phase.symbolic += tick() - t;
         }
@@ -386,7 +392,7 @@ impl Solver {
                         // A term changed its structure: new pattern, new symbolic analysis.
                         let t = tick();
                         self.system = None;
-                        self.system = Some(System::build(problem, &self.cur, opts.ordering));
+                        self.system = Some(System::build(problem, &self.cur, opts.ordering, opts.supernodal));
                         self.symbolic_analyses += 1;
                         phase.symbolic += tick() - t;
                     }

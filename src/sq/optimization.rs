@@ -184,7 +184,8 @@ impl CongruenceProblem {
         problem.add_boxed(self.line_normal_angle(params), w.lc_orth);
         problem.add_term(UnitLength::vectors(self.line_offsets()), w.unit);
         self.group_blocks(&mut problem);
-        let mut solver = Solver::new(SolverOptions { max_iterations: params.lc_iterations, clock: clock.0, ..SolverOptions::default() });
+        // Lines in 3 × 3 blocks with the radius coefficients as a dense border: supernodal is faster.
+        let mut solver = Solver::new(SolverOptions { max_iterations: params.lc_iterations, clock: clock.0, supernodal: true, ..SolverOptions::default() });
         let report = solver.solve(&mut problem, x, |it| hook(SqStep::LineCongruence, it.iteration, it.terms, it.x));
         // Back to unit lines on the side of n.
         for (p, l) in self.lines(x).into_iter().enumerate() {
