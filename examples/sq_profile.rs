@@ -3,7 +3,7 @@
 
 use spherical_faces::import::{import_file, ImportedFile};
 use spherical_faces::progress::Clock;
-use spherical_faces::sq::optimization::CongruenceProblem;
+use spherical_faces::sq::optimization::{CongruenceProblem, StepOutcome};
 use spherical_faces::sq::params::SqParams;
 use spherical_faces::sq::radius::{check_mean_curvature, fit_radius, SamplingGrid};
 
@@ -23,24 +23,21 @@ fn main() {
         let lc = problem.line_congruence_step(&mut x, &params, clock, &mut |_, _, _, _| true);
         let mut x = problem.extend_for_torsal(&x);
         let t = problem.torsal_step(&mut x, &params, clock, &mut |_, _, _, _| true);
-        let per = |total: f64, n: usize| total / n.max(1) as f64;
-        println!(
-            "lc: {} it, median {:.3} ms; per it: evaluate {:.3}, assemble {:.3}, factorize+solve {:.3}, symbolic {:.3} (total)",
-            lc.iterations,
-            spherical_faces::stats::median(&lc.iteration_ms).unwrap_or(0.0),
-            per(lc.phase_ms.evaluate, lc.iterations),
-            per(lc.phase_ms.assemble, lc.iterations),
-            per(lc.phase_ms.factorize_solve, lc.iterations),
-            lc.phase_ms.symbolic
-        );
-        println!(
-            "torsal: {} it, median {:.3} ms; per it: evaluate {:.3}, assemble {:.3}, factorize+solve {:.3}, symbolic {:.3} (total)",
-            t.iterations,
-            spherical_faces::stats::median(&t.iteration_ms).unwrap_or(0.0),
-            per(t.phase_ms.evaluate, t.iterations),
-            per(t.phase_ms.assemble, t.iterations),
-            per(t.phase_ms.factorize_solve, t.iterations),
-            t.phase_ms.symbolic
-        );
+        print("lc", &lc);
+        print("torsal", &t);
     }
+}
+
+/// One line per step: iterations, the median iteration and the mean time per phase.
+fn print(step: &str, o: &StepOutcome) {
+    let per = |total: f64| total / o.iterations.max(1) as f64;
+    println!(
+        "{step}: {} it, median {:.3} ms; per it: evaluate {:.3}, assemble {:.3}, factorize+solve {:.3}, symbolic {:.3} (total)",
+        o.iterations,
+        spherical_faces::stats::median(&o.iteration_ms).unwrap_or(0.0),
+        per(o.phase_ms.evaluate),
+        per(o.phase_ms.assemble),
+        per(o.phase_ms.factorize_solve),
+        o.phase_ms.symbolic
+    );
 }

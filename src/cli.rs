@@ -92,23 +92,17 @@ fn st_support_command(args: &[String]) -> Result<String, String> {
     let (mut mesh_path, mut out) = (None, None);
     let (mut adaptive, mut epsilon, mut faces) = (false, None, None);
     let mut it = args.iter();
-    let number = |flag: &str, v: Option<&String>, lo: f64, hi: f64| -> Result<f64, String> {
-        let v = v.ok_or(format!("{flag} needs a value"))?;
-        v.parse::<f64>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a number in [{lo}, {hi}]"))
-    };
     while let Some(a) = it.next() {
         match a.as_str() {
             "--optimize-radius" => params.optimize_radius = true,
-            "--depth" => params.support_depth = number(a, it.next(), 0.0, 1.0)?,
-            "--axis-length" => params.axis_length = number(a, it.next(), 0.0, 10.0)?,
-            "--radius-tolerance" => params.radius_tolerance = number(a, it.next(), 1e-9, 1.0)?,
+            "--depth" => params.support_depth = number(a, it.next(), (0.0, 1.0))?,
+            "--axis-length" => params.axis_length = number(a, it.next(), (0.0, 10.0))?,
+            "--radius-tolerance" => params.radius_tolerance = number(a, it.next(), (1e-9, 1.0))?,
             "--adaptive" => adaptive = true,
             "--epsilon" => epsilon = Some(positive_fraction(a, it.next())?),
             "--faces" => faces = Some(face_count(a, it.next())?),
             "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-            s if mesh_path.is_none() => mesh_path = Some(s.to_string()),
-            s => return Err(format!("unexpected argument {s}")),
+            s => positional(s, &mut mesh_path)?,
         }
     }
     params.remesh = match (adaptive, epsilon, faces) {
@@ -158,9 +152,7 @@ fn st_command(args: &[String]) -> Result<String, String> {
                 params.variant = EdgeArcs::from_key(v).ok_or(format!("--variant {v}: expected a or b"))?;
             }
             "--out" => out = Some(value()?.clone()),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-            s if mesh_path.is_none() => mesh_path = Some(s.to_string()),
-            s => return Err(format!("unexpected argument {s}")),
+            s => positional(s, &mut mesh_path)?,
         }
     }
     let mesh_path = mesh_path.ok_or("st needs a mesh file")?;
@@ -186,14 +178,6 @@ fn sq_command(args: &[String]) -> Result<String, String> {
     let mut params = SqParams::default();
     let (mut path, mut out) = (None, None);
     let mut it = args.iter();
-    let number = |flag: &str, v: Option<&String>, (lo, hi): (f64, f64)| -> Result<f64, String> {
-        let v = v.ok_or(format!("{flag} needs a value"))?;
-        v.parse::<f64>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a number in [{lo}, {hi}]"))
-    };
-    let whole = |flag: &str, v: Option<&String>, (lo, hi): (usize, usize)| -> Result<usize, String> {
-        let v = v.ok_or(format!("{flag} needs a value"))?;
-        v.parse::<usize>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a whole number in [{lo}, {hi}]"))
-    };
     while let Some(a) = it.next() {
         match a.as_str() {
             "--theta" => params.theta_deg = number(a, it.next(), THETA_RANGE)?,
@@ -206,9 +190,7 @@ fn sq_command(args: &[String]) -> Result<String, String> {
                 None => return Err("--until needs a stage (congruence)".into()),
             },
             "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
-            s if s.starts_with("--") => return Err(format!("unknown option {s}")),
-            s if path.is_none() => path = Some(s.to_string()),
-            s => return Err(format!("unexpected argument {s}")),
+            s => positional(s, &mut path)?,
         }
     }
     let path = path.ok_or("sq needs a B-spline surface (.json) or sample:vault")?;
@@ -236,6 +218,30 @@ fn sq_command(args: &[String]) -> Result<String, String> {
         text += &format!("\nwarning: {w}");
     }
     Ok(text)
+}
+
+/// A number in [lo, hi] after `flag`.
+fn number(flag: &str, v: Option<&String>, (lo, hi): (f64, f64)) -> Result<f64, String> {
+    let v = v.ok_or(format!("{flag} needs a value"))?;
+    v.parse::<f64>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a number in [{lo}, {hi}]"))
+}
+
+/// A whole number in [lo, hi] after `flag`.
+fn whole(flag: &str, v: Option<&String>, (lo, hi): (usize, usize)) -> Result<usize, String> {
+    let v = v.ok_or(format!("{flag} needs a value"))?;
+    v.parse::<usize>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a whole number in [{lo}, {hi}]"))
+}
+
+/// An argument that is not a known option: the input path the first time, an error otherwise.
+fn positional(arg: &str, path: &mut Option<String>) -> Result<(), String> {
+    if arg.starts_with("--") {
+        return Err(format!("unknown option {arg}"));
+    }
+    if path.is_some() {
+        return Err(format!("unexpected argument {arg}"));
+    }
+    *path = Some(arg.to_string());
+    Ok(())
 }
 
 /// Writes `files` into `dir` (created if missing).

@@ -52,9 +52,12 @@ struct View {
     target: u32,
 }
 
+#[derive(Default)]
 struct Builder {
     views: Vec<View>,
     accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    materials: Vec<Value>,
 }
 
 impl Builder {
@@ -136,27 +139,17 @@ pub struct LineSet<'a> {
 /// Writes a GLB of a surface (node `surface`: triangles with vertex normals) and line sets (one
 /// node each, named by the set; empty sets are left out); `extras` goes to `asset.extras`.
 pub fn write_lines_glb(surface: &TriMesh, line_sets: &[LineSet], extras: Value) -> Vec<u8> {
-    let mut b = Builder { views: Vec::new(), accessors: Vec::new() };
-    let (mut meshes, mut materials, mut nodes) = (Vec::new(), Vec::new(), Vec::new());
+    let mut b = Builder::default();
+    let mut nodes = Vec::new();
     if !surface.triangles.is_empty() {
-        let (vp, vn, vi) = (b.view(Some(12), ARRAY_BUFFER), b.view(Some(12), ARRAY_BUFFER), b.view(None, ELEMENT_ARRAY_BUFFER));
-        let pos = b.vec3(vp, surface.positions.iter().copied(), true);
-        let nrm = b.vec3(vn, surface.vertex_normals().into_iter(), false);
-        let idx = b.indices(vi, &surface.triangles);
-        materials.push(json!({
-            "name": "surface",
-            "pbrMetallicRoughness": { "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6 },
-            "doubleSided": true
-        }));
-        meshes.push(json!({ "name": "surface", "primitives": [{
-            "attributes": { "POSITION": pos, "NORMAL": nrm }, "indices": idx, "mode": MODE_TRIANGLES, "material": materials.len() - 1
-        }]}));
-        nodes.push(json!({ "name": "surface", "mesh": meshes.len() - 1 }));
+        let material = json!({ "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6 });
+        let normals = surface.vertex_normals();
+        nodes.push(b.triangles_node("surface", material, &surface.positions, Some(&normals), &surface.triangles));
     }
     for set in line_sets.iter().filter(|s| !s.segments.is_empty()) {
-        nodes.push(b.lines_node(set, &mut meshes, &mut materials));
+        nodes.push(b.lines_node(set));
     }
-    b.finish(nodes, meshes, materials, extras)
+    b.finish(nodes, extras)
 }
 
 /// Writes a GLB. `node_axes` are line segments (start, end), e.g. from
@@ -168,9 +161,7 @@ pub fn write_glb(
     node_axes: Option<&[(DVec3, DVec3)]>,
     extras: Value,
 ) -> Vec<u8> {
-    let mut b = Builder { views: Vec::new(), accessors: Vec::new() };
-    let mut meshes: Vec<Value> = Vec::new();
-    let mut materials: Vec<Value> = Vec::new();
+    let mut b = Builder::default();
     let mut nodes: Vec<Value> = Vec::new();
 
     // Panels.
@@ -182,12 +173,12 @@ pub fn write_glb(
     });
     if !panels.is_empty() {
         let (vp, vn, vi) = (b.view(Some(12), ARRAY_BUFFER), b.view(Some(12), ARRAY_BUFFER), b.view(None, ELEMENT_ARRAY_BUFFER));
-        materials.push(json!({
+        b.materials.push(json!({
             "name": "panels",
             "pbrMetallicRoughness": { "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.9, "roughnessFactor": 0.25 },
             "doubleSided": true
         }));
-        let mat = materials.len() - 1;
+        let mat = b.materials.len() - 1;
         let primitives: Vec<Value> = panels
             .iter()
             .map(|p| {
@@ -201,53 +192,63 @@ pub fn write_glb(
                 })
             })
             .collect();
-        meshes.push(json!({ "name": "panels", "primitives": primitives }));
-        panels_node["mesh"] = json!(meshes.len() - 1);
+        b.meshes.push(json!({ "name": "panels", "primitives": primitives }));
+        panels_node["mesh"] = json!(b.meshes.len() - 1);
     }
     nodes.push(panels_node);
 
     // Support structure.
     if let Some(s) = support.filter(|s| !s.triangles.is_empty() && !s.positions.is_empty()) {
-        let (vp, vi) = (b.view(Some(12), ARRAY_BUFFER), b.view(None, ELEMENT_ARRAY_BUFFER));
-        let pos = b.vec3(vp, s.positions.iter().copied(), true);
-        let idx = b.indices(vi, &s.triangles);
-        materials.push(json!({
-            "name": "support",
-            "pbrMetallicRoughness": { "baseColorFactor": [0.55, 0.42, 0.28, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.7 },
-            "doubleSided": true
-        }));
-        meshes.push(json!({ "name": "support", "primitives": [{
-            "attributes": { "POSITION": pos }, "indices": idx, "mode": MODE_TRIANGLES, "material": materials.len() - 1
-        }]}));
-        nodes.push(json!({ "name": "support", "mesh": meshes.len() - 1 }));
+        let material = json!({ "baseColorFactor": [0.55, 0.42, 0.28, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.7 });
+        nodes.push(b.triangles_node("support", material, &s.positions, None, &s.triangles));
     }
 
     // Node axes.
     if let Some(axes) = node_axes.filter(|a| !a.is_empty()) {
         let set = LineSet { name: "node_axes", color: [0.85, 0.15, 0.1, 1.0], segments: axes };
-        nodes.push(b.lines_node(&set, &mut meshes, &mut materials));
+        nodes.push(b.lines_node(&set));
     }
 
-    b.finish(nodes, meshes, materials, extras)
+    b.finish(nodes, extras)
 }
 
 impl Builder {
+    /// A node of one indexed triangle primitive (with vertex normals when given) with its own
+    /// mesh and double-sided material of `pbr` (pbrMetallicRoughness).
+    fn triangles_node(&mut self, name: &str, pbr: Value, positions: &[DVec3], normals: Option<&[DVec3]>, triangles: &[[u32; 3]]) -> Value {
+        let vp = self.view(Some(12), ARRAY_BUFFER);
+        let vn = normals.map(|_| self.view(Some(12), ARRAY_BUFFER));
+        let vi = self.view(None, ELEMENT_ARRAY_BUFFER);
+        let pos = self.vec3(vp, positions.iter().copied(), true);
+        let mut attributes = json!({ "POSITION": pos });
+        if let (Some(v), Some(n)) = (vn, normals) {
+            attributes["NORMAL"] = json!(self.vec3(v, n.iter().copied(), false));
+        }
+        let idx = self.indices(vi, triangles);
+        self.materials.push(json!({ "name": name, "pbrMetallicRoughness": pbr, "doubleSided": true }));
+        self.meshes.push(json!({ "name": name, "primitives": [{
+            "attributes": attributes, "indices": idx, "mode": MODE_TRIANGLES, "material": self.materials.len() - 1
+        }]}));
+        json!({ "name": name, "mesh": self.meshes.len() - 1 })
+    }
+
     /// A node of LINES (two points per segment) with its own mesh and unlit material.
-    fn lines_node(&mut self, set: &LineSet, meshes: &mut Vec<Value>, materials: &mut Vec<Value>) -> Value {
+    fn lines_node(&mut self, set: &LineSet) -> Value {
         let vp = self.view(Some(12), ARRAY_BUFFER);
         let pos = self.vec3(vp, set.segments.iter().flat_map(|&(s, e)| [s, e]), true);
-        materials.push(json!({
+        self.materials.push(json!({
             "name": set.name,
             "pbrMetallicRoughness": { "baseColorFactor": set.color, "metallicFactor": 0.0, "roughnessFactor": 1.0 }
         }));
-        meshes.push(json!({ "name": set.name, "primitives": [{
-            "attributes": { "POSITION": pos }, "mode": MODE_LINES, "material": materials.len() - 1
+        self.meshes.push(json!({ "name": set.name, "primitives": [{
+            "attributes": { "POSITION": pos }, "mode": MODE_LINES, "material": self.materials.len() - 1
         }]}));
-        json!({ "name": set.name, "mesh": meshes.len() - 1 })
+        json!({ "name": set.name, "mesh": self.meshes.len() - 1 })
     }
 
     /// The GLB bytes: JSON chunk and BIN chunk.
-    fn finish(self, nodes: Vec<Value>, meshes: Vec<Value>, materials: Vec<Value>, extras: Value) -> Vec<u8> {
+    fn finish(self, nodes: Vec<Value>, extras: Value) -> Vec<u8> {
+        let (meshes, materials) = (self.meshes, self.materials);
         // Buffer: views back to back, each 4-byte aligned (all data is 4-byte elements anyway).
         let mut bin: Vec<u8> = Vec::new();
         let mut buffer_views: Vec<Value> = Vec::new();
