@@ -366,3 +366,26 @@ fn sq_refusals_reach_the_app() {
     let FromWorker::Error { message } = &r.messages.last().unwrap().0 else { panic!() };
     assert!(message.contains("B-spline reference"), "{message}");
 }
+
+/// A cancel during the torsal step stops SQ within the iteration: Cancelled, no files after it,
+/// and the design computes again.
+#[test]
+fn sq_stage_cancels_within_one_iteration() {
+    use spherical_faces::sq::params::SqParams;
+    let mut s = Session::new();
+    let mut r = Recorder::default();
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::Vault), None);
+    r.messages.clear();
+    let params = SqParams { grid: 10, ..SqParams::default() };
+    r.cancel_after = Some(60);
+    r.progress_seen = 0;
+    send(&mut s, &mut r, run(StageRequest::Sq(params.clone())), None);
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "sq"), "{:?}", r.messages.last().unwrap().0);
+    let progress = r.messages.iter().filter(|m| matches!(m.0, FromWorker::Progress(_))).count();
+    assert_eq!(progress, 60, "no progress after the cancel request");
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
+    r.messages.clear();
+    r.cancel_after = None;
+    send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Finished { result: StageResult::Sq(_), .. }));
+}

@@ -48,7 +48,7 @@ pub struct SqSummary {
 pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<SqSummary, StageError> {
     let start = sink.now_ms();
     let mut last_snapshot = f64::NEG_INFINITY;
-    let (mut points, mut length) = (Vec::new(), 0.0);
+    let (mut points, mut length, mut lc_done) = (Vec::new(), 0.0, 0);
     let mut on_event = |e: SqEvent| match e {
         SqEvent::Progress(p) => report(sink, STAGE, p, Vec::new(), start),
         SqEvent::Started { points: p, lines } => {
@@ -63,8 +63,13 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             let total: f64 = terms.iter().map(|t| t.energy).sum();
             let mut energies = vec![Energy { name: "total".into(), value: total }];
             energies.extend(terms.iter().map(|t| Energy { name: t.name.clone(), value: t.energy }));
-            let done = iteration + if step == SqStep::Torsal { params.lc_iterations } else { 0 };
-            let go = report(sink, STAGE, Progress::new(step.key(), done, params.lc_iterations + params.torsal_iterations), energies, start);
+            // Step 1 may converge early: step 2 counts on from where it stopped.
+            if step == SqStep::LineCongruence {
+                lc_done = iteration;
+            }
+            let done = iteration + if step == SqStep::Torsal { lc_done } else { 0 };
+            let total = if step == SqStep::Torsal { lc_done } else { params.lc_iterations } + params.torsal_iterations;
+            let go = report(sink, STAGE, Progress::new(step.key(), done, total), energies, start);
             if go.is_ok() && sink.now_ms() - last_snapshot >= SNAPSHOT_INTERVAL_MS {
                 sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_LINES, &line_segments(&points, &lines, length))]);
                 last_snapshot = sink.now_ms();
