@@ -104,6 +104,101 @@ impl Builder {
         }));
         self.accessors.len() - 1
     }
+
+    /// A node of one indexed triangle primitive (with vertex normals when given) with its own
+    /// mesh and double-sided material of `pbr` (pbrMetallicRoughness).
+    fn triangles_node(&mut self, name: &str, pbr: Value, positions: &[DVec3], normals: Option<&[DVec3]>, triangles: &[[u32; 3]]) -> Value {
+        let vp = self.view(Some(12), ARRAY_BUFFER);
+        let vn = normals.map(|_| self.view(Some(12), ARRAY_BUFFER));
+        let vi = self.view(None, ELEMENT_ARRAY_BUFFER);
+        let pos = self.vec3(vp, positions.iter().copied(), true);
+        let mut attributes = json!({ "POSITION": pos });
+        if let (Some(v), Some(n)) = (vn, normals) {
+            attributes["NORMAL"] = json!(self.vec3(v, n.iter().copied(), false));
+        }
+        let idx = self.indices(vi, triangles);
+        self.materials.push(json!({ "name": name, "pbrMetallicRoughness": pbr, "doubleSided": true }));
+        self.meshes.push(json!({ "name": name, "primitives": [{
+            "attributes": attributes, "indices": idx, "mode": MODE_TRIANGLES, "material": self.materials.len() - 1
+        }]}));
+        json!({ "name": name, "mesh": self.meshes.len() - 1 })
+    }
+
+    /// A node of LINES (two points per segment) with its own mesh and unlit material.
+    fn lines_node(&mut self, set: &LineSet) -> Value {
+        let vp = self.view(Some(12), ARRAY_BUFFER);
+        let pos = self.vec3(vp, set.segments.iter().flat_map(|&(s, e)| [s, e]), true);
+        self.materials.push(json!({
+            "name": set.name,
+            "pbrMetallicRoughness": { "baseColorFactor": set.color, "metallicFactor": 0.0, "roughnessFactor": 1.0 }
+        }));
+        self.meshes.push(json!({ "name": set.name, "primitives": [{
+            "attributes": { "POSITION": pos }, "mode": MODE_LINES, "material": self.materials.len() - 1
+        }]}));
+        json!({ "name": set.name, "mesh": self.meshes.len() - 1 })
+    }
+
+    /// The GLB bytes: JSON chunk and BIN chunk.
+    fn finish(self, nodes: Vec<Value>, extras: Value) -> Vec<u8> {
+        let (meshes, materials) = (self.meshes, self.materials);
+        // Buffer: views back to back, each 4-byte aligned (all data is 4-byte elements anyway).
+        let mut bin: Vec<u8> = Vec::new();
+        let mut buffer_views: Vec<Value> = Vec::new();
+        for v in &self.views {
+            while !bin.len().is_multiple_of(4) {
+                bin.push(0);
+            }
+            let mut view = json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": v.bytes.len(), "target": v.target });
+            if let Some(s) = v.stride {
+                view["byteStride"] = json!(s);
+            }
+            buffer_views.push(view);
+            bin.extend_from_slice(&v.bytes);
+        }
+
+        let mut asset = json!({
+            "version": "2.0",
+            "generator": concat!("spherical-faces ", env!("CARGO_PKG_VERSION")),
+        });
+        if !extras.is_null() {
+            asset["extras"] = extras;
+        }
+        let mut root = Map::new();
+        root.insert("asset".into(), asset);
+        root.insert("scene".into(), json!(0));
+        root.insert("scenes".into(), json!([{ "name": "spherical-faces", "nodes": (0..nodes.len()).collect::<Vec<_>>() }]));
+        root.insert("nodes".into(), Value::Array(nodes));
+        if !meshes.is_empty() {
+            root.insert("meshes".into(), Value::Array(meshes));
+            root.insert("materials".into(), Value::Array(materials));
+            root.insert("accessors".into(), Value::Array(self.accessors));
+            root.insert("bufferViews".into(), Value::Array(buffer_views));
+            root.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
+        }
+        let mut json_bytes = serde_json::to_vec(&Value::Object(root)).expect("JSON values serialize");
+        while !json_bytes.len().is_multiple_of(4) {
+            json_bytes.push(b' ');
+        }
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+
+        let has_bin = !bin.is_empty();
+        let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + bin.len() } else { 0 };
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json_bytes);
+        if has_bin {
+            out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+            out.extend_from_slice(b"BIN\0");
+            out.extend_from_slice(&bin);
+        }
+        out
+    }
 }
 
 /// Per-panel sphere data for the `panels` node's extras.
@@ -212,102 +307,6 @@ pub fn write_glb(
     b.finish(nodes, extras)
 }
 
-impl Builder {
-    /// A node of one indexed triangle primitive (with vertex normals when given) with its own
-    /// mesh and double-sided material of `pbr` (pbrMetallicRoughness).
-    fn triangles_node(&mut self, name: &str, pbr: Value, positions: &[DVec3], normals: Option<&[DVec3]>, triangles: &[[u32; 3]]) -> Value {
-        let vp = self.view(Some(12), ARRAY_BUFFER);
-        let vn = normals.map(|_| self.view(Some(12), ARRAY_BUFFER));
-        let vi = self.view(None, ELEMENT_ARRAY_BUFFER);
-        let pos = self.vec3(vp, positions.iter().copied(), true);
-        let mut attributes = json!({ "POSITION": pos });
-        if let (Some(v), Some(n)) = (vn, normals) {
-            attributes["NORMAL"] = json!(self.vec3(v, n.iter().copied(), false));
-        }
-        let idx = self.indices(vi, triangles);
-        self.materials.push(json!({ "name": name, "pbrMetallicRoughness": pbr, "doubleSided": true }));
-        self.meshes.push(json!({ "name": name, "primitives": [{
-            "attributes": attributes, "indices": idx, "mode": MODE_TRIANGLES, "material": self.materials.len() - 1
-        }]}));
-        json!({ "name": name, "mesh": self.meshes.len() - 1 })
-    }
-
-    /// A node of LINES (two points per segment) with its own mesh and unlit material.
-    fn lines_node(&mut self, set: &LineSet) -> Value {
-        let vp = self.view(Some(12), ARRAY_BUFFER);
-        let pos = self.vec3(vp, set.segments.iter().flat_map(|&(s, e)| [s, e]), true);
-        self.materials.push(json!({
-            "name": set.name,
-            "pbrMetallicRoughness": { "baseColorFactor": set.color, "metallicFactor": 0.0, "roughnessFactor": 1.0 }
-        }));
-        self.meshes.push(json!({ "name": set.name, "primitives": [{
-            "attributes": { "POSITION": pos }, "mode": MODE_LINES, "material": self.materials.len() - 1
-        }]}));
-        json!({ "name": set.name, "mesh": self.meshes.len() - 1 })
-    }
-
-    /// The GLB bytes: JSON chunk and BIN chunk.
-    fn finish(self, nodes: Vec<Value>, extras: Value) -> Vec<u8> {
-        let (meshes, materials) = (self.meshes, self.materials);
-        // Buffer: views back to back, each 4-byte aligned (all data is 4-byte elements anyway).
-        let mut bin: Vec<u8> = Vec::new();
-        let mut buffer_views: Vec<Value> = Vec::new();
-        for v in &self.views {
-            while !bin.len().is_multiple_of(4) {
-                bin.push(0);
-            }
-            let mut view = json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": v.bytes.len(), "target": v.target });
-            if let Some(s) = v.stride {
-                view["byteStride"] = json!(s);
-            }
-            buffer_views.push(view);
-            bin.extend_from_slice(&v.bytes);
-        }
-
-        let mut asset = json!({
-            "version": "2.0",
-            "generator": concat!("spherical-faces ", env!("CARGO_PKG_VERSION")),
-        });
-        if !extras.is_null() {
-            asset["extras"] = extras;
-        }
-        let mut root = Map::new();
-        root.insert("asset".into(), asset);
-        root.insert("scene".into(), json!(0));
-        root.insert("scenes".into(), json!([{ "name": "spherical-faces", "nodes": (0..nodes.len()).collect::<Vec<_>>() }]));
-        root.insert("nodes".into(), Value::Array(nodes));
-        if !meshes.is_empty() {
-            root.insert("meshes".into(), Value::Array(meshes));
-            root.insert("materials".into(), Value::Array(materials));
-            root.insert("accessors".into(), Value::Array(self.accessors));
-            root.insert("bufferViews".into(), Value::Array(buffer_views));
-            root.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
-        }
-        let mut json_bytes = serde_json::to_vec(&Value::Object(root)).expect("JSON values serialize");
-        while !json_bytes.len().is_multiple_of(4) {
-            json_bytes.push(b' ');
-        }
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-
-        let has_bin = !bin.is_empty();
-        let total = 12 + 8 + json_bytes.len() + if has_bin { 8 + bin.len() } else { 0 };
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json_bytes);
-        if has_bin {
-            out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&bin);
-        }
-        out
-    }
-}
 
 /// The JSON chunk of a GLB (for tests and tools); None if `glb` is not a GLB.
 pub fn glb_json(glb: &[u8]) -> Option<Value> {

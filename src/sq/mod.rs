@@ -70,8 +70,7 @@ pub struct SqCongruence {
     /// Unit lines, on the side of the normals: of the fitted central congruence, and final.
     pub initial_lines: Vec<DVec3>,
     pub lines: Vec<DVec3>,
-    /// Per quad of G (i + (n − 1) j): the torsal directions, initial and final.
-    pub initial_torsal: Vec<Option<TorsalPair>>,
+    /// Per quad of G (i + (n − 1) j): the final torsal directions.
     pub torsal: Vec<Option<TorsalPair>>,
     /// The final torsal directions in parameters (unit (du, dv) in the domain's units).
     pub torsal_uv: Vec<Option<[[f64; 2]; 2]>>,
@@ -89,7 +88,6 @@ pub struct SqCongruence {
     /// Step timings (ms): radius, line_congruence, torsal, metrics.
     pub timings_ms: Vec<(String, f64)>,
     pub warnings: Vec<String>,
-    pub diag: f64,
 }
 
 impl SqCongruence {
@@ -206,7 +204,6 @@ pub fn compute(
         radius_fit_error: fit.relative_error,
         initial_lines,
         lines,
-        initial_torsal,
         torsal: pairs,
         torsal_uv,
         initial_figures,
@@ -219,6 +216,5 @@ pub fn compute(
         torsal_iteration_ms: torsal.iteration_ms,
         timings_ms: timings.laps,
         warnings,
-        diag: s,
     })
 }

@@ -99,10 +99,14 @@ pub const CROSS_FIELD_BINS: usize = 6;
 
 /// Line segments (point pairs) of field `name` as a display mesh of edges.
 pub fn segments_mesh(fields: &[Field], name: &str, generation: &mut u64) -> Option<Arc<MeshData>> {
-    let positions = find(fields, name).and_then(Field::as_f32)?.to_vec();
+    Some(segment_mesh(find(fields, name).and_then(Field::as_f32)?.to_vec(), generation))
+}
+
+/// Point pairs as a display mesh of edges, with a fresh generation.
+fn segment_mesh(positions: Vec<f32>, generation: &mut u64) -> Arc<MeshData> {
     *generation += 1;
     let edges = (0..(positions.len() / 3) as u32).collect();
-    Some(Arc::new(MeshData { generation: *generation, positions, normals: Vec::new(), triangles: Vec::new(), edges }))
+    Arc::new(MeshData { generation: *generation, positions, normals: Vec::new(), triangles: Vec::new(), edges })
 }
 
 impl SqView {
@@ -130,14 +134,7 @@ impl SqView {
             let b = (((a - lo) / (90.0 - lo) * CROSS_FIELD_BINS as f32) as usize).min(CROSS_FIELD_BINS - 1);
             bins[b].extend_from_slice(&arms[6 * k..6 * k + 6]);
         }
-        self.cross_field = bins
-            .into_iter()
-            .map(|positions| {
-                *generation += 1;
-                let edges = (0..(positions.len() / 3) as u32).collect();
-                Arc::new(MeshData { generation: *generation, positions, normals: Vec::new(), triangles: Vec::new(), edges })
-            })
-            .collect();
+        self.cross_field = bins.into_iter().map(|positions| segment_mesh(positions, generation)).collect();
         self.cross_field_range = (lo, 90.0);
         self.cross_field_arms = angles.len();
     }
