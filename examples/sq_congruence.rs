@@ -28,7 +28,7 @@ fn main() {
             params.torsal_weights.lc_orth = w;
         }
         let t0 = std::time::Instant::now();
-        match spherical_faces::sq::compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())) {
+        match spherical_faces::sq::compute_congruence(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())) {
             Ok(r) => {
                 println!("{a}: {:.0} ms, iterations {} + {}", t0.elapsed().as_secs_f64() * 1e3, r.lc_iterations, r.torsal_iterations);
                 println!("  initial {:?}", r.initial_figures);

@@ -265,7 +265,7 @@ impl SqWorkload {
 
     /// The timed work: one run; the per-iteration times (ms) of step 1 and step 2.
     pub fn sample(&self, clock: Clock) -> (Vec<f64>, Vec<f64>) {
-        let c = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
+        let c = sq::compute_congruence(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
         (c.lc_iteration_ms, c.torsal_iteration_ms)
     }
 

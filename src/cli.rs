@@ -11,7 +11,7 @@ use spherical_faces::progress::{ignore, Clock};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON};
 use spherical_faces::samples::Sample;
-use spherical_faces::sq::params::{SqParams, ALPHA_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use spherical_faces::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
 
@@ -31,13 +31,17 @@ const USAGE: &str = "usage:
       with the sizing field of tolerance E (relative to the bbox diagonal) or uniformly to
       about N faces, then optimize the face spheres. Same files and report.json schema.
   spherical-faces sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K]
-                     [--until congruence] --out DIR
-      SQ mesh with support structure (paper Sec. 5), up to the torsal cross field (Sec. 5.1):
-      fit the radius function on an N × N grid (default 20), optimize the line congruence to
-      within θ of the normals (default 20°) and its torsal planes to meet at ≥ α (default 75°),
-      recomputing the torsal directions every K iterations (default 10). Writes
-      DIR/congruence.json, congruence.glb and report.json. This version stops after the
-      congruence stage (quad remeshing and the final optimization follow).";
+                     [--faces N] [--until congruence|remesh|final] [--depth D] --out DIR
+      SQ mesh with support structure (paper Sec. 5): fit the radius function on an N × N
+      grid (default 20), optimize the line congruence to within θ of the normals (default
+      20°) and its torsal planes to meet at ≥ α (default 75°), recomputing the torsal
+      directions every K iterations (default 10) (Sec. 5.1); remesh along the torsal cross
+      field to about N quads (default 237) and fair it into Q′; optimize the face spheres
+      (Eq. 10) and project to an exact SQ mesh; panels, support structure of depth D
+      (relative to the diagonal, default 0.02) and node axes (Sec. 5.2). Writes
+      congruence.json and congruence.glb; with --until remesh also mesh.obj (Q′); by default
+      also panels.glb, panels.obj, panels.csv, panels.json, support.csv, mesh.obj (the SQ
+      mesh's vertices and quads) and report.json.";
 
 pub fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -173,7 +177,8 @@ fn st_command(args: &[String]) -> Result<String, String> {
     ))
 }
 
-/// `sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K] [--until congruence] --out DIR`.
+/// `sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K] [--faces N]
+/// [--until congruence|remesh|final] [--depth D] --out DIR`.
 fn sq_command(args: &[String]) -> Result<String, String> {
     let mut params = SqParams::default();
     let (mut path, mut out) = (None, None);
@@ -184,11 +189,12 @@ fn sq_command(args: &[String]) -> Result<String, String> {
             "--alpha" => params.alpha_deg = number(a, it.next(), ALPHA_RANGE)?,
             "--grid" => params.grid = whole(a, it.next(), GRID_RANGE)?,
             "--rs" => params.recompute_every = whole(a, it.next(), RECOMPUTE_RANGE)?,
-            "--until" => match it.next().map(String::as_str) {
-                Some(stages::sq::STOPS_AFTER) => {}
-                Some(v) => return Err(format!("--until {v}: this version computes up to the congruence stage (--until congruence)")),
-                None => return Err("--until needs a stage (congruence)".into()),
-            },
+            "--faces" => params.faces = whole(a, it.next(), FACES_RANGE)?,
+            "--depth" => params.support_depth = number(a, it.next(), (1e-6, 0.5))?,
+            "--until" => {
+                let v = it.next().ok_or("--until needs a stage: congruence, remesh or final")?;
+                params.until = Until::from_key(v).ok_or(format!("--until {v}: expected congruence, remesh or final"))?;
+            }
             "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
             s => positional(s, &mut path)?,
         }
@@ -198,22 +204,53 @@ fn sq_command(args: &[String]) -> Result<String, String> {
     let reference = read_reference(&path)?;
     let clock = Clock::native();
     let result = spherical_faces::sq::compute(&reference, &params, clock, &mut |_| Ok(())).map_err(|e| format!("{path}: {e}"))?;
-    let segments = spherical_faces::export::congruence::CongruenceSegments::of(&result);
-    let (report, files) = stages::sq::export(&reference, &result, &params, &segments);
+    let segments = spherical_faces::export::congruence::CongruenceSegments::of(&result.congruence);
+    let (report, files) = stages::sq::export(&reference, &result, &params, &segments, clock);
     write_files(&out, &files)?;
     let m = &report.metrics;
-    let mut text = format!(
-        "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, α = {}°; \
-         {} quads without real torsal directions; E_LC per term {:.2e}). SQ stops after the congruence stage in this version.",
-        out.display(),
-        m.max_line_normal_angle_deg.unwrap_or(f64::NAN),
-        params.theta_deg,
-        m.min_torsal_plane_angle_deg.unwrap_or(f64::NAN),
-        params.alpha_deg,
-        m.quads_without_real_torsal_directions.unwrap_or(0),
-        m.lc_residual.unwrap_or(f64::NAN),
-        n = params.grid,
-    );
+    let g = |x: Option<f64>| x.unwrap_or(f64::NAN);
+    let mut text = match params.until {
+        Until::Final => format!(
+            "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
+             planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
+             ≥ {:.2}° (α = {}°); max distance to the reference {:.2e} of the diagonal; edges off the torsal directions by {:.2}° on \
+             average; {} distinct radii; {:.0} ms.",
+            report.output.panels,
+            out.display(),
+            g(m.max_vertex_sphere_residual),
+            g(m.max_centre_face_planarity),
+            g(m.max_torsal_plane_residual),
+            g(m.max_axis_normal_angle_deg),
+            params.theta_deg,
+            g(m.min_torsal_plane_angle_deg),
+            params.alpha_deg,
+            g(m.max_distance_to_reference),
+            g(m.mean_edge_torsal_angle_deg),
+            m.distinct_radii.unwrap_or(0),
+            report.timings_ms.get("total").copied().unwrap_or(0.0),
+        ),
+        Until::Remesh => format!(
+            "wrote the quad mesh Q′ ({} quads, {:.1} % of the patch, edges off the torsal directions by {:.2}° on average, at most {:.2}°) \
+             and the congruence to {}.",
+            report.output.faces,
+            100.0 * g(m.coverage),
+            g(m.mean_edge_torsal_angle_deg),
+            g(m.max_edge_torsal_angle_deg),
+            out.display()
+        ),
+        Until::Congruence => format!(
+            "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, \
+             α = {}°; {} quads without real torsal directions; E_LC per term {:.2e}).",
+            out.display(),
+            g(m.max_line_normal_angle_deg),
+            params.theta_deg,
+            g(m.min_torsal_plane_angle_deg),
+            params.alpha_deg,
+            m.quads_without_real_torsal_directions.unwrap_or(0),
+            g(m.lc_residual),
+            n = params.grid,
+        ),
+    };
     for w in &report.warnings {
         text += &format!("\nwarning: {w}");
     }

@@ -16,7 +16,7 @@ use spherical_faces::sq::metrics::torsal_pairs;
 use spherical_faces::sq::optimization::CongruenceProblem;
 use spherical_faces::sq::params::{Inequality, SqParams};
 use spherical_faces::sq::radius::{check_mean_curvature, SamplingGrid};
-use spherical_faces::sq::{compute, SqCongruence, SqError, SqEvent};
+use spherical_faces::sq::{compute_congruence as compute, SqCongruence, SqError, SqEvent};
 
 fn spline(name: &str) -> BSplineSurface {
     match import_file(&common::shared_bytes(&format!("data/bsplines/{name}.json")), name) {

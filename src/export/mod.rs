@@ -12,7 +12,7 @@ pub mod report;
 pub mod schedule;
 
 pub use glb::{absolute_sphere_extras, write_glb};
-pub use obj::write_obj;
+pub use obj::{write_mesh_obj, write_obj};
 pub use report::{AbsoluteSphereReport, Metrics, Report};
 pub use schedule::{build_schedule, count_distinct_radii, PanelSchedule};
 

@@ -67,3 +67,21 @@ pub fn write_obj(panels: &[Panel], support: Option<&SupportGeometry>, node_axes:
     }
     out
 }
+
+/// OBJ text of a mesh of polygons itself (vertices and faces), for a designer's CAD tool.
+pub fn write_mesh_obj(mesh: &crate::geometry::mesh::PolyMesh, name: &str) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "# spherical-faces {}: {} vertices, {} faces", env!("CARGO_PKG_VERSION"), mesh.vertex_count(), mesh.face_count());
+    let _ = writeln!(out, "o {name}");
+    for &p in &mesh.positions {
+        vertex(&mut out, p);
+    }
+    for f in &mesh.faces {
+        out.push('f');
+        for &v in f.corners() {
+            let _ = write!(out, " {}", v + 1);
+        }
+        out.push('\n');
+    }
+    out
+}

@@ -163,6 +163,30 @@ pub struct Metrics {
     pub line_congruence_iterations: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub torsal_iterations: Option<usize>,
+    /// SQ (Sec. 5.2): max over inner vertices of the distance of their face centres to the plane
+    /// through them, relative.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_centre_face_planarity: Option<f64>,
+    /// SQ: max over interior edges of |⟨l, n_uw⟩| for the node axes l at both ends and the unit
+    /// normal n_uw of the edge's torsal plane (the plane of its circle).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_torsal_plane_residual: Option<f64>,
+    /// SQ: the congruence's min torsal-plane angle on G when the run went on to the SQ mesh
+    /// (then `min_torsal_plane_angle_deg` is the mesh's, between the support planes at a node).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub congruence_min_torsal_plane_angle_deg: Option<f64>,
+    /// SQ: angle between the mesh edges and the torsal directions at the edge midpoints, deg
+    /// (edges not along the patch boundary).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_edge_torsal_angle_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_edge_torsal_angle_deg: Option<f64>,
+    /// SQ: the covered share of the patch's area.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<f64>,
+    /// SQ: iterations of the final optimization (warm-up, full, projection).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_iterations: Option<[usize; 3]>,
 }
 
 /// The report of one run.

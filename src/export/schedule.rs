@@ -23,6 +23,7 @@ use std::fmt::Write;
 
 use serde::{Deserialize, Serialize};
 
+use crate::congruence::support_structure::SupportElement;
 use crate::panels::arc::Arc;
 use crate::panels::deviation::max_deviation;
 use crate::panels::panel::Panel;
@@ -95,7 +96,66 @@ pub struct PanelSchedule {
     pub max_deviation: f64,
     /// `max_deviation / reference_diagonal` (the report's `max_distance_to_reference`).
     pub max_deviation_relative: f64,
+    /// The distinct |r| (rounded to `radius_tolerance`), ascending.
+    #[serde(default)]
+    pub radii: Vec<f64>,
     pub panels: Vec<PanelRecord>,
+    /// The support structure's planar elements (methods with support structure).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub support_elements: Vec<SupportRecord>,
+}
+
+/// One planar support element in the schedule: its plane and its corners.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SupportRecord {
+    pub id: usize,
+    /// The mesh edge (vertex ids) it stands on.
+    pub edge: [u32; 2],
+    /// Its plane: a point (the centre of the edge's circle) and the unit normal.
+    pub plane_point: [f64; 3],
+    pub plane_normal: [f64; 3],
+    /// The edge's two vertices, then the inner corners on the node axes of the second and the
+    /// first vertex.
+    pub corners: [[f64; 3]; 4],
+    /// Radii of the outer (edge) arc and the inner arc.
+    pub outer_radius: f64,
+    pub inner_radius: f64,
+}
+
+impl SupportRecord {
+    pub fn of(elements: &[SupportElement]) -> Vec<SupportRecord> {
+        elements
+            .iter()
+            .enumerate()
+            .map(|(id, e)| SupportRecord {
+                id,
+                edge: e.edge,
+                plane_point: e.circle.center.to_array(),
+                plane_normal: e.circle.normal.to_array(),
+                corners: e.corners.map(|c| c.to_array()),
+                outer_radius: e.circle.radius,
+                inner_radius: e.inner_circle.radius,
+            })
+            .collect()
+    }
+
+    /// CSV of the records: a header and one row each.
+    pub fn to_csv(records: &[SupportRecord]) -> String {
+        let mut out = String::from("id,v0_id,v1_id,plane_x,plane_y,plane_z,normal_x,normal_y,normal_z");
+        for k in 0..4 {
+            let _ = write!(out, ",c{k}_x,c{k}_y,c{k}_z");
+        }
+        out.push_str(",outer_radius,inner_radius\n");
+        for r in records {
+            let [p, n] = [r.plane_point, r.plane_normal];
+            let _ = write!(out, "{},{},{},{},{},{},{},{},{}", r.id, r.edge[0], r.edge[1], p[0], p[1], p[2], n[0], n[1], n[2]);
+            for c in &r.corners {
+                let _ = write!(out, ",{},{},{}", c[0], c[1], c[2]);
+            }
+            let _ = writeln!(out, ",{},{}", r.outer_radius, r.inner_radius);
+        }
+        out
+    }
 }
 
 /// Number of distinct radii: `Some(r)` values grouped by round(|r|/tolerance) (exact |r| when
@@ -119,6 +179,18 @@ pub fn count_distinct_radii(radii: impl IntoIterator<Item = Option<f64>>, tolera
         }
     }
     keys.len() + usize::from(plane)
+}
+
+/// The distinct |r| of `radii` (planes left out), rounded to `tolerance`, ascending.
+pub fn distinct_radii(radii: impl IntoIterator<Item = Option<f64>>, tolerance: f64) -> Vec<f64> {
+    let mut keys: BTreeSet<u64> = BTreeSet::new();
+    let round = tolerance > 0.0 && tolerance.is_finite();
+    for r in radii.into_iter().flatten().filter(|r| r.is_finite()) {
+        let r = r.abs();
+        let v = if round { (r / tolerance).round() * tolerance } else { r };
+        keys.insert(v.to_bits());
+    }
+    keys.into_iter().map(f64::from_bits).collect()
 }
 
 fn arc_record(arc: &Arc, from: u32, to: u32) -> ArcRecord {
@@ -173,7 +245,10 @@ pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance:
         })
         .collect();
     let max_dev = records.iter().map(|r| r.max_deviation).fold(0.0, f64::max);
+    let radii = distinct_radii(records.iter().map(|r| r.sphere.radius), radius_tolerance);
     PanelSchedule {
+        radii,
+        support_elements: Vec::new(),
         panel_count: records.len(),
         radius_tolerance,
         distinct_radii: count_distinct_radii(records.iter().map(|r| r.sphere.radius), radius_tolerance),

@@ -132,6 +132,12 @@ pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeA
             }
             continue;
         }
+        if let (&[(f, k)], Some(&n)) = (inc.as_slice(), sm.boundary_planes.get(&[lo, hi])) {
+            let arc = cut_arc(p, q, n, &spheres[f], &[face_triangles(mesh, f)], diag);
+            let pts = arc.sample(arc.segments_for(ARC_TOL_FACTOR * tol));
+            side_arcs[f][k] = Some(if corner(f, k) == lo { (arc, pts) } else { (arc.reversed(), pts.into_iter().rev().collect()) });
+            continue;
+        }
         let groups: Vec<Vec<usize>> = if inc.len() <= 2 {
             vec![inc.iter().map(|&(f, _)| f).collect()]
         } else {
@@ -170,6 +176,21 @@ pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeA
             }
         })
         .collect()
+}
+
+/// The points of the panels' arc along mesh edge `edge` (from `edge[0]` to `edge[1]`), taken
+/// from the first panel at that edge: the outer side of a support element, so the support meets
+/// the panels exactly.
+pub fn edge_arc_points(sm: &SphereMesh, panels: &[Panel], edge: [u32; 2]) -> Option<Vec<DVec3>> {
+    let topo = sm.topology();
+    let e = topo.edge_index(edge[0], edge[1])?;
+    let &(f, k) = topo.edge_faces(e).first()?;
+    let panel = panels.get(f as usize)?;
+    let mut points = panel.arc_points(k as usize);
+    if panel.corners[k as usize] != edge[0] {
+        points.reverse();
+    }
+    Some(points)
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! face sphere through its corners. Panels, support structures and exports are derived from it.
 
 use std::cell::OnceCell;
+use std::collections::HashMap;
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -29,13 +30,21 @@ pub struct SphereMesh {
     /// reference normal).
     pub face_spheres: Vec<Sphere>,
     pub boundary_arcs: BoundaryArcRule,
+    /// Per boundary edge (lo, hi): the normal of the plane that cuts its arc, instead of
+    /// `boundary_arcs` (the SQ method cuts along its support planes, Sec. 5.2).
+    pub boundary_planes: HashMap<[u32; 2], DVec3>,
     /// Connectivity of `mesh`, computed on first use ([`Self::topology`]).
     topology: OnceCell<Topology>,
 }
 
 impl SphereMesh {
     pub fn new(mesh: impl Into<PolyMesh>, face_spheres: Vec<Sphere>, boundary_arcs: BoundaryArcRule) -> Self {
-        Self { mesh: mesh.into(), face_spheres, boundary_arcs, topology: OnceCell::new() }
+        Self { mesh: mesh.into(), face_spheres, boundary_arcs, boundary_planes: HashMap::new(), topology: OnceCell::new() }
+    }
+
+    /// The same mesh with its boundary edges cut by the planes with these normals.
+    pub fn with_boundary_planes(self, boundary_planes: HashMap<[u32; 2], DVec3>) -> Self {
+        Self { boundary_planes, ..self }
     }
 
     /// The connectivity of the mesh (edges and their faces), computed once. The mesh's faces
@@ -67,6 +76,6 @@ impl SphereMesh {
 
 impl PartialEq for SphereMesh {
     fn eq(&self, other: &Self) -> bool {
-        self.mesh == other.mesh && self.face_spheres == other.face_spheres && self.boundary_arcs == other.boundary_arcs
+        self.mesh == other.mesh && self.face_spheres == other.face_spheres && self.boundary_arcs == other.boundary_arcs && self.boundary_planes == other.boundary_planes
     }
 }

@@ -66,6 +66,9 @@ pub mod field {
     /// The torsal-plane angle (degrees) of each cross-field arm, f32 × 1.
     pub const SQ_CROSS_FIELD_ANGLE: &str = "sq.cross_field.angle";
     pub const SQ_NO_REAL_QUADS: &str = "sq.no_real_quads";
+    /// SQ (Sec. 5.2): the edges of the quad mesh (as remeshed, Q′, then the SQ mesh) as point
+    /// pairs, f32 × 3.
+    pub const SQ_QUAD_MESH: &str = "sq.quad_mesh";
 }
 
 /// Binary payload of a field.

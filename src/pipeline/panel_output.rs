@@ -5,7 +5,8 @@ use glam::DVec3;
 
 use super::fields::{field, Field};
 use crate::congruence::central_spheres::CurvatureField;
-use crate::congruence::support_structure::SupportGeometry;
+use crate::congruence::support_structure::{SupportElement, SupportGeometry};
+use crate::export::schedule::SupportRecord;
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::{build_schedule, panel_files, write_glb, write_obj, ExportFile, Metrics, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
@@ -101,6 +102,8 @@ pub struct PanelExport<'a> {
     pub support: Option<&'a SupportGeometry>,
     pub node_axes: Option<&'a [(DVec3, DVec3)]>,
     pub absolute_sphere: Option<&'a AbsoluteSphere>,
+    /// The support elements for the schedule (`support.csv` and the JSON).
+    pub support_elements: Option<&'a [SupportElement]>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -118,16 +121,34 @@ impl<'a> PanelExport<'a> {
         timings: &'a [(String, f64)],
     ) -> Self {
         let extras = serde_json::json!({});
-        Self { method, sphere_mesh, panels, diag, radius_tolerance, metrics, timings, extras, support: None, node_axes: None, absolute_sphere: None }
+        Self {
+            method,
+            sphere_mesh,
+            panels,
+            diag,
+            radius_tolerance,
+            metrics,
+            timings,
+            extras,
+            support: None,
+            node_axes: None,
+            absolute_sphere: None,
+            support_elements: None,
+        }
     }
 
     pub fn with_extras(self, extras: serde_json::Value) -> Self {
         Self { extras, ..self }
     }
 
-    /// The support structure, the node axes and the Ω they pass through (Sec. 4).
-    pub fn with_support(self, support: &'a SupportGeometry, node_axes: &'a [(DVec3, DVec3)], omega: &'a AbsoluteSphere) -> Self {
-        Self { support: Some(support), node_axes: Some(node_axes), absolute_sphere: Some(omega), ..self }
+    /// The support structure (its strips and elements) and the node axes.
+    pub fn with_support(self, support: &'a SupportGeometry, elements: &'a [SupportElement], node_axes: &'a [(DVec3, DVec3)]) -> Self {
+        Self { support: Some(support), support_elements: Some(elements), node_axes: Some(node_axes), ..self }
+    }
+
+    /// The Ω the node axes pass through (Sec. 4).
+    pub fn with_absolute_sphere(self, omega: &'a AbsoluteSphere) -> Self {
+        Self { absolute_sphere: Some(omega), ..self }
     }
 }
 
@@ -135,7 +156,8 @@ impl<'a> PanelExport<'a> {
 /// `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `report.json`.
 pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
     let t0 = clock.now();
-    let schedule = build_schedule(e.panels, reference, e.radius_tolerance * e.diag);
+    let mut schedule = build_schedule(e.panels, reference, e.radius_tolerance * e.diag);
+    schedule.support_elements = e.support_elements.map(SupportRecord::of).unwrap_or_default();
     let mut extras = e.extras;
     extras["method"] = e.method.into();
     let glb = write_glb(e.panels, e.support, e.node_axes, extras);
@@ -156,6 +178,10 @@ pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Re
         e.timings,
     );
     report.add_timing("export", clock.now() - t0);
-    let files = panel_files(glb, obj, &schedule, &report);
+    let mut files = panel_files(glb, obj, &schedule, &report);
+    if !schedule.support_elements.is_empty() {
+        let csv = SupportRecord::to_csv(&schedule.support_elements);
+        files.insert(4, ExportFile { name: "support.csv".into(), mime: "text/csv".into(), bytes: csv.into_bytes() });
+    }
     (report, files)
 }

@@ -63,6 +63,12 @@ impl<'a> ReferenceProximity<'a> {
         }
     }
 
+    /// Sets the name shown in reports.
+    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+
     /// Shares the closest-point lookups with `other` (same reference and vertex offsets): the
     /// first of the two to prepare at a point looks the moved vertices up, the other reuses them.
     pub fn share_closest_with(&mut self, other: &Self) {

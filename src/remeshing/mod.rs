@@ -16,6 +16,7 @@
 
 pub mod influence_zones;
 pub mod pliant;
+pub mod quad_remeshing;
 
 use serde::{Deserialize, Serialize};
 

@@ -3,6 +3,7 @@
 use std::fmt;
 
 use crate::progress::Cancelled;
+use crate::remeshing::quad_remeshing::QuadRemeshError;
 
 /// Why the SQ method cannot run (or stopped).
 #[derive(Clone, Debug, PartialEq)]
@@ -22,6 +23,13 @@ pub enum SqError {
     RadiusFit { samples: usize, coefficients: usize },
     /// c_u × c_v vanishes: the spheres do not vary (e.g. a sphere patch's central spheres).
     SingularCentreSurface { points: usize, total: usize },
+    /// No grid quad has real torsal directions to remesh along.
+    NoTorsalField,
+    /// The quad remeshing failed (Sec. 5.2).
+    Remesh(QuadRemeshError),
+    /// The final optimization left a face sphere or vertex undefined (NaN) or a vertex without
+    /// its spheres' exact intersection (Sec. 5.2).
+    FinalOptimization(String),
     Cancelled,
 }
 
@@ -61,6 +69,9 @@ impl fmt::Display for SqError {
                 "the line congruence is undefined at {points} of {total} grid points: the centre surface c = f + r n is \
                  singular there (c_u × c_v = 0), as on a sphere patch, whose central spheres all coincide"
             ),
+            SqError::NoTorsalField => f.write_str("no quad of the grid has real torsal directions: there is no cross field to remesh along"),
+            SqError::Remesh(e) => write!(f, "quad remeshing along the torsal directions: {e}"),
+            SqError::FinalOptimization(m) => write!(f, "final sphere optimization: {m}"),
             SqError::Cancelled => f.write_str("cancelled"),
         }
     }
@@ -71,5 +82,11 @@ impl std::error::Error for SqError {}
 impl From<Cancelled> for SqError {
     fn from(_: Cancelled) -> Self {
         SqError::Cancelled
+    }
+}
+
+impl From<QuadRemeshError> for SqError {
+    fn from(e: QuadRemeshError) -> Self {
+        SqError::Remesh(e)
     }
 }

@@ -11,9 +11,14 @@
 //! 3. **Torsal directions** (step 2): per grid quad, two torsal directions whose planes meet at
 //!    ≥ α (Fig. 20), recomputed every RS iterations.
 //!
-//! The result is the optimized congruence with its torsal cross field on G, and the figures of
-//! Sec. 2.5 before and after ([`metrics`]). Quad remeshing along the cross field and the final
-//! sphere optimization (Sec. 5.2) follow.
+//! 4. **Quad mesh** ([`quad_mesh`], Sec. 5.2): the torsal cross field integrated to a quad mesh
+//!    with about N faces, faired into Q′ by gliding over the reference.
+//! 5. **Final optimization** ([`sphere_optimization`], Eq. 10): face spheres, vertices, node
+//!    axes and torsal planes, then the projection to an exact SQ mesh with support structure.
+//! 6. **Panels out** ([`sq_mesh`]): spherical quad panels, node axes and support elements, with
+//!    the figures of exactness.
+//!
+//! [`compute`] runs as far as [`SqParams::until`] asks; [`compute_congruence`] runs steps 1–3.
 //!
 //! Everything is computed in the frame y = (x − t)/s of the bounding box (centre t, diagonal s),
 //! so the weights are dimensionless; results are returned in model units.
@@ -22,8 +27,12 @@ mod error;
 pub mod metrics;
 pub mod optimization;
 pub mod params;
+pub mod quad_mesh;
 pub mod radius;
 pub mod segments;
+pub mod sphere_optimization;
+pub mod sphere_terms;
+pub mod sq_mesh;
 pub mod terms;
 
 use glam::DVec3;
@@ -38,7 +47,13 @@ use crate::stats::median;
 pub use self::error::SqError;
 use self::metrics::{torsal_pairs, CongruenceFigures};
 use self::optimization::{CongruenceProblem, SqStep};
-use self::params::{RadiusBasis, SqParams, ALPHA_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use self::params::{RadiusBasis, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use self::quad_mesh::{quad_mesh, SqQuadMesh};
+use self::sphere_optimization::{on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase};
+use self::sq_mesh::{sq_mesh, SqMesh};
+use crate::geometry::mesh::PolyMesh;
+use crate::geometry::sphere::Sphere;
+use crate::remeshing::quad_remeshing::edge_field_angles;
 use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
 
 /// What the method reports while it runs.
@@ -50,6 +65,17 @@ pub enum SqEvent<'a> {
     /// After every solver iteration: the step, the iteration within it, the term statistics and
     /// the current unit lines of G.
     Iteration { step: SqStep, iteration: usize, terms: &'a [TermStats], lines: Vec<DVec3> },
+    /// Steps 1–3 are done.
+    Congruence(&'a SqCongruence),
+    /// The quad mesh as the remesh extracted it (before Q′).
+    Remeshed { mesh: &'a PolyMesh },
+    /// After every fairing iteration of Q′: the term statistics and the vertices.
+    Fairing { iteration: usize, terms: &'a [TermStats], positions: &'a [DVec3] },
+    /// Q′ is done.
+    QuadMesh(&'a SqQuadMesh),
+    /// After every iteration of the final optimization: its phase, the iteration within the
+    /// phase, the term statistics, the vertices and the face spheres (model units).
+    Spheres { phase: SpherePhase, iteration: usize, terms: &'a [TermStats], positions: &'a [DVec3], spheres: &'a [Sphere] },
 }
 
 /// The optimized congruence on G, in model units.
@@ -112,6 +138,12 @@ pub fn validate(params: &SqParams) -> Result<(), SqError> {
     if !(ALPHA_RANGE.0..=ALPHA_RANGE.1).contains(&params.alpha_deg) {
         return bad("α", params.alpha_deg.to_string(), ALPHA_RANGE.0.to_string(), ALPHA_RANGE.1.to_string());
     }
+    if !(FACES_RANGE.0..=FACES_RANGE.1).contains(&params.faces) {
+        return bad("faces", params.faces.to_string(), FACES_RANGE.0.to_string(), FACES_RANGE.1.to_string());
+    }
+    if !(params.support_depth > 0.0 && params.support_depth < 1.0) {
+        return Err(SqError::Parameter(format!("support depth {} is outside (0, 1) of the diagonal", params.support_depth)));
+    }
     if !(RECOMPUTE_RANGE.0..=RECOMPUTE_RANGE.1).contains(&params.recompute_every) {
         return bad("RS", params.recompute_every.to_string(), RECOMPUTE_RANGE.0.to_string(), RECOMPUTE_RANGE.1.to_string());
     }
@@ -125,8 +157,8 @@ pub fn validate(params: &SqParams) -> Result<(), SqError> {
     Ok(())
 }
 
-/// Runs Sec. 5 and 5.1 on a B-spline reference (see the module docs).
-pub fn compute(
+/// Runs Sec. 5 and 5.1 on a B-spline reference (steps 1–3 of the module docs).
+pub fn compute_congruence(
     reference: &Reference,
     params: &SqParams,
     clock: Clock,
@@ -217,4 +249,163 @@ pub fn compute(
         timings_ms: timings.laps,
         warnings,
     })
+}
+
+/// The projection's hinges keep θ and α by this much (degrees): its last, pure Gauss–Newton
+/// steps may still move the angles by a few tenths.
+pub const PROJECTION_MARGIN_DEG: f64 = 0.5;
+
+/// The final SQ mesh (Sec. 5.2) with what the final optimization did.
+#[derive(Clone, Debug)]
+pub struct SqFinal {
+    pub mesh: SqMesh,
+    /// (u, v) of the final vertices (closest points).
+    pub uv: Vec<[f64; 2]>,
+    /// Angles (deg) between the final edges and the torsal directions.
+    pub edge_angles_deg: Vec<f64>,
+    pub outcome: SphereOutcome,
+}
+
+/// What [`compute`] produced, as far as [`SqParams::until`] asked.
+#[derive(Clone, Debug)]
+pub struct SqResult {
+    pub congruence: SqCongruence,
+    pub quad_mesh: Option<SqQuadMesh>,
+    pub sq_mesh: Option<SqFinal>,
+    /// Step timings (ms) after the congruence: remesh (with Q′), spheres, panels.
+    pub timings_ms: Vec<(String, f64)>,
+    pub warnings: Vec<String>,
+}
+
+impl SqResult {
+    /// Median time of a full-optimization iteration (ms).
+    pub fn final_iteration_median_ms(&self) -> Option<f64> {
+        self.sq_mesh.as_ref().and_then(|f| median(&f.outcome.iteration_ms))
+    }
+}
+
+/// Runs the SQ method as far as `params.until` (see the module docs).
+pub fn compute(
+    reference: &Reference,
+    params: &SqParams,
+    clock: Clock,
+    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+) -> Result<SqResult, SqError> {
+    let congruence = compute_congruence(reference, params, clock, on_event)?;
+    on_event(SqEvent::Congruence(&congruence))?;
+    let mut warnings = congruence.warnings.clone();
+    let mut result = SqResult { congruence, quad_mesh: None, sq_mesh: None, timings_ms: Vec::new(), warnings: Vec::new() };
+    if params.until == Until::Congruence {
+        result.warnings = warnings;
+        return Ok(result);
+    }
+    let mut timings = Timings::start(clock);
+    on_event(SqEvent::Progress(Progress::new("remesh", 0, 1)))?;
+    let mut cancelled = false;
+    let quad = quad_mesh(reference, &result.congruence, params, clock, &mut |iteration, terms, positions| {
+        let go = on_event(SqEvent::Fairing { iteration, terms, positions }).is_ok();
+        cancelled |= !go;
+        go
+    });
+    let quad = match quad {
+        Err(SqError::Cancelled) => return Err(SqError::Cancelled),
+        other => other?,
+    };
+    on_event(SqEvent::Remeshed { mesh: &quad.remesh })?;
+    on_event(SqEvent::QuadMesh(&quad))?;
+    timings.lap("remesh");
+    warnings.extend(quad.warnings.iter().cloned());
+    if params.until == Until::Remesh {
+        result.quad_mesh = Some(quad);
+        result.timings_ms = timings.laps;
+        result.warnings = warnings;
+        return Ok(result);
+    }
+    let done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
+    result.quad_mesh = Some(quad);
+    result.sq_mesh = Some(done);
+    result.timings_ms = timings.laps;
+    result.warnings = warnings;
+    Ok(result)
+}
+
+/// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
+fn final_mesh(
+    reference: &Reference,
+    congruence: &SqCongruence,
+    quad: &SqQuadMesh,
+    params: &SqParams,
+    clock: Clock,
+    timings: &mut Timings,
+    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+) -> Result<SqFinal, SqError> {
+    let surface = reference.spline().ok_or(SqError::NotBSpline)?;
+    let spline = reference.spline_reference().ok_or(SqError::NotBSpline)?;
+    let (lo, hi) = reference.mesh().bbox();
+    let (t, s) = (0.5 * (lo + hi), reference.diagonal());
+    let framed = reference.in_frame(t, s);
+    let mesh = &quad.mesh;
+    let frame_mesh = PolyMesh::new(mesh.positions.iter().map(|p| (*p - t) / s).collect(), mesh.faces.clone());
+    let radii: Vec<f64> = quad.uv.iter().map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s).collect();
+    let normals: Vec<DVec3> = quad.uv.iter().map(|uv| surface.derivatives(uv[0], uv[1]).normal().unwrap_or(DVec3::Z)).collect();
+    let lines: Vec<DVec3> = quad
+        .uv
+        .iter()
+        .zip(&normals)
+        .map(|(uv, n)| {
+            let l = on_grid(surface, congruence.grid, &congruence.lines, *uv).normalize_or_zero();
+            if l.dot(*n) < 0.0 { -l } else { l }
+        })
+        .collect();
+    let stars = QuadStars::new(mesh);
+    let input = SphereInput { mesh: &frame_mesh, radii: &radii, lines: &lines, normals: &normals, lattice: &quad.lattice,
+        on_boundary: &quad.on_boundary,
+        reference: &framed,
+        cos2_theta: params.target_theta_deg().to_radians().cos().powi(2),
+        cos2_alpha: params.target_alpha_deg().to_radians().cos().powi(2),
+        limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
+    };
+    let total = params.sphere_iterations.iter().sum::<usize>();
+    let mut cancelled = false;
+    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, &params.sphere_weights, params.sphere_iterations, clock, &mut |phase, iteration, terms, v, sp| {
+        let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
+        let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+        let before = match phase {
+            SpherePhase::WarmUp => 0,
+            SpherePhase::Full => params.sphere_iterations[0],
+            SpherePhase::Projection => params.sphere_iterations[0] + params.sphere_iterations[1],
+        };
+        let go = on_event(SqEvent::Progress(Progress::new(phase.key(), before + iteration, total))).is_ok()
+            && on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres }).is_ok();
+        cancelled |= !go;
+        go
+    });
+    if outcome.cancelled || cancelled {
+        return Err(SqError::Cancelled);
+    }
+    timings.lap("spheres");
+    let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
+    let spheres: Vec<Sphere> = spheres.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+    if positions.iter().any(|p| !p.is_finite()) || spheres.iter().any(|x| !x.is_finite()) {
+        return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
+    }
+    on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
+    // The reference's closest points: (u, v), normals and the vertices' distance.
+    let mut uv = Vec::with_capacity(positions.len());
+    let mut final_normals = Vec::with_capacity(positions.len());
+    let mut distance: f64 = 0.0;
+    for (p, start) in positions.iter().zip(&quad.uv) {
+        let (w, q, n) = spline.closest_point(*p, *start);
+        uv.push(w);
+        final_normals.push(n.unwrap_or(DVec3::Z));
+        distance = distance.max(p.distance(q));
+    }
+    let diag = reference.diagonal();
+    let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
+    let edge_angles_deg = edge_field_angles(surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
+    let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
+    out.figures.max_vertex_distance_to_reference = distance / diag;
+    on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
+    timings.lap("panels");
+    Ok(SqFinal { mesh: out, uv, edge_angles_deg, outcome })
 }

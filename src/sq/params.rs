@@ -66,6 +66,78 @@ impl Default for TorsalWeights {
     }
 }
 
+/// Weights of the final sphere-congruence optimization (Eq. 10, Table 3's first row and defaults).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SphereWeights {
+    pub sphere: f64,
+    pub unit: f64,
+    pub supp: f64,
+    /// E_supp during the warm-up ("a small value for the support structure").
+    pub warm_up_supp: f64,
+    pub torsal_plane: f64,
+    pub prox_f: f64,
+    pub prox_c: f64,
+    /// ε of the point-distance part of E_prox.
+    pub epsilon: f64,
+    pub fair: f64,
+    pub reg_sphere: f64,
+    pub reg_normal: f64,
+    /// The support planes at a node meeting at ≥ α, and the node axes within θ of the normals
+    /// (hinges; not in Eq. 10, see [`super::sphere_terms`]).
+    pub support_angle: f64,
+    pub axis_angle: f64,
+}
+
+impl Default for SphereWeights {
+    fn default() -> Self {
+        Self {
+            sphere: 2.0,
+            unit: 10.0,
+            supp: 0.5,
+            warm_up_supp: 0.05,
+            torsal_plane: 0.01,
+            prox_f: 1.0,
+            prox_c: 0.1,
+            epsilon: 0.01,
+            fair: 0.2,
+            reg_sphere: 0.04,
+            reg_normal: 0.05,
+            support_angle: 1.0,
+            axis_angle: 1.0,
+        }
+    }
+}
+
+/// How far the method runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Until {
+    /// Sec. 5.1: the optimized congruence and its torsal cross field.
+    Congruence,
+    /// Sec. 5.2, first part: the quad mesh along the cross field and Q′.
+    Remesh,
+    /// The whole method: the SQ mesh with panels, support structure and node axes.
+    #[default]
+    Final,
+}
+
+impl Until {
+    pub const ALL: [Until; 3] = [Until::Congruence, Until::Remesh, Until::Final];
+
+    pub fn key(self) -> &'static str {
+        match self {
+            Until::Congruence => "congruence",
+            Until::Remesh => "remesh",
+            Until::Final => "final",
+        }
+    }
+
+    pub fn from_key(key: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|u| u.key() == key)
+    }
+}
+
 /// The SQ method's parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -92,6 +164,23 @@ pub struct SqParams {
     /// The last iterations run with w_angle = w_fair = 0.
     pub final_iterations: usize,
     pub torsal_weights: TorsalWeights,
+    /// How far to run.
+    pub until: Until,
+    /// Quads to aim at in the remesh (Sec. 5.2).
+    pub faces: usize,
+    /// Iterations of the glide fairing that turns the remesh into Q′.
+    pub fairing_iterations: usize,
+    /// Weight of the polyline fairness against the glide terms in Q′.
+    pub fairing_weight: f64,
+    /// Iterations of the final optimization: warm-up, full (Eq. 10), projection to exactness.
+    pub sphere_iterations: [usize; 3],
+    pub sphere_weights: SphereWeights,
+    /// Depth of the support elements, relative to the bounding-box diagonal.
+    pub support_depth: f64,
+    /// Length of the displayed node axes, relative to the diagonal.
+    pub axis_length: f64,
+    /// Radii closer than this (relative to the diagonal) count as one in the schedule.
+    pub radius_tolerance: f64,
 }
 
 impl Default for SqParams {
@@ -109,6 +198,15 @@ impl Default for SqParams {
             recompute_every: 10,
             final_iterations: 10,
             torsal_weights: TorsalWeights::default(),
+            until: Until::default(),
+            faces: 237,
+            fairing_iterations: 10,
+            fairing_weight: 0.002,
+            sphere_iterations: [5, 100, 30],
+            sphere_weights: SphereWeights::default(),
+            support_depth: 0.02,
+            axis_length: 0.06,
+            radius_tolerance: 1e-3,
         }
     }
 }
@@ -130,3 +228,4 @@ pub const GRID_RANGE: (usize, usize) = (4, 100);
 pub const THETA_RANGE: (f64, f64) = (1.0, 89.0);
 pub const ALPHA_RANGE: (f64, f64) = (1.0, 90.0);
 pub const RECOMPUTE_RANGE: (usize, usize) = (1, 1000);
+pub const FACES_RANGE: (usize, usize) = (4, 20_000);

@@ -52,7 +52,7 @@ use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
-use crate::panels::{build_panels, DEFAULT_CHORD_TOLERANCE};
+use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
 use crate::progress::{Cancelled, Clock, OnProgress, Progress, Timings};
 use crate::reference::{Reference, ReferenceError};
 use crate::remeshing::{local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams, Sizing, SizingBounds};
@@ -270,19 +270,8 @@ pub fn compute(
     progress(Progress::new("panels", 0, 1))?;
     let diag = result.diag;
     result.panels = build_panels(&result.sphere_mesh, DEFAULT_CHORD_TOLERANCE * diag);
-    let topo = result.sphere_mesh.topology();
-    let panels = &result.panels;
-    result.support_geometry = support_strips(&result.support_elements, |el| {
-        // The element's arc is the panels' arc of its edge, from edge[0] to edge[1].
-        let e = topo.edge_index(el.edge[0], el.edge[1])?;
-        let &(f, k) = topo.edge_faces(e).first()?;
-        let panel = &panels[f as usize];
-        let mut points = panel.arc_points(k as usize);
-        if panel.corners[k as usize] != el.edge[0] {
-            points.reverse();
-        }
-        Some(points)
-    });
+    let (sm, panels) = (&result.sphere_mesh, &result.panels);
+    result.support_geometry = support_strips(&result.support_elements, |el| edge_arc_points(sm, panels, el.edge));
     progress(Progress::new("panels", 1, 1))?;
     timings.lap("panels");
     result.timings_ms.extend(timings.laps);

@@ -1,38 +1,46 @@
-//! The stage of SQ meshes with support structure (Sec. 5), part 5.1: runs [`crate::sq::compute`],
-//! streams the lines of the congruence while they optimize and the energy of every term, then
-//! the cross field, the files (`congruence.json`, `congruence.glb`, `report.json`) and the
-//! summary (method "sq"). The run stops after the congruence stage and says so in the report
-//! (`stopped_after: "congruence"`); quad remeshing and the final optimization (Sec. 5.2) follow.
+//! The stage of SQ meshes with support structure (Sec. 5): runs [`crate::sq::compute`] as far as
+//! the parameters' `until` asks and streams every stage live, with one progress count across
+//! them: the lines of the congruence while they optimize (Sec. 5.1), the cross field, the quad
+//! mesh as remeshed and while it fairs into Q′, the panels while the final sphere optimization
+//! runs (Sec. 5.2), then the panels, support structure and node axes; the energy of every term
+//! on every iteration; the files and the summary (method "sq").
 //!
 //! When the mean curvature changes sign (Sec. 6.3), the stage sends H at the reference's
 //! vertices (snapshot [`REFUSED_STAGE`]) before its error, so the app can show where.
 
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::StageError;
 use crate::congruence::central_spheres::JetParams;
 use crate::export::congruence::{congruence_glb, CongruenceJson, CongruenceSegments};
 use crate::export::report::{InputCounts, OutputCounts};
-use crate::export::{ExportFile, Metrics, Report};
+use crate::export::{write_mesh_obj, ExportFile, Metrics, Report};
+use crate::geometry::mesh::PolyMesh;
+use crate::geometry::sphere::Sphere;
+use crate::panels::build_panels;
+use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field};
-use crate::pipeline::panel_output::f32s;
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{ignore, Clock, Progress};
 use crate::reference::Reference;
+use crate::solver::TermStats;
 use crate::sq::metrics::CongruenceFigures;
-use crate::sq::optimization::SqStep;
-use crate::sq::params::SqParams;
+use crate::sq::params::{SqParams, Until};
 use crate::sq::segments::{grid_spacing, line_segments, LINE_LENGTH};
-use crate::sq::{compute, SqCongruence, SqError, SqEvent};
+use crate::sq::sq_mesh::SqMeshFigures;
+use crate::sq::{compute, SqCongruence, SqError, SqEvent, SqResult};
+use crate::stats::mean;
 
 /// Stage name of the method in the worker protocol (the design link's `method=sq`).
 pub const STAGE: &str = "sq";
 /// Snapshot of H at the reference vertices, sent when SQ refuses the surface (Sec. 6.3).
 pub const REFUSED_STAGE: &str = "sq.refused";
-/// What this part of the method computes last.
-pub const STOPS_AFTER: &str = "congruence";
-/// Least time between two live line snapshots (ms); every iteration still sends its energies.
+/// Least time between two live snapshots (ms); every iteration still sends its energies.
 pub const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
+/// Chord tolerance of the live panels, relative to the diagonal (coarser than the export's).
+pub const LIVE_PANEL_TOLERANCE: f64 = 2e-3;
 
 /// What the UI shows after the run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -41,40 +49,114 @@ pub struct SqSummary {
     /// Of the central congruence of the fitted r, and of the optimized one.
     pub initial: CongruenceFigures,
     pub figures: CongruenceFigures,
+    /// How exact the SQ mesh is, when the run got there.
+    #[serde(default)]
+    pub mesh: Option<SqMeshFigures>,
 }
 
-/// Runs the method on `reference`, streaming the lines and the energies to `sink`; returns the
-/// summary after sending the display fields and the files.
+/// The energies of an iteration: the total first, then every term.
+fn energies(terms: &[TermStats]) -> Vec<Energy> {
+    let total: f64 = terms.iter().filter(|t| t.weight > 0.0).map(|t| t.energy).sum();
+    let mut out = vec![Energy { name: "total".into(), value: total }];
+    out.extend(terms.iter().filter(|t| t.weight > 0.0).map(|t| Energy { name: t.name.clone(), value: t.energy }));
+    out
+}
+
+/// The edges of a mesh of polygons as point pairs.
+pub fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
+    crate::geometry::mesh::topology::Topology::new(mesh)
+        .edges()
+        .iter()
+        .map(|&[a, b]| (mesh.positions[a as usize], mesh.positions[b as usize]))
+        .collect()
+}
+
+/// Runs the method on `reference`, streaming every stage to `sink`; returns the summary after
+/// sending the display fields and the files.
 pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<SqSummary, StageError> {
     let start = sink.now_ms();
+    let diag = reference.diagonal();
     let mut last_snapshot = f64::NEG_INFINITY;
-    let (mut points, mut length, mut lc_done) = (Vec::new(), 0.0, 0);
-    let mut on_event = |e: SqEvent| match e {
-        SqEvent::Progress(p) => report(sink, STAGE, p, Vec::new(), start),
-        SqEvent::Started { points: p, lines } => {
-            points = p.to_vec();
-            length = LINE_LENGTH * grid_spacing(params.grid, &points);
-            let initial = line_segments(&points, lines, length);
-            sink.snapshot(STAGE, 0, vec![segments_field(field::SQ_INITIAL_LINES, &initial), segments_field(field::SQ_LINES, &initial)]);
-            last_snapshot = sink.now_ms();
-            report(sink, STAGE, Progress::new("line_congruence", 0, params.lc_iterations + params.torsal_iterations), Vec::new(), start)
-        }
-        SqEvent::Iteration { step, iteration, terms, lines } => {
-            let total: f64 = terms.iter().map(|t| t.energy).sum();
-            let mut energies = vec![Energy { name: "total".into(), value: total }];
-            energies.extend(terms.iter().map(|t| Energy { name: t.name.clone(), value: t.energy }));
-            // Step 1 may converge early: step 2 counts on from where it stopped.
-            if step == SqStep::LineCongruence {
-                lc_done = iteration;
+    let (mut points, mut length) = (Vec::new(), 0.0);
+    let mut faces: Vec<crate::geometry::mesh::Face> = Vec::new();
+    // One count across the stages: iterations done, and at most how many there will be.
+    let [warm, full, projection] = params.sphere_iterations;
+    let later = match params.until {
+        Until::Congruence => 0,
+        Until::Remesh => params.fairing_iterations + 1,
+        Until::Final => params.fairing_iterations + 1 + warm + full + 2 * projection + 1,
+    };
+    let mut planned = params.lc_iterations + params.torsal_iterations + later;
+    let mut done = 0usize;
+    let mut lc_done = 0usize;
+    let mut on_event = |e: SqEvent| -> Result<(), crate::progress::Cancelled> {
+        let mut due = |sink: &mut dyn Sink| {
+            let now = sink.now_ms();
+            let due = now - last_snapshot >= SNAPSHOT_INTERVAL_MS;
+            if due {
+                last_snapshot = now;
             }
-            let done = iteration + if step == SqStep::Torsal { lc_done } else { 0 };
-            let total = if step == SqStep::Torsal { lc_done } else { params.lc_iterations } + params.torsal_iterations;
-            let go = report(sink, STAGE, Progress::new(step.key(), done, total), energies, start);
-            if go.is_ok() && sink.now_ms() - last_snapshot >= SNAPSHOT_INTERVAL_MS {
-                sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_LINES, &line_segments(&points, &lines, length))]);
+            due
+        };
+        match e {
+            SqEvent::Progress(p) => report(sink, STAGE, Progress::new(p.step, done.min(planned), planned), Vec::new(), start),
+            SqEvent::Started { points: p, lines } => {
+                points = p.to_vec();
+                length = LINE_LENGTH * grid_spacing(params.grid, &points);
+                let initial = line_segments(&points, lines, length);
+                sink.snapshot(STAGE, 0, vec![segments_field(field::SQ_INITIAL_LINES, &initial), segments_field(field::SQ_LINES, &initial)]);
                 last_snapshot = sink.now_ms();
+                report(sink, STAGE, Progress::new("line_congruence", 0, planned), Vec::new(), start)
             }
-            go
+            SqEvent::Iteration { step, iteration, terms, lines } => {
+                // Step 1 may converge early: the count goes on from where it stopped.
+                if step == crate::sq::optimization::SqStep::LineCongruence {
+                    lc_done = iteration;
+                    done = iteration;
+                } else {
+                    planned = lc_done + params.torsal_iterations + later;
+                    done = lc_done + iteration;
+                }
+                let go = report(sink, STAGE, Progress::new(step.key(), done, planned), energies(terms), start);
+                if go.is_ok() && due(sink) {
+                    sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_LINES, &line_segments(&points, &lines, length))]);
+                }
+                go
+            }
+            SqEvent::Congruence(c) => {
+                done = lc_done + c.torsal_iterations;
+                planned = done + later;
+                sink.snapshot(STAGE, done as u32, display_fields(&CongruenceSegments::of(c)));
+                report(sink, STAGE, Progress::new("cross_field", done, planned), Vec::new(), start)
+            }
+            SqEvent::Remeshed { mesh } => {
+                faces = mesh.faces.clone();
+                sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh))]);
+                Ok(())
+            }
+            SqEvent::Fairing { iteration, terms, positions } => {
+                done += 1;
+                let go = report(sink, STAGE, Progress::new("fairing", done, planned), energies(terms), start);
+                if go.is_ok() && due(sink) && !faces.is_empty() {
+                    let mesh = PolyMesh::new(positions.to_vec(), faces.clone());
+                    sink.snapshot(STAGE, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&mesh))]);
+                }
+                go
+            }
+            SqEvent::QuadMesh(q) => {
+                faces = q.mesh.faces.clone();
+                done += 1;
+                sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&q.mesh))]);
+                report(sink, STAGE, Progress::new("quad_mesh", done, planned), Vec::new(), start)
+            }
+            SqEvent::Spheres { phase, terms, positions, spheres, .. } => {
+                done += 1;
+                let go = report(sink, STAGE, Progress::new(phase.key(), done.min(planned), planned), energies(terms), start);
+                if go.is_ok() && due(sink) {
+                    sink.snapshot(STAGE, done as u32, live_panels(positions, &faces, spheres, diag));
+                }
+                go
+            }
         }
     };
     let result = match compute(reference, params, clock, &mut on_event) {
@@ -89,11 +171,32 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
         }
         Err(e) => return Err(e.into()),
     };
-    let segments = CongruenceSegments::of(&result);
-    let (report, files) = export(reference, &result, params, &segments);
-    sink.snapshot(STAGE, (result.lc_iterations + result.torsal_iterations) as u32, display_fields(&segments));
+    let segments = CongruenceSegments::of(&result.congruence);
+    let (report, files) = export(reference, &result, params, &segments, clock);
+    let mut fields = display_fields(&segments);
+    if let Some(q) = &result.quad_mesh {
+        let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
+        fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
+    }
+    if let Some(f) = &result.sq_mesh {
+        fields.extend(panel_fields(&f.mesh.panels));
+        fields.extend(support_fields(&f.mesh.support_geometry, &f.mesh.node_axis_segments()));
+    }
+    sink.snapshot(STAGE, planned as u32, fields);
     sink.files(STAGE, files);
-    Ok(SqSummary { report, initial: result.initial_figures, figures: result.figures })
+    let c = &result.congruence;
+    Ok(SqSummary { report, initial: c.initial_figures.clone(), figures: c.figures.clone(), mesh: result.sq_mesh.as_ref().map(|f| f.mesh.figures) })
+}
+
+/// Panels of the current spheres, coarsely tessellated, for the live view.
+fn live_panels(positions: &[DVec3], faces: &[crate::geometry::mesh::Face], spheres: &[Sphere], diag: f64) -> Vec<Field> {
+    if faces.is_empty() || faces.len() != spheres.len() {
+        return Vec::new();
+    }
+    let sm = SphereMesh::new(PolyMesh::new(positions.to_vec(), faces.to_vec()), spheres.to_vec(), BoundaryArcRule::Parallel(DVec3::ZERO));
+    let mut fields = panel_fields(&build_panels(&sm, LIVE_PANEL_TOLERANCE * diag));
+    fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&sm.mesh)));
+    fields
 }
 
 /// Segments as a field of point pairs.
@@ -113,7 +216,7 @@ pub fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
     ]
 }
 
-/// The report (method "sq") of a result.
+/// The report (method "sq") of the congruence part of a run.
 pub fn sq_report(reference: &Reference, result: &SqCongruence, params: &SqParams) -> Report {
     let (f, i) = (&result.figures, &result.initial_figures);
     let mut report = Report::new(STAGE);
@@ -139,7 +242,6 @@ pub fn sq_report(reference: &Reference, result: &SqCongruence, params: &SqParams
     for (step, ms) in &result.timings_ms {
         report.add_timing(step.clone(), *ms);
     }
-    report.add_timing("total", result.timings_ms.iter().map(|(_, ms)| ms).sum::<f64>());
     report.add_timing("lc_iteration_median", result.lc_iteration_median_ms().unwrap_or(0.0));
     report.add_timing("torsal_iteration_median", result.torsal_iteration_median_ms().unwrap_or(0.0));
     report.iterations = Some(result.lc_iterations + result.torsal_iterations);
@@ -147,28 +249,74 @@ pub fn sq_report(reference: &Reference, result: &SqCongruence, params: &SqParams
     report.theta_deg = Some(params.theta_deg);
     report.alpha_deg = Some(params.alpha_deg);
     report.radius_basis = Some(result.radius_basis);
-    report.stopped_after = Some(STOPS_AFTER.into());
+    report.stopped_after = Some(params.until.key().into());
     report.warnings = result.warnings.clone();
     report
 }
 
-/// The report and the files: `congruence.json`, `congruence.glb`, `report.json`.
-pub fn export(reference: &Reference, result: &SqCongruence, params: &SqParams, segments: &CongruenceSegments) -> (Report, Vec<ExportFile>) {
-    let report = sq_report(reference, result, params);
+/// The report and the files: `congruence.json`, `congruence.glb`; with the quad mesh
+/// `mesh.obj` (Q′, or the SQ mesh's vertices and quads); with the SQ mesh `panels.glb`,
+/// `panels.obj`, the schedule (`panels.csv`, `panels.json`, `support.csv`); and `report.json`.
+pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, segments: &CongruenceSegments, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let c = &result.congruence;
+    let mut report = sq_report(reference, c, params);
     let ((u0, u1), (v0, v1)) = reference.spline().map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
-    let json = CongruenceJson::of(result, params.theta_deg, params.alpha_deg, [[u0, u1], [v0, v1]]);
+    let json = CongruenceJson::of(c, params.theta_deg, params.alpha_deg, [[u0, u1], [v0, v1]]);
     let extras = serde_json::json!({
         "method": STAGE,
         "theta_deg": params.theta_deg,
         "alpha_deg": params.alpha_deg,
-        "grid": result.grid,
+        "grid": c.grid,
         "metrics": &report.metrics,
     });
     let file = |name: &str, mime: &str, bytes: Vec<u8>| ExportFile { name: name.into(), mime: mime.into(), bytes };
-    let files = vec![
+    let mut files = vec![
         file("congruence.glb", "model/gltf-binary", congruence_glb(reference.mesh(), segments, extras)),
         file("congruence.json", "application/json", json.to_json().into_bytes()),
-        file("report.json", "application/json", report.to_json().into_bytes()),
     ];
+    for (step, ms) in &result.timings_ms {
+        report.add_timing(step.clone(), *ms);
+    }
+    report.warnings = result.warnings.clone();
+    if let Some(q) = &result.quad_mesh {
+        let m = &mut report.metrics;
+        m.coverage = Some(q.coverage);
+        let angles = result.sq_mesh.as_ref().map_or(&q.edge_angles_deg, |f| &f.edge_angles_deg);
+        m.mean_edge_torsal_angle_deg = Some(mean(angles));
+        m.max_edge_torsal_angle_deg = Some(angles.iter().copied().fold(0.0, f64::max));
+        let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
+        report.output = OutputCounts { vertices: mesh.vertex_count(), faces: mesh.face_count(), panels: 0 };
+        files.push(file("mesh.obj", "text/plain", write_mesh_obj(mesh, "sq_mesh").into_bytes()));
+    }
+    if let Some(f) = &result.sq_mesh {
+        let g = &f.mesh.figures;
+        let m = &mut report.metrics;
+        m.congruence_min_torsal_plane_angle_deg = m.min_torsal_plane_angle_deg;
+        m.max_vertex_sphere_residual = Some(g.max_vertex_sphere_residual);
+        m.max_centre_face_planarity = Some(g.max_centre_face_planarity);
+        m.max_torsal_plane_residual = Some(g.max_torsal_plane_residual);
+        m.max_axis_normal_angle_deg = Some(g.max_axis_normal_angle_deg);
+        m.mean_axis_normal_angle_deg = Some(g.mean_axis_normal_angle_deg);
+        m.min_torsal_plane_angle_deg = Some(g.min_torsal_plane_angle_deg);
+        m.max_vertex_distance_to_reference = Some(g.max_vertex_distance_to_reference);
+        m.axes_from_spheres = Some(g.axes_from_spheres);
+        let o = &f.outcome;
+        m.final_iterations = Some([o.warm_up_iterations, o.iterations, o.projection_iterations]);
+        report.add_timing("final_iteration_median", result.final_iteration_median_ms().unwrap_or(0.0));
+        let axes = f.mesh.node_axis_segments();
+        let timings: Vec<(String, f64)> = report.timings_ms.iter().map(|(k, v)| (k.clone(), *v)).collect();
+        let export = PanelExport::new(STAGE, &f.mesh.sphere_mesh, &f.mesh.panels, reference.diagonal(), params.radius_tolerance, report.metrics.clone(), &timings)
+            .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
+            .with_support(&f.mesh.support_geometry, &f.mesh.support_elements, &axes);
+        let (panel_report, panel_files) = export_panels(reference, export, clock);
+        report.metrics = panel_report.metrics;
+        report.output = panel_report.output;
+        report.timings_ms = panel_report.timings_ms;
+        files.extend(panel_files.into_iter().filter(|f| f.name != "report.json"));
+    }
+    let total: f64 = c.timings_ms.iter().chain(&result.timings_ms).map(|(_, ms)| ms).sum();
+    report.timings_ms.insert("total".into(), total);
+    report.iterations = Some(c.lc_iterations + c.torsal_iterations + result.sq_mesh.as_ref().map_or(0, |f| f.outcome.warm_up_iterations + f.outcome.iterations + f.outcome.projection_iterations));
+    files.push(file("report.json", "application/json", report.to_json().into_bytes()));
     (report, files)
 }

@@ -77,7 +77,8 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
     let axes = result.node_axis_segments();
     let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &result.timings_ms)
         .with_extras(crate::export::absolute_sphere_extras(&result.omega))
-        .with_support(&result.support_geometry, &axes, &result.omega);
+        .with_support(&result.support_geometry, &result.support_elements, &axes)
+        .with_absolute_sphere(&result.omega);
     export_panels(reference, export, clock)
 }
 

@@ -1,0 +1,173 @@
+//! Sec. 5.2, first part: the quad mesh along the torsal cross field, and Q′.
+//!
+//! 1. The torsal directions of the optimized congruence (per quad of G, in parameters) are combed
+//!    into a cross field and integrated to a quad mesh with about N faces
+//!    ([`crate::remeshing::quad_remeshing`]).
+//! 2. **Q′**: the zigzag is removed by letting the mesh glide over the reference while its
+//!    polylines are faired (second differences, Tang et al. 2014): the glide terms of
+//!    [`crate::reference::proximity`] (tangent distance and ε times point distance), the fairness
+//!    and E_reg, in the frame of the bounding box. Vertices on the patch boundary stay where the
+//!    remesh put them (on the boundary curve).
+//! 3. Each vertex's (u, v) is its closest point on the reference.
+//!
+//! A torsal field with a singularity (an umbilic, where the directions turn about a point, as on
+//! a paraboloid of revolution) cannot be combed into two functions: its integration folds. Then
+//! the remesh follows the parameter lines instead, and the result says so in a warning.
+
+use std::collections::{HashMap, HashSet};
+
+use glam::DVec3;
+
+use crate::geometry::mesh::PolyMesh;
+use crate::progress::Clock;
+use crate::reference::proximity::ReferenceProximity;
+use crate::reference::Reference;
+use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, quad_remesh, CrossField, QuadRemesh, QuadRemeshParams};
+use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats, Termination};
+
+use super::error::SqError;
+use super::params::SqParams;
+use super::SqCongruence;
+
+/// The quad mesh of Sec. 5.2 before the final optimization (model units).
+#[derive(Clone, Debug)]
+pub struct SqQuadMesh {
+    /// The combed torsal field, and the cross field the remesh followed (the torsal field, or
+    /// the parameter lines).
+    pub torsal: CrossField,
+    pub field: CrossField,
+    /// Whether the remesh had to follow the parameter lines (a singular torsal field).
+    pub parameter_lines: bool,
+    /// The mesh as extracted, and Q′.
+    pub remesh: PolyMesh,
+    pub mesh: PolyMesh,
+    /// (u, v) of Q′'s vertices (closest points).
+    pub uv: Vec<[f64; 2]>,
+    pub lattice: Vec<[i32; 2]>,
+    pub on_boundary: Vec<bool>,
+    /// Covered share of the patch's area.
+    pub coverage: f64,
+    /// Cells dropped as degenerate by the remesh.
+    pub dropped: usize,
+    /// Angles (deg) between the edges of the remesh and of Q′ and the torsal directions.
+    pub remesh_edge_angles_deg: Vec<f64>,
+    pub edge_angles_deg: Vec<f64>,
+    pub fairing_iterations: usize,
+    pub warnings: Vec<String>,
+}
+
+/// Second differences along the lattice polylines (both neighbours present and joined by mesh
+/// edges), per coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the
+/// patch boundary are left out: the boundary cuts the last segment of a polyline short, and
+/// fairing it would drag the polyline off the torsal direction.
+pub fn polyline_fairness(lattice: &[[i32; 2]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
+    let index: HashMap<[i32; 2], u32> = lattice.iter().enumerate().map(|(v, &k)| (k, v as u32)).collect();
+    let edge_set: HashSet<[u32; 2]> = edges.iter().copied().collect();
+    let joined = |a: u32, b: u32| edge_set.contains(&[a.min(b), a.max(b)]);
+    let mut fair = Linear::new();
+    for (v, &[k, l]) in lattice.iter().enumerate() {
+        for (dk, dl) in [(1, 0), (0, 1)] {
+            let (Some(&a), Some(&b)) = (index.get(&[k - dk, l - dl]), index.get(&[k + dk, l + dl])) else { continue };
+            if !(joined(a, v as u32) && joined(v as u32, b)) || [a as usize, v, b as usize].iter().any(|&i| on_boundary[i]) {
+                continue;
+            }
+            for c in 0..3 {
+                fair.push_row(&[(offset(a as usize) + c, 1.0), (offset(v) + c, -2.0), (offset(b as usize) + c, 1.0)], 0.0);
+            }
+        }
+    }
+    fair.with_name("fairness")
+}
+
+/// Remeshes along the torsal field of `congruence` and fairs the result into Q′ (see the module
+/// docs). `hook` sees every fairing iteration (terms, vertices in model units); false cancels.
+pub fn quad_mesh(
+    reference: &Reference,
+    congruence: &SqCongruence,
+    params: &SqParams,
+    clock: Clock,
+    hook: &mut dyn FnMut(usize, &[TermStats], &[DVec3]) -> bool,
+) -> Result<SqQuadMesh, SqError> {
+    let surface = reference.spline().ok_or(SqError::NotBSpline)?;
+    let torsal = CrossField::comb(surface, congruence.grid, &congruence.torsal_uv).ok_or(SqError::NoTorsalField)?;
+    let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
+    let mut warnings = Vec::new();
+    let (field, remesh, parameter_lines) = match quad_remesh(surface, &torsal, &remesh_params)? {
+        r if r.folded_triangles == 0 => (torsal.clone(), r, false),
+        folded => {
+            let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (congruence.grid - 1).pow(2)];
+            let field = CrossField::comb(surface, congruence.grid, &lines).ok_or(SqError::NoTorsalField)?;
+            let r = quad_remesh(surface, &field, &remesh_params)?;
+            warnings.push(format!(
+                "the torsal directions turn about a point (an umbilic or a singularity of the cross field: {} folded triangles in its integration), so no quad mesh without singular vertices follows them; the quad mesh follows the parameter lines and the final optimization makes it an exact SQ mesh",
+                folded.folded_triangles
+            ));
+            (field, r, true)
+        }
+    };
+    let QuadRemesh { mesh: remesh, uv, lattice, on_boundary, dropped, .. } = remesh;
+    let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
+
+    // Q′ in the frame of the bounding box.
+    let (lo, hi) = reference.mesh().bbox();
+    let (t, s) = (0.5 * (lo + hi), reference.diagonal());
+    let framed = reference.in_frame(t, s);
+    let nv = remesh.vertex_count();
+    let mut x: Vec<f64> = remesh.positions.iter().flat_map(|p| ((*p - t) / s).to_array()).collect();
+    let offsets: Vec<usize> = (0..nv).map(|v| 3 * v).collect();
+    let mut problem = Problem::new(3 * nv);
+    let tangent = ReferenceProximity::tangent(&framed, offsets.clone());
+    let mut point = ReferenceProximity::point(&framed, offsets, vec![params.sphere_weights.epsilon.sqrt(); nv]);
+    point.share_closest_with(&tangent);
+    problem.add_term(tangent.with_name("glide_tangent"), 1.0);
+    problem.add_term(point.with_name("glide_point"), 1.0);
+    let edges = crate::geometry::mesh::topology::Topology::new(&remesh).edges().to_vec();
+    problem.add_term(polyline_fairness(&lattice, &on_boundary, &edges, |v| 3 * v), params.fairing_weight);
+    problem.add_term(Proximal::new((0..3 * nv).collect()), 0.05);
+    for (v, &b) in on_boundary.iter().enumerate() {
+        problem.group_variables(3 * v..3 * v + 3);
+        if b {
+            problem.fix_range(3 * v..3 * v + 3);
+        }
+    }
+    let mut solver = Solver::new(SolverOptions { max_iterations: params.fairing_iterations, clock: clock.0, ..SolverOptions::default() });
+    let report = solver.solve(&mut problem, &mut x, |it| {
+        let pts: Vec<DVec3> = it.x.chunks(3).map(|c| t + s * DVec3::new(c[0], c[1], c[2])).collect();
+        hook(it.iteration, it.terms, &pts)
+    });
+    if report.termination == Termination::Cancelled {
+        return Err(SqError::Cancelled);
+    }
+    // Closest points: the (u, v) of Q′'s vertices.
+    let start = reference.spline_reference().ok_or(SqError::NotBSpline)?;
+    let mut positions = Vec::with_capacity(nv);
+    let mut q_uv = Vec::with_capacity(nv);
+    for v in 0..nv {
+        let p = t + s * DVec3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+        let (w, _, _) = start.closest_point(p, uv[v]);
+        positions.push(p);
+        q_uv.push(w);
+    }
+    let mesh = PolyMesh::new(positions, remesh.faces.clone());
+    let edge_angles_deg = edge_field_angles(surface, &torsal, &mesh, &q_uv, &on_boundary);
+    let coverage = coverage(surface, &mesh);
+    if coverage < 0.9 {
+        warnings.push(format!("the quad mesh covers {:.1} % of the patch", 100.0 * coverage));
+    }
+    Ok(SqQuadMesh {
+        torsal,
+        field,
+        parameter_lines,
+        remesh,
+        mesh,
+        uv: q_uv,
+        lattice,
+        on_boundary,
+        coverage,
+        dropped,
+        remesh_edge_angles_deg,
+        edge_angles_deg,
+        fairing_iterations: report.iterations,
+        warnings,
+    })
+}

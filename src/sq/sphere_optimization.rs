@@ -1,0 +1,442 @@
+//! The final sphere-congruence optimization (Sec. 5.2, Eq. 10, Fig. 24) on the quad mesh Q′, and
+//! the projection to an exact SQ mesh with support structure.
+//!
+//! **Variables** (in the frame of the bounding box, like Sec. 5.1): per face its sphere (A, B, C);
+//! the vertices of Q′; per inner vertex n_cq, the normal of the face of the mesh of centres (the
+//! node axis); per edge n_uw, the normal of its discrete torsal plane.
+//!
+//! **Initialization** (Fig. 24 left): c_ij = q_ij + r(u_i, v_j) n_ij; each face's sphere has the
+//! mean of its corners' centres and radii. n_cq starts as the congruence's line at the vertex,
+//! n_uw as the unit (u − w) × (l_u + l_w).
+//!
+//! **Energy** (Eq. 10, Table 3's weights): E_sphere ([`PointOnSphere`]), E_unit
+//! ([`UnitLength::spheres`]), E_supp ([`CentrePlanarity`]), E_torsal plane ([`TorsalPlane`]),
+//! E_prox for the vertices (the glide terms of [`crate::reference::proximity`]: tangent distance
+//! plus ε times point distance) and for the centres ([`CentreProximity`]), quad fairness (second
+//! differences along the mesh polylines) and E_reg ([`Proximal`] on spheres and normals); and two
+//! hinges that hold the support planes at ≥ α and the node axes within θ of the normals
+//! ([`CentreQuadAngle`], [`AxisNormalAngle`]).
+//!
+//! **Phases**: a warm-up moves only the spheres (and n_cq) under E_sphere, E_unit and a small
+//! E_supp; then the full optimization. Per-edge and per-star normals couple only to their own
+//! edge or star, so the block ordering eliminates them first (a Schur complement inside the
+//! sparse Cholesky factorization).
+//!
+//! **Projection to exactness.** At an inner vertex four spheres meet; when their centres are
+//! coplanar, the reflection of the vertex in that plane lies on all four, so the spheres share a
+//! second point and the node axis is the line through both, orthogonal to the plane. Then the
+//! circle of every inner edge contains both end vertices and both second points, so neighbouring
+//! node axes are coplanar: the support structure is torsion free. Exactness therefore needs only
+//! (i) every vertex on its faces' spheres and (ii) coplanar centres at inner vertices. The last
+//! phase solves exactly these equations (with the unit normalizations) by Gauss–Newton from the
+//! optimized state, all other weights zero and a tiny damping: it converges quadratically to a
+//! nearby exact solution (an underdetermined system: 4F + 4S equations, 5F + 3V + 3S unknowns).
+
+use glam::DVec3;
+
+use crate::geometry::bspline::BSplineSurface;
+use crate::geometry::mesh::PolyMesh;
+use crate::geometry::sphere::Sphere;
+use crate::progress::Clock;
+use crate::reference::proximity::ReferenceProximity;
+use crate::reference::Reference;
+use crate::solver::terms::v3;
+use crate::solver::{Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermStats, Termination, UnitLength};
+
+use super::params::SphereWeights;
+use super::quad_mesh::polyline_fairness;
+use super::sphere_terms::{AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane, VertexNormals};
+
+/// Neighbouring face centres keep at least this share of their initial distance.
+pub const CENTRE_SEPARATION: f64 = 0.25;
+
+/// The phases, as reported to the hook.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpherePhase {
+    WarmUp,
+    Full,
+    Projection,
+}
+
+impl SpherePhase {
+    pub fn key(self) -> &'static str {
+        match self {
+            SpherePhase::WarmUp => "warm_up",
+            SpherePhase::Full => "spheres",
+            SpherePhase::Projection => "projection",
+        }
+    }
+}
+
+/// Called after every iteration with the phase, the iteration within it, the term statistics,
+/// the vertices and the spheres (frame units); false cancels.
+pub type SphereHook<'h> = dyn FnMut(SpherePhase, usize, &[TermStats], &[DVec3], &[Sphere]) -> bool + 'h;
+
+/// The combinatorics the optimization needs.
+#[derive(Clone, Debug)]
+pub struct QuadStars {
+    /// Per inner vertex (four faces in a closed cycle): the vertex and its faces in order.
+    pub stars: Vec<(u32, [u32; 4])>,
+    /// Per vertex: its star index, if inner.
+    pub star_of: Vec<Option<usize>>,
+    /// Per vertex with three faces: the vertex and its faces.
+    pub fans: Vec<(u32, [u32; 3])>,
+    /// Every edge (lo, hi).
+    pub edges: Vec<[u32; 2]>,
+}
+
+impl QuadStars {
+    pub fn new(mesh: &PolyMesh) -> Self {
+        let nv = mesh.vertex_count();
+        let mut incident: Vec<Vec<u32>> = vec![Vec::new(); nv];
+        for (f, face) in mesh.faces.iter().enumerate() {
+            for &v in face.corners() {
+                incident[v as usize].push(f as u32);
+            }
+        }
+        let corner = |f: u32, v: u32| mesh.faces[f as usize].corners().iter().position(|&c| c == v);
+        let mut stars = Vec::new();
+        let mut star_of = vec![None; nv];
+        let mut fans = Vec::new();
+        for v in 0..nv as u32 {
+            let faces = &incident[v as usize];
+            if let &[f, g, h] = faces.as_slice() {
+                fans.push((v, [f, g, h]));
+            }
+            if faces.len() != 4 {
+                continue;
+            }
+            // Walk around v: from face f, the next face contains v and f's corner after v.
+            let mut order = [faces[0]; 4];
+            let mut closed = true;
+            for k in 1..=4 {
+                let f = order[k - 1];
+                let c = mesh.faces[f as usize].corners();
+                let next = c[(corner(f, v).unwrap() + 1) % c.len()];
+                let g = faces.iter().copied().find(|&g| g != f && corner(g, next).is_some());
+                match (k, g) {
+                    (4, Some(g)) => closed &= g == order[0],
+                    (_, Some(g)) => order[k] = g,
+                    (_, None) => closed = false,
+                }
+                if !closed {
+                    break;
+                }
+            }
+            let mut distinct = order.to_vec();
+            distinct.sort_unstable();
+            distinct.dedup();
+            if closed && distinct.len() == 4 {
+                star_of[v as usize] = Some(stars.len());
+                stars.push((v, order));
+            }
+        }
+        let topo = crate::geometry::mesh::topology::Topology::new(mesh);
+        Self { stars, star_of, fans, edges: topo.edges().to_vec() }
+    }
+}
+
+/// Where the variables are.
+#[derive(Clone, Copy, Debug)]
+pub struct SphereLayout {
+    pub faces: usize,
+    pub vertices: usize,
+    pub stars: usize,
+    pub edges: usize,
+}
+
+impl SphereLayout {
+    pub fn sphere(&self, f: usize) -> usize {
+        5 * f
+    }
+    pub fn vertex(&self, v: usize) -> usize {
+        5 * self.faces + 3 * v
+    }
+    pub fn star_normal(&self, s: usize) -> usize {
+        5 * self.faces + 3 * self.vertices + 3 * s
+    }
+    pub fn edge_normal(&self, e: usize) -> usize {
+        5 * self.faces + 3 * self.vertices + 3 * self.stars + 3 * e
+    }
+    pub fn len(&self) -> usize {
+        self.edge_normal(self.edges)
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// What the optimization starts from, in the frame.
+pub struct SphereInput<'a> {
+    pub mesh: &'a PolyMesh,
+    /// Per vertex: the congruence's radius r(u, v) (frame units) and unit line, and f's unit normal.
+    pub radii: &'a [f64],
+    pub lines: &'a [DVec3],
+    pub normals: &'a [DVec3],
+    /// Per vertex: its lattice index (k, l), for the polylines of the fairness term.
+    pub lattice: &'a [[i32; 2]],
+    pub on_boundary: &'a [bool],
+    /// The reference in the frame.
+    pub reference: &'a Reference,
+    /// cos² of the angles the hinges aim at: θ for the node axes, α for the support planes.
+    pub cos2_theta: f64,
+    pub cos2_alpha: f64,
+    /// θ and α (degrees), less a small margin: the projection's hinges.
+    pub limits: [f64; 2],
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default)]
+pub struct SphereOutcome {
+    pub warm_up_iterations: usize,
+    pub iterations: usize,
+    pub projection_iterations: usize,
+    pub iteration_ms: Vec<f64>,
+    pub phase_ms: PhaseTimes,
+    /// The terms after the full optimization (before the projection).
+    pub terms: Vec<TermStats>,
+    pub cancelled: bool,
+}
+
+/// The initial spheres of Fig. 24 (left): per face, the mean of its corners' centres
+/// q + r n and radii r.
+pub fn initial_spheres(mesh: &PolyMesh, radii: &[f64], normals: &[DVec3]) -> Vec<Sphere> {
+    mesh.faces
+        .iter()
+        .map(|face| {
+            let c = face.corners();
+            let k = c.len() as f64;
+            let centre = c.iter().map(|&v| mesh.positions[v as usize] + radii[v as usize] * normals[v as usize]).sum::<DVec3>() / k;
+            let r = c.iter().map(|&v| radii[v as usize]).sum::<f64>() / k;
+            Sphere::from_center_radius(centre, r)
+        })
+        .collect()
+}
+
+/// The vertices and spheres of `x`.
+pub fn unpack(layout: &SphereLayout, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
+    let vertices = (0..layout.vertices).map(|v| v3(x, layout.vertex(v))).collect();
+    let spheres = (0..layout.faces).map(|f| Sphere::from_array(x[layout.sphere(f)..layout.sphere(f) + 5].try_into().unwrap())).collect();
+    (vertices, spheres)
+}
+
+/// Runs the warm-up, the full optimization and the projection (see the module docs); returns
+/// the vertices, the spheres (normalized) and what happened.
+pub fn optimize_spheres(
+    input: &SphereInput,
+    stars: &QuadStars,
+    w: &SphereWeights,
+    iterations: [usize; 3],
+    clock: Clock,
+    hook: &mut SphereHook,
+) -> (Vec<DVec3>, Vec<Sphere>, SphereOutcome) {
+    let mesh = input.mesh;
+    let layout = SphereLayout { faces: mesh.face_count(), vertices: mesh.vertex_count(), stars: stars.stars.len(), edges: stars.edges.len() };
+    let mut x = vec![0.0; layout.len()];
+    let spheres = initial_spheres(mesh, input.radii, input.normals);
+    for (f, s) in spheres.iter().enumerate() {
+        x[layout.sphere(f)..layout.sphere(f) + 5].copy_from_slice(&s.to_array());
+    }
+    for (v, p) in mesh.positions.iter().enumerate() {
+        x[layout.vertex(v)..layout.vertex(v) + 3].copy_from_slice(&p.to_array());
+    }
+    for (s, &(v, _)) in stars.stars.iter().enumerate() {
+        x[layout.star_normal(s)..layout.star_normal(s) + 3].copy_from_slice(&input.lines[v as usize].to_array());
+    }
+    let axis = |v: u32| match stars.star_of[v as usize] {
+        Some(s) => NodeAxis::Variable(layout.star_normal(s)),
+        None => NodeAxis::Fixed(input.lines[v as usize]),
+    };
+    let mut torsal_edges = Vec::with_capacity(layout.edges);
+    for (e, &[u, w]) in stars.edges.iter().enumerate() {
+        let (pu, pw) = (mesh.positions[u as usize], mesh.positions[w as usize]);
+        let l = input.lines[u as usize] + input.lines[w as usize];
+        let n = (pu - pw).cross(l).try_normalize().unwrap_or(DVec3::Z);
+        x[layout.edge_normal(e)..layout.edge_normal(e) + 3].copy_from_slice(&n.to_array());
+        torsal_edges.push((layout.vertex(u as usize), layout.vertex(w as usize), axis(u), axis(w), layout.edge_normal(e)));
+    }
+
+    let mut problem = Problem::new(layout.len());
+    let pairs: Vec<(usize, usize)> =
+        mesh.faces.iter().enumerate().flat_map(|(f, face)| face.corners().iter().map(move |&v| (layout.vertex(v as usize), layout.sphere(f)))).collect();
+    let sphere_id = problem.add_term(PointOnSphere::new(pairs).with_name("sphere"), w.sphere);
+    let sphere_offsets: Vec<usize> = (0..layout.faces).map(|f| layout.sphere(f)).collect();
+    let unit_id = problem.add_term(UnitLength::spheres(sphere_offsets).with_name("sphere_unit"), w.unit);
+    let star_terms: Vec<([usize; 4], usize)> =
+        stars.stars.iter().enumerate().map(|(s, (_, faces))| (faces.map(|f| layout.sphere(f as usize)), layout.star_normal(s))).collect();
+    let supp_id = problem.add_term(CentrePlanarity { stars: star_terms }, w.supp);
+    let star_normals: Vec<usize> = (0..layout.stars).map(|s| layout.star_normal(s)).collect();
+    let star_unit_id = problem.add_term(UnitLength::vectors(star_normals).with_name("axis_unit"), w.unit);
+    let torsal_id = problem.add_term(TorsalPlane { edges: torsal_edges }, w.torsal_plane);
+    let edge_normals: Vec<usize> = (0..layout.edges).map(|e| layout.edge_normal(e)).collect();
+    let edge_unit_id = problem.add_term(UnitLength::vectors(edge_normals).with_name("torsal_plane_unit"), w.unit);
+    let vertex_offsets: Vec<usize> = (0..layout.vertices).map(|v| layout.vertex(v)).collect();
+    let tangent = ReferenceProximity::tangent(input.reference, vertex_offsets.clone());
+    let mut point = ReferenceProximity::point(input.reference, vertex_offsets, vec![w.epsilon.sqrt(); layout.vertices]);
+    point.share_closest_with(&tangent);
+    let tangent_id = problem.add_term(tangent.with_name("vertex_proximity"), w.prox_f);
+    let point_id = problem.add_term(point.with_name("vertex_proximity_point"), w.prox_f);
+    let centre_faces: Vec<(usize, DVec3, DVec3)> = mesh
+        .faces
+        .iter()
+        .enumerate()
+        .map(|(f, face)| {
+            let l = face.corners().iter().map(|&v| input.lines[v as usize]).sum::<DVec3>().normalize_or_zero();
+            (layout.sphere(f), spheres[f].center().unwrap_or(DVec3::ZERO), l)
+        })
+        .collect();
+    let centre_id = problem.add_term(CentreProximity { faces: centre_faces, epsilon: w.epsilon }, w.prox_c);
+    let fair_id = problem.add_term(polyline_fairness(input.lattice, input.on_boundary, &stars.edges, |v| layout.vertex(v)), w.fair);
+    let quads: Vec<[usize; 4]> = stars.stars.iter().map(|(_, faces)| faces.map(|f| layout.sphere(f as usize))).collect();
+    let axes: Vec<(usize, usize)> = stars.stars.iter().enumerate().map(|(s, &(v, _))| (layout.star_normal(s), v as usize)).collect();
+    let fans: Vec<([usize; 3], usize)> = stars.fans.iter().map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize)).collect();
+    let normals = VertexNormals::new(input.reference, (0..layout.vertices).map(|v| layout.vertex(v)).collect(), input.normals.to_vec(), &x);
+    // The hinges at the targets (with margins) for the optimization, and at θ and α themselves
+    // (less a margin) for the projection.
+    let mut hinges = |cos2_alpha: f64, cos2_theta: f64, suffix: &str| {
+        let angle = Hinge::new(CentreQuadAngle { stars: quads.clone(), cos2: cos2_alpha }).with_name(format!("support_plane_angle{suffix}"));
+        let axis = Hinge::new(AxisNormalAngle { axes: axes.clone(), normals: normals.clone(), cos2: cos2_theta }).with_name(format!("axis_normal_angle{suffix}"));
+        let fan = Hinge::new(FanAxisAngle { fans: fans.clone(), normals: normals.clone(), cos2: cos2_theta }).with_name(format!("fan_axis_normal_angle{suffix}"));
+        (problem.add_term(angle, 0.0), problem.add_term(axis, 0.0), problem.add_term(fan, 0.0))
+    };
+    let (angle_id, axis_id, fan_id) = hinges(input.cos2_alpha, input.cos2_theta, "");
+    let (exact_angle_id, exact_axis_id, exact_fan_id) = hinges(input.limits[1].to_radians().cos().powi(2), input.limits[0].to_radians().cos().powi(2), "_limit");
+    let topo = crate::geometry::mesh::topology::Topology::new(mesh);
+    let pairs: Vec<(usize, usize, f64)> = topo
+        .interior_edges()
+        .filter_map(|(_, f, g)| {
+            let (cf, cg) = (spheres[f as usize].center()?, spheres[g as usize].center()?);
+            Some((layout.sphere(f as usize), layout.sphere(g as usize), cf.distance_squared(cg)))
+        })
+        .collect();
+    let separation_id = problem.add_term(Hinge::new(CentreSeparation { pairs, share: CENTRE_SEPARATION }).with_name("centre_separation"), 1.0);
+    let sphere_vars: Vec<usize> = (0..5 * layout.faces).collect();
+    let reg_sphere_id = problem.add_term(Proximal::new(sphere_vars).with_name("regularization_spheres"), w.reg_sphere);
+    let normal_vars: Vec<usize> = (layout.star_normal(0)..layout.len()).collect();
+    let reg_normal_id = problem.add_term(Proximal::new(normal_vars).with_name("regularization_normals"), w.reg_normal);
+    for f in 0..layout.faces {
+        problem.group_variables(layout.sphere(f)..layout.sphere(f) + 5);
+    }
+    for v in 0..layout.vertices {
+        problem.group_variables(layout.vertex(v)..layout.vertex(v) + 3);
+    }
+    for s in 0..layout.stars {
+        problem.group_variables(layout.star_normal(s)..layout.star_normal(s) + 3);
+    }
+    for e in 0..layout.edges {
+        problem.group_variables(layout.edge_normal(e)..layout.edge_normal(e) + 3);
+    }
+
+    let mut outcome = SphereOutcome::default();
+    let mut solver = Solver::new(SolverOptions { clock: clock.0, ..SolverOptions::default() });
+    let mut run = |problem: &mut Problem, x: &mut [f64], phase: SpherePhase, max: usize, solver: &mut Solver, outcome: &mut SphereOutcome| -> usize {
+        solver.options.max_iterations = max;
+        let report = solver.solve(problem, x, |it| {
+            let (v, s) = unpack(&layout, it.x);
+            hook(phase, it.iteration, it.terms, &v, &s)
+        });
+        outcome.phase_ms.add(&report.phase_ms);
+        if phase == SpherePhase::Full {
+            outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
+            outcome.terms = report.terms.clone();
+        }
+        outcome.cancelled |= report.termination == Termination::Cancelled;
+        report.iterations
+    };
+
+    // Warm-up: the spheres and the star normals move; sphericity and a small support weight.
+    let all = [sphere_id, unit_id, supp_id, star_unit_id, torsal_id, edge_unit_id, tangent_id, point_id, centre_id, fair_id, reg_sphere_id, reg_normal_id, angle_id, axis_id, separation_id, exact_angle_id, exact_axis_id, fan_id, exact_fan_id];
+    let set = |problem: &mut Problem, weights: &[(crate::solver::TermId, f64)]| {
+        for &id in &all {
+            problem.set_weight(id, 0.0);
+        }
+        for &(id, wt) in weights {
+            problem.set_weight(id, wt);
+        }
+    };
+    set(
+        &mut problem,
+        &[(sphere_id, w.sphere), (unit_id, w.unit), (supp_id, w.warm_up_supp), (star_unit_id, w.unit), (reg_sphere_id, w.reg_sphere), (reg_normal_id, w.reg_normal), (separation_id, 1.0)],
+    );
+    problem.fix_range(layout.vertex(0)..layout.star_normal(0));
+    problem.fix_range(layout.edge_normal(0)..layout.len());
+    outcome.warm_up_iterations = run(&mut problem, &mut x, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome);
+    if outcome.cancelled {
+        let (v, s) = unpack(&layout, &x);
+        return (v, s, outcome);
+    }
+
+    // The full optimization (Eq. 10).
+    set(
+        &mut problem,
+        &[
+            (sphere_id, w.sphere),
+            (unit_id, w.unit),
+            (supp_id, w.supp),
+            (star_unit_id, w.unit),
+            (torsal_id, w.torsal_plane),
+            (edge_unit_id, w.unit),
+            (tangent_id, w.prox_f),
+            (point_id, w.prox_f),
+            (centre_id, w.prox_c),
+            (fair_id, w.fair),
+            (reg_sphere_id, w.reg_sphere),
+            (reg_normal_id, w.reg_normal),
+            (angle_id, w.support_angle),
+            (axis_id, w.axis_angle),
+            (fan_id, w.axis_angle),
+            (separation_id, 1.0),
+        ],
+    );
+    for i in 0..layout.len() {
+        problem.unfix(i);
+    }
+    outcome.iterations = run(&mut problem, &mut x, SpherePhase::Full, iterations[1], &mut solver, &mut outcome);
+    if outcome.cancelled {
+        let (v, s) = unpack(&layout, &x);
+        return (v, s, outcome);
+    }
+
+    // Projection: only the equations of exactness, Gauss–Newton with a tiny damping.
+    // First with the hinges at θ and α (the exact solutions form a large family: land on one
+    // that keeps them), then the equations alone, so that nothing pulls against exactness.
+    set(
+        &mut problem,
+        &[(sphere_id, 1.0), (unit_id, 1.0), (supp_id, 1.0), (star_unit_id, 1.0), (exact_angle_id, w.support_angle), (exact_axis_id, w.axis_angle), (exact_fan_id, w.axis_angle), (separation_id, 1.0)],
+    );
+    problem.fix_range(layout.edge_normal(0)..layout.len());
+    let mut projection = Solver::new(SolverOptions {
+        clock: clock.0,
+        min_epsilon: 1e-7,
+        energy_tolerance: 1e-27,
+        relative_decrease_tolerance: 0.0,
+        step_tolerance: 1e-16,
+        ..SolverOptions::default()
+    });
+    outcome.projection_iterations = run(&mut problem, &mut x, SpherePhase::Projection, iterations[2], &mut projection, &mut outcome);
+    if outcome.cancelled {
+        let (v, s) = unpack(&layout, &x);
+        return (v, s, outcome);
+    }
+    set(&mut problem, &[(sphere_id, 1.0), (unit_id, 1.0), (supp_id, 1.0), (star_unit_id, 1.0)]);
+    outcome.projection_iterations += run(&mut problem, &mut x, SpherePhase::Projection, iterations[2], &mut projection, &mut outcome);
+    let (v, s) = unpack(&layout, &x);
+    (v, s.into_iter().map(|s| s.normalized()).collect(), outcome)
+}
+
+/// The congruence's line and radius at a parameter: bilinear in the points of the grid G
+/// (`n` × `n`, point (i, j) at i + n j) over the domain.
+pub fn on_grid<T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>>(
+    surface: &BSplineSurface,
+    n: usize,
+    values: &[T],
+    uv: [f64; 2],
+) -> T {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let s = ((uv[0] - u0) / (u1 - u0) * (n - 1) as f64).clamp(0.0, (n - 1) as f64);
+    let t = ((uv[1] - v0) / (v1 - v0) * (n - 1) as f64).clamp(0.0, (n - 1) as f64);
+    let (i, j) = ((s.floor() as usize).min(n - 2), (t.floor() as usize).min(n - 2));
+    let (fs, ft) = (s - i as f64, t - j as f64);
+    let at = |a: usize, b: usize| values[(i + a) + n * (j + b)];
+    at(0, 0) * ((1.0 - fs) * (1.0 - ft)) + at(1, 0) * (fs * (1.0 - ft)) + at(0, 1) * ((1.0 - fs) * ft) + at(1, 1) * (fs * ft)
+}

@@ -1,0 +1,231 @@
+//! The SQ mesh with support structure out of the final optimization (Sec. 5.2, Fig. 19, 25):
+//! spherical quad panels, node axes, planar support elements, and the figures of exactness.
+//!
+//! - **Panels**: every face a spherical quad bounded by four circular arcs
+//!   ([`crate::panels::build_panels`], variant (a)): an interior edge's arc is the intersection
+//!   circle of its two face spheres through its end vertices. A boundary edge's arc is its face
+//!   sphere cut by the plane through the edge that contains the mean of its two node axes, the
+//!   plane its support element would lie in.
+//! - **Node axes**: at a vertex with two or more interior edges, the common line of the planes of
+//!   their circles (least squares: the right singular vector of the stacked plane normals), which
+//!   is the line through the vertex and the second common point of its spheres and, for four
+//!   faces, orthogonal to the plane of their centres. Computed from the spheres, not assumed; the
+//!   planes meet at about α, so it is well conditioned even where the spheres are nearly coaxal
+//!   and the second point is far. With one interior edge, the reference normal projected into
+//!   its circle's plane; with none, the reference normal. Axes point to the side
+//!   of the sphere centres (the support side).
+//! - **Support elements**: per interior edge, the planar element in the plane of the edge's circle
+//!   between the two node axes, of the settable depth
+//!   ([`crate::congruence::support_structure::support_element`]), tessellated along the panels'
+//!   own arc points.
+
+// Negated float comparisons are deliberate: they also reject NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::congruence::support_structure::{support_element, support_strips, SupportElement, SupportGeometry};
+
+/// Least σ₂/σ₁ of the stacked circle-plane normals at a vertex for its axis to count as
+/// determined by the spheres.
+pub const AXIS_MIN_CONDITION: f64 = 1e-3;
+use crate::geometry::circle::Circle;
+use crate::geometry::linalg::Svd;
+use crate::geometry::mesh::PolyMesh;
+use crate::geometry::sphere::Sphere;
+use crate::panels::panel::Panel;
+use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
+
+use super::sphere_optimization::QuadStars;
+
+/// How exact the SQ mesh is (lengths relative to the bounding-box diagonal).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SqMeshFigures {
+    /// max over faces and corners of |dist(v, sphere)|.
+    pub max_vertex_sphere_residual: f64,
+    /// max over inner vertices of the distance of their four sphere centres to the
+    /// least-squares plane through them.
+    pub max_centre_face_planarity: f64,
+    /// max over interior edges whose ends both have axes from spheres of |⟨l, n_uw⟩| for both
+    /// axes l, n_uw the unit normal of the edge's circle (its torsal plane): the sine of the angle
+    /// between axis and plane.
+    pub max_torsal_plane_residual: f64,
+    /// Angle between node axes and the reference normals (deg).
+    pub max_axis_normal_angle_deg: f64,
+    pub mean_axis_normal_angle_deg: f64,
+    /// min over inner vertices of the angle between the support planes of two consecutive edges.
+    pub min_torsal_plane_angle_deg: f64,
+    /// max distance of a vertex to the reference.
+    pub max_vertex_distance_to_reference: f64,
+    /// Vertices whose node axis comes from three or more spheres.
+    pub axes_from_spheres: usize,
+}
+
+/// The SQ mesh with its panels and support structure (model units).
+#[derive(Clone, Debug)]
+pub struct SqMesh {
+    pub sphere_mesh: SphereMesh,
+    pub panels: Vec<Panel>,
+    /// Per vertex: (vertex, unit node axis toward the support side).
+    pub node_axes: Vec<(DVec3, DVec3)>,
+    pub axis_from_spheres: Vec<bool>,
+    pub support_elements: Vec<SupportElement>,
+    pub support_geometry: SupportGeometry,
+    /// Length of the displayed axis segments.
+    pub axis_length: f64,
+    pub figures: SqMeshFigures,
+}
+
+impl SqMesh {
+    /// The node axes as display segments toward the support side.
+    pub fn node_axis_segments(&self) -> Vec<(DVec3, DVec3)> {
+        self.node_axes.iter().map(|&(v, d)| (v, v + self.axis_length * d)).collect()
+    }
+}
+
+/// The circle of two neighbouring face spheres, None when they coincide (to 1e-9 of the radius:
+/// the two panels lie on one sphere and their common edge has no circle of its own).
+pub fn edge_circle(s1: &Sphere, s2: &Sphere) -> Option<Circle> {
+    if let (Some((c1, r1)), Some((c2, r2))) = (s1.center().zip(s1.signed_radius()), s2.center().zip(s2.signed_radius())) {
+        if c1.distance(c2) + (r1 - r2).abs() <= 1e-9 * r1.abs().max(r2.abs()) {
+            return None;
+        }
+    }
+    Circle::intersection(s1, s2)
+}
+
+/// Node axes of the SQ mesh (see the module docs), with whether each comes from its spheres.
+pub fn node_axes(sm: &SphereMesh, normals: &[DVec3]) -> (Vec<(DVec3, DVec3)>, Vec<bool>) {
+    let mesh = &sm.mesh;
+    let spheres = &sm.face_spheres;
+    let nv = mesh.vertex_count();
+    let topo = sm.topology();
+    // The planes of the interior edges' circles at every vertex.
+    let mut planes: Vec<Vec<DVec3>> = vec![Vec::new(); nv];
+    for (e, edge) in topo.edges().iter().enumerate() {
+        if let [(f, _), (g, _)] = topo.edge_faces(e) {
+            if let Some(c) = edge_circle(&spheres[*f as usize], &spheres[*g as usize]) {
+                for &v in edge {
+                    planes[v as usize].push(c.normal);
+                }
+            }
+        }
+    }
+    let mut centres: Vec<Vec<DVec3>> = vec![Vec::new(); nv];
+    for (f, face) in mesh.faces.iter().enumerate() {
+        if let Some(c) = spheres[f].center() {
+            for &v in face.corners() {
+                centres[v as usize].push(c);
+            }
+        }
+    }
+    let mut from_spheres = vec![false; nv];
+    let axes = (0..nv)
+        .map(|v| {
+            let p = mesh.positions[v];
+            let n = normals[v];
+            let direction = match planes[v].as_slice() {
+                [] => n,
+                [c] => (n - n.dot(*c) * *c).try_normalize().unwrap_or(n),
+                many => {
+                    let rows: Vec<[f64; 3]> = many.iter().map(|c| c.to_array()).collect();
+                    let svd = Svd::new(&rows);
+                    if svd.sigma[1] > AXIS_MIN_CONDITION * svd.sigma[0] {
+                        from_spheres[v] = true;
+                        DVec3::from_array(svd.v[2]).normalize_or_zero()
+                    } else {
+                        n
+                    }
+                }
+            };
+            // Toward the centres of the spheres around v.
+            let side = centres[v].iter().map(|c| (*c - p).dot(direction)).sum::<f64>();
+            (p, if side < 0.0 { -direction } else { direction })
+        })
+        .collect();
+    (axes, from_spheres)
+}
+
+/// Builds the SQ mesh from the optimized vertices and face spheres (model units); `normals` are
+/// the reference normals at the vertices; `depth` and `axis_length` absolute.
+pub fn sq_mesh(mesh: PolyMesh, spheres: Vec<Sphere>, normals: &[DVec3], stars: &QuadStars, diag: f64, depth: f64, axis_length: f64) -> SqMesh {
+    let sm = SphereMesh::new(mesh, spheres, BoundaryArcRule::Parallel(DVec3::ZERO));
+    let (axes, axis_from_spheres) = node_axes(&sm, normals);
+    let topo = sm.topology();
+    let mut planes = HashMap::new();
+    for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
+        if topo.edge_faces(e).len() == 1 {
+            let (p, q) = (sm.mesh.positions[lo as usize], sm.mesh.positions[hi as usize]);
+            let d = axes[lo as usize].1 + axes[hi as usize].1;
+            if let Some(n) = (q - p).cross(d).try_normalize() {
+                planes.insert([lo, hi], n);
+            }
+        }
+    }
+    let sm = sm.with_boundary_planes(planes);
+    let panels = build_panels(&sm, DEFAULT_CHORD_TOLERANCE * diag);
+    let topo = sm.topology();
+    let mut support_elements = Vec::new();
+    for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
+        let faces = topo.edge_faces(e);
+        if faces.len() != 2 {
+            continue;
+        }
+        let (f, k) = faces[0];
+        let circle = panels[f as usize].arcs[k as usize].circle;
+        let (u, w) = (sm.mesh.positions[lo as usize], sm.mesh.positions[hi as usize]);
+        if let Some(el) = support_element([lo, hi], circle, [u, w], [axes[lo as usize].1, axes[hi as usize].1], depth) {
+            support_elements.push(el);
+        }
+    }
+    let support_geometry = support_strips(&support_elements, |el| edge_arc_points(&sm, &panels, el.edge));
+    let figures = figures(&sm, &axes, &axis_from_spheres, normals, stars, diag);
+    SqMesh { sphere_mesh: sm, panels, node_axes: axes, axis_from_spheres, support_elements, support_geometry, axis_length, figures }
+}
+
+/// The figures of [`SqMeshFigures`] except the distance to the reference.
+fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], normals: &[DVec3], stars: &QuadStars, diag: f64) -> SqMeshFigures {
+    let spheres = &sm.face_spheres;
+    let mut out = SqMeshFigures { min_torsal_plane_angle_deg: 90.0, ..SqMeshFigures::default() };
+    out.max_vertex_sphere_residual = sm.max_vertex_sphere_residual() / diag;
+    for (_, faces) in &stars.stars {
+        let centres: Vec<DVec3> = faces.iter().filter_map(|&f| spheres[f as usize].center()).collect();
+        if centres.len() < 4 {
+            out.max_centre_face_planarity = f64::INFINITY;
+            continue;
+        }
+        let mid = centres.iter().sum::<DVec3>() / 4.0;
+        let rows: Vec<[f64; 3]> = centres.iter().map(|c| (*c - mid).to_array()).collect();
+        let n = DVec3::from_array(Svd::new(&rows).v[2]).normalize_or_zero();
+        let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
+        out.max_centre_face_planarity = out.max_centre_face_planarity.max(worst / diag);
+        // Support planes of consecutive edges at the vertex: the circles of consecutive face pairs.
+        let circles: Vec<Option<Circle>> = (0..4).map(|k| edge_circle(&spheres[faces[k] as usize], &spheres[faces[(k + 1) % 4] as usize])).collect();
+        for k in 0..4 {
+            if let (Some(a), Some(b)) = (circles[k], circles[(k + 1) % 4]) {
+                let angle = a.normal.dot(b.normal).abs().min(1.0).acos().to_degrees();
+                out.min_torsal_plane_angle_deg = out.min_torsal_plane_angle_deg.min(angle);
+            }
+        }
+    }
+    let topo = sm.topology();
+    for (e, &[u, w]) in topo.edges().iter().enumerate() {
+        let [(f, _), (g, _)] = topo.edge_faces(e) else { continue };
+        if !(from_spheres[u as usize] && from_spheres[w as usize]) {
+            continue;
+        }
+        if let Some(c) = edge_circle(&spheres[*f as usize], &spheres[*g as usize]) {
+            let (du, dw) = (axes[u as usize].1, axes[w as usize].1);
+            out.max_torsal_plane_residual = out.max_torsal_plane_residual.max(du.dot(c.normal).abs()).max(dw.dot(c.normal).abs());
+        }
+    }
+    let angles: Vec<f64> = axes.iter().zip(normals).map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees()).collect();
+    out.max_axis_normal_angle_deg = angles.iter().copied().fold(0.0, f64::max);
+    out.mean_axis_normal_angle_deg = angles.iter().sum::<f64>() / angles.len().max(1) as f64;
+    out.axes_from_spheres = from_spheres.iter().filter(|&&b| b).count();
+    out
+}
