@@ -7,7 +7,7 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON};
 use crate::samples::Sample;
-use crate::sq::params::{SqParams, ALPHA_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use crate::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
@@ -260,7 +260,15 @@ impl Design {
             }
             Method::Sq => {
                 let sq = &self.sq;
-                s += &format!("&theta={}&alpha={}&grid={}&rs={}", fmt_num(sq.theta_deg), fmt_num(sq.alpha_deg), sq.grid, sq.recompute_every);
+                s += &format!(
+                    "&theta={}&alpha={}&grid={}&rs={}&faces={}&until={}",
+                    fmt_num(sq.theta_deg),
+                    fmt_num(sq.alpha_deg),
+                    sq.grid,
+                    sq.recompute_every,
+                    sq.faces,
+                    sq.until.key()
+                );
             }
         }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
@@ -360,6 +368,7 @@ impl Design {
                 "alpha" => parse_f64_in(v, ALPHA_RANGE.0, ALPHA_RANGE.1).map(|x| d.sq.alpha_deg = x).is_some(),
                 "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64).map(|x| d.sq.grid = x as usize).is_some(),
                 "rs" => parse_in(v, RECOMPUTE_RANGE.0 as i64, RECOMPUTE_RANGE.1 as i64).map(|x| d.sq.recompute_every = x as usize).is_some(),
+                "until" => Until::from_key(v).map(|u| d.sq.until = u).is_some(),
                 "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
@@ -400,6 +409,14 @@ impl Design {
         let mine = applies(Method::StSupport);
         if let Some(kind) = support_remesh.or(mine.then(|| SizingKind::of(d.st_support.remesh))) {
             d.st_support.remesh = sizing_of(kind, d.st_support.remesh, mine);
+        }
+        // For SQ, N is the remesh's face count.
+        if let Some(n) = faces.filter(|_| applies(Method::Sq)) {
+            if (FACES_RANGE.0..=FACES_RANGE.1).contains(&n) {
+                d.sq.faces = n;
+            } else {
+                notices.push(format!("ignored invalid value for 'faces': '{n}' (SQ takes {} to {})", FACES_RANGE.0, FACES_RANGE.1));
+            }
         }
         d.st_adapted.jet = d.jet.clone();
         d.st_support.jet = d.jet.clone();

@@ -174,7 +174,7 @@ fn sq_writes_the_congruence_and_its_report() {
     let out = run(&["sq", "../shared/data/bsplines/tunnel_arch.json", "--theta", "20", "--alpha", "75", "--grid", "12", "--until", "congruence", "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("stops after the congruence stage"), "{stdout}");
+    assert!(stdout.contains("wrote the congruence"), "{stdout}");
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "sq");
     assert_eq!(r["grid"], 12);

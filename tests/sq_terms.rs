@@ -98,3 +98,56 @@ fn the_regularizer_damps_without_energy() {
     assert_eq!(residuals(&reg, &moved), vec![-1.0 + 1.2, 2.0 - 2.5]);
     assert_fd(&reg, &x);
 }
+
+// ---------------------------------------------------------------------------------------------
+// The final sphere-congruence optimization (Sec. 5.2, Eq. 10).
+
+use spherical_faces::pipeline::session::Loaded;
+use spherical_faces::samples::Sample;
+use spherical_faces::sq::sphere_terms::{
+    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis,
+    TorsalPlane as EdgeTorsalPlane, VertexNormals,
+};
+
+/// Six spheres (5 blocks with a in ±[0.2, 0.5]), four vertices and four unit-ish normals.
+fn sphere_point(seed: u64) -> Vec<f64> {
+    let mut rng = Rng(seed);
+    let mut x = Vec::new();
+    for k in 0..6 {
+        let a = (0.2 + 0.3 * rng.uniform()) * if k % 2 == 0 { 1.0 } else { -1.0 };
+        x.extend([a, rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5]);
+    }
+    for _ in 0..8 {
+        x.extend([rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() + 0.2]);
+    }
+    x
+}
+
+#[test]
+fn final_optimization_terms_match_finite_differences() {
+    let loaded = Loaded::from_sample(Sample::from_key("vault").unwrap());
+    for seed in [3, 11, 29] {
+        let x = sphere_point(seed);
+        let s = |k: usize| 5 * k;
+        let v = |k: usize| 30 + 3 * k;
+        assert_fd(&CentrePlanarity { stars: vec![([s(0), s(1), s(2), s(3)], v(4)), ([s(2), s(3), s(4), s(5)], v(5))] }, &x);
+        let edges = vec![
+            (v(0), v(1), NodeAxis::Variable(v(4)), NodeAxis::Variable(v(5)), v(6)),
+            (v(1), v(2), NodeAxis::Fixed(glam::DVec3::new(0.1, 0.2, 0.97)), NodeAxis::Variable(v(5)), v(7)),
+        ];
+        assert_fd(&EdgeTorsalPlane { edges }, &x);
+        let n = glam::DVec3::new(0.3, -0.2, 0.9).normalize();
+        assert_fd(&CentreProximity { faces: vec![(s(0), glam::DVec3::new(0.5, 0.1, -0.3), n), (s(5), glam::DVec3::ZERO, n)], epsilon: 0.01 }, &x);
+        // Hinges active and inactive: wide and narrow angles.
+        for cos2 in [0.0, 0.3, 0.95] {
+            assert_fd(&CentreQuadAngle { stars: vec![[s(0), s(1), s(2), s(3)], [s(5), s(4), s(3), s(2)]], cos2 }, &x);
+            assert_fd(&Hinge::new(CentreQuadAngle { stars: vec![[s(0), s(1), s(2), s(3)]], cos2 }), &x);
+            let normals = VertexNormals::new(&loaded.surface, vec![v(0), v(1)], vec![n, glam::DVec3::Z], &x);
+            assert_fd(&AxisNormalAngle { axes: vec![(v(4), 0), (v(5), 1)], normals: normals.clone(), cos2 }, &x);
+            assert_fd(&FanAxisAngle { fans: vec![([s(0), s(1), s(2)], 0), ([s(3), s(4), s(5)], 1)], normals, cos2 }, &x);
+        }
+        let sep = CentreSeparation { pairs: vec![(s(0), s(1), 0.3), (s(2), s(5), 2.0)], share: 0.25 };
+        assert_fd(&sep, &x);
+        assert!(residuals(&sep, &x).iter().all(|r| r.is_finite()));
+    }
+}

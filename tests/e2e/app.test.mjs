@@ -411,7 +411,7 @@ for (const project of PROJECTS) {
 
     test(`[${project.name}] l. SQ (Sec. 5.1) on the vault sample streams lines and term energies, meets θ and α, and its congruence GLB validates`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
-      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10';
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&until=congruence';
       await withApp(t, browser, server, project, { name: 'l-sq', fragment }, async (app) => {
         const s = await waitForState(
           app,
@@ -438,6 +438,7 @@ for (const project of PROJECTS) {
         assert.equal(s.sq.initial_lines, 400);
         assert.equal(s.sq.cross_field_arms, 2 * 361, 'two torsal arms per grid quad');
         assert.equal(s.sq.energies, r.iterations, 'one energy report per solver iteration');
+        assert.equal(s.sq.quad_mesh_edges, 0, 'stopped after the congruence: no quad mesh');
         for (const term of ['total', 'line_congruence', 'line_normal_angle', 'torsal_plane', 'torsal_angle', 'line_fairness']) {
           assert.ok(s.sq.terms.some((n) => n.startsWith(term)), `term ${term} plotted (${s.sq.terms})`);
         }
@@ -456,6 +457,58 @@ for (const project of PROJECTS) {
         await download.saveAs(file);
         const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
         assert.equal(v.status, 0, `the Khronos validator accepts the congruence GLB: ${v.stdout}${v.stderr}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] n. SQ end to end (Sec. 5.2) on the vault sample: quad mesh, Q′, live panels, an exact SQ mesh with support structure, downloads`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&faces=237&until=final';
+      await withApp(t, browser, server, project, { name: 'n-sq-final', fragment }, async (app) => {
+        const s = await waitForState(
+          app,
+          'sq finished with panels (sq.ready, panels.glb offered)',
+          (s) => s.sq && s.sq.ready && !s.busy && s.downloads.includes('panels.glb'),
+          { timeout: T.load },
+        );
+        const r = s.sq.report;
+        t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; metrics ${JSON.stringify(r.metrics)}; timings ${JSON.stringify(r.timings_ms)}`);
+        assert.ok(!s.error, `error: ${s.error}`);
+        assert.equal(r.stopped_after, 'final');
+        for (const part of ['faces=237', 'until=final']) {
+          assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
+        }
+        const m = r.metrics;
+        assert.ok(r.output.faces >= 150 && r.output.faces <= 330, `about 237 quads: ${r.output.faces}`);
+        assert.equal(r.output.panels, r.output.faces, 'one panel per quad');
+        assert.ok(m.max_vertex_sphere_residual <= 1e-8, `vertex–sphere residual ${m.max_vertex_sphere_residual}`);
+        assert.ok(m.max_centre_face_planarity <= 1e-8, `centre-face planarity ${m.max_centre_face_planarity}`);
+        assert.ok(m.max_torsal_plane_residual <= 1e-8, `torsal-plane residual ${m.max_torsal_plane_residual}`);
+        assert.ok(m.max_axis_normal_angle_deg <= 20, `node axes within θ: ${m.max_axis_normal_angle_deg}`);
+        assert.ok(m.min_torsal_plane_angle_deg >= 75, `support planes at ≥ α: ${m.min_torsal_plane_angle_deg}`);
+        assert.ok(m.max_distance_to_reference < 0.01, `distance to the reference ${m.max_distance_to_reference}`);
+        assert.ok(m.mean_edge_torsal_angle_deg <= 5, `edges along the torsal directions: ${m.mean_edge_torsal_angle_deg}`);
+        assert.ok(m.coverage >= 0.9, `coverage ${m.coverage}`);
+        for (const k of ['remesh', 'final_iteration_median', 'total']) {
+          assert.ok(r.timings_ms[k] > 0, `timings_ms.${k}`);
+        }
+        assert.ok(s.sq.quad_mesh_edges > 0 && s.sq.panel_triangles > 0 && s.sq.support_triangles > 0 && s.sq.axes > 0, 'quad mesh, panels, support and axes shown');
+        for (const step of ['line_congruence', 'torsal', 'fairing', 'warm_up', 'spheres', 'projection']) {
+          assert.ok(s.sq.energy_steps.includes(step), `energies of ${step} plotted (${s.sq.energy_steps})`);
+        }
+        for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'support.csv', 'mesh.obj', 'report.json', 'congruence.glb']) {
+          assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
+        }
+        assertDrawn(await measureViewport(app, s, 'sq-final'), 'panels, support and axes');
+        const [download] = await Promise.all([
+          app.page.waitForEvent('download', { timeout: 30_000 }),
+          app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'panels.glb' }))),
+        ]);
+        fs.mkdirSync(ARTIFACTS_DIR, { recursive: true });
+        const file = path.join(ARTIFACTS_DIR, `${project.name}-sq-panels.glb`);
+        await download.saveAs(file);
+        const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
+        assert.equal(v.status, 0, `the Khronos validator accepts the SQ panels GLB: ${v.stdout}${v.stderr}`);
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

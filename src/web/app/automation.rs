@@ -80,6 +80,18 @@ impl App {
             "cross_field_arms": v.cross_field_arms,
             "energies": v.energy.len(),
             "terms": v.energy.last().map(|(_, _, e)| e.iter().map(|e| e.name.clone()).collect::<Vec<_>>()).unwrap_or_default(),
+            // The progress steps that sent energies, in order of first appearance.
+            "energy_steps": v.energy.iter().fold(Vec::<String>::new(), |mut acc, (_, step, _)| {
+                if !acc.contains(step) {
+                    acc.push(step.clone());
+                }
+                acc
+            }),
+            "quad_mesh_edges": v.quad_mesh.as_ref().map_or(0, |m| m.edges.len() / 2),
+            "panel_triangles": v.panels.as_ref().map_or(0, |m| m.triangles.len() / 3),
+            "support_triangles": v.support.as_ref().map_or(0, |m| m.triangles.len() / 3),
+            "axes": v.axes.as_ref().map_or(0, |m| m.edges.len() / 2),
+            "mesh": v.summary.as_ref().and_then(|s| s.mesh),
             "refused": v.refused_h.is_some(),
             "ready": v.summary.is_some(),
             "report": v.summary.as_ref().map(|s| &s.report),

@@ -73,7 +73,7 @@ pub struct StSupportView {
     pub summary: Option<StSupportSummary>,
 }
 
-/// The SQ run (Sec. 5.1) as it streams in: the lines of the central congruence, the lines as
+/// The SQ run (Sec. 5) as it streams in: the lines of the central congruence, the lines as
 /// they optimize, the energy of every term per iteration; when done, the torsal cross field by
 /// angle bins, the quads without real torsal directions and the summary. On a refusal for the
 /// sign of H, H at the reference vertices.
@@ -88,6 +88,12 @@ pub struct SqView {
     pub cross_field_range: (f32, f32),
     pub cross_field_arms: usize,
     pub no_real_quads: Option<Arc<MeshData>>,
+    /// Sec. 5.2: the quad mesh's edges (as remeshed, Q′, then the SQ mesh), the panels (live
+    /// while the spheres optimize, then final), the support structure and the node axes.
+    pub quad_mesh: Option<Arc<MeshData>>,
+    pub panels: Option<Arc<MeshData>>,
+    pub support: Option<Arc<MeshData>>,
+    pub axes: Option<Arc<MeshData>>,
     /// (iteration, step, energy of every term and the total).
     pub energy: Vec<(u32, String, Vec<Energy>)>,
     pub refused_h: Option<Arc<ScalarData>>,
@@ -123,6 +129,16 @@ impl SqView {
         if let Some(m) = segments_mesh(fields, field::SQ_NO_REAL_QUADS, generation) {
             self.no_real_quads = Some(m);
         }
+        if let Some(m) = segments_mesh(fields, field::SQ_QUAD_MESH, generation) {
+            self.quad_mesh = Some(m);
+        }
+        if find(fields, field::PANEL_POSITIONS).is_some() {
+            self.panels = Some(mesh_from_fields(fields, generation, PANEL_FIELDS));
+        }
+        if find(fields, field::SUPPORT_POSITIONS).is_some() {
+            self.support = Some(mesh_from_fields(fields, generation, SUPPORT_FIELDS));
+            self.axes = Some(mesh_from_fields(fields, generation, AXES_FIELDS));
+        }
         let (Some(arms), Some(angles)) =
             (find(fields, field::SQ_CROSS_FIELD).and_then(Field::as_f32), find(fields, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32))
         else {
@@ -143,6 +159,8 @@ impl SqView {
 /// The field names of a display mesh: positions, normals, triangles, edges.
 pub const PANEL_FIELDS: [&str; 4] = [field::PANEL_POSITIONS, field::PANEL_NORMALS, field::PANEL_TRIANGLES, field::PANEL_EDGES];
 pub const MESH_FIELDS: [&str; 4] = [field::POSITIONS, field::NORMALS, field::TRIANGLES, field::EDGES];
+pub const SUPPORT_FIELDS: [&str; 4] = [field::SUPPORT_POSITIONS, "", field::SUPPORT_TRIANGLES, ""];
+pub const AXES_FIELDS: [&str; 4] = [field::AXES_POSITIONS, "", "", field::AXES_LINES];
 
 /// A display mesh from snapshot fields (missing fields are empty), with a fresh generation.
 pub fn mesh_from_fields(fields: &[Field], generation: &mut u64, names: [&str; 4]) -> Arc<MeshData> {
@@ -159,8 +177,8 @@ impl StSupportView {
         });
         Self {
             panels: mesh_from_fields(fields, generation, PANEL_FIELDS),
-            support: mesh_from_fields(fields, generation, [field::SUPPORT_POSITIONS, "", field::SUPPORT_TRIANGLES, ""]),
-            axes: mesh_from_fields(fields, generation, [field::AXES_POSITIONS, "", "", field::AXES_LINES]),
+            support: mesh_from_fields(fields, generation, SUPPORT_FIELDS),
+            axes: mesh_from_fields(fields, generation, AXES_FIELDS),
             envelope,
             summary: None,
         }

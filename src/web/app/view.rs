@@ -152,7 +152,7 @@ impl App {
             }
         }
         if let Some(v) = sq {
-            layers.extend(self.sq_layers(v));
+            layers.extend(self.sq_layers(v, shading, edge_color));
         }
         layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
         let frame = ViewerFrame {
@@ -224,9 +224,10 @@ impl App {
         layers
     }
 
-    /// The SQ congruence: lines (Fig. 21), the cross field by angle bins (Fig. 23) and the quads
-    /// without real torsal directions in red.
-    fn sq_layers(&self, v: &SqView) -> Vec<Layer> {
+    /// The SQ run: lines (Fig. 21), the cross field by angle bins (Fig. 23) and the quads
+    /// without real torsal directions in red; the quad mesh, the panels (reflective with the
+    /// design's shading), the support structure and the node axes (Fig. 19, 25).
+    fn sq_layers(&self, v: &SqView, shading: u32, edge_color: [f32; 4]) -> Vec<Layer> {
         let id = Mat4::IDENTITY;
         let lines = |m: &Arc<MeshData>, color| Layer { geometry: Geometry::Mesh(m.clone()), model: id, style: Style::Lines { color } };
         let d = self.sq_display;
@@ -242,6 +243,22 @@ impl App {
             layers.extend(v.cross_field.iter().enumerate().filter(|(_, m)| !m.edges.is_empty()).map(|(k, m)| lines(m, colormap::bin_color(k, bins))));
         }
         layers.extend(v.no_real_quads.as_ref().filter(|m| !m.edges.is_empty()).map(|m| lines(m, [0.95, 0.10, 0.10, 1.0])));
+        let surface = |m: &Arc<MeshData>, shading, color| Layer { geometry: Geometry::Mesh(m.clone()), model: id, style: Style::Surface { shading, color, color_map: None } };
+        if d.panels {
+            if let Some(p) = &v.panels {
+                layers.push(surface(p, shading, [0.70, 0.80, 0.88, 1.0]));
+                layers.push(lines(p, edge_color));
+            }
+        }
+        if d.quad_mesh && (v.panels.is_none() || !d.panels) {
+            layers.extend(v.quad_mesh.as_ref().map(|m| lines(m, [0.95, 0.55, 0.20, 1.0])));
+        }
+        if d.support {
+            layers.extend(v.support.as_ref().map(|m| surface(m, 0, [0.80, 0.55, 0.30, 1.0])));
+        }
+        if d.axes {
+            layers.extend(v.axes.as_ref().map(|m| lines(m, [0.85, 0.15, 0.12, 1.0])));
+        }
         layers
     }
 

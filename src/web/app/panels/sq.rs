@@ -1,11 +1,13 @@
-//! SQ meshes with support structure (Sec. 5), part 5.1: θ, α, the grid and RS, the weights under
-//! "advanced"; the live energy of every term, the figures of the central and the optimized
-//! congruence, and what the viewport shows (lines of Fig. 21, cross field of Fig. 23).
+//! SQ meshes with support structure (Sec. 5): θ, α, the grid, the face count and the support
+//! depth, RS, iterations and weights under "advanced"; one live energy plot per stage
+//! (congruence, Q′, spheres), the figures of the congruence and of the SQ mesh, and what the
+//! viewport shows (lines of Fig. 21, cross field of Fig. 23, quad mesh, panels, support
+//! structure and node axes of Fig. 19, 25).
 
 use egui::{Color32, RichText};
 
-use crate::pipeline::stages::sq::STOPS_AFTER;
-use crate::sq::params::{SqParams, ALPHA_RANGE, GRID_RANGE, THETA_RANGE};
+use crate::pipeline::fields::Energy;
+use crate::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
 use crate::web::app::plots::{key_values, term_plot};
 use crate::web::app::state::SqView;
 
@@ -16,11 +18,15 @@ pub struct SqDisplay {
     pub lines: bool,
     pub cross_field: bool,
     pub surface: bool,
+    pub quad_mesh: bool,
+    pub panels: bool,
+    pub support: bool,
+    pub axes: bool,
 }
 
 impl Default for SqDisplay {
     fn default() -> Self {
-        Self { initial_lines: false, lines: true, cross_field: true, surface: true }
+        Self { initial_lines: false, lines: true, cross_field: true, surface: true, quad_mesh: true, panels: true, support: true, axes: true }
     }
 }
 
@@ -34,6 +40,17 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
         .on_hover_text("Smallest angle between the two torsal planes of a grid quad (Sec. 5.1)");
     ui.add(egui::Slider::new(&mut params.grid, GRID_RANGE.0..=GRID_RANGE.1.min(60)).text("grid"))
         .on_hover_text("Points per direction of the sampling grid G");
+    ui.add(egui::Slider::new(&mut params.faces, FACES_RANGE.0.max(16)..=2000).logarithmic(true).text("faces"))
+        .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
+    ui.add(egui::Slider::new(&mut params.support_depth, 0.002..=0.1).logarithmic(true).text("support depth"))
+        .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
+    egui::ComboBox::from_label("run until")
+        .selected_text(params.until.key())
+        .show_ui(ui, |ui| {
+            for u in Until::ALL {
+                ui.selectable_value(&mut params.until, u, u.key());
+            }
+        });
     egui::CollapsingHeader::new("advanced").id_salt("sq-advanced").show(ui, |ui| {
         ui.add(egui::Slider::new(&mut params.recompute_every, 1..=50).text("RS"))
             .on_hover_text("The torsal directions and planes are recomputed every RS iterations");
@@ -57,15 +74,28 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
         weight(ui, &mut w.angle, "w_angle");
         weight(ui, &mut w.fair, "w_fair");
         weight(ui, &mut w.reg, "w_reg");
+        ui.label(RichText::new("final optimization (Eq. 10, Table 3)").small());
+        ui.add(egui::Slider::new(&mut params.sphere_iterations[1], 0..=500).text("iterations"));
+        let w = &mut params.sphere_weights;
+        weight(ui, &mut w.sphere, "w_sphere");
+        weight(ui, &mut w.supp, "w_supp");
+        weight(ui, &mut w.torsal_plane, "w_torsal_plane");
+        weight(ui, &mut w.prox_f, "w_prox_f");
+        weight(ui, &mut w.prox_c, "w_prox_c");
+        weight(ui, &mut w.fair, "w_fair");
         if ui.small_button("defaults").clicked() {
-            let keep = (params.theta_deg, params.alpha_deg, params.grid);
-            *params = SqParams { theta_deg: keep.0, alpha_deg: keep.1, grid: keep.2, ..SqParams::default() };
+            let keep = (params.theta_deg, params.alpha_deg, params.grid, params.faces, params.until);
+            *params = SqParams { theta_deg: keep.0, alpha_deg: keep.1, grid: keep.2, faces: keep.3, until: keep.4, ..SqParams::default() };
         }
     });
     ui.checkbox(&mut display.lines, "optimized lines");
     ui.checkbox(&mut display.initial_lines, "lines of the central congruence (before)");
     ui.checkbox(&mut display.cross_field, "torsal cross field");
     ui.checkbox(&mut display.surface, "reference surface");
+    ui.checkbox(&mut display.quad_mesh, "quad mesh");
+    ui.checkbox(&mut display.panels, "panels");
+    ui.checkbox(&mut display.support, "support structure");
+    ui.checkbox(&mut display.axes, "node axes");
     *params != before
 }
 
@@ -76,13 +106,16 @@ fn weight(ui: &mut egui::Ui, w: &mut f64, label: &str) {
 /// The live energy of every term and, when done, the figures before and after.
 pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
     ui.separator();
-    ui.strong("SQ congruence (Sec. 5.1)");
+    ui.strong("SQ mesh with support structure (Sec. 5)");
     if v.refused_h.is_some() {
         ui.colored_label(Color32::from_rgb(240, 180, 80), "The surface is coloured by the sign of H: red H > 0, blue H < 0.");
     }
-    if !v.energy.is_empty() {
-        ui.label(RichText::new("energy of every term per iteration (log scale)").small());
-        term_plot(ui, &v.energy);
+    for (title, steps) in ENERGY_PLOTS {
+        let series: Vec<(u32, String, Vec<Energy>)> = v.energy.iter().filter(|(_, step, _)| steps.contains(&step.as_str())).cloned().collect();
+        if !series.is_empty() {
+            ui.label(RichText::new(format!("{title}: energy of every term per iteration (log scale)")).small());
+            term_plot(ui, &series);
+        }
     }
     let Some(sum) = &v.summary else {
         if v.lines.is_some() {
@@ -128,13 +161,36 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         rows.push(("median iteration, step 1 / 2", format!("{lc:.2} / {t:.2} ms")));
     }
     key_values(ui, "sq-metrics", &rows);
+    if let Some(mf) = &sum.mesh {
+        ui.strong("SQ mesh (Sec. 5.2)");
+        let e = |x: f64| format!("{x:.1e}");
+        let mut rows = vec![
+            ("faces", format!("{} quads, {:.1} % of the patch", r.output.faces, 100.0 * m.coverage.unwrap_or(0.0))),
+            ("vertex–sphere residual / diag", format!("{} {}", e(mf.max_vertex_sphere_residual), ok(mf.max_vertex_sphere_residual <= 1e-8))),
+            ("centre-face planarity / diag", format!("{} {}", e(mf.max_centre_face_planarity), ok(mf.max_centre_face_planarity <= 1e-8))),
+            ("torsal-plane residual", format!("{} {}", e(mf.max_torsal_plane_residual), ok(mf.max_torsal_plane_residual <= 1e-8))),
+            ("max ∠(node axis, n)", format!("{:.2}° {} (θ {}°)", mf.max_axis_normal_angle_deg, ok(mf.max_axis_normal_angle_deg <= params.theta_deg), params.theta_deg)),
+            ("min support-plane angle", format!("{:.2}° {} (α {}°)", mf.min_torsal_plane_angle_deg, ok(mf.min_torsal_plane_angle_deg >= params.alpha_deg), params.alpha_deg)),
+            ("max distance to the reference / diag", g(m.max_distance_to_reference)),
+            (
+                "edges off the torsal directions",
+                format!("{:.2}° mean, {:.2}° max", m.mean_edge_torsal_angle_deg.unwrap_or(0.0), m.max_edge_torsal_angle_deg.unwrap_or(0.0)),
+            ),
+            ("distinct radii", m.distinct_radii.map_or("–".into(), |d| d.to_string())),
+        ];
+        if let Some(t) = r.timings_ms.get("final_iteration_median") {
+            rows.push(("median final iteration", format!("{t:.2} ms")));
+        }
+        if let Some(t) = r.timings_ms.get("total") {
+            rows.push(("total", format!("{t:.0} ms")));
+        }
+        key_values(ui, "sq-mesh-metrics", &rows);
+    }
     for w in &r.warnings {
         ui.colored_label(Color32::from_rgb(240, 180, 80), w);
     }
-    ui.label(
-        RichText::new(format!(
-            "This version stops after the {STOPS_AFTER} stage: quad remeshing along the cross field and the final sphere optimization (Sec. 5.2) follow."
-        ))
-        .small(),
-    );
 }
+
+/// The energy plots: one per stage, with the progress steps that belong to it.
+const ENERGY_PLOTS: [(&str, &[&str]); 3] =
+    [("congruence", &["line_congruence", "torsal"]), ("Q′", &["fairing"]), ("spheres", &["warm_up", "spheres", "projection"])];
