@@ -115,9 +115,10 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     bencher.bench_local(|| record(&name, w.sample(&mut problem, &mut solver)));
 }
 
-/// One SQ congruence run on tunnel_arch (20×20) per sample; the `bench` lines are the medians of
-/// the solver's per-iteration times of step 1 (`sq_lc_iteration`) and step 2
-/// (`sq_torsal_iteration`).
+/// One whole SQ run on tunnel_arch (20×20 grid, about 237 quads) per sample; the `bench` lines
+/// are the medians of the solver's per-iteration times of step 1 (`sq_lc_iteration`), step 2
+/// (`sq_torsal_iteration`) and the final optimization (`sq_final_iteration`), and of the whole
+/// run (`sq_pipeline`).
 #[divan::bench(sample_count = SQ_SAMPLES as u32, sample_size = 1)]
 fn sq_iterations(bencher: Bencher) {
     let w = SqWorkload::new(scale());
@@ -125,8 +126,10 @@ fn sq_iterations(bencher: Bencher) {
     w.sample(clock); // warm-up
     info("sq", w.describe());
     bencher.bench_local(|| {
-        let (lc, torsal) = w.sample(clock);
-        record("sq_lc_iteration", lc);
-        record("sq_torsal_iteration", torsal);
+        let s = w.sample(clock);
+        record("sq_lc_iteration", s.lc_ms);
+        record("sq_torsal_iteration", s.torsal_ms);
+        record("sq_final_iteration", s.final_ms);
+        record("sq_pipeline", vec![s.total_ms]);
     });
 }

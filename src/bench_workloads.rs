@@ -14,10 +14,11 @@
 //!   same initial point and runs [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations; the solver's own
 //!   per-iteration times (`SolverOptions::clock`) are the measurement.
 //!
-//! - `sq_lc_iteration` / `sq_torsal_iteration`: iterations of the two steps of the SQ congruence
-//!   optimization (Sec. 5.1, [`crate::sq::compute`] with default parameters: θ 20°, α 75°) on
-//!   `tunnel_arch` with a 20×20 grid (400 lines, 361 quads); one sample is one whole run, and the
-//!   solver's per-iteration times of each step are the measurement.
+//! - `sq_lc_iteration` / `sq_torsal_iteration` / `sq_final_iteration` / `sq_pipeline`: the SQ
+//!   method ([`crate::sq::compute`] with default parameters: θ 20°, α 75°, a 20×20 grid, about
+//!   237 quads) on `tunnel_arch`; one sample is one whole run. The solver's per-iteration times
+//!   of the two congruence steps (Sec. 5.1) and of the full final optimization (Eq. 10) are
+//!   measured, and the whole run from the B-spline to the panels and support structure.
 //!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
@@ -244,7 +245,8 @@ impl AngleWorkload {
 /// `tunnel_arch.json` (benches/data, a copy of ../shared/data/bsplines).
 pub const TUNNEL_ARCH: &str = include_str!("../benches/data/tunnel_arch.json");
 
-/// The SQ congruence optimization on `tunnel_arch` (grid 20, or 6 when tiny).
+/// The SQ method on `tunnel_arch` (grid 20 and about 237 quads, or a 6 × 6 grid and 16 quads
+/// when tiny).
 pub struct SqWorkload {
     pub reference: Reference,
     pub params: SqParams,
@@ -258,20 +260,69 @@ impl SqWorkload {
         let reference = Reference::from_bspline(b.surface).expect("tunnel_arch is regular");
         let params = match scale {
             Scale::Full => SqParams::default(),
-            Scale::Tiny => SqParams { grid: 6, lc_iterations: 3, torsal_iterations: 3, final_iterations: 1, ..SqParams::default() },
+            Scale::Tiny => SqParams {
+                grid: 6,
+                lc_iterations: 3,
+                torsal_iterations: 3,
+                final_iterations: 1,
+                faces: 16,
+                fairing_iterations: 2,
+                sphere_iterations: [1, 3, 3],
+                ..SqParams::default()
+            },
         };
         Self { reference, params }
     }
 
-    /// The timed work: one run; the per-iteration times (ms) of step 1 and step 2.
-    pub fn sample(&self, clock: Clock) -> (Vec<f64>, Vec<f64>) {
-        let c = sq::compute_congruence(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
-        (c.lc_iteration_ms, c.torsal_iteration_ms)
+    /// The timed work: one whole run; the per-iteration times (ms) of step 1, step 2 and the
+    /// final optimization, and the run's total (ms).
+    pub fn sample(&self, clock: Clock) -> SqSample {
+        let t0 = clock.now();
+        let r = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
+        let total_ms = clock.now() - t0;
+        let faces = r.sq_mesh.as_ref().map_or(0, |f| f.mesh.panels.len());
+        let c = r.congruence;
+        SqSample {
+            lc_ms: c.lc_iteration_ms,
+            torsal_ms: c.torsal_iteration_ms,
+            final_ms: r.sq_mesh.map(|f| f.outcome.iteration_ms).unwrap_or_default(),
+            total_ms,
+            faces,
+        }
     }
 
     pub fn describe(&self) -> String {
         let n = self.params.grid;
-        format!("# sq: tunnel_arch, {n}×{n} grid ({} lines, {} quads), θ {}°, α {}°", n * n, (n - 1) * (n - 1), self.params.theta_deg, self.params.alpha_deg)
+        format!(
+            "# sq: tunnel_arch, {n}×{n} grid ({} lines, {} quads), θ {}°, α {}°, about {} quads",
+            n * n,
+            (n - 1) * (n - 1),
+            self.params.theta_deg,
+            self.params.alpha_deg,
+            self.params.faces
+        )
+    }
+}
+
+/// What one SQ run measured.
+#[derive(Clone, Debug, Default)]
+pub struct SqSample {
+    pub lc_ms: Vec<f64>,
+    pub torsal_ms: Vec<f64>,
+    pub final_ms: Vec<f64>,
+    pub total_ms: f64,
+    /// Panels of the SQ mesh.
+    pub faces: usize,
+}
+
+impl SqSample {
+    /// Appends another sample's times.
+    pub fn extend(&mut self, other: SqSample) -> &mut Self {
+        self.lc_ms.extend(other.lc_ms);
+        self.torsal_ms.extend(other.torsal_ms);
+        self.final_ms.extend(other.final_ms);
+        self.faces = other.faces;
+        self
     }
 }
 
@@ -338,13 +389,16 @@ where
     out(&sq.describe());
     sq.sample(clock);
     pause().await;
-    let (mut lc, mut torsal) = (Vec::new(), Vec::new());
+    let (mut all, mut totals) = (SqSample::default(), Vec::new());
     for _ in 0..SQ_SAMPLES {
-        let (a, b) = sq.sample(clock);
-        lc.extend(a);
-        torsal.extend(b);
+        let s = sq.sample(clock);
+        totals.push(s.total_ms);
+        all.extend(s);
         pause().await;
     }
-    out(&result_line("sq_lc_iteration", &lc));
-    out(&result_line("sq_torsal_iteration", &torsal));
+    out(&format!("# sq_final_iteration: {} panels", all.faces));
+    out(&result_line("sq_lc_iteration", &all.lc_ms));
+    out(&result_line("sq_torsal_iteration", &all.torsal_ms));
+    out(&result_line("sq_final_iteration", &all.final_ms));
+    out(&result_line("sq_pipeline", &totals));
 }

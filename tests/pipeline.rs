@@ -143,8 +143,8 @@ fn st_support_streams_panels_files_and_a_report() {
     assert!(!find(&snap.1, field::AXES_LINES).unwrap().as_u32().unwrap().is_empty());
     let (FromWorker::Files { fields, mime, .. }, bodies) = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap() else { panic!() };
     let names: Vec<_> = fields.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
-    assert_eq!(mime.len(), 5);
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "support.csv", "report.json"]);
+    assert_eq!(mime.len(), 6);
     assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
     let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
     let m = &summary.report.metrics;
@@ -152,7 +152,7 @@ fn st_support_streams_panels_files_and_a_report() {
     assert!(m.max_orthogonality_residual.unwrap() <= 1e-9);
     assert!(m.max_node_axis_offset.unwrap() <= 1e-9);
     assert_eq!(summary.report.output.panels, summary.report.input.faces);
-    let report: serde_json::Value = serde_json::from_slice(bodies[4].as_bytes().unwrap()).unwrap();
+    let report: serde_json::Value = serde_json::from_slice(bodies[5].as_bytes().unwrap()).unwrap();
     assert_eq!(report["method"], "st-support");
 }
 
@@ -303,8 +303,9 @@ fn a_reference_fits_its_jets_once() {
     assert!(reference_fits(&r) > 0, "other jet parameters fit again");
 }
 
-/// SQ in the session: live lines and one energy report per solver iteration, then the cross
-/// field, the files and the summary; θ and α met on the vault sample.
+/// SQ in the session: live lines and one energy report per solver iteration, the cross field,
+/// the quad mesh, live panels, then the panels, support structure and node axes, the files and
+/// the summary; θ and α met on the vault sample, and the mesh exact.
 #[test]
 fn sq_streams_lines_and_energies_then_files() {
     use spherical_faces::pipeline::stages::sq;
@@ -327,6 +328,15 @@ fn sq_streams_lines_and_energies_then_files() {
     assert_eq!(find(last, field::SQ_CROSS_FIELD).and_then(Field::as_f32).unwrap().len(), 121 * 2 * 6, "two arms per quad");
     assert_eq!(find(last, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32).unwrap().len(), 121 * 2);
     assert!(find(last, field::SQ_NO_REAL_QUADS).and_then(Field::as_f32).unwrap().is_empty());
+    for name in [field::SQ_QUAD_MESH, field::PANEL_TRIANGLES, field::SUPPORT_TRIANGLES, field::AXES_LINES] {
+        let len = find(last, name).map_or(0, |f| f.as_f32().map_or(0, <[f32]>::len) + f.as_u32().map_or(0, <[u32]>::len));
+        assert!(len > 0, "{name} in the last snapshot");
+    }
+    // Live panels while the spheres optimize.
+    assert!(snapshots[..snapshots.len() - 1].iter().any(|f| find(f, field::PANEL_TRIANGLES).is_some()), "live panels");
+    let mesh = summary.mesh.expect("the SQ mesh's figures");
+    assert!(mesh.max_vertex_sphere_residual <= 1e-8 && mesh.max_centre_face_planarity <= 1e-8, "{mesh:?}");
+    assert_eq!(report.stopped_after.as_deref(), Some("final"));
     let files: Vec<&str> = r
         .messages
         .iter()
@@ -335,7 +345,10 @@ fn sq_streams_lines_and_energies_then_files() {
             _ => None,
         })
         .unwrap();
-    assert_eq!(files, ["congruence.glb", "congruence.json", "report.json"]);
+    assert_eq!(
+        files,
+        ["congruence.glb", "congruence.json", "mesh.obj", "panels.glb", "panels.obj", "panels.csv", "panels.json", "support.csv", "report.json"]
+    );
 }
 
 /// SQ refuses a sign change of H and sends H at the vertices first; on a mesh it says that it

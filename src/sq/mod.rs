@@ -302,7 +302,7 @@ pub fn compute(
     let mut timings = Timings::start(clock);
     on_event(SqEvent::Progress(Progress::new("remesh", 0, 1)))?;
     let mut cancelled = false;
-    let quad = quad_mesh(reference, &result.congruence, params, clock, &mut |iteration, terms, positions| {
+    let quad = quad_mesh(reference, result.congruence.grid, &result.congruence.torsal_uv, params, clock, &mut |iteration, terms, positions| {
         let go = on_event(SqEvent::Fairing { iteration, terms, positions }).is_ok();
         cancelled |= !go;
         go

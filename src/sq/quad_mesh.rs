@@ -27,7 +27,6 @@ use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats,
 
 use super::error::SqError;
 use super::params::SqParams;
-use super::SqCongruence;
 
 /// The quad mesh of Sec. 5.2 before the final optimization (model units).
 #[derive(Clone, Debug)]
@@ -56,6 +55,10 @@ pub struct SqQuadMesh {
     pub warnings: Vec<String>,
 }
 
+/// Called after every fairing iteration with the iteration, the term statistics and the
+/// vertices (model units); false cancels.
+pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> bool + 'h;
+
 /// Second differences along the lattice polylines (both neighbours present and joined by mesh
 /// edges), per coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the
 /// patch boundary are left out: the boundary cuts the last segment of a polyline short, and
@@ -79,24 +82,27 @@ pub fn polyline_fairness(lattice: &[[i32; 2]], on_boundary: &[bool], edges: &[[u
     fair.with_name("fairness")
 }
 
-/// Remeshes along the torsal field of `congruence` and fairs the result into Q′ (see the module
-/// docs). `hook` sees every fairing iteration (terms, vertices in model units); false cancels.
+/// Remeshes along the torsal field (per quad of the `grid` × `grid` sampling grid, unit (du, dv)
+/// directions, as [`super::SqCongruence::torsal_uv`]) and fairs the result into Q′ (see the
+/// module docs). `hook` sees every fairing iteration (terms, vertices in model units); false
+/// cancels.
 pub fn quad_mesh(
     reference: &Reference,
-    congruence: &SqCongruence,
+    grid: usize,
+    torsal_uv: &[Option<[[f64; 2]; 2]>],
     params: &SqParams,
     clock: Clock,
-    hook: &mut dyn FnMut(usize, &[TermStats], &[DVec3]) -> bool,
+    hook: &mut FairingHook,
 ) -> Result<SqQuadMesh, SqError> {
     let surface = reference.spline().ok_or(SqError::NotBSpline)?;
-    let torsal = CrossField::comb(surface, congruence.grid, &congruence.torsal_uv).ok_or(SqError::NoTorsalField)?;
+    let torsal = CrossField::comb(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
     let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
     let mut warnings = Vec::new();
     let (field, remesh, parameter_lines) = match quad_remesh(surface, &torsal, &remesh_params)? {
         r if r.folded_triangles == 0 => (torsal.clone(), r, false),
         folded => {
-            let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (congruence.grid - 1).pow(2)];
-            let field = CrossField::comb(surface, congruence.grid, &lines).ok_or(SqError::NoTorsalField)?;
+            let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
+            let field = CrossField::comb(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
             let r = quad_remesh(surface, &field, &remesh_params)?;
             warnings.push(format!(
                 "the torsal directions turn about a point (an umbilic or a singularity of the cross field: {} folded triangles in its integration), so no quad mesh without singular vertices follows them; the quad mesh follows the parameter lines and the final optimization makes it an exact SQ mesh",

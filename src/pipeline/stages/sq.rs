@@ -89,6 +89,8 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
     let mut planned = params.lc_iterations + params.torsal_iterations + later;
     let mut done = 0usize;
     let mut lc_done = 0usize;
+    // The first live snapshot of Q′ and of the panels goes out at once, later ones when due.
+    let (mut first_fairing, mut first_spheres) = (true, true);
     let mut on_event = |e: SqEvent| -> Result<(), crate::progress::Cancelled> {
         let mut due = |sink: &mut dyn Sink| {
             let now = sink.now_ms();
@@ -137,7 +139,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             SqEvent::Fairing { iteration, terms, positions } => {
                 done += 1;
                 let go = report(sink, STAGE, Progress::new("fairing", done, planned), energies(terms), start);
-                if go.is_ok() && due(sink) && !faces.is_empty() {
+                if go.is_ok() && (std::mem::take(&mut first_fairing) | due(sink)) && !faces.is_empty() {
                     let mesh = PolyMesh::new(positions.to_vec(), faces.clone());
                     sink.snapshot(STAGE, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&mesh))]);
                 }
@@ -152,7 +154,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             SqEvent::Spheres { phase, terms, positions, spheres, .. } => {
                 done += 1;
                 let go = report(sink, STAGE, Progress::new(phase.key(), done.min(planned), planned), energies(terms), start);
-                if go.is_ok() && due(sink) {
+                if go.is_ok() && (std::mem::take(&mut first_spheres) | due(sink)) {
                     sink.snapshot(STAGE, done as u32, live_panels(positions, &faces, spheres, diag));
                 }
                 go
@@ -316,7 +318,10 @@ pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, segme
     }
     let total: f64 = c.timings_ms.iter().chain(&result.timings_ms).map(|(_, ms)| ms).sum();
     report.timings_ms.insert("total".into(), total);
-    report.iterations = Some(c.lc_iterations + c.torsal_iterations + result.sq_mesh.as_ref().map_or(0, |f| f.outcome.warm_up_iterations + f.outcome.iterations + f.outcome.projection_iterations));
+    // Every solver iteration of the run: the congruence's, Q′'s and the final optimization's.
+    let fairing = result.quad_mesh.as_ref().map_or(0, |q| q.fairing_iterations);
+    let spheres = result.sq_mesh.as_ref().map_or(0, |f| f.outcome.warm_up_iterations + f.outcome.iterations + f.outcome.projection_iterations);
+    report.iterations = Some(c.lc_iterations + c.torsal_iterations + fairing + spheres);
     files.push(file("report.json", "application/json", report.to_json().into_bytes()));
     (report, files)
 }
