@@ -36,6 +36,7 @@ fn main() {
         println!("  {:?}", f.mesh.figures);
         println!("  iterations {} {} {} final it median {:?} timings {:?}", f.outcome.warm_up_iterations, f.outcome.iterations, f.outcome.projection_iterations, r.final_iteration_median_ms(), r.timings_ms);
         println!("  congruence: {:?}", r.congruence.figures);
+        println!("  phases {:?}", f.outcome.phase_ms);
         if let Ok(v) = std::env::var("FAN") { for v in v.split(",") { probe_fan(f, loaded.surface.spline().unwrap(), v.parse().unwrap()); } }
         if let Ok(v) = std::env::var("PROBE") { for v in v.split(",") { probe(&f.mesh.sphere_mesh, v.parse().unwrap()); } }
     }

@@ -31,6 +31,9 @@
 //!
 //! Every term's Jacobian is checked against finite differences (`tests/sq_terms.rs`).
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use glam::DVec3;
 
 use crate::reference::Reference;
@@ -213,39 +216,51 @@ impl Term for CentreQuadAngle {
 }
 
 /// The reference normals at moving vertices, refreshed where a vertex moved (closest points).
+/// Clones share one table, so terms over the same vertices look each vertex up once.
 #[derive(Clone)]
 pub struct VertexNormals<'a> {
-    pub reference: &'a Reference,
+    reference: &'a Reference,
     /// Vertex 3-block offsets.
-    pub offsets: Vec<usize>,
-    pub normals: Vec<DVec3>,
+    offsets: Vec<usize>,
+    table: Rc<RefCell<NormalTable>>,
+}
+
+struct NormalTable {
+    normals: Vec<DVec3>,
+    /// Position each normal was found for.
     at: Vec<DVec3>,
     /// The closest point found last, where the next search starts.
     hits: Vec<Option<DVec3>>,
 }
 
 impl<'a> VertexNormals<'a> {
-    /// `normals`: the normals at the vertices' current positions.
+    /// `normals`: the normals at the vertices' current positions in `x`.
     pub fn new(reference: &'a Reference, offsets: Vec<usize>, normals: Vec<DVec3>, x: &[f64]) -> Self {
         let at = offsets.iter().map(|&o| v3(x, o)).collect();
         let hits = vec![None; offsets.len()];
-        Self { reference, offsets, normals, at, hits }
+        Self { reference, offsets, table: Rc::new(RefCell::new(NormalTable { normals, at, hits })) }
     }
 
-    fn refresh(&mut self, x: &[f64]) {
+    fn refresh(&self, x: &[f64]) {
+        let mut t = self.table.borrow_mut();
         for (k, &o) in self.offsets.iter().enumerate() {
             let p = v3(x, o);
-            if p == self.at[k] || !p.is_finite() {
+            if p == t.at[k] || !p.is_finite() {
                 continue;
             }
-            let hit = self.reference.closest_point_near(p, self.hits[k]);
-            self.hits[k] = hit.as_ref().map(|h| h.point);
+            let hit = self.reference.closest_point_near(p, t.hits[k]);
+            t.hits[k] = hit.as_ref().map(|h| h.point);
             if let Some(n) = hit.and_then(|h| h.normal) {
                 // Keep the side: the normals only enter squared, but stay comparable.
-                self.normals[k] = if n.dot(self.normals[k]) < 0.0 { -n } else { n };
-                self.at[k] = p;
+                t.normals[k] = if n.dot(t.normals[k]) < 0.0 { -n } else { n };
+                t.at[k] = p;
             }
         }
+    }
+
+    /// The normal at vertex `k` (an index into the offsets).
+    pub fn normal(&self, k: usize) -> DVec3 {
+        self.table.borrow().normals[k]
     }
 }
 
@@ -270,7 +285,7 @@ impl Term for AxisNormalAngle<'_> {
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
         for (k, &(o, v)) in self.axes.iter().enumerate() {
-            let n = self.normals.normals[v];
+            let n = self.normals.normal(v);
             let c = v3(x, o).dot(n);
             r[k] = self.cos2 - c * c;
             jac.add_block(k, o, &(-2.0 * c * n).to_array());
@@ -328,7 +343,7 @@ impl Term for FanAxisAngle<'_> {
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
         for (k, (spheres, v)) in self.fans.iter().enumerate() {
-            let normal = &self.normals.normals[*v];
+            let normal = &self.normals.normal(*v);
             let c = spheres.map(|o| centre(x, o));
             let (a, b) = (c[0].0 - c[1].0, c[1].0 - c[2].0);
             let n = a.cross(b);
