@@ -54,11 +54,14 @@ pub struct SqSummary {
     pub mesh: Option<SqMeshFigures>,
 }
 
-/// The energies of an iteration: the total first, then every term.
-fn energies(terms: &[TermStats]) -> Vec<Energy> {
-    let total: f64 = terms.iter().filter(|t| t.weight > 0.0).map(|t| t.energy).sum();
+/// The energies of an iteration: the total first, then every term (with `switched_on_only`,
+/// the terms of nonzero weight: the final optimization's phases use different subsets of one
+/// problem's terms).
+fn energies(terms: &[TermStats], switched_on_only: bool) -> Vec<Energy> {
+    let on = |t: &&TermStats| !switched_on_only || t.weight > 0.0;
+    let total: f64 = terms.iter().filter(on).map(|t| t.energy).sum();
     let mut out = vec![Energy { name: "total".into(), value: total }];
-    out.extend(terms.iter().filter(|t| t.weight > 0.0).map(|t| Energy { name: t.name.clone(), value: t.energy }));
+    out.extend(terms.iter().filter(on).map(|t| Energy { name: t.name.clone(), value: t.energy }));
     out
 }
 
@@ -119,7 +122,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
                     planned = lc_done + params.torsal_iterations + later;
                     done = lc_done + iteration;
                 }
-                let go = report(sink, STAGE, Progress::new(step.key(), done, planned), energies(terms), start);
+                let go = report(sink, STAGE, Progress::new(step.key(), done, planned), energies(terms, false), start);
                 if go.is_ok() && due(sink) {
                     sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_LINES, &line_segments(&points, &lines, length))]);
                 }
@@ -138,7 +141,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             }
             SqEvent::Fairing { iteration, terms, positions } => {
                 done += 1;
-                let go = report(sink, STAGE, Progress::new("fairing", done, planned), energies(terms), start);
+                let go = report(sink, STAGE, Progress::new("fairing", done, planned), energies(terms, false), start);
                 if go.is_ok() && (std::mem::take(&mut first_fairing) | due(sink)) && !faces.is_empty() {
                     let mesh = PolyMesh::new(positions.to_vec(), faces.clone());
                     sink.snapshot(STAGE, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&mesh))]);
@@ -153,7 +156,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             }
             SqEvent::Spheres { phase, terms, positions, spheres, .. } => {
                 done += 1;
-                let go = report(sink, STAGE, Progress::new(phase.key(), done.min(planned), planned), energies(terms), start);
+                let go = report(sink, STAGE, Progress::new(phase.key(), done.min(planned), planned), energies(terms, true), start);
                 if go.is_ok() && (std::mem::take(&mut first_spheres) | due(sink)) {
                     sink.snapshot(STAGE, done as u32, live_panels(positions, &faces, spheres, diag));
                 }
