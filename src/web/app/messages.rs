@@ -161,6 +161,12 @@ impl App {
                         }
                     }
                     StageResult::Sq(summary) => {
+                        // With the SQ mesh done, the panels take the stage: the congruence and
+                        // the reference step back (each can be switched on again).
+                        if summary.mesh.is_some() {
+                            let d = &mut self.sq_display;
+                            (d.lines, d.cross_field, d.surface) = (false, false, false);
+                        }
                         if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
                             v.summary = Some(*summary);
                         }

@@ -234,6 +234,11 @@ impl App {
             l.st_adapted = (self.design.method == Method::StAdapted).then(StAdaptedView::default);
             l.sq = (self.design.method == Method::Sq).then(SqView::default);
         }
+        if self.design.method == Method::Sq {
+            // A new run shows its congruence again while it optimizes.
+            let d = &mut self.sq_display;
+            (d.lines, d.cross_field, d.surface) = (true, true, true);
+        }
         if self.design.color == ColorBy::Sizing {
             self.scalars = None;
         }
