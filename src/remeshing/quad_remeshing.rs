@@ -453,13 +453,19 @@ fn boundary_root(g: &Integration, rect: Rect, side: usize, k: usize, value: f64,
     }
 }
 
+/// Area of the quad `f` over `pts`: half the cross product of its diagonals.
+fn quad_area(pts: &[DVec3], f: &[u32]) -> f64 {
+    quad_area_vector(pts, f).length()
+}
+
+fn quad_area_vector(pts: &[DVec3], f: &[u32]) -> DVec3 {
+    let p = |k: usize| pts[f[k] as usize];
+    0.5 * (p(2) - p(0)).cross(p(3) - p(1))
+}
+
 /// No re-entrant corners: a vertex with three quads (a dropped cell beside it) loses the smaller
 /// of its two outer quads, until none is left. Returns how many were dropped.
 fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3]) -> usize {
-    let area_of = |f: &[u32]| {
-        let p: Vec<DVec3> = f.iter().map(|&i| pts[i as usize]).collect();
-        0.5 * (p[2] - p[0]).cross(p[3] - p[1]).length()
-    };
     let mut dropped = 0;
     loop {
         let mut incident: HashMap<u32, Vec<usize>> = HashMap::new();
@@ -477,7 +483,7 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3]) -> usize {
             .filter_map(|v| {
                 let fs = &incident[v];
                 let outer = fs.iter().copied().filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1);
-                outer.min_by(|&a, &b| area_of(&faces[a]).total_cmp(&area_of(&faces[b])))
+                outer.min_by(|&a, &b| quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b])))
             })
             .collect();
         let Some(&f) = drop.first() else { break };
@@ -567,7 +573,7 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
         let mid = uv[ids[0] as usize];
         let d = surface.derivatives(mid[0], mid[1]);
         let normal = d.su.cross(d.sv).normalize_or_zero();
-        let a = 0.5 * (p[2] - p[0]).cross(p[3] - p[1]);
+        let a = quad_area_vector(&pts, &ids);
         let short = (0..4).any(|c| p[c].distance(p[(c + 1) % 4]) < min_edge);
         // Corner angle over 170° or a corner turning the wrong way (both sides of the normal).
         let bad_corner = (0..4).any(|c| {
@@ -585,13 +591,7 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
     }
     if final_pass {
         dropped += drop_reentrant_corners(&mut faces, &pts);
-        area = faces
-            .iter()
-            .map(|f| {
-                let p: Vec<DVec3> = f.iter().map(|&i| pts[i as usize]).collect();
-                0.5 * (p[2] - p[0]).cross(p[3] - p[1]).length()
-            })
-            .sum();
+        area = faces.iter().map(|f| quad_area(&pts, f)).sum();
     }
     if faces.is_empty() {
         return None;
