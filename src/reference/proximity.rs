@@ -21,6 +21,19 @@ struct ClosestCache {
     hits: Vec<(DVec3, DVec3)>,
 }
 
+/// Read access to a [`ReferenceProximity`]'s closest points (see [`ReferenceProximity::lookups`]).
+#[derive(Clone, Debug)]
+pub struct ClosestLookups(Rc<RefCell<ClosestCache>>);
+
+impl ClosestLookups {
+    /// The unit normal found for vertex `k` (an index into the term's offsets) when it was at
+    /// `position`; None when it was looked up elsewhere (or not yet).
+    pub fn normal_at(&self, k: usize, position: DVec3) -> Option<DVec3> {
+        let c = self.0.borrow();
+        (c.pos.get(k) == Some(&position)).then(|| c.hits[k].1)
+    }
+}
+
 /// Proximity to the reference (Sec. 5.2): per vertex either the tangent-plane distance
 /// n·(v − q) (one residual) or the point distance v − q (three residuals, scaled per vertex),
 /// with (q, n) the closest reference point and its normal, refreshed in [`Term::prepare`].
@@ -79,6 +92,13 @@ impl<'a> ReferenceProximity<'a> {
     /// Closest points and normals currently used.
     pub fn closest(&self) -> &[(DVec3, DVec3)] {
         &self.closest
+    }
+
+    /// A read handle on the lookups this term makes (shared with [`Self::share_closest_with`]):
+    /// other terms over the same vertices, prepared after it, can take its normals instead of
+    /// looking the vertices up again.
+    pub fn lookups(&self) -> ClosestLookups {
+        ClosestLookups(self.cache.clone())
     }
 }
 

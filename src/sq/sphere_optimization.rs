@@ -274,6 +274,7 @@ pub fn optimize_spheres(
     let tangent = ReferenceProximity::tangent(input.reference, vertex_offsets.clone());
     let mut point = ReferenceProximity::point(input.reference, vertex_offsets, vec![w.epsilon.sqrt(); layout.vertices]);
     point.share_closest_with(&tangent);
+    let lookups = tangent.lookups();
     let tangent_id = problem.add_term(tangent.with_name("vertex_proximity"), w.prox_f);
     let point_id = problem.add_term(point.with_name("vertex_proximity_point"), w.prox_f);
     let centre_faces: Vec<(usize, DVec3, DVec3)> = mesh
@@ -290,7 +291,8 @@ pub fn optimize_spheres(
     let quads: Vec<[usize; 4]> = stars.stars.iter().map(|(_, faces)| faces.map(|f| layout.sphere(f as usize))).collect();
     let axes: Vec<(usize, usize)> = stars.stars.iter().enumerate().map(|(s, &(v, _))| (layout.star_normal(s), v as usize)).collect();
     let fans: Vec<([usize; 3], usize)> = stars.fans.iter().map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize)).collect();
-    let normals = VertexNormals::new(input.reference, (0..layout.vertices).map(|v| layout.vertex(v)).collect(), input.normals.to_vec(), &x);
+    // The proximity terms come first, so their lookups are fresh when the hinges prepare.
+    let normals = VertexNormals::new(input.reference, (0..layout.vertices).map(|v| layout.vertex(v)).collect(), input.normals.to_vec(), &x).with_lookups(lookups);
     // The hinges at the targets (with margins) for the optimization, and at θ and α themselves
     // (less a margin) for the projection.
     let mut hinges = |cos2_alpha: f64, cos2_theta: f64, suffix: &str| {

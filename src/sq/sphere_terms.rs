@@ -36,6 +36,7 @@ use std::rc::Rc;
 
 use glam::DVec3;
 
+use crate::reference::proximity::ClosestLookups;
 use crate::reference::Reference;
 use crate::solver::terms::v3;
 use crate::solver::{JacobianSink, Term};
@@ -223,6 +224,8 @@ pub struct VertexNormals<'a> {
     /// Vertex 3-block offsets.
     offsets: Vec<usize>,
     table: Rc<RefCell<NormalTable>>,
+    /// A proximity term's lookups over the same vertices, prepared first, to take normals from.
+    lookups: Option<ClosestLookups>,
 }
 
 struct NormalTable {
@@ -238,7 +241,13 @@ impl<'a> VertexNormals<'a> {
     pub fn new(reference: &'a Reference, offsets: Vec<usize>, normals: Vec<DVec3>, x: &[f64]) -> Self {
         let at = offsets.iter().map(|&o| v3(x, o)).collect();
         let hits = vec![None; offsets.len()];
-        Self { reference, offsets, table: Rc::new(RefCell::new(NormalTable { normals, at, hits })) }
+        Self { reference, offsets, table: Rc::new(RefCell::new(NormalTable { normals, at, hits })), lookups: None }
+    }
+
+    /// Takes the normals a proximity term over the same vertices (in the same order) found,
+    /// where it found them at the current positions; that term must be prepared first.
+    pub fn with_lookups(self, lookups: ClosestLookups) -> Self {
+        Self { lookups: Some(lookups), ..self }
     }
 
     fn refresh(&self, x: &[f64]) {
@@ -246,6 +255,11 @@ impl<'a> VertexNormals<'a> {
         for (k, &o) in self.offsets.iter().enumerate() {
             let p = v3(x, o);
             if p == t.at[k] || !p.is_finite() {
+                continue;
+            }
+            if let Some(n) = self.lookups.as_ref().and_then(|l| l.normal_at(k, p)) {
+                t.normals[k] = if n.dot(t.normals[k]) < 0.0 { -n } else { n };
+                t.at[k] = p;
                 continue;
             }
             let hit = self.reference.closest_point_near(p, t.hits[k]);
