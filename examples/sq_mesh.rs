@@ -1,0 +1,81 @@
+//! Runs the whole SQ method (Sec. 5) and prints the quad mesh, the figures of exactness, the
+//! iterations and where the final optimization's time goes:
+//! `cargo run --release --example sq_mesh -- FILE.json|sample:vault ...`.
+//! Environment: FULL / PROJ (iterations of the full optimization / the projection), FAIRIT /
+//! FAIRW (Q′ fairing iterations / weight), V (print the terms during the final optimization).
+
+use spherical_faces::pipeline::session::Loaded;
+use spherical_faces::progress::Clock;
+use spherical_faces::samples::Sample;
+use spherical_faces::sq::params::SqParams;
+use spherical_faces::sq::SqEvent;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    for a in args {
+        let loaded = match a.strip_prefix("sample:") {
+            Some(k) => Loaded::from_sample(Sample::from_key(k).expect("a sample")),
+            None => Loaded::from_file(&std::fs::read(&a).expect("readable"), &a).expect("loads"),
+        };
+        let mut params = SqParams::default();
+        if let Some(n) = std::env::var("FULL").ok().and_then(|v| v.parse().ok()) {
+            params.sphere_iterations[1] = n;
+        }
+        if let Some(n) = std::env::var("PROJ").ok().and_then(|v| v.parse().ok()) {
+            params.sphere_iterations[2] = n;
+        }
+        if let Some(n) = std::env::var("FAIRIT").ok().and_then(|v| v.parse().ok()) {
+            params.fairing_iterations = n;
+        }
+        if let Some(n) = std::env::var("FAIRW").ok().and_then(|v| v.parse().ok()) {
+            params.fairing_weight = n;
+        }
+        let verbose = std::env::var("V").is_ok();
+        let t0 = std::time::Instant::now();
+        let r = spherical_faces::sq::compute(&loaded.surface, &params, Clock::native(), &mut |e| {
+            if let SqEvent::Spheres {
+                phase,
+                iteration,
+                terms,
+                ..
+            } = e
+            {
+                if verbose
+                    && (iteration % 10 == 1
+                        || phase != spherical_faces::sq::sphere_optimization::SpherePhase::Full)
+                {
+                    let t: Vec<String> = terms
+                        .iter()
+                        .filter(|t| t.weight > 0.0)
+                        .map(|t| format!("{}={:.2e}/{:.1e}", t.name, t.energy, t.max_abs))
+                        .collect();
+                    println!("  {:?} {iteration}: {}", phase, t.join(" "));
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        let q = r.quad_mesh.as_ref().unwrap();
+        let f = r.sq_mesh.as_ref().unwrap();
+        let stat = |v: &[f64]| {
+            (
+                v.iter().sum::<f64>() / v.len() as f64,
+                v.iter().cloned().fold(0.0, f64::max),
+            )
+        };
+        println!("{a}: {ms:.0} ms, faces {} coverage {:.3} dropped {} param-lines {} remesh angles {:?} Q' angles {:?} final angles {:?}",
+            q.mesh.face_count(), q.coverage, q.dropped, q.parameter_lines, stat(&q.remesh_edge_angles_deg), stat(&q.edge_angles_deg), stat(&f.edge_angles_deg));
+        println!("  {:?}", f.mesh.figures);
+        println!(
+            "  iterations {} {} {} final it median {:?} timings {:?}",
+            f.outcome.warm_up_iterations,
+            f.outcome.iterations,
+            f.outcome.projection_iterations,
+            r.final_iteration_median_ms(),
+            r.timings_ms
+        );
+        println!("  congruence: {:?}", r.congruence.figures);
+        println!("  phases {:?}", f.outcome.phase_ms);
+    }
+}
