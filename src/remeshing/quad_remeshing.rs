@@ -598,10 +598,9 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
     }
     // Orientation: counter-clockwise about f_u × f_v (the lattice cells all turn the same way).
     let turn = faces.iter().map(|f| {
-        let p: Vec<DVec3> = f.iter().map(|&i| pts[i as usize]).collect();
         let c = uv[f[0] as usize];
         let d = surface.derivatives(c[0], c[1]);
-        (p[2] - p[0]).cross(p[3] - p[1]).dot(d.su.cross(d.sv)).signum()
+        quad_area_vector(&pts, f).dot(d.su.cross(d.sv)).signum()
     });
     let positive = turn.sum::<f64>() >= 0.0;
     let mut used = vec![u32::MAX; uv.len()];

@@ -301,11 +301,8 @@ pub fn compute(
     }
     let mut timings = Timings::start(clock);
     on_event(SqEvent::Progress(Progress::new("remesh", 0, 1)))?;
-    let mut cancelled = false;
     let quad = quad_mesh(reference, result.congruence.grid, &result.congruence.torsal_uv, params, clock, &mut |iteration, terms, positions| {
-        let go = on_event(SqEvent::Fairing { iteration, terms, positions }).is_ok();
-        cancelled |= !go;
-        go
+        on_event(SqEvent::Fairing { iteration, terms, positions }).is_ok()
     });
     let quad = match quad {
         Err(SqError::Cancelled) => return Err(SqError::Cancelled),
@@ -365,22 +362,13 @@ fn final_mesh(
         cos2_alpha: params.target_alpha_deg().to_radians().cos().powi(2),
         limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
     };
-    let total = params.sphere_iterations.iter().sum::<usize>();
-    let mut cancelled = false;
+    // The Spheres event carries the phase and iteration: it is the progress of this step.
     let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, &params.sphere_weights, params.sphere_iterations, clock, &mut |phase, iteration, terms, v, sp| {
         let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
         let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
-        let before = match phase {
-            SpherePhase::WarmUp => 0,
-            SpherePhase::Full => params.sphere_iterations[0],
-            SpherePhase::Projection => params.sphere_iterations[0] + params.sphere_iterations[1],
-        };
-        let go = on_event(SqEvent::Progress(Progress::new(phase.key(), before + iteration, total))).is_ok()
-            && on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres }).is_ok();
-        cancelled |= !go;
-        go
+        on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres }).is_ok()
     });
-    if outcome.cancelled || cancelled {
+    if outcome.cancelled {
         return Err(SqError::Cancelled);
     }
     timings.lap("spheres");

@@ -31,10 +31,8 @@ use super::params::SqParams;
 /// The quad mesh of Sec. 5.2 before the final optimization (model units).
 #[derive(Clone, Debug)]
 pub struct SqQuadMesh {
-    /// The combed torsal field, and the cross field the remesh followed (the torsal field, or
-    /// the parameter lines).
+    /// The combed torsal field.
     pub torsal: CrossField,
-    pub field: CrossField,
     /// Whether the remesh had to follow the parameter lines (a singular torsal field).
     pub parameter_lines: bool,
     /// The mesh as extracted, and Q′.
@@ -98,8 +96,8 @@ pub fn quad_mesh(
     let torsal = CrossField::comb(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
     let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
     let mut warnings = Vec::new();
-    let (field, remesh, parameter_lines) = match quad_remesh(surface, &torsal, &remesh_params)? {
-        r if r.folded_triangles == 0 => (torsal.clone(), r, false),
+    let (remesh, parameter_lines) = match quad_remesh(surface, &torsal, &remesh_params)? {
+        r if r.folded_triangles == 0 => (r, false),
         folded => {
             let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
             let field = CrossField::comb(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
@@ -108,7 +106,7 @@ pub fn quad_mesh(
                 "the torsal directions turn about a point (an umbilic or a singularity of the cross field: {} folded triangles in its integration), so no quad mesh without singular vertices follows them; the quad mesh follows the parameter lines and the final optimization makes it an exact SQ mesh",
                 folded.folded_triangles
             ));
-            (field, r, true)
+            (r, true)
         }
     };
     let QuadRemesh { mesh: remesh, uv, lattice, on_boundary, dropped, .. } = remesh;
@@ -162,7 +160,6 @@ pub fn quad_mesh(
     }
     Ok(SqQuadMesh {
         torsal,
-        field,
         parameter_lines,
         remesh,
         mesh,
