@@ -1,222 +1,456 @@
-//! The native command line over the same pipeline as the browser app (see `main.rs`).
+//! The native command line over the same pipeline as the browser app (see `main.rs`), on clap.
+//!
+//! Conventions: `--help` per command, `--version`; results on stdout, warnings and a live
+//! progress line on stderr (the progress line only on a terminal, never with `--quiet`); an error
+//! is one line on stderr (one JSON object with `--json`). Exit codes: see [`EXIT_CODES`].
 
+use std::io::{IsTerminal, Read, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use clap::{Args, Parser, Subcommand};
+
 use spherical_faces::congruence::central_spheres::JetParams;
-use spherical_faces::export::ExportFile;
+use spherical_faces::export::{ExportFile, Report};
+use spherical_faces::import::MAX_BYTES;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
-use spherical_faces::progress::{ignore, Clock};
+use spherical_faces::progress::{Clock, Progress};
 use spherical_faces::reference::Reference;
-use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON};
+use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use spherical_faces::sq::SqEvent;
 use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_adapted::StAdaptedEvent;
 use spherical_faces::st_support::StSupportParams;
+use spherical_faces::text::printable;
 
-const USAGE: &str = "usage:
-  spherical-faces info <surface>
-      <surface> is a mesh (.obj, .gltf, .glb), a B-spline surface (.json, the paper authors'
-      format) or sample:NAME, a built-in sample (dome, torus, sphere-cap, wave-roof, vault).
-  spherical-faces st-support <surface> [--optimize-radius] [--depth D] [--axis-length L]
-                             [--radius-tolerance T] [--adaptive --epsilon E | --faces N] --out DIR
-      ST mesh with support structure (paper Sec. 4). Writes DIR/panels.glb, panels.obj,
-      panels.csv, panels.json and report.json. D, L and T are relative to the bbox diagonal
-      (defaults 0.02, 0.1, 0.001). --adaptive --epsilon E remeshes first with the sizing field
-      of the local spheres orthogonal to Ω (Sec. 3, Fig. 16 bottom; E relative to the diagonal,
-      default 0.0004); --faces N remeshes first uniformly to about N faces.
-  spherical-faces st <surface> [--epsilon E | --faces N] [--variant a|b] --out DIR
-      Angle-minimizing ST mesh with face size adapted to the surface (paper Sec. 3): remesh
-      with the sizing field of tolerance E (relative to the bbox diagonal) or uniformly to
-      about N faces, then optimize the face spheres. Same files and report.json schema.
-  spherical-faces sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K]
-                     [--faces N] [--until congruence|remesh|final] [--depth D] --out DIR
-      SQ mesh with support structure (paper Sec. 5): fit the radius function on an N × N
-      grid (default 20), optimize the line congruence to within θ of the normals (default
-      20°) and its torsal planes to meet at ≥ α (default 75°), recomputing the torsal
-      directions every K iterations (default 10) (Sec. 5.1); remesh along the torsal cross
-      field to about N quads (default 237) and fair it into Q′; optimize the face spheres
-      (Eq. 10) and project to an exact SQ mesh; panels, support structure of depth D
-      (relative to the diagonal, default 0.02) and node axes (Sec. 5.2). Writes
-      congruence.json and congruence.glb; with --until remesh also mesh.obj (Q′); by default
-      also panels.glb, panels.obj, panels.csv, panels.json, support.csv, mesh.obj (the SQ
-      mesh's vertices and quads) and report.json.";
+const EXIT_CODES: &str = "Exit codes: 0 done; 1 the output could not be written; 2 bad arguments, bad input, or a \
+refusal (the surface does not suit the method). Errors are one line on stderr, or one JSON object \
+{\"error\": ..., \"exit_code\": ...} with --json.";
 
-pub fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    match args.first().map(String::as_str) {
-        Some("info") if args.len() == 2 => finish(info(&args[1])),
-        Some("st-support") => finish(st_support_command(&args[1..])),
-        Some("st") => finish(st_command(&args[1..])),
-        Some("sq") => finish(sq_command(&args[1..])),
-        Some("-h" | "--help" | "help") => {
-            println!("{USAGE}");
-            ExitCode::SUCCESS
-        }
-        _ => {
-            eprintln!("{USAGE}");
-            ExitCode::from(2)
-        }
+const SURFACE_HELP: &str = "A mesh (.obj, .gltf, .glb), a B-spline surface (.json, the paper authors' format), a \
+Rhino file (.3dm, read with the rhino3dm package through Node) or sample:NAME, a built-in sample (dome, torus, \
+sphere-cap, wave-roof, vault)";
+
+#[derive(Parser)]
+#[command(name = "spherical-faces", version, about = "Approximates a free-form surface by a mesh of spherical panels \
+(Approximation by Meshes with Spherical Faces).", after_help = EXIT_CODES)]
+struct Cli {
+    /// No progress line on stderr.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    /// Errors as one JSON object on stderr, for scripts.
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Counts after welding, mean curvature (jet-fitted on a mesh, exact on a B-spline) and, for a
+    /// B-spline, its degrees, control grid, domain and curvature ranges: one JSON object. With
+    /// --list-objects, the objects of a .3dm file instead.
+    #[command(after_help = EXIT_CODES)]
+    Info {
+        #[command(flatten)]
+        input: Input,
+        /// List the objects of a .3dm file (one JSON object per line) and stop.
+        #[arg(long)]
+        list_objects: bool,
+    },
+    /// ST mesh with adapted face size (paper Sec. 3): remesh with the sizing field of tolerance E,
+    /// or uniformly to about N faces, then optimize the face spheres.
+    #[command(after_help = EXIT_CODES)]
+    St {
+        #[command(flatten)]
+        input: Input,
+        /// Sizing-field tolerance ε, relative to the bounding-box diagonal (default 0.0004).
+        #[arg(long, value_name = "E", value_parser = open_fraction, conflicts_with = "faces")]
+        epsilon: Option<f64>,
+        /// Remesh uniformly to about N faces instead.
+        #[arg(long, value_name = "N", value_parser = face_count)]
+        faces: Option<usize>,
+        /// Panel edges: (a) intersection circles of adjacent spheres, (b) spheres cut by the
+        /// bisecting face planes.
+        #[arg(long, value_name = "a|b", default_value = "a", value_parser = variant)]
+        variant: EdgeArcs,
+        #[command(flatten)]
+        output: Output,
+    },
+    /// ST mesh with support structure (paper Sec. 4): Ω, face spheres orthogonal to it, node axes,
+    /// support elements and panels.
+    #[command(name = "st-support", after_help = EXIT_CODES)]
+    StSupport {
+        #[command(flatten)]
+        input: Input,
+        /// Optimize R² (or d) of Ω for the smallest kinks (Fig. 16).
+        #[arg(long)]
+        optimize_radius: bool,
+        /// Depth of the support elements, relative to the diagonal.
+        #[arg(long, value_name = "D", default_value_t = 0.02, value_parser = fraction_in::<0, 1>)]
+        depth: f64,
+        /// Length of the drawn node axes, relative to the diagonal.
+        #[arg(long, value_name = "L", default_value_t = 0.1, value_parser = fraction_in::<0, 10>)]
+        axis_length: f64,
+        /// Radii closer than T × the diagonal count as one in the schedule.
+        #[arg(long, value_name = "T", default_value_t = 0.001, value_parser = radius_tolerance)]
+        radius_tolerance: f64,
+        /// Remesh first with the sizing field of the local spheres orthogonal to Ω (Fig. 16,
+        /// bottom).
+        #[arg(long, conflicts_with = "faces")]
+        adaptive: bool,
+        /// The adaptive sizing's tolerance, relative to the diagonal (default 0.0004).
+        #[arg(long, value_name = "E", value_parser = open_fraction, requires = "adaptive")]
+        epsilon: Option<f64>,
+        /// Remesh first uniformly to about N faces.
+        #[arg(long, value_name = "N", value_parser = face_count)]
+        faces: Option<usize>,
+        #[command(flatten)]
+        output: Output,
+    },
+    /// SQ mesh with support structure (paper Sec. 5) on a B-spline surface: radius function, line
+    /// congruence and torsal optimization (5.1); quad mesh along the torsal cross field, Q′, the
+    /// final sphere optimization, panels, support structure and node axes (5.2).
+    #[command(after_help = EXIT_CODES)]
+    Sq {
+        #[command(flatten)]
+        input: Input,
+        /// Largest angle between the lines and the normals (degrees).
+        #[arg(long, value_name = "DEG", default_value_t = SqParams::default().theta_deg, value_parser = range_f64::<THETA>)]
+        theta: f64,
+        /// Smallest angle between the torsal planes (degrees).
+        #[arg(long, value_name = "DEG", default_value_t = SqParams::default().alpha_deg, value_parser = range_f64::<ALPHA>)]
+        alpha: f64,
+        /// Points per direction of the sampling grid G.
+        #[arg(long, value_name = "N", default_value_t = SqParams::default().grid, value_parser = range_usize::<GRID>)]
+        grid: usize,
+        /// Recompute the exact torsal directions every K iterations.
+        #[arg(long, value_name = "K", default_value_t = SqParams::default().recompute_every, value_parser = range_usize::<RECOMPUTE>)]
+        rs: usize,
+        /// About this many quads.
+        #[arg(long, value_name = "N", default_value_t = SqParams::default().faces, value_parser = range_usize::<FACES>)]
+        faces: usize,
+        /// Stop after this stage.
+        #[arg(long, value_name = "STAGE", default_value = "final", value_parser = until)]
+        until: Until,
+        /// Depth of the support elements, relative to the diagonal.
+        #[arg(long, value_name = "D", default_value_t = SqParams::default().support_depth, value_parser = fraction_in::<0, 1>)]
+        depth: f64,
+        #[command(flatten)]
+        output: Output,
+    },
+}
+
+#[derive(Args)]
+struct Input {
+    #[arg(help = SURFACE_HELP, value_name = "SURFACE")]
+    surface: String,
+    /// In a .3dm file with several objects, the one to take (its index in `info --list-objects`);
+    /// default: the first NURBS surface, else the first mesh.
+    #[arg(long, value_name = "K")]
+    object: Option<usize>,
+}
+
+#[derive(Args)]
+struct Output {
+    /// The folder to write into (created if missing; checked before any work).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+}
+
+/// Why a command failed: the message and the exit code.
+struct Failure {
+    message: String,
+    code: u8,
+}
+
+impl Failure {
+    fn input(message: impl Into<String>) -> Self {
+        Self { message: message.into(), code: 2 }
+    }
+
+    fn output(message: impl Into<String>) -> Self {
+        Self { message: message.into(), code: 1 }
     }
 }
 
-/// Prints the command's output, or its error as one line on stderr with exit code 2.
-fn finish(result: Result<String, String>) -> ExitCode {
+impl<E: std::fmt::Display> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Failure::input(e.to_string())
+    }
+}
+
+pub fn main() -> ExitCode {
+    let json = std::env::args().any(|a| a == "--json");
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                print!("{}", e.render());
+                return ExitCode::SUCCESS;
+            }
+            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                eprint!("{}", e.render());
+                return ExitCode::from(2);
+            }
+            // One line: clap's message up to its usage, without its prefix, and where to look.
+            let text = e.render().to_string();
+            let message: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+                .filter(|l| !l.is_empty() && !l.starts_with("tip:"))
+                .collect();
+            let message = message.join(" ");
+            return fail(json, &Failure::input(format!("{} (see --help)", message.trim_start_matches("error: "))));
+        }
+    };
+    let mut progress = ProgressLine::new(!cli.quiet && std::io::stderr().is_terminal());
+    let result = match cli.command {
+        Command::Info { input, list_objects } => info(&input, list_objects),
+        Command::St { input, epsilon, faces, variant, output } => {
+            let sizing = match faces {
+                Some(n) => Sizing::UniformFaces(n),
+                None => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
+            };
+            st(&input, StAdaptedParams { sizing, variant, ..StAdaptedParams::default() }, &output, &mut progress)
+        }
+        Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, output } => {
+            let remesh = match (adaptive, faces) {
+                (true, _) => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
+                (false, Some(n)) => Sizing::UniformFaces(n),
+                (false, None) => Sizing::None,
+            };
+            let params = StSupportParams {
+                optimize_radius,
+                support_depth: depth,
+                axis_length,
+                radius_tolerance,
+                remesh,
+                ..StSupportParams::default()
+            };
+            st_support(&input, params, &output, &mut progress)
+        }
+        Command::Sq { input, theta, alpha, grid, rs, faces, until, depth, output } => {
+            let params = SqParams {
+                theta_deg: theta,
+                alpha_deg: alpha,
+                grid,
+                recompute_every: rs,
+                faces,
+                until,
+                support_depth: depth,
+                ..SqParams::default()
+            };
+            sq(&input, params, &output, &mut progress)
+        }
+    };
+    progress.clear();
     match result {
         Ok(out) => {
             println!("{out}");
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
+        Err(f) => fail(json, &f),
+    }
+}
+
+/// Prints the failure (one line, or one JSON object) and gives its exit code.
+fn fail(json: bool, f: &Failure) -> ExitCode {
+    let message = printable(&f.message);
+    if json {
+        eprintln!("{}", serde_json::json!({ "error": message, "exit_code": f.code }));
+    } else {
+        eprintln!("error: {message}");
+    }
+    ExitCode::from(f.code)
+}
+
+/// A live progress line on stderr: "step done/total", redrawn at most every 100 ms.
+struct ProgressLine {
+    enabled: bool,
+    last: Option<std::time::Instant>,
+    drawn: bool,
+}
+
+impl ProgressLine {
+    fn new(enabled: bool) -> Self {
+        Self { enabled, last: None, drawn: false }
+    }
+
+    fn show(&mut self, p: &Progress) {
+        if !self.enabled || self.last.is_some_and(|t| t.elapsed().as_millis() < 100) {
+            return;
+        }
+        self.last = Some(std::time::Instant::now());
+        let text = if p.total > 0 { format!("{} {}/{}", p.step, p.done, p.total) } else { p.step.to_string() };
+        eprint!("\r{text:<60}");
+        let _ = std::io::stderr().flush();
+        self.drawn = true;
+    }
+
+    fn clear(&mut self) {
+        if self.drawn {
+            eprint!("\r{:<60}\r", "");
+            self.drawn = false;
         }
     }
 }
 
-/// Loads a file or a sample the way the app does; the error names the file. `sample:NAME` is a
-/// built-in sample (the app's sample menu).
-fn load(path: &str) -> Result<Loaded, String> {
+/// Loads a file or a sample the way the app does; the error names the file.
+fn load(input: &Input) -> Result<Loaded, Failure> {
+    let path = input.surface.as_str();
     if let Some(key) = path.strip_prefix("sample:") {
         let sample = Sample::from_key(key).ok_or_else(|| {
             let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-            format!("sample:{key}: no such sample (samples: {})", names.join(", "))
+            Failure::input(format!("sample:{key}: no such sample (samples: {})", names.join(", ")))
         })?;
         return Ok(Loaded::from_sample(sample));
     }
-    let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
-    let name = std::path::Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
-    Loaded::from_file(&bytes, &name).map_err(|e| e.to_string())
+    let name = Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
+    if rhino::is_3dm(path) {
+        let (text, object_name) = rhino::convert(path, input.object)?;
+        let name = format!("{name} ({object_name})");
+        return Loaded::from_file(text.as_bytes(), &name).map_err(Failure::from);
+    }
+    if input.object.is_some() {
+        return Err(Failure::input("--object applies to .3dm files only"));
+    }
+    let bytes = read_input(path)?;
+    Loaded::from_file(&bytes, &name).map_err(Failure::from)
 }
 
-/// `st-support <mesh> [options] --out DIR`: writes the panel files and report.json.
-fn st_support_command(args: &[String]) -> Result<String, String> {
-    let mut params = StSupportParams::default();
-    let (mut mesh_path, mut out) = (None, None);
-    let (mut adaptive, mut epsilon, mut faces) = (false, None, None);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--optimize-radius" => params.optimize_radius = true,
-            "--depth" => params.support_depth = number(a, it.next(), (0.0, 1.0))?,
-            "--axis-length" => params.axis_length = number(a, it.next(), (0.0, 10.0))?,
-            "--radius-tolerance" => params.radius_tolerance = number(a, it.next(), (1e-9, 1.0))?,
-            "--adaptive" => adaptive = true,
-            "--epsilon" => epsilon = Some(positive_fraction(a, it.next())?),
-            "--faces" => faces = Some(face_count(a, it.next())?),
-            "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
-            s => positional(s, &mut mesh_path)?,
-        }
+/// The bytes of `path`, refused before reading when over [`MAX_BYTES`].
+fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
+    let file = std::fs::File::open(path).map_err(|e| Failure::input(format!("{path}: {e}")))?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let too_large = |n: u64| Failure::input(format!("{path}: {n} bytes exceed the limit of {MAX_BYTES} ({} MiB)", MAX_BYTES >> 20));
+    if len > MAX_BYTES as u64 {
+        return Err(too_large(len));
     }
-    params.remesh = match (adaptive, epsilon, faces) {
-        (_, _, Some(_)) if adaptive || epsilon.is_some() => return Err("use either --adaptive --epsilon E or --faces N".into()),
-        (false, Some(_), None) => return Err("--epsilon needs --adaptive (remesh with the sizing field)".into()),
-        (true, e, None) => Sizing::Adaptive { epsilon: e.unwrap_or(DEFAULT_EPSILON) },
-        (false, None, Some(n)) => Sizing::UniformFaces(n),
-        _ => Sizing::None,
-    };
-    let mesh_path = mesh_path.ok_or("st-support needs a mesh file")?;
-    let out = std::path::PathBuf::from(out.ok_or("st-support needs --out DIR")?);
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(MAX_BYTES as u64 + 1).read_to_end(&mut bytes).map_err(|e| Failure::input(format!("{path}: {e}")))?;
+    if bytes.len() > MAX_BYTES {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// Creates `dir` and proves it writable before any work, so a bad `--out` loses nothing.
+fn check_output(output: &Output) -> Result<(), Failure> {
+    let dir = &output.out;
+    let bad = |e: std::io::Error| Failure::output(format!("{}: cannot write there: {e}", dir.display()));
+    std::fs::create_dir_all(dir).map_err(bad)?;
+    let probe = dir.join(".spherical-faces-write-test");
+    std::fs::write(&probe, b"").map_err(bad)?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Writes `files` into `dir` and prints the report's warnings.
+fn write_files(output: &Output, files: &[ExportFile], report: &Report) -> Result<(), Failure> {
+    for f in files {
+        let path = output.out.join(&f.name);
+        std::fs::write(&path, &f.bytes).map_err(|e| Failure::output(format!("{}: {e}", path.display())))?;
+    }
+    for w in &report.warnings {
+        eprintln!("warning: {}", printable(w));
+    }
+    Ok(())
+}
+
+fn reference(input: &Input) -> Result<Reference, Failure> {
+    Ok(load(input)?.surface)
+}
+
+/// `st-support SURFACE [options] --out DIR`.
+fn st_support(input: &Input, params: StSupportParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+    check_output(output)?;
     let clock = Clock::native();
     let t0 = clock.now();
-    let reference = read_reference(&mesh_path)?;
+    let reference = reference(input)?;
     let import_ms = clock.now() - t0;
     let t1 = clock.now();
-    reference.curvature(&params.jet, &mut ignore).map_err(|e| e.to_string())?;
+    let mut on_progress = |p: Progress| {
+        progress.show(&p);
+        Ok(())
+    };
+    reference.curvature(&params.jet, &mut on_progress).map_err(|_| Failure::input("cancelled"))?;
     let curvature_ms = clock.now() - t1;
-    let mut result = spherical_faces::st_support::compute(&reference, &params, clock, &mut ignore)
-        .map_err(|e| format!("{mesh_path}: {e}"))?;
+    let mut result = spherical_faces::st_support::compute(&reference, &params, clock, &mut on_progress)
+        .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
     // The report's timings include reading and curvature, which the CLI did itself.
     result.timings_ms.insert(0, ("curvature".into(), curvature_ms));
     result.timings_ms.insert(0, ("import".into(), import_ms));
     let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
-    write_files(&out, &files)?;
+    progress.clear();
+    write_files(output, &files, &report)?;
     Ok(format!(
         "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
         result.panels.len(),
-        out.display(),
+        output.out.display(),
         result.metrics.max_kink_angle_deg,
         report.metrics.max_distance_to_reference.unwrap_or(f64::NAN)
     ))
 }
 
-/// `st <mesh> [--epsilon E | --faces N] [--variant a|b] --out DIR`.
-fn st_command(args: &[String]) -> Result<String, String> {
-    let mut params = StAdaptedParams::default();
-    let (mut mesh_path, mut out) = (None, None);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut value = || it.next().ok_or(format!("{a} needs a value"));
-        match a.as_str() {
-            "--epsilon" => params.sizing = Sizing::Adaptive { epsilon: positive_fraction(a, Some(value()?))? },
-            "--faces" => params.sizing = Sizing::UniformFaces(face_count(a, Some(value()?))?),
-            "--variant" => {
-                let v = value()?;
-                params.variant = EdgeArcs::from_key(v).ok_or(format!("--variant {v}: expected a or b"))?;
-            }
-            "--out" => out = Some(value()?.clone()),
-            s => positional(s, &mut mesh_path)?,
-        }
-    }
-    let mesh_path = mesh_path.ok_or("st needs a mesh file")?;
-    let out = std::path::PathBuf::from(out.ok_or("st needs --out DIR")?);
-    let reference = read_reference(&mesh_path)?;
+/// `st SURFACE [--epsilon E | --faces N] [--variant a|b] --out DIR`.
+fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+    check_output(output)?;
+    let reference = reference(input)?;
     let clock = Clock::native();
-    let result = spherical_faces::st_adapted::compute(&reference, &params, clock, &mut |_| Ok(()))
-        .map_err(|e| format!("{mesh_path}: {e}"))?;
+    let result = spherical_faces::st_adapted::compute(&reference, &params, clock, &mut |e| {
+        match e {
+            StAdaptedEvent::Progress(p) | StAdaptedEvent::Iteration { progress: p, .. } => progress.show(&p),
+            _ => {}
+        }
+        Ok(())
+    })
+    .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
     let (report, files) = stages::st_adapted::export(&reference, &result, &params, clock);
-    write_files(&out, &files)?;
+    progress.clear();
+    write_files(output, &files, &report)?;
     Ok(format!(
         "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {:.2e} of the diagonal)",
         report.output.panels,
-        out.display(),
+        output.out.display(),
         result.metrics.mean_kink_angle_deg,
         result.metrics.max_kink_angle_deg,
         result.metrics.max_distance_to_reference
     ))
 }
 
-/// `sq <bspline.json> [--theta DEG] [--alpha DEG] [--grid N] [--rs K] [--faces N]
-/// [--until congruence|remesh|final] [--depth D] --out DIR`.
-fn sq_command(args: &[String]) -> Result<String, String> {
-    let mut params = SqParams::default();
-    let (mut path, mut out) = (None, None);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--theta" => params.theta_deg = number(a, it.next(), THETA_RANGE)?,
-            "--alpha" => params.alpha_deg = number(a, it.next(), ALPHA_RANGE)?,
-            "--grid" => params.grid = whole(a, it.next(), GRID_RANGE)?,
-            "--rs" => params.recompute_every = whole(a, it.next(), RECOMPUTE_RANGE)?,
-            "--faces" => params.faces = whole(a, it.next(), FACES_RANGE)?,
-            "--depth" => params.support_depth = number(a, it.next(), (1e-6, 0.5))?,
-            "--until" => {
-                let v = it.next().ok_or("--until needs a stage: congruence, remesh or final")?;
-                params.until = Until::from_key(v).ok_or(format!("--until {v}: expected congruence, remesh or final"))?;
-            }
-            "--out" => out = Some(it.next().ok_or("--out needs a folder")?.clone()),
-            s => positional(s, &mut path)?,
-        }
-    }
-    let path = path.ok_or("sq needs a B-spline surface (.json) or sample:vault")?;
-    let out = std::path::PathBuf::from(out.ok_or("sq needs --out DIR")?);
-    let reference = read_reference(&path)?;
+/// `sq SURFACE [options] --out DIR`.
+fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+    check_output(output)?;
+    let reference = reference(input)?;
     let clock = Clock::native();
-    let result = spherical_faces::sq::compute(&reference, &params, clock, &mut |_| Ok(())).map_err(|e| format!("{path}: {e}"))?;
+    let result = spherical_faces::sq::compute(&reference, &params, clock, &mut |e| {
+        if let SqEvent::Progress(p) = e {
+            progress.show(&p);
+        }
+        Ok(())
+    })
+    .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
     let segments = spherical_faces::export::congruence::CongruenceSegments::of(&result.congruence);
     let (report, files) = stages::sq::export(&reference, &result, &params, &segments, clock);
-    write_files(&out, &files)?;
+    progress.clear();
+    write_files(output, &files, &report)?;
     let m = &report.metrics;
     let g = |x: Option<f64>| x.unwrap_or(f64::NAN);
-    let mut text = match params.until {
+    Ok(match params.until {
         Until::Final => format!(
             "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
              planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
              ≥ {:.2}° (α = {}°); max distance to the reference {:.2e} of the diagonal; edges off the torsal directions by {:.2}° on \
              average; {} distinct radii; {:.0} ms.",
             report.output.panels,
-            out.display(),
+            output.out.display(),
             g(m.max_vertex_sphere_residual),
             g(m.max_centre_face_planarity),
             g(m.max_torsal_plane_residual),
@@ -236,12 +470,12 @@ fn sq_command(args: &[String]) -> Result<String, String> {
             100.0 * g(m.coverage),
             g(m.mean_edge_torsal_angle_deg),
             g(m.max_edge_torsal_angle_deg),
-            out.display()
+            output.out.display()
         ),
         Until::Congruence => format!(
             "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, \
              α = {}°; {} quads without real torsal directions; E_LC per term {:.2e}).",
-            out.display(),
+            output.out.display(),
             g(m.max_line_normal_angle_deg),
             params.theta_deg,
             g(m.min_torsal_plane_angle_deg),
@@ -250,70 +484,21 @@ fn sq_command(args: &[String]) -> Result<String, String> {
             g(m.lc_residual),
             n = params.grid,
         ),
-    };
-    for w in &report.warnings {
-        text += &format!("\nwarning: {w}");
-    }
-    Ok(text)
-}
-
-/// A number in [lo, hi] after `flag`.
-fn number(flag: &str, v: Option<&String>, (lo, hi): (f64, f64)) -> Result<f64, String> {
-    let v = v.ok_or(format!("{flag} needs a value"))?;
-    v.parse::<f64>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a number in [{lo}, {hi}]"))
-}
-
-/// A whole number in [lo, hi] after `flag`.
-fn whole(flag: &str, v: Option<&String>, (lo, hi): (usize, usize)) -> Result<usize, String> {
-    let v = v.ok_or(format!("{flag} needs a value"))?;
-    v.parse::<usize>().ok().filter(|x| (lo..=hi).contains(x)).ok_or(format!("{flag} {v}: expected a whole number in [{lo}, {hi}]"))
-}
-
-/// An argument that is not a known option: the input path the first time, an error otherwise.
-fn positional(arg: &str, path: &mut Option<String>) -> Result<(), String> {
-    if arg.starts_with("--") {
-        return Err(format!("unknown option {arg}"));
-    }
-    if path.is_some() {
-        return Err(format!("unexpected argument {arg}"));
-    }
-    *path = Some(arg.to_string());
-    Ok(())
-}
-
-/// Writes `files` into `dir` (created if missing).
-fn write_files(dir: &std::path::Path, files: &[ExportFile]) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    for f in files {
-        let path = dir.join(&f.name);
-        std::fs::write(&path, &f.bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    Ok(())
-}
-
-/// ε of a sizing field: a number in (0, 1), relative to the bbox diagonal.
-fn positive_fraction(flag: &str, v: Option<&String>) -> Result<f64, String> {
-    let v = v.ok_or(format!("{flag} needs a value"))?;
-    v.parse::<f64>().ok().filter(|x| *x > 0.0 && *x < 1.0).ok_or(format!("{flag} {v}: expected a number in (0, 1)"))
-}
-
-/// A target face count of a uniform remesh.
-fn face_count(flag: &str, v: Option<&String>) -> Result<usize, String> {
-    let v = v.ok_or(format!("{flag} needs a value"))?;
-    v.parse::<usize>().ok().filter(|n| *n >= 4).ok_or(format!("{flag} {v}: expected a whole number ≥ 4"))
-}
-
-/// The reference surface in a file (or a sample).
-fn read_reference(path: &str) -> Result<Reference, String> {
-    Ok(load(path)?.surface)
+    })
 }
 
 /// One JSON object: counts after triangulation and welding (of a B-spline: its tessellation),
 /// and the mean curvature (jet-fitted on a mesh, exact on a B-spline, at the vertices); for a
 /// B-spline also its degrees, control grid, domain and the ranges of H and K.
-fn info(path: &str) -> Result<String, String> {
-    let loaded = load(path)?;
-    let field = loaded.surface.curvature(&JetParams::default(), &mut ignore).map_err(|_| "curvature computation was cancelled".to_string())?;
+fn info(input: &Input, list_objects: bool) -> Result<String, Failure> {
+    if list_objects {
+        if !rhino::is_3dm(&input.surface) {
+            return Err(Failure::input("--list-objects applies to .3dm files only"));
+        }
+        return rhino::list(&input.surface);
+    }
+    let loaded = load(input)?;
+    let field = loaded.surface.curvature(&JetParams::default(), &mut |_| Ok(())).map_err(|_| Failure::input("cancelled"))?;
     let s = &loaded.info.stats;
     let c = &field.summary;
     let mut json = serde_json::json!({
@@ -337,4 +522,137 @@ fn info(path: &str) -> Result<String, String> {
         });
     }
     Ok(json.to_string())
+}
+
+/// Rhino .3dm files, read by the rhino3dm package (OpenNURBS in wasm) under Node: the same
+/// converter the app loads in the browser (`www/rhino3dm/convert.mjs`).
+mod rhino {
+    use super::Failure;
+    use std::process::Command;
+
+    /// The converter script: `SF_RHINO3DM_CLI`, else the one in this source tree.
+    fn script() -> String {
+        std::env::var("SF_RHINO3DM_CLI").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/www/rhino3dm/cli.mjs").into())
+    }
+
+    pub fn is_3dm(path: &str) -> bool {
+        path.to_ascii_lowercase().ends_with(".3dm")
+    }
+
+    fn how_to() -> String {
+        format!(
+            "reading .3dm needs Node.js ≥ 20 and the rhino3dm package: run `npm ci` in {}; or convert by hand with \
+             `node {} FILE.3dm --out FILE.json` (a NURBS surface) and open the .json",
+            std::path::Path::new(&script()).parent().map_or(".".into(), |p| p.display().to_string()),
+            script()
+        )
+    }
+
+    fn node(args: &[&str]) -> Result<Vec<u8>, Failure> {
+        let out = Command::new("node").arg(script()).args(args).output().map_err(|e| Failure::input(format!("node: {e}; {}", how_to())))?;
+        if !out.status.success() {
+            let err = String::from_utf8_lossy(&out.stderr);
+            let first = err.lines().find(|l| !l.trim().is_empty()).unwrap_or("the converter failed");
+            let hint = if first.contains("npm ci") || first.contains("Cannot find") { format!(" ({})", how_to()) } else { String::new() };
+            return Err(Failure::input(format!("{first}{hint}")));
+        }
+        Ok(out.stdout)
+    }
+
+    /// `info --list-objects`: the converter's object list, one JSON object per line.
+    pub fn list(path: &str) -> Result<String, Failure> {
+        let out = node(&[path, "--list"])?;
+        Ok(String::from_utf8_lossy(&out).trim_end().to_string())
+    }
+
+    /// The chosen object as our B-spline JSON or OBJ text, and its description.
+    pub fn convert(path: &str, object: Option<usize>) -> Result<(String, String), Failure> {
+        let listing = list(path)?;
+        let objects: Vec<serde_json::Value> = listing.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
+        let pick = match object {
+            Some(k) => objects
+                .iter()
+                .find(|o| o["index"].as_u64() == Some(k as u64))
+                .ok_or_else(|| Failure::input(format!("{path}: no object {k} (objects: {})", summary(&objects))))?,
+            None => objects
+                .iter()
+                .find(|o| o["kind"] == "surface")
+                .or_else(|| objects.iter().find(|o| o["kind"] == "mesh"))
+                .ok_or_else(|| Failure::input(format!("{path}: no NURBS surface or mesh")))?,
+        };
+        let index = pick["index"].as_u64().unwrap_or(0).to_string();
+        if object.is_none() && objects.len() > 1 {
+            eprintln!("note: {path} holds {} objects ({}); using object {index}, pick another with --object K", objects.len(), summary(&objects));
+        }
+        let text = String::from_utf8(node(&[path, "--object", &index])?).map_err(|e| Failure::input(format!("{path}: {e}")))?;
+        let name = pick["name"].as_str().filter(|n| !n.is_empty()).map_or(format!("object {index}"), str::to_string);
+        Ok((text, name))
+    }
+
+    fn summary(objects: &[serde_json::Value]) -> String {
+        objects
+            .iter()
+            .map(|o| format!("{}: {} {}", o["index"], o["kind"].as_str().unwrap_or("?"), o["name"].as_str().unwrap_or("")).trim_end().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+// --- value parsers: every count and number the user types is checked here ------------------------
+
+fn number(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("'{s}' is not a number"))
+}
+
+/// A number in [LO, HI].
+fn fraction_in<const LO: u32, const HI: u32>(s: &str) -> Result<f64, String> {
+    let x = number(s)?;
+    if (LO as f64..=HI as f64).contains(&x) { Ok(x) } else { Err(format!("{x} is not in [{LO}, {HI}]")) }
+}
+
+/// ε: a number in (0, 1).
+fn open_fraction(s: &str) -> Result<f64, String> {
+    let x = number(s)?;
+    if x > 0.0 && x < 1.0 { Ok(x) } else { Err(format!("{x} is not in (0, 1)")) }
+}
+
+fn radius_tolerance(s: &str) -> Result<f64, String> {
+    let x = number(s)?;
+    if (1e-9..=1.0).contains(&x) { Ok(x) } else { Err(format!("{x} is not in [1e-9, 1]")) }
+}
+
+/// A remesh's face count: [`MIN_FACES`] to [`MAX_FACES`], as in the design link and the app.
+fn face_count(s: &str) -> Result<usize, String> {
+    let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
+    if (MIN_FACES..=MAX_FACES).contains(&n) { Ok(n) } else { Err(format!("{n} is not in [{MIN_FACES}, {MAX_FACES}]")) }
+}
+
+fn variant(s: &str) -> Result<EdgeArcs, String> {
+    EdgeArcs::from_key(s).ok_or_else(|| format!("'{s}': expected a or b"))
+}
+
+fn until(s: &str) -> Result<Until, String> {
+    Until::from_key(s).ok_or_else(|| format!("'{s}': expected congruence, remesh or final"))
+}
+
+const THETA: u8 = 0;
+const ALPHA: u8 = 1;
+const GRID: u8 = 2;
+const RECOMPUTE: u8 = 3;
+const FACES: u8 = 4;
+
+fn range_f64<const R: u8>(s: &str) -> Result<f64, String> {
+    let (lo, hi) = if R == THETA { THETA_RANGE } else { ALPHA_RANGE };
+    let x = number(s)?;
+    if (lo..=hi).contains(&x) { Ok(x) } else { Err(format!("{x} is not in [{lo}, {hi}]")) }
+}
+
+fn range_usize<const R: u8>(s: &str) -> Result<usize, String> {
+    let (lo, hi) = match R {
+        GRID => GRID_RANGE,
+        RECOMPUTE => RECOMPUTE_RANGE,
+        _ => FACES_RANGE,
+    };
+    let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
+    if (lo..=hi).contains(&n) { Ok(n) } else { Err(format!("{n} is not in [{lo}, {hi}]")) }
 }

@@ -5,7 +5,7 @@
 use crate::congruence::central_spheres::JetParams;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
-use crate::remeshing::{Sizing, DEFAULT_EPSILON};
+use crate::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use crate::samples::Sample;
 use crate::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use crate::st_adapted::params::StAdaptedParams;
@@ -176,7 +176,7 @@ fn sizing_fragment(key: &str, sizing: Sizing) -> String {
     let kind = SizingKind::of(sizing).key();
     match sizing {
         Sizing::None => format!("&{key}={kind}"),
-        Sizing::Adaptive { epsilon } => format!("&{key}={kind}&eps={}", fmt_num_sig(epsilon)),
+        Sizing::Adaptive { epsilon } => format!("&{key}={kind}&eps={}", fmt_num(epsilon)),
         Sizing::UniformFaces(n) => format!("&{key}={kind}&faces={n}"),
     }
 }
@@ -237,6 +237,7 @@ impl Design {
         let mut s = format!("#v={VERSION}");
         match &self.reference {
             Reference::Sample(x) => s += &format!("&sample={}", x.key()),
+            Reference::OwnFile(name) if name.is_empty() => s += "&sample=file",
             Reference::OwnFile(name) => s += &format!("&sample=file&file={}", percent_encode(name)),
         }
         s += &format!("&method={}", self.method.key());
@@ -275,12 +276,12 @@ impl Design {
         if let Some(c) = self.camera {
             s += &format!(
                 "&cam={},{},{},{},{},{}",
-                fmt_num(c.yaw),
-                fmt_num(c.pitch),
-                fmt_num(c.distance),
-                fmt_num(c.target[0]),
-                fmt_num(c.target[1]),
-                fmt_num(c.target[2])
+                fmt_cam(c.yaw),
+                fmt_cam(c.pitch),
+                fmt_cam(c.distance),
+                fmt_cam(c.target[0]),
+                fmt_cam(c.target[1]),
+                fmt_cam(c.target[2])
             );
         }
         s
@@ -342,10 +343,11 @@ impl Design {
                         continue;
                     }
                 },
-                "file" => {
+                // An empty name is no name: the design then asks for "your file".
+                "file" => !v.is_empty() && {
                     file_name = Some(clip(v));
-                    !v.is_empty()
-                }
+                    true
+                },
                 "method" => Method::from_key(v).map(|m| d.method = m).is_some(),
                 "jet_degree" => parse_in(v, 2, 4).map(|x| d.jet.degree = x as u8).is_some(),
                 "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
@@ -363,7 +365,7 @@ impl Design {
                 "sizing" => SizingKind::from_key(v).map(|k| adapted_sizing = Some(k)).is_some(),
                 // ε and N belong to the method the link names (applied below).
                 "eps" => parse_f64_in(v, 1e-7, 0.1).map(|x| eps = Some(x)).is_some(),
-                "faces" => parse_in(v, 8, 200_000).map(|x| faces = Some(x as usize)).is_some(),
+                "faces" => parse_in(v, MIN_FACES as i64, MAX_FACES as i64).map(|x| faces = Some(x as usize)).is_some(),
                 "theta" => parse_f64_in(v, THETA_RANGE.0, THETA_RANGE.1).map(|x| d.sq.theta_deg = x).is_some(),
                 "alpha" => parse_f64_in(v, ALPHA_RANGE.0, ALPHA_RANGE.1).map(|x| d.sq.alpha_deg = x).is_some(),
                 "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64).map(|x| d.sq.grid = x as usize).is_some(),
@@ -445,28 +447,26 @@ fn parse_camera(v: &str) -> Option<CameraState> {
     Some(CameraState { yaw: n[0], pitch: n[1].clamp(-1.55, 1.55), distance: n[2], target: [n[3], n[4], n[5]] })
 }
 
-/// Four significant digits, for small values like ε.
-fn fmt_num_sig(x: f64) -> String {
-    let s = format!("{x:.3e}");
-    match s.split_once('e') {
-        Some((m, e)) => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
-        None => s,
+/// A parameter exactly: the shorter of the plain and the exponent form of the shortest
+/// round-trip digits (so `rtol=1e-5` reads back as 1e-5, never as 0).
+fn fmt_num(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
     }
+    let (plain, exp) = (format!("{x}"), format!("{x:e}"));
+    if exp.len() < plain.len() { exp } else { plain }
 }
 
-fn fmt_num(x: f64) -> String {
-    let s = format!("{x:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
+/// A camera coordinate to six significant digits: short, and a fixed point of reading and
+/// writing (a distance of 1e-5 stays 1e-5).
+fn fmt_cam(x: f64) -> String {
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    fmt_num(rounded)
 }
 
 /// Notices quote link text; keep it short.
 fn clip(s: &str) -> String {
-    let mut out: String = s.chars().filter(|c| !c.is_control()).take(60).collect();
-    if s.chars().count() > 60 {
-        out.push('…');
-    }
-    out
+    crate::text::clip(s, 60)
 }
 
 fn percent_encode(s: &str) -> String {

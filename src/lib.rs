@@ -9,6 +9,8 @@ pub mod progress;
 pub mod stats;
 /// A small deterministic random generator for tests and samples.
 pub mod rng;
+/// User-facing text: control characters escaped.
+pub mod text;
 /// Sparse Levenberg–Marquardt on faer: residual terms, finite-difference checks, ordering.
 pub mod solver;
 /// Generalized spheres, circles, the absolute sphere Ω, closest points, meshes.

@@ -222,8 +222,8 @@ fn sq_refuses_bad_input_with_one_line() {
     for (args, needle) in [
         (vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--out", "/tmp/sf-sq-x"], "mean curvature of one sign"),
         (vec!["sq", "../shared/data/meshes/tri_dome.obj", "--out", "/tmp/sf-sq-x"], "B-spline reference"),
-        (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "--theta 95"),
-        (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "--until panels"),
+        (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "'95' for '--theta <DEG>'"),
+        (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "'panels' for '--until <STAGE>'"),
         (vec!["sq", "sample:vault"], "--out"),
     ] {
         let out = run(&args);

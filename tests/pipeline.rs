@@ -86,7 +86,7 @@ fn a_bad_file_reports_an_error_and_keeps_the_design() {
     r.messages.clear();
     send(&mut s, &mut r, ToWorker::LoadFile { name: "broken.obj".into() }, Some(b"v 1 2\nf 1 2 9\n".to_vec()));
     assert_eq!(r.messages.len(), 1);
-    let FromWorker::Error { message } = &r.messages[0].0 else { panic!() };
+    let FromWorker::Error { message, .. } = &r.messages[0].0 else { panic!() };
     assert!(message.starts_with("broken.obj"), "{message}");
     assert_eq!(s.reference.as_ref().unwrap().info.source, Source::Sample(Sample::TorusPatch));
     // The previous reference still computes.
@@ -164,7 +164,7 @@ fn st_support_on_a_minimal_surface_is_refused() {
     send(&mut s, &mut r, ToWorker::LoadFile { name: "enneper2.obj".into() }, Some(bytes));
     r.messages.clear();
     send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
-    let Some((FromWorker::Error { message }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
+    let Some((FromWorker::Error { message, .. }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
     assert!(message.contains("no usable central spheres"), "{message}");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. })));
 }
@@ -371,12 +371,12 @@ fn sq_refusals_reach_the_app() {
     let h = find(fields, field::MEAN_CURVATURE).and_then(Field::as_f32).unwrap();
     assert_eq!(h.len(), vertices);
     assert!(h.iter().any(|&x| x > 0.0) && h.iter().any(|&x| x < 0.0));
-    let FromWorker::Error { message } = &r.messages[n - 1].0 else { panic!() };
+    let FromWorker::Error { message, .. } = &r.messages[n - 1].0 else { panic!() };
     assert!(message.contains("mean curvature of one sign") && message.contains("ST method"), "{message}");
 
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
-    let FromWorker::Error { message } = &r.messages.last().unwrap().0 else { panic!() };
+    let FromWorker::Error { message, .. } = &r.messages.last().unwrap().0 else { panic!() };
     assert!(message.contains("B-spline reference"), "{message}");
 }
 

@@ -135,3 +135,12 @@ fn session_runs_curvature_in_wasm() {
     assert!(summary.min_h.is_finite() && summary.max_h.is_finite());
     assert!(!summary.h_changes_sign);
 }
+
+/// On wasm32 a field header's `len × 4` is computed in 64 bits: a length of 2³⁰ + 1 would wrap a
+/// 32-bit product to 4 and accept a 4-byte body.
+#[wasm_bindgen_test]
+fn field_lengths_do_not_wrap_on_wasm32() {
+    use spherical_faces::pipeline::fields::{FieldHeader, FieldKind};
+    let header = FieldHeader { name: "positions".into(), kind: FieldKind::F32, dim: 3, len: (1 << 30) + 1 };
+    assert!(Field::from_bytes(&header, &[0, 0, 0, 0]).is_err());
+}

@@ -59,6 +59,11 @@ pub const PLANAR_TOLERANCE: f64 = 1e-3;
 /// changes of gently curved roofs.
 pub const SIGN_CHANGE_THRESHOLD: f64 = 0.2;
 
+/// The most points of one fit's neighbourhood. A vertex of valence 10,000 (a fan-triangulated
+/// polygon) would otherwise put 10,000 points into the fit of each of its neighbours: the work
+/// would grow with the square of the valence. Larger one-rings are sampled evenly.
+pub const MAX_NEIGHBOURHOOD: usize = 96;
+
 /// Each side of a sign change needs at least this fraction of the successfully fitted vertices
 /// (and at least one vertex), so that a few noisy fits (e.g. at corners) do not decide it.
 pub const SIGN_CHANGE_MIN_FRACTION: f64 = 0.01;
@@ -131,6 +136,8 @@ pub struct CurvatureSummary {
     pub low_degree_fits: usize,
     /// Vertices without a fit (zero curvature reported).
     pub failed_fits: usize,
+    /// The most points one fit used (at most [`MAX_NEIGHBOURHOOD`]).
+    pub largest_neighbourhood: usize,
 }
 
 /// Per-vertex curvature and central spheres of a mesh.
@@ -218,6 +225,7 @@ pub fn jet_fit(
     let mut central_spheres = Vec::with_capacity(nv);
     let mut boundary = Vec::with_capacity(nv);
     let mut low_degree_fits = 0;
+    let mut largest_neighbourhood = 0;
     let mut failed = vec![false; nv];
 
     for v in 0..nv {
@@ -226,6 +234,7 @@ pub fn jet_fit(
         }
         boundary.push(topo.is_boundary_vertex(v));
         ring.collect(topo, v, min_points, max_rings);
+        largest_neighbourhood = largest_neighbourhood.max(ring.points.len());
         let f = pos[v];
         let pts = ring.points.iter().map(|&i| pos[i as usize]);
         let n0 = normals[v].or_else(|| JetFitter::pca_normal(pts.clone(), DVec3::Z)).unwrap_or(DVec3::Z);
@@ -254,7 +263,8 @@ pub fn jet_fit(
     progress(Progress::new("jet_fit", nv, nv))?;
 
     let planar: Vec<bool> = vertices.iter().map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE).collect();
-    let summary = summarize(&vertices, &failed, &boundary, &planar, diag, low_degree_fits);
+    let mut summary = summarize(&vertices, &failed, &boundary, &planar, diag, low_degree_fits);
+    summary.largest_neighbourhood = largest_neighbourhood;
     Ok(CurvatureField { vertices, central_spheres, boundary, planar, summary })
 }
 
@@ -311,6 +321,7 @@ fn summarize(
         planar_vertices: planar.iter().filter(|&&p| p).count(),
         low_degree_fits,
         failed_fits: failed.iter().filter(|&&b| b).count(),
+        largest_neighbourhood: 0,
     }
 }
 
@@ -354,7 +365,9 @@ impl RingCollector {
     }
 
     /// Fills `points` with v and its rings: at least one ring, then more until `min_points` points
-    /// or `max_rings` rings (or the component is exhausted).
+    /// or `max_rings` rings (or the component is exhausted), never more than
+    /// [`MAX_NEIGHBOURHOOD`] points. A one-ring larger than that is taken with an even stride, so
+    /// the work per vertex is bounded whatever the valences.
     fn collect(&mut self, topo: &Topology, v: usize, min_points: usize, max_rings: usize) {
         if self.generation == u32::MAX {
             self.stamp.iter_mut().for_each(|s| *s = 0);
@@ -367,9 +380,14 @@ impl RingCollector {
         self.stamp[v] = g;
         let (mut start, mut end, mut rings) = (0usize, 1usize, 0usize);
         while rings < max_rings && (rings == 0 || self.points.len() < min_points) {
-            for i in start..end {
+            'ring: for i in start..end {
                 let p = self.points[i] as usize;
-                for &w in topo.vertex_neighbors(p) {
+                let neighbours = topo.vertex_neighbors(p);
+                let stride = neighbours.len().div_ceil(MAX_NEIGHBOURHOOD).max(1);
+                for &w in neighbours.iter().step_by(stride) {
+                    if self.points.len() >= MAX_NEIGHBOURHOOD {
+                        break 'ring;
+                    }
                     let w = w as usize;
                     if w < self.stamp.len() && self.stamp[w] != g {
                         self.stamp[w] = g;

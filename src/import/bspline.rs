@@ -15,7 +15,7 @@
 use glam::DVec3;
 use serde_json::Value;
 
-use super::raw::{Ctx, ImportError};
+use super::raw::{check_scale, Ctx, ImportError, MAX_COORDINATE};
 use crate::geometry::bspline::{BSplineBasis, BSplineSurface, MAX_DEGREE};
 
 /// Most control points accepted.
@@ -61,6 +61,11 @@ pub(crate) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<(BSplineSurface, Vec<Stri
     };
     let (pu, pv) = (degree("degreeU")?, degree("degreeV")?);
     let (ku, kv) = (numbers("knotsU")?, numbers("knotsV")?);
+    for (key, knots) in [("knotsU", &ku), ("knotsV", &kv)] {
+        if let Some(k) = knots.iter().find(|k| k.abs() > MAX_COORDINATE) {
+            return Err(ctx.unsupported(format!("'{key}': the knot {k:e} is beyond ±{:e}: rescale the parameter domain", MAX_COORDINATE)));
+        }
+    }
     let cp = numbers("controlPoints")?;
     if cp.len() % 4 != 0 {
         return Err(ctx.malformed(None, format!("'controlPoints' has {} numbers, not a multiple of 4 (x, y, z, w per point)", cp.len())));
@@ -100,8 +105,20 @@ pub(crate) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<(BSplineSurface, Vec<Stri
     let bv = basis("knotsV", pv, kv, form_v)?;
     let control: Vec<DVec3> = cp.chunks_exact(4).map(|c| DVec3::new(c[0], c[1], c[2])).collect();
     let weights: Vec<f64> = cp.chunks_exact(4).map(|c| c[3]).collect();
+    check_scale(&control, ctx)?;
     if let Some(i) = weights.iter().position(|&w| !(w > 0.0)) {
         return Err(ctx.malformed(None, format!("'controlPoints': the weight of point {i} is {} (weights must be positive)", weights[i])));
+    }
+    // Products of basis functions and weights must stay normal numbers (a subnormal weight, or
+    // knots spanning 1e308, give NaN points).
+    let range = 1.0 / MAX_COORDINATE..=MAX_COORDINATE;
+    if let Some(i) = weights.iter().position(|w| !range.contains(w)) {
+        return Err(ctx.unsupported(format!(
+            "'controlPoints': the weight of point {i} is {:e}, outside [{:e}, {:e}]: rescale the weights",
+            weights[i],
+            range.start(),
+            range.end()
+        )));
     }
     let surface = BSplineSurface::new(bu, bv, control, weights).map_err(|e| ctx.malformed(None, format!("'controlPoints': {e}")))?;
     if matches!((form_u, form_v), (KnotForm::Textbook, _) | (_, KnotForm::Textbook)) {

@@ -324,6 +324,16 @@ fn read_accessor(
             }
         }
     } else {
+        // No bufferView: zeros, overwritten by sparse entries. Such an accessor is backed by no
+        // data, so a tiny file could declare millions of elements: only as many as the sparse
+        // entries (the data that is there) are accepted.
+        let backed = acc.sparse.as_ref().map_or(0, |s| s.count.0);
+        if count > backed.max(3) {
+            return Err(ctx.unsupported(format!(
+                "accessor {ai} declares {count} elements but has no bufferView (only {backed} sparse entries carry data): \
+                 accessors of zeros are not supported"
+            )));
+        }
         values.resize(count as usize * dims, 0.0);
     }
 

@@ -13,14 +13,15 @@ mod gltf;
 mod obj;
 mod raw;
 
+
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::weld::weld_with_face_map;
 use crate::geometry::mesh::{Face, PolyMesh, TriMesh};
 use crate::geometry::mesh::topology::{MeshStats, Topology};
 use serde::{Deserialize, Serialize};
 
-pub use raw::{ImportError, MAX_BYTES, MAX_TRIANGLES, MAX_VERTICES};
-use raw::{Ctx, RawMesh};
+pub use raw::{ImportError, MAX_BYTES, MAX_COORDINATE, MAX_TRIANGLES, MAX_VERTICES, MIN_DIAGONAL};
+use raw::{check_scale, Ctx, RawMesh};
 
 /// Vertices closer than this fraction of the bounding-box diagonal are merged.
 pub const WELD_TOLERANCE: f64 = 1e-7;
@@ -83,7 +84,7 @@ fn display_name(file_name: &str) -> String {
     if base.is_empty() {
         "input".to_string()
     } else {
-        base.to_string()
+        crate::text::clip(base, 120)
     }
 }
 
@@ -191,6 +192,7 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
     }
     let raw_mesh = TriMesh::new(positions, triangles);
     let diag = raw_mesh.referenced_diagonal();
+    check_scale(&raw_mesh.positions, ctx)?;
     let (mesh, report, face_map) = weld_with_face_map(&raw_mesh, WELD_TOLERANCE * diag);
     let total_faces = raw_mesh.triangles.len();
     drop(raw_mesh);

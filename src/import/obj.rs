@@ -12,7 +12,7 @@ use glam::{DVec2, DVec3};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 
-/// Polygons with more corners than this are fan-triangulated (ear clipping is quadratic).
+/// Polygons with more corners than this are strip-triangulated (ear clipping is quadratic).
 const EAR_CLIP_MAX: usize = 256;
 
 /// Logical lines: `\n`-separated, a trailing `\` joins the next line. Yields 1-based line numbers
@@ -217,7 +217,7 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
         let first = raw.triangles.len();
         if poly.len() > EAR_CLIP_MAX {
             big += 1;
-            fan(&poly, &mut raw.triangles);
+            strip(&poly, &mut raw.triangles);
         } else if !tri.triangulate(&positions, &poly, &mut raw.triangles) {
             fans += 1;
         }
@@ -236,7 +236,9 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
         ));
     }
     if big > 0 {
-        raw.notes.push(format!("{big} polygons with more than {EAR_CLIP_MAX} corners were fan-triangulated"));
+        raw.notes.push(format!(
+            "{big} polygons with more than {EAR_CLIP_MAX} corners were triangulated as a zigzag strip (exact for convex polygons)"
+        ));
     }
     if lines_points > 0 {
         raw.notes.push(format!("skipped {lines_points} line/point elements (l, p)"));
@@ -248,6 +250,24 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
     }
     raw.positions = positions;
     Ok(raw)
+}
+
+/// A zigzag strip between the polygon's two halves: every corner is on at most four triangles
+/// (a fan would make one corner a hub of valence n, and curvature estimation there quadratic).
+/// Same orientation as the polygon; exact for convex polygons, like a fan.
+fn strip(poly: &[u32], out: &mut Vec<[u32; 3]>) {
+    let (mut lo, mut hi) = (0usize, poly.len() - 1);
+    let mut advance_lo = true;
+    while hi - lo >= 2 {
+        if advance_lo {
+            out.push([poly[lo], poly[lo + 1], poly[hi]]);
+            lo += 1;
+        } else {
+            out.push([poly[lo], poly[hi - 1], poly[hi]]);
+            hi -= 1;
+        }
+        advance_lo = !advance_lo;
+    }
 }
 
 fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {

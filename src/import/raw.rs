@@ -5,6 +5,8 @@ use std::fmt;
 
 use glam::DVec3;
 
+use crate::text::printable;
+
 /// Largest accepted triangle count (after triangulation, before welding).
 pub const MAX_TRIANGLES: usize = 2_000_000;
 /// Largest accepted input size in bytes (512 MiB).
@@ -74,15 +76,15 @@ pub(crate) struct Ctx {
 
 impl Ctx {
     pub fn malformed(&self, line: Option<usize>, message: impl Into<String>) -> ImportError {
-        ImportError::Malformed { file: self.file.clone(), line, message: message.into() }
+        ImportError::Malformed { file: self.file.clone(), line, message: printable(&message.into()) }
     }
 
     pub fn unsupported(&self, message: impl Into<String>) -> ImportError {
-        ImportError::Unsupported { file: self.file.clone(), message: message.into() }
+        ImportError::Unsupported { file: self.file.clone(), message: printable(&message.into()) }
     }
 
     pub fn empty(&self, reason: impl Into<String>) -> ImportError {
-        ImportError::Empty { file: self.file.clone(), reason: reason.into() }
+        ImportError::Empty { file: self.file.clone(), reason: printable(&reason.into()) }
     }
 
     pub fn too_large(&self, what: &str, count: u64, limit: usize) -> ImportError {
@@ -99,6 +101,31 @@ impl Ctx {
         }
         Ok(())
     }
+}
+
+/// The coordinate range the geometry computes with: lengths are squared (and areas multiplied),
+/// which overflows beyond about 1e154 and underflows below 1e-154.
+pub const MAX_COORDINATE: f64 = 1e100;
+/// The smallest bounding-box diagonal, see [`MAX_COORDINATE`].
+pub const MIN_DIAGONAL: f64 = 1e-100;
+
+/// Refuses a model whose scale the geometry cannot compute with: its largest coordinate and
+/// its extent (the largest side of its bounding box, computed without squaring).
+pub(crate) fn check_scale(positions: &[DVec3], ctx: &Ctx) -> Result<(), ImportError> {
+    let largest = positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let diag = if positions.is_empty() { 0.0 } else { (hi - lo).max_element() };
+    if largest > MAX_COORDINATE {
+        return Err(ctx.unsupported(format!(
+            "coordinates reach {largest:.3e}, beyond the range this program computes in (up to {MAX_COORDINATE:e}): rescale the model"
+        )));
+    }
+    if diag > 0.0 && diag < MIN_DIAGONAL {
+        return Err(ctx.unsupported(format!(
+            "the model is {diag:.3e} across, below the range this program computes in (at least {MIN_DIAGONAL:e}): rescale the model"
+        )));
+    }
+    Ok(())
 }
 
 /// What a format parser produces: raw triangles before welding.

@@ -6,12 +6,18 @@ use super::panel::Panel;
 use super::tessellate::project_to_sphere;
 use crate::geometry::closest::TriangleBvh;
 
+/// The most points sampled on one panel. A glass panel's tessellation has fewer; only a
+/// degenerate face's panel comes near the tessellation's cap, and then an even subset keeps the
+/// measure's work bounded.
+pub const MAX_SAMPLES: usize = 16384;
+
 /// Points sampled on a panel: its tessellation vertices and its triangle centroids projected
-/// onto the panel's sphere.
+/// onto the panel's sphere (evenly thinned to at most about [`MAX_SAMPLES`]).
 pub fn panel_samples(panel: &Panel) -> Vec<DVec3> {
-    let mut pts = panel.positions.clone();
+    let stride = (panel.positions.len() + panel.triangles.len()).div_ceil(MAX_SAMPLES).max(1);
+    let mut pts: Vec<DVec3> = panel.positions.iter().step_by(stride).copied().collect();
     let base = panel.positions[0];
-    for t in &panel.triangles {
+    for t in panel.triangles.iter().step_by(stride) {
         let c = (panel.positions[t[0] as usize] + panel.positions[t[1] as usize] + panel.positions[t[2] as usize]) / 3.0;
         pts.push(project_to_sphere(&panel.sphere, base, c));
     }

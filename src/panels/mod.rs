@@ -92,12 +92,25 @@ pub fn build_panels(sm: &SphereMesh, chord_tolerance: f64) -> Vec<Panel> {
 }
 
 /// [`build_panels`] with the interior edge arcs of the given variant (Fig. 12).
+/// The most tessellation triangles of all panels together, about: glass panels stay far below
+/// it, degenerate faces' panels (huge spheres, crossing arcs) would otherwise take
+/// [`tessellate::MAX_PANEL_TRIANGLES`] each.
+pub const PANEL_TRIANGLE_BUDGET: usize = 4_000_000;
+
+/// The subdivision level cap of each of `faces` panels under [`PANEL_TRIANGLE_BUDGET`]: at
+/// least 32, at most [`tessellate::MAX_LEVEL`].
+pub fn level_cap(faces: usize) -> usize {
+    let level = (PANEL_TRIANGLE_BUDGET as f64 / (2 * faces.max(1)) as f64).sqrt() as usize;
+    level.clamp(32, tessellate::MAX_LEVEL)
+}
+
 pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
     let mesh = &sm.mesh;
     let topo = sm.topology();
     let diag = mesh.bbox_diagonal().max(f64::MIN_POSITIVE);
     let tol = if chord_tolerance > 0.0 && chord_tolerance.is_finite() { chord_tolerance } else { 1e-4 * diag };
     let faces = mesh.face_count();
+    let max_level = level_cap(faces);
     let spheres: Vec<Sphere> = (0..faces)
         .map(|f| {
             let s = sm.face_spheres.get(f).copied().unwrap_or(Sphere { a: f64::NAN, b: DVec3::NAN, c: f64::NAN });
@@ -146,7 +159,7 @@ pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeA
         };
         for group in groups {
             let arc = edge_arc(p, q, &group, &spheres, mesh, sm.boundary_arcs, diag);
-            let n = arc.segments_for(ARC_TOL_FACTOR * tol);
+            let n = arc.segments_for(ARC_TOL_FACTOR * tol).min(4 * max_level);
             let pts = arc.sample(n);
             for &(f, k) in inc.iter().filter(|(f, _)| group.contains(f)) {
                 side_arcs[f][k] = Some(if corner(f, k) == lo {
@@ -163,7 +176,7 @@ pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeA
             let sides: Vec<(Arc, Vec<DVec3>)> =
                 std::mem::take(&mut side_arcs[f]).into_iter().map(|s| s.expect("every face side has an arc")).collect();
             let arcs = sides.iter().map(|s| s.0).collect();
-            let t = tessellate(&spheres[f], sides, &mesh.face_points(f), tol);
+            let t = tessellate(&spheres[f], sides, &mesh.face_points(f), tol, max_level);
             Panel {
                 face: f,
                 sphere: spheres[f],

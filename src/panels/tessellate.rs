@@ -9,8 +9,11 @@ use glam::DVec3;
 use super::arc::Arc;
 use crate::geometry::sphere::Sphere;
 
-/// Highest subdivision level of one panel (at most about N² = 65536 triangles).
+/// Highest subdivision level of one panel (at most about 2 · N² = 131,072 triangles).
 pub const MAX_LEVEL: usize = 256;
+/// The most triangles one panel's tessellation can have: a quad's M × N grid at [`MAX_LEVEL`]
+/// and the zippers to four sides of at most [`super::arc::MAX_ARC_SEGMENTS`] points each.
+pub const MAX_PANEL_TRIANGLES: usize = 2 * MAX_LEVEL * MAX_LEVEL + 4 * (super::arc::MAX_ARC_SEGMENTS + MAX_LEVEL + 2);
 /// Fraction of the chord tolerance allowed for the sagitta of an arc segment. The flat triangles
 /// on a boundary segment deviate from the sphere by a bit more than its sagitta (their longest
 /// edge is a little longer than the segment), so leave them room.
@@ -30,8 +33,10 @@ pub struct Tessellation {
 }
 
 /// Tessellates a panel on `sphere` with corners `corners` (3 or 4) from its sides (arc k and its
-/// points, from corner k to corner k + 1), with chord error ≤ `tol`.
-pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVec3], tol: f64) -> Tessellation {
+/// points, from corner k to corner k + 1), with chord error ≤ `tol`, at levels up to `max_level`
+/// (at most [`MAX_LEVEL`]).
+pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVec3], tol: f64, max_level: usize) -> Tessellation {
+    let max_level = max_level.clamp(1, MAX_LEVEL);
     let nc = corners.len();
     let n_side: Vec<usize> = sides.iter().map(|s| s.1.len() - 1).collect();
     // Corners first, then the inner points of each side.
@@ -53,11 +58,14 @@ pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVe
         _ => triangle_q_max(corners[0], corners[1], corners[2]).max(triangle_q_max(corners[0], corners[2], corners[3])),
     };
     let estimate = (sphere.a.abs() * q / tol).sqrt().ceil();
-    let estimate = if estimate.is_finite() { (estimate as usize).min(MAX_LEVEL) } else { MAX_LEVEL };
+    let estimate = if estimate.is_finite() { (estimate as usize).min(max_level) } else { max_level };
     // Grid levels: one for a triangle; along sides 0/2 and 1/3 for a quad.
     let mut levels = match nc {
-        3 => [n_side.iter().copied().max().unwrap_or(1).max(estimate).max(1); 2],
-        _ => [n_side[0].max(n_side[2]).max(estimate).max(1), n_side[1].max(n_side[3]).max(estimate).max(1)],
+        3 => [n_side.iter().copied().max().unwrap_or(1).max(estimate).clamp(1, max_level); 2],
+        _ => [
+            n_side[0].max(n_side[2]).max(estimate).clamp(1, max_level),
+            n_side[1].max(n_side[3]).max(estimate).clamp(1, max_level),
+        ],
     };
     let (mut best_err, mut stalled) = (f64::INFINITY, 0);
     loop {
@@ -88,7 +96,7 @@ pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVe
         } else {
             stalled += 1;
         }
-        if err <= tol || levels.iter().all(|&l| l >= MAX_LEVEL) || stalled >= 3 {
+        if err <= tol || levels.iter().all(|&l| l >= max_level) || stalled >= 3 {
             let area = triangles
                 .iter()
                 .map(|t| {
@@ -100,7 +108,7 @@ pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVe
         }
         for level in &mut levels {
             let grow = (*level as f64 * (err / tol).sqrt() * 1.05).ceil() as usize;
-            *level = grow.max(*level + 1).min(MAX_LEVEL);
+            *level = grow.max(*level + 1).min(max_level);
         }
     }
 }

@@ -158,9 +158,12 @@ impl Field {
 
     /// Rebuilds a field from its header and bytes; rejects a length mismatch.
     pub fn from_bytes(header: &FieldHeader, bytes: &[u8]) -> Result<Self, FieldLengthError> {
-        let width = if header.kind == FieldKind::U8 { 1 } else { 4 };
-        if bytes.len() != header.len as usize * width {
-            return Err(FieldLengthError { name: header.name.clone(), expected: header.len as usize * width, got: bytes.len() });
+        let width: u64 = if header.kind == FieldKind::U8 { 1 } else { 4 };
+        // In u64: on wasm32 a crafted `len` would wrap a 32-bit usize product.
+        let expected = (header.len as u64).checked_mul(width);
+        if expected != Some(bytes.len() as u64) {
+            let expected = expected.map_or(usize::MAX, |e| usize::try_from(e).unwrap_or(usize::MAX));
+            return Err(FieldLengthError { name: header.name.clone(), expected, got: bytes.len() });
         }
         let words = bytes.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]);
         let data = match header.kind {

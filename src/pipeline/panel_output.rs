@@ -104,6 +104,8 @@ pub struct PanelExport<'a> {
     pub absolute_sphere: Option<&'a AbsoluteSphere>,
     /// The support elements for the schedule (`support.csv` and the JSON).
     pub support_elements: Option<&'a [SupportElement]>,
+    /// The report's warnings.
+    pub warnings: Vec<String>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -134,7 +136,13 @@ impl<'a> PanelExport<'a> {
             node_axes: None,
             absolute_sphere: None,
             support_elements: None,
+            warnings: Vec::new(),
         }
+    }
+
+    /// The warnings the report carries (the failed assumptions of the reference).
+    pub fn with_warnings(self, warnings: &[impl ToString]) -> Self {
+        Self { warnings: warnings.iter().map(ToString::to_string).collect(), ..self }
     }
 
     pub fn with_extras(self, extras: serde_json::Value) -> Self {
@@ -178,6 +186,7 @@ pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Re
         e.timings,
     );
     report.add_timing("export", clock.now() - t0);
+    report.warnings = e.warnings;
     let mut files = panel_files(glb, obj, &schedule, &report);
     if !schedule.support_elements.is_empty() {
         let csv = SupportRecord::to_csv(&schedule.support_elements);

@@ -69,6 +69,8 @@ impl StageRequest {
 pub enum ToWorker {
     LoadSample(Sample),
     LoadFile { name: String },
+    /// Loads another object of the multi-object file loaded last.
+    PickObject(usize),
     Run(Box<StageRequest>),
     Cancel,
     /// Diagnostics: the worker panics on purpose, to exercise crash recovery end to end.
@@ -87,6 +89,20 @@ pub struct ReferenceInfo {
     /// Degrees, control grid, domain and curvature ranges of a B-spline reference.
     #[serde(default)]
     pub bspline: Option<BSplineInfo>,
+    /// The objects of a file that holds several (a Rhino .3dm), and which one is loaded.
+    #[serde(default)]
+    pub objects: Vec<FileObject>,
+    #[serde(default)]
+    pub object: Option<usize>,
+}
+
+/// One object of a file holding several (a Rhino .3dm: a NURBS surface or a mesh).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FileObject {
+    pub name: String,
+    /// "surface" or "mesh".
+    pub kind: String,
+    pub summary: String,
 }
 
 /// The summary a finished stage returns (bulk data arrives as snapshot fields).
@@ -112,8 +128,13 @@ pub enum FromWorker {
     Files { stage: String, fields: Vec<FieldHeader>, mime: Vec<String> },
     Finished { stage: String, result: StageResult, elapsed_ms: f64 },
     Cancelled { stage: String },
-    /// An error a user can act on. The previous design stays loaded.
-    Error { message: String },
+    /// An error a user can act on. The previous design stays loaded. `remesh_to`: the method
+    /// refused its input's size and asks for a remesh to about this many faces first.
+    Error {
+        message: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        remesh_to: Option<usize>,
+    },
 }
 
 /// A message encoded for transport: JSON header plus binary bodies in field order.

@@ -3,7 +3,7 @@
 
 use super::fields::{Field, StageProgress};
 use super::panel_output::mesh_fields;
-use super::protocol::{FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
+use super::protocol::{FileObject, FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 use super::sink::Sink;
 use super::stages::{curvature, sq, st_adapted, st_support, StageError};
 use crate::export::ExportFile;
@@ -80,6 +80,8 @@ impl Loaded {
             bbox_diagonal: surface.diagonal(),
             notes,
             bspline: None,
+            objects: Vec::new(),
+            object: None,
         };
         Self { surface, info }
     }
@@ -102,8 +104,18 @@ impl Loaded {
 #[derive(Default)]
 pub struct Session {
     pub reference: Option<Loaded>,
+    /// The objects of the multi-object file loaded last, with their texts (B-spline JSON or OBJ).
+    objects: Option<FileObjects>,
     /// Times the stages (none by default: timings read 0).
     pub clock: Clock,
+}
+
+/// A file of several objects and their texts.
+struct FileObjects {
+    file: String,
+    objects: Vec<FileObject>,
+    texts: Vec<String>,
+    notes: Vec<String>,
 }
 
 /// A stage's [`Sink`] over the session's [`Outbox`].
@@ -142,18 +154,60 @@ impl Session {
     /// Handles one message. `bytes` is the file body of a `LoadFile`.
     pub fn handle(&mut self, msg: ToWorker, bytes: Option<&[u8]>, out: &mut dyn Outbox) {
         match msg {
-            ToWorker::LoadSample(sample) => self.install(Loaded::from_sample(sample), out),
+            ToWorker::LoadSample(sample) => {
+                self.objects = None;
+                self.install(Loaded::from_sample(sample), out)
+            }
+            ToWorker::PickObject(k) => self.load_object(k, out),
             ToWorker::LoadFile { name } => match bytes {
-                None => out.send(FromWorker::Error { message: format!("{name}: no file data arrived") }, vec![]),
+                None => out.send(FromWorker::Error { message: format!("{name}: no file data arrived"), remesh_to: None }, vec![]),
                 Some(b) => match Loaded::from_file(b, &name) {
-                    Ok(r) => self.install(r, out),
-                    Err(e) => out.send(FromWorker::Error { message: e.to_string() }, vec![]),
+                    Ok(r) => {
+                        self.objects = None;
+                        self.install(r, out)
+                    }
+                    Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: None }, vec![]),
                 },
             },
             ToWorker::Run(stage) => self.run(*stage, out),
             // A cancel that arrives between stages has nothing to stop.
             ToWorker::Cancel => {}
             ToWorker::Crash => panic!("crash requested for diagnostics"),
+        }
+    }
+
+    /// Loads a file of several objects, converted outside (a Rhino .3dm, by rhino3dm.js in the
+    /// worker): `texts[k]` is object k as B-spline JSON or OBJ. The first surface is loaded (else
+    /// the first object); [`ToWorker::PickObject`] loads another.
+    pub fn load_objects(&mut self, file: &str, objects: Vec<FileObject>, texts: Vec<String>, notes: Vec<String>, out: &mut dyn Outbox) {
+        let file = crate::text::clip(file, 120);
+        if objects.is_empty() || objects.len() != texts.len() {
+            out.send(FromWorker::Error { message: format!("{file}: no NURBS surface or mesh in it"), remesh_to: None }, vec![]);
+            return;
+        }
+        let first = objects.iter().position(|o| o.kind == "surface").unwrap_or(0);
+        self.objects = Some(FileObjects { file, objects, texts, notes });
+        self.load_object(first, out);
+    }
+
+    fn load_object(&mut self, k: usize, out: &mut dyn Outbox) {
+        let Some(f) = self.objects.as_ref() else {
+            out.send(FromWorker::Error { message: "no file with several objects is loaded".into(), remesh_to: None }, vec![]);
+            return;
+        };
+        let Some(object) = f.objects.get(k) else {
+            out.send(FromWorker::Error { message: format!("{}: no object {k}", f.file), remesh_to: None }, vec![]);
+            return;
+        };
+        let name = format!("{} › {}", f.file, crate::text::clip(&object.name, 80));
+        match Loaded::from_file(f.texts[k].as_bytes(), &name) {
+            Ok(mut r) => {
+                r.info.objects = f.objects.clone();
+                r.info.object = Some(k);
+                r.info.notes.extend(f.notes.iter().map(|n| crate::text::printable(n)));
+                self.install(r, out)
+            }
+            Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: None }, vec![]),
         }
     }
 
@@ -167,7 +221,7 @@ impl Session {
     fn run(&mut self, stage: StageRequest, out: &mut dyn Outbox) {
         let name = stage.name().to_string();
         let Some(loaded) = self.reference.as_ref() else {
-            out.send(FromWorker::Error { message: "Load a reference surface first.".into() }, vec![]);
+            out.send(FromWorker::Error { message: "Load a reference surface first.".into(), remesh_to: None }, vec![]);
             return;
         };
         let reference = &loaded.surface;
@@ -190,7 +244,7 @@ impl Session {
                 out.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
             }
             Err(StageError::Cancelled) => out.send(FromWorker::Cancelled { stage: name }, vec![]),
-            Err(e) => out.send(FromWorker::Error { message: e.to_string() }, vec![]),
+            Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: e.remesh_to() }, vec![]),
         }
     }
 }

@@ -8,6 +8,7 @@
 //! Queries: [`Reference::closest_point`] gives the closest point, the normal there (interpolated
 //! on a mesh, exact on a B-spline) and, on a B-spline, its (u, v).
 
+pub mod assumptions;
 pub mod bspline;
 pub mod proximity;
 

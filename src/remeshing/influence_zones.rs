@@ -117,11 +117,33 @@ impl SizingField {
     }
 
     /// The constant field whose uniform triangulation of `mesh` has about `faces` faces: for
-    /// equilateral triangles of edge g, area A = N · √3/4 · g².
+    /// equilateral triangles of edge g, area A = N · √3/4 · g². A boundary of length P needs
+    /// P / g vertices, so g is at least P / N: a sliver of tiny area but long boundary is not
+    /// cut into far more than N faces.
     pub fn uniform_for_face_count(mesh: &TriMesh, faces: usize) -> Self {
+        let n = faces.max(1) as f64;
         let area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
-        let g = (4.0 * area / (3f64.sqrt() * faces.max(1) as f64)).sqrt();
+        let g = (4.0 * area / (3f64.sqrt() * n)).sqrt().max(boundary_length(mesh) / n);
         Self::uniform(mesh, g)
+    }
+
+    /// About how many faces a remesh to this field makes on `mesh` (the mesh it was built on):
+    /// Σ over triangles of A_t / (√3/4 · g_t²), g_t the mean of its corners' values, plus the
+    /// boundary's length in units of g (Sec. 3).
+    pub fn expected_faces(&self, mesh: &TriMesh) -> f64 {
+        let g_of = |v: u32| self.values.get(v as usize).copied().unwrap_or(self.bounds.g_min).max(f64::MIN_POSITIVE);
+        let per_area = 4.0 / 3f64.sqrt();
+        let interior: f64 = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(f, t)| {
+                let g = (g_of(t[0]) + g_of(t[1]) + g_of(t[2])) / 3.0;
+                per_area * mesh.face_area_vector(f).length() / (g * g)
+            })
+            .sum();
+        let boundary: f64 = boundary_edges(mesh).map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]) / g_of(a).min(g_of(b))).sum();
+        interior + boundary
     }
 
     /// Influence zones of the given per-vertex spheres (normalized), ε absolute, default bounds.
@@ -519,4 +541,24 @@ pub fn local_spheres_orthogonal(
         }
     }
     out
+}
+
+/// The edges of `mesh` on fewer or more than two faces (boundary and non-manifold edges), once
+/// each as (low, high) vertex, sorted (sums over them are deterministic).
+fn boundary_edges(mesh: &TriMesh) -> impl Iterator<Item = (u32, u32)> {
+    let mut count: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut edges: Vec<(u32, u32)> = count.into_iter().filter(|&(_, c)| c != 2).map(|(e, _)| e).collect();
+    edges.sort_unstable();
+    edges.into_iter()
+}
+
+/// Total length of the boundary (and non-manifold) edges of `mesh`.
+fn boundary_length(mesh: &TriMesh) -> f64 {
+    boundary_edges(mesh).map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize])).sum()
 }

@@ -31,9 +31,47 @@ pub use influence_zones::{
     DEFAULT_EPSILON,
 };
 pub use pliant::{
-    pliant_remesh, pliant_remesh_with_stats, RemeshError, RemeshOutput, RemeshParams, RoundStats, COLLAPSE_BELOW,
-    SPLIT_ABOVE,
+    face_cap, pliant_remesh, pliant_remesh_with_stats, RemeshError, RemeshOutput, RemeshParams, RoundStats,
+    COLLAPSE_BELOW, SPLIT_ABOVE, TARGET_FACTOR,
 };
+
+/// The most faces any remesh may ask for, in the CLI, the design link and the app alike.
+pub const MAX_FACES: usize = 200_000;
+/// The fewest.
+pub const MIN_FACES: usize = 4;
+
+/// The most faces a triangle method (ST, ST with support structure) works on: beyond it the
+/// panels outgrow the browser worker's memory (200k faces with support structure: 2.6 GB and a
+/// 500 MB schedule), so the user is asked to remesh first.
+pub const MAX_METHOD_FACES: usize = 40_000;
+
+/// A method's size guard: it would work on more faces than it handles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TooManyFaces {
+    pub faces: usize,
+    pub limit: usize,
+}
+
+impl TooManyFaces {
+    /// The face count to remesh to: half the limit.
+    pub fn suggested(&self) -> usize {
+        (self.limit / 2).max(MIN_FACES)
+    }
+}
+
+impl std::fmt::Display for TooManyFaces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "this would make about {} faces, more than the method handles ({}): remesh to about {} faces first",
+            self.faces,
+            self.limit,
+            self.suggested()
+        )
+    }
+}
+
+impl std::error::Error for TooManyFaces {}
 
 /// How the reference is remeshed before a method runs (Sec. 3).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -66,5 +104,26 @@ impl Sizing {
             Sizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(mesh, n)),
             Sizing::None => None,
         })
+    }
+
+    /// The size guard: the faces the method will work on (the mesh's own, N, or what the
+    /// adaptive `field` asks for) must not exceed `limit`.
+    pub fn check_size(&self, mesh: &TriMesh, field: Option<&SizingField>, limit: usize) -> Result<(), TooManyFaces> {
+        let faces = match (*self, field) {
+            (Sizing::UniformFaces(n), _) => n,
+            (Sizing::Adaptive { .. }, Some(field)) => field.expected_faces(mesh).min(usize::MAX as f64) as usize,
+            _ => mesh.face_count(),
+        };
+        if faces > limit { Err(TooManyFaces { faces, limit }) } else { Ok(()) }
+    }
+
+    /// Refuses a uniform remesh whose `faces` miss the target N by more than [`TARGET_FACTOR`].
+    pub fn check_reached(&self, faces: usize) -> Result<(), pliant::RemeshError> {
+        match *self {
+            Sizing::UniformFaces(target) if faces * TARGET_FACTOR < target || faces > TARGET_FACTOR * target => {
+                Err(pliant::RemeshError::TargetMissed { target, faces })
+            }
+            _ => Ok(()),
+        }
     }
 }

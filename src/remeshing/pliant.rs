@@ -119,6 +119,17 @@ pub struct RemeshOutput {
     pub unprojected_vertices: usize,
     /// Largest distance of an output vertex from the reference.
     pub max_distance_to_reference: f64,
+    /// The most faces the mesh may reach (see [`face_cap`]).
+    pub face_cap: usize,
+}
+
+/// The most faces a remesh of `reference` to `sizing` may reach: four times the faces the field
+/// asks for, plus twice the reference's. Splits stop there, so the work of a round is bounded by
+/// the target and the input, never by the mesh's own growth.
+pub fn face_cap(reference: &TriMesh, sizing: &SizingField) -> usize {
+    let expected = sizing.expected_faces(reference);
+    let cap = 4.0 * expected + 2.0 * reference.face_count() as f64 + 64.0;
+    if cap.is_finite() && cap < 1e9 { cap as usize } else { 1_000_000_000 }
 }
 
 /// Why [`pliant_remesh`] gave no mesh.
@@ -127,14 +138,25 @@ pub enum RemeshError {
     Cancelled,
     /// Every face collapsed away (a sizing field far coarser than the surface).
     NoFaces,
+    /// A uniform remesh to about `target` faces made `faces`, off by more than a factor
+    /// [`TARGET_FACTOR`]: the reference is too small, thin or folded to be cut that finely.
+    TargetMissed { target: usize, faces: usize },
 }
+
+/// How far a uniform remesh may miss its face count before it is refused.
+pub const TARGET_FACTOR: usize = 3;
 
 impl std::fmt::Display for RemeshError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            RemeshError::Cancelled => "cancelled",
-            RemeshError::NoFaces => "remeshing produced no faces",
-        })
+        match self {
+            RemeshError::Cancelled => f.write_str("cancelled"),
+            RemeshError::NoFaces => f.write_str("remeshing produced no faces"),
+            RemeshError::TargetMissed { target, faces } => write!(
+                f,
+                "remeshing to about {target} faces made {faces}: the surface is too small, thin or folded to be remeshed to that \
+                 size (repair it, or ask for a face count it can hold)"
+            ),
+        }
     }
 }
 
@@ -181,6 +203,7 @@ pub fn pliant_remesh_with_stats(
         rounds,
         unprojected_vertices: unprojected,
         max_distance_to_reference: max_d,
+        face_cap: r.face_cap,
     })
 }
 
@@ -205,6 +228,8 @@ pub struct Remesher<'a> {
     faces_buf: Vec<u32>,
     /// Snap distance: projections closer than this are skipped.
     tiny: f64,
+    /// Splits stop at this many faces ([`face_cap`]).
+    pub face_cap: usize,
 }
 
 /// Smallest angle's sine, 2A / (l_mid · l_max) (0 for degenerate triangles), and the unnormalized
@@ -263,6 +288,7 @@ impl<'a> Remesher<'a> {
             ring_b: Vec::new(),
             faces_buf: Vec::new(),
             tiny: 1e-15 * diag.max(1e-300),
+            face_cap: face_cap(reference, sizing),
             m,
         }
     }
@@ -344,7 +370,8 @@ impl<'a> Remesher<'a> {
             .filter(|&(l, _)| l > SPLIT_ABOVE)
             .collect();
         queue.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let budget = 8 * self.m.tri.len() + 1_000_000;
+        // A split adds at most two faces.
+        let budget = self.face_cap.saturating_sub(self.m.face_count()) / 2;
         let mut splits = 0;
         while let Some((_, h)) = queue.pop() {
             if splits >= budget {

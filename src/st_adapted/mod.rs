@@ -73,7 +73,8 @@ use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::{Reference, ReferenceError};
-use crate::remeshing::{pliant_remesh, RemeshError, SizingBounds};
+use crate::reference::assumptions::{kink_warning, method_warnings, SurfaceWarning};
+use crate::remeshing::{MAX_METHOD_FACES, TooManyFaces, pliant_remesh, RemeshError, SizingBounds};
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
 use initialization::{initial_spheres, project_spheres};
@@ -106,6 +107,11 @@ pub enum StAdaptedError {
     /// H ≈ 0 on most of the surface: no central spheres to start from or to size faces by.
     NoCentralSpheres(UnusableCentralSpheres),
     NoFaces,
+    /// The remesh could not reach the asked face count; the reference's failed assumptions
+    /// (folds, slivers) often say why.
+    Remesh(RemeshError, Vec<SurfaceWarning>),
+    /// More faces than the method handles.
+    TooManyFaces(TooManyFaces),
 }
 
 impl fmt::Display for StAdaptedError {
@@ -119,6 +125,11 @@ impl fmt::Display for StAdaptedError {
                  size from their influence zones"
             ),
             StAdaptedError::NoFaces => f.write_str("remeshing produced no faces"),
+            StAdaptedError::Remesh(e, warnings) => {
+                e.fmt(f)?;
+                warnings.iter().try_for_each(|w| write!(f, "; {w}"))
+            }
+            StAdaptedError::TooManyFaces(e) => e.fmt(f),
         }
     }
 }
@@ -136,6 +147,7 @@ impl From<RemeshError> for StAdaptedError {
         match e {
             RemeshError::Cancelled => StAdaptedError::Cancelled,
             RemeshError::NoFaces => StAdaptedError::NoFaces,
+            e @ RemeshError::TargetMissed { .. } => StAdaptedError::Remesh(e, Vec::new()),
         }
     }
 }
@@ -163,6 +175,8 @@ pub struct StAdaptedResult {
     pub variant: EdgeArcs,
     /// Final term statistics.
     pub terms: Vec<TermStats>,
+    /// The method's assumptions the reference fails (H of one sign, no folds, no slivers).
+    pub warnings: Vec<SurfaceWarning>,
 }
 
 /// The angle-minimizing ST method end to end (see the module docs).
@@ -198,6 +212,7 @@ pub fn compute(
     let bounds = SizingBounds::for_mesh(mesh, topo);
     let sizing = params.sizing.field(mesh, topo, &sphere_of, bounds, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
     timings.lap("sizing");
+    params.sizing.check_size(mesh, sizing.as_ref(), MAX_METHOD_FACES).map_err(StAdaptedError::TooManyFaces)?;
     if let Some(s) = &sizing {
         on_event(StAdaptedEvent::Sizing { values: s.values() })?;
     }
@@ -206,13 +221,17 @@ pub fn compute(
         Some(s) => pliant_remesh(mesh, s, &params.remesh, &mut |p| on_event(StAdaptedEvent::Progress(p)))?,
         None => mesh.clone(),
     };
+    params
+        .sizing
+        .check_reached(remeshed.face_count())
+        .map_err(|e| StAdaptedError::Remesh(e, method_warnings(reference, &field, None)))?;
     timings.lap("remesh");
     on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
 
     // Central spheres of the remeshed mesh and the initialization.
     step(on_event, "init")?;
     timings.skip();
-    let central_spheres = match sizing {
+    let central_spheres = match &sizing {
         Some(_) => {
             let topo = Topology::new(&remeshed);
             jet_fit(&remeshed, &topo, &params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?.central_spheres
@@ -264,6 +283,8 @@ pub fn compute(
     let (final_metrics, panels) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
     let angle_iteration_median_ms = median(&iteration_ms);
+    let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
+    warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg()));
     Ok(StAdaptedResult {
         sphere_mesh,
         panels,
@@ -278,6 +299,7 @@ pub fn compute(
         diag,
         variant: params.variant,
         terms,
+        warnings,
     })
 }
 

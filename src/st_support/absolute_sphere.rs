@@ -333,7 +333,10 @@ impl std::fmt::Display for AbsoluteSphereError {
             AbsoluteSphereError::NoCentralSpheres(e) => {
                 write!(f, "{e}; ST meshes with support structure need central spheres to estimate the absolute sphere")
             }
-            AbsoluteSphereError::NoCenter => f.write_str("could not estimate the centre m"),
+            AbsoluteSphereError::NoCenter => f.write_str(
+                "could not estimate the centre m of the absolute sphere: the normals neither meet near a point nor are parallel \
+                 enough for Ω at infinity",
+            ),
         }
     }
 }
@@ -381,6 +384,9 @@ pub fn estimate_absolute_sphere(
             r2_vertices.push(i as u32);
         }
         let d = d_samples.iter().sum::<f64>() / d_samples.len() as f64;
+        if !d.is_finite() {
+            return Err(AbsoluteSphereError::NoCenter);
+        }
         let angles = normals.iter().map(|n| angle_deg(a, *n)).collect();
         (AbsoluteSphere::Plane { axis: a, d }, angles)
     } else {
@@ -392,6 +398,9 @@ pub fn estimate_absolute_sphere(
             r2_vertices.push(i as u32);
         }
         let r2 = r2_samples.iter().sum::<f64>() / r2_samples.len() as f64;
+        if !m.is_finite() || !r2.is_finite() {
+            return Err(AbsoluteSphereError::NoCenter);
+        }
         let angles = points.iter().zip(&normals).map(|(v, n)| angle_deg(*v - m, *n)).collect();
         (AbsoluteSphere::Sphere { center: m, r2 }, angles)
     };

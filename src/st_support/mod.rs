@@ -55,7 +55,8 @@ use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
 use crate::progress::{Cancelled, Clock, OnProgress, Progress, Timings};
 use crate::reference::{Reference, ReferenceError};
-use crate::remeshing::{local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams, Sizing, SizingBounds};
+use crate::reference::assumptions::{is_sliver, kink_warning, method_warnings, SurfaceWarning};
+use crate::remeshing::{MAX_METHOD_FACES, TooManyFaces, local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams, Sizing, SizingBounds};
 use crate::stats::mean;
 use absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams};
 use edge_circles::edge_circle;
@@ -122,7 +123,8 @@ pub struct StSupportMetrics {
     pub interior_edges: usize,
     /// Vertices whose axis comes from their star's spheres; the others use the line through m.
     pub axes_from_spheres: usize,
-    /// Faces whose sphere could not be made orthogonal to Ω (they keep their triangle's plane).
+    /// Sliver faces (their sphere is unreliable) and faces whose sphere could not be made
+    /// orthogonal to Ω (they keep their triangle's plane).
     pub degenerate_faces: usize,
     /// Edges without a support element (both face spheres planes, or no circle).
     pub edges_without_support: usize,
@@ -135,6 +137,11 @@ pub enum StSupportError {
     Reference(ReferenceError),
     AbsoluteSphere(AbsoluteSphereError),
     NoFaces,
+    /// The remesh could not reach the asked face count; the reference's failed assumptions
+    /// (folds, slivers) often say why.
+    Remesh(RemeshError, Vec<SurfaceWarning>),
+    /// More faces than the method handles.
+    TooManyFaces(TooManyFaces),
 }
 
 impl fmt::Display for StSupportError {
@@ -144,6 +151,11 @@ impl fmt::Display for StSupportError {
             StSupportError::Reference(e) => e.fmt(f),
             StSupportError::AbsoluteSphere(e) => e.fmt(f),
             StSupportError::NoFaces => f.write_str("remeshing produced no faces"),
+            StSupportError::Remesh(e, warnings) => {
+                e.fmt(f)?;
+                warnings.iter().try_for_each(|w| write!(f, "; {w}"))
+            }
+            StSupportError::TooManyFaces(e) => e.fmt(f),
         }
     }
 }
@@ -161,6 +173,7 @@ impl From<RemeshError> for StSupportError {
         match e {
             RemeshError::Cancelled => StSupportError::Cancelled,
             RemeshError::NoFaces => StSupportError::NoFaces,
+            e @ RemeshError::TargetMissed { .. } => StSupportError::Remesh(e, Vec::new()),
         }
     }
 }
@@ -204,6 +217,8 @@ pub struct StSupportResult {
     pub metrics: StSupportMetrics,
     /// (step, milliseconds) in execution order.
     pub timings_ms: Vec<(String, f64)>,
+    /// The method's assumptions the reference fails (H of one sign, no folds, no slivers).
+    pub warnings: Vec<SurfaceWarning>,
 }
 
 impl StSupportResult {
@@ -226,7 +241,10 @@ fn remeshed_reference(
 ) -> Result<Option<Reference>, StSupportError> {
     let (mesh, topo) = (reference.mesh(), reference.topology());
     let sizing = match params.remesh {
-        Sizing::None => return Ok(None),
+        Sizing::None => {
+            params.remesh.check_size(mesh, None, MAX_METHOD_FACES).map_err(StSupportError::TooManyFaces)?;
+            return Ok(None);
+        }
         Sizing::UniformFaces(_) => params.remesh.field(mesh, topo, &|i| Sphere::plane(mesh.positions[i], DVec3::Z), SizingBounds::for_mesh(mesh, topo), progress)?,
         Sizing::Adaptive { .. } => {
             progress(Progress::new("sizing", 0, 1))?;
@@ -238,7 +256,12 @@ fn remeshed_reference(
         }
     };
     let Some(sizing) = sizing else { return Ok(None) };
+    params.remesh.check_size(mesh, Some(&sizing), MAX_METHOD_FACES).map_err(StSupportError::TooManyFaces)?;
     let remeshed = pliant_remesh(mesh, &sizing, &RemeshParams::default(), progress)?;
+    params
+        .remesh
+        .check_reached(remeshed.face_count())
+        .map_err(|e| StSupportError::Remesh(e, method_warnings(reference, field, None)))?;
     Ok(Some(Reference::from_triangles(remeshed)))
 }
 
@@ -261,7 +284,10 @@ pub fn compute(
         }
         None => (reference, field),
     };
+    let warnings = method_warnings(reference, &*reference.curvature(&params.jet, progress)?, remeshed.as_ref().map(|r| r.mesh()));
     let mut result = on_mesh(work.mesh(), work.topology(), &field, params, clock, progress)?;
+    result.warnings = warnings;
+    result.warnings.extend(kink_warning(&result.sphere_mesh.kink_angles_deg()));
     if remeshed.is_some() {
         result.timings_ms.insert(0, timings.laps.remove(0));
     }
@@ -338,10 +364,13 @@ fn on_mesh(
             progress(Progress::new("face_spheres", f, nf))?;
         }
         let p = work.face_points(f);
+        if is_sliver(p) {
+            degenerate_faces += 1;
+        }
         let s = match Sphere::through_points_orthogonal(p, &omega_coefficients) {
             Some(s) if s.is_finite() => s,
             _ => {
-                degenerate_faces += 1;
+                degenerate_faces += !is_sliver(p) as usize;
                 Sphere::through_points_family(p)[0]
             }
         };
@@ -489,5 +518,6 @@ fn on_mesh(
         diag,
         metrics,
         timings_ms: timer.laps,
+        warnings: Vec::new(),
     })
 }

@@ -78,7 +78,7 @@ impl WorkerClient {
                         .and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string()));
                     match decoded {
                         Ok((msg, fields)) => Incoming::Message(msg, fields),
-                        Err(message) => Incoming::Message(FromWorker::Error { message }, Vec::new()),
+                        Err(message) => Incoming::Message(FromWorker::Error { message, remesh_to: None }, Vec::new()),
                     }
                 };
                 inbox.borrow_mut().push_back(item);
@@ -131,7 +131,7 @@ impl WorkerClient {
         }
         if let Err(e) = self.worker.post_message_with_transfer(&obj, &transfer) {
             self.inbox.borrow_mut().push_back(Incoming::Message(
-                FromWorker::Error { message: format!("could not send to the worker: {e:?}") },
+                FromWorker::Error { message: format!("could not send to the worker: {e:?}"), remesh_to: None },
                 Vec::new(),
             ));
         }
@@ -170,7 +170,7 @@ impl WorkerClient {
                 *self = w;
                 self.restarts = restarts;
             }
-            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(FromWorker::Error { message: e.to_string() }, Vec::new())),
+            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(FromWorker::Error { message: e.to_string(), remesh_to: None }, Vec::new())),
         }
     }
 

@@ -11,7 +11,7 @@ import {
   PROJECTS,
   T,
   TRI_DOME,
-  SADDLE,
+  MIXED_3DM, SADDLE,
   changedFraction,
   dropFile,
   isSettled,
@@ -509,6 +509,20 @@ for (const project of PROJECTS) {
         await download.saveAs(file);
         const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
         assert.equal(v.status, 0, `the Khronos validator accepts the SQ panels GLB: ${v.stdout}${v.stderr}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] o. a dropped Rhino .3dm opens its first NURBS surface, lists its objects, and SQ runs on it`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'o-3dm', fragment: 'v=1&sample=vault&method=sq&until=congruence' }, async (app) => {
+        await waitForState(app, 'vault settled', (s) => s.source === 'sample:vault' && s.sq && !s.busy, { timeout: T.load });
+        await dropFile(app, 'mixed.3dm', fs.readFileSync(MIXED_3DM), 'application/octet-stream');
+        const s = await waitForState(app, 'the .3dm surface and its congruence', (s) => s.source.includes('mixed.3dm') && s.is_bspline && s.sq && s.sq.ready && !s.busy, { timeout: T.load });
+        t.diagnostic(`source ${s.source}, objects ${JSON.stringify(s.file_objects)}, error ${s.error}`);
+        assert.deepEqual(s.file_objects, ['grid_mesh', 'tunnel_arch', 'torus_patch']);
+        assert.equal(s.file_object, 1, 'the first surface');
+        assert.equal(s.error, null);
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

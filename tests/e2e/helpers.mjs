@@ -495,6 +495,7 @@ export function changedFraction(a, b, { tolerance = 12 } = {}) {
 
 export const TRI_DOME = path.resolve(REPO_ROOT, '../shared/data/meshes/tri_dome.obj');
 export const SADDLE = path.resolve(REPO_ROOT, '../shared/data/bsplines/saddle_sign_change.json');
+export const MIXED_3DM = path.resolve(REPO_ROOT, 'tests/data/3dm/mixed.3dm');
 
 /** A GLB that claims 1000 bytes and a JSON chunk but stops in the middle of it. */
 export function truncatedGlb() {

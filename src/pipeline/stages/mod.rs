@@ -37,6 +37,17 @@ impl fmt::Display for StageError {
 
 impl std::error::Error for StageError {}
 
+impl StageError {
+    /// The face count to remesh to when the method refused the size of its input.
+    pub fn remesh_to(&self) -> Option<usize> {
+        match self {
+            StageError::StAdapted(crate::st_adapted::StAdaptedError::TooManyFaces(e))
+            | StageError::StSupport(crate::st_support::StSupportError::TooManyFaces(e)) => Some(e.suggested()),
+            _ => None,
+        }
+    }
+}
+
 impl From<Cancelled> for StageError {
     fn from(_: Cancelled) -> Self {
         StageError::Cancelled

@@ -134,6 +134,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         timings.push(("angle_iteration_median".into(), med));
     }
     let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &timings)
-        .with_extras(serde_json::json!({ "variant": variant }));
+        .with_extras(serde_json::json!({ "variant": variant }))
+        .with_warnings(&result.warnings);
     export_panels(reference, export, clock)
 }

@@ -78,7 +78,8 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
     let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &result.timings_ms)
         .with_extras(crate::export::absolute_sphere_extras(&result.omega))
         .with_support(&result.support_geometry, &result.support_elements, &axes)
-        .with_absolute_sphere(&result.omega);
+        .with_absolute_sphere(&result.omega)
+        .with_warnings(&result.warnings);
     export_panels(reference, export, clock)
 }
 

@@ -49,6 +49,9 @@ impl App {
             "selected_vertex": self.selected,
             "method": self.design.method.key(),
             "downloads": self.downloads.iter().map(|d| d.name.clone()).collect::<Vec<_>>(),
+            "file_objects": self.loaded.as_ref().map_or(Vec::new(), |l| l.info.objects.iter().map(|o| o.name.clone()).collect::<Vec<_>>()),
+            "file_object": self.loaded.as_ref().and_then(|l| l.info.object),
+            "is_bspline": self.loaded.as_ref().is_some_and(|l| l.info.bspline.is_some()),
         });
         state["cancels"] = serde_json::json!({
             "requested": self.cancels,

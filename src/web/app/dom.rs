@@ -60,7 +60,7 @@ pub fn make_file_input(
     let Ok(el) = doc.create_element("input") else { return (None, None) };
     let Ok(input) = el.dyn_into::<web_sys::HtmlInputElement>() else { return (None, None) };
     input.set_type("file");
-    input.set_accept(".obj,.gltf,.glb,.json");
+    input.set_accept(".obj,.gltf,.glb,.json,.3dm");
     input.set_id("sf-file-input");
     let _ = input.style().set_property("display", "none");
     if let Some(body) = doc.body() {

@@ -182,11 +182,12 @@ impl App {
                 self.busy = None;
                 self.notices.push(format!("Stage '{stage}' cancelled."));
             }
-            FromWorker::Error { message } => {
+            FromWorker::Error { message, remesh_to } => {
                 // A failed stage also ends the stages queued after it.
                 self.busy = None;
                 self.file_in_flight = None;
                 self.error = Some(message);
+                self.remesh_to = remesh_to;
             }
         }
     }

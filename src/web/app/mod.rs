@@ -28,6 +28,7 @@ use wasm_bindgen::prelude::*;
 
 use crate::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading};
 use crate::pipeline::protocol::ToWorker;
+use crate::remeshing::Sizing;
 use crate::samples::Sample;
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::ViewerResources;
@@ -46,6 +47,8 @@ pub struct App {
     design: Design,
     notices: Vec<String>,
     error: Option<String>,
+    /// The method refused its input's size: a remesh to about this many faces is offered.
+    remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
     loaded: Option<Loaded>,
     /// The file behind the loaded design, kept to restore it in a fresh worker.
@@ -150,6 +153,7 @@ impl App {
             design,
             notices,
             error,
+            remesh_to: None,
             worker,
             loaded: None,
             file: None,
@@ -208,6 +212,18 @@ impl App {
     }
 
     fn load_file(&mut self, file: web_sys::File) {
+        self.remesh_to = None;
+        // Refused before a byte is read: the worker would hold the whole file.
+        if file.size() > crate::import::MAX_BYTES as f64 {
+            let name = crate::text::clip(&file.name(), 120);
+            self.error = Some(format!(
+                "{name}: {:.0} bytes exceed the limit of {} ({} MiB)",
+                file.size(),
+                crate::import::MAX_BYTES,
+                crate::import::MAX_BYTES >> 20
+            ));
+            return;
+        }
         self.send(&ToWorker::LoadFile { name: file.name() }, Some(&file));
         self.file_in_flight = Some(file);
         self.busy = Some(Busy { stage: "import".into(), progress: None });
@@ -222,6 +238,7 @@ impl App {
 
     /// Runs the design's stages in the worker (the curvature first; the method reuses it).
     fn run_method(&mut self) {
+        self.remesh_to = None;
         if self.loaded.is_none() {
             return;
         }
@@ -310,9 +327,22 @@ impl App {
             if let Some(err) = self.error.clone() {
                 egui::Frame::new().fill(Color32::from_rgb(90, 24, 24)).inner_margin(6.0).corner_radius(4.0).show(ui, |ui| {
                     ui.label(RichText::new(err).color(Color32::WHITE));
-                    if ui.small_button("Dismiss").clicked() {
-                        self.error = None;
-                    }
+                    ui.horizontal(|ui| {
+                        if let Some(n) = self.remesh_to {
+                            if ui.small_button(format!("Remesh to about {n} faces and run")).clicked() {
+                                match self.design.method {
+                                    Method::StAdapted => self.design.st_adapted.sizing = Sizing::UniformFaces(n),
+                                    Method::StSupport => self.design.st_support.remesh = Sizing::UniformFaces(n),
+                                    _ => {}
+                                }
+                                (self.error, self.remesh_to) = (None, None);
+                                self.run_method();
+                            }
+                        }
+                        if ui.small_button("Dismiss").clicked() {
+                            (self.error, self.remesh_to) = (None, None);
+                        }
+                    });
                 });
                 ui.add_space(6.0);
             }
@@ -379,7 +409,10 @@ impl App {
                 }
             });
             ui.separator();
-            panels::info::show(ui, self.loaded.as_ref(), self.selected);
+            if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
+                self.send(&ToWorker::PickObject(k), None);
+                self.busy = Some(Busy { stage: "import".into(), progress: None });
+            }
             if let Some(l) = &self.loaded {
                 let results = ui.scope(|ui| match self.design.method {
                     Method::Curvature => {}
@@ -497,7 +530,7 @@ impl eframe::App for App {
             self.viewport(ui);
             if hovering {
                 ui.painter().rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
-                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF, GLB or a B-spline .json to load", egui::FontId::proportional(22.0), Color32::WHITE);
+                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF, GLB, a B-spline .json or a Rhino .3dm to load", egui::FontId::proportional(22.0), Color32::WHITE);
             }
         });
         let dragging = ui.input(|i| i.pointer.any_down());

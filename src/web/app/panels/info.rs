@@ -7,13 +7,25 @@ use crate::pipeline::fields::{field, find, Field};
 use crate::web::app::plots::key_values;
 use crate::web::app::state::{CurvatureView, Loaded};
 
-/// The reference section.
-pub fn show(ui: &mut egui::Ui, loaded: Option<&Loaded>, selected: Option<usize>) {
+/// The reference section; returns the object picked of a file holding several.
+pub fn show(ui: &mut egui::Ui, loaded: Option<&Loaded>, selected: Option<usize>) -> Option<usize> {
     ui.strong("Reference");
     let Some(l) = loaded else {
         ui.label("loading…");
-        return;
+        return None;
     };
+    let mut picked = None;
+    if l.info.objects.len() > 1 {
+        let current = l.info.object.unwrap_or(0);
+        let label = |k: usize| l.info.objects.get(k).map_or(String::new(), |o| format!("{k}: {} ({})", o.name, o.kind));
+        egui::ComboBox::from_id_salt("file-object").selected_text(label(current)).width(250.0).show_ui(ui, |ui| {
+            for (k, o) in l.info.objects.iter().enumerate() {
+                if ui.selectable_label(k == current, label(k)).on_hover_text(&o.summary).clicked() && k != current {
+                    picked = Some(k);
+                }
+            }
+        });
+    }
     let s = &l.info.stats;
     key_values(
         ui,
@@ -63,6 +75,7 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Loaded>, selected: Option<usize>)
             ui.label(RichText::new("Click the surface to see a vertex's central sphere.").small());
         }
     }
+    picked
 }
 
 /// The central sphere (Def. 2.9) of vertex `v`, as sent by the curvature stage.

@@ -55,3 +55,10 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
     *sizing = kind.sizing(epsilon, faces);
     memory.remember(*sizing);
 }
+
+/// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
+pub fn warnings(ui: &mut egui::Ui, warnings: &[String]) {
+    for w in warnings {
+        ui.colored_label(egui::Color32::from_rgb(240, 180, 80), w);
+    }
+}

@@ -186,9 +186,7 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         }
         key_values(ui, "sq-mesh-metrics", &rows);
     }
-    for w in &r.warnings {
-        ui.colored_label(Color32::from_rgb(240, 180, 80), w);
-    }
+    super::warnings(ui, &r.warnings);
 }
 
 /// The energy plots: one per stage, with the progress steps that belong to it.

@@ -61,4 +61,5 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     if sum.metrics.flipped_faces > 0 {
         ui.colored_label(Color32::from_rgb(240, 180, 80), format!("{} faces ended flipped against the reference.", sum.metrics.flipped_faces));
     }
+    super::warnings(ui, &sum.report.warnings);
 }

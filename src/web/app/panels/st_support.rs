@@ -59,4 +59,5 @@ pub fn results(ui: &mut egui::Ui, view: &StSupportView) {
     histogram(ui, &[(&sum.angles_m0, Color32::from_rgb(90, 190, 90)), (&sum.angles_m, Color32::from_rgb(220, 80, 70))], "°");
     ui.label(RichText::new(if matches!(sum.omega, AbsoluteSphere::Plane { .. }) { "distances dᵢ" } else { "Rᵢ² of the central spheres" }).small());
     histogram(ui, &[(&sum.r2, Color32::from_rgb(110, 150, 230))], "");
+    super::warnings(ui, &r.warnings);
 }
