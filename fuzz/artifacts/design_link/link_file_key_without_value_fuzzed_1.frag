@@ -1,0 +1,1 @@
+tur#6=1&sample=file&file&ca#v=

@@ -1,0 +1,1 @@
+#v=1&sample=torus=12“ Ÿßlpha=30&grid=20&rs=5&faces=40#v=1&sample=file&file&

@@ -1,0 +1,1 @@
+#v=1&sample=file&file=%00

@@ -1,0 +1,1 @@
+#v=1&sample=dome&method=curvature&jet_degree=3&jet_rings=4&color=H&shading=smooth&edges=0

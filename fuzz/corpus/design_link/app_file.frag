@@ -1,0 +1,1 @@
+#v=1&sample=file&file=my%20roof%20%232.obj&method=curvature&jet_degree=3&jet_rings=4&color=H&shading=smooth&edges=0

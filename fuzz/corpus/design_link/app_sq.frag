@@ -1,0 +1,1 @@
+#v=1&sample=vault&method=sq&jet_degree=3&jet_rings=4&theta=20&alpha=75&grid=20&rs=10&faces=237&until=final&color=H&shading=smooth&edges=0

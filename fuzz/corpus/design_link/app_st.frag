@@ -1,0 +1,1 @@
+#v=1&sample=sphere-cap&method=st&jet_degree=3&jet_rings=4&sizing=adaptive&eps=4e-4&variant=a&color=sizing&shading=flat&edges=1&cam=0.25,-0.5,4,0.5,-0.25,1

@@ -1,0 +1,1 @@
+#v=1&sample=dome&method=st-support&jet_degree=3&jet_rings=4&opt_r=0&depth=0.02&axis=0.1&rtol=1e-3&remesh=none&color=H&shading=smooth&edges=0

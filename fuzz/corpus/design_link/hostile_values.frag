@@ -1,0 +1,1 @@
+v=2&sample=nope&method=st&sizing=none&eps=1&faces=7&jet_degree=9&%zz=%41&&edges=2&cam=1,2,-3,4,5,6&x+y=1

@@ -1,0 +1,1 @@
+#v=1&sample=file&file=roof%20v2%2B%C3%A9.obj&method=curvature&color=none

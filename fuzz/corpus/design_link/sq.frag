@@ -1,0 +1,1 @@
+#v=1&sample=torus&method=sq&jet_degree=4&jet_rings=8&theta=12.5&alpha=30&grid=20&rs=5&faces=400&until=remesh&color=k2&shading=smooth&edges=0

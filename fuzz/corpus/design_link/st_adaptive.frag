@@ -1,0 +1,1 @@
+#v=1&sample=wave-roof&method=st&jet_degree=3&jet_rings=3&sizing=adaptive&eps=2.5e-4&variant=b&color=sizing&shading=flat&edges=1&cam=0.6,0.4,3.5,0,0,0.25

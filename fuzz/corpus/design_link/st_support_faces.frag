@@ -1,0 +1,1 @@
+#v=1&sample=vault&method=st-support&jet_degree=2&jet_rings=2&opt_r=1&depth=0.1&axis=0.2&rtol=0.001&remesh=faces&faces=300&color=k1-k2&shading=reflective&edges=0
