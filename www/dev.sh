@@ -4,6 +4,10 @@
 #   bash www/dev.sh test    install what is missing, run native, wasm-pack and browser end-to-end tests
 #   bash www/dev.sh bench   native benches (cargo bench, divan) and the same workloads in release wasm in
 #                           headless Chromium, then a native-vs-wasm table (target/bench/)
+#   bash www/dev.sh fuzz [target|all] [seconds]
+#                           libFuzzer on stable Rust (fuzz/README.md): build the fuzz targets, run each for
+#                           `seconds` (default all, 60 s each), one line per target; exits 1 on a finding.
+#                           `test` runs it for 20 s per target after the native tests (SF_SKIP_FUZZ=1 skips it)
 # Both are idempotent: installs are skipped when present, target/ is reused.
 # The install recipe is ../shared/toolchain.md: nothing is downloaded outside crates.io, npm and Debian.
 set -euo pipefail
@@ -95,6 +99,16 @@ setup_browser() {
   fi
 }
 
+# rhino3dm.js (npm, MIT: OpenNURBS in wasm) reads Rhino .3dm files: in the app's worker, loaded on
+# the first .3dm only, and in the CLI through Node (www/rhino3dm/cli.mjs).
+setup_rhino3dm() {
+  if [ ! -d www/rhino3dm/node_modules/rhino3dm ] || [ www/rhino3dm/package-lock.json -nt www/rhino3dm/node_modules/.stamp ]; then
+    have npm || apt_install nodejs npm
+    log "npm ci (www/rhino3dm)"
+    (cd www/rhino3dm && npm ci --no-audit --no-fund --silent && touch node_modules/.stamp)
+  fi
+}
+
 # --- build ------------------------------------------------------------------------------------
 build_web() {
   local profile="${1:-release}"
@@ -105,6 +119,10 @@ build_web() {
   cp index.html "$DIST/"
   cp www/*.js www/*.css "$DIST/" 2>/dev/null || true
   cp target/pkg/spherical_faces.js target/pkg/spherical_faces_bg.wasm "$DIST/pkg/"
+  setup_rhino3dm
+  mkdir -p "$DIST/rhino3dm"
+  cp www/rhino3dm/convert.mjs www/rhino3dm/node_modules/rhino3dm/rhino3dm.module.js \
+    www/rhino3dm/node_modules/rhino3dm/rhino3dm.wasm "$DIST/rhino3dm/"
   log "wasm: $(stat -c %s "$DIST/pkg/spherical_faces_bg.wasm") bytes"
 }
 
@@ -119,8 +137,15 @@ cmd_serve() {
 cmd_test() {
   cmd_setup
   setup_browser
+  setup_rhino3dm
+  log "rhino3dm converter tests (node)"
+  (cd www/rhino3dm && node --test convert.test.mjs)
   log "native tests"
   cargo test --all-targets
+  if [ "${SF_SKIP_FUZZ:-0}" != 1 ]; then
+    log "fuzz smoke: every target for 20 s (SF_SKIP_FUZZ=1 skips it)"
+    cmd_fuzz all 20
+  fi
   log "wasm-pack tests in headless Chromium"
   wasm-pack test --headless --chrome --chromedriver /usr/bin/chromedriver . --test web
   build_web release
@@ -156,11 +181,72 @@ cmd_bench() {
   log "results in $out (native.txt, wasm.txt, table.txt)"
 }
 
+# --- fuzzing (fuzz/README.md) -----------------------------------------------------------------
+# libFuzzer on stable rustc: fuzz/rustc-wrapper.sh adds SanitizerCoverage to the crates under
+# test; libfuzzer-sys builds libFuzzer's C++ (a C++ compiler is needed). New inputs go to a
+# working corpus in target/fuzz/work/<t>; the committed seeds in fuzz/corpus/<t> are read only.
+# Reproducers land in fuzz/artifacts/<t>/ (tests/fuzz_replay.rs replays them).
+FUZZ_TARGETS=(obj gltf bspline design_link protocol)
+
+fuzz_max_len() {
+  case "$1" in
+    design_link) echo 4096 ;;
+    *) echo 65536 ;;
+  esac
+}
+
+cmd_fuzz() {
+  local which="${1:-all}" secs="${2:-60}"
+  local targets=()
+  if [ "$which" = all ]; then
+    targets=("${FUZZ_TARGETS[@]}")
+  elif [[ " ${FUZZ_TARGETS[*]} " == *" $which "* ]]; then
+    targets=("$which")
+  else
+    log "unknown fuzz target '$which' (targets: ${FUZZ_TARGETS[*]}, or all)"
+    exit 2
+  fi
+  [[ "$secs" =~ ^[0-9]+$ ]] || { log "fuzz: seconds must be a whole number, got '$secs'"; exit 2; }
+  have c++ || have g++ || have clang++ || apt_install g++
+  local tdir="$ROOT/target/fuzz"
+  log "building the fuzz targets (release, SanitizerCoverage through fuzz/rustc-wrapper.sh)"
+  CARGO_TARGET_DIR="$tdir" RUSTC_WRAPPER="$ROOT/fuzz/rustc-wrapper.sh" \
+    cargo build --release --manifest-path fuzz/Cargo.toml --bins
+  local total=0 lines=() t
+  for t in "${targets[@]}"; do
+    local work="$tdir/work/$t" out="$tdir/logs/$t.log" arts="fuzz/artifacts/$t"
+    mkdir -p "$work" "$tdir/logs" "$arts"
+    local before rc=0
+    before="$(ls -A "$arts")"
+    log "fuzz $t for ${secs} s (log: $out)"
+    nice -n 19 "$tdir/release/$t" -max_total_time="$secs" -rss_limit_mb=2048 -max_len="$(fuzz_max_len "$t")" \
+      -timeout=10 -print_final_stats=1 -artifact_prefix="$arts/" "$work" "fuzz/corpus/$t" >"$out" 2>&1 || rc=$?
+    local execs corpus findings
+    execs="$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$out" | grep -oE '[0-9]+$' | tail -1 || true)"
+    corpus="$(grep -oE 'corp: [0-9]+' "$out" | grep -oE '[0-9]+$' | tail -1 || true)"
+    findings="$(comm -13 <(printf '%s\n' "$before" | sort) <(ls -A "$arts" | sort) | grep -c . || true)"
+    # A crash on an input whose artifact is already there writes no new file; it still counts.
+    if [ "$rc" != 0 ] && [ "$findings" = 0 ]; then findings=1; fi
+    if [ "$findings" != 0 ]; then
+      grep -E -A1 '^(==[0-9]+== ERROR: libFuzzer|thread .* panicked at)' "$out" | head -4 >&2 || true
+      grep -E 'Test unit written to' "$out" | head -1 >&2 || true
+    fi
+    total=$((total + findings))
+    lines+=("$(printf 'fuzz %s: %s execs, corpus %s files, %s findings' "$t" "${execs:-0}" "${corpus:-0}" "$findings")")
+  done
+  printf '%s\n' "${lines[@]}"
+  if [ "$total" != 0 ]; then
+    log "fuzz: $total findings; reproducers in fuzz/artifacts/ (replay: cargo test --test fuzz_replay)"
+    return 1
+  fi
+}
+
 case "${1:-}" in
   setup) cmd_setup ;;
   build) cmd_setup; build_web "${2:-release}" ;;
   serve) cmd_serve ;;
   test) cmd_test ;;
   bench) cmd_bench ;;
-  *) echo "usage: bash www/dev.sh serve|test|bench   (also: setup, build [release|dev])" >&2; exit 2 ;;
+  fuzz) cmd_fuzz "${2:-all}" "${3:-60}" ;;
+  *) echo "usage: bash www/dev.sh serve|test|bench|fuzz [target|all] [seconds]   (also: setup, build [release|dev])" >&2; exit 2 ;;
 esac
