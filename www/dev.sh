@@ -7,7 +7,7 @@
 #   bash www/dev.sh fuzz [target|all] [seconds]
 #                           libFuzzer on stable Rust (fuzz/README.md): build the fuzz targets, run each for
 #                           `seconds` (default all, 60 s each), one line per target; exits 1 on a finding.
-#                           `test` runs it for 20 s per target after the native tests (SF_SKIP_FUZZ=1 skips it)
+#                           `test` runs it for 10 s per target after the native tests (SF_SKIP_FUZZ=1 skips it)
 # Both are idempotent: installs are skipped when present, target/ is reused.
 # The install recipe is ../shared/toolchain.md: nothing is downloaded outside crates.io, npm and Debian.
 set -euo pipefail
@@ -143,8 +143,8 @@ cmd_test() {
   log "native tests"
   cargo test --all-targets
   if [ "${SF_SKIP_FUZZ:-0}" != 1 ]; then
-    log "fuzz smoke: every target for 20 s (SF_SKIP_FUZZ=1 skips it)"
-    cmd_fuzz all 20
+    log "fuzz smoke: every target for 10 s (SF_SKIP_FUZZ=1 skips it)"
+    cmd_fuzz all 10
   fi
   log "wasm-pack tests in headless Chromium"
   wasm-pack test --headless --chrome --chromedriver /usr/bin/chromedriver . --test web

@@ -48,7 +48,8 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
                 .on_hover_text("Distance tolerance of the influence zones, relative to the bbox diagonal (Sec. 3): smaller ε, smaller faces");
         }
         SizingKind::Faces => {
-            ui.add(egui::Slider::new(&mut faces, 50..=8000).logarithmic(true).text("faces"));
+            // The methods' own cap: more faces are refused with an offer to remesh.
+            ui.add(egui::Slider::new(&mut faces, 50..=crate::remeshing::MAX_METHOD_FACES).logarithmic(true).text("faces"));
         }
         SizingKind::None => {}
     }

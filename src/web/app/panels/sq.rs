@@ -40,7 +40,7 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
         .on_hover_text("Smallest angle between the two torsal planes of a grid quad (Sec. 5.1)");
     ui.add(egui::Slider::new(&mut params.grid, GRID_RANGE.0..=GRID_RANGE.1.min(60)).text("grid"))
         .on_hover_text("Points per direction of the sampling grid G");
-    ui.add(egui::Slider::new(&mut params.faces, FACES_RANGE.0.max(16)..=2000).logarithmic(true).text("faces"))
+    ui.add(egui::Slider::new(&mut params.faces, FACES_RANGE.0.max(16)..=FACES_RANGE.1).logarithmic(true).text("faces"))
         .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
     ui.add(egui::Slider::new(&mut params.support_depth, 0.002..=0.1).logarithmic(true).text("support depth"))
         .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
