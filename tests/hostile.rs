@@ -316,8 +316,8 @@ fn a_folded_flap_is_warned_about_and_remeshes_within_bounds() {
     // The flap cannot be cut into 200 even faces: refused, and the refusal names the fold.
     let params = StAdaptedParams { sizing: Sizing::UniformFaces(200), ..StAdaptedParams::default() };
     let err = spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_err();
-    let StAdaptedError::Remesh(_, warnings) = &err else { panic!("{err}") };
-    assert!(warnings.iter().any(|w| matches!(w, SurfaceWarning::Folds { .. })), "{err}");
+    let StAdaptedError::Remesh(refused) = &err else { panic!("{err}") };
+    assert!(refused.warnings.iter().any(|w| matches!(w, SurfaceWarning::Folds { .. })), "{err}");
     assert!(err.to_string().contains("folds back"), "{err}");
 }
 

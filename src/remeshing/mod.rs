@@ -25,6 +25,7 @@ use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, OnProgress};
+use crate::reference::assumptions::SurfaceWarning;
 
 pub use influence_zones::{
     influence_zone, local_spheres_orthogonal, mean_edge_length, zone_diameter, SizingBounds, SizingField,
@@ -39,6 +40,23 @@ pub use pliant::{
 pub const MAX_FACES: usize = 200_000;
 /// The fewest.
 pub const MIN_FACES: usize = 4;
+
+/// A remesh refused, with the reference's failed assumptions (folds, slivers), which often say
+/// why; one type for every method that remeshes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemeshRefused {
+    pub error: pliant::RemeshError,
+    pub warnings: Vec<SurfaceWarning>,
+}
+
+impl std::fmt::Display for RemeshRefused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.error.fmt(f)?;
+        self.warnings.iter().try_for_each(|w| write!(f, "; {w}"))
+    }
+}
+
+impl std::error::Error for RemeshRefused {}
 
 /// The most faces a triangle method (ST, ST with support structure) works on: beyond it the
 /// panels outgrow the browser worker's memory (200k faces with support structure: 2.6 GB and a

@@ -74,7 +74,7 @@ use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::{Reference, ReferenceError};
 use crate::reference::assumptions::{kink_warning, method_warnings, SurfaceWarning};
-use crate::remeshing::{MAX_METHOD_FACES, TooManyFaces, pliant_remesh, RemeshError, SizingBounds};
+use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, pliant_remesh, RemeshError, SizingBounds};
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
 use initialization::{initial_spheres, project_spheres};
@@ -109,7 +109,7 @@ pub enum StAdaptedError {
     NoFaces,
     /// The remesh could not reach the asked face count; the reference's failed assumptions
     /// (folds, slivers) often say why.
-    Remesh(RemeshError, Vec<SurfaceWarning>),
+    Remesh(RemeshRefused),
     /// More faces than the method handles.
     TooManyFaces(TooManyFaces),
 }
@@ -125,10 +125,7 @@ impl fmt::Display for StAdaptedError {
                  size from their influence zones"
             ),
             StAdaptedError::NoFaces => f.write_str("remeshing produced no faces"),
-            StAdaptedError::Remesh(e, warnings) => {
-                e.fmt(f)?;
-                warnings.iter().try_for_each(|w| write!(f, "; {w}"))
-            }
+            StAdaptedError::Remesh(e) => e.fmt(f),
             StAdaptedError::TooManyFaces(e) => e.fmt(f),
         }
     }
@@ -147,7 +144,7 @@ impl From<RemeshError> for StAdaptedError {
         match e {
             RemeshError::Cancelled => StAdaptedError::Cancelled,
             RemeshError::NoFaces => StAdaptedError::NoFaces,
-            e @ RemeshError::TargetMissed { .. } => StAdaptedError::Remesh(e, Vec::new()),
+            error @ RemeshError::TargetMissed { .. } => StAdaptedError::Remesh(RemeshRefused { error, warnings: Vec::new() }),
         }
     }
 }
@@ -224,7 +221,7 @@ pub fn compute(
     params
         .sizing
         .check_reached(remeshed.face_count())
-        .map_err(|e| StAdaptedError::Remesh(e, method_warnings(reference, &field, None)))?;
+        .map_err(|error| StAdaptedError::Remesh(RemeshRefused { error, warnings: method_warnings(reference, &field, None) }))?;
     timings.lap("remesh");
     on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
 

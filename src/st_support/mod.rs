@@ -56,7 +56,7 @@ use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
 use crate::progress::{Cancelled, Clock, OnProgress, Progress, Timings};
 use crate::reference::{Reference, ReferenceError};
 use crate::reference::assumptions::{is_sliver, kink_warning, method_warnings, SurfaceWarning};
-use crate::remeshing::{MAX_METHOD_FACES, TooManyFaces, local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams, Sizing, SizingBounds};
+use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams, Sizing, SizingBounds};
 use crate::stats::mean;
 use absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams};
 use edge_circles::edge_circle;
@@ -139,7 +139,7 @@ pub enum StSupportError {
     NoFaces,
     /// The remesh could not reach the asked face count; the reference's failed assumptions
     /// (folds, slivers) often say why.
-    Remesh(RemeshError, Vec<SurfaceWarning>),
+    Remesh(RemeshRefused),
     /// More faces than the method handles.
     TooManyFaces(TooManyFaces),
 }
@@ -151,10 +151,7 @@ impl fmt::Display for StSupportError {
             StSupportError::Reference(e) => e.fmt(f),
             StSupportError::AbsoluteSphere(e) => e.fmt(f),
             StSupportError::NoFaces => f.write_str("remeshing produced no faces"),
-            StSupportError::Remesh(e, warnings) => {
-                e.fmt(f)?;
-                warnings.iter().try_for_each(|w| write!(f, "; {w}"))
-            }
+            StSupportError::Remesh(e) => e.fmt(f),
             StSupportError::TooManyFaces(e) => e.fmt(f),
         }
     }
@@ -173,7 +170,7 @@ impl From<RemeshError> for StSupportError {
         match e {
             RemeshError::Cancelled => StSupportError::Cancelled,
             RemeshError::NoFaces => StSupportError::NoFaces,
-            e @ RemeshError::TargetMissed { .. } => StSupportError::Remesh(e, Vec::new()),
+            error @ RemeshError::TargetMissed { .. } => StSupportError::Remesh(RemeshRefused { error, warnings: Vec::new() }),
         }
     }
 }
@@ -261,7 +258,7 @@ fn remeshed_reference(
     params
         .remesh
         .check_reached(remeshed.face_count())
-        .map_err(|e| StSupportError::Remesh(e, method_warnings(reference, field, None)))?;
+        .map_err(|error| StSupportError::Remesh(RemeshRefused { error, warnings: method_warnings(reference, field, None) }))?;
     Ok(Some(Reference::from_triangles(remeshed)))
 }
 
@@ -277,6 +274,7 @@ pub fn compute(
     let field = reference.curvature(&params.jet, progress)?;
     let mut timings = Timings::start(clock);
     let remeshed = remeshed_reference(reference, &field, params, progress)?;
+    let warnings = method_warnings(reference, &field, remeshed.as_ref().map(|r| r.mesh()));
     let (work, field): (&Reference, Rc<CurvatureField>) = match &remeshed {
         Some(r) => {
             timings.lap("remesh");
@@ -284,7 +282,6 @@ pub fn compute(
         }
         None => (reference, field),
     };
-    let warnings = method_warnings(reference, &*reference.curvature(&params.jet, progress)?, remeshed.as_ref().map(|r| r.mesh()));
     let mut result = on_mesh(work.mesh(), work.topology(), &field, params, clock, progress)?;
     result.warnings = warnings;
     result.warnings.extend(kink_warning(&result.sphere_mesh.kink_angles_deg()));
