@@ -210,7 +210,7 @@ impl AngleWorkload {
 
     /// The problem at the initial point with the fixed vertices fixed.
     pub fn problem(&self) -> Problem<'_> {
-        self.frame.problem(&self.params.weights).0
+        self.frame.problem(&self.params.variant_weights()).0
     }
 
     /// A solver for [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations, timing each one with `clock`.

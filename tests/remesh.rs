@@ -194,6 +194,9 @@ fn uniform_field_for_a_face_count() {
     }
 }
 
+/// A sphere is fit exactly by its central spheres, and this patch's sides are great circles
+/// (gnomonic images of lines), geodesics whose κ_g = 0 leaves the boundary uncapped: g = g_max
+/// everywhere.
 #[test]
 fn sphere_patch_sizing_is_g_max_everywhere() {
     let mesh = sphere_patch(5.0, 0.6, 24);
@@ -206,6 +209,52 @@ fn sphere_patch_sizing_is_g_max_everywhere() {
     assert!(sizing.values().iter().all(|&g| g == g_max), "g ∈ [{lo}, {hi}] ≠ g_max {g_max}");
     // Interpolated values too.
     assert_eq!(sizing.at(DVec3::new(0.3, -0.2, 6.0)), g_max);
+}
+
+/// A boundary that turns within the surface caps g there: a disc cut from the sphere of radius 5
+/// by the circle of polar angle 0.6 (radius r = 5 sin 0.6, geodesic curvature
+/// κ_g = √(1/r² − 1/5²)) gets g = √(8ε/κ_g) on its boundary, so that a boundary arc (nearly a
+/// geodesic of its panel's sphere) stays within ε of the circle.
+#[test]
+fn a_turning_boundary_caps_the_sizing() {
+    // A polar grid: the pole, then rings of 48 vertices at polar angles 0.6 k/12.
+    let (rings, around) = (12usize, 48usize);
+    let mut positions = vec![DVec3::new(0.0, 0.0, 5.0)];
+    for k in 1..=rings {
+        let polar = 0.6 * k as f64 / rings as f64;
+        for j in 0..around {
+            let phi = std::f64::consts::TAU * j as f64 / around as f64;
+            positions.push(5.0 * DVec3::new(polar.sin() * phi.cos(), polar.sin() * phi.sin(), polar.cos()));
+        }
+    }
+    let ring = |k: usize, j: usize| if k == 0 { 0 } else { (1 + (k - 1) * around + j % around) as u32 };
+    let mut triangles = Vec::new();
+    for j in 0..around {
+        triangles.push([0, ring(1, j), ring(1, j + 1)]);
+        for k in 1..rings {
+            triangles.push([ring(k, j), ring(k + 1, j), ring(k + 1, j + 1)]);
+            triangles.push([ring(k, j), ring(k + 1, j + 1), ring(k, j + 1)]);
+        }
+    }
+    let disc = TriMesh::new(positions, triangles);
+    let topo = Topology::new(&disc);
+    let field = fit(&disc, &topo);
+    let eps = 1e-3 * disc.bbox_diagonal();
+    let sizing = SizingField::from_curvature(&disc, &topo, &field, 1e-3);
+    let g_max = SizingBounds::for_mesh(&disc, &topo).g_max;
+    let r = 5.0 * 0.6f64.sin();
+    let kg = (1.0 / (r * r) - 1.0 / 25.0).sqrt();
+    let cap = (8.0 * eps / kg).sqrt();
+    assert!(cap < g_max);
+    let mut capped = 0;
+    for v in (0..disc.vertex_count()).filter(|&v| topo.is_boundary_vertex(v)) {
+        let g = sizing.values()[v];
+        // The chords of the 48-gon turn by 7.5°: their discrete curvature is the circle's to 0.1 %.
+        assert!((g / cap - 1.0).abs() < 0.01, "boundary vertex {v}: g {g}, √(8ε/κ_g) {cap}");
+        capped += 1;
+    }
+    assert!(capped > 0, "no boundary vertex capped");
+    assert!((0..disc.vertex_count()).any(|v| !topo.is_boundary_vertex(v) && sizing.values()[v] == g_max));
 }
 
 #[test]
@@ -226,7 +275,8 @@ fn local_spheres_orthogonal_to_omega_reproduce_a_sphere_orthogonal_to_it() {
     let bounds = SizingBounds::for_mesh(&mesh, &topo);
     let sizing =
         SizingField::from_sphere_fn(&mesh, &topo, &|i| spheres[i], 1e-4 * diag, bounds, &mut spherical_faces::progress::ignore).unwrap();
-    assert!(sizing.values().iter().all(|&g| g == bounds.g_max));
+    // g_max inside; the boundary is capped (see the sphere patch test).
+    assert!((0..mesh.vertex_count()).all(|v| topo.is_boundary_vertex(v) || sizing.values()[v] == bounds.g_max));
     // And on a surface that is not spherical the zones are finite.
     let cyl = cylinder_patch(2.0, 1.5, 8.0, 24, 48);
     let ctopo = Topology::new(&cyl);

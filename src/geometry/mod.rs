@@ -6,6 +6,8 @@ pub mod absolute_sphere;
 pub mod bspline;
 pub mod circle;
 pub mod closest;
+pub mod dual;
 pub mod linalg;
 pub mod mesh;
+pub mod pencil;
 pub mod sphere;

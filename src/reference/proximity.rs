@@ -152,43 +152,34 @@ impl Term for ReferenceProximity<'_> {
     }
 }
 
-/// Face spheres near the reference: ψ_f(r_f), r_f the reference point closest to the centroid of
-/// face f's current vertices (refreshed in [`Term::prepare`]; constant in the Jacobian). For a
-/// normalized sphere ψ ≈ the signed distance of r_f to it, so this bounds the panels' bulge.
-pub struct FaceProximity<'a> {
-    name: String,
+/// The reference point closest to the centroid of each group of vertices (a face's corners),
+/// refreshed by [`CentroidTargets::update`] (a group whose centroid did not move is not looked up
+/// again): the targets of the ST method's face distance.
+pub struct CentroidTargets<'a> {
     reference: &'a Reference,
-    /// (sphere offset, the offsets of its 3 or 4 vertices) per face.
-    faces: Vec<(usize, Vec<usize>)>,
+    /// The offsets of each group's vertices.
+    groups: Vec<Vec<usize>>,
     targets: Vec<DVec3>,
     /// Centroid each target was computed for (NaN: never).
     centroids: Vec<DVec3>,
 }
 
-impl<'a> FaceProximity<'a> {
-    pub fn new(reference: &'a Reference, faces: Vec<(usize, Vec<usize>)>, x: &[f64]) -> Self {
-        let n = faces.len();
+impl<'a> CentroidTargets<'a> {
+    pub fn new(reference: &'a Reference, groups: Vec<Vec<usize>>, x: &[f64]) -> Self {
+        let n = groups.len();
         let mut t = Self {
-            name: "face_distance".into(),
             reference,
+            groups,
             targets: vec![DVec3::ZERO; n],
             centroids: vec![DVec3::NAN; n],
-            faces,
         };
-        t.prepare(x);
+        t.update(x);
         t
     }
-}
 
-impl Term for FaceProximity<'_> {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn residual_count(&self) -> usize {
-        self.faces.len()
-    }
-    fn prepare(&mut self, x: &[f64]) {
-        for (k, (_, vs)) in self.faces.iter().enumerate() {
+    /// Looks up the groups whose centroid moved.
+    pub fn update(&mut self, x: &[f64]) {
+        for (k, vs) in self.groups.iter().enumerate() {
             let c = vs[1..].iter().fold(v3(x, vs[0]), |s, &o| s + v3(x, o)) / vs.len() as f64;
             if !c.is_finite() || c == self.centroids[k] {
                 continue;
@@ -200,12 +191,22 @@ impl Term for FaceProximity<'_> {
             }
         }
     }
-    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
-        for (k, &(so, _)) in self.faces.iter().enumerate() {
-            let p = self.targets[k];
-            let q = p.length_squared();
-            r[k] = x[so] * q - v3(x, so + 1).dot(p) + x[so + 4];
-            jac.add_block(k, so, &[q, -p.x, -p.y, -p.z, 1.0]);
-        }
+
+    /// The reference point closest to group `k`'s centroid.
+    pub fn target(&self, k: usize) -> DVec3 {
+        self.targets[k]
     }
+
+    pub fn len(&self) -> usize {
+        self.groups.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.groups.is_empty()
+    }
+}
+
+/// ∂ψ(p)/∂(a, b, c) = (|p|², −p, 1): the gradient of a sphere's value at a fixed point.
+pub fn value_gradient(p: DVec3) -> [f64; 5] {
+    [p.length_squared(), -p.x, -p.y, -p.z, 1.0]
 }

@@ -34,6 +34,14 @@
 //! that is itself farther than ε from its sphere (possible with spheres not through v_i), or whose
 //! first neighbour is already off the band, gets g_min.
 //!
+//! **Boundary.** A panel's boundary arc between two boundary vertices runs nearly along a
+//! geodesic of its sphere, while the reference's boundary curve turns in the surface with
+//! geodesic curvature κ_g: over an edge of length L they part by about L² κ_g / 8. So at a
+//! boundary vertex g is also at most √(8ε / κ_g) ([`cap_at_boundary`]), with κ_g the tangential
+//! part of the boundary polyline's discrete curvature there. Without it a surface that one sphere
+//! fits (a spherical patch) gets faces as large as g_max whose boundary arcs leave the reference's
+//! footprint by far more than ε.
+//!
 //! **Variant (Fig. 16, bottom).** Any per-vertex sphere can replace the central sphere
 //! ([`SizingField::from_sphere_fn`]); [`local_spheres_orthogonal`] gives the local least-squares
 //! spheres orthogonal to an absolute sphere Ω.
@@ -182,6 +190,7 @@ impl SizingField {
             values.push(d.clamp(bounds.g_min, bounds.g_max));
         }
         values.resize(mesh.vertex_count(), bounds.g_min);
+        cap_at_boundary(mesh, topo, &mut values, eps_abs);
         progress(Progress::new("sizing", n, n))?;
         Ok(Self::from_values(mesh, values, bounds))
     }
@@ -269,6 +278,44 @@ impl SizingField {
             sum += v;
         }
         (lo, sum / self.values.len() as f64, hi)
+    }
+}
+
+/// The largest turn of the boundary polyline at a vertex that [`cap_at_boundary`] reads as the
+/// curvature of a smooth boundary curve; sharper turns are corners.
+pub const MAX_BOUNDARY_TURN_DEG: f64 = 30.0;
+
+/// Caps g at every boundary vertex of `mesh` by √(8ε / κ_g) (see the module docs): κ_g is the
+/// part tangent to the surface of the boundary polyline's curvature vector
+/// (t₂ − t₁) / (½ (|e₁| + |e₂|)), t₁, t₂ the unit directions of the two boundary edges at the
+/// vertex, and the surface normal the sum of the incident faces' area vectors. Corners (turns over
+/// [`MAX_BOUNDARY_TURN_DEG`]) and vertices on more or fewer than two boundary edges are left alone.
+pub fn cap_at_boundary(mesh: &TriMesh, topo: &Topology, values: &mut [f64], eps_abs: f64) {
+    let mut ends: Vec<Vec<u32>> = vec![Vec::new(); topo.vertex_count()];
+    for (e, &[a, b]) in topo.edges().iter().enumerate() {
+        if topo.edge_face_counts()[e] == 1 {
+            ends[a as usize].push(b);
+            ends[b as usize].push(a);
+        }
+    }
+    for (v, ends) in ends.iter().enumerate() {
+        let &[u, w] = ends.as_slice() else { continue };
+        let p = mesh.positions[v];
+        let (e1, e2) = (p - mesh.positions[u as usize], mesh.positions[w as usize] - p);
+        let (l1, l2) = (e1.length(), e2.length());
+        if !(l1 > 0.0 && l2 > 0.0) {
+            continue;
+        }
+        // A corner of the boundary is kept as a vertex by the remesher and needs no short edges.
+        if (e1 / l1).dot(e2 / l2) < MAX_BOUNDARY_TURN_DEG.to_radians().cos() {
+            continue;
+        }
+        let k = (e2 / l2 - e1 / l1) / (0.5 * (l1 + l2));
+        let n = topo.vertex_faces(v).iter().map(|&f| mesh.face_area_vector(f as usize)).sum::<DVec3>().normalize_or_zero();
+        let kg = (k - k.dot(n) * n).length();
+        if kg > 0.0 && v < values.len() {
+            values[v] = values[v].min((8.0 * eps_abs / kg).sqrt());
+        }
     }
 }
 

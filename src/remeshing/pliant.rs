@@ -196,6 +196,10 @@ pub fn pliant_remesh_with_stats(
         progress(Progress::new("remesh", round, params.rounds))?;
         rounds.push(r.round());
     }
+    if r.split_boundary_chords() > 0 {
+        r.smooth_and_project();
+        r.m.compact();
+    }
     progress(Progress::new("remesh", params.rounds, params.rounds))?;
     let (unprojected, max_d) = r.final_projection();
     Ok(RemeshOutput {
@@ -390,6 +394,27 @@ impl<'a> Remesher<'a> {
             }
         }
         splits
+    }
+
+    /// Splits every interior edge whose two ends lie on the boundary (a chord across the
+    /// boundary, often an "ear" face with three boundary corners). A face sphere there has its
+    /// vertices pinned to the boundary and little freedom left, and the arc of such a chord runs
+    /// over the boundary; the split gives the edge an interior vertex. Returns the number of splits.
+    pub fn split_boundary_chords(&mut self) -> usize {
+        let chords: Vec<u32> = self
+            .edges()
+            .into_iter()
+            .filter(|&h| {
+                let m = &self.m;
+                !m.is_boundary_edge(h) && m.is_boundary_vertex(m.from(h)) && m.is_boundary_vertex(m.to(h))
+            })
+            .collect();
+        // A split adds two faces; the face cap holds here too.
+        let budget = self.face_cap.saturating_sub(self.m.face_count()) / 2;
+        for &h in chords.iter().take(budget) {
+            self.split(h);
+        }
+        chords.len().min(budget)
     }
 
     /// Splits edge h at its projected midpoint (straight midpoint if that fails the checks).

@@ -3,8 +3,8 @@
 //! Steps ([`compute`]): jet fit of the reference → refusal when the central spheres are
 //! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
 //! a uniform field for a face count) → pliant remeshing → jet fit of the remeshed mesh (face
-//! central spheres) → initialization → staged optimization with [`crate::solver`] → exact
-//! re-fit of every face sphere through its three vertices → metrics.
+//! central spheres) → initialization → staged optimization with [`crate::solver`] →
+//! metrics.
 //!
 //! **Initialization.** Every face sphere is the member of the pencil through its three vertices
 //! ([`Sphere::through_points_family`], orthonormal basis s₀ (plane), s₁) closest to the face's
@@ -13,30 +13,31 @@
 //! (cos θ ≥ 0; else negated).
 //!
 //! **Optimization** (in a frame centred at the reference's bounding box and scaled by its
-//! diagonal, so weights are dimensionless). Variables: the face spheres (5-blocks (a, b, c),
-//! first) and the vertices (3-blocks, after). Terms ([`terms::build_problem`]):
-//! - `sphere`: ψ_f(v) for the three corners of every face (E_sphere);
-//! - `unit`: bᵀb − 4ac − 1 (E_unit);
-//! - `angle`: ⟨s_f, s_g⟩ − 1 for every interior edge (exact bilinear Jacobian; ⟨s_f, s_g⟩ is the
-//!   cosine of the kink angle for spheres oriented alike);
+//! diagonal, so weights are dimensionless). Variables: one pencil angle θ_f per face (first) and
+//! the vertices (3-blocks, after). Face f's sphere is the member s_f = cos θ_f s₀ + sin θ_f s₁ of
+//! the pencil through its three vertices ([`crate::geometry::pencil`]): it passes through them
+//! wherever they move, so E_sphere and E_unit of the paper hold exactly and a sphere costs one
+//! unknown, not five. Terms ([`terms::build_problem`]):
+//! - `angle`: ⟨s_f, s_g⟩ − 1 for every interior edge (⟨s_f, s_g⟩ is the cosine of the kink angle
+//!   for spheres oriented alike), through the chain rule to θ and the four vertices;
 //! - `tangent_distance`: n_v·(v − q_v), q_v the closest reference point, n_v the reference normal
 //!   there (barycentric vertex normals), updated in `Term::prepare` (vertices glide, Sec. 5.2);
 //! - `point_distance`: v − q_v (small weight; ×[`terms::BOUNDARY_POINT_FACTOR`] on boundary vertices so
 //!   the boundary does not slide off);
 //! - `face_distance`: ψ_f(r_f) with r_f the reference point closest to face f's centroid
-//!   ([`crate::reference::proximity::FaceProximity`], same weight schedule as the proximity terms): keeps the panels, not
-//!   only the vertices, near the reference;
+//!   ([`crate::reference::proximity::CentroidTargets`], same weight schedule as the proximity terms):
+//!   keeps the panels, not only the vertices, near the reference;
 //! - `fairness`: uniform Laplacian v − mean(neighbours) at interior vertices (small weight);
-//! - `edge_orthogonality` (variant (a) option, off by default): for every interior edge, the
-//!   circle's plane contains the reference normal at the edge midpoint, written as
-//!   ⟨a_g b_f − a_f b_g, n_e⟩ / |…| ≈ 0 — see [`terms::EdgeOrthogonality`];
+//! - `edge_circle` (variant (a) only): the sideways bulge of every interior edge's arc, zero when
+//!   the intersection circle is orthogonal to the reference (Sec. 7, Fig. 12 left) — see
+//!   [`terms::EdgeCircle`]; without it, two nearly tangent spheres of different radii meet in a
+//!   small circle whose arc overhangs the surface;
 //! - `orientation`: each face keeps an oriented area of at least 0.2 × its initial one (a hinge
 //!   barrier, [`terms::FaceOrientation`]), so gliding vertices never fold a face.
 //!
-//! The stages ([`params::OptimizationStage`]) scale the proximity weights (larger first, then relaxed); a last
-//! stage with E_sphere dominating is followed by the exact projection: each face sphere is
-//! replaced by the member of its vertices' pencil closest to the optimized sphere, so the
-//! vertex–sphere residual is at rounding level.
+//! The stages ([`params::OptimizationStage`]) scale the proximity weights (larger first, then
+//! relaxed). No projection is needed at the end: the spheres pass through their vertices to
+//! rounding.
 //!
 //! **Variant (b)** (Fig. 12 bottom): the same spheres, but each interior edge arc is cut from
 //! each face sphere by the *bisecting plane* of the two face planes (the plane through the edge
@@ -77,7 +78,7 @@ use crate::reference::assumptions::{kink_warning, method_warnings, SurfaceWarnin
 use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, pliant_remesh, RemeshError, SizingBounds};
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
-use initialization::{initial_spheres, project_spheres};
+use initialization::initial_spheres;
 use metrics::{metrics, StAdaptedMetrics};
 use optimization::{run_stages, OptimizationFrame};
 use params::StAdaptedParams;
@@ -246,7 +247,7 @@ pub fn compute(
     timings.skip();
     let frame = OptimizationFrame::new(reference, &remeshed, &init, params);
     let mut x = frame.x0.clone();
-    let (mut problem, ids) = frame.problem(&params.weights);
+    let (mut problem, ids) = frame.problem(&params.variant_weights());
     let mut solver = Solver::new(SolverOptions { clock: clock.0, ..SolverOptions::default() });
     let total = params.total_iterations();
     let mut iteration = 0usize;
@@ -268,10 +269,7 @@ pub fn compute(
     problem.prepare(&x);
     let terms = problem.term_stats(&x);
     let (verts, sph) = frame.to_model(&x);
-    let mesh_out = TriMesh::new(verts, remeshed.triangles.clone());
-    // Exact incidence: the pencil member closest to each optimized sphere.
-    let face_spheres = project_spheres(&mesh_out, &sph);
-    let sphere_mesh = SphereMesh::new(mesh_out, face_spheres, rule);
+    let sphere_mesh = SphereMesh::new(TriMesh::new(verts, remeshed.triangles.clone()), sph, rule);
     timings.lap("optimize");
 
     step(on_event, "metrics")?;

@@ -50,8 +50,6 @@ pub fn run_stages(
         problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale);
         problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale);
         problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale);
-        problem.set_weight(ids.sphere, w.sphere * stage.sphere_scale);
-        problem.set_weight(ids.unit, w.unit * stage.sphere_scale);
         solver.options.max_iterations = stage.iterations;
         solver.options.initial_epsilon = epsilon;
         let name = stage.name.as_str();
@@ -98,7 +96,7 @@ impl OptimizationFrame {
         let topology = Topology::new(&mesh);
         let boundary = boundary_vertices(&topology);
         let spheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
-        let x0 = pack(&mesh.positions, &spheres);
+        let x0 = pack(&mesh, &spheres);
         let nv = mesh.vertex_count();
         let mut fixed = vec![false; nv];
         if params.fix_boundary {
@@ -135,7 +133,7 @@ impl OptimizationFrame {
 
     /// Vertices and face spheres of `x`, in model coordinates.
     pub fn to_model(&self, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
-        let (verts, sph) = unpack(x, self.mesh.face_count(), self.mesh.vertex_count());
+        let (verts, sph) = unpack(x, &self.mesh.triangles, self.mesh.vertex_count());
         let verts = verts.iter().map(|&p| self.t + p * self.diag).collect();
         let sph = sph.iter().map(|s| s.from_frame(self.t, self.diag).normalized()).collect();
         (verts, sph)

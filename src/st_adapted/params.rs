@@ -11,16 +11,15 @@ use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct StAdaptedWeights {
-    pub sphere: f64,
-    pub unit: f64,
     pub angle: f64,
     pub tangent_distance: f64,
     pub point_distance: f64,
     /// Face sphere through the reference point closest to the face centroid (limits bulging).
     pub face_distance: f64,
     pub fairness: f64,
-    /// Variant (a) option: edge circles orthogonal to the reference; 0 = off.
-    pub edge_orthogonality: f64,
+    /// Variant (a): the sideways bulge of the edge circles' arcs (`terms::EdgeCircle`); not
+    /// used by variant (b), whose arcs are cut by bisecting planes.
+    pub edge_circle: f64,
     /// Barrier against folded faces (`FaceOrientation` under a hinge).
     pub orientation: f64,
 }
@@ -28,26 +27,23 @@ pub struct StAdaptedWeights {
 impl Default for StAdaptedWeights {
     fn default() -> Self {
         Self {
-            sphere: 1000.0,
-            unit: 1000.0,
             angle: 1.0,
             tangent_distance: 100.0,
             point_distance: 10.0,
             face_distance: 100.0,
             fairness: 1.0,
-            edge_orthogonality: 0.0,
+            edge_circle: 10.0,
             orientation: 1000.0,
         }
     }
 }
 
-/// One optimization stage: proximity weights × `proximity_scale`, sphere/unit weights ×
-/// `sphere_scale`, at most `iterations` solver iterations.
+/// One optimization stage: proximity weights × `proximity_scale`, at most `iterations` solver
+/// iterations.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OptimizationStage {
     pub name: String,
     pub proximity_scale: f64,
-    pub sphere_scale: f64,
     pub iterations: usize,
 }
 
@@ -78,20 +74,19 @@ pub struct StAdaptedParams {
 }
 
 impl StAdaptedParams {
-    /// Default stages with the given iteration counts per stage (proximity, angle, relax, close).
-    pub fn stages_with(iterations: [usize; 4]) -> Vec<OptimizationStage> {
-        let mk = |name: &str, p: f64, s: f64, it: usize| OptimizationStage {
-            name: name.into(),
-            proximity_scale: p,
-            sphere_scale: s,
-            iterations: it,
-        };
-        vec![
-            mk("proximity", 10.0, 1.0, iterations[0]),
-            mk("angle", 1.0, 1.0, iterations[1]),
-            mk("relax", 0.5, 1.0, iterations[2]),
-            mk("close", 0.5, 1000.0, iterations[3]),
-        ]
+    /// Default stages with the given iteration counts per stage (proximity, angle, relax).
+    pub fn stages_with(iterations: [usize; 3]) -> Vec<OptimizationStage> {
+        let mk = |name: &str, p: f64, it: usize| OptimizationStage { name: name.into(), proximity_scale: p, iterations: it };
+        vec![mk("proximity", 10.0, iterations[0]), mk("angle", 1.0, iterations[1]), mk("relax", 0.5, iterations[2])]
+    }
+
+    /// The weights the variant uses: variant (b) cuts its arcs by bisecting planes and has no
+    /// edge-circle term.
+    pub fn variant_weights(&self) -> StAdaptedWeights {
+        match self.variant {
+            EdgeArcs::Intersection => self.weights.clone(),
+            EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, ..self.weights.clone() },
+        }
     }
 
     /// Solver iterations over all stages.
@@ -108,7 +103,7 @@ impl Default for StAdaptedParams {
             remesh: RemeshParams::default(),
             jet: JetParams::default(),
             weights: StAdaptedWeights::default(),
-            stages: Self::stages_with([5, 15, 15, 10]),
+            stages: Self::stages_with([5, 15, 25]),
             min_usable_fraction: 0.5,
             min_curvature_ratio: 0.1,
             initial_epsilon: 0.1,

@@ -1,16 +1,23 @@
 //! The residual terms of the angle-minimizing ST optimization (see the [`super`] module docs)
-//! and the problem they make: face spheres (5-blocks (a, b, c), first) and vertices (3-blocks,
-//! after) as variables.
+//! and the problem they make. The variables are one pencil angle θ_f per face (first) and the
+//! vertices (3-blocks, after): face f's sphere is the member s_f = cos θ_f s₀ + sin θ_f s₁ of the
+//! pencil through its three vertices ([`crate::geometry::pencil`]), so it passes through them
+//! exactly and every sphere term reaches the vertices through the chain rule.
+
+use std::cell::RefCell;
+use std::rc::Rc;
 
 use glam::DVec3;
 
 use super::params::StAdaptedWeights;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::dual::{Dual, D3};
+use crate::geometry::pencil::{pencil_angle, pencil_member, PencilMember};
 use crate::geometry::sphere::Sphere;
-use crate::reference::proximity::{FaceProximity, ReferenceProximity};
+use crate::reference::proximity::{value_gradient, CentroidTargets, ClosestLookups, ReferenceProximity};
 use crate::reference::Reference;
-use crate::solver::{Hinge, InversiveProduct, JacobianSink, Linear, PointOnSphere, Problem, Term, TermId, UnitLength};
+use crate::solver::{Hinge, JacobianSink, Linear, Problem, Term, TermId};
 use crate::solver::terms::v3;
 
 /// Boundary vertices get this factor on their point-distance residuals.
@@ -74,77 +81,211 @@ impl Term for FaceOrientation {
     }
 }
 
-/// Variant (a) option: the plane of the intersection circle of s_f and s_g (normal
-/// m = a_g b_f − a_f b_g) should contain the reference normal n_e at the edge, i.e. the edge
-/// circle is orthogonal to the reference: residual ⟨m, n_e⟩ / ℓ_e with ℓ_e = |m| at the
-/// initial state (a fixed scale, so the residual stays polynomial); n_e is refreshed in
-/// [`Term::prepare`] from the vertices' closest reference points.
-pub struct EdgeOrthogonality {
-    name: String,
-    /// (sphere f, sphere g, vertex p, vertex q) offsets.
-    items: Vec<(usize, usize, usize, usize)>,
-    scales: Vec<f64>,
+/// The face spheres at a point x: s_f is the member θ_f = x[f] of the pencil through face f's
+/// vertices. Computed once per point (with their Jacobians) and shared by the terms that use them.
+#[derive(Clone)]
+pub struct FaceSpheres {
+    shared: Rc<SharedSpheres>,
+}
+
+struct SharedSpheres {
+    /// The offsets of each face's three vertices, counter-clockwise.
+    corners: Vec<[usize; 3]>,
+    /// (θ and the nine coordinates of every face, the members there).
+    cache: RefCell<(Vec<f64>, Vec<PencilMember>)>,
+}
+
+impl FaceSpheres {
+    pub fn new(corners: Vec<[usize; 3]>) -> Self {
+        Self { shared: Rc::new(SharedSpheres { corners, cache: RefCell::new((Vec::new(), Vec::new())) }) }
+    }
+
+    /// Calls `f` with the members at `x` (recomputed only when θ or a corner changed).
+    pub fn with<R>(&self, x: &[f64], f: impl FnOnce(&[PencilMember]) -> R) -> R {
+        let corners = &self.shared.corners;
+        let mut key = Vec::with_capacity(10 * corners.len());
+        for (k, c) in corners.iter().enumerate() {
+            key.push(x[angle_offset(k)]);
+            for &o in c {
+                key.extend_from_slice(&x[o..o + 3]);
+            }
+        }
+        let mut cache = self.shared.cache.borrow_mut();
+        if cache.0 != key {
+            cache.1 = key
+                .chunks_exact(10)
+                .map(|k| pencil_member([0, 1, 2].map(|i| DVec3::new(k[1 + 3 * i], k[2 + 3 * i], k[3 + 3 * i])), k[0]))
+                .collect();
+            cache.0 = key;
+        }
+        f(&cache.1)
+    }
+
+    /// Adds the Jacobian row `row` of a scalar g(s_f), given ∂g/∂s_f = `grad`.
+    fn add_chain(&self, jac: &mut JacobianSink, row: usize, f: usize, member: &PencilMember, grad: &[f64; 5]) {
+        let (dt, dp) = member.chain(grad);
+        jac.add(row, angle_offset(f), dt);
+        for (k, &o) in self.shared.corners[f].iter().enumerate() {
+            jac.add_block(row, o, &dp[3 * k..3 * k + 3]);
+        }
+    }
+}
+
+/// ⟨s, t⟩ = bᵀb′ − 2(a c′ + a′ c) of two coefficient arrays (a, b, c).
+fn inversive_product(s: &[f64; 5], t: &[f64; 5]) -> f64 {
+    s[1] * t[1] + s[2] * t[2] + s[3] * t[3] - 2.0 * (s[0] * t[4] + t[0] * s[4])
+}
+
+/// ∂⟨s, t⟩/∂s.
+fn inversive_product_gradient(t: &[f64; 5]) -> [f64; 5] {
+    [-2.0 * t[4], t[1], t[2], t[3], -2.0 * t[0]]
+}
+
+/// E_angle (Sec. 3): ⟨s_f, s_g⟩ − 1 for every interior edge, the cosine of the kink angle minus 1
+/// for normalized spheres oriented alike.
+pub struct KinkAngle {
+    spheres: FaceSpheres,
+    /// (f, g) per interior edge.
+    edges: Vec<(usize, usize)>,
+}
+
+impl Term for KinkAngle {
+    fn name(&self) -> &str {
+        "angle"
+    }
+    fn residual_count(&self) -> usize {
+        self.edges.len()
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        self.spheres.with(x, |m| {
+            for (k, &(f, g)) in self.edges.iter().enumerate() {
+                let (sf, sg) = (&m[f].sphere, &m[g].sphere);
+                r[k] = inversive_product(sf, sg) - 1.0;
+                self.spheres.add_chain(jac, k, f, &m[f], &inversive_product_gradient(sg));
+                self.spheres.add_chain(jac, k, g, &m[g], &inversive_product_gradient(sf));
+            }
+        });
+    }
+}
+
+/// Face spheres near the reference: ψ_f(r_f), r_f the reference point closest to the centroid of
+/// face f's vertices ([`CentroidTargets`], refreshed in [`Term::prepare`]; constant in the Jacobian).
+/// For a normalized sphere ψ ≈ the signed distance of r_f to it, so this bounds the panels' bulge.
+pub struct FaceDistance<'a> {
+    spheres: FaceSpheres,
+    targets: CentroidTargets<'a>,
+}
+
+impl Term for FaceDistance<'_> {
+    fn name(&self) -> &str {
+        "face_distance"
+    }
+    fn residual_count(&self) -> usize {
+        self.targets.len()
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        self.targets.update(x);
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        self.spheres.with(x, |m| {
+            for (f, member) in m.iter().enumerate() {
+                let g = value_gradient(self.targets.target(f));
+                r[f] = g.iter().zip(&member.sphere).map(|(g, s)| g * s).sum();
+                self.spheres.add_chain(jac, f, f, member, &g);
+            }
+        });
+    }
+}
+
+/// Variant (a) (Fig. 12 left, Sec. 7 "nice intersection circles"): the edge circle of two
+/// adjacent faces is the intersection circle of their spheres, and its arc between the edge's
+/// vertices p, q should stay over the edge, not bulge sideways out of the surface's footprint.
+/// Residual per interior edge: the arc's sideways bulge (L²/8) κ sin φ, with L = |p − q|, κ the
+/// circle's curvature and φ the tilt of its plane from the reference normal n_e at the edge
+/// (sin φ = ⟨m̂, n_e⟩, m = a_g b_f − a_f b_g the plane's normal; 0 when the circle is orthogonal
+/// to R). The curvature comes from the pencil of s_f, s_g: κ is twice the largest a over its
+/// unit members, κ² = 4 ((a_f − a_g)² + 2 a_f a_g (1 − c)) / (1 − c²), c = ⟨s_f, s_g⟩, so two
+/// nearly tangent spheres of different radii, whose circle is small, pay for it. n_e is the mean
+/// of the reference normals at the closest points of p and q, taken in [`Term::prepare`] from the
+/// proximity terms' lookups (constant in the Jacobian).
+pub struct EdgeCircle {
+    spheres: FaceSpheres,
+    /// (f, g, offset of p, offset of q) per interior edge.
+    edges: Vec<(usize, usize, usize, usize)>,
+    /// (p, q) as vertex indices, the keys of `lookups`.
+    ends: Vec<(usize, usize)>,
+    lookups: ClosestLookups,
     normals: Vec<DVec3>,
 }
 
-impl EdgeOrthogonality {
-    /// `normals`: initial reference normal per edge; `x`: point for the scales.
-    pub fn new(items: Vec<(usize, usize, usize, usize)>, normals: Vec<DVec3>, x: &[f64]) -> Self {
-        let scales = items
-            .iter()
-            .map(|&(f, g, _, _)| {
-                let m = x[g] * v3(x, f + 1) - x[f] * v3(x, g + 1);
-                let l = m.length();
-                if l > 1e-12 {
-                    1.0 / l
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        Self { name: "edge_orthogonality".into(), items, scales, normals }
+/// κ sin φ of the intersection circle of s_f and s_g (see [`EdgeCircle`]) and its gradient by
+/// (s_f, s_g); None where the circle is undefined (tangent or equal spheres).
+fn edge_circle_bulge(sf: &[f64; 5], sg: &[f64; 5], n: DVec3) -> Option<(f64, [f64; 10])> {
+    let v: [Dual<10>; 10] = std::array::from_fn(|k| Dual::variable(if k < 5 { sf[k] } else { sg[k - 5] }, k));
+    let (af, cf, ag, cg) = (v[0], v[4], v[5], v[9]);
+    let bf = D3 { x: v[1], y: v[2], z: v[3] };
+    let bg = D3 { x: v[6], y: v[7], z: v[8] };
+    let c = bf.dot(bg) - (af * cg + ag * cf) * 2.0;
+    let one_minus_c = Dual::constant(1.0) - c;
+    let da = af - ag;
+    let q = da * da + af * ag * one_minus_c * 2.0;
+    let sine_denominator = one_minus_c * (Dual::constant(1.0) + c);
+    let m = bf * ag - bg * af;
+    let mm = m.dot(m);
+    if !(one_minus_c.v > 1e-14 && q.v > 1e-300 && mm.v > 1e-300 && sine_denominator.v > 0.0) {
+        return None;
     }
-
-    /// Sets the per-edge reference normals.
-    pub fn set_normals(&mut self, normals: Vec<DVec3>) {
-        self.normals = normals;
-    }
+    let kappa = (q / sine_denominator).sqrt() * 2.0;
+    let sin_phi = m.dot(D3::constant(n)) / mm.sqrt();
+    let k = kappa * sin_phi;
+    k.v.is_finite().then_some((k.v, k.d))
 }
 
-impl Term for EdgeOrthogonality {
+impl Term for EdgeCircle {
     fn name(&self) -> &str {
-        &self.name
+        "edge_circle"
     }
     fn residual_count(&self) -> usize {
-        self.items.len()
+        self.edges.len()
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        for (k, (&(_, _, po, qo), &(p, q))) in self.edges.iter().zip(&self.ends).enumerate() {
+            if let (Some(a), Some(b)) = (self.lookups.normal_at(p, v3(x, po)), self.lookups.normal_at(q, v3(x, qo))) {
+                self.normals[k] = (a + b).normalize_or(self.normals[k]);
+            }
+        }
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
-        for (k, &(f, g, _, _)) in self.items.iter().enumerate() {
-            let (af, bf) = (x[f], v3(x, f + 1));
-            let (ag, bg) = (x[g], v3(x, g + 1));
-            let n = self.normals[k];
-            let s = self.scales[k];
-            let m = ag * bf - af * bg;
-            r[k] = s * m.dot(n);
-            jac.add(k, f, -s * bg.dot(n));
-            jac.add_block(k, f + 1, &[s * ag * n.x, s * ag * n.y, s * ag * n.z]);
-            jac.add(k, g, s * bf.dot(n));
-            jac.add_block(k, g + 1, &[-s * af * n.x, -s * af * n.y, -s * af * n.z]);
-        }
+        self.spheres.with(x, |m| {
+            for (k, &(f, g, po, qo)) in self.edges.iter().enumerate() {
+                let Some((bulge, grad)) = edge_circle_bulge(&m[f].sphere, &m[g].sphere, self.normals[k]) else {
+                    r[k] = 0.0;
+                    continue;
+                };
+                let d = v3(x, po) - v3(x, qo);
+                let l2 = d.length_squared() / 8.0;
+                r[k] = l2 * bulge;
+                let gf: [f64; 5] = std::array::from_fn(|i| l2 * grad[i]);
+                let gg: [f64; 5] = std::array::from_fn(|i| l2 * grad[5 + i]);
+                self.spheres.add_chain(jac, k, f, &m[f], &gf);
+                self.spheres.add_chain(jac, k, g, &m[g], &gg);
+                let dp = d * (bulge / 4.0);
+                jac.add_block(k, po, &dp.to_array());
+                jac.add_block(k, qo, &(-dp).to_array());
+            }
+        });
     }
 }
 
 /// Handles of the terms of [`build_problem`].
 #[derive(Clone, Debug)]
 pub struct StAdaptedTerms {
-    pub sphere: TermId,
-    pub unit: TermId,
     pub angle: TermId,
     pub tangent_distance: TermId,
     pub point_distance: TermId,
     pub face_distance: TermId,
     pub fairness: TermId,
-    pub edge_orthogonality: Option<TermId>,
+    pub edge_circle: Option<TermId>,
     pub orientation: TermId,
 }
 
@@ -161,43 +302,43 @@ pub fn boundary_vertices(topology: &Topology) -> Vec<bool> {
     boundary
 }
 
-/// Offset of face f's sphere block.
-pub fn sphere_offset(f: usize) -> usize {
-    5 * f
+/// Offset of face f's pencil angle θ_f.
+pub fn angle_offset(f: usize) -> usize {
+    f
 }
 
 /// Offset of vertex v's block in a problem with `faces` faces.
 pub fn vertex_offset(faces: usize, v: usize) -> usize {
-    5 * faces + 3 * v
+    faces + 3 * v
 }
 
-/// The variable vector: face spheres then vertices.
-pub fn pack(vertices: &[DVec3], spheres: &[Sphere]) -> Vec<f64> {
-    let mut x = Vec::with_capacity(5 * spheres.len() + 3 * vertices.len());
-    for s in spheres {
-        x.extend_from_slice(&s.to_array());
-    }
-    for v in vertices {
+/// The variable vector: the pencil angle of each face's sphere, then the vertices. Each sphere is
+/// replaced by the member of its face's pencil closest to it (itself when it passes through the
+/// face's vertices).
+pub fn pack(mesh: &TriMesh, spheres: &[Sphere]) -> Vec<f64> {
+    let mut x = Vec::with_capacity(spheres.len() + 3 * mesh.vertex_count());
+    x.extend(spheres.iter().enumerate().map(|(f, s)| pencil_angle(mesh.face_points(f), s)));
+    for v in &mesh.positions {
         x.extend_from_slice(&v.to_array());
     }
     x
 }
 
-/// Inverse of [`pack`].
-pub fn unpack(x: &[f64], faces: usize, vertices: usize) -> (Vec<DVec3>, Vec<Sphere>) {
-    let spheres = (0..faces)
-        .map(|f| {
-            let o = sphere_offset(f);
-            Sphere::from_array([x[o], x[o + 1], x[o + 2], x[o + 3], x[o + 4]])
-        })
+/// Inverse of [`pack`]: the vertices and the face spheres of `x` over `triangles`.
+pub fn unpack(x: &[f64], triangles: &[[u32; 3]], vertices: usize) -> (Vec<DVec3>, Vec<Sphere>) {
+    let nf = triangles.len();
+    let verts: Vec<DVec3> = (0..vertices).map(|v| v3(x, vertex_offset(nf, v))).collect();
+    let spheres = triangles
+        .iter()
+        .enumerate()
+        .map(|(f, t)| pencil_member(t.map(|v| verts[v as usize]), x[angle_offset(f)]).sphere())
         .collect();
-    let verts = (0..vertices).map(|v| v3(x, vertex_offset(faces, v))).collect();
     (verts, spheres)
 }
 
-/// The optimization problem over `mesh` (faces' spheres and vertices, see [`pack`]) against the
-/// reference, both in the same coordinates; `topology` is the mesh's. `x` is the starting point
-/// (for the initial face orientations and the scales of the edge-orthogonality term).
+/// The optimization problem over `mesh` (faces' pencil angles and vertices, see [`pack`]) against
+/// the reference, both in the same coordinates; `topology` is the mesh's. `x` is the starting
+/// point (for the initial face orientations and the first closest-point lookups).
 pub fn build_problem<'a>(
     mesh: &TriMesh,
     topology: &Topology,
@@ -212,35 +353,28 @@ pub fn build_problem<'a>(
         .collect();
     let nf = mesh.face_count();
     let nv = mesh.vertex_count();
-    let mut problem = Problem::new(5 * nf + 3 * nv);
-    // Spheres and vertices are the blocks of the fill-reducing ordering.
+    let mut problem = Problem::new(nf + 3 * nv);
+    // Angles and vertices are the blocks of the fill-reducing ordering.
     for f in 0..nf {
-        problem.group_variables(sphere_offset(f)..sphere_offset(f) + 5);
+        problem.group_variables(angle_offset(f)..angle_offset(f) + 1);
     }
     for v in 0..nv {
         problem.group_variables(vertex_offset(nf, v)..vertex_offset(nf, v) + 3);
     }
-    let pairs: Vec<(usize, usize)> = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .flat_map(|(f, t)| t.map(|v| (vertex_offset(nf, v as usize), sphere_offset(f))))
-        .collect();
-    let sphere = problem.add_term(PointOnSphere::new(pairs).with_name("sphere"), weights.sphere);
-    let unit = problem.add_term(UnitLength::spheres((0..nf).map(sphere_offset).collect()).with_name("unit"), weights.unit);
-    let edge_pairs = interior.iter().map(|&(_, _, f, g)| (sphere_offset(f), sphere_offset(g))).collect();
-    let angle = problem.add_term(InversiveProduct::new(edge_pairs, 1.0).with_name("angle"), weights.angle);
+    let corners: Vec<[usize; 3]> = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(nf, v as usize))).collect();
+    let spheres = FaceSpheres::new(corners.clone());
+    let edges: Vec<(usize, usize)> = interior.iter().map(|&(_, _, f, g)| (f, g)).collect();
+    let angle = problem.add_term(KinkAngle { spheres: spheres.clone(), edges: edges.clone() }, weights.angle);
     let offsets: Vec<usize> = (0..nv).map(|v| vertex_offset(nf, v)).collect();
     let scales = (0..nv).map(|v| if boundary[v] { BOUNDARY_POINT_FACTOR } else { 1.0 }).collect();
     let tangent = ReferenceProximity::tangent(reference, offsets.clone());
     let mut point = ReferenceProximity::point(reference, offsets, scales);
     point.share_closest_with(&tangent);
+    let lookups = tangent.lookups();
     let tangent_distance = problem.add_term(tangent, weights.tangent_distance);
     let point_distance = problem.add_term(point, weights.point_distance);
-    let face_items = (0..nf)
-        .map(|f| (sphere_offset(f), mesh.triangles[f].iter().map(|&v| vertex_offset(nf, v as usize)).collect()))
-        .collect();
-    let face_distance = problem.add_term(FaceProximity::new(reference, face_items, x), weights.face_distance);
+    let targets = CentroidTargets::new(reference, corners.iter().map(|c| c.to_vec()).collect(), x);
+    let face_distance = problem.add_term(FaceDistance { spheres: spheres.clone(), targets }, weights.face_distance);
     let mut lap = Linear::new().with_name("fairness");
     for (v, &on_boundary) in boundary.iter().enumerate() {
         let nb = topology.vertex_neighbors(v);
@@ -255,19 +389,17 @@ pub fn build_problem<'a>(
         }
     }
     let fairness = problem.add_term(lap, weights.fairness);
-    let corners = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(nf, v as usize))).collect();
     let orientation =
         problem.add_term(Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"), weights.orientation);
-    let edge_orthogonality = (weights.edge_orthogonality > 0.0).then(|| {
-        let items: Vec<_> = interior
-            .iter()
-            .map(|&(a, b, f, g)| (sphere_offset(f), sphere_offset(g), vertex_offset(nf, a as usize), vertex_offset(nf, b as usize)))
-            .collect();
-        let en: Vec<DVec3> = interior
+    let edge_circle = (weights.edge_circle > 0.0).then(|| {
+        let edges = interior.iter().map(|&(a, b, f, g)| (f, g, vertex_offset(nf, a as usize), vertex_offset(nf, b as usize))).collect();
+        let ends = interior.iter().map(|&(a, b, _, _)| (a as usize, b as usize)).collect();
+        // Until the proximity terms have looked the vertices up: the mean of the faces' normals.
+        let normals = interior
             .iter()
             .map(|&(_, _, f, g)| (mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero()).normalize_or_zero())
             .collect();
-        problem.add_term(EdgeOrthogonality::new(items, en, x), weights.edge_orthogonality)
+        problem.add_term(EdgeCircle { spheres: spheres.clone(), edges, ends, lookups: lookups.clone(), normals }, weights.edge_circle)
     });
-    (problem, StAdaptedTerms { sphere, unit, angle, tangent_distance, point_distance, face_distance, fairness, edge_orthogonality, orientation })
+    (problem, StAdaptedTerms { angle, tangent_distance, point_distance, face_distance, fairness, edge_circle, orientation })
 }

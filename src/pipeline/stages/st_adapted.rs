@@ -15,7 +15,6 @@ use crate::pipeline::panel_output::{export_panels, panel_fields, triangle_mesh_f
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
-use crate::st_adapted::initialization::project_spheres;
 use crate::st_adapted::metrics::StAdaptedMetrics;
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_adapted::{compute, StAdaptedEvent, StAdaptedResult};
@@ -73,8 +72,7 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
                 let go = report(sink, STAGE, progress, energies, start);
                 if go.is_ok() && (sink.now_ms() - last_snapshot >= SNAPSHOT_INTERVAL_MS || done == total) {
                     let mesh = TriMesh::new(vertices.to_vec(), remeshed_triangles.clone());
-                    let spheres = project_spheres(&mesh, spheres);
-                    let sm = SphereMesh::new(mesh, spheres, BoundaryArcRule::Parallel(glam::DVec3::ZERO));
+                    let sm = SphereMesh::new(mesh, spheres.to_vec(), BoundaryArcRule::Parallel(glam::DVec3::ZERO));
                     send_panels(sink, &sm, done as u32, LIVE_CHORD_TOLERANCE * diag, params.variant);
                     last_snapshot = sink.now_ms();
                 }
