@@ -2,6 +2,7 @@
 # Spherical Faces developer entry point.
 #   bash www/dev.sh serve   install what is missing, build the release wasm, serve on 127.0.0.1:8080
 #   bash www/dev.sh test    install what is missing, run native, wasm-pack and browser end-to-end tests
+#   bash www/dev.sh timings the app's timings in headless Chromium (tests/e2e/timings.mjs)
 #   bash www/dev.sh bench   native benches (cargo bench, divan) and the same workloads in release wasm in
 #                           headless Chromium, then a native-vs-wasm table (target/bench/)
 #   bash www/dev.sh fuzz [target|all] [seconds]
@@ -124,6 +125,13 @@ build_web() {
   cp www/rhino3dm/convert.mjs www/rhino3dm/node_modules/rhino3dm/rhino3dm.module.js \
     www/rhino3dm/node_modules/rhino3dm/rhino3dm.wasm "$DIST/rhino3dm/"
   log "wasm: $(stat -c %s "$DIST/pkg/spherical_faces_bg.wasm") bytes"
+  # .cargo/config.toml builds with +simd128: the module must hold SIMD instructions (faer's
+  # kernels through pulp, LLVM's vectorized loops).
+  have wasm-objdump || apt_install wabt
+  local simd
+  simd="$(wasm-objdump -d "$DIST/pkg/spherical_faces_bg.wasm" | grep -cE '(v128|f64x2|f32x4|i32x4)\.' || true)"
+  log "wasm: $simd SIMD instructions"
+  [ "$simd" -gt 0 ] || { echo "the wasm holds no SIMD instructions: is +simd128 in .cargo/config.toml?" >&2; exit 1; }
 }
 
 cmd_setup() { setup_rust; setup_wasm_tools; }
@@ -163,8 +171,10 @@ cmd_bench() {
   log "native benches: cargo bench --bench pipeline"
   cargo bench --bench pipeline 2>&1 | tee "$out/native.txt"
   log "wasm benches (release) in headless Chromium: tests/wasm_bench.rs"
-  WASM_BINDGEN_TEST_TIMEOUT="${WASM_BINDGEN_TEST_TIMEOUT:-1800}" \
-    wasm-pack test --release --headless --chrome --chromedriver /usr/bin/chromedriver . --test wasm_bench -- --nocapture \
+  # cargo with wasm-bindgen's runner, as wasm-pack test does, but building this one test target only.
+  WASM_BINDGEN_TEST_TIMEOUT="${WASM_BINDGEN_TEST_TIMEOUT:-1800}" CHROMEDRIVER=/usr/bin/chromedriver \
+    CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
+    cargo test --release --target wasm32-unknown-unknown --test wasm_bench -- --nocapture \
     2>&1 | tee "$out/wasm.txt"
   local pat='bench [A-Za-z0-9_]+: [0-9.]+ ms/iter'
   {
@@ -179,6 +189,17 @@ cmd_bench() {
     echo "load: $(uptime | sed 's/.*load average/load average/')  ($(nproc) cores)"
   } | tee "$out/table.txt"
   log "results in $out (native.txt, wasm.txt, table.txt)"
+}
+
+# Browser timings of the release build (tests/e2e/timings.mjs): ST adapted to about 600 faces and
+# SQ on a sample, from the run's request to the result, and a 1M-triangle OBJ import with its
+# curvature. Measurements, not tests.
+cmd_timings() {
+  cmd_setup
+  setup_browser
+  build_web release
+  (cd tests/e2e && SF_DIST="$DIST" node timings.mjs) 2>&1 | tee "${CARGO_TARGET_DIR:-$ROOT/target}/timings.txt"
+  echo "load: $(uptime | sed 's/.*load average/load average/')  ($(nproc) cores)"
 }
 
 # --- fuzzing (fuzz/README.md) -----------------------------------------------------------------
@@ -247,6 +268,7 @@ case "${1:-}" in
   serve) cmd_serve ;;
   test) cmd_test ;;
   bench) cmd_bench ;;
+  timings) cmd_timings ;;
   fuzz) cmd_fuzz "${2:-all}" "${3:-60}" ;;
-  *) echo "usage: bash www/dev.sh serve|test|bench|fuzz [target|all] [seconds]   (also: setup, build [release|dev])" >&2; exit 2 ;;
+  *) echo "usage: bash www/dev.sh serve|test|bench|timings|fuzz [target|all] [seconds]   (also: setup, build [release|dev])" >&2; exit 2 ;;
 esac

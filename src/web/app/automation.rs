@@ -31,7 +31,11 @@ impl App {
             "source": source,
             "vertices": v, "faces": f, "boundary_loops": bl, "non_manifold_edges": nm,
             "busy": self.busy.is_some(),
+            // From the request of the last finished run to its result, in the page (ms).
+            "last_run": self.last_run.as_ref().map(|(stage, ms)| serde_json::json!({ "stage": stage, "ms": ms })),
             "stage": self.busy.as_ref().map(|b| b.stage.clone()).unwrap_or_default(),
+            // The progress the app shows for the running stage: its step, done and total.
+            "progress": self.busy.as_ref().and_then(|b| b.progress.as_ref()).map(|p| serde_json::json!([p.detail, p.iteration, p.total])),
             "curvature_ready": curvature_ready,
             "color_by": self.design.color.key(),
             "shading": self.design.shading.key(),

@@ -146,7 +146,8 @@ impl App {
                 }
             }
             FromWorker::Finished { stage, result, .. } => {
-                if self.busy.as_ref().is_some_and(|b| b.stage == stage) {
+                if let Some(b) = self.busy.as_ref().filter(|b| b.stage == stage) {
+                    self.last_run = Some((stage.clone(), super::dom::now_ms() - b.since_ms));
                     self.busy = None;
                 }
                 match result {

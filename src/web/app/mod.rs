@@ -56,6 +56,9 @@ pub struct App {
     /// A file sent to the worker but not yet confirmed as loaded.
     file_in_flight: Option<web_sys::File>,
     busy: Option<Busy>,
+    /// The last stage that finished and how long it took from the request to its result (ms,
+    /// in the page, for the automation state).
+    last_run: Option<(String, f64)>,
     downloads: Vec<Download>,
     /// Method parameters changed while a slider is held: rerun on release.
     params_dirty: bool,
@@ -159,6 +162,7 @@ impl App {
             file: None,
             file_in_flight: None,
             busy: None,
+            last_run: None,
             downloads: Vec::new(),
             params_dirty: false,
             show_reference: false,
@@ -226,7 +230,7 @@ impl App {
         }
         self.send(&ToWorker::LoadFile { name: file.name() }, Some(&file));
         self.file_in_flight = Some(file);
-        self.busy = Some(Busy { stage: "import".into(), progress: None });
+        self.busy = Some(Busy::new("import"));
     }
 
     fn send(&mut self, msg: &ToWorker, file: Option<&web_sys::File>) {
@@ -261,7 +265,7 @@ impl App {
         }
         self.downloads.clear();
         let last = stages.last().map(|s| s.name().to_string()).unwrap_or_default();
-        self.busy = Some(Busy { stage: last, progress: None });
+        self.busy = Some(Busy::new(last));
         for stage in stages {
             self.send(&ToWorker::Run(Box::new(stage)), None);
         }
@@ -298,7 +302,7 @@ impl App {
                     let selected = self.design.reference == Reference::Sample(s);
                     if ui.selectable_label(selected, s.title()).on_hover_text(s.description()).clicked() && !selected {
                         self.send(&ToWorker::LoadSample(s), None);
-                        self.busy = Some(Busy { stage: "import".into(), progress: None });
+                        self.busy = Some(Busy::new("import"));
                     }
                 }
             });
@@ -411,7 +415,7 @@ impl App {
             ui.separator();
             if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
                 self.send(&ToWorker::PickObject(k), None);
-                self.busy = Some(Busy { stage: "import".into(), progress: None });
+                self.busy = Some(Busy::new("import"));
             }
             if let Some(l) = &self.loaded {
                 let results = ui.scope(|ui| match self.design.method {

@@ -196,6 +196,14 @@ pub struct Download {
 pub struct Busy {
     pub stage: String,
     pub progress: Option<StageProgress>,
+    /// `performance.now()` when the run was asked for (Run pressed, a link opened, a file dropped).
+    pub since_ms: f64,
+}
+
+impl Busy {
+    pub fn new(stage: impl Into<String>) -> Self {
+        Self { stage: stage.into(), progress: None, since_ms: super::dom::now_ms() }
+    }
 }
 
 /// The colour map currently uploaded.
