@@ -1,5 +1,5 @@
-//! Initialization of the face spheres (Sec. 3 end) and the exact projection that ends the
-//! optimization: both pick a member of the pencil of spheres through a face's three vertices.
+//! Initialization of the face spheres (Sec. 3 end): the member of the pencil of spheres through a
+//! face's three vertices closest to its central sphere.
 
 use glam::DVec3;
 
@@ -35,20 +35,6 @@ pub fn initial_spheres(mesh: &TriMesh, vertex_spheres: &[Sphere]) -> Vec<Sphere>
             let c = Sphere::from_array(c);
             let c = if c.discriminant() > 0.0 { c.normalized() } else { c };
             closest_family_member(mesh.face_points(f), &c)
-        })
-        .collect()
-}
-
-/// Replaces every sphere by the member of its vertices' pencil closest to it (max ⟨s, s_opt⟩,
-/// exact incidence), keeping the optimized sphere's orientation.
-pub fn project_spheres(mesh: &TriMesh, spheres: &[Sphere]) -> Vec<Sphere> {
-    (0..mesh.face_count())
-        .map(|f| {
-            let [s0, s1] = Sphere::through_points_family(mesh.face_points(f));
-            let target = &spheres[f];
-            let theta = s1.inversive_product(target).atan2(s0.inversive_product(target));
-            let (sn, cs) = theta.sin_cos();
-            Sphere::combine(&s0, cs, &s1, sn)
         })
         .collect()
 }

@@ -131,12 +131,7 @@ impl FaceSpheres {
     }
 }
 
-/// ⟨s, t⟩ = bᵀb′ − 2(a c′ + a′ c) of two coefficient arrays (a, b, c).
-fn inversive_product(s: &[f64; 5], t: &[f64; 5]) -> f64 {
-    s[1] * t[1] + s[2] * t[2] + s[3] * t[3] - 2.0 * (s[0] * t[4] + t[0] * s[4])
-}
-
-/// ∂⟨s, t⟩/∂s.
+/// ∂⟨s, t⟩/∂s of the inversive product ⟨s, t⟩ = bᵀb′ − 2(a c′ + a′ c) ([`Sphere::inversive_product`]).
 fn inversive_product_gradient(t: &[f64; 5]) -> [f64; 5] {
     [-2.0 * t[4], t[1], t[2], t[3], -2.0 * t[0]]
 }
@@ -160,7 +155,7 @@ impl Term for KinkAngle {
         self.spheres.with(x, |m| {
             for (k, &(f, g)) in self.edges.iter().enumerate() {
                 let (sf, sg) = (&m[f].sphere, &m[g].sphere);
-                r[k] = inversive_product(sf, sg) - 1.0;
+                r[k] = Sphere::from_array(*sf).inversive_product(&Sphere::from_array(*sg)) - 1.0;
                 self.spheres.add_chain(jac, k, f, &m[f], &inversive_product_gradient(sg));
                 self.spheres.add_chain(jac, k, g, &m[g], &inversive_product_gradient(sf));
             }

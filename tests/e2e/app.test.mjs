@@ -310,9 +310,10 @@ for (const project of PROJECTS) {
       });
     });
 
-    test(`[${project.name}] i. the UI keeps drawing while a 2k-face ST optimizes, and Cancel stops it within one iteration`, { timeout: T.test }, async (t) => {
+    test(`[${project.name}] i. the UI keeps drawing while a 4k-face ST optimizes, and Cancel stops it within one iteration`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
-      const fragment = 'v=1&sample=dome&method=st&sizing=faces&faces=2000&variant=a';
+      // 4000 faces: the whole run takes several seconds, so the cancel below finds it running.
+      const fragment = 'v=1&sample=dome&method=st&sizing=faces&faces=4000&variant=a';
       await withApp(t, browser, server, project, { name: 'i-st-draw-cancel', fragment }, async (app) => {
         const first = await waitForState(
           app,
@@ -320,7 +321,7 @@ for (const project of PROJECTS) {
           (s) => s.busy && s.st_adapted && s.st_adapted.energies > 0,
           { timeout: T.load, interval: 50 },
         );
-        assert.ok(first.st_adapted.remeshed_faces > 1500, `about 2000 faces: ${first.st_adapted.remeshed_faces}`);
+        assert.ok(first.st_adapted.remeshed_faces > 3000, `about 4000 faces: ${first.st_adapted.remeshed_faces}`);
         // Orbit the view meanwhile, as a user would: every frame then redraws the scene. Frame
         // rates are measured by the benchmarks, not here (the GPU is software on these machines).
         const [x, y, w, h] = first.viewport;
