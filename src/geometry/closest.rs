@@ -200,14 +200,37 @@ impl TriangleBvh {
 
     /// The closest point at distance at most `max_distance`; None if there is none.
     pub fn closest_point_within(&self, p: DVec3, max_distance: f64) -> Option<ClosestHit> {
+        let d2 = if max_distance.is_finite() { max_distance * max_distance } else { f64::INFINITY };
+        self.search(p, d2, None)
+    }
+
+    /// [`Self::closest_point`], started from triangle `hint` (e.g. the last hit of a moving
+    /// point): its closest point bounds the search, so a coherent query visits only the part of
+    /// the hierarchy that could hold a nearer one. The same point as an unstarted search.
+    pub fn closest_point_from(&self, p: DVec3, hint: usize) -> Option<ClosestHit> {
+        let Some(&[a, b, c]) = self.tris.get(hint) else { return self.closest_point(p) };
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            return self.closest_point(p);
+        }
+        let (q, barycentric) = closest_point_on_triangle(p, a, b, c);
+        let d2 = q.distance_squared(p);
+        let start = ClosestHit { point: q, triangle: hint, barycentric, distance: d2.sqrt() };
+        self.search(p, d2, Some(start))
+    }
+
+    /// Depth-first search, nearer child first, for a point nearer than `best` (or within
+    /// `best_d2`).
+    fn search(&self, p: DVec3, mut best_d2: f64, mut best: Option<ClosestHit>) -> Option<ClosestHit> {
         if self.nodes.is_empty() || !p.is_finite() {
             return None;
         }
-        let mut best_d2 = if max_distance.is_finite() { max_distance * max_distance } else { f64::INFINITY };
-        let mut best: Option<ClosestHit> = None;
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, box_distance2(p, self.nodes[0].lo, self.nodes[0].hi)));
-        while let Some((ni, d2)) = stack.pop() {
+        // A median split keeps the depth below log2(n) + 1, and the stack below depth + 1.
+        let mut stack = [(0u32, 0.0f64); 64];
+        stack[0] = (0, box_distance2(p, self.nodes[0].lo, self.nodes[0].hi));
+        let mut top = 1usize;
+        while top > 0 {
+            top -= 1;
+            let (ni, d2) = stack[top];
             if d2 > best_d2 {
                 continue;
             }
@@ -217,7 +240,7 @@ impl TriangleBvh {
                     let [a, b, c] = self.tris[ti as usize];
                     let (q, bary) = closest_point_on_triangle(p, a, b, c);
                     let dq = q.distance_squared(p);
-                    if dq <= best_d2 {
+                    if dq < best_d2 || (dq == best_d2 && best.is_none()) {
                         best_d2 = dq;
                         best = Some(ClosestHit { point: q, triangle: ti as usize, barycentric: bary, distance: dq.sqrt() });
                     }
@@ -227,13 +250,10 @@ impl TriangleBvh {
                 let dl = box_distance2(p, self.nodes[l as usize].lo, self.nodes[l as usize].hi);
                 let dr = box_distance2(p, self.nodes[r as usize].lo, self.nodes[r as usize].hi);
                 // Push the farther child first so the nearer one is visited first.
-                if dl <= dr {
-                    stack.push((r, dr));
-                    stack.push((l, dl));
-                } else {
-                    stack.push((l, dl));
-                    stack.push((r, dr));
-                }
+                let (near, far) = if dl <= dr { ((l, dl), (r, dr)) } else { ((r, dr), (l, dl)) };
+                stack[top] = far;
+                stack[top + 1] = near;
+                top += 2;
             }
         }
         best
@@ -365,6 +385,10 @@ mod tests {
             let [a, b, c] = mesh.face_points(h.triangle);
             let (q, _) = closest_point_on_triangle(p, a, b, c);
             assert!(q.distance(h.point) < 1e-14);
+            // Started from any triangle: the same distance.
+            let hint = ((rng.uniform() * mesh.face_count() as f64) as usize).min(mesh.face_count() - 1);
+            let s = bvh.closest_point_from(p, hint).unwrap();
+            assert!((s.distance - g.distance).abs() < 1e-14, "from {hint}: {} vs {}", s.distance, g.distance);
             // Bounded queries.
             assert!(bvh.closest_point_within(p, g.distance * 0.5).is_none() || g.distance == 0.0);
             assert!(bvh.closest_point_within(p, g.distance * 1.01 + 1e-12).is_some());

@@ -4,7 +4,7 @@ use glam::DVec3;
 
 use super::panel::Panel;
 use super::tessellate::project_to_sphere;
-use crate::geometry::closest::TriangleBvh;
+use crate::geometry::closest::{closest_point_on_triangle, TriangleBvh};
 
 /// The most points sampled on one panel. A glass panel's tessellation has fewer; only a
 /// degenerate face's panel comes near the tessellation's cap, and then an even subset keeps the
@@ -24,15 +24,40 @@ pub fn panel_samples(panel: &Panel) -> Vec<DVec3> {
     pts
 }
 
-/// Largest distance from the panel's samples ([`panel_samples`]) to the reference.
+/// Largest distance from the panel's samples ([`panel_samples`]) to the reference (infinite when
+/// a sample has no closest point). Exact, with fewer searches: each starts from the last hit's
+/// triangle, and a sample no farther from that triangle than the largest distance so far is not
+/// searched, as it cannot raise the maximum.
 pub fn max_deviation(panel: &Panel, reference: &TriangleBvh) -> f64 {
-    panel_samples(panel).into_iter().map(|p| reference.distance(p)).fold(0.0, f64::max)
+    max_deviation_above(panel, reference, 0.0)
+}
+
+/// max(`floor`, [`max_deviation`]): samples no farther than `floor` are not searched.
+fn max_deviation_above(panel: &Panel, reference: &TriangleBvh, floor: f64) -> f64 {
+    let mut max = floor;
+    let mut last: Option<usize> = None;
+    for p in panel_samples(panel) {
+        let hit = match last {
+            Some(t) => {
+                let [a, b, c] = reference.triangle(t);
+                if closest_point_on_triangle(p, a, b, c).0.distance(p) <= max {
+                    continue;
+                }
+                reference.closest_point_from(p, t)
+            }
+            None => reference.closest_point(p),
+        };
+        let Some(hit) = hit else { return f64::INFINITY };
+        max = max.max(hit.distance);
+        last = Some(hit.triangle);
+    }
+    max
 }
 
 /// Largest deviation over all panels, relative to `diag` (the reference's bounding-box
 /// diagonal; absolute when it is 0).
 pub fn max_distance_to_reference(panels: &[Panel], reference: &TriangleBvh, diag: f64) -> f64 {
-    let d = panels.iter().map(|p| max_deviation(p, reference)).fold(0.0, f64::max);
+    let d = panels.iter().fold(0.0, |d, p| max_deviation_above(p, reference, d));
     if diag > 0.0 {
         d / diag
     } else {

@@ -189,16 +189,16 @@ impl Reference {
         self.bvh().closest_point(p).map(|hit| self.surface_point_of(p, hit))
     }
 
-    /// [`Self::closest_point`], searched only within the distance from `p` to `previous` (a point
-    /// on the surface, e.g. the last closest point of a moving point, so the closest one is at
-    /// most that far): the same point as an unbounded search, visiting a small part of the
-    /// hierarchy.
-    pub fn closest_point_near(&self, p: DVec3, previous: Option<DVec3>) -> Option<SurfacePoint> {
+    /// [`Self::closest_point`], started from triangle `previous` of [`Self::mesh`] (e.g. the
+    /// triangle of a moving point's last closest point): the same point as an unstarted search,
+    /// visiting a small part of the hierarchy.
+    pub fn closest_point_near(&self, p: DVec3, previous: Option<usize>) -> Option<SurfacePoint> {
         let bvh = self.bvh();
-        previous
-            .and_then(|q| bvh.closest_point_within(p, p.distance(q) * (1.0 + 1e-9) + 1e-300))
-            .or_else(|| bvh.closest_point(p))
-            .map(|hit| self.surface_point_of(p, hit))
+        match previous {
+            Some(t) => bvh.closest_point_from(p, t),
+            None => bvh.closest_point(p),
+        }
+        .map(|hit| self.surface_point_of(p, hit))
     }
 
     /// [`Self::closest_point`] on the B-spline, started from a hit on the tessellation (the

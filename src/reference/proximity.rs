@@ -19,6 +19,8 @@ struct ClosestCache {
     pos: Vec<DVec3>,
     /// (closest point, interpolated unit normal).
     hits: Vec<(DVec3, DVec3)>,
+    /// The triangle of each closest point, where the next search starts.
+    triangles: Vec<usize>,
 }
 
 /// Read access to a [`ReferenceProximity`]'s closest points (see [`ReferenceProximity::lookups`]).
@@ -64,7 +66,7 @@ impl<'a> ReferenceProximity<'a> {
 
     fn new(name: &str, reference: &'a Reference, offsets: Vec<usize>, scales: Option<Vec<f64>>, point: bool) -> Self {
         let n = offsets.len();
-        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n] };
+        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n], triangles: vec![0; n] };
         Self {
             name: name.into(),
             reference,
@@ -122,9 +124,10 @@ impl Term for ReferenceProximity<'_> {
                 continue;
             }
             if cache.pos[k] != v {
-                let previous = cache.pos[k].is_finite().then_some(cache.hits[k].0);
+                let previous = cache.pos[k].is_finite().then_some(cache.triangles[k]);
                 if let Some(hit) = self.reference.closest_point_near(v, previous) {
                     cache.hits[k] = (hit.point, hit.normal.unwrap_or(cache.hits[k].1));
+                    cache.triangles[k] = hit.triangle;
                     cache.pos[k] = v;
                 }
             }
@@ -160,6 +163,8 @@ pub struct CentroidTargets<'a> {
     /// The offsets of each group's vertices.
     groups: Vec<Vec<usize>>,
     targets: Vec<DVec3>,
+    /// The triangle of each target, where the next search starts.
+    triangles: Vec<usize>,
     /// Centroid each target was computed for (NaN: never).
     centroids: Vec<DVec3>,
 }
@@ -171,6 +176,7 @@ impl<'a> CentroidTargets<'a> {
             reference,
             groups,
             targets: vec![DVec3::ZERO; n],
+            triangles: vec![0; n],
             centroids: vec![DVec3::NAN; n],
         };
         t.update(x);
@@ -184,9 +190,10 @@ impl<'a> CentroidTargets<'a> {
             if !c.is_finite() || c == self.centroids[k] {
                 continue;
             }
-            let previous = self.centroids[k].is_finite().then_some(self.targets[k]);
+            let previous = self.centroids[k].is_finite().then_some(self.triangles[k]);
             if let Some(hit) = self.reference.closest_point_near(c, previous) {
                 self.targets[k] = hit.point;
+                self.triangles[k] = hit.triangle;
                 self.centroids[k] = c;
             }
         }

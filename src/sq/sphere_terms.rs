@@ -232,8 +232,8 @@ struct NormalTable {
     normals: Vec<DVec3>,
     /// Position each normal was found for.
     at: Vec<DVec3>,
-    /// The closest point found last, where the next search starts.
-    hits: Vec<Option<DVec3>>,
+    /// The triangle of the closest point found last, where the next search starts.
+    hits: Vec<Option<usize>>,
 }
 
 impl<'a> VertexNormals<'a> {
@@ -263,7 +263,7 @@ impl<'a> VertexNormals<'a> {
                 continue;
             }
             let hit = self.reference.closest_point_near(p, t.hits[k]);
-            t.hits[k] = hit.as_ref().map(|h| h.point);
+            t.hits[k] = hit.as_ref().map(|h| h.triangle);
             if let Some(n) = hit.and_then(|h| h.normal) {
                 // Keep the side: the normals only enter squared, but stay comparable.
                 t.normals[k] = if n.dot(t.normals[k]) < 0.0 { -n } else { n };
