@@ -174,6 +174,10 @@ pub struct SqParams {
     pub fairing_weight: f64,
     /// Iterations of the final optimization: warm-up, full (Eq. 10), projection to exactness.
     pub sphere_iterations: [usize; 3],
+    /// The full optimization stops when an accepted step lowers its energy by at most this
+    /// fraction (on the vault sample it then ends after about half of its iterations, with the
+    /// same angles, distances and exactness).
+    pub sphere_decrease_tolerance: f64,
     pub sphere_weights: SphereWeights,
     /// Depth of the support elements, relative to the bounding-box diagonal.
     pub support_depth: f64,
@@ -203,6 +207,7 @@ impl Default for SqParams {
             fairing_iterations: 10,
             fairing_weight: 0.002,
             sphere_iterations: [5, 100, 30],
+            sphere_decrease_tolerance: 1e-5,
             sphere_weights: SphereWeights::default(),
             support_depth: 0.02,
             axis_length: 0.06,

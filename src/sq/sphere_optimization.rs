@@ -221,12 +221,15 @@ pub fn unpack(layout: &SphereLayout, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
 }
 
 /// Runs the warm-up, the full optimization and the projection (see the module docs); returns
-/// the vertices, the spheres (normalized) and what happened.
+/// the vertices, the spheres (normalized) and what happened. The full optimization stops early
+/// when an accepted step lowers its energy by at most `decrease_tolerance` of it.
+#[allow(clippy::too_many_arguments)]
 pub fn optimize_spheres(
     input: &SphereInput,
     stars: &QuadStars,
     w: &SphereWeights,
     iterations: [usize; 3],
+    decrease_tolerance: f64,
     clock: Clock,
     hook: &mut SphereHook,
 ) -> (Vec<DVec3>, Vec<Sphere>, SphereOutcome) {
@@ -393,6 +396,7 @@ pub fn optimize_spheres(
     for i in 0..layout.len() {
         problem.unfix(i);
     }
+    solver.options.relative_decrease_tolerance = decrease_tolerance;
     outcome.iterations = run(&mut problem, &mut x, SpherePhase::Full, iterations[1], &mut solver, &mut outcome);
     if outcome.cancelled {
         let (v, s) = unpack(&layout, &x);

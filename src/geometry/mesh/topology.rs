@@ -35,24 +35,48 @@ pub struct Topology {
 impl Topology {
     pub fn new<M: Faces + ?Sized>(mesh: &M) -> Self {
         let n = mesh.vertex_count();
-        // Half-edge keys sorted once; no hash maps.
-        let mut keys: Vec<[u32; 2]> = Vec::with_capacity(mesh.face_count() * 3);
-        for f in 0..mesh.face_count() {
+        let nf = mesh.face_count();
+        // Half-edges bucketed by their smaller vertex (a counting sort), then by the larger one
+        // inside each small bucket: the edges come out sorted, each with its faces in face order,
+        // without a global sort, a search or a hash map.
+        let half_edges = |f: usize| {
             let c = mesh.corners(f);
-            for k in 0..c.len() {
+            (0..c.len()).map(move |k| {
                 let (a, b) = (c[k], c[(k + 1) % c.len()]);
-                keys.push([a.min(b), a.max(b)]);
+                (a.min(b), a.max(b), k as u8)
+            })
+        };
+        let mut lo_count = vec![0u32; n];
+        for f in 0..nf {
+            for (a, _, _) in half_edges(f) {
+                lo_count[a as usize] += 1;
             }
         }
-        keys.sort_unstable();
-        let mut edges = Vec::with_capacity(keys.len() / 2 + 1);
-        let mut edge_face_count = Vec::with_capacity(keys.len() / 2 + 1);
-        for k in keys {
-            if edges.last() == Some(&k) {
-                *edge_face_count.last_mut().unwrap() += 1;
-            } else {
-                edges.push(k);
-                edge_face_count.push(1);
+        let lo_offsets = prefix_sum(&lo_count);
+        let mut fill = lo_offsets.clone();
+        // (larger vertex, face, side)
+        let mut bucketed = vec![(0u32, 0u32, 0u8); *lo_offsets.last().unwrap() as usize];
+        for f in 0..nf {
+            for (a, b, k) in half_edges(f) {
+                bucketed[fill[a as usize] as usize] = (b, f as u32, k);
+                fill[a as usize] += 1;
+            }
+        }
+        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(bucketed.len() / 2 + 1);
+        let mut edge_face_count: Vec<u32> = Vec::with_capacity(bucketed.len() / 2 + 1);
+        let mut edge_faces = Vec::with_capacity(bucketed.len());
+        for a in 0..n {
+            let bucket = &mut bucketed[lo_offsets[a] as usize..lo_offsets[a + 1] as usize];
+            bucket.sort_by_key(|h| h.0); // stable: faces stay ascending
+            for &(b, f, k) in bucket.iter() {
+                let e = [a as u32, b];
+                if edges.last() == Some(&e) {
+                    *edge_face_count.last_mut().unwrap() += 1;
+                } else {
+                    edges.push(e);
+                    edge_face_count.push(1);
+                }
+                edge_faces.push((f, k));
             }
         }
         let mut boundary_vertex = vec![false; n];
@@ -90,18 +114,6 @@ impl Topology {
             }
         }
         let edge_face_offsets = prefix_sum(&edge_face_count);
-        let mut fill = edge_face_offsets.clone();
-        let mut edge_faces = vec![(0u32, 0u8); *edge_face_offsets.last().unwrap() as usize];
-        for f in 0..mesh.face_count() {
-            let c = mesh.corners(f);
-            for k in 0..c.len() {
-                let (a, b) = (c[k], c[(k + 1) % c.len()]);
-                if let Ok(e) = edges.binary_search(&[a.min(b), a.max(b)]) {
-                    edge_faces[fill[e] as usize] = (f as u32, k as u8);
-                    fill[e] += 1;
-                }
-            }
-        }
         Self {
             neighbor_offsets,
             neighbors,
@@ -214,4 +226,57 @@ fn prefix_sum(counts: &[u32]) -> Vec<u32> {
         out.push(s);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use std::collections::BTreeMap;
+
+    /// Faces of 3 or 4 random corners over few vertices: shared, non-manifold and repeated
+    /// edges, isolated vertices.
+    struct Soup {
+        n: usize,
+        faces: Vec<Vec<u32>>,
+    }
+
+    impl Faces for Soup {
+        fn vertex_count(&self) -> usize {
+            self.n
+        }
+        fn face_count(&self) -> usize {
+            self.faces.len()
+        }
+        fn corners(&self, f: usize) -> &[u32] {
+            &self.faces[f]
+        }
+    }
+
+    #[test]
+    fn edges_and_their_faces_match_a_map() {
+        let mut rng = Rng(7);
+        for round in 0..50 {
+            let n = 4 + round % 9;
+            let pick = |rng: &mut Rng| ((rng.uniform() * n as f64) as u32).min(n as u32 - 1);
+            let faces: Vec<Vec<u32>> = (0..3 + round)
+                .map(|_| (0..if rng.uniform() < 0.5 { 3 } else { 4 }).map(|_| pick(&mut rng)).collect())
+                .collect();
+            let soup = Soup { n, faces };
+            let topo = Topology::new(&soup);
+            let mut map: BTreeMap<[u32; 2], Vec<(u32, u8)>> = BTreeMap::new();
+            for (f, c) in soup.faces.iter().enumerate() {
+                for k in 0..c.len() {
+                    let (a, b) = (c[k], c[(k + 1) % c.len()]);
+                    map.entry([a.min(b), a.max(b)]).or_default().push((f as u32, k as u8));
+                }
+            }
+            let edges: Vec<[u32; 2]> = map.keys().copied().collect();
+            assert_eq!(topo.edges(), edges.as_slice());
+            for (e, faces) in map.values().enumerate() {
+                assert_eq!(topo.edge_faces(e), faces.as_slice());
+                assert_eq!(topo.edge_face_counts()[e] as usize, faces.len());
+            }
+        }
+    }
 }
