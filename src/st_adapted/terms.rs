@@ -253,10 +253,9 @@ impl Term for EdgeCircle {
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
         self.spheres.with(x, |m| {
             for (k, &(f, g, po, qo)) in self.edges.iter().enumerate() {
-                let Some((bulge, grad)) = edge_circle_bulge(&m[f].sphere, &m[g].sphere, self.normals[k]) else {
-                    r[k] = 0.0;
-                    continue;
-                };
+                // No intersection circle to bend (equal or tangent spheres): residual 0, with
+                // the same Jacobian pattern, so the solver keeps its symbolic factorization.
+                let (bulge, grad) = edge_circle_bulge(&m[f].sphere, &m[g].sphere, self.normals[k]).unwrap_or((0.0, [0.0; 10]));
                 let d = v3(x, po) - v3(x, qo);
                 let l2 = d.length_squared() / 8.0;
                 r[k] = l2 * bulge;
