@@ -83,8 +83,8 @@ fn main() {
                 m.max_vertex_distance_to_reference,
                 m.max_distance_to_reference / epsilon,
             );
-            if r.initial_metrics.flipped_faces + m.flipped_faces > 0 {
-                println!("<!-- {name}: flipped faces {} initially, {} at the end -->", r.initial_metrics.flipped_faces, m.flipped_faces);
+            if r.initial_shape.flipped_faces + m.flipped_faces > 0 {
+                println!("<!-- {name}: flipped faces {} initially, {} at the end -->", r.initial_shape.flipped_faces, m.flipped_faces);
                 let mesh = &r.sphere_mesh.mesh;
                 for f in 0..mesh.face_count() {
                     let pts = mesh.face_points(f);

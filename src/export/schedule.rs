@@ -225,11 +225,19 @@ fn sphere_record(p: &Panel) -> SphereRecord {
 
 /// Builds the schedule of `panels` against the `reference` surface.
 pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance: f64) -> PanelSchedule {
+    build_schedule_with(panels, reference, radius_tolerance, None)
+}
+
+/// [`build_schedule`] with each panel's [`max_deviation`] from `reference` given (when the
+/// method measured them already; one per panel).
+pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_tolerance: f64, deviations: Option<&[f64]>) -> PanelSchedule {
+    let deviations = deviations.filter(|d| d.len() == panels.len());
     let bvh = reference.bvh();
     let diag = reference.diagonal();
     let records: Vec<PanelRecord> = panels
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(i, p)| {
             let c = &p.corners;
             let n = c.len();
             PanelRecord {
@@ -239,7 +247,11 @@ pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance:
                 sphere: sphere_record(p),
                 edges: (0..n).map(|k| arc_record(&p.arcs[k], c[k], c[(k + 1) % n])).collect(),
                 area: p.area,
-                max_deviation: if bvh.is_empty() { f64::NAN } else { max_deviation(p, bvh) },
+                max_deviation: match deviations {
+                    Some(d) => d[i],
+                    None if bvh.is_empty() => f64::NAN,
+                    None => max_deviation(p, bvh),
+                },
                 triangles: p.triangles.len(),
             }
         })

@@ -8,7 +8,7 @@ use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{SupportElement, SupportGeometry};
 use crate::export::schedule::SupportRecord;
 use crate::export::report::{InputCounts, OutputCounts};
-use crate::export::{build_schedule, panel_files, write_glb, write_obj, ExportFile, Metrics, Report};
+use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, Metrics, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
@@ -106,6 +106,8 @@ pub struct PanelExport<'a> {
     pub support_elements: Option<&'a [SupportElement]>,
     /// The report's warnings.
     pub warnings: Vec<String>,
+    /// Each panel's largest distance to the reference, when the method measured it already.
+    pub deviations: Option<&'a [f64]>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -137,6 +139,7 @@ impl<'a> PanelExport<'a> {
             absolute_sphere: None,
             support_elements: None,
             warnings: Vec::new(),
+            deviations: None,
         }
     }
 
@@ -154,6 +157,12 @@ impl<'a> PanelExport<'a> {
         Self { support: Some(support), support_elements: Some(elements), node_axes: Some(node_axes), ..self }
     }
 
+    /// Each panel's [`crate::panels::deviation::max_deviation`] from the reference, measured by
+    /// the method: the schedule takes them instead of measuring again.
+    pub fn with_deviations(self, deviations: &'a [f64]) -> Self {
+        Self { deviations: Some(deviations), ..self }
+    }
+
     /// The Ω the node axes pass through (Sec. 4).
     pub fn with_absolute_sphere(self, omega: &'a AbsoluteSphere) -> Self {
         Self { absolute_sphere: Some(omega), ..self }
@@ -164,7 +173,7 @@ impl<'a> PanelExport<'a> {
 /// `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `report.json`.
 pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
     let t0 = clock.now();
-    let mut schedule = build_schedule(e.panels, reference, e.radius_tolerance * e.diag);
+    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations);
     schedule.support_elements = e.support_elements.map(SupportRecord::of).unwrap_or_default();
     let mut extras = e.extras;
     extras["method"] = e.method.into();

@@ -1,11 +1,11 @@
 //! The quality of an ST mesh against its reference: residuals, kink angles, distances, the
-//! gaps of variant (b) and folded faces.
+//! gaps of variant (b) and folded faces; the initial mesh's shape without its panels.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::panels::build_panels_with;
-use crate::panels::deviation::max_distance_to_reference;
+use crate::panels::deviation::max_deviation;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::gaps::{max_arc_gap, GAP_SAMPLES};
 use crate::panels::panel::Panel;
@@ -37,19 +37,29 @@ pub struct StAdaptedMetrics {
     pub max_gap_over_edge_length: Option<f64>,
 }
 
-/// Metrics of a sphere mesh against the reference (see [`StAdaptedMetrics`]), with its panels
-/// for `variant` (tessellated to [`DEFAULT_CHORD_TOLERANCE`] of the diagonal).
-pub fn metrics(sm: &SphereMesh, reference: &Reference, variant: EdgeArcs) -> (StAdaptedMetrics, Vec<Panel>) {
+/// The shape of a sphere mesh before it has panels (lengths relative to the reference
+/// diagonal): what the initial mesh of the optimization is compared by.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StAdaptedShape {
+    /// max over faces and corners of | |v − c| − r |, relative.
+    pub max_vertex_sphere_residual: f64,
+    /// Kink angles over interior edges (degrees).
+    pub mean_kink_angle_deg: f64,
+    pub max_kink_angle_deg: f64,
+    /// Max vertex distance to the reference, relative.
+    pub max_vertex_distance_to_reference: f64,
+    pub faces: usize,
+    pub interior_edges: usize,
+    /// Faces whose normal points against the reference normal at the closest point of their
+    /// centroid (should be 0).
+    pub flipped_faces: usize,
+}
+
+/// The shape of a sphere mesh against the reference (see [`StAdaptedShape`]).
+pub fn shape(sm: &SphereMesh, reference: &Reference) -> StAdaptedShape {
     let diag = reference.diagonal().max(f64::MIN_POSITIVE);
     let mesh = &sm.mesh;
-    let res = sm.max_vertex_sphere_residual();
     let kinks = sm.kink_angles_deg();
-    let mean = mean(&kinks);
-    let max = kinks.iter().copied().fold(0.0, f64::max);
-    let panels = build_panels_with(sm, DEFAULT_CHORD_TOLERANCE * diag, variant);
-    let dist = max_distance_to_reference(&panels, reference.bvh(), reference.diagonal());
-    let vdist = mesh.positions.iter().map(|&p| reference.bvh().distance(p)).fold(0.0, f64::max) / diag;
-    let gap = (variant == EdgeArcs::BisectingPlanes).then(|| max_arc_gap(&panels, sm.topology(), GAP_SAMPLES));
     let flipped_faces = (0..mesh.face_count())
         .filter(|&f| {
             let points = mesh.face_points(f);
@@ -58,17 +68,38 @@ pub fn metrics(sm: &SphereMesh, reference: &Reference, variant: EdgeArcs) -> (St
             mesh.face_area_vector(f).dot(normal) < 0.0
         })
         .count();
-    let metrics = StAdaptedMetrics {
-        max_vertex_sphere_residual: res / diag,
-        mean_kink_angle_deg: mean,
-        max_kink_angle_deg: max,
-        max_distance_to_reference: dist,
-        max_vertex_distance_to_reference: vdist,
-        max_gap: gap.map(|g| g.0 / diag),
-        max_gap_over_edge_length: gap.map(|g| g.1),
+    StAdaptedShape {
+        max_vertex_sphere_residual: sm.max_vertex_sphere_residual() / diag,
+        mean_kink_angle_deg: mean(&kinks),
+        max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),
+        max_vertex_distance_to_reference: mesh.positions.iter().map(|&p| reference.bvh().distance(p)).fold(0.0, f64::max) / diag,
         faces: mesh.face_count(),
         interior_edges: kinks.len(),
         flipped_faces,
+    }
+}
+
+/// Metrics of a sphere mesh against the reference (see [`StAdaptedMetrics`]), with its panels
+/// for `variant` (tessellated to [`DEFAULT_CHORD_TOLERANCE`] of the diagonal) and each panel's
+/// [`max_deviation`] (absolute), for the schedule.
+pub fn metrics(sm: &SphereMesh, reference: &Reference, variant: EdgeArcs) -> (StAdaptedMetrics, Vec<Panel>, Vec<f64>) {
+    let diag = reference.diagonal().max(f64::MIN_POSITIVE);
+    let s = shape(sm, reference);
+    let panels = build_panels_with(sm, DEFAULT_CHORD_TOLERANCE * diag, variant);
+    let deviations: Vec<f64> = panels.iter().map(|p| max_deviation(p, reference.bvh())).collect();
+    let dist = deviations.iter().copied().fold(0.0, f64::max) / diag;
+    let gap = (variant == EdgeArcs::BisectingPlanes).then(|| max_arc_gap(&panels, sm.topology(), GAP_SAMPLES));
+    let metrics = StAdaptedMetrics {
+        max_vertex_sphere_residual: s.max_vertex_sphere_residual,
+        mean_kink_angle_deg: s.mean_kink_angle_deg,
+        max_kink_angle_deg: s.max_kink_angle_deg,
+        max_distance_to_reference: dist,
+        max_vertex_distance_to_reference: s.max_vertex_distance_to_reference,
+        max_gap: gap.map(|g| g.0 / diag),
+        max_gap_over_edge_length: gap.map(|g| g.1),
+        faces: s.faces,
+        interior_edges: s.interior_edges,
+        flipped_faces: s.flipped_faces,
     };
-    (metrics, panels)
+    (metrics, panels, deviations)
 }

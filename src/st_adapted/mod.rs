@@ -79,7 +79,7 @@ use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, pliant_rem
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
 use initialization::initial_spheres;
-use metrics::{metrics, StAdaptedMetrics};
+use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
 use optimization::{run_stages, OptimizationFrame};
 use params::StAdaptedParams;
 
@@ -157,9 +157,13 @@ pub struct StAdaptedResult {
     /// The panels of `sphere_mesh` for the variant, tessellated to
     /// [`crate::panels::DEFAULT_CHORD_TOLERANCE`] of the diagonal.
     pub panels: Vec<Panel>,
+    /// Each panel's largest distance to the reference ([`crate::panels::deviation::max_deviation`],
+    /// absolute), measured once for the metrics and the schedule.
+    pub panel_deviations: Vec<f64>,
     pub initial_sphere_mesh: SphereMesh,
     pub remeshed: TriMesh,
-    pub initial_metrics: StAdaptedMetrics,
+    /// The initial sphere mesh's shape (it gets no panels).
+    pub initial_shape: StAdaptedShape,
     pub metrics: StAdaptedMetrics,
     /// Solver iterations over all stages.
     pub iterations: usize,
@@ -274,8 +278,8 @@ pub fn compute(
 
     step(on_event, "metrics")?;
     timings.skip();
-    let (initial_metrics, _) = metrics(&initial_sphere_mesh, reference, params.variant);
-    let (final_metrics, panels) = metrics(&sphere_mesh, reference, params.variant);
+    let initial_shape = shape(&initial_sphere_mesh, reference);
+    let (final_metrics, panels, panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
     let angle_iteration_median_ms = median(&iteration_ms);
     let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
@@ -283,9 +287,10 @@ pub fn compute(
     Ok(StAdaptedResult {
         sphere_mesh,
         panels,
+        panel_deviations,
         initial_sphere_mesh,
         remeshed,
-        initial_metrics,
+        initial_shape,
         metrics: final_metrics,
         iterations: iteration,
         iteration_ms,

@@ -15,7 +15,7 @@ use crate::pipeline::panel_output::{export_panels, panel_fields, triangle_mesh_f
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
-use crate::st_adapted::metrics::StAdaptedMetrics;
+use crate::st_adapted::metrics::{StAdaptedMetrics, StAdaptedShape};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_adapted::{compute, StAdaptedEvent, StAdaptedResult};
 
@@ -33,7 +33,7 @@ pub const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StAdaptedSummary {
     pub report: Report,
-    pub initial: StAdaptedMetrics,
+    pub initial: StAdaptedShape,
     pub metrics: StAdaptedMetrics,
     pub iterations: usize,
     /// min / max of the sizing field g (absolute), when the reference was remeshed adaptively.
@@ -91,7 +91,7 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
     sink.files(STAGE, files);
     Ok(StAdaptedSummary {
         report,
-        initial: result.initial_metrics.clone(),
+        initial: result.initial_shape.clone(),
         metrics: result.metrics.clone(),
         iterations: result.iterations,
         sizing_range,
@@ -118,10 +118,10 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         angle_iterations: Some(result.iterations),
         variant: Some(variant.into()),
         flipped_faces: Some(m.flipped_faces),
-        initial_flipped_faces: Some(result.initial_metrics.flipped_faces),
+        initial_flipped_faces: Some(result.initial_shape.flipped_faces),
         max_vertex_distance_to_reference: Some(m.max_vertex_distance_to_reference),
-        initial_mean_kink_angle_deg: Some(result.initial_metrics.mean_kink_angle_deg),
-        initial_max_kink_angle_deg: Some(result.initial_metrics.max_kink_angle_deg),
+        initial_mean_kink_angle_deg: Some(result.initial_shape.mean_kink_angle_deg),
+        initial_max_kink_angle_deg: Some(result.initial_shape.max_kink_angle_deg),
         // One gap measure: the panels' own arcs (`panels::gaps`), written under both keys.
         max_gap: gap,
         max_panel_arc_gap: gap,
@@ -133,6 +133,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
     }
     let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &timings)
         .with_extras(serde_json::json!({ "variant": variant }))
+        .with_deviations(&result.panel_deviations)
         .with_warnings(&result.warnings);
     export_panels(reference, export, clock)
 }
