@@ -51,15 +51,30 @@ pub struct WorkerClient {
     cancel_flag: Option<Int32Array>,
     /// Worker messages handed to the app by [`Self::poll`].
     polled: Cell<u32>,
-    repaint: Rc<dyn Fn()>,
+    repaint: Rc<dyn Fn(Wake)>,
     _on_message: Closure<dyn FnMut(MessageEvent)>,
     _on_error: Closure<dyn FnMut(web_sys::ErrorEvent)>,
     pub restarts: u32,
 }
 
+/// How soon a message from the worker needs the UI redrawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wake {
+    /// A result, an error, a crash: now.
+    Now,
+    /// Progress and live snapshots, which stream while the worker computes: within
+    /// [`LIVE_REPAINT_MS`], so that a software renderer redrawing the view does not take the
+    /// worker's CPU at every iteration.
+    Soon,
+}
+
+/// The longest a streamed message waits for its redraw (ms).
+pub const LIVE_REPAINT_MS: u64 = 100;
+
 impl WorkerClient {
-    /// Spawns `worker.js` next to the page. `repaint` wakes the UI when a message arrives.
-    pub fn spawn(repaint: Rc<dyn Fn()>) -> Result<Self, WorkerStartError> {
+    /// Spawns `worker.js` next to the page. `repaint` wakes the UI when a message arrives: at
+    /// once for a result, an error or a crash, [`Wake::Soon`] for progress and live snapshots.
+    pub fn spawn(repaint: Rc<dyn Fn(Wake)>) -> Result<Self, WorkerStartError> {
         let inbox: Inbox = Rc::new(RefCell::new(VecDeque::new()));
         let opts = WorkerOptions::new();
         opts.set_type(WorkerType::Module);
@@ -81,8 +96,12 @@ impl WorkerClient {
                         Err(message) => Incoming::Message(FromWorker::Error { message, remesh_to: None }, Vec::new()),
                     }
                 };
+                let wake = match &item {
+                    Incoming::Message(FromWorker::Progress(_) | FromWorker::Snapshot { .. }, _) => Wake::Soon,
+                    _ => Wake::Now,
+                };
                 inbox.borrow_mut().push_back(item);
-                repaint();
+                repaint(wake);
             })
         };
         let on_error = {
@@ -91,7 +110,7 @@ impl WorkerClient {
             Closure::<dyn FnMut(web_sys::ErrorEvent)>::new(move |ev: web_sys::ErrorEvent| {
                 ev.prevent_default();
                 inbox.borrow_mut().push_back(Incoming::Crashed(format!("The pipeline worker failed: {}", ev.message())));
-                repaint();
+                repaint(Wake::Now);
             })
         };
         worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));

@@ -39,7 +39,10 @@ async function timeStage(browser, server, name, fragment, ready) {
     try {
       const s = await waitForState(app, `${name} finished`, (s) => ready(s) && !s.busy && s.last_run, { timeout: T.load, interval: 50 });
       ms.push(s.last_run.ms);
-      detail = `stage ${s.last_run.stage}, ${JSON.stringify(s.st_adapted ? { panels: s.st_adapted.panels, iterations: s.st_adapted.energies } : { mesh: s.sq && s.sq.mesh })}`;
+      // The worker's own steps (the report's timings, ms), to tell compute from the page's share.
+      const steps = (s.st_adapted ? s.st_adapted.timings_ms : s.sq && s.sq.report && s.sq.report.timings_ms) || {};
+      const worker = Object.entries(steps).map(([k, v]) => `${k} ${Math.round(v)}`).join(', ');
+      detail = `stage ${s.last_run.stage}, ${JSON.stringify(s.st_adapted ? { panels: s.st_adapted.panels, iterations: s.st_adapted.energies } : { mesh: s.sq && s.sq.mesh })}; worker steps (ms): ${worker}`;
     } finally {
       await app.context.close();
     }

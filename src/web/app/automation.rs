@@ -78,6 +78,7 @@ impl App {
             "energies": a.energy.len(),
             "ready": a.summary.is_some(),
             "panels": a.summary.as_ref().map_or(0, |s| s.report.output.panels),
+            "timings_ms": a.summary.as_ref().map(|s| &s.report.timings_ms),
         })));
         state["sq"] = serde_json::json!(self.loaded.as_ref().and_then(|l| l.sq.as_ref()).map(|v| serde_json::json!({
             "line_snapshots": v.line_snapshots,

@@ -32,7 +32,7 @@ use crate::remeshing::Sizing;
 use crate::samples::Sample;
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::ViewerResources;
-use crate::web::worker_client::WorkerClient;
+use crate::web::worker_client::{Wake, WorkerClient, LIVE_REPAINT_MS};
 use dom::{count_events, make_file_input, now_ms, save_file};
 use panels::SizingMemory;
 use state::{Busy, Download, Loaded, ScalarView, SqView, StAdaptedView};
@@ -125,7 +125,10 @@ impl App {
         let fragment = dom::location_hash();
         let (design, notices) = Design::from_fragment(&fragment);
         let ctx = cc.egui_ctx.clone();
-        let repaint: Rc<dyn Fn()> = Rc::new(move || ctx.request_repaint());
+        let repaint: Rc<dyn Fn(Wake)> = Rc::new(move |wake| match wake {
+            Wake::Now => ctx.request_repaint(),
+            Wake::Soon => ctx.request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS)),
+        });
         let (worker, error) = match WorkerClient::spawn(repaint) {
             Ok(w) => (Some(w), None),
             Err(e) => (None, Some(e.to_string())),
@@ -544,8 +547,11 @@ impl eframe::App for App {
             self.ui_ms.pop_front();
         }
         self.ui_ms.push_back(now_ms() - started);
-        if self.busy.is_some() || !self.drawn {
+        if !self.drawn {
             ui.ctx().request_repaint();
+        } else if self.busy.is_some() {
+            // The elapsed time ticks; worker messages wake the view sooner.
+            ui.ctx().request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS));
         }
     }
 
