@@ -103,22 +103,25 @@ impl FaceSpheres {
     /// Calls `f` with the members at `x` (recomputed only when θ or a corner changed).
     pub fn with<R>(&self, x: &[f64], f: impl FnOnce(&[PencilMember]) -> R) -> R {
         let corners = &self.shared.corners;
-        let mut key = Vec::with_capacity(10 * corners.len());
-        for (k, c) in corners.iter().enumerate() {
-            key.push(x[angle_offset(k)]);
-            for &o in c {
-                key.extend_from_slice(&x[o..o + 3]);
+        let mut cache = self.shared.cache.borrow_mut();
+        let (key, members) = &mut *cache;
+        let fresh = key.len() == 10 * corners.len()
+            && corners.iter().zip(key.chunks_exact(10)).enumerate().all(|(k, (c, kk))| {
+                kk[0] == x[angle_offset(k)] && c.iter().enumerate().all(|(i, &o)| kk[1 + 3 * i..4 + 3 * i] == x[o..o + 3])
+            });
+        if !fresh {
+            key.clear();
+            members.clear();
+            for (k, c) in corners.iter().enumerate() {
+                let theta = x[angle_offset(k)];
+                key.push(theta);
+                for &o in c {
+                    key.extend_from_slice(&x[o..o + 3]);
+                }
+                members.push(pencil_member(c.map(|o| DVec3::new(x[o], x[o + 1], x[o + 2])), theta));
             }
         }
-        let mut cache = self.shared.cache.borrow_mut();
-        if cache.0 != key {
-            cache.1 = key
-                .chunks_exact(10)
-                .map(|k| pencil_member([0, 1, 2].map(|i| DVec3::new(k[1 + 3 * i], k[2 + 3 * i], k[3 + 3 * i])), k[0]))
-                .collect();
-            cache.0 = key;
-        }
-        f(&cache.1)
+        f(members)
     }
 
     /// Adds the Jacobian row `row` of a scalar g(s_f), given ∂g/∂s_f = `grad`.
