@@ -43,14 +43,13 @@ pub fn run_stages(
     let mut run = StageRun::default();
     let mut epsilon = params.initial_epsilon;
     let w = &params.weights;
-    let proximity = params.tolerance_scale();
     for stage in &params.stages {
         if stage.iterations == 0 {
             continue;
         }
-        problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale * proximity);
-        problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale * proximity);
-        problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale * proximity);
+        problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale);
+        problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale);
+        problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale);
         solver.options.max_iterations = stage.iterations;
         solver.options.initial_epsilon = epsilon;
         let name = stage.name.as_str();

@@ -7,10 +7,6 @@ use crate::congruence::central_spheres::JetParams;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
 
-/// The sizing tolerance ε (relative to the diagonal) at which [`StAdaptedWeights`] hold as
-/// written; finer tolerances scale the proximity weights ([`StAdaptedParams::tolerance_scale`]).
-pub const WEIGHTS_EPSILON: f64 = 2e-3;
-
 /// Term weights (frame scaled to diagonal 1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -90,19 +86,6 @@ impl StAdaptedParams {
         match self.variant {
             EdgeArcs::Intersection => self.weights.clone(),
             EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, ..self.weights.clone() },
-        }
-    }
-
-    /// The factor on the proximity weights for the sizing tolerance ε: ε₀/ε, at least 1, with
-    /// ε₀ = [`WEIGHTS_EPSILON`]. The kinks' share of the energy does
-    /// not depend on ε (kinks ~ √(εκ) over ~1/ε edges), while a deviation of ε costs ~ε²
-    /// per vertex over ~1/ε vertices; this keeps the deviations in proportion to ε at finer
-    /// tolerances (Sec. 3: the deviation from the reference stays "below ε"). 1 for the other
-    /// sizings.
-    pub fn tolerance_scale(&self) -> f64 {
-        match self.sizing {
-            Sizing::Adaptive { epsilon } if epsilon > 0.0 => (WEIGHTS_EPSILON / epsilon).max(1.0),
-            _ => 1.0,
         }
     }
 
