@@ -363,7 +363,7 @@ fn final_mesh(
         limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
     };
     // The Spheres event carries the phase and iteration: it is the progress of this step.
-    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, &params.sphere_weights, params.sphere_iterations, params.sphere_decrease_tolerance, clock, &mut |phase, iteration, terms, v, sp| {
+    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, params, clock, &mut |phase, iteration, terms, v, sp| {
         let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
         let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
         on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres }).is_ok()

@@ -43,7 +43,7 @@ use crate::reference::Reference;
 use crate::solver::terms::v3;
 use crate::solver::{Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermStats, Termination, UnitLength};
 
-use super::params::SphereWeights;
+use super::params::SqParams;
 use super::quad_mesh::polyline_fairness;
 use super::sphere_terms::{AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane, VertexNormals};
 
@@ -220,19 +220,18 @@ pub fn unpack(layout: &SphereLayout, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
     (vertices, spheres)
 }
 
-/// Runs the warm-up, the full optimization and the projection (see the module docs); returns
-/// the vertices, the spheres (normalized) and what happened. The full optimization stops early
-/// when an accepted step lowers its energy by at most `decrease_tolerance` of it.
-#[allow(clippy::too_many_arguments)]
+/// Runs the warm-up, the full optimization and the projection (see the module docs) with
+/// `params`' sphere weights, iterations and decrease tolerance (the full optimization stops early
+/// when an accepted step lowers its energy by at most that fraction); returns the vertices, the
+/// spheres (normalized) and what happened.
 pub fn optimize_spheres(
     input: &SphereInput,
     stars: &QuadStars,
-    w: &SphereWeights,
-    iterations: [usize; 3],
-    decrease_tolerance: f64,
+    params: &SqParams,
     clock: Clock,
     hook: &mut SphereHook,
 ) -> (Vec<DVec3>, Vec<Sphere>, SphereOutcome) {
+    let (w, iterations) = (&params.sphere_weights, params.sphere_iterations);
     let mesh = input.mesh;
     let layout = SphereLayout { faces: mesh.face_count(), vertices: mesh.vertex_count(), stars: stars.stars.len(), edges: stars.edges.len() };
     let mut x = vec![0.0; layout.len()];
@@ -396,7 +395,7 @@ pub fn optimize_spheres(
     for i in 0..layout.len() {
         problem.unfix(i);
     }
-    solver.options.relative_decrease_tolerance = decrease_tolerance;
+    solver.options.relative_decrease_tolerance = params.sphere_decrease_tolerance;
     outcome.iterations = run(&mut problem, &mut x, SpherePhase::Full, iterations[1], &mut solver, &mut outcome);
     if outcome.cancelled {
         let (v, s) = unpack(&layout, &x);
