@@ -553,3 +553,39 @@ fn panels_stay_within_two_epsilon_boundary_included() {
         }
     }
 }
+
+/// The boundary arcs follow the reference boundary (`st_adapted::boundary_arcs`): on a
+/// spherical cap (radius 20, over the circle of radius 12 on z = 0) every sample of every
+/// boundary arc lies within 0.1ε of that circle (the vertices glide on the reference polygon,
+/// 2e-5 of the diagonal from it; the rest is the face spheres' own distance from the cap). The
+/// great-circle arcs they replace cut inside the circle by about κ_g·|pq|²/8, 7ε here.
+#[test]
+fn boundary_arcs_follow_the_reference_boundary() {
+    use spherical_faces::panels::sphere_mesh::SphereMesh;
+    use spherical_faces::panels::{build_panels_with, edge_arc_points};
+    use spherical_faces::samples::sphere_cap;
+    let reference = Reference::from_triangles(sphere_cap(20.0, 12.0, 48));
+    let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
+    let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).expect("the cap runs");
+    let off_circle = |x: DVec3| (x.truncate().length() - 12.0).hypot(x.z);
+    let worst = |sm: &SphereMesh| -> f64 {
+        let panels = build_panels_with(sm, 1e-4 * r.diag, r.variant);
+        let topology = sm.topology();
+        let mut worst = 0.0f64;
+        let mut edges = 0;
+        for (e, &edge) in topology.edges().iter().enumerate() {
+            if topology.edge_faces(e).len() == 1 {
+                edges += 1;
+                let points = edge_arc_points(sm, &panels, edge).expect("a boundary arc");
+                worst = points.iter().fold(worst, |w, &x| w.max(off_circle(x)));
+            }
+        }
+        assert!(edges >= 6, "{edges} boundary edges");
+        worst / r.diag
+    };
+    let followed = worst(&r.sphere_mesh);
+    let great_circles = worst(&SphereMesh::new(r.sphere_mesh.mesh.clone(), r.sphere_mesh.face_spheres.clone(), r.sphere_mesh.boundary_arcs));
+    println!("boundary arcs off the boundary circle: {followed:.2e} (great circles {great_circles:.2e}) of the diagonal");
+    assert!(followed <= 2e-4, "{followed}");
+    assert!(great_circles > 10.0 * followed, "{great_circles} vs {followed}");
+}

@@ -150,6 +150,8 @@ cmd_test() {
   (cd www/rhino3dm && node --test convert.test.mjs)
   log "native tests"
   cargo test --all-targets
+  log "doc tests (--all-targets leaves them out)"
+  cargo test --doc
   if [ "${SF_SKIP_FUZZ:-0}" != 1 ]; then
     log "fuzz smoke: every target for 10 s (SF_SKIP_FUZZ=1 skips it)"
     cmd_fuzz all 10

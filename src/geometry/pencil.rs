@@ -1,7 +1,9 @@
 //! The pencil of spheres through three points as one angle (Sec. 3): every normalized sphere
 //! through p₀, p₁, p₂ is, up to orientation,
 //!
-//!     s(θ) = cos θ s₀ + sin θ s₁,
+//! ```text
+//! s(θ) = cos θ s₀ + sin θ s₁,
+//! ```
 //!
 //! with s₀ = (0, n̂, ⟨n̂, p₀⟩) the plane of the points (n̂ the unit normal of (p₁ − p₀) × (p₂ − p₀))
 //! and s₁ = (1/(2ρ), m/ρ, (|m|² − ρ²)/(2ρ)) their circumsphere (centre m the circumcentre, radius

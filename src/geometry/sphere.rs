@@ -177,6 +177,15 @@ impl Sphere {
         (2.0 * psi / (1.0 + q.sqrt())).abs()
     }
 
+    /// The point of a **normalized** sphere or plane closest to `x`: x moved along the (radial)
+    /// normal by its signed distance 2ψ/(1 + √(1 + 4aψ)), without cancellation for huge radii.
+    /// Undefined at the centre.
+    pub fn closest_point(&self, x: DVec3) -> DVec3 {
+        let psi = self.eval(x);
+        let q = (1.0 + 4.0 * self.a * psi).max(0.0);
+        x + (2.0 * psi / (1.0 + q.sqrt())) * self.unit_normal_at(x)
+    }
+
     /// The row of the linear condition "passes through p": [|p|², −p, 1] · (a, b, c) = ψ(p).
     pub fn point_row(p: DVec3) -> [f64; 5] {
         [p.length_squared(), -p.x, -p.y, -p.z, 1.0]
@@ -327,6 +336,20 @@ mod tests {
             let x = DVec3::new(0.3, 0.1, -2.0);
             assert!(close(s.eval(x), ((x - c).length_squared() - r * r) / (2.0 * r), EPS));
         }
+    }
+
+    #[test]
+    fn closest_point_is_the_radial_foot() {
+        let x = DVec3::new(0.3, 0.1, -2.0);
+        for (c, r) in [(DVec3::new(1.0, -2.0, 0.5), 3.0), (DVec3::new(-4.0, 0.25, 7.0), -0.75), (DVec3::new(0.0, 0.0, 1e7), -1e7)] {
+            let s = Sphere::from_center_radius(c, r);
+            let foot = s.closest_point(x);
+            let exact = c + r.abs() * (x - c).normalize();
+            assert!((foot - exact).length() <= 1e-9 * (1.0 + r.abs()), "{foot} vs {exact}");
+            assert!(s.eval(foot).abs() <= 1e-9, "{}", s.eval(foot));
+        }
+        let plane = Sphere::plane(DVec3::new(0.0, 0.0, 1.0), DVec3::Z);
+        assert!((plane.closest_point(x) - DVec3::new(0.3, 0.1, 1.0)).length() <= EPS);
     }
 
     #[test]

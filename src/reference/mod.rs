@@ -69,6 +69,7 @@ pub struct Reference {
     topology: OnceCell<Topology>,
     vertex_normals: OnceCell<Vec<DVec3>>,
     bvh: OnceCell<TriangleBvh>,
+    boundary_bvh: OnceCell<TriangleBvh>,
     curvature: RefCell<Option<(JetParams, Rc<CurvatureField>)>>,
     spline: Option<SplineReference>,
 }
@@ -101,6 +102,7 @@ impl Reference {
             topology: OnceCell::new(),
             vertex_normals: OnceCell::new(),
             bvh: OnceCell::new(),
+            boundary_bvh: OnceCell::new(),
             curvature: RefCell::new(None),
             spline: None,
         }
@@ -144,6 +146,23 @@ impl Reference {
     /// The closest-point hierarchy of [`Self::mesh`].
     pub fn bvh(&self) -> &TriangleBvh {
         self.bvh.get_or_init(|| TriangleBvh::new(&self.mesh))
+    }
+
+    /// The closest-point hierarchy of the boundary of [`Self::mesh`]: its edges with one
+    /// face, each as a degenerate triangle (a, b, b). Empty for a closed surface.
+    pub fn boundary_bvh(&self) -> &TriangleBvh {
+        self.boundary_bvh.get_or_init(|| {
+            let topology = self.topology();
+            let p = &self.mesh.positions;
+            let segments = (0..topology.edges().len())
+                .filter(|&e| topology.edge_faces(e).len() == 1)
+                .map(|e| {
+                    let [a, b] = topology.edges()[e];
+                    [p[a as usize], p[b as usize], p[b as usize]]
+                })
+                .collect();
+            TriangleBvh::from_triangles(segments)
+        })
     }
 
     /// The jet-fitted curvature with `params`: computed once per parameter set (the last one

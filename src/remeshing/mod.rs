@@ -3,7 +3,7 @@
 //!
 //! Typical use:
 //! ```no_run
-//! # use spherical_faces::geometry::mesh::{Topology, TriMesh};
+//! # use spherical_faces::geometry::mesh::{topology::Topology, TriMesh};
 //! # use spherical_faces::congruence::central_spheres::{jet_fit, JetParams};
 //! # use spherical_faces::remeshing::{SizingField, RemeshParams, pliant_remesh, DEFAULT_EPSILON};
 //! # use spherical_faces::progress::ignore;

@@ -46,14 +46,17 @@
 //! ([`EdgeArcs::BisectingPlanes`]); the gap between the two arcs of an edge is measured on the
 //! panels' own arcs ([`crate::panels::gaps::arc_gaps`]).
 //!
-//! **Boundary arcs**: [`BoundaryArcRule::Parallel`]`(0)`: with a zero direction the panels
-//! falls back to the plane through the edge and the sphere normal at its start, i.e. the plane
-//! through the edge and the face sphere's centre (a great-circle arc; straight for planes).
+//! **Boundary arcs** ([`boundary_arcs`]): each boundary edge is cut by the plane whose arc passes
+//! nearest the reference boundary. Where the reference has no boundary near the edge, the rule
+//! [`BoundaryArcRule::Parallel`]`(0)` holds: the plane through the edge and the face sphere's
+//! centre (a great-circle arc; straight for planes). The initial mesh and the live snapshots
+//! use that rule throughout.
 
 
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod boundary_arcs;
 pub mod initialization;
 pub mod metrics;
 pub mod optimization;
@@ -274,6 +277,10 @@ pub fn compute(
     let terms = problem.term_stats(&x);
     let (verts, sph) = frame.to_model(&x);
     let sphere_mesh = SphereMesh::new(TriMesh::new(verts, remeshed.triangles.clone()), sph, rule);
+    let sphere_mesh = {
+        let planes = boundary_arcs::boundary_planes(&sphere_mesh, reference);
+        sphere_mesh.with_boundary_planes(planes)
+    };
     timings.lap("optimize");
 
     step(on_event, "metrics")?;

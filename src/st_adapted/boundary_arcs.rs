@@ -1,0 +1,42 @@
+//! The arcs of the boundary edges (one face each): cut from the face sphere by the plane through
+//! the edge whose circle passes nearest the reference boundary, so the panels follow the
+//! boundary instead of overhanging it.
+//!
+//! The paper leaves boundary arcs open (Sec. 3). Of the circles of a face sphere through the
+//! edge's vertices p and q, the arc midpoints fill the great circle of the sphere in the
+//! bisector plane of pq. The arc is the one whose midpoint is the point of that great circle
+//! closest to b, the reference boundary's point closest to the chord midpoint: b projected into
+//! the bisector plane, then radially onto the sphere. For a boundary curve that lies on the
+//! sphere the arc passes through it; a great-circle arc (the rule it replaces) deviates from a
+//! boundary with geodesic curvature κ_g by about κ_g·|pq|²/8.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+
+use crate::panels::sphere_mesh::SphereMesh;
+use crate::reference::Reference;
+
+/// Per boundary edge (lo, hi) of `sphere_mesh`: the normal of its cutting plane. An edge whose
+/// reference boundary is farther than its length from its midpoint, or whose plane is undefined
+/// (a planar face), is left out and keeps the mesh's [`SphereMesh::boundary_arcs`] rule.
+pub fn boundary_planes(sphere_mesh: &SphereMesh, reference: &Reference) -> HashMap<[u32; 2], DVec3> {
+    let topology = sphere_mesh.topology();
+    let positions = &sphere_mesh.mesh.positions;
+    let boundary = reference.boundary_bvh();
+    let mut planes = HashMap::new();
+    for (e, &[lo, hi]) in topology.edges().iter().enumerate() {
+        let &[(f, _)] = topology.edge_faces(e) else { continue };
+        let (p, q) = (positions[lo as usize], positions[hi as usize]);
+        let length = p.distance(q);
+        let mid = 0.5 * (p + q);
+        let Some(hit) = boundary.closest_point_within(mid, length) else { continue };
+        let u = (q - p) / length;
+        let b = hit.point - (hit.point - mid).dot(u) * u;
+        let arc_mid = sphere_mesh.face_spheres[f as usize].closest_point(b);
+        if let Some(n) = u.cross(arc_mid - mid).try_normalize() {
+            planes.insert([lo, hi], n);
+        }
+    }
+    planes
+}
