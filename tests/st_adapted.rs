@@ -589,3 +589,30 @@ fn boundary_arcs_follow_the_reference_boundary() {
     assert!(followed <= 2e-4, "{followed}");
     assert!(great_circles > 10.0 * followed, "{great_circles} vs {followed}");
 }
+
+/// The facet sagitta is the height of the smooth surface over the facets: on a triangulated
+/// spherical cap of 6 rings or more, the median distance of the triangles' centroids from the
+/// sphere (within 10 %; coarser, the vertex normals tilt and it reads low).
+/// A reference coarser than ε gets the warning (the 91-vertex dome at ε = 2e-3), a fine one not.
+#[test]
+fn a_reference_coarser_than_epsilon_is_named() {
+    use spherical_faces::reference::assumptions::{coarseness_warning, facet_sagitta, SurfaceWarning};
+    use spherical_faces::samples::sphere_cap;
+    use spherical_faces::stats::median;
+    for rings in [6, 12, 36] {
+        let mesh = sphere_cap(20.0, 12.0, rings);
+        let center = DVec3::new(0.0, 0.0, -16.0);
+        let heights: Vec<f64> =
+            (0..mesh.face_count()).map(|f| 20.0 - (mesh.face_points(f).iter().sum::<DVec3>() / 3.0 - center).length()).collect();
+        let exact = median(&heights).unwrap() / mesh.bbox_diagonal();
+        let estimate = facet_sagitta(&mesh, &mesh.vertex_normals());
+        println!("{rings} rings: sagitta {estimate:.3e}, centroids {exact:.3e}");
+        assert!((estimate / exact - 1.0).abs() < 0.1, "{rings} rings: {estimate} vs {exact}");
+    }
+    let dome = load_reference("tri_dome");
+    let warning = coarseness_warning(&dome, 2e-3).expect("the dome is coarser than 2e-3");
+    assert!(matches!(warning, SurfaceWarning::CoarserThanTolerance { sagitta, .. } if sagitta > 4e-3 && sagitta < 6e-3), "{warning:?}");
+    assert!(warning.to_string().contains("coarser than the tolerance"), "{warning}");
+    assert_eq!(coarseness_warning(&dome, 1e-2), None);
+    assert_eq!(coarseness_warning(&load_reference("tri_mesh"), 2e-3), None);
+}

@@ -77,7 +77,7 @@ use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::{Reference, ReferenceError};
-use crate::reference::assumptions::{kink_warning, method_warnings, SurfaceWarning};
+use crate::reference::assumptions::{coarseness_warning, kink_warning, method_warnings, SurfaceWarning};
 use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, pliant_remesh, RemeshError, SizingBounds};
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
@@ -291,6 +291,9 @@ pub fn compute(
     let angle_iteration_median_ms = median(&iteration_ms);
     let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg()));
+    if let crate::remeshing::Sizing::Adaptive { epsilon } = params.sizing {
+        warnings.extend(coarseness_warning(reference, epsilon));
+    }
     Ok(StAdaptedResult {
         sphere_mesh,
         panels,
