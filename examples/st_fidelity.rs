@@ -124,6 +124,14 @@ fn detail(reference: &Reference, r: &spherical_faces::st_adapted::StAdaptedResul
     let topo = sm.topology();
     let mut order: Vec<usize> = (0..distances.len()).collect();
     order.sort_by(|&a, &b| distances[b].total_cmp(&distances[a]));
+    let initial_panels = spherical_faces::panels::build_panels_with(&r.initial_sphere_mesh, 1e-4 * r.diag, r.variant);
+    let initial: Vec<f64> = initial_panels.iter().map(|p| max_deviation(p, reference.bvh()) / r.diag).collect();
+    println!(
+        "  initial sphere mesh: panel distance median {:.4} / p99 {:.4} / max {:.4}",
+        median(&initial).unwrap_or(0.0),
+        percentile(initial.iter().copied(), 0.99),
+        initial.iter().copied().fold(0.0, f64::max)
+    );
     for &f in order.iter().take(4) {
         let face = sm.mesh.faces[f].corners();
         let on_boundary: Vec<bool> = face.iter().map(|&v| boundary[v as usize]).collect();
@@ -133,7 +141,7 @@ fn detail(reference: &Reference, r: &spherical_faces::st_adapted::StAdaptedResul
             .unwrap();
         let hit = reference.closest_point(far).unwrap();
         let on_ref_boundary = hit.barycentric.iter().any(|&b| b < 1e-9);
-        println!("  panel {f}: distance {:.4}, vertices on boundary {on_boundary:?}, farthest point's foot on a reference edge: {on_ref_boundary}", distances[f]);
+        println!("  panel {f}: distance {:.4} (initially {:.4}), vertices on boundary {on_boundary:?}, farthest point's foot on a reference edge: {on_ref_boundary}", distances[f], initial[f]);
         for (e, g, h) in topo.interior_edges() {
             let (g, h) = (g as usize, h as usize);
             if g != f && h != f {

@@ -115,6 +115,27 @@ fn fd_jacobian_hinge() {
     assert!((stats[0].energy - 0.64).abs() < 1e-12);
 }
 
+/// The tolerance band |g| ≤ τ: inside, nothing; outside, g − τ sign(g), on both sides.
+#[test]
+fn fd_jacobian_band() {
+    // Inner residuals 1 − x_i: 0.8, −1, 1.5, −0.3; with τ = 0.5 the first three are outside.
+    let x = vec![0.2, 2.0, -0.5, 1.3];
+    let mut lin = Linear::new();
+    for i in 0..4 {
+        lin.push_row(&[(i, -1.0)], 1.0);
+    }
+    let band = Band::new(lin, 0.5);
+    assert_fd(&band, &x);
+    let xs = random_x(10, 5);
+    assert_fd(&Band::new(UnitLength::spheres(vec![0, 5]), 0.1), &xs);
+    let mut p = Problem::new(4);
+    p.add_term(band, 1.0);
+    let stats = p.term_stats(&x);
+    assert_eq!(stats[0].active, 3);
+    assert!((stats[0].max_abs - 1.0).abs() < 1e-15, "1.5 − 0.5");
+    assert!((stats[0].energy - (0.3f64.powi(2) + 0.5f64.powi(2) + 1.0)).abs() < 1e-12);
+}
+
 #[test]
 fn fd_jacobian_point_on_sphere() {
     let x = random_x(16, 6);

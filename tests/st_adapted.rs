@@ -188,7 +188,9 @@ fn every_term_has_a_correct_jacobian() {
     let topo = Topology::new(&mesh);
     assert!(topo.interior_edges().count() > 0);
     let weights = StAdaptedWeights { edge_circle: 1.0, ..Default::default() };
-    let (mut problem, _) = build_problem(&mesh, &topo, &reference, &weights, &x);
+    // A band narrower than the patch's jitter (1e-3): most of its rows are active.
+    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &weights, Some(1e-4), &x);
+    assert!(ids.tolerance.is_some());
     problem.prepare(&x);
     for i in 0..problem.num_terms() {
         let term = problem.term(TermId(i));
@@ -231,7 +233,7 @@ fn glide_terms_follow_their_moving_targets() {
         .collect();
     let x = pack(&mesh, &spheres);
     let topo = Topology::new(&mesh);
-    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), &x);
+    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), None, &x);
     let (nv, nf) = (mesh.vertex_count(), mesh.face_count());
     let h = 1e-6;
     let worst = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
@@ -262,7 +264,7 @@ fn glide_terms_follow_their_moving_targets() {
 fn tangent_distance_grows_along_the_normal_on_a_curved_reference() {
     let (reference, mesh, x) = patch();
     let topo = Topology::new(&mesh);
-    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), &x);
+    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), None, &x);
     let (nv, nf) = (mesh.vertex_count(), mesh.face_count());
     let (analytic, numeric) = jacobians(problem.term_mut(ids.tangent_distance), &x, 1e-7, true);
     let mut worst: f64 = 0.0;

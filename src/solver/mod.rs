@@ -18,7 +18,7 @@
 //! - **Auxiliary variables**: just more variables ([`Problem::add_variables`]).
 //! - **Unit length**: [`UnitLength`] (|v|² − 1 for 3-blocks, bᵀb − 4ac − 1 for 5-blocks).
 //! - **One-sided terms**: any residual can be switched off for the current point with
-//!   [`JacobianSink::deactivate`]; [`Hinge`] wraps any term into `max(0, g)`.
+//!   [`JacobianSink::deactivate`]; [`Hinge`] wraps any term into `max(0, g)`, [`Band`] into the dead zone |g| ≤ τ.
 //! - **Fixed variables**: soft with [`Anchor`], hard with [`Problem::fix`].
 //! - **Stages**: [`Problem::set_weight`] between calls to [`Solver::solve`]; the solver keeps its
 //!   symbolic factorization across calls as long as the sparsity pattern is the same.
@@ -41,7 +41,7 @@ pub use lm::{
     IterationReport, PhaseTimes, SolveReport, Solver, SolverOptions, TermStats, Termination,
 };
 pub use terms::{
-    Anchor, FnTerm, Hinge, InversiveProduct, InversiveProductFixed, Linear, PointOnPlane,
+    Anchor, Band, FnTerm, Hinge, InversiveProduct, InversiveProductFixed, Linear, PointOnPlane,
     PointOnSphere, Proximal, SphereFit, UnitLength,
 };
 pub use problem::{JacobianSink, Problem, Term, TermId};

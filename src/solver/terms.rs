@@ -245,6 +245,52 @@ impl<T: Term> Term for Hinge<T> {
 
 // ---------------------------------------------------------------------------------------------
 
+/// Dead-zone wrapper: residual g − τ sign(g) where |g| > τ, and 0 (row switched off) where
+/// |g| ≤ τ, for every residual g of the inner term: the tolerance band |g| ≤ τ, free inside and
+/// a least-squares wall outside. A NaN g stays active (so the solver rejects the point).
+#[derive(Clone, Debug)]
+pub struct Band<T> {
+    name: String,
+    inner: T,
+    half_width: f64,
+}
+
+impl<T: Term> Band<T> {
+    pub fn new(inner: T, half_width: f64) -> Self {
+        Self { name: format!("band({})", inner.name()), inner, half_width }
+    }
+
+    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+}
+
+impl<T: Term> Term for Band<T> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn residual_count(&self) -> usize {
+        self.inner.residual_count()
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        self.inner.eval(x, r, jac);
+        for (i, ri) in r.iter_mut().enumerate() {
+            if ri.abs() <= self.half_width {
+                *ri = 0.0;
+                jac.deactivate(i);
+            } else {
+                *ri -= self.half_width * ri.signum();
+            }
+        }
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        self.inner.prepare(x);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
 /// Sparse affine residuals r_k = Σ_j a_kj x_j + c_k (linear constraints, fairness stencils,
 /// with [`Hinge`] linear inequalities).
 #[derive(Clone, Debug)]

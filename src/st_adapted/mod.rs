@@ -34,6 +34,10 @@
 //!   small circle whose arc overhangs the surface;
 //! - `orientation`: each face keeps an oriented area of at least 0.2 × its initial one (a hinge
 //!   barrier, [`terms::FaceOrientation`]), so gliding vertices never fold a face.
+//! - `vertex_tolerance`, `face_tolerance`: the tangent distance and the face distance beyond
+//!   ε/2 ([`params::StAdaptedParams::tolerance_band`], a dead zone [`crate::solver::Band`] with a
+//!   large weight): the proximity terms pull everything toward the reference, the band keeps the
+//!   outliers within the user's tolerance, so the panels stay within about 2ε of it.
 //!
 //! The stages ([`params::OptimizationStage`]) scale the proximity weights (larger first, then
 //! relaxed). No projection is needed at the end: the spheres pass through their vertices to

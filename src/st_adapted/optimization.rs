@@ -82,6 +82,9 @@ pub struct OptimizationFrame {
     pub x0: Vec<f64>,
     /// Hard-fixed vertices.
     pub fixed: Vec<usize>,
+    /// The tolerance band's half-width ([`StAdaptedParams::tolerance_band`]; the frame's
+    /// diagonal is 1).
+    pub tolerance: Option<f64>,
 }
 
 impl OptimizationFrame {
@@ -117,12 +120,12 @@ impl OptimizationFrame {
             }
         }
         let fixed = (0..nv).filter(|&v| fixed[v]).collect();
-        Self { t, diag, reference: nref, mesh, topology, x0, fixed }
+        Self { t, diag, reference: nref, mesh, topology, x0, fixed, tolerance: params.tolerance_band() }
     }
 
     /// [`build_problem`] at the initial point, with the fixed vertices fixed.
     pub fn problem(&self, weights: &StAdaptedWeights) -> (Problem<'_>, StAdaptedTerms) {
-        let (mut problem, ids) = build_problem(&self.mesh, &self.topology, &self.reference, weights, &self.x0);
+        let (mut problem, ids) = build_problem(&self.mesh, &self.topology, &self.reference, weights, self.tolerance, &self.x0);
         let nf = self.mesh.face_count();
         for &v in &self.fixed {
             let o = vertex_offset(nf, v);

@@ -22,6 +22,10 @@ pub struct StAdaptedWeights {
     pub edge_circle: f64,
     /// Barrier against folded faces (`FaceOrientation` under a hinge).
     pub orientation: f64,
+    /// The tolerance band: vertices and face centroids farther from the reference than
+    /// [`StAdaptedParams::tolerance_band`] (`solver::Band`), so the tolerance ε holds for the
+    /// panels, not only on average.
+    pub tolerance: f64,
 }
 
 impl Default for StAdaptedWeights {
@@ -34,6 +38,7 @@ impl Default for StAdaptedWeights {
             fairness: 1.0,
             edge_circle: 10.0,
             orientation: 1000.0,
+            tolerance: 1e4,
         }
     }
 }
@@ -86,6 +91,16 @@ impl StAdaptedParams {
         match self.variant {
             EdgeArcs::Intersection => self.weights.clone(),
             EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, ..self.weights.clone() },
+        }
+    }
+
+    /// The tolerance band's half-width, relative to the diagonal: ε/2 of an adaptive sizing, so
+    /// that vertices and face centroids stay within ε/2 and the panels, which bulge by about ε
+    /// between them, within 2ε. None for a face-count target, which has no ε.
+    pub fn tolerance_band(&self) -> Option<f64> {
+        match self.sizing {
+            Sizing::Adaptive { epsilon } => Some(0.5 * epsilon),
+            _ => None,
         }
     }
 

@@ -17,7 +17,7 @@ use crate::geometry::pencil::{pencil_angle, pencil_member, PencilMember};
 use crate::geometry::sphere::Sphere;
 use crate::reference::proximity::{value_gradient, CentroidTargets, ClosestLookups, ReferenceProximity};
 use crate::reference::Reference;
-use crate::solver::{Hinge, JacobianSink, Linear, Problem, Term, TermId};
+use crate::solver::{Band, Hinge, JacobianSink, Linear, Problem, Term, TermId};
 use crate::solver::terms::v3;
 
 /// Boundary vertices get this factor on their point-distance residuals.
@@ -169,9 +169,11 @@ impl Term for KinkAngle {
 /// Face spheres near the reference: ψ_f(r_f), r_f the reference point closest to the centroid of
 /// face f's vertices ([`CentroidTargets`], refreshed in [`Term::prepare`]; constant in the Jacobian).
 /// For a normalized sphere ψ ≈ the signed distance of r_f to it, so this bounds the panels' bulge.
+/// Clones share their targets (the tolerance band looks nothing up again).
+#[derive(Clone)]
 pub struct FaceDistance<'a> {
     spheres: FaceSpheres,
-    targets: CentroidTargets<'a>,
+    targets: Rc<RefCell<CentroidTargets<'a>>>,
 }
 
 impl Term for FaceDistance<'_> {
@@ -179,15 +181,16 @@ impl Term for FaceDistance<'_> {
         "face_distance"
     }
     fn residual_count(&self) -> usize {
-        self.targets.len()
+        self.targets.borrow().len()
     }
     fn prepare(&mut self, x: &[f64]) {
-        self.targets.update(x);
+        self.targets.borrow_mut().update(x);
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        let targets = self.targets.borrow();
         self.spheres.with(x, |m| {
             for (f, member) in m.iter().enumerate() {
-                let g = value_gradient(self.targets.target(f));
+                let g = value_gradient(targets.target(f));
                 r[f] = g.iter().zip(&member.sphere).map(|(g, s)| g * s).sum();
                 self.spheres.add_chain(jac, f, f, member, &g);
             }
@@ -283,6 +286,8 @@ pub struct StAdaptedTerms {
     pub face_distance: TermId,
     pub fairness: TermId,
     pub edge_circle: Option<TermId>,
+    /// The tolerance band (vertices, face centroids), when the problem has a tolerance.
+    pub tolerance: Option<[TermId; 2]>,
     pub orientation: TermId,
 }
 
@@ -335,12 +340,15 @@ pub fn unpack(x: &[f64], triangles: &[[u32; 3]], vertices: usize) -> (Vec<DVec3>
 
 /// The optimization problem over `mesh` (faces' pencil angles and vertices, see [`pack`]) against
 /// the reference, both in the same coordinates; `topology` is the mesh's. `x` is the starting
-/// point (for the initial face orientations and the first closest-point lookups).
+/// point (for the initial face orientations and the first closest-point lookups). `tolerance`:
+/// the half-width τ of the tolerance band (same units), beyond which vertices and face centroids
+/// pay `weights.tolerance` ([`Band`]).
 pub fn build_problem<'a>(
     mesh: &TriMesh,
     topology: &Topology,
     reference: &'a Reference,
     weights: &StAdaptedWeights,
+    tolerance: Option<f64>,
     x: &[f64],
 ) -> (Problem<'a>, StAdaptedTerms) {
     let boundary = boundary_vertices(topology);
@@ -365,13 +373,16 @@ pub fn build_problem<'a>(
     let offsets: Vec<usize> = (0..nv).map(|v| vertex_offset(nf, v)).collect();
     let scales = (0..nv).map(|v| if boundary[v] { BOUNDARY_POINT_FACTOR } else { 1.0 }).collect();
     let tangent = ReferenceProximity::tangent(reference, offsets.clone());
-    let mut point = ReferenceProximity::point(reference, offsets, scales);
+    let mut point = ReferenceProximity::point(reference, offsets.clone(), scales);
     point.share_closest_with(&tangent);
+    let mut tangent_lookups = ReferenceProximity::tangent(reference, offsets);
+    tangent_lookups.share_closest_with(&tangent);
     let lookups = tangent.lookups();
     let tangent_distance = problem.add_term(tangent, weights.tangent_distance);
     let point_distance = problem.add_term(point, weights.point_distance);
     let targets = CentroidTargets::new(reference, corners.iter().map(|c| c.to_vec()).collect(), x);
-    let face_distance = problem.add_term(FaceDistance { spheres: spheres.clone(), targets }, weights.face_distance);
+    let face = FaceDistance { spheres: spheres.clone(), targets: Rc::new(RefCell::new(targets)) };
+    let face_distance = problem.add_term(face.clone(), weights.face_distance);
     let mut lap = Linear::new().with_name("fairness");
     for (v, &on_boundary) in boundary.iter().enumerate() {
         let nb = topology.vertex_neighbors(v);
@@ -386,6 +397,15 @@ pub fn build_problem<'a>(
         }
     }
     let fairness = problem.add_term(lap, weights.fairness);
+    // The tolerance band: vertices and face centroids farther than τ from the reference.
+    let tolerance = tolerance.filter(|_| weights.tolerance > 0.0).map(|tau| {
+        let mut vertices = ReferenceProximity::tangent(reference, (0..nv).map(|v| vertex_offset(nf, v)).collect());
+        vertices.share_closest_with(&tangent_lookups);
+        [
+            problem.add_term(Band::new(vertices, tau).with_name("vertex_tolerance"), weights.tolerance),
+            problem.add_term(Band::new(face, tau).with_name("face_tolerance"), weights.tolerance),
+        ]
+    });
     let orientation =
         problem.add_term(Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"), weights.orientation);
     let edge_circle = (weights.edge_circle > 0.0).then(|| {
@@ -398,5 +418,5 @@ pub fn build_problem<'a>(
             .collect();
         problem.add_term(EdgeCircle { spheres: spheres.clone(), edges, ends, lookups: lookups.clone(), normals }, weights.edge_circle)
     });
-    (problem, StAdaptedTerms { angle, tangent_distance, point_distance, face_distance, fairness, edge_circle, orientation })
+    (problem, StAdaptedTerms { angle, tangent_distance, point_distance, face_distance, fairness, edge_circle, orientation, tolerance })
 }
