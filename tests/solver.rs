@@ -115,7 +115,8 @@ fn fd_jacobian_hinge() {
     assert!((stats[0].energy - 0.64).abs() < 1e-12);
 }
 
-/// The tolerance band |g| ≤ τ: inside, nothing; outside, g − τ sign(g), on both sides.
+/// The tolerance band |g| ≤ τ: inside, nothing; outside, sign(g) τ ln(1 + (|g| − τ)/τ), on
+/// both sides.
 #[test]
 fn fd_jacobian_band() {
     // Inner residuals 1 − x_i: 0.8, −1, 1.5, −0.3; with τ = 0.5 the first three are outside.
@@ -131,9 +132,14 @@ fn fd_jacobian_band() {
     let mut p = Problem::new(4);
     p.add_term(band, 1.0);
     let stats = p.term_stats(&x);
+    let wall = |g: f64| 0.5 * (1.0 + (g - 0.5) / 0.5f64).ln();
     assert_eq!(stats[0].active, 3);
-    assert!((stats[0].max_abs - 1.0).abs() < 1e-15, "1.5 − 0.5");
-    assert!((stats[0].energy - (0.3f64.powi(2) + 0.5f64.powi(2) + 1.0)).abs() < 1e-12);
+    assert!((stats[0].max_abs - wall(1.5)).abs() < 1e-15);
+    let energy = wall(0.8).powi(2) + wall(1.0).powi(2) + wall(1.5).powi(2);
+    assert!((stats[0].energy - energy).abs() < 1e-12, "{} vs {energy}", stats[0].energy);
+    // Near the band the wall is g − τ; far out it grows like τ ln(g/τ).
+    assert!((wall(0.5 + 1e-6) - 1e-6).abs() < 1e-11);
+    assert!(wall(50.0) < 3.0);
 }
 
 #[test]

@@ -41,8 +41,9 @@ pub enum SurfaceWarning {
     /// The result's panels meet at more than [`KINK_WARNING_DEG`] at `edges` edges.
     Kinks { edges: usize, max_deg: f64 },
     /// The reference's median facet lies farther than the tolerance `epsilon` from the smooth
-    /// surface through its vertices (its [`facet_sagitta`], `sagitta`; both relative to the
-    /// diagonal).
+    /// surface through its vertices (its
+    /// [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta), `sagitta`; both
+    /// relative to the diagonal).
     CoarserThanTolerance { sagitta: f64, epsilon: f64 },
 }
 
@@ -120,33 +121,11 @@ pub fn kink_warning(kinks_deg: &[f64]) -> Option<SurfaceWarning> {
     (edges > 0).then_some(SurfaceWarning::Kinks { edges, max_deg })
 }
 
-/// The median over the triangles of `mesh` of the height of the smooth surface through its
-/// vertices over the triangle's centroid, relative to the bounding-box diagonal. With the
-/// surface's second fundamental form II the height of a quadratic vanishing at the corners is
-/// (1/18) Σ_edges eᵀ II e at the centroid, and eᵀ II e ≈ ⟨n_b − n_a, b − a⟩ for the edge e = b − a
-/// with vertex normals n (exact on a sphere: ℓ²/(6R) for an equilateral triangle of side ℓ).
-pub fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
-    let p = &mesh.positions;
-    let sagitta: Vec<f64> = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let t = t.map(|v| v as usize);
-            let edge = |a: usize, b: usize| (vertex_normals[b] - vertex_normals[a]).dot(p[b] - p[a]);
-            (edge(t[0], t[1]) + edge(t[1], t[2]) + edge(t[2], t[0])).abs() / 18.0
-        })
-        .collect();
-    crate::stats::median(&sagitta).unwrap_or(0.0) / mesh.bbox_diagonal().max(f64::MIN_POSITIVE)
-}
-
-/// The coarseness warning of a mesh reference for the tolerance `epsilon` (relative to the
-/// diagonal): its [`facet_sagitta`] exceeds ε. None for a B-spline reference, whose panels are
-/// measured against the spline itself.
+/// The coarseness warning of a reference for the tolerance `epsilon` (relative to the
+/// diagonal): its [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta)
+/// exceeds ε (never for a B-spline reference).
 pub fn coarseness_warning(reference: &crate::reference::Reference, epsilon: f64) -> Option<SurfaceWarning> {
-    if reference.spline().is_some() {
-        return None;
-    }
-    let sagitta = facet_sagitta(reference.mesh(), reference.vertex_normals());
+    let sagitta = reference.facet_sagitta();
     (sagitta > epsilon).then_some(SurfaceWarning::CoarserThanTolerance { sagitta, epsilon })
 }
 

@@ -70,6 +70,7 @@ pub struct Reference {
     vertex_normals: OnceCell<Vec<DVec3>>,
     bvh: OnceCell<TriangleBvh>,
     boundary_bvh: OnceCell<TriangleBvh>,
+    facet_sagitta: OnceCell<f64>,
     curvature: RefCell<Option<(JetParams, Rc<CurvatureField>)>>,
     spline: Option<SplineReference>,
 }
@@ -103,6 +104,7 @@ impl Reference {
             vertex_normals: OnceCell::new(),
             bvh: OnceCell::new(),
             boundary_bvh: OnceCell::new(),
+            facet_sagitta: OnceCell::new(),
             curvature: RefCell::new(None),
             spline: None,
         }
@@ -162,6 +164,16 @@ impl Reference {
                 })
                 .collect();
             TriangleBvh::from_triangles(segments)
+        })
+    }
+
+    /// How far the facets lie from the smooth surface through the vertices, relative to the
+    /// diagonal ([`facet_sagitta`]): no smooth panel comes closer to the facets. 0 for a
+    /// B-spline reference, whose distances are measured to the spline.
+    pub fn facet_sagitta(&self) -> f64 {
+        *self.facet_sagitta.get_or_init(|| match self.spline {
+            Some(_) => 0.0,
+            None => facet_sagitta(&self.mesh, self.vertex_normals()),
         })
     }
 
@@ -248,4 +260,23 @@ impl Reference {
         let spline = self.spline.as_ref().map(|sp| SplineReference { surface: sp.surface.in_frame(t, s), ..sp.clone() });
         Self { spline, ..Self::with_triangulation(surface, mesh) }
     }
+}
+
+/// The median over the triangles of `mesh` of the height of the smooth surface through its
+/// vertices over the triangle's centroid, relative to the bounding-box diagonal. With the
+/// surface's second fundamental form II the height of a quadratic vanishing at the corners is
+/// (1/18) Σ_edges eᵀ II e at the centroid, and eᵀ II e ≈ ⟨n_b − n_a, b − a⟩ for the edge e = b − a
+/// with vertex normals n (exact on a sphere: ℓ²/(6R) for an equilateral triangle of side ℓ).
+pub fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
+    let p = &mesh.positions;
+    let sagitta: Vec<f64> = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let t = t.map(|v| v as usize);
+            let edge = |a: usize, b: usize| (vertex_normals[b] - vertex_normals[a]).dot(p[b] - p[a]);
+            (edge(t[0], t[1]) + edge(t[1], t[2]) + edge(t[2], t[0])).abs() / 18.0
+        })
+        .collect();
+    crate::stats::median(&sagitta).unwrap_or(0.0) / mesh.bbox_diagonal().max(f64::MIN_POSITIVE)
 }

@@ -62,6 +62,20 @@ impl<'s> JacobianSink<'s> {
         }
     }
 
+    /// The number of entries added so far (for [`Self::scale_rows_since`]).
+    #[inline]
+    pub fn mark(&self) -> usize {
+        self.vals.len()
+    }
+
+    /// Multiplies the entries added since `mark` by the scale of their row (`scales` indexed by
+    /// the term's rows).
+    pub fn scale_rows_since(&mut self, mark: usize, scales: &[f64]) {
+        for k in mark..self.vals.len() {
+            self.vals[k] *= scales[(self.rows[k] - self.row_offset) as usize];
+        }
+    }
+
     /// Switches residual `row` off at this point: it counts as 0 and its Jacobian row is ignored.
     #[inline]
     pub fn deactivate(&mut self, row: usize) {

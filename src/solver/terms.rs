@@ -245,9 +245,11 @@ impl<T: Term> Term for Hinge<T> {
 
 // ---------------------------------------------------------------------------------------------
 
-/// Dead-zone wrapper: residual g − τ sign(g) where |g| > τ, and 0 (row switched off) where
-/// |g| ≤ τ, for every residual g of the inner term: the tolerance band |g| ≤ τ, free inside and
-/// a least-squares wall outside. A NaN g stays active (so the solver rejects the point).
+/// Tolerance-band wrapper: for every residual g of the inner term, 0 inside the band |g| ≤ τ
+/// (row switched off) and a logarithmic wall outside, sign(g) τ ln(1 + e/τ) with e = |g| − τ
+/// (≈ e just outside, slope τ/(τ + e) further out): outliers are pulled in, but one that cannot
+/// come in (a reference coarser than the band) does not swamp the other terms. A NaN g stays
+/// active (so the solver rejects the point).
 #[derive(Clone, Debug)]
 pub struct Band<T> {
     name: String,
@@ -274,15 +276,21 @@ impl<T: Term> Term for Band<T> {
         self.inner.residual_count()
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        let mark = jac.mark();
         self.inner.eval(x, r, jac);
+        let tau = self.half_width;
+        let mut scales = vec![1.0; r.len()];
         for (i, ri) in r.iter_mut().enumerate() {
-            if ri.abs() <= self.half_width {
+            if ri.abs() <= tau {
                 *ri = 0.0;
                 jac.deactivate(i);
             } else {
-                *ri -= self.half_width * ri.signum();
+                let stretch = 1.0 + (ri.abs() - tau) / tau;
+                scales[i] = 1.0 / stretch;
+                *ri = ri.signum() * tau * stretch.ln();
             }
         }
+        jac.scale_rows_since(mark, &scales);
     }
     fn prepare(&mut self, x: &[f64]) {
         self.inner.prepare(x);

@@ -82,8 +82,9 @@ pub struct OptimizationFrame {
     pub x0: Vec<f64>,
     /// Hard-fixed vertices.
     pub fixed: Vec<usize>,
-    /// The tolerance band's half-width ([`StAdaptedParams::tolerance_band`]; the frame's
-    /// diagonal is 1).
+    /// The tolerance band's half-width: [`StAdaptedParams::tolerance_band`], at least the reference's
+    /// [`Reference::facet_sagitta`] (a coarse reference's facets are that far from any smooth
+    /// panel); the frame's diagonal is 1.
     pub tolerance: Option<f64>,
 }
 
@@ -120,7 +121,7 @@ impl OptimizationFrame {
             }
         }
         let fixed = (0..nv).filter(|&v| fixed[v]).collect();
-        Self { t, diag, reference: nref, mesh, topology, x0, fixed, tolerance: params.tolerance_band() }
+        Self { t, diag, reference: nref, mesh, topology, x0, fixed, tolerance: params.tolerance_band().map(|t| t.max(reference.facet_sagitta())) }
     }
 
     /// [`build_problem`] at the initial point, with the fixed vertices fixed.

@@ -375,8 +375,9 @@ pub fn build_problem<'a>(
     let tangent = ReferenceProximity::tangent(reference, offsets.clone());
     let mut point = ReferenceProximity::point(reference, offsets.clone(), scales);
     point.share_closest_with(&tangent);
-    let mut tangent_lookups = ReferenceProximity::tangent(reference, offsets);
-    tangent_lookups.share_closest_with(&tangent);
+    // The tolerance band's vertex rows: the tangent distance again, on the same lookups.
+    let mut vertex_band = ReferenceProximity::tangent(reference, offsets);
+    vertex_band.share_closest_with(&tangent);
     let lookups = tangent.lookups();
     let tangent_distance = problem.add_term(tangent, weights.tangent_distance);
     let point_distance = problem.add_term(point, weights.point_distance);
@@ -399,10 +400,8 @@ pub fn build_problem<'a>(
     let fairness = problem.add_term(lap, weights.fairness);
     // The tolerance band: vertices and face centroids farther than τ from the reference.
     let tolerance = tolerance.filter(|_| weights.tolerance > 0.0).map(|tau| {
-        let mut vertices = ReferenceProximity::tangent(reference, (0..nv).map(|v| vertex_offset(nf, v)).collect());
-        vertices.share_closest_with(&tangent_lookups);
         [
-            problem.add_term(Band::new(vertices, tau).with_name("vertex_tolerance"), weights.tolerance),
+            problem.add_term(Band::new(vertex_band, tau).with_name("vertex_tolerance"), weights.tolerance),
             problem.add_term(Band::new(face, tau).with_name("face_tolerance"), weights.tolerance),
         ]
     });
