@@ -231,7 +231,7 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     assert_eq!(summary.iterations, 45);
     assert_eq!(summary.remeshed_faces, rt.len() / 3);
     assert!(summary.metrics.max_vertex_sphere_residual <= 1e-8);
-    // Variant (a) trades a little kink for edge circles that stay over their edges (Sec. 7; the
+    // Variant (a) trades a little kink for edge circles that stay over their edges (Sec. 6.1; the
     // panel distances are tested in tests/st_adapted.rs).
     let (i, f) = (&summary.initial, &summary.metrics);
     assert!(f.mean_kink_angle_deg < 1.05 * i.mean_kink_angle_deg, "mean kink {} → {}", i.mean_kink_angle_deg, f.mean_kink_angle_deg);

@@ -11,7 +11,8 @@
 //!   that normal is ill-conditioned (the spheres are identical or meet at an angle below ~1e-9,
 //!   or both faces are planes) the edge falls back to the boundary rule below, on the more curved
 //!   sphere;
-//! - a boundary edge (one face) uses the plane through its two vertices and the rule's point m
+//! - a boundary edge (one face) uses its plane from [`SphereMesh::boundary_planes`] if it has
+//!   one, else the plane through its two vertices and the rule's point m
 //!   (`Through(m)`) or direction a (`Parallel(a)`). If m lies on the edge's line (or a is
 //!   parallel to it), the plane through the edge and the sphere normal at the first vertex is
 //!   used instead.

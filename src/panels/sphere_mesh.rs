@@ -31,7 +31,8 @@ pub struct SphereMesh {
     pub face_spheres: Vec<Sphere>,
     pub boundary_arcs: BoundaryArcRule,
     /// Per boundary edge (lo, hi): the normal of the plane that cuts its arc, instead of
-    /// `boundary_arcs` (the SQ method cuts along its support planes, Sec. 5.2).
+    /// `boundary_arcs` (the SQ method cuts along its support planes, Sec. 5.2; the ST method
+    /// along the reference boundary).
     pub boundary_planes: HashMap<[u32; 2], DVec3>,
     /// Connectivity of `mesh`, computed on first use ([`Self::topology`]).
     topology: OnceCell<Topology>,

@@ -1,8 +1,10 @@
 //! What the sphere methods assume of the reference, checked before they run: mean curvature of
 //! one sign (Sec. 6.3: central spheres flip through planes where H changes sign), no face folded
 //! back onto its neighbour, no sliver faces (a sliver's sphere through its three corners is huge
-//! and meets its neighbours at large kinks). A failed check is a warning the CLI, the report and
-//! the app show alike.
+//! and meets its neighbours at large kinks), facets no farther from the smooth surface than the
+//! tolerance ε (smooth panels stay that far from them). After a run, kinks over
+//! [`KINK_WARNING_DEG`] are reported too. A failed check is a warning the CLI, the report and the
+//! app show alike.
 
 // Negated float comparisons are deliberate: NaN counts as a kink and as a sliver.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -263,10 +263,12 @@ impl Reference {
 }
 
 /// The median over the triangles of `mesh` of the height of the smooth surface through its
-/// vertices over the triangle's centroid, relative to the bounding-box diagonal. With the
-/// surface's second fundamental form II the height of a quadratic vanishing at the corners is
+/// vertices over the triangle, relative to the bounding-box diagonal. With the surface's second
+/// fundamental form II the height of a quadratic vanishing at the corners is
 /// (1/18) Σ_edges eᵀ II e at the centroid, and eᵀ II e ≈ ⟨n_b − n_a, b − a⟩ for the edge e = b − a
-/// with vertex normals n (exact on a sphere: ℓ²/(6R) for an equilateral triangle of side ℓ).
+/// with vertex normals n (exact on a sphere: ℓ²/(6R) for an equilateral triangle of side ℓ). The
+/// edge terms are summed in absolute value, so that on a saddle, where they cancel at the
+/// centroid, the bulge elsewhere in the triangle still counts.
 pub fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
     let p = &mesh.positions;
     let sagitta: Vec<f64> = mesh
@@ -274,8 +276,8 @@ pub fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
         .iter()
         .map(|t| {
             let t = t.map(|v| v as usize);
-            let edge = |a: usize, b: usize| (vertex_normals[b] - vertex_normals[a]).dot(p[b] - p[a]);
-            (edge(t[0], t[1]) + edge(t[1], t[2]) + edge(t[2], t[0])).abs() / 18.0
+            let edge = |a: usize, b: usize| (vertex_normals[b] - vertex_normals[a]).dot(p[b] - p[a]).abs();
+            (edge(t[0], t[1]) + edge(t[1], t[2]) + edge(t[2], t[0])) / 18.0
         })
         .collect();
     crate::stats::median(&sagitta).unwrap_or(0.0) / mesh.bbox_diagonal().max(f64::MIN_POSITIVE)

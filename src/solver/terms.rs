@@ -258,8 +258,18 @@ pub struct Band<T> {
 }
 
 impl<T: Term> Band<T> {
+    /// `half_width` τ must be positive and finite.
     pub fn new(inner: T, half_width: f64) -> Self {
+        assert!(half_width > 0.0 && half_width.is_finite(), "a tolerance band needs 0 < τ < ∞, not {half_width}");
         Self { name: format!("band({})", inner.name()), inner, half_width }
+    }
+
+    pub fn inner(&self) -> &T {
+        &self.inner
+    }
+
+    pub fn inner_mut(&mut self) -> &mut T {
+        &mut self.inner
     }
 
     pub fn with_name(mut self, name: impl Into<String>) -> Self {

@@ -17,24 +17,39 @@ use glam::DVec3;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::reference::Reference;
 
-/// Per boundary edge (lo, hi) of `sphere_mesh`: the normal of its cutting plane. An edge whose
-/// reference boundary is farther than its length from its midpoint, or whose plane is undefined
-/// (a planar face), is left out and keeps the mesh's [`SphereMesh::boundary_arcs`] rule.
+/// The farthest the arc midpoint may lie from the chord midpoint, × the chord length: a
+/// quarter keeps the arc well under a half circle, so it is the minor arc the panel takes.
+const MAX_BULGE: f64 = 0.25;
+
+/// Per boundary edge (lo, hi) of `sphere_mesh`: the normal of its cutting plane. An edge is left
+/// out, and keeps the mesh's [`SphereMesh::boundary_arcs`] rule, when its face sphere is a plane
+/// (any cut is the straight edge), when the reference boundary is farther than
+/// [`MAX_BULGE`] × its length from its midpoint, or when the arc would bulge farther than that
+/// (a corner or a thin strip of the reference).
 pub fn boundary_planes(sphere_mesh: &SphereMesh, reference: &Reference) -> HashMap<[u32; 2], DVec3> {
     let topology = sphere_mesh.topology();
     let positions = &sphere_mesh.mesh.positions;
     let boundary = reference.boundary_bvh();
+    let diag = reference.diagonal();
     let mut planes = HashMap::new();
     for (e, &[lo, hi]) in topology.edges().iter().enumerate() {
         let &[(f, _)] = topology.edge_faces(e) else { continue };
+        let sphere = &sphere_mesh.face_spheres[f as usize];
+        // The threshold of `panels::edge_arcs::cut_arc` for a straight cut.
+        if sphere.a.abs() * diag <= 1e-12 {
+            continue;
+        }
         let (p, q) = (positions[lo as usize], positions[hi as usize]);
         let length = p.distance(q);
         let mid = 0.5 * (p + q);
-        let Some(hit) = boundary.closest_point_within(mid, length) else { continue };
+        let Some(hit) = boundary.closest_point_within(mid, MAX_BULGE * length) else { continue };
         let u = (q - p) / length;
         let b = hit.point - (hit.point - mid).dot(u) * u;
-        let arc_mid = sphere_mesh.face_spheres[f as usize].closest_point(b);
-        if let Some(n) = u.cross(arc_mid - mid).try_normalize() {
+        let bulge = sphere.closest_point(b) - mid;
+        if bulge.length() > MAX_BULGE * length {
+            continue;
+        }
+        if let Some(n) = u.cross(bulge).try_normalize() {
             planes.insert([lo, hi], n);
         }
     }

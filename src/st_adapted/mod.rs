@@ -3,8 +3,8 @@
 //! Steps ([`compute`]): jet fit of the reference → refusal when the central spheres are
 //! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
 //! a uniform field for a face count) → pliant remeshing → jet fit of the remeshed mesh (face
-//! central spheres) → initialization → staged optimization with [`crate::solver`] →
-//! metrics.
+//! central spheres) → initialization → staged optimization with [`crate::solver`] → boundary
+//! arcs along the reference boundary → metrics and warnings.
 //!
 //! **Initialization.** Every face sphere is the member of the pencil through its three vertices
 //! ([`Sphere::through_points_family`], orthonormal basis s₀ (plane), s₁) closest to the face's
@@ -29,15 +29,17 @@
 //!   keeps the panels, not only the vertices, near the reference;
 //! - `fairness`: uniform Laplacian v − mean(neighbours) at interior vertices (small weight);
 //! - `edge_circle` (variant (a) only): the sideways bulge of every interior edge's arc, zero when
-//!   the intersection circle is orthogonal to the reference (Sec. 7, Fig. 12 left) — see
+//!   the intersection circle is orthogonal to the reference (Sec. 6.1, Fig. 12 left) — see
 //!   [`terms::EdgeCircle`]; without it, two nearly tangent spheres of different radii meet in a
 //!   small circle whose arc overhangs the surface;
 //! - `orientation`: each face keeps an oriented area of at least 0.2 × its initial one (a hinge
-//!   barrier, [`terms::FaceOrientation`]), so gliding vertices never fold a face.
-//! - `vertex_tolerance`, `face_tolerance`: the tangent distance and the face distance beyond
-//!   ε/2 ([`params::StAdaptedParams::tolerance_band`], a dead zone [`crate::solver::Band`] with a
-//!   large weight): the proximity terms pull everything toward the reference, the band keeps the
-//!   outliers within the user's tolerance, so the panels stay within about 2ε of it.
+//!   barrier, [`terms::FaceOrientation`]), so gliding vertices never fold a face;
+//! - `vertex_tolerance`, `face_tolerance`: the tangent distance and the face distance beyond τ,
+//!   ε/2 or the reference's facet sagitta if that is larger
+//!   ([`params::StAdaptedParams::tolerance_band`]), in a [`crate::solver::Band`] with a large
+//!   weight (zero inside, a logarithmic wall outside): the proximity terms pull everything toward
+//!   the reference, the band keeps the outliers within the user's tolerance, so the panels stay
+//!   near 2ε of it, not only on average.
 //!
 //! The stages ([`params::OptimizationStage`]) scale the proximity weights (larger first, then
 //! relaxed). No projection is needed at the end: the spheres pass through their vertices to
@@ -184,7 +186,8 @@ pub struct StAdaptedResult {
     pub variant: EdgeArcs,
     /// Final term statistics.
     pub terms: Vec<TermStats>,
-    /// The method's assumptions the reference fails (H of one sign, no folds, no slivers).
+    /// The method's assumptions the reference fails (H of one sign, no folds, no slivers, not
+    /// coarser than ε) and the kinks over the warning angle.
     pub warnings: Vec<SurfaceWarning>,
 }
 
@@ -295,7 +298,7 @@ pub fn compute(
     let angle_iteration_median_ms = median(&iteration_ms);
     let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg()));
-    if let crate::remeshing::Sizing::Adaptive { epsilon } = params.sizing {
+    if let Some(epsilon) = params.epsilon() {
         warnings.extend(coarseness_warning(reference, epsilon));
     }
     Ok(StAdaptedResult {

@@ -96,10 +96,18 @@ impl StAdaptedParams {
 
     /// The tolerance band's half-width, relative to the diagonal: ε/2 of an adaptive sizing, so
     /// that vertices and face centroids stay within ε/2 and the panels, which bulge by about ε
-    /// between them, within 2ε. None for a face-count target, which has no ε.
+    /// between them, within 2ε. None for a face-count target, which has no ε. The optimization
+    /// widens it to the reference's facet sagitta where that is larger (a reference coarser than
+    /// ε/2; coarser than ε it is also warned about).
     pub fn tolerance_band(&self) -> Option<f64> {
+        self.epsilon().map(|epsilon| 0.5 * epsilon)
+    }
+
+    /// The tolerance ε of an adaptive sizing, relative to the diagonal (None for a face-count
+    /// target or no remeshing).
+    pub fn epsilon(&self) -> Option<f64> {
         match self.sizing {
-            Sizing::Adaptive { epsilon } => Some(0.5 * epsilon),
+            Sizing::Adaptive { epsilon } => Some(epsilon),
             _ => None,
         }
     }

@@ -198,7 +198,7 @@ impl Term for FaceDistance<'_> {
     }
 }
 
-/// Variant (a) (Fig. 12 left, Sec. 7 "nice intersection circles"): the edge circle of two
+/// Variant (a) (Fig. 12 left, Sec. 6.1 "nice intersection circles"): the edge circle of two
 /// adjacent faces is the intersection circle of their spheres, and its arc between the edge's
 /// vertices p, q should stay over the edge, not bulge sideways out of the surface's footprint.
 /// Residual per interior edge: the arc's sideways bulge (L²/8) κ sin φ, with L = |p − q|, κ the
