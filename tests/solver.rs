@@ -115,8 +115,7 @@ fn fd_jacobian_hinge() {
     assert!((stats[0].energy - 0.64).abs() < 1e-12);
 }
 
-/// The tolerance band |g| ≤ τ: inside, nothing; outside, sign(g) τ ln(1 + (|g| − τ)/τ), on
-/// both sides.
+/// The tolerance band |g| ≤ τ: inside, nothing; outside, sign(g) τ ln(|g|/τ), on both sides.
 #[test]
 fn fd_jacobian_band() {
     // Inner residuals 1 − x_i: 0.8, −1, 1.5, −0.3; with τ = 0.5 the first three are outside.

@@ -109,6 +109,12 @@ pub fn edge_arc(
     cut_arc(p, q, n, &s_cut, &tris, diag)
 }
 
+/// Whether every plane cut of `s` is a straight edge: a plane, or a sphere so flat
+/// (r > 5e11·diag) that it deviates from its tangent plane by < 1e-12·diag over the model.
+pub fn cuts_straight(s: &Sphere, diag: f64) -> bool {
+    s.a.abs() * diag <= 1e-12
+}
+
 /// The arc p→q of the circle where the plane through p with normal `n` (made orthogonal to the
 /// edge) cuts the sphere `s`; the arc nearer the faces (given by their triangles).
 pub fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DVec3; 3]>], diag: f64) -> Arc {
@@ -118,9 +124,7 @@ pub fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DVec3; 3]
     let n = (n - n.dot(eh) * eh).normalize();
     let w = n.cross(eh);
     let mid = 0.5 * (p + q);
-    // A plane, or a sphere so flat (r > 5e11·diag) that it deviates from its tangent plane by
-    // < 1e-12·diag over the model: a plane cut of it is a straight edge.
-    if s.a.abs() * diag <= 1e-12 {
+    if cuts_straight(s, diag) {
         return Arc::straight(p, q, n);
     }
     // Circle centre = M + h w, h = ⟨C − p, w⟩ with C − p = −∇ψ(p)/(2a).

@@ -269,7 +269,7 @@ impl Reference {
 /// with vertex normals n (exact on a sphere: ℓ²/(6R) for an equilateral triangle of side ℓ). The
 /// edge terms are summed in absolute value, so that on a saddle, where they cancel at the
 /// centroid, the bulge elsewhere in the triangle still counts.
-pub fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
+fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
     let p = &mesh.positions;
     let sagitta: Vec<f64> = mesh
         .triangles

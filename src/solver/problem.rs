@@ -68,11 +68,10 @@ impl<'s> JacobianSink<'s> {
         self.vals.len()
     }
 
-    /// Multiplies the entries added since `mark` by the scale of their row (`scales` indexed by
-    /// the term's rows).
-    pub fn scale_rows_since(&mut self, mark: usize, scales: &[f64]) {
+    /// Multiplies the entries added since `mark` by `scale(row)` (rows of the term).
+    pub fn scale_rows_since(&mut self, mark: usize, scale: impl Fn(usize) -> f64) {
         for k in mark..self.vals.len() {
-            self.vals[k] *= scales[(self.rows[k] - self.row_offset) as usize];
+            self.vals[k] *= scale((self.rows[k] - self.row_offset) as usize);
         }
     }
 

@@ -246,10 +246,10 @@ impl<T: Term> Term for Hinge<T> {
 // ---------------------------------------------------------------------------------------------
 
 /// Tolerance-band wrapper: for every residual g of the inner term, 0 inside the band |g| ≤ τ
-/// (row switched off) and a logarithmic wall outside, sign(g) τ ln(1 + e/τ) with e = |g| − τ
-/// (≈ e just outside, slope τ/(τ + e) further out): outliers are pulled in, but one that cannot
-/// come in (a reference coarser than the band) does not swamp the other terms. A NaN g stays
-/// active (so the solver rejects the point).
+/// (row switched off) and a logarithmic wall outside, sign(g) τ ln(|g|/τ) (≈ |g| − τ just
+/// outside, slope τ/|g| further out): outliers are pulled in, but one that cannot come in (a
+/// reference coarser than the band) does not swamp the other terms. A NaN g stays active (so the
+/// solver rejects the point).
 #[derive(Clone, Debug)]
 pub struct Band<T> {
     name: String,
@@ -289,18 +289,18 @@ impl<T: Term> Term for Band<T> {
         let mark = jac.mark();
         self.inner.eval(x, r, jac);
         let tau = self.half_width;
-        let mut scales = vec![1.0; r.len()];
+        // The stretch |g|/τ, written 1 + (|g| − τ)/τ; d/dg [τ ln(stretch)] = 1/stretch (rows
+        // inside the band are switched off below).
+        let stretch = |g: f64| 1.0 + (g.abs() - tau) / tau;
+        jac.scale_rows_since(mark, |i| 1.0 / stretch(r[i]).max(1.0));
         for (i, ri) in r.iter_mut().enumerate() {
             if ri.abs() <= tau {
                 *ri = 0.0;
                 jac.deactivate(i);
             } else {
-                let stretch = 1.0 + (ri.abs() - tau) / tau;
-                scales[i] = 1.0 / stretch;
-                *ri = ri.signum() * tau * stretch.ln();
+                *ri = ri.signum() * tau * stretch(*ri).ln();
             }
         }
-        jac.scale_rows_since(mark, &scales);
     }
     fn prepare(&mut self, x: &[f64]) {
         self.inner.prepare(x);

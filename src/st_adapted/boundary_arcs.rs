@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
+use crate::panels::edge_arcs::cuts_straight;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::reference::Reference;
 
@@ -35,8 +36,7 @@ pub fn boundary_planes(sphere_mesh: &SphereMesh, reference: &Reference) -> HashM
     for (e, &[lo, hi]) in topology.edges().iter().enumerate() {
         let &[(f, _)] = topology.edge_faces(e) else { continue };
         let sphere = &sphere_mesh.face_spheres[f as usize];
-        // The threshold of `panels::edge_arcs::cut_arc` for a straight cut.
-        if sphere.a.abs() * diag <= 1e-12 {
+        if cuts_straight(sphere, diag) {
             continue;
         }
         let (p, q) = (positions[lo as usize], positions[hi as usize]);
