@@ -97,6 +97,9 @@ fn main() {
                     }
                 }
             }
+            for w in &r.warnings {
+                println!("<!-- {name} ({variant:?}): warning: {w} -->");
+            }
             quality.push((name.clone(), variant, m.clone(), r.iterations, r.angle_iteration_median_ms, seconds, r.warnings.len()));
         }
     }

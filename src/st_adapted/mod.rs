@@ -32,6 +32,11 @@
 //!   the intersection circle is orthogonal to the reference (Sec. 6.1, Fig. 12 left) — see
 //!   [`terms::EdgeCircle`]; without it, two nearly tangent spheres of different radii meet in a
 //!   small circle whose arc overhangs the surface;
+//! - `sagitta_match` (variant (a) only, with a tolerance ε): the two panels of an interior edge
+//!   bulge alike over it, within τ ([`terms::SagittaMatch`] in a [`crate::solver::Band`] of the
+//!   tolerance band's weight): near the boundary of a surface whose H changes sign, a nearly flat
+//!   sphere beside a small one meets it in a circle whose arc overhangs the boundary, which the
+//!   edge-circle term's small-arc estimate underrates (conical1 at ε = 2e-3: 4.1ε → 1.8ε);
 //! - `orientation`: each face keeps an oriented area of at least 0.2 × its initial one (a hinge
 //!   barrier, [`terms::FaceOrientation`]), so gliding vertices never fold a face;
 //! - `vertex_tolerance`, `face_tolerance`: the tangent distance and the face distance beyond τ,

@@ -20,6 +20,10 @@ pub struct StAdaptedWeights {
     /// Variant (a): the sideways bulge of the edge circles' arcs (`terms::EdgeCircle`); not
     /// used by variant (b), whose arcs are cut by bisecting planes.
     pub edge_circle: f64,
+    /// Variant (a): adjacent panels whose sagittas over their common edge differ by more than
+    /// the tolerance band's τ (`terms::SagittaMatch` in a `solver::Band`); not used by variant
+    /// (b), nor without a tolerance ε.
+    pub sagitta_match: f64,
     /// Barrier against folded faces (`FaceOrientation` under a hinge).
     pub orientation: f64,
     /// The tolerance band: vertices and face centroids farther from the reference than
@@ -37,6 +41,7 @@ impl Default for StAdaptedWeights {
             face_distance: 100.0,
             fairness: 1.0,
             edge_circle: 10.0,
+            sagitta_match: 1e4,
             orientation: 1000.0,
             tolerance: 1e4,
         }
@@ -86,11 +91,11 @@ impl StAdaptedParams {
     }
 
     /// The weights the variant uses: variant (b) cuts its arcs by bisecting planes and has no
-    /// edge-circle term.
+    /// edge-circle or sagitta-match term.
     pub fn variant_weights(&self) -> StAdaptedWeights {
         match self.variant {
             EdgeArcs::Intersection => self.weights.clone(),
-            EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, ..self.weights.clone() },
+            EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, sagitta_match: 0.0, ..self.weights.clone() },
         }
     }
 

@@ -277,6 +277,42 @@ impl Term for EdgeCircle {
     }
 }
 
+/// Variant (a): the two panels of an interior edge pq bulge alike over it. A normalized sphere
+/// (curvature 2a) rises (L²/8)·2a over a chord of length L = |p − q|, so the panels' sagittas
+/// over pq differ by (L²/4)(a_f − a_g), the residual. Where that exceeds τ (in a [`Band`]), the
+/// spheres meet in a small circle whose arc leaves the surface sideways, the overhang that
+/// [`EdgeCircle`]'s small-arc estimate underrates near the boundary of a surface whose H
+/// changes sign (a nearly flat sphere beside a small one, Sec. 6.3).
+pub struct SagittaMatch {
+    spheres: FaceSpheres,
+    /// (f, g, offset of p, offset of q) per interior edge.
+    edges: Vec<(usize, usize, usize, usize)>,
+}
+
+impl Term for SagittaMatch {
+    fn name(&self) -> &str {
+        "sagitta_match"
+    }
+    fn residual_count(&self) -> usize {
+        self.edges.len()
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        self.spheres.with(x, |m| {
+            for (k, &(f, g, po, qo)) in self.edges.iter().enumerate() {
+                let d = v3(x, po) - v3(x, qo);
+                let l2 = d.length_squared() / 4.0;
+                let da = m[f].sphere[0] - m[g].sphere[0];
+                r[k] = l2 * da;
+                self.spheres.add_chain(jac, k, f, &m[f], &[l2, 0.0, 0.0, 0.0, 0.0]);
+                self.spheres.add_chain(jac, k, g, &m[g], &[-l2, 0.0, 0.0, 0.0, 0.0]);
+                let dp = d * (da / 2.0);
+                jac.add_block(k, po, &dp.to_array());
+                jac.add_block(k, qo, &(-dp).to_array());
+            }
+        });
+    }
+}
+
 /// Handles of the terms of [`build_problem`].
 #[derive(Clone, Debug)]
 pub struct StAdaptedTerms {
@@ -286,6 +322,8 @@ pub struct StAdaptedTerms {
     pub face_distance: TermId,
     pub fairness: TermId,
     pub edge_circle: Option<TermId>,
+    /// The sagitta match band (variant (a), with a tolerance).
+    pub sagitta_match: Option<TermId>,
     /// The tolerance band (vertices, face centroids), when the problem has a tolerance.
     pub tolerance: Option<[TermId; 2]>,
     pub orientation: TermId,
@@ -342,7 +380,8 @@ pub fn unpack(x: &[f64], triangles: &[[u32; 3]], vertices: usize) -> (Vec<DVec3>
 /// the reference, both in the same coordinates; `topology` is the mesh's. `x` is the starting
 /// point (for the initial face orientations and the first closest-point lookups). `tolerance`:
 /// the half-width τ of the tolerance band (same units), beyond which vertices and face centroids
-/// pay `weights.tolerance` ([`Band`]).
+/// pay `weights.tolerance` ([`Band`]), and adjacent panels whose sagittas differ by more pay
+/// `weights.sagitta_match` ([`SagittaMatch`]).
 pub fn build_problem<'a>(
     mesh: &TriMesh,
     topology: &Topology,
@@ -399,7 +438,7 @@ pub fn build_problem<'a>(
     }
     let fairness = problem.add_term(lap, weights.fairness);
     // The tolerance band: vertices and face centroids farther than τ from the reference.
-    let tolerance = tolerance.filter(|_| weights.tolerance > 0.0).map(|tau| {
+    let tolerance_terms = tolerance.filter(|_| weights.tolerance > 0.0).map(|tau| {
         [
             problem.add_term(Band::new(vertex_band, tau).with_name("vertex_tolerance"), weights.tolerance),
             problem.add_term(Band::new(face, tau).with_name("face_tolerance"), weights.tolerance),
@@ -407,15 +446,20 @@ pub fn build_problem<'a>(
     });
     let orientation =
         problem.add_term(Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"), weights.orientation);
+    // (f, g, offset of p, offset of q) per interior edge pq.
+    let edge_faces: Vec<_> = interior.iter().map(|&(a, b, f, g)| (f, g, vertex_offset(nf, a as usize), vertex_offset(nf, b as usize))).collect();
     let edge_circle = (weights.edge_circle > 0.0).then(|| {
-        let edges = interior.iter().map(|&(a, b, f, g)| (f, g, vertex_offset(nf, a as usize), vertex_offset(nf, b as usize))).collect();
         let ends = interior.iter().map(|&(a, b, _, _)| (a as usize, b as usize)).collect();
         // Until the proximity terms have looked the vertices up: the mean of the faces' normals.
         let normals = interior
             .iter()
             .map(|&(_, _, f, g)| (mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero()).normalize_or_zero())
             .collect();
-        problem.add_term(EdgeCircle { spheres: spheres.clone(), edges, ends, lookups: lookups.clone(), normals }, weights.edge_circle)
+        problem.add_term(EdgeCircle { spheres: spheres.clone(), edges: edge_faces.clone(), ends, lookups: lookups.clone(), normals }, weights.edge_circle)
     });
-    (problem, StAdaptedTerms { angle, tangent_distance, point_distance, face_distance, fairness, edge_circle, orientation, tolerance })
+    let sagitta_match = tolerance.filter(|_| weights.sagitta_match > 0.0).map(|tau| {
+        problem.add_term(Band::new(SagittaMatch { spheres: spheres.clone(), edges: edge_faces }, tau).with_name("sagitta_match"), weights.sagitta_match)
+    });
+    let terms = StAdaptedTerms { angle, tangent_distance, point_distance, face_distance, fairness, edge_circle, sagitta_match, orientation, tolerance: tolerance_terms };
+    (problem, terms)
 }
