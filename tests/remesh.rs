@@ -15,6 +15,7 @@ use spherical_faces::remeshing::{
     influence_zone, local_spheres_orthogonal, mean_edge_length, pliant_remesh, pliant_remesh_with_stats, RemeshParams,
     SizingBounds, SizingField, DEFAULT_EPSILON,
 };
+use spherical_faces::remeshing::influence_zones::{limit_gradation, GRADATION};
 use spherical_faces::samples::{cylinder_patch, sphere_patch, Sample};
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::progress::Cancelled;
@@ -211,6 +212,27 @@ fn sphere_patch_sizing_is_g_max_everywhere() {
     assert_eq!(sizing.at(DVec3::new(0.3, -0.2, 6.0)), g_max);
 }
 
+/// The gradation limit: afterwards g grows by at most GRADATION per unit length along every
+/// edge, no value rises, and the smallest value stays.
+#[test]
+fn gradation_limits_the_growth_of_g_along_edges() {
+    let mesh = sphere_patch(5.0, 0.6, 16);
+    let topo = Topology::new(&mesh);
+    let mut rng = spherical_faces::rng::Rng(42);
+    let before: Vec<f64> = (0..mesh.vertex_count()).map(|_| rng.range(0.05, 3.0)).collect();
+    let mut g = before.clone();
+    limit_gradation(&mesh, &topo, &mut g, GRADATION);
+    for &[a, b] in topo.edges() {
+        let (a, b) = (a as usize, b as usize);
+        let d = mesh.positions[a].distance(mesh.positions[b]);
+        assert!((g[a] - g[b]).abs() <= GRADATION * d * (1.0 + 1e-12), "edge {a}-{b}: {} vs {} over {d}", g[a], g[b]);
+    }
+    assert!(g.iter().zip(&before).all(|(x, y)| x <= y));
+    let lowest = before.iter().copied().fold(f64::INFINITY, f64::min);
+    assert_eq!(g.iter().copied().fold(f64::INFINITY, f64::min), lowest);
+    assert!(g.iter().zip(&before).any(|(x, y)| x < y), "the random field was graded already");
+}
+
 /// A boundary that turns within the surface caps g there: a disc cut from the sphere of radius 5
 /// by the circle of polar angle 0.6 (radius r = 5 sin 0.6, geodesic curvature
 /// κ_g = √(1/r² − 1/5²)) gets g = √(8ε/κ_g) on its boundary, so that a boundary arc (nearly a
@@ -254,7 +276,18 @@ fn a_turning_boundary_caps_the_sizing() {
         capped += 1;
     }
     assert!(capped > 0, "no boundary vertex capped");
-    assert!((0..disc.vertex_count()).any(|v| !topo.is_boundary_vertex(v) && sizing.values()[v] == g_max));
+    assert_g_max_or_graded(&disc, &topo, sizing.values(), g_max);
+}
+
+/// Every interior value of g is g_max or graded: a neighbour's value plus GRADATION times their
+/// distance (the sphere fits everywhere, so only the boundary cap and the gradation lower g).
+fn assert_g_max_or_graded(mesh: &TriMesh, topo: &Topology, g: &[f64], g_max: f64) {
+    for v in (0..mesh.vertex_count()).filter(|&v| !topo.is_boundary_vertex(v) && g[v] != g_max) {
+        let graded = topo.vertex_neighbors(v).iter().any(|&u| {
+            (g[v] - g[u as usize] - GRADATION * mesh.positions[v].distance(mesh.positions[u as usize])).abs() < 1e-12 * g_max
+        });
+        assert!(g[v] < g_max && graded, "interior vertex {v}: g {} neither g_max nor graded", g[v]);
+    }
 }
 
 #[test]
@@ -275,8 +308,9 @@ fn local_spheres_orthogonal_to_omega_reproduce_a_sphere_orthogonal_to_it() {
     let bounds = SizingBounds::for_mesh(&mesh, &topo);
     let sizing =
         SizingField::from_sphere_fn(&mesh, &topo, &|i| spheres[i], 1e-4 * diag, bounds, &mut spherical_faces::progress::ignore).unwrap();
-    // g_max inside; the boundary is capped (see the sphere patch test).
-    assert!((0..mesh.vertex_count()).all(|v| topo.is_boundary_vertex(v) || sizing.values()[v] == bounds.g_max));
+    // g_max inside, but for the gradation away from the capped boundary (see the sphere patch
+    // test).
+    assert_g_max_or_graded(&mesh, &topo, sizing.values(), bounds.g_max);
     // And on a surface that is not spherical the zones are finite.
     let cyl = cylinder_patch(2.0, 1.5, 8.0, 24, 48);
     let ctopo = Topology::new(&cyl);

@@ -42,6 +42,13 @@
 //! fits (a spherical patch) gets faces as large as g_max whose boundary arcs leave the reference's
 //! footprint by far more than ε.
 //!
+//! **Gradation.** g may grow by at most [`GRADATION`] per unit length along the mesh
+//! ([`limit_gradation`], after the clamping and the boundary cap). Without it a surface that one
+//! sphere fits gets g_max faces right beside the boundary's short ones (chebyshev_sphere at
+//! ε = 4e-4: edges from 0.013 to 0.38 of the diagonal on a sphere of radius 0.38); the remesher
+//! cannot project the vertices of such a transition without flipping faces, leaves them up to
+//! 0.04 of the diagonal off the reference, and the panels follow (92ε).
+//!
 //! **Variant (Fig. 16, bottom).** Any per-vertex sphere can replace the central sphere
 //! ([`SizingField::from_sphere_fn`]); [`local_spheres_orthogonal`] gives the local least-squares
 //! spheres orthogonal to an absolute sphere Ω.
@@ -61,14 +68,16 @@ use crate::geometry::sphere::Sphere;
 use crate::progress::{ignore, Cancelled, OnProgress, Progress};
 
 /// Default ε, relative to the bounding-box diagonal. On the default sample (`Sample::Dome`, 3456
-/// triangles) it gives g ∈ [1.5, 4.4] m and 346 faces after 10 rounds; 4× larger gives 86 faces,
-/// 4× smaller 1630 (measured in `tests/remesh.rs`).
+/// triangles) it gives g ∈ [1.0, 3.9] m and 367 faces after 10 rounds; 4× larger gives 107
+/// faces, 4× smaller 1715 (measured in `tests/remesh.rs`).
 pub const DEFAULT_EPSILON: f64 = 4e-4;
 
 /// Default g_min as a fraction of the mean edge length of the reference.
 pub const DEFAULT_G_MIN_EDGE_FACTOR: f64 = 0.5;
 /// Default g_max as a fraction of the bounding-box diagonal.
 pub const DEFAULT_G_MAX_DIAGONAL_FACTOR: f64 = 0.25;
+/// How fast g may grow along the surface, per unit length ([`limit_gradation`]).
+pub const GRADATION: f64 = 0.5;
 
 /// How often the progress callback is called, in vertices.
 const PROGRESS_EVERY: usize = 1024;
@@ -191,6 +200,7 @@ impl SizingField {
         }
         values.resize(mesh.vertex_count(), bounds.g_min);
         cap_at_boundary(mesh, topo, &mut values, eps_abs);
+        limit_gradation(mesh, topo, &mut values, GRADATION);
         progress(Progress::new("sizing", n, n))?;
         Ok(Self::from_values(mesh, values, bounds))
     }
@@ -278,6 +288,34 @@ impl SizingField {
             sum += v;
         }
         (lo, sum / self.values.len() as f64, hi)
+    }
+}
+
+/// Limits the growth of g along the mesh edges to `gradation` per unit length: g(v) ≤ g(u) +
+/// gradation · |u − v| over every path (Dijkstra from all vertices at once), so large faces do not
+/// meet small ones abruptly.
+pub fn limit_gradation(mesh: &TriMesh, topo: &Topology, values: &mut [f64], gradation: f64) {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let n = values.len().min(topo.vertex_count());
+    let key = |g: f64| Reverse(g.to_bits());
+    let mut heap: BinaryHeap<(Reverse<u64>, u32)> = (0..n).filter(|&v| values[v] >= 0.0).map(|v| (key(values[v]), v as u32)).collect();
+    while let Some((Reverse(bits), u)) = heap.pop() {
+        let g = f64::from_bits(bits);
+        if g > values[u as usize] {
+            continue;
+        }
+        for &w in topo.vertex_neighbors(u as usize) {
+            let w = w as usize;
+            if w >= n {
+                continue;
+            }
+            let candidate = g + gradation * mesh.positions[u as usize].distance(mesh.positions[w]);
+            if candidate < values[w] {
+                values[w] = candidate;
+                heap.push((key(candidate), w as u32));
+            }
+        }
     }
 }
 

@@ -2,8 +2,8 @@
 //!
 //! Steps ([`compute`]): jet fit of the reference → refusal when the central spheres are
 //! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
-//! a uniform field for a face count) → pliant remeshing → jet fit of the remeshed mesh (face
-//! central spheres) → initialization → staged optimization with [`crate::solver`] → boundary
+//! a uniform field for a face count) → pliant remeshing → the reference's central spheres at the
+//! remeshed vertices ([`Reference::central_spheres_at`]) → initialization → staged optimization with [`crate::solver`] → boundary
 //! arcs along the reference boundary → metrics and warnings.
 //!
 //! **Initialization.** Every face sphere is the member of the pencil through its three vertices
@@ -79,9 +79,7 @@ use std::fmt;
 use glam::DVec3;
 
 use crate::congruence::central_spheres::UnusableCentralSpheres;
-use crate::congruence::central_spheres::jet_fit;
 use crate::geometry::mesh::TriMesh;
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::panel::Panel;
@@ -245,14 +243,12 @@ pub fn compute(
     timings.lap("remesh");
     on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
 
-    // Central spheres of the remeshed mesh and the initialization.
+    // The reference's central spheres at the remeshed vertices, and the initialization (a jet
+    // fit on the coarser remeshed mesh would be noisier where its faces are large).
     step(on_event, "init")?;
     timings.skip();
     let central_spheres = match &sizing {
-        Some(_) => {
-            let topo = Topology::new(&remeshed);
-            jet_fit(&remeshed, &topo, &params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?.central_spheres
-        }
+        Some(_) => reference.central_spheres_at(&field, &remeshed.positions),
         None => field.central_spheres.clone(),
     };
     let init = initial_spheres(&remeshed, &central_spheres);
