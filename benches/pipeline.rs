@@ -14,8 +14,9 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::progress::{native_clock_ms, Clock};
+use spherical_faces::solver::PhaseTimes;
 use spherical_faces::bench_workloads::{
-    result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
+    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
     REMESH_SAMPLES, SQ_SAMPLES,
 };
 
@@ -112,7 +113,14 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
     let name = format!("angle_iteration_{faces}");
     info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
-    bencher.bench_local(|| record(&name, w.sample(&mut problem, &mut solver)));
+    let (mut phases, mut iterations) = (PhaseTimes::default(), 0);
+    bencher.bench_local(|| {
+        let (ms, p) = w.sample_with_phases(&mut problem, &mut solver);
+        phases.add(&p);
+        iterations += ms.len();
+        record(&name, ms)
+    });
+    info(&format!("{name} phases"), phase_line(&name, &phases, iterations));
 }
 
 /// One whole SQ run on tunnel_arch (20×20 grid, about 237 quads) per sample; the `bench` lines

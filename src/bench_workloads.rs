@@ -34,7 +34,7 @@ use crate::import::{import_file, ImportedFile};
 use crate::samples;
 use crate::sq;
 use crate::sq::params::SqParams;
-use crate::solver::{Problem, Solver, SolverOptions};
+use crate::solver::{PhaseTimes, Problem, Solver, SolverOptions};
 use crate::st_adapted::initialization::initial_spheres;
 use crate::st_adapted::optimization::OptimizationFrame;
 use crate::st_adapted::params::StAdaptedParams;
@@ -226,8 +226,14 @@ impl AngleWorkload {
     /// The timed work of one sample: [`ANGLE_ITERATIONS_PER_SAMPLE`] iterations from the initial
     /// point; returns the per-iteration times (empty without a clock).
     pub fn sample(&self, problem: &mut Problem<'_>, solver: &mut Solver) -> Vec<f64> {
+        self.sample_with_phases(problem, solver).0
+    }
+
+    /// [`Self::sample`] with the solver's phase times (evaluate, assemble, factorize + solve).
+    pub fn sample_with_phases(&self, problem: &mut Problem<'_>, solver: &mut Solver) -> (Vec<f64>, PhaseTimes) {
         let mut x = self.frame.x0.clone();
-        solver.solve(problem, &mut x, |_| true).iteration_ms
+        let report = solver.solve(problem, &mut x, |_| true);
+        (report.iteration_ms, report.phase_ms)
     }
 
     /// `n` samples; the per-iteration times of all of them. A first, untimed sample does the
@@ -238,6 +244,18 @@ impl AngleWorkload {
         self.sample(&mut problem, &mut solver);
         (0..n).flat_map(|_| self.sample(&mut problem, &mut solver)).collect()
     }
+}
+
+/// The phase times per iteration of `phases` summed over `iterations`, as an informational line:
+/// where an iteration's time goes, natively and in wasm.
+pub fn phase_line(name: &str, phases: &PhaseTimes, iterations: usize) -> String {
+    let n = iterations.max(1) as f64;
+    format!(
+        "# {name} per iteration: evaluate {:.3} ms, assemble {:.3} ms, factorize+solve {:.3} ms",
+        phases.evaluate / n,
+        phases.assemble / n,
+        phases.factorize_solve / n
+    )
 }
 
 // --- 4. SQ congruence iterations ----------------------------------------------------------------
@@ -377,11 +395,14 @@ where
         let mut solver = w.solver(clock);
         w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
         pause().await;
-        let mut ms = Vec::new();
+        let (mut ms, mut phases) = (Vec::new(), PhaseTimes::default());
         for _ in 0..ANGLE_SAMPLES {
-            ms.extend(w.sample(&mut problem, &mut solver));
+            let (m, p) = w.sample_with_phases(&mut problem, &mut solver);
+            ms.extend(m);
+            phases.add(&p);
             pause().await;
         }
+        out(&phase_line(&format!("angle_iteration_{faces}"), &phases, ms.len()));
         out(&result_line(&format!("angle_iteration_{faces}"), &ms));
     }
 
