@@ -147,6 +147,20 @@ impl Sphere {
         Self { a: w0 * s0.a + w1 * s1.a, b: w0 * s0.b + w1 * s1.b, c: w0 * s0.c + w1 * s1.c }
     }
 
+    /// The sum of coefficient vectors (a, b, c) (each already weighted by the caller), normalized
+    /// where it is a real sphere or plane (bᵀb − 4ac > 0): the blend of neighbouring spheres
+    /// oriented alike, e.g. the central spheres at a face's or a triangle's corners.
+    pub fn blend(terms: impl IntoIterator<Item = [f64; 5]>) -> Self {
+        let mut sum = [0.0; 5];
+        for t in terms {
+            for (s, t) in sum.iter_mut().zip(t) {
+                *s += t;
+            }
+        }
+        let sum = Sphere::from_array(sum);
+        if sum.discriminant() > 0.0 { sum.normalized() } else { sum }
+    }
+
     /// The oriented normal b − 2a x. Unit at points of a normalized sphere; for r > 0 it points to
     /// the centre, for a plane it is b. ψ decreases along it.
     pub fn normal_at(&self, x: DVec3) -> DVec3 {

@@ -227,15 +227,8 @@ impl Reference {
             .map(|&p| {
                 let hit = self.closest_point_near(p, previous).expect("a validated reference has faces");
                 previous = Some(hit.triangle);
-                let mut c = [0.0; 5];
-                for (&v, &w) in self.mesh.triangles[hit.triangle].iter().zip(&hit.barycentric) {
-                    let s = field.central_spheres[v as usize].to_array();
-                    for i in 0..5 {
-                        c[i] += w * s[i];
-                    }
-                }
-                let c = Sphere::from_array(c);
-                if c.discriminant() > 0.0 { c.normalized() } else { c }
+                let corners = self.mesh.triangles[hit.triangle];
+                Sphere::blend(corners.iter().zip(hit.barycentric).map(|(&v, w)| field.central_spheres[v as usize].to_array().map(|a| w * a)))
             })
             .collect()
     }

@@ -24,16 +24,7 @@ pub fn closest_family_member(p: [DVec3; 3], target: &Sphere) -> Sphere {
 pub fn initial_spheres(mesh: &TriMesh, vertex_spheres: &[Sphere]) -> Vec<Sphere> {
     (0..mesh.face_count())
         .map(|f| {
-            let t = mesh.triangles[f];
-            let mut c = [0.0; 5];
-            for &v in &t {
-                let a = vertex_spheres[v as usize].to_array();
-                for i in 0..5 {
-                    c[i] += a[i] / 3.0;
-                }
-            }
-            let c = Sphere::from_array(c);
-            let c = if c.discriminant() > 0.0 { c.normalized() } else { c };
+            let c = Sphere::blend(mesh.triangles[f].map(|v| vertex_spheres[v as usize].to_array().map(|a| a / 3.0)));
             closest_family_member(mesh.face_points(f), &c)
         })
         .collect()

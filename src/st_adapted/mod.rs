@@ -3,8 +3,8 @@
 //! Steps ([`compute`]): jet fit of the reference → refusal when the central spheres are
 //! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
 //! a uniform field for a face count) → pliant remeshing → the reference's central spheres at the
-//! remeshed vertices ([`Reference::central_spheres_at`]) → initialization → staged optimization with [`crate::solver`] → boundary
-//! arcs along the reference boundary → metrics and warnings.
+//! remeshed vertices ([`Reference::central_spheres_at`]) → initialization → staged optimization
+//! with [`crate::solver`] → boundary arcs along the reference boundary → metrics and warnings.
 //!
 //! **Initialization.** Every face sphere is the member of the pencil through its three vertices
 //! ([`Sphere::through_points_family`], orthonormal basis s₀ (plane), s₁) closest to the face's
