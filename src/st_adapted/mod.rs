@@ -183,6 +183,8 @@ pub struct StAdaptedResult {
     pub iteration_ms: Vec<f64>,
     /// Median of `iteration_ms`.
     pub angle_iteration_median_ms: Option<f64>,
+    /// Whether the sparse Cholesky factorization was supernodal (else simplicial).
+    pub supernodal: bool,
     /// Step timings (ms) when a clock was given: jet_fit, sizing, remesh, init, optimize, metrics.
     pub timings_ms: Vec<(String, f64)>,
     pub diag: f64,
@@ -281,6 +283,7 @@ pub fn compute(
         return Err(StAdaptedError::Cancelled);
     }
     let iteration_ms = run.iteration_ms;
+    let supernodal = run.last.as_ref().is_some_and(|r| r.supernodal);
     problem.prepare(&x);
     let terms = problem.term_stats(&x);
     let (verts, sph) = frame.to_model(&x);
@@ -313,6 +316,7 @@ pub fn compute(
         iterations: iteration,
         iteration_ms,
         angle_iteration_median_ms,
+        supernodal,
         timings_ms: if clock.0.is_some() { timings.laps } else { Vec::new() },
         diag,
         variant: params.variant,

@@ -176,7 +176,8 @@ export async function launchBrowser(project) {
     throw new Error(`${CHROMIUM} not found: install Debian's Chromium (apt-get install -y chromium chromium-driver). ` +
       'Never let a tool download its own browser.');
   }
-  return chromium.launch({ executablePath: CHROMIUM, headless: true, args: project.args, timeout: T.launch });
+  const extra = (process.env.SF_CHROMIUM_ARGS || '').split(' ').filter(Boolean);
+  return chromium.launch({ executablePath: CHROMIUM, headless: true, args: [...project.args, ...extra], timeout: T.launch });
 }
 
 /** The app's URL; `backend: false` leaves ?backend out (the app's own choice). */

@@ -7,6 +7,10 @@
 // - import_curvature_1m: a generated 1,000,000-triangle OBJ dropped on the canvas, from the drop
 //   to the coloured curvature (wall clock, polled every 50 ms), with the progress steps seen.
 // Each page is fresh (the wasm compiles and warms up in it); the median of SF_RUNS (3) is printed.
+// The two runs also print the wall clock from opening the page to the final panels, which includes
+// the wasm start and the worker's warm-up (src/pipeline/warm_up.rs).
+// SF_TIMINGS=st,sq,import picks the measurements (default all); SF_CHROMIUM_ARGS adds browser
+// flags (e.g. "--js-flags=--no-liftoff" to compare the wasm tiers).
 import { startServer, launchBrowser, openApp, waitForState, dropFile, requireDist, PROJECTS, T } from './helpers.mjs';
 
 const runs = Number(process.env.SF_RUNS || 3);
@@ -33,12 +37,15 @@ function gridObj(n) {
 
 async function timeStage(browser, server, name, fragment, ready) {
   const ms = [];
+  const wall = [];
   let detail = '';
   for (let k = 0; k < runs; k++) {
+    const opened = Date.now();
     const app = await openApp(browser, server, project, { fragment, name });
     try {
       const s = await waitForState(app, `${name} finished`, (s) => ready(s) && !s.busy && s.last_run, { timeout: T.load, interval: 50 });
       ms.push(s.last_run.ms);
+      wall.push(Date.now() - opened);
       // The worker's own steps (the report's timings, ms), to tell compute from the page's share.
       const steps = (s.st_adapted ? s.st_adapted.timings_ms : s.sq && s.sq.report && s.sq.report.timings_ms) || {};
       const worker = Object.entries(steps).map(([k, v]) => `${k} ${Math.round(v)}`).join(', ');
@@ -47,7 +54,7 @@ async function timeStage(browser, server, name, fragment, ready) {
       await app.context.close();
     }
   }
-  console.log(`timing ${name}: ${median(ms).toFixed(0)} ms (median of ${ms.map((m) => m.toFixed(0)).join(', ')}; ${detail}; ${project.name})`);
+  console.log(`timing ${name}: ${median(ms).toFixed(0)} ms (median of ${ms.map((m) => m.toFixed(0)).join(', ')}; page open to panels ${median(wall)} ms; ${detail}; ${project.name})`);
 }
 
 async function timeImport(browser, server) {
@@ -81,9 +88,13 @@ const dist = requireDist();
 const server = await startServer(dist);
 const browser = await launchBrowser(project);
 try {
-  await timeStage(browser, server, 'st_adapted_600', 'v=1&sample=dome&method=st&sizing=faces&faces=600&variant=a', (s) => s.st_adapted && s.st_adapted.ready);
-  await timeStage(browser, server, 'sq_sample', 'v=1&sample=vault&method=sq', (s) => s.sq && s.sq.ready);
-  await timeImport(browser, server);
+  // SF_TIMINGS=st,sq,import (default all) picks the measurements.
+  const only = (process.env.SF_TIMINGS || 'st,sq,import').split(',');
+  if (only.includes('st')) {
+    await timeStage(browser, server, 'st_adapted_600', 'v=1&sample=dome&method=st&sizing=faces&faces=600&variant=a', (s) => s.st_adapted && s.st_adapted.ready);
+  }
+  if (only.includes('sq')) await timeStage(browser, server, 'sq_sample', 'v=1&sample=vault&method=sq', (s) => s.sq && s.sq.ready);
+  if (only.includes('import')) await timeImport(browser, server);
 } finally {
   await browser.close();
   server.stop && server.stop();
