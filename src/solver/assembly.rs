@@ -265,56 +265,76 @@ impl System {
         }
         drop(order);
 
-        // Upper-triangular pattern of JᵀJ + diagonal, as sorted keys (col j, row i).
+        // Upper-triangular pattern of JᵀJ + diagonal, column by column: column j holds j and
+        // every i < j that shares a row with it. `pair_dest` lists, row by row and for a ≤ b over
+        // the row's sorted entries, the position of (cols[a], cols[b]), as `assemble` reads it.
         let mut n_pairs = 0usize;
+        let mut pair_base = Vec::with_capacity(m);
         for r in 0..m {
             let k = (entry_row_ptr[r + 1] - entry_row_ptr[r]) as usize;
+            pair_base.push(n_pairs);
             n_pairs += k * (k + 1) / 2;
         }
         assert!(n_pairs < NONE as usize, "too many Jacobian products");
-        let mut keys: Vec<u64> = Vec::with_capacity(n_pairs + nf);
-        for i in 0..nf as u64 {
-            keys.push((i << 32) | i);
+        // The rows of each free column, with the column's index within the row (Jᵀ in CSR).
+        let mut col_rows_ptr = vec![0u32; nf + 1];
+        for &c in &entry_col {
+            col_rows_ptr[c as usize + 1] += 1;
         }
-        for r in 0..m {
-            let cols = &entry_col[entry_row_ptr[r] as usize..entry_row_ptr[r + 1] as usize];
-            for a in 0..cols.len() {
-                for b in a + 1..cols.len() {
-                    // cols sorted ascending and unique: row i = cols[a] < col j = cols[b].
-                    keys.push(((cols[b] as u64) << 32) | cols[a] as u64);
-                }
-            }
-        }
-        keys.sort_unstable();
-        keys.dedup();
-        let nnz = keys.len();
-        assert!(nnz < NONE as usize);
-        let mut col_ptr = vec![0u32; nf + 1];
-        let mut row_idx = Vec::with_capacity(nnz);
-        for &k in &keys {
-            col_ptr[(k >> 32) as usize + 1] += 1;
-            row_idx.push((k & 0xffff_ffff) as u32);
-        }
-        drop(keys);
         for j in 0..nf {
-            col_ptr[j + 1] += col_ptr[j];
+            col_rows_ptr[j + 1] += col_rows_ptr[j];
         }
-        let find = |i: u32, j: u32| -> u32 {
-            let s = col_ptr[j as usize] as usize;
-            let e = col_ptr[j as usize + 1] as usize;
-            (s + row_idx[s..e].binary_search(&i).expect("pattern entry")) as u32
-        };
-        let diag_pos: Vec<u32> = (0..nf as u32).map(|i| find(i, i)).collect();
-        let mut pair_dest = Vec::with_capacity(n_pairs);
+        let mut col_rows = vec![(0u32, 0u32); entry_col.len()];
+        let mut fill = col_rows_ptr.clone();
         for r in 0..m {
-            let cols = &entry_col[entry_row_ptr[r] as usize..entry_row_ptr[r + 1] as usize];
-            for a in 0..cols.len() {
-                pair_dest.push(diag_pos[cols[a] as usize]);
-                for b in a + 1..cols.len() {
-                    pair_dest.push(find(cols[a], cols[b]));
-                }
+            let (e0, e1) = (entry_row_ptr[r] as usize, entry_row_ptr[r + 1] as usize);
+            for (b, &c) in entry_col[e0..e1].iter().enumerate() {
+                col_rows[fill[c as usize] as usize] = (r as u32, b as u32);
+                fill[c as usize] += 1;
             }
         }
+        drop(fill);
+        let mut col_ptr = Vec::with_capacity(nf + 1);
+        col_ptr.push(0u32);
+        let mut row_idx: Vec<u32> = Vec::new();
+        let mut pos = vec![NONE; nf];
+        let mut pair_dest = vec![NONE; n_pairs];
+        let mut diag_pos = Vec::with_capacity(nf);
+        for j in 0..nf {
+            let start = row_idx.len();
+            let rows = &col_rows[col_rows_ptr[j] as usize..col_rows_ptr[j + 1] as usize];
+            row_idx.push(j as u32);
+            pos[j] = 0;
+            for &(r, b) in rows {
+                let e0 = entry_row_ptr[r as usize] as usize;
+                for &i in &entry_col[e0..e0 + b as usize] {
+                    if pos[i as usize] == NONE {
+                        pos[i as usize] = 0;
+                        row_idx.push(i);
+                    }
+                }
+            }
+            row_idx[start..].sort_unstable();
+            for (p, &i) in row_idx[start..].iter().enumerate() {
+                pos[i as usize] = (start + p) as u32;
+            }
+            diag_pos.push(pos[j]);
+            // Entry (a, b) of a row with k entries sits at a k − a(a − 1)/2 + (b − a) in its block.
+            for &(r, b) in rows {
+                let (e0, e1) = (entry_row_ptr[r as usize] as usize, entry_row_ptr[r as usize + 1] as usize);
+                let (k, b) = (e1 - e0, b as usize);
+                for (a, &i) in entry_col[e0..e0 + b + 1].iter().enumerate() {
+                    pair_dest[pair_base[r as usize] + a * k - a * a.saturating_sub(1) / 2 + (b - a)] = pos[i as usize];
+                }
+            }
+            for &i in &row_idx[start..] {
+                pos[i as usize] = NONE;
+            }
+            col_ptr.push(row_idx.len() as u32);
+        }
+        let nnz = row_idx.len();
+        assert!(nnz < NONE as usize);
+        debug_assert!(pair_dest.iter().all(|&d| d != NONE));
 
         let groups = problem.variable_groups();
         let group: Vec<u32> = free_to_var.iter().map(|&v| groups[v as usize]).collect();
@@ -511,6 +531,75 @@ pub(crate) fn factor_flops(chol: &SymbolicCholesky<u32>) -> f64 {
                 }
             }
             f
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use crate::solver::Linear;
+
+    /// The pattern holds exactly the upper triangle of JᵀJ's structure plus the diagonal, and
+    /// `assemble` gives the dense JᵀWJ and JᵀWr over the free variables: rows with repeated and
+    /// unsorted columns, two weights, fixed variables, a free variable in no row.
+    #[test]
+    fn assembly_matches_the_dense_normal_equations() {
+        let n = 23;
+        let mut rng = Rng(7);
+        let mut problem = Problem::new(n);
+        let mut dense_rows: Vec<(f64, Vec<f64>, f64)> = Vec::new();
+        for (weight, rows) in [(1.0, 31), (2.5, 17)] {
+            let mut term = Linear::new();
+            for _ in 0..rows {
+                let k = 1 + (rng.uniform() * 7.0) as usize;
+                let coeffs: Vec<(usize, f64)> =
+                    (0..k).map(|_| (((rng.uniform() * (n - 1) as f64) as usize).min(n - 2), rng.range(-1.0, 1.0))).collect();
+                let constant = rng.range(-1.0, 1.0);
+                term.push_row(&coeffs, constant);
+                let mut row = vec![0.0; n];
+                for &(c, v) in &coeffs {
+                    row[c] += v;
+                }
+                dense_rows.push((weight, row, constant));
+            }
+            problem.add_term(term, weight);
+        }
+        for v in [0, 5, 6, 13] {
+            problem.fix(v);
+        }
+        let x: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+        let mut buf = EvalBuffers::default();
+        evaluate(&problem, &x, &mut buf);
+        let mut sys = System::build(&problem, &buf, Ordering::BlockAmd, false);
+        sys.assemble(&problem, &buf);
+        let free: Vec<usize> = sys.free_to_var.iter().map(|&v| v as usize).collect();
+        assert_eq!(free.len(), n - 4);
+        let (col_ptr, row_idx) = (sys.a_sym.col_ptr(), sys.a_sym.row_idx());
+        for (j, &vj) in free.iter().enumerate() {
+            let rows = &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize];
+            assert!(rows.windows(2).all(|w| w[0] < w[1]), "column {j}: rows sorted and unique");
+            for (i, &vi) in free.iter().enumerate().take(j + 1) {
+                let coupled = i == j || dense_rows.iter().any(|(_, row, _)| row[vi] != 0.0 && row[vj] != 0.0);
+                let at = rows.iter().position(|&r| r as usize == i);
+                assert_eq!(at.is_some(), coupled, "pattern entry ({i}, {j})");
+                let (mut h, mut g) = (0.0, 0.0);
+                for (w, row, c) in &dense_rows {
+                    h += w * row[vi] * row[vj];
+                    if i == j {
+                        let r: f64 = row.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() + c;
+                        g += w * row[vj] * r;
+                    }
+                }
+                if let Some(p) = at {
+                    let got = sys.h[col_ptr[j] as usize + p];
+                    assert!((got - h).abs() <= 1e-12 * (1.0 + h.abs()), "JᵀWJ ({i}, {j}): {got} vs {h}");
+                }
+                if i == j {
+                    assert!((sys.g[j] - g).abs() <= 1e-12 * (1.0 + g.abs()), "JᵀWr {j}: {} vs {g}", sys.g[j]);
+                }
+            }
         }
     }
 }
