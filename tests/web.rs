@@ -61,6 +61,13 @@ async fn protocol_round_trip_across_a_message_channel() {
     assert!(transport::from_js(&JsValue::from_str("nonsense")).is_err());
 }
 
+/// faer's dense products above 16³ run gemm, whose simd128 kernels are off by default: the
+/// `wasm-simd128-enable` feature (Cargo.toml) must reach it, or the Cholesky runs scalar kernels.
+#[wasm_bindgen_test]
+fn dense_products_run_wasm_simd_kernels() {
+    assert!(gemm::get_wasm_simd128(), "gemm's wasm simd128 kernels are off");
+}
+
 #[wasm_bindgen_test]
 fn obj_importer_in_the_browser() {
     let bytes = include_bytes!("../../shared/data/meshes/tri_dome.obj");
