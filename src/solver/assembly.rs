@@ -42,6 +42,13 @@ pub(crate) struct EvalBuffers {
     pub term_trips: Vec<usize>,
 }
 
+/// Whether two index arrays are equal. Every accepted step compares the whole triplet structure;
+/// `==` on integer slices becomes a memcmp, which wasm runs a byte at a time, while this OR of
+/// XORs vectorizes.
+fn same_indices(a: &[u32], b: &[u32]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
 /// Evaluates one term into (cleared) buffers; used by `evaluate` and the Jacobian check.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn eval_term(
@@ -186,8 +193,8 @@ impl System {
     pub fn matches_structure(&self, buf: &EvalBuffers) -> bool {
         self.term_rows == buf.term_rows
             && self.term_trips == buf.term_trips
-            && self.rows == buf.rows
-            && self.cols == buf.cols
+            && same_indices(&self.rows, &buf.rows)
+            && same_indices(&self.cols, &buf.cols)
     }
 
     /// Builds the pattern, the maps and the symbolic factorization from an evaluation.
