@@ -68,6 +68,35 @@ fn dense_products_run_wasm_simd_kernels() {
     assert!(gemm::get_wasm_simd128(), "gemm's wasm simd128 kernels are off");
 }
 
+/// Small dense products (at most 16³ multiply-adds) go to nano-gemm, whose wasm fallback kernel is
+/// patched (vendor/nano-gemm/PATCH.md): column-major, transposed, accumulating and replacing
+/// products agree with a triple loop.
+#[wasm_bindgen_test]
+fn small_dense_products_match_a_triple_loop() {
+    use faer::linalg::matmul::matmul;
+    use faer::{Accum, Mat, Par};
+    let value = |i: usize, j: usize, s: f64| ((i * 7 + j * 3) as f64 * 0.37 + s).sin();
+    for (m, n, k) in [(1, 1, 1), (3, 4, 5), (7, 5, 6), (16, 16, 16), (9, 2, 13), (2, 11, 3)] {
+        let lhs = Mat::from_fn(m, k, |i, j| value(i, j, 0.1));
+        let lhs_t = Mat::from_fn(k, m, |i, j| value(j, i, 0.1));
+        let rhs = Mat::from_fn(k, n, |i, j| value(i, j, 0.7));
+        let start = Mat::from_fn(m, n, |i, j| value(i, j, 1.3));
+        for (accum, transposed) in [(Accum::Replace, false), (Accum::Add, false), (Accum::Add, true)] {
+            let mut dst = start.clone();
+            let left = if transposed { lhs_t.transpose() } else { lhs.as_ref() };
+            matmul(dst.as_mut(), accum, left, rhs.as_ref(), -0.5, Par::Seq);
+            for i in 0..m {
+                for j in 0..n {
+                    let dot: f64 = (0..k).map(|p| lhs[(i, p)] * rhs[(p, j)]).sum();
+                    let base = if accum == Accum::Add { start[(i, j)] } else { 0.0 };
+                    let want = base - 0.5 * dot;
+                    assert!((dst[(i, j)] - want).abs() <= 1e-12, "{m}×{k}·{k}×{n} ({accum:?}, transposed {transposed}) at ({i}, {j}): {} vs {want}", dst[(i, j)]);
+                }
+            }
+        }
+    }
+}
+
 #[wasm_bindgen_test]
 fn obj_importer_in_the_browser() {
     let bytes = include_bytes!("../../shared/data/meshes/tri_dome.obj");
