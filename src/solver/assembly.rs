@@ -49,6 +49,25 @@ fn same_indices(a: &[u32], b: &[u32]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0, |acc, (x, y)| acc | (x ^ y)) == 0
 }
 
+/// Counting sort: the values of `items` (bucket, value) grouped by bucket, in input order within
+/// a bucket; returns the bucket starts (`n_buckets + 1` of them) and the grouped values.
+fn group_by_bucket<T: Copy + Default>(n_buckets: usize, items: impl Iterator<Item = (usize, T)> + Clone) -> (Vec<u32>, Vec<T>) {
+    let mut start = vec![0u32; n_buckets + 1];
+    for (k, _) in items.clone() {
+        start[k + 1] += 1;
+    }
+    for k in 0..n_buckets {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![T::default(); start[n_buckets] as usize];
+    for (k, v) in items {
+        out[fill[k] as usize] = v;
+        fill[k] += 1;
+    }
+    (start, out)
+}
+
 /// Evaluates one term into (cleared) buffers; used by `evaluate` and the Jacobian check.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn eval_term(
@@ -231,26 +250,11 @@ impl System {
         }
         let nf = free_to_var.len();
 
-        // Group triplets with free columns by row (counting sort).
-        let mut row_start = vec![0u32; m + 1];
-        for t in 0..n_trip {
-            if free_index[buf.cols[t] as usize] != NONE {
-                row_start[buf.rows[t] as usize + 1] += 1;
-            }
-        }
-        for i in 0..m {
-            row_start[i + 1] += row_start[i];
-        }
-        let mut fill = row_start.clone();
-        let mut order = vec![0u32; row_start[m] as usize];
-        for t in 0..n_trip {
-            if free_index[buf.cols[t] as usize] != NONE {
-                let r = buf.rows[t] as usize;
-                order[fill[r] as usize] = t as u32;
-                fill[r] += 1;
-            }
-        }
-        drop(fill);
+        // Group triplets with free columns by row.
+        let (row_start, mut order) = group_by_bucket(
+            m,
+            (0..n_trip).filter(|&t| free_index[buf.cols[t] as usize] != NONE).map(|t| (buf.rows[t] as usize, t as u32)),
+        );
 
         // Unique (row, free col) entries, sorted by column within each row.
         let mut trip_entry = vec![NONE; n_trip];
@@ -284,23 +288,13 @@ impl System {
         }
         assert!(n_pairs < NONE as usize, "too many Jacobian products");
         // The rows of each free column, with the column's index within the row (Jᵀ in CSR).
-        let mut col_rows_ptr = vec![0u32; nf + 1];
-        for &c in &entry_col {
-            col_rows_ptr[c as usize + 1] += 1;
-        }
-        for j in 0..nf {
-            col_rows_ptr[j + 1] += col_rows_ptr[j];
-        }
-        let mut col_rows = vec![(0u32, 0u32); entry_col.len()];
-        let mut fill = col_rows_ptr.clone();
-        for r in 0..m {
-            let (e0, e1) = (entry_row_ptr[r] as usize, entry_row_ptr[r + 1] as usize);
-            for (b, &c) in entry_col[e0..e1].iter().enumerate() {
-                col_rows[fill[c as usize] as usize] = (r as u32, b as u32);
-                fill[c as usize] += 1;
-            }
-        }
-        drop(fill);
+        let (col_rows_ptr, col_rows) = group_by_bucket(
+            nf,
+            (0..m).flat_map(|r| {
+                let (e0, e1) = (entry_row_ptr[r] as usize, entry_row_ptr[r + 1] as usize);
+                entry_col[e0..e1].iter().enumerate().map(move |(b, &c)| (c as usize, (r as u32, b as u32)))
+            }),
+        );
         let mut col_ptr = Vec::with_capacity(nf + 1);
         col_ptr.push(0u32);
         let mut row_idx: Vec<u32> = Vec::new();

@@ -88,7 +88,6 @@ const dist = requireDist();
 const server = await startServer(dist);
 const browser = await launchBrowser(project);
 try {
-  // SF_TIMINGS=st,sq,import (default all) picks the measurements.
   const only = (process.env.SF_TIMINGS || 'st,sq,import').split(',');
   if (only.includes('st')) {
     await timeStage(browser, server, 'st_adapted_600', 'v=1&sample=dome&method=st&sizing=faces&faces=600&variant=a', (s) => s.st_adapted && s.st_adapted.ready);
