@@ -20,7 +20,7 @@ use spherical_faces::progress::{Clock, Progress};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
-use spherical_faces::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use spherical_faces::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use spherical_faces::sq::SqEvent;
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_adapted::StAdaptedEvent;
@@ -28,7 +28,8 @@ use spherical_faces::st_support::StSupportParams;
 use spherical_faces::text::printable;
 
 const EXIT_CODES: &str = "Exit codes: 0 done; 1 the output could not be written; 2 bad arguments, bad input, or a \
-refusal (the surface does not suit the method). Errors are one line on stderr, or one JSON object \
+refusal (the surface does not suit the method); 3 the files are written but the result misses a guarantee of its method \
+(report.json: meets_guarantees false, with each guarantee's figure). Errors are one line on stderr, or one JSON object \
 {\"error\": ..., \"exit_code\": ...} with --json.";
 
 const SURFACE_HELP: &str = "A mesh (.obj, .gltf, .glb), a B-spline surface (.json, the paper authors' format), a \
@@ -137,6 +138,10 @@ enum Command {
         /// Stop after this stage.
         #[arg(long, value_name = "STAGE", default_value = "final", value_parser = until)]
         until: Until,
+        /// The starting sphere congruence: auto (central, then constant radii when it misses θ or
+        /// α), central (r = 1/H) or constant.
+        #[arg(long, value_name = "START", default_value = "auto", value_parser = radius_start)]
+        start: RadiusStart,
         /// Depth of the support elements, relative to the diagonal.
         #[arg(long, value_name = "D", default_value_t = SqParams::default().support_depth, value_parser = fraction_in::<0, 1>)]
         depth: f64,
@@ -175,6 +180,16 @@ impl Failure {
 
     fn output(message: impl Into<String>) -> Self {
         Self { message: message.into(), code: 1 }
+    }
+
+    /// The files are written, but the result misses a guarantee of its method: `summary` (what was
+    /// written) goes to stdout, the misses to stderr.
+    fn missed(summary: &str, report: &Report) -> Self {
+        println!("{summary}");
+        Self {
+            message: format!("the result misses its guarantees: {}", report.failure_text()),
+            code: spherical_faces::guarantees::MISSED_GUARANTEES_EXIT_CODE,
+        }
     }
 }
 
@@ -236,7 +251,7 @@ pub fn main() -> ExitCode {
             };
             st_support(&input, params, &output, &mut progress)
         }
-        Command::Sq { input, theta, alpha, grid, rs, faces, until, depth, output } => {
+        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, output } => {
             let params = SqParams {
                 theta_deg: theta,
                 alpha_deg: alpha,
@@ -244,6 +259,7 @@ pub fn main() -> ExitCode {
                 recompute_every: rs,
                 faces,
                 until,
+                start,
                 support_depth: depth,
                 ..SqParams::default()
             };
@@ -443,7 +459,7 @@ fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressL
     write_files(output, &files, &report)?;
     let m = &report.metrics;
     let g = |x: Option<f64>| x.unwrap_or(f64::NAN);
-    Ok(match params.until {
+    let summary = match params.until {
         Until::Final => format!(
             "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
              planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
@@ -484,7 +500,11 @@ fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressL
             g(m.lc_residual),
             n = params.grid,
         ),
-    })
+    };
+    match report.meets_guarantees {
+        Some(true) => Ok(summary),
+        _ => Err(Failure::missed(&summary, &report)),
+    }
 }
 
 /// One JSON object: counts after triangulation and welding (of a B-spline: its tessellation),
@@ -629,6 +649,10 @@ fn face_count(s: &str) -> Result<usize, String> {
 
 fn variant(s: &str) -> Result<EdgeArcs, String> {
     EdgeArcs::from_key(s).ok_or_else(|| format!("'{s}': expected a or b"))
+}
+
+fn radius_start(s: &str) -> Result<RadiusStart, String> {
+    RadiusStart::from_key(s).ok_or_else(|| format!("'{s}': expected auto, central or constant"))
 }
 
 fn until(s: &str) -> Result<Until, String> {

@@ -5,6 +5,8 @@
 
 /// Progress events, the typed `Cancelled` and the caller's clock, taken by every method.
 pub mod progress;
+/// What a method promises of its result, measured: guarantees and the verdict of a run.
+pub mod guarantees;
 /// Mean, median, percentiles and histograms of samples.
 pub mod stats;
 /// A small deterministic random generator for tests and samples.

@@ -1,6 +1,6 @@
 //! The SQ method up to the torsal cross field (Sec. 5, 5.1): the offset congruence of a torus
-//! (lines = normals, torsal = principal directions), refusals (sign change of H, a sphere patch's
-//! singular centre surface, a mesh reference), the boundary-strip warning, and the acceptance
+//! (lines = normals, torsal = principal directions), refusals (sign change of H, a mesh
+//! reference), the trivial sphere patch, the boundary-strip warning, and the acceptance
 //! figures on `tunnel_arch` and the vault at θ 20°, α 75°.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared
 
@@ -78,12 +78,30 @@ fn a_sign_change_of_the_mean_curvature_is_refused_with_the_shares() {
     }
 }
 
+/// A sphere patch (radius 2 about the origin) is the trivial case: one sphere, node axes through
+/// its centre, every vertex on it, about N quads, and every guarantee met.
 #[test]
-fn the_central_spheres_of_a_sphere_patch_give_no_line_congruence() {
+fn a_sphere_patch_gives_one_sphere_with_node_axes_through_its_centre() {
     let r = Reference::from_bspline(spline("sphere_patch")).unwrap();
-    let err = run(&r, &SqParams::default()).unwrap_err();
-    assert!(matches!(err, SqError::SingularCentreSurface { points, total } if points == total), "{err:?}");
-    assert!(err.to_string().contains("sphere patch"));
+    let params = SqParams::default();
+    let result = spherical_faces::sq::compute(&r, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    assert!(result.congruence.sphere.is_some_and(|(c, radius)| c.length() < 1e-9 && (radius - 2.0).abs() < 1e-9), "{:?}", result.congruence.sphere);
+    assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
+    let m = &result.sq_mesh.expect("the SQ mesh").mesh;
+    let n = m.sphere_mesh.mesh.face_count();
+    assert!((180..=300).contains(&n), "about {} quads: {n}", params.faces);
+    for s in &m.sphere_mesh.face_spheres {
+        let (c, radius) = (s.center().unwrap(), s.signed_radius().unwrap().abs());
+        assert!(c.length() < 1e-12 && (radius - 2.0).abs() < 1e-12, "one sphere: {c} {radius}");
+    }
+    for p in &m.sphere_mesh.mesh.positions {
+        assert!((p.length() - 2.0).abs() < 1e-12, "vertex on the sphere: {p}");
+    }
+    for &(p, d) in &m.node_axes {
+        // The distance of the centre 0 from the axis through p along d.
+        assert!(p.cross(d).length() < 1e-9, "axis through the centre: {p} {d}");
+    }
+    assert!(m.figures.min_torsal_plane_angle_deg >= params.alpha_deg, "{:?}", m.figures);
 }
 
 #[test]
@@ -115,7 +133,7 @@ fn a_sign_change_in_the_boundary_strip_is_a_warning() {
     // The method runs and passes the warning on.
     let r = Reference::from_bspline(s).unwrap();
     let result = run(&r, &SqParams { torsal_iterations: 20, ..SqParams::default() }).unwrap();
-    assert_eq!(result.warnings, vec![warning]);
+    assert_eq!(result.warnings.first(), Some(&warning), "{:?}", result.warnings);
 }
 
 fn check_acceptance(name: &str, reference: &Reference) -> SqCongruence {

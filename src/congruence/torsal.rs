@@ -66,7 +66,11 @@ pub struct TorsalPair {
 /// The torsal directions of a quad (see the module docs); None without real ones or when a
 /// torsal plane is undefined (t parallel to l_c).
 pub fn torsal_pair(f: [DVec3; 4], l: [DVec3; 4]) -> Option<TorsalPair> {
-    let roots = quadratic_roots(torsal_quadratic(f, l))?;
+    pair_of(f, l, quadratic_roots(torsal_quadratic(f, l))?)
+}
+
+/// The pair of directions (μ0 : μ1) `roots` of a quad with their torsal planes.
+fn pair_of(f: [DVec3; 4], l: [DVec3; 4], roots: [[f64; 2]; 2]) -> Option<TorsalPair> {
     let (dp, dm) = (f[2] - f[0], f[1] - f[3]);
     let lc = 0.25 * (l[0] + l[1] + l[2] + l[3]);
     let mut mu = [[0.0; 2]; 2];
@@ -84,4 +88,11 @@ pub fn torsal_pair(f: [DVec3; 4], l: [DVec3; 4]) -> Option<TorsalPair> {
     }
     let angle_deg = plane_normals[0].dot(plane_normals[1]).abs().min(1.0).acos().to_degrees();
     Some(TorsalPair { mu, t, plane_normals, angle_deg })
+}
+
+/// The pair of parameter directions of a quad (f1 − f0 along u, f3 − f0 along v): the torsal
+/// directions where every direction is torsal (a sphere's normals all meet at its centre).
+pub fn parameter_pair(f: [DVec3; 4], l: [DVec3; 4]) -> Option<TorsalPair> {
+    // u: d⁺ + d⁻ = 2 Δu f_u; v: d⁺ − d⁻ = 2 Δv f_v.
+    pair_of(f, l, [[1.0, 1.0], [1.0, -1.0]])
 }

@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::guarantees::{Guarantee, Verdict};
 use crate::remeshing::Sizing;
 use crate::sq::params::RadiusBasis;
 
@@ -216,6 +217,12 @@ pub struct Report {
     /// What a user should know about the run (e.g. a boundary strip of the other sign of H).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Whether the result meets every guarantee of its method ([`crate::guarantees`]), and
+    /// each guarantee with its measured figure; left out by a method that measures none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub meets_guarantees: Option<bool>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub guarantees: Vec<Guarantee>,
 }
 
 impl Report {
@@ -242,6 +249,17 @@ impl Report {
             r.add_timing(step.clone(), *ms);
         }
         r
+    }
+
+    /// Records the verdict of the run.
+    pub fn set_verdict(&mut self, verdict: &Verdict) {
+        self.meets_guarantees = Some(verdict.holds());
+        self.guarantees = verdict.guarantees.clone();
+    }
+
+    /// The missed guarantees in one line, "" when there are none.
+    pub fn failure_text(&self) -> String {
+        Verdict::new(self.guarantees.clone()).failure_text()
     }
 
     /// Records a stage time (ms); a repeated stage adds up.

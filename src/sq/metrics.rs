@@ -51,3 +51,10 @@ impl CongruenceFigures {
         }
     }
 }
+
+/// Grid points whose line is beyond θ, quads without real torsal directions and quads whose
+/// torsal planes meet below α (degrees).
+pub fn misses(grid: &SamplingGrid, lines: &[DVec3], pairs: &[Option<TorsalPair>], theta_deg: f64, alpha_deg: f64) -> usize {
+    let beyond = line_normal_angles(grid, lines).iter().filter(|&&a| !(a <= theta_deg)).count();
+    beyond + pairs.iter().filter(|p| p.is_none_or(|p| !(p.angle_deg >= alpha_deg))).count()
+}

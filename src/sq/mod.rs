@@ -24,6 +24,7 @@
 //! so the weights are dimensionless; results are returned in model units.
 
 mod error;
+pub mod guarantees;
 pub mod metrics;
 pub mod optimization;
 pub mod params;
@@ -33,11 +34,12 @@ pub mod segments;
 pub mod sphere_optimization;
 pub mod sphere_terms;
 pub mod sq_mesh;
+pub mod start;
 pub mod terms;
 
 use glam::DVec3;
 
-use crate::congruence::torsal::TorsalPair;
+use crate::congruence::torsal::{parameter_pair, TorsalPair};
 use crate::geometry::bspline::BSplineFunction;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::Reference;
@@ -45,9 +47,11 @@ use crate::solver::TermStats;
 use crate::stats::median;
 
 pub use self::error::SqError;
+use self::guarantees::Delivered;
+use crate::guarantees::Verdict;
 use self::metrics::{torsal_pairs, CongruenceFigures};
 use self::optimization::{CongruenceProblem, SqStep};
-use self::params::{RadiusBasis, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use self::params::{RadiusBasis, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
 use self::sphere_optimization::{on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
@@ -55,6 +59,7 @@ use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::remeshing::quad_remeshing::edge_field_angles;
 use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
+use self::start::{constant_function, constant_radius, spherical_reference};
 
 /// What the method reports while it runs.
 pub enum SqEvent<'a> {
@@ -65,6 +70,9 @@ pub enum SqEvent<'a> {
     /// After every solver iteration: the step, the iteration within it, the term statistics and
     /// the current unit lines of G.
     Iteration { step: SqStep, iteration: usize, terms: &'a [TermStats], lines: Vec<DVec3> },
+    /// The first start missed θ or α: the optimization starts again from `start`, with these
+    /// unit lines.
+    Restarted { start: RadiusStart, lines: &'a [DVec3] },
     /// Steps 1–3 are done.
     Congruence(&'a SqCongruence),
     /// The quad mesh as the remesh extracted it (before Q′).
@@ -93,6 +101,11 @@ pub struct SqCongruence {
     pub radius_basis: RadiusBasis,
     /// Largest |r − 1/H| of the fit over G, relative to the mean |1/H|.
     pub radius_fit_error: f64,
+    /// The start the congruence kept, and every start tried with its figures.
+    pub start: RadiusStart,
+    pub attempts: Vec<CongruenceAttempt>,
+    /// The reference is one sphere (centre, radius in model units): the trivial case.
+    pub sphere: Option<(DVec3, f64)>,
     /// Unit lines, on the side of the normals: of the fitted central congruence, and final.
     pub initial_lines: Vec<DVec3>,
     pub lines: Vec<DVec3>,
@@ -157,7 +170,30 @@ pub fn validate(params: &SqParams) -> Result<(), SqError> {
     Ok(())
 }
 
-/// Runs Sec. 5 and 5.1 on a B-spline reference (steps 1–3 of the module docs).
+/// One start of the congruence optimization and what it reached.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CongruenceAttempt {
+    pub start: RadiusStart,
+    /// Of the start's congruence, and of the optimized one (measured on the lines of r).
+    pub initial_figures: CongruenceFigures,
+    pub figures: CongruenceFigures,
+    /// Grid points beyond θ, quads without real torsal directions and quads below α.
+    pub misses: usize,
+    pub meets_guarantees: bool,
+}
+
+/// The optimized state of one start.
+struct Optimized {
+    x: Vec<f64>,
+    lc_residual_step1: f64,
+    lc: optimization::StepOutcome,
+    torsal: optimization::StepOutcome,
+}
+
+/// Runs Sec. 5 and 5.1 on a B-spline reference (steps 1–3 of the module docs). With
+/// [`RadiusStart::Auto`] it starts from the central congruence and, when the optimized
+/// congruence misses θ or α on G, starts again from constant radii ([`start`]); it keeps the
+/// first start that meets both, else the one with the fewest misses.
 pub fn compute_congruence(
     reference: &Reference,
     params: &SqParams,
@@ -172,59 +208,85 @@ pub fn compute_congruence(
     let (t, s) = (0.5 * (lo + hi), reference.diagonal());
     let surface = spline.in_frame(t, s);
     let grid = SamplingGrid::new(&surface, params.grid)?;
+    let ((u0, u1), (v0, v1)) = spline.domain();
+    let n = params.grid;
+    let (du, dv) = ((u1 - u0) / (n - 1) as f64, (v1 - v0) / (n - 1) as f64);
+    let model_points: Vec<DVec3> = grid.frames.iter().map(|f| t + s * f.point).collect();
+    if let Some((centre, radius)) = spherical_reference(&grid) {
+        let sphere = (t + s * centre, s * radius);
+        return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
+    }
     let signs = check_mean_curvature(&surface, &grid, (hi - lo).length() / s)?;
     let fit = fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?;
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
-    let initial_lines = problem.congruence_lines(&fit.function.coefficients)?;
     let grid = &problem.grid;
-    let initial_torsal = torsal_pairs(grid, &initial_lines);
-    let initial_figures = CongruenceFigures::of(grid, &initial_lines, &initial_torsal);
     timings.lap("radius");
-    let model_points: Vec<DVec3> = grid.frames.iter().map(|f| t + s * f.point).collect();
-    on_event(SqEvent::Started { points: &model_points, lines: &initial_lines })?;
 
-    let mut hook = |step: SqStep, iteration: usize, terms: &[TermStats], x: &[f64]| {
-        on_event(SqEvent::Iteration { step, iteration, terms, lines: problem.lines(x) }).is_ok()
+    let starts: &[RadiusStart] = match params.start {
+        RadiusStart::Auto => &[RadiusStart::Central, RadiusStart::Constant],
+        RadiusStart::Central => &[RadiusStart::Central],
+        RadiusStart::Constant => &[RadiusStart::Constant],
     };
-    let mut x = problem.initial_point(&fit.function.coefficients, &initial_lines, params);
-    let lc = problem.line_congruence_step(&mut x, params, clock, &mut hook);
-    if lc.cancelled {
-        return Err(SqError::Cancelled);
+    let mut attempts: Vec<CongruenceAttempt> = Vec::new();
+    let mut best: Option<(usize, Optimized, Vec<DVec3>, Vec<DVec3>)> = None;
+    for (k, &start) in starts.iter().enumerate() {
+        let function = match start {
+            RadiusStart::Constant => constant_function(&fit.function, constant_radius(grid, signs.sign)),
+            _ => fit.function.clone(),
+        };
+        let initial_lines = match start {
+            // The offset's lines are the normals (module docs of `start`).
+            RadiusStart::Constant => grid.frames.iter().map(|f| f.normal).collect(),
+            _ => problem.congruence_lines(&function.coefficients)?,
+        };
+        let initial_figures = CongruenceFigures::of(grid, &initial_lines, &torsal_pairs(grid, &initial_lines));
+        if k == 0 {
+            on_event(SqEvent::Started { points: &model_points, lines: &initial_lines })?;
+        } else {
+            on_event(SqEvent::Restarted { start, lines: &initial_lines })?;
+        }
+        let optimized = optimize(&problem, &function.coefficients, &initial_lines, params, clock, on_event)?;
+        let lines = problem.measured_lines(&optimized.x);
+        let pairs = torsal_pairs(grid, &lines);
+        let figures = CongruenceFigures::of(grid, &lines, &pairs);
+        let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
+        let meets = misses == 0;
+        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses, meets_guarantees: meets });
+        if best.as_ref().is_none_or(|b| misses < b.0) {
+            best = Some((misses, optimized, initial_lines, lines));
+        }
+        if meets {
+            break;
+        }
     }
-    let lc_residual_step1 = problem.lc_residual(&x);
-    timings.lap("line_congruence");
-    let mut x = problem.extend_for_torsal(&x);
-    let torsal = problem.torsal_step(&mut x, params, clock, &mut hook);
-    if torsal.cancelled {
-        return Err(SqError::Cancelled);
-    }
-    timings.lap("torsal");
-
-    let lines = problem.lines(&x);
+    timings.lap("congruence");
+    let (_, optimized, initial_lines, lines) = best.expect("at least one start");
+    // The kept start: the first that meets θ and α, else the first with the fewest misses.
+    let chosen = (0..attempts.len()).min_by_key(|&i| attempts[i].misses).unwrap_or(0);
+    let x = optimized.x;
     let pairs = torsal_pairs(grid, &lines);
     let figures = CongruenceFigures::of(grid, &lines, &pairs);
     let lc_residual = problem.lc_residual(&x);
     let coefficients: Vec<f64> = x[problem.layout.radius.clone()].iter().map(|c| c * s).collect();
-    let ((u0, u1), (v0, v1)) = spline.domain();
-    let n = params.grid;
-    let (du, dv) = ((u1 - u0) / (n - 1) as f64, (v1 - v0) / (n - 1) as f64);
-    let torsal_uv = pairs
-        .iter()
-        .map(|p| {
-            p.map(|p| {
-                p.mu.map(|[m0, m1]| {
-                    let (a, b) = ((m0 + m1) * du, (m0 - m1) * dv);
-                    let len = a.hypot(b);
-                    [a / len, b / len]
-                })
-            })
-        })
-        .collect();
+    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv])))).collect();
     let radius = BSplineFunction { coefficients, ..fit.function.clone() };
     let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
     timings.lap("metrics");
     let mut warnings = Vec::new();
     warnings.extend(signs.warning);
+    if chosen > 0 {
+        let a = &attempts[0];
+        warnings.push(format!(
+            "the central congruence (r = 1/H) ended with lines up to {:.1}° off the normals (θ = {}°), {} grid quads without real \
+             torsal directions and torsal planes at ≥ {:.1}° (α = {}°); the congruence starts from constant radii instead (Sec. 6.3)",
+            a.figures.max_line_normal_angle_deg,
+            params.theta_deg,
+            a.figures.quads_without_real_torsal_directions,
+            a.figures.min_torsal_plane_angle_deg,
+            params.alpha_deg
+        ));
+    }
+    let initial_figures = attempts[0].initial_figures.clone();
     Ok(SqCongruence {
         grid: n,
         uv: grid.uv.clone(),
@@ -234,21 +296,111 @@ pub fn compute_congruence(
         radius,
         radius_basis: params.radius_basis,
         radius_fit_error: fit.relative_error,
+        start: attempts[chosen].start,
+        sphere: None,
+        attempts,
         initial_lines,
         lines,
         torsal: pairs,
         torsal_uv,
         initial_figures,
         figures,
-        lc_residual_step1,
+        lc_residual_step1: optimized.lc_residual_step1,
         lc_residual,
-        lc_iterations: lc.iterations,
-        torsal_iterations: torsal.iterations,
-        lc_iteration_ms: lc.iteration_ms,
-        torsal_iteration_ms: torsal.iteration_ms,
+        lc_iterations: optimized.lc.iterations,
+        torsal_iterations: optimized.torsal.iterations,
+        lc_iteration_ms: optimized.lc.iteration_ms,
+        torsal_iteration_ms: optimized.torsal.iteration_ms,
         timings_ms: timings.laps,
         warnings,
     })
+}
+
+/// A unit direction in parameters of (μ0, μ1) on a grid quad of spacing (Δu, Δv): d⁺ is
+/// (Δu, Δv) and d⁻ is (Δu, −Δv) (Fig. 20).
+fn parameter_direction([m0, m1]: [f64; 2], [du, dv]: [f64; 2]) -> [f64; 2] {
+    let (a, b) = ((m0 + m1) * du, (m0 - m1) * dv);
+    let len = a.hypot(b);
+    [a / len, b / len]
+}
+
+/// Steps 1 and 2 from radius coefficients and lines.
+fn optimize(
+    problem: &CongruenceProblem,
+    coefficients: &[f64],
+    lines: &[DVec3],
+    params: &SqParams,
+    clock: Clock,
+    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+) -> Result<Optimized, SqError> {
+    let mut hook = |step: SqStep, iteration: usize, terms: &[TermStats], x: &[f64]| {
+        on_event(SqEvent::Iteration { step, iteration, terms, lines: problem.lines(x) }).is_ok()
+    };
+    let mut x = problem.initial_point(coefficients, lines, params);
+    let lc = problem.line_congruence_step(&mut x, params, clock, &mut hook);
+    if lc.cancelled {
+        return Err(SqError::Cancelled);
+    }
+    let lc_residual_step1 = problem.lc_residual(&x);
+    let mut x = problem.extend_for_torsal(&x);
+    let torsal = problem.torsal_step(&mut x, params, clock, &mut hook);
+    if torsal.cancelled {
+        return Err(SqError::Cancelled);
+    }
+    Ok(Optimized { x, lc_residual_step1, lc, torsal })
+}
+
+/// The trivial case: a sphere patch (see [`start`]). The lines are the normals, and every
+/// direction being torsal, the cross field follows the parameter lines.
+fn spherical_congruence(
+    grid: SamplingGrid,
+    points: Vec<DVec3>,
+    sphere: (DVec3, f64),
+    params: &SqParams,
+    spacing: [f64; 2],
+    domain: ((f64, f64), (f64, f64)),
+    mut timings: Timings,
+) -> SqCongruence {
+    let lines: Vec<DVec3> = grid.frames.iter().map(|f| f.normal).collect();
+    let pairs: Vec<Option<TorsalPair>> = (0..grid.quad_count())
+        .map(|q| {
+            let c = grid.quad(q);
+            parameter_pair(c.map(|p| grid.frames[p].point), c.map(|p| lines[p]))
+        })
+        .collect();
+    let figures = CongruenceFigures::of(&grid, &lines, &pairs);
+    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, spacing)))).collect();
+    let function = BSplineFunction::constant(sphere.1, domain);
+    timings.lap("radius");
+    let misses = metrics::misses(&grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
+    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses, meets_guarantees: misses == 0 };
+    SqCongruence {
+        grid: params.grid,
+        uv: grid.uv.clone(),
+        points,
+        normals: lines.clone(),
+        radii: vec![sphere.1; grid.point_count()],
+        radius: function,
+        radius_basis: params.radius_basis,
+        radius_fit_error: 0.0,
+        start: RadiusStart::Central,
+        sphere: Some(sphere),
+        attempts: vec![attempt],
+        initial_lines: lines.clone(),
+        lines,
+        torsal: pairs,
+        torsal_uv,
+        initial_figures: figures.clone(),
+        figures,
+        lc_residual_step1: 0.0,
+        lc_residual: 0.0,
+        lc_iterations: 0,
+        torsal_iterations: 0,
+        lc_iteration_ms: Vec::new(),
+        torsal_iteration_ms: Vec::new(),
+        timings_ms: timings.laps,
+        warnings: vec!["the surface is one sphere: every central sphere is the surface itself, so the panels all lie on that sphere and the node axes pass through its centre".into()],
+    }
 }
 
 /// The projection's hinges keep θ and α by this much (degrees): its last, pure Gauss–Newton
@@ -275,6 +427,8 @@ pub struct SqResult {
     /// Step timings (ms) after the congruence: remesh (with Q′), spheres, panels.
     pub timings_ms: Vec<(String, f64)>,
     pub warnings: Vec<String>,
+    /// The guarantees of what the run delivers ([`guarantees`]), measured on it.
+    pub verdict: Verdict,
 }
 
 impl SqResult {
@@ -294,7 +448,9 @@ pub fn compute(
     let congruence = compute_congruence(reference, params, clock, on_event)?;
     on_event(SqEvent::Congruence(&congruence))?;
     let mut warnings = congruence.warnings.clone();
-    let mut result = SqResult { congruence, quad_mesh: None, sq_mesh: None, timings_ms: Vec::new(), warnings: Vec::new() };
+    let (theta, alpha) = (params.theta_deg, params.alpha_deg);
+    let verdict = guarantees::verdict(&congruence.figures, Delivered::Congruence, theta, alpha);
+    let mut result = SqResult { congruence, quad_mesh: None, sq_mesh: None, timings_ms: Vec::new(), warnings: Vec::new(), verdict };
     if params.until == Until::Congruence {
         result.warnings = warnings;
         return Ok(result);
@@ -313,17 +469,35 @@ pub fn compute(
     timings.lap("remesh");
     warnings.extend(quad.warnings.iter().cloned());
     if params.until == Until::Remesh {
+        result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::QuadMesh(&quad.mesh), theta, alpha);
         result.quad_mesh = Some(quad);
         result.timings_ms = timings.laps;
         result.warnings = warnings;
         return Ok(result);
     }
     let done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
+    result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::SqMesh(&done.mesh.sphere_mesh.mesh, &done.mesh.figures), theta, alpha);
     result.quad_mesh = Some(quad);
     result.sq_mesh = Some(done);
     result.timings_ms = timings.laps;
     result.warnings = warnings;
     Ok(result)
+}
+
+/// The trivial case: on one sphere every quad mesh is exact (see [`start`]): each vertex of Q′
+/// on the sphere, every face sphere the sphere itself.
+fn spherical_mesh(reference: &Reference, quad: &SqQuadMesh, stars: &QuadStars, centre: DVec3, r: f64, params: &SqParams, timings: &mut Timings) -> SqFinal {
+    let diag = reference.diagonal();
+    let positions: Vec<DVec3> = quad.mesh.positions.iter().map(|p| centre + r * (*p - centre).normalize_or(DVec3::Z)).collect();
+    let normals: Vec<DVec3> = positions.iter().map(|p| (centre - *p) / r).collect();
+    let sphere = Sphere::from_center_radius(centre, r).normalized();
+    let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
+    let spheres = vec![sphere; mesh.face_count()];
+    let mut out = sq_mesh(mesh, spheres, &normals, stars, diag, params.support_depth * diag, params.axis_length * diag);
+    let distance = out.sphere_mesh.mesh.positions.iter().map(|p| (p.distance(centre) - r).abs()).fold(0.0, f64::max);
+    out.figures.max_vertex_distance_to_reference = distance / diag;
+    timings.lap("panels");
+    SqFinal { mesh: out, uv: quad.uv.clone(), edge_angles_deg: quad.edge_angles_deg.clone(), outcome: SphereOutcome::default() }
 }
 
 /// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
@@ -355,6 +529,9 @@ fn final_mesh(
         })
         .collect();
     let stars = QuadStars::new(mesh);
+    if let Some((centre, r)) = congruence.sphere {
+        return Ok(spherical_mesh(reference, quad, &stars, centre, r, params, timings));
+    }
     let input = SphereInput { mesh: &frame_mesh, radii: &radii, lines: &lines, normals: &normals, lattice: &quad.lattice,
         on_boundary: &quad.on_boundary,
         reference: &framed,

@@ -125,6 +125,22 @@ impl CongruenceProblem {
         x
     }
 
+    /// The lines of the congruence of `x`'s radius function, c_u × c_v (Sec. 2.1), unit and on
+    /// the side of the normals: what the guarantees are measured on, not the optimizer's line
+    /// variables. Where the centre surface is singular (a focal point of a constant radius),
+    /// the line variable stands in.
+    pub fn measured_lines(&self, x: &[f64]) -> Vec<DVec3> {
+        let coefficients = &x[self.layout.radius.clone()];
+        let variables = self.lines(x);
+        self.grid
+            .frames
+            .iter()
+            .zip(&self.rows)
+            .zip(variables)
+            .map(|((f, row), l)| centre_derivatives(f, row.apply(coefficients)).line(f.normal, f.su.length() * f.sv.length()).unwrap_or(l))
+            .collect()
+    }
+
     /// The unit lines of `x`, on the side of the normals.
     pub fn lines(&self, x: &[f64]) -> Vec<DVec3> {
         (0..self.layout.points)

@@ -15,6 +15,38 @@ pub enum Inequality {
     Slack,
 }
 
+/// Where the congruence optimization starts (Sec. 5.1, Sec. 6.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RadiusStart {
+    /// The central congruence r = 1/H (Sec. 5.1); when its optimized congruence misses θ or α,
+    /// start again from constant radii.
+    #[default]
+    Auto,
+    /// The central congruence only.
+    Central,
+    /// Constant radii: the normal congruence of f, whose torsal directions are the principal
+    /// directions and whose torsal planes are orthogonal (Sec. 2.5, θ = 0), the start Sec. 6.3
+    /// names for the other curvature restriction.
+    Constant,
+}
+
+impl RadiusStart {
+    pub const ALL: [RadiusStart; 3] = [RadiusStart::Auto, RadiusStart::Central, RadiusStart::Constant];
+
+    pub fn key(self) -> &'static str {
+        match self {
+            RadiusStart::Auto => "auto",
+            RadiusStart::Central => "central",
+            RadiusStart::Constant => "constant",
+        }
+    }
+
+    pub fn from_key(key: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.key() == key)
+    }
+}
+
 /// The radius function's basis (Eq. 8): clamped, uniform, `controls` × `controls` coefficients.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RadiusBasis {
@@ -153,6 +185,8 @@ pub struct SqParams {
     /// and α are to be met.
     pub margins_deg: [f64; 2],
     pub radius_basis: RadiusBasis,
+    /// The starting sphere congruence.
+    pub start: RadiusStart,
     pub inequality: Inequality,
     /// Iterations of the line-congruence step (at most; it stops when converged).
     pub lc_iterations: usize,
@@ -195,6 +229,7 @@ impl Default for SqParams {
             alpha_deg: 75.0,
             margins_deg: [1.0, 3.0],
             radius_basis: RadiusBasis::default(),
+            start: RadiusStart::default(),
             inequality: Inequality::default(),
             lc_iterations: 100,
             lc_weights: LineCongruenceWeights::default(),

@@ -103,7 +103,7 @@ pub fn quad_mesh(
             let field = CrossField::comb(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
             let r = quad_remesh(surface, &field, &remesh_params)?;
             warnings.push(format!(
-                "the torsal directions turn about a point (an umbilic or a singularity of the cross field: {} folded triangles in its integration), so no quad mesh without singular vertices follows them; the quad mesh follows the parameter lines and the final optimization makes it an exact SQ mesh",
+                "the torsal directions turn about a point (an umbilic or a singularity of the cross field: {} folded triangles in its integration), so no quad mesh without singular vertices follows them; the quad mesh follows the parameter lines instead, which the final optimization starts from",
                 folded.folded_triangles
             ));
             (r, true)

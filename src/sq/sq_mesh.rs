@@ -98,6 +98,16 @@ pub fn edge_circle(s1: &Sphere, s2: &Sphere) -> Option<Circle> {
     Circle::intersection(s1, s2)
 }
 
+/// The unit normal of the support plane of edge uw between two face spheres: the plane of their
+/// circle; where the two spheres coincide (panels of one sphere, whose common edge may be any
+/// circle through u and w), the plane through the edge and the mean of its node axes `axes`.
+pub fn support_plane_normal(s1: &Sphere, s2: &Sphere, [u, w]: [DVec3; 2], axes: [DVec3; 2]) -> Option<DVec3> {
+    match edge_circle(s1, s2) {
+        Some(c) => Some(c.normal),
+        None => (w - u).cross(axes[0] + axes[1]).try_normalize(),
+    }
+}
+
 /// Node axes of the SQ mesh (see the module docs), with whether each comes from its spheres.
 pub fn node_axes(sm: &SphereMesh, normals: &[DVec3]) -> (Vec<(DVec3, DVec3)>, Vec<bool>) {
     let mesh = &sm.mesh;
@@ -190,9 +200,10 @@ pub fn sq_mesh(mesh: PolyMesh, spheres: Vec<Sphere>, normals: &[DVec3], stars: &
 /// The figures of [`SqMeshFigures`] except the distance to the reference.
 fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], normals: &[DVec3], stars: &QuadStars, diag: f64) -> SqMeshFigures {
     let spheres = &sm.face_spheres;
+    let mesh = &sm.mesh;
     let mut out = SqMeshFigures { min_torsal_plane_angle_deg: 90.0, ..SqMeshFigures::default() };
     out.max_vertex_sphere_residual = sm.max_vertex_sphere_residual() / diag;
-    for (_, faces) in &stars.stars {
+    for (v, faces) in &stars.stars {
         let centres: Vec<DVec3> = faces.iter().filter_map(|&f| spheres[f as usize].center()).collect();
         if centres.len() < 4 {
             out.max_centre_face_planarity = f64::INFINITY;
@@ -203,13 +214,24 @@ fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], norm
         let n = DVec3::from_array(Svd::new(&rows).v[2]).normalize_or_zero();
         let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
         out.max_centre_face_planarity = out.max_centre_face_planarity.max(worst / diag);
-        // Support planes of consecutive edges at the vertex: the circles of consecutive face pairs.
-        let circles: Vec<Option<Circle>> = (0..4).map(|k| edge_circle(&spheres[faces[k] as usize], &spheres[faces[(k + 1) % 4] as usize])).collect();
+        // Support planes of consecutive edges at the vertex: those of consecutive face pairs, whose
+        // shared edge runs from v to their other common corner. A plane that cannot be measured
+        // fails the figure (NaN).
+        let p = mesh.positions[*v as usize];
+        let planes: Vec<Option<DVec3>> = (0..4)
+            .map(|k| {
+                let (f, g) = (faces[k] as usize, faces[(k + 1) % 4] as usize);
+                let other = mesh.faces[f].corners().iter().copied().find(|&c| c != *v && mesh.faces[g].corners().contains(&c))?;
+                support_plane_normal(&spheres[f], &spheres[g], [p, mesh.positions[other as usize]], [axes[*v as usize].1, axes[other as usize].1])
+            })
+            .collect();
         for k in 0..4 {
-            if let (Some(a), Some(b)) = (circles[k], circles[(k + 1) % 4]) {
-                let angle = a.normal.dot(b.normal).abs().min(1.0).acos().to_degrees();
-                out.min_torsal_plane_angle_deg = out.min_torsal_plane_angle_deg.min(angle);
-            }
+            let angle = match (planes[k], planes[(k + 1) % 4]) {
+                (Some(a), Some(b)) => a.dot(b).abs().min(1.0).acos().to_degrees(),
+                _ => f64::NAN,
+            };
+            let so_far = out.min_torsal_plane_angle_deg;
+            out.min_torsal_plane_angle_deg = if angle.is_nan() || so_far.is_nan() { f64::NAN } else { so_far.min(angle) };
         }
     }
     let topo = sm.topology();

@@ -48,6 +48,12 @@ pub struct FitError {
 }
 
 impl BSplineFunction {
+    /// The constant function `value` on the domain (degree 1, a 2 × 2 grid of coefficients).
+    pub fn constant(value: f64, (u, v): ((f64, f64), (f64, f64))) -> Self {
+        let basis = |d| BSplineBasis::clamped_uniform(1, 2, d).expect("a linear basis on a domain");
+        Self { u: basis(u), v: basis(v), coefficients: vec![value; 4] }
+    }
+
     /// The row of parameter (u, v) (clamped to the domain).
     pub fn row(u: &BSplineBasis, v: &BSplineBasis, s: f64, t: f64) -> FunctionRow {
         Self::row_with(u.count(), &u.evaluate(s), &v.evaluate(t))

@@ -77,7 +77,7 @@ pub fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
 /// Runs the method on `reference`, streaming every stage to `sink`; returns the summary after
 /// sending the display fields and the files.
 pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<SqSummary, StageError> {
-    let start = sink.now_ms();
+    let start_ms = sink.now_ms();
     let diag = reference.diagonal();
     let mut last_snapshot = f64::NEG_INFINITY;
     let (mut points, mut length) = (Vec::new(), 0.0);
@@ -92,6 +92,8 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
     let mut planned = params.lc_iterations + params.torsal_iterations + later;
     let mut done = 0usize;
     let mut lc_done = 0usize;
+    // Iterations of earlier starts of the congruence (a restart from constant radii).
+    let mut base = 0usize;
     // The first live snapshot of Q′ and of the panels goes out at once, later ones when due.
     let (mut first_fairing, mut first_spheres) = (true, true);
     let mut on_event = |e: SqEvent| -> Result<(), crate::progress::Cancelled> {
@@ -104,35 +106,41 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             due
         };
         match e {
-            SqEvent::Progress(p) => report(sink, STAGE, Progress::new(p.step, done.min(planned), planned), Vec::new(), start),
+            SqEvent::Progress(p) => report(sink, STAGE, Progress::new(p.step, done.min(planned), planned), Vec::new(), start_ms),
             SqEvent::Started { points: p, lines } => {
                 points = p.to_vec();
                 length = LINE_LENGTH * grid_spacing(params.grid, &points);
                 let initial = line_segments(&points, lines, length);
                 sink.snapshot(STAGE, 0, vec![segments_field(field::SQ_INITIAL_LINES, &initial), segments_field(field::SQ_LINES, &initial)]);
                 last_snapshot = sink.now_ms();
-                report(sink, STAGE, Progress::new("line_congruence", 0, planned), Vec::new(), start)
+                report(sink, STAGE, Progress::new("line_congruence", 0, planned), Vec::new(), start_ms)
             }
             SqEvent::Iteration { step, iteration, terms, lines } => {
                 // Step 1 may converge early: the count goes on from where it stopped.
                 if step == crate::sq::optimization::SqStep::LineCongruence {
-                    lc_done = iteration;
-                    done = iteration;
+                    lc_done = base + iteration;
+                    done = lc_done;
                 } else {
                     planned = lc_done + params.torsal_iterations + later;
                     done = lc_done + iteration;
                 }
-                let go = report(sink, STAGE, Progress::new(step.key(), done, planned), energies(terms, false), start);
+                let go = report(sink, STAGE, Progress::new(step.key(), done, planned), energies(terms, false), start_ms);
                 if go.is_ok() && due(sink) {
                     sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_LINES, &line_segments(&points, &lines, length))]);
                 }
                 go
             }
+            SqEvent::Restarted { start, lines } => {
+                base = done;
+                planned = done + params.lc_iterations + params.torsal_iterations + later;
+                sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_LINES, &line_segments(&points, lines, length))]);
+                report(sink, STAGE, Progress::new(start.key(), done, planned), Vec::new(), start_ms)
+            }
             SqEvent::Congruence(c) => {
                 done = lc_done + c.torsal_iterations;
                 planned = done + later;
                 sink.snapshot(STAGE, done as u32, display_fields(&CongruenceSegments::of(c)));
-                report(sink, STAGE, Progress::new("cross_field", done, planned), Vec::new(), start)
+                report(sink, STAGE, Progress::new("cross_field", done, planned), Vec::new(), start_ms)
             }
             SqEvent::Remeshed { mesh } => {
                 faces = mesh.faces.clone();
@@ -141,7 +149,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
             }
             SqEvent::Fairing { iteration, terms, positions } => {
                 done += 1;
-                let go = report(sink, STAGE, Progress::new("fairing", done, planned), energies(terms, false), start);
+                let go = report(sink, STAGE, Progress::new("fairing", done, planned), energies(terms, false), start_ms);
                 if go.is_ok() && (std::mem::take(&mut first_fairing) | due(sink)) && !faces.is_empty() {
                     let mesh = PolyMesh::new(positions.to_vec(), faces.clone());
                     sink.snapshot(STAGE, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&mesh))]);
@@ -152,11 +160,11 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
                 faces = q.mesh.faces.clone();
                 done += 1;
                 sink.snapshot(STAGE, done as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&q.mesh))]);
-                report(sink, STAGE, Progress::new("quad_mesh", done, planned), Vec::new(), start)
+                report(sink, STAGE, Progress::new("quad_mesh", done, planned), Vec::new(), start_ms)
             }
             SqEvent::Spheres { phase, terms, positions, spheres, .. } => {
                 done += 1;
-                let go = report(sink, STAGE, Progress::new(phase.key(), done.min(planned), planned), energies(terms, true), start);
+                let go = report(sink, STAGE, Progress::new(phase.key(), done.min(planned), planned), energies(terms, true), start_ms);
                 if go.is_ok() && (std::mem::take(&mut first_spheres) | due(sink)) {
                     sink.snapshot(STAGE, done as u32, live_panels(positions, &faces, spheres, diag));
                 }
@@ -325,6 +333,7 @@ pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, segme
     let fairing = result.quad_mesh.as_ref().map_or(0, |q| q.fairing_iterations);
     let spheres = result.sq_mesh.as_ref().map_or(0, |f| f.outcome.warm_up_iterations + f.outcome.iterations + f.outcome.projection_iterations);
     report.iterations = Some(c.lc_iterations + c.torsal_iterations + fairing + spheres);
+    report.set_verdict(&result.verdict);
     files.push(file("report.json", "application/json", report.to_json().into_bytes()));
     (report, files)
 }

@@ -168,6 +168,7 @@ impl App {
                             let d = &mut self.sq_display;
                             (d.lines, d.cross_field, d.surface) = (false, false, false);
                         }
+                        self.missed_guarantees = super::panels::missed_guarantees(&summary.report);
                         if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
                             v.summary = Some(*summary);
                         }
@@ -235,3 +236,4 @@ impl App {
         self.run_method();
     }
 }
+

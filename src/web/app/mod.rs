@@ -47,6 +47,9 @@ pub struct App {
     design: Design,
     notices: Vec<String>,
     error: Option<String>,
+    /// The last result misses a guarantee of its method: which, by how much (the status bar
+    /// shows it in red).
+    missed_guarantees: Option<String>,
     /// The method refused its input's size: a remesh to about this many faces is offered.
     remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
@@ -159,6 +162,7 @@ impl App {
             design,
             notices,
             error,
+            missed_guarantees: None,
             remesh_to: None,
             worker,
             loaded: None,
@@ -246,6 +250,7 @@ impl App {
     /// Runs the design's stages in the worker (the curvature first; the method reuses it).
     fn run_method(&mut self) {
         self.remesh_to = None;
+        self.missed_guarantees = None;
         if self.loaded.is_none() {
             return;
         }
@@ -529,6 +534,11 @@ impl eframe::App for App {
                     }
                     ui.add(egui::ProgressBar::new(frac).text(text).animate(true));
                 });
+            });
+        }
+        if let (None, Some(missed)) = (&self.busy, &self.missed_guarantees) {
+            egui::Panel::bottom("verdict").show(ui, |ui| {
+                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {missed}")).strong());
             });
         }
         egui::Panel::left("side").default_size(290.0).resizable(true).show(ui, |ui| self.side_panel(ui));

@@ -58,6 +58,23 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
 }
 
 /// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
+/// The colour of a result that misses its guarantees.
+pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);
+
+/// The status line of a result that misses its method's guarantees, None when it meets them.
+pub fn missed_guarantees(report: &crate::export::Report) -> Option<String> {
+    (report.meets_guarantees == Some(false)).then(|| format!("The result misses its guarantees: {}", report.failure_text()))
+}
+
+/// The verdict at the top of a method's results: the missed guarantees in red, or a check mark.
+pub fn verdict(ui: &mut egui::Ui, report: &crate::export::Report) {
+    match missed_guarantees(report) {
+        Some(text) => ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {text}")).strong()),
+        None if report.meets_guarantees == Some(true) => ui.colored_label(egui::Color32::from_rgb(120, 200, 120), "✔ Meets every guarantee (see the figures below)"),
+        None => return,
+    };
+}
+
 pub fn warnings(ui: &mut egui::Ui, warnings: &[String]) {
     for w in warnings {
         ui.colored_label(egui::Color32::from_rgb(240, 180, 80), w);

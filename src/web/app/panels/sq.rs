@@ -125,6 +125,7 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
     };
     let (i, f) = (&sum.initial, &sum.figures);
     let r = &sum.report;
+    super::verdict(ui, r);
     let m = &r.metrics;
     let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.2e}"));
     let ok = |good: bool| if good { "✔" } else { "✘" };

@@ -1,0 +1,63 @@
+//! What an SQ run promises (Sec. 2.5 (b), (c); Sec. 5.2), measured on its result.
+//!
+//! - **Congruence** (on G, from the lines of the final radius function, c_u × c_v, and the torsal
+//!   directions recomputed exactly from them, [`super::metrics`]): every line within θ of the
+//!   normal, every grid quad with real torsal directions, their planes at ≥ α.
+//! - **SQ mesh** (from the final vertices and face spheres, [`super::sq_mesh`]): quads only,
+//!   every vertex on its faces' spheres and the centres around every inner vertex coplanar
+//!   (≤ [`EXACT`] of the diagonal: an exact SQ mesh with a torsion-free support structure), node
+//!   axes within θ of the normals, support planes at a node meeting at ≥ α.
+
+use crate::geometry::mesh::PolyMesh;
+use crate::guarantees::{Guarantee, Verdict};
+
+use super::metrics::CongruenceFigures;
+use super::sq_mesh::SqMeshFigures;
+
+/// Exactness: vertex–sphere residual and centre-face planarity, relative to the diagonal.
+pub const EXACT: f64 = 1e-8;
+
+/// The congruence's guarantees at θ and α (degrees).
+pub fn congruence_guarantees(f: &CongruenceFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
+    vec![
+        Guarantee::at_most("max_line_normal_angle_deg", f.max_line_normal_angle_deg, theta_deg, "deg"),
+        Guarantee::count_at_most("quads_without_real_torsal_directions", f.quads_without_real_torsal_directions, 0),
+        Guarantee::at_least("min_torsal_plane_angle_deg", f.min_torsal_plane_angle_deg, alpha_deg, "deg"),
+    ]
+}
+
+/// The SQ mesh's guarantees at θ and α (degrees).
+pub fn mesh_guarantees(mesh: &PolyMesh, f: &SqMeshFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
+    let not_quads = mesh.faces.iter().filter(|face| face.len() != 4).count();
+    vec![
+        Guarantee::at_least("faces", mesh.faces.len() as f64, 1.0, ""),
+        Guarantee::count_at_most("faces_not_quads", not_quads, 0),
+        Guarantee::at_most("max_vertex_sphere_residual", f.max_vertex_sphere_residual, EXACT, "of the diagonal"),
+        Guarantee::at_most("max_centre_face_planarity", f.max_centre_face_planarity, EXACT, "of the diagonal"),
+        Guarantee::at_most("max_axis_normal_angle_deg", f.max_axis_normal_angle_deg, theta_deg, "deg"),
+        Guarantee::at_least("min_support_plane_angle_deg", f.min_torsal_plane_angle_deg, alpha_deg, "deg"),
+    ]
+}
+
+/// What a run delivers, as far as it went.
+pub enum Delivered<'a> {
+    Congruence,
+    /// The quad mesh Q′.
+    QuadMesh(&'a PolyMesh),
+    /// The SQ mesh.
+    SqMesh(&'a PolyMesh, &'a SqMeshFigures),
+}
+
+/// The verdict of a run on what it delivers: the congruence's guarantees when it stopped there
+/// (with quads only when it stopped after the quad mesh), the SQ mesh's otherwise.
+pub fn verdict(congruence: &CongruenceFigures, delivered: Delivered, theta_deg: f64, alpha_deg: f64) -> Verdict {
+    Verdict::new(match delivered {
+        Delivered::Congruence => congruence_guarantees(congruence, theta_deg, alpha_deg),
+        Delivered::QuadMesh(m) => {
+            let mut all = congruence_guarantees(congruence, theta_deg, alpha_deg);
+            all.push(Guarantee::count_at_most("faces_not_quads", m.faces.iter().filter(|f| f.len() != 4).count(), 0));
+            all
+        }
+        Delivered::SqMesh(m, f) => mesh_guarantees(m, f, theta_deg, alpha_deg),
+    })
+}
