@@ -1,7 +1,8 @@
 //! The native command line over the same pipeline as the browser app (see `main.rs`), on clap.
 //!
 //! Conventions: `--help` per command, `--version`; results on stdout, warnings and a live
-//! progress line on stderr (the progress line only on a terminal, never with `--quiet`); an error
+//! progress line on stderr (on a terminal a live line, elsewhere JSON lines once a second after
+//! the first second; never with `--quiet`); an error
 //! is one line on stderr (one JSON object with `--json`). Exit codes: see [`EXIT_CODES`].
 
 use std::io::{IsTerminal, Read, Write};
@@ -40,7 +41,7 @@ sphere-cap, wave-roof, vault)";
 #[command(name = "spherical-faces", version, about = "Approximates a free-form surface by a mesh of spherical panels \
 (Approximation by Meshes with Spherical Faces).", after_help = EXIT_CODES)]
 struct Cli {
-    /// No progress line on stderr.
+    /// No progress on stderr (a live line on a terminal, otherwise one JSON object a second).
     #[arg(long, short, global = true)]
     quiet: bool,
     /// Errors as one JSON object on stderr, for scripts.
@@ -225,7 +226,12 @@ pub fn main() -> ExitCode {
             return fail(json, &Failure::input(format!("{} (see --help)", message.trim_start_matches("error: "))));
         }
     };
-    let mut progress = ProgressLine::new(!cli.quiet && std::io::stderr().is_terminal());
+    let mode = match (cli.quiet, std::io::stderr().is_terminal()) {
+        (true, _) => ProgressMode::Off,
+        (false, true) => ProgressMode::Line,
+        (false, false) => ProgressMode::JsonLines,
+    };
+    let mut progress = ProgressLine::new(mode);
     let result = match cli.command {
         Command::Info { input, list_objects } => info(&input, list_objects),
         Command::St { input, epsilon, faces, variant, output } => {
@@ -287,21 +293,43 @@ fn fail(json: bool, f: &Failure) -> ExitCode {
     ExitCode::from(f.code)
 }
 
-/// A live progress line on stderr: "step done/total", redrawn at most every 100 ms.
+/// How progress goes to stderr.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum ProgressMode {
+    Off,
+    /// A live line "step done/total" on a terminal, redrawn at most every 100 ms.
+    Line,
+    /// Not a terminal: one JSON object a line, `{"progress": {"step", "done", "total"}}`, at most
+    /// one a second, the first after a second (a quick run or refusal prints none).
+    JsonLines,
+}
+
+/// The progress on stderr.
 struct ProgressLine {
-    enabled: bool,
+    mode: ProgressMode,
+    started: std::time::Instant,
     last: Option<std::time::Instant>,
     drawn: bool,
 }
 
 impl ProgressLine {
-    fn new(enabled: bool) -> Self {
-        Self { enabled, last: None, drawn: false }
+    fn new(mode: ProgressMode) -> Self {
+        Self { mode, started: std::time::Instant::now(), last: None, drawn: false }
     }
 
     fn show(&mut self, p: &Progress) {
-        if !self.enabled || self.last.is_some_and(|t| t.elapsed().as_millis() < 100) {
-            return;
+        let since = |t: Option<std::time::Instant>| t.map_or(u128::MAX, |t| t.elapsed().as_millis());
+        match self.mode {
+            ProgressMode::Off => return,
+            ProgressMode::JsonLines => {
+                if self.started.elapsed().as_millis() >= 1000 && since(self.last) >= 1000 {
+                    self.last = Some(std::time::Instant::now());
+                    eprintln!("{}", serde_json::json!({ "progress": { "step": p.step, "done": p.done, "total": p.total } }));
+                }
+                return;
+            }
+            ProgressMode::Line if since(self.last) < 100 => return,
+            ProgressMode::Line => {}
         }
         self.last = Some(std::time::Instant::now());
         let text = if p.total > 0 { format!("{} {}/{}", p.step, p.done, p.total) } else { p.step.to_string() };

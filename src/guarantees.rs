@@ -58,14 +58,16 @@ impl fmt::Display for Guarantee {
             Bound::AtLeast => "≥",
         };
         let unit = if self.unit.is_empty() { String::new() } else { format!(" {}", self.unit) };
-        let number = |x: f64| {
+        // Enough digits that a miss does not print as its limit.
+        let number = |x: f64, digits: usize| {
             if self.unit.is_empty() || self.unit == "deg" {
-                if x.fract() == 0.0 && x.abs() < 1e15 { format!("{x:.0}") } else { format!("{x:.2}") }
+                if x.fract() == 0.0 && x.abs() < 1e15 { format!("{x:.0}") } else { format!("{x:.digits$}") }
             } else {
-                format!("{x:.2e}")
+                format!("{x:.digits$e}")
             }
         };
-        write!(f, "{} {}{} (must be {op} {}{})", self.name, number(self.measured), unit, number(self.limit), unit)
+        let digits = (2..9).find(|&d| number(self.measured, d) != number(self.limit, d)).unwrap_or(9);
+        write!(f, "{} {}{} (must be {op} {}{})", self.name, number(self.measured, digits), unit, number(self.limit, 2), unit)
     }
 }
 
@@ -111,5 +113,7 @@ mod tests {
         assert!(!Verdict::default().holds(), "no guarantee measured is no verdict");
         assert!(!Guarantee::at_most("x", f64::NAN, 1.0, "").holds, "NaN never holds");
         assert!(!Guarantee::count_at_most("folded_faces", 2, 0).holds);
+        let close = Guarantee::at_least("min_support_plane_angle_deg", 89.999_7, 90.0, "deg");
+        assert_eq!(close.to_string(), "min_support_plane_angle_deg 89.9997 deg (must be ≥ 90 deg)");
     }
 }
