@@ -13,7 +13,7 @@ fn main() {
     let s = b.surface.in_frame(glam::DVec3::new(0.0, 6.0, 2.2), 16.75);
     let params = SqParams::default();
     let grid = SamplingGrid::new(&s, params.grid).unwrap();
-    let signs = check_mean_curvature(&s, &grid, 1.0).unwrap();
+    let signs = check_mean_curvature(&s, &grid, 1.0, SqParams::default().faces).unwrap();
     let fit = fit_radius(&s, &grid, params.radius_basis, &signs.excluded).unwrap();
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
     let lines = problem.congruence_lines(&fit.function.coefficients).unwrap();

@@ -459,14 +459,24 @@ fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut Pr
     let (report, files) = stages::st_adapted::export(&reference, &result, &params, clock);
     progress.clear();
     write_files(output, &files, &report)?;
-    Ok(format!(
-        "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {:.2e} of the diagonal)",
+    let summary = format!(
+        "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {:.2e} of the diagonal; {} folded faces)",
         report.output.panels,
         output.out.display(),
         result.metrics.mean_kink_angle_deg,
         result.metrics.max_kink_angle_deg,
-        result.metrics.max_distance_to_reference
-    ))
+        result.metrics.max_distance_to_reference,
+        result.metrics.flipped_faces
+    );
+    verdict(summary, &report)
+}
+
+/// The summary when the report meets its guarantees, else the failure with exit code 3.
+fn verdict(summary: String, report: &Report) -> Result<String, Failure> {
+    match report.meets_guarantees {
+        Some(true) => Ok(summary),
+        _ => Err(Failure::missed(&summary, report)),
+    }
 }
 
 /// `sq SURFACE [options] --out DIR`.
@@ -529,10 +539,7 @@ fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressL
             n = params.grid,
         ),
     };
-    match report.meets_guarantees {
-        Some(true) => Ok(summary),
-        _ => Err(Failure::missed(&summary, &report)),
-    }
+    verdict(summary, &report)
 }
 
 /// One JSON object: counts after triangulation and welding (of a B-spline: its tessellation),

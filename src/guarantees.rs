@@ -66,7 +66,7 @@ impl fmt::Display for Guarantee {
                 format!("{x:.digits$e}")
             }
         };
-        let digits = (2..9).find(|&d| number(self.measured, d) != number(self.limit, d)).unwrap_or(9);
+        let digits = (2..9).find(|&d| format!("{:.d$e}", self.measured) != format!("{:.d$e}", self.limit)).unwrap_or(9);
         write!(f, "{} {}{} (must be {op} {}{})", self.name, number(self.measured, digits), unit, number(self.limit, 2), unit)
     }
 }

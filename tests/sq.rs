@@ -69,7 +69,7 @@ fn problem_coefficients(problem: &CongruenceProblem, r0: f64) -> Vec<f64> {
 fn a_sign_change_of_the_mean_curvature_is_refused_with_the_shares() {
     let r = Reference::from_bspline(spline("saddle_sign_change")).unwrap();
     let err = run(&r, &SqParams::default()).unwrap_err();
-    let SqError::MeanCurvatureSignChange { positive_share, negative_share } = err else { panic!("{err:?}") };
+    let SqError::MeanCurvatureSignChange { positive_share, negative_share, .. } = err else { panic!("{err:?}") };
     // README: H > 0 on 69.16 % of the area, H < 0 on 30.84 %.
     assert!((positive_share - 0.6916).abs() < 0.005 && (negative_share - 0.3084).abs() < 0.005, "{positive_share} {negative_share}");
     let message = err.to_string();
@@ -124,8 +124,8 @@ fn a_sign_change_in_the_boundary_strip_is_a_warning() {
     let control: Vec<DVec3> = (0..nv).flat_map(|j| (0..nu).map(move |i| (i, j))).map(|(i, j)| DVec3::new(gu[i], gv[j], height(gu[i], gv[j]))).collect();
     let s = BSplineSurface::new(bu, bv, control, vec![1.0; nu * nv]).unwrap();
     let grid = SamplingGrid::new(&s, 20).unwrap();
-    let signs = check_mean_curvature(&s, &grid, 1.5).unwrap();
-    let warning = signs.warning.clone().expect("a warning");
+    let signs = check_mean_curvature(&s, &grid, 1.5, 237).unwrap();
+    let [warning] = signs.warnings.clone().try_into().expect("one warning");
     assert!(warning.contains("near the boundary"), "{warning}");
     assert!(signs.negative_share > 0.9 && signs.positive_share > 0.0 && signs.positive_share < 0.05, "{signs:?}");
     // The excluded points are on the edge x = 0.
@@ -172,4 +172,44 @@ fn tunnel_arch_meets_theta_and_alpha() {
 #[test]
 fn the_vault_sample_meets_theta_and_alpha() {
     check_acceptance("vault", &Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap());
+}
+
+/// A vault z = −0.05 (x² + y²) over [−5, 5]² with a shallow dimple (H > 0 on well under 1 % of the
+/// area, |H| ≈ 0.02): a speck of the other sign, run through with a warning that says where, not
+/// refused; a deeper, wider dimple is refused and the message says where.
+#[test]
+fn a_speck_of_the_other_sign_runs_with_a_warning_and_a_pit_is_refused_where_it_is() {
+    let vault = |depth: f64, width: f64| {
+        let n = 30;
+        let basis = || BSplineBasis::clamped_uniform(3, n, (0.0, 1.0)).unwrap();
+        let (bu, bv) = (basis(), basis());
+        let (gu, gv) = (bu.greville(), bv.greville());
+        let z = |x: f64, y: f64| -0.05 * (x * x + y * y) - depth * (-((x - 1.5).powi(2) + (y - 1.0).powi(2)) / (width * width)).exp();
+        let control: Vec<DVec3> = (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let (x, y) = (10.0 * gu[i] - 5.0, 10.0 * gv[j] - 5.0);
+                DVec3::new(x, y, z(x, y))
+            })
+            .collect();
+        BSplineSurface::new(bu, bv, control, vec![1.0; n * n]).unwrap()
+    };
+    let speck = vault(0.03, 0.6);
+    let grid = SamplingGrid::new(&speck, 20).unwrap();
+    let signs = check_mean_curvature(&speck, &grid, 1.0, 237).unwrap();
+    let (positive, negative) = (signs.positive_share, signs.negative_share);
+    assert!(positive > 0.0 && positive < 0.01 && negative > 0.99, "{positive} {negative}");
+    let [warning] = signs.warnings.clone().try_into().expect("one warning");
+    assert!(warning.contains("speck") && warning.contains("(u, v) = (0.6"), "{warning}");
+    let r = Reference::from_bspline(speck).unwrap();
+    let result = run(&r, &SqParams::default()).unwrap();
+    assert!(result.warnings.iter().any(|w| w.contains("speck")), "{:?}", result.warnings);
+
+    let pit = vault(1.0, 1.5);
+    let grid = SamplingGrid::new(&pit, 20).unwrap();
+    let err = check_mean_curvature(&pit, &grid, 1.0, 237).unwrap_err();
+    let SqError::MeanCurvatureSignChange { at: Some([u, v]), .. } = err else { panic!("{err:?}") };
+    // The dimple's centre (1.5, 1) is at (u, v) = (0.65, 0.6).
+    assert!((u - 0.65).abs() < 0.05 && (v - 0.6).abs() < 0.05, "{u} {v}");
+    assert!(err.to_string().contains("strongest at (u, v)"), "{err}");
 }

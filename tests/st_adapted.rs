@@ -666,3 +666,51 @@ fn a_sphere_stays_trivial_at_the_default_tolerance() {
         assert_eq!(m.flipped_faces, 0);
     }
 }
+
+/// A folded face is reported, not hidden: a face at the boundary of the dome turned over (its
+/// corners reversed, its sphere still through them) counts as a folded face, and the result
+/// misses its guarantees with the count, while the same mesh unfolded meets them.
+#[test]
+fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
+    use spherical_faces::geometry::mesh::PolyMesh;
+    use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+    use spherical_faces::samples::Sample;
+    use spherical_faces::st_adapted::guarantees::verdict;
+    let reference = Reference::from_triangles(Sample::Dome.mesh());
+    let tri = reference.mesh().clone();
+    let topo = reference.topology();
+    let spheres_of = |m: &PolyMesh| -> Vec<Sphere> {
+        (0..m.face_count()).map(|f| {
+            let p = m.face_points(f);
+            Sphere::through_points_family([p[0], p[1], p[2]])[0]
+        }).collect()
+    };
+    let smooth = PolyMesh::from(&tri);
+    let sm = SphereMesh::new(smooth.clone(), spheres_of(&smooth), BoundaryArcRule::Parallel(DVec3::ZERO));
+    let (m, _, _) = metrics(&sm, &reference, EdgeArcs::Intersection);
+    assert_eq!(m.flipped_faces, 0);
+    assert!(verdict(&m).holds(), "{}", verdict(&m).failure_text());
+
+    let boundary_face = (0..tri.triangles.len()).find(|&f| tri.triangles[f].iter().any(|&v| topo.is_boundary_vertex(v as usize))).unwrap();
+    let mut folded = tri.clone();
+    folded.triangles[boundary_face].swap(1, 2);
+    let folded = PolyMesh::from(&folded);
+    let sm = SphereMesh::new(folded.clone(), spheres_of(&folded), BoundaryArcRule::Parallel(DVec3::ZERO));
+    let (m, _, _) = metrics(&sm, &reference, EdgeArcs::Intersection);
+    assert_eq!(m.flipped_faces, 1);
+    let v = verdict(&m);
+    assert!(!v.holds() && v.failure_text().contains("folded_faces 1"), "{}", v.failure_text());
+}
+
+/// Uniform remeshing of cmc1 to about 120 faces leaves a boundary sliver whose vertices are nearly
+/// collinear; the optimization used to tilt it past the reference normal (one folded face). No
+/// step may fold a face now, so the result has none.
+#[test]
+fn the_optimization_folds_no_face_on_a_coarse_uniform_remesh() {
+    let reference = load_reference("cmc1");
+    let params = StAdaptedParams { sizing: Sizing::UniformFaces(120), ..StAdaptedParams::default() };
+    let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    assert_eq!(r.initial_shape.flipped_faces, 0);
+    assert_eq!(r.metrics.flipped_faces, 0, "{:?}", r.metrics);
+    assert!(spherical_faces::st_adapted::guarantees::verdict(&r.metrics).holds());
+}

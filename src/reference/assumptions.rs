@@ -40,8 +40,9 @@ pub enum SurfaceWarning {
     Folds { edges: usize },
     /// Faces thinner than [`SLIVER_ASPECT`].
     Slivers { faces: usize },
-    /// The result's panels meet at more than [`KINK_WARNING_DEG`] at `edges` edges.
-    Kinks { edges: usize, max_deg: f64 },
+    /// The result's panels meet at more than [`KINK_WARNING_DEG`] at `edges` edges, where the
+    /// reference's own facets meet at up to `reference_max_deg`.
+    Kinks { edges: usize, max_deg: f64, reference_max_deg: f64 },
     /// The reference's median facet lies farther than the tolerance `epsilon` from the smooth
     /// surface through its vertices (its
     /// [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta), `sagitta`; both
@@ -67,10 +68,16 @@ impl fmt::Display for SurfaceWarning {
                 "{faces} sliver face(s) (height under {SLIVER_ASPECT:e} of their longest edge): their spheres are nearly planes \
                  and meet their neighbours at large kinks; remesh first"
             ),
-            SurfaceWarning::Kinks { edges, max_deg } => write!(
+            SurfaceWarning::Kinks { edges, max_deg, reference_max_deg } if *reference_max_deg > KINK_WARNING_DEG => write!(
                 f,
-                "panels meet at kinks of up to {max_deg:.1}° ({edges} edge(s) over {KINK_WARNING_DEG}°): the surface does not suit \
-                 this method there"
+                "panels meet at kinks of up to {max_deg:.1}° ({edges} edge(s) over {KINK_WARNING_DEG}°), and the reference's own \
+                 facets meet at up to {reference_max_deg:.1}°: the surface itself bends sharply there"
+            ),
+            SurfaceWarning::Kinks { edges, max_deg, reference_max_deg } => write!(
+                f,
+                "panels meet at kinks of up to {max_deg:.1}° ({edges} edge(s) over {KINK_WARNING_DEG}°), although the reference's \
+                 own facets meet at no more than {reference_max_deg:.1}°: the panels fold or kink where the surface is smooth, a \
+                 defect of the result, not of the surface"
             ),
             SurfaceWarning::CoarserThanTolerance { sagitta, epsilon } => write!(
                 f,
@@ -116,11 +123,12 @@ fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<SurfaceWarning>
         .then_some(SurfaceWarning::MeanCurvatureChangesSign { positive, negative })
 }
 
-/// The kink warning of a result whose interior edges meet at `kinks_deg`.
-pub fn kink_warning(kinks_deg: &[f64]) -> Option<SurfaceWarning> {
+/// The kink warning of a result whose interior edges meet at `kinks_deg`, beside the reference's
+/// own largest dihedral angle.
+pub fn kink_warning(kinks_deg: &[f64], reference: &crate::reference::Reference) -> Option<SurfaceWarning> {
     let edges = kinks_deg.iter().filter(|&&k| !(k <= KINK_WARNING_DEG)).count();
     let max_deg = kinks_deg.iter().copied().fold(0.0, f64::max);
-    (edges > 0).then_some(SurfaceWarning::Kinks { edges, max_deg })
+    (edges > 0).then(|| SurfaceWarning::Kinks { edges, max_deg, reference_max_deg: reference.max_dihedral_angle_deg() })
 }
 
 /// The coarseness warning of a reference for the tolerance `epsilon` (relative to the

@@ -72,6 +72,7 @@ pub struct Reference {
     bvh: OnceCell<TriangleBvh>,
     boundary_bvh: OnceCell<TriangleBvh>,
     facet_sagitta: OnceCell<f64>,
+    max_dihedral_angle_deg: OnceCell<f64>,
     curvature: RefCell<Option<(JetParams, Rc<CurvatureField>)>>,
     spline: Option<SplineReference>,
 }
@@ -106,6 +107,7 @@ impl Reference {
             bvh: OnceCell::new(),
             boundary_bvh: OnceCell::new(),
             facet_sagitta: OnceCell::new(),
+            max_dihedral_angle_deg: OnceCell::new(),
             curvature: RefCell::new(None),
             spline: None,
         }
@@ -175,6 +177,25 @@ impl Reference {
         *self.facet_sagitta.get_or_init(|| match self.spline {
             Some(_) => 0.0,
             None => facet_sagitta(&self.mesh, self.vertex_normals()),
+        })
+    }
+
+    /// The largest angle (degrees) between the normals of two facets sharing an interior edge of
+    /// the triangulation: how sharply the reference itself bends from facet to facet, against
+    /// which the panels' kinks are judged.
+    pub fn max_dihedral_angle_deg(&self) -> f64 {
+        *self.max_dihedral_angle_deg.get_or_init(|| {
+            let normal = |f: u32| {
+                let t = self.mesh.triangles[f as usize].map(|v| self.mesh.positions[v as usize]);
+                (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
+            };
+            let topo = self.topology();
+            (0..topo.edges().len())
+                .filter_map(|e| match topo.edge_faces(e) {
+                    [(f, _), (g, _)] => Some(normal(*f).dot(normal(*g)).clamp(-1.0, 1.0).acos().to_degrees()),
+                    _ => None,
+                })
+                .fold(0.0, f64::max)
         })
     }
 

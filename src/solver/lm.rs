@@ -381,7 +381,7 @@ impl Solver {
                 evaluate(problem, &self.x_trial, &mut self.trial);
                 phase.evaluate += tick() - t;
                 let e_trial = weighted_energy(problem, &self.trial);
-                if e_trial.is_finite() && e_trial < energy {
+                if e_trial.is_finite() && e_trial < energy && problem.is_admissible(&self.x_trial) {
                     accepted = true;
                     let rho = if pred > 0.0 { (energy - e_trial) / pred } else { 1.0 };
                     small_decrease = energy - e_trial <= opts.relative_decrease_tolerance * energy;

@@ -112,12 +112,26 @@ pub struct Problem<'a> {
     /// Ordering group key per variable (see [`Problem::group_variables`]).
     groups: Vec<u32>,
     pub(crate) terms: Vec<TermSlot<'a>>,
+    /// A hard constraint on the iterates: a step to a point it rejects is not taken.
+    admissible: Option<Box<dyn Fn(&[f64]) -> bool + 'a>>,
 }
 
 impl<'a> Problem<'a> {
     /// A problem over `n_vars` free variables and no terms.
     pub fn new(n_vars: usize) -> Self {
-        Self { n_vars, fixed: vec![false; n_vars], groups: (0..n_vars as u32).collect(), terms: Vec::new() }
+        Self { n_vars, fixed: vec![false; n_vars], groups: (0..n_vars as u32).collect(), terms: Vec::new(), admissible: None }
+    }
+
+    /// Only points that `admissible` accepts are taken as steps (the solver treats any other
+    /// trial point as a failed step and raises the damping): a barrier that no weight can
+    /// trade away, e.g. no folded face.
+    pub fn set_admissible(&mut self, admissible: impl Fn(&[f64]) -> bool + 'a) {
+        self.admissible = Some(Box::new(admissible));
+    }
+
+    /// Whether `x` is admissible (always, without a constraint).
+    pub fn is_admissible(&self, x: &[f64]) -> bool {
+        self.admissible.as_ref().is_none_or(|f| f(x))
     }
 
     /// Appends `count` (auxiliary) variables and returns their index range.

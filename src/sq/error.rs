@@ -14,8 +14,9 @@ pub enum SqError {
     Parameter(String),
     /// S_u × S_v vanishes at a point of G.
     Singular { uv: [f64; 2] },
-    /// H takes both signs (Sec. 6.3): area shares of H > 0 and H < 0.
-    MeanCurvatureSignChange { positive_share: f64, negative_share: f64 },
+    /// H takes both signs (Sec. 6.3): area shares of H > 0 and H < 0, and where the other sign
+    /// is strongest inside the patch.
+    MeanCurvatureSignChange { positive_share: f64, negative_share: f64, at: Option<[f64; 2]> },
     /// |H| · diag below [`super::radius::MIN_MEAN_CURVATURE`] at a point of G.
     MeanCurvatureNearZero { uv: [f64; 2], h_diag: f64 },
     RadiusBasis(String),
@@ -43,13 +44,14 @@ impl fmt::Display for SqError {
             SqError::Singular { uv } => {
                 write!(f, "the surface has no normal at (u, v) = ({:.6}, {:.6}) (S_u × S_v = 0)", uv[0], uv[1])
             }
-            SqError::MeanCurvatureSignChange { positive_share, negative_share } => write!(
+            SqError::MeanCurvatureSignChange { positive_share, negative_share, at } => write!(
                 f,
                 "SQ meshes need a mean curvature of one sign (Sec. 6.3), but H > 0 on {:.1} % of the area and H < 0 on \
-                 {:.1} %. Where H = 0 the central spheres become planes (radius 1/H unbounded), so the sphere congruence \
+                 {:.1} %{}. Where H = 0 the central spheres become planes (radius 1/H unbounded), so the sphere congruence \
                  cannot start there. Use an ST method (st, st-support), or trim the patch to one side of the curve H = 0.",
                 100.0 * positive_share,
-                100.0 * negative_share
+                100.0 * negative_share,
+                at.map_or(String::new(), |[u, v]| format!(", the other sign strongest at (u, v) = ({u:.3}, {v:.3})"))
             ),
             SqError::MeanCurvatureNearZero { uv, h_diag } => write!(
                 f,

@@ -216,7 +216,7 @@ pub fn compute_congruence(
         let sphere = (t + s * centre, s * radius);
         return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
     }
-    let signs = check_mean_curvature(&surface, &grid, (hi - lo).length() / s)?;
+    let signs = check_mean_curvature(&surface, &grid, (hi - lo).length() / s, params.faces)?;
     let fit = fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?;
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
     let grid = &problem.grid;
@@ -273,7 +273,7 @@ pub fn compute_congruence(
     let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
     timings.lap("metrics");
     let mut warnings = Vec::new();
-    warnings.extend(signs.warning);
+    warnings.extend(signs.warnings);
     if chosen > 0 {
         let a = &attempts[0];
         warnings.push(format!(

@@ -7,7 +7,10 @@
 //!   H = 0). H is sampled on a fine grid of cell midpoints (area-weighted shares of each sign) and
 //!   on G. A wrong sign or |H| · diag < [`MIN_MEAN_CURVATURE`] inside the strip between the
 //!   boundary and G's second row is a warning (CAD surfaces often curl at their edges), and those
-//!   grid points are left out of the fit; anywhere else it is a refusal.
+//!   grid points are left out of the fit. So is a *speck* of the other sign inside: at most
+//!   [`MAX_SPECK_SHARE`] of the area, bending a panel the wrong way by at most
+//!   [`SPECK_TOLERANCE`] of the diagonal, so that spheres of the dominant sign still approximate
+//!   it. Anything more is a refusal that says where.
 //! - **Radius**: r_ij = 1/H at the points of G, fitted by least squares with a clamped uniform
 //!   B-spline basis ([`crate::sq::params::RadiusBasis`]; Eq. 8 puts r on f's basis, which would
 //!   have as many coefficients as G has points; the authors' code fits 36).
@@ -80,14 +83,26 @@ pub struct MeanCurvatureSigns {
     /// +1 or −1: the sign over most of the area.
     pub sign: f64,
     /// Points of G with the other sign or |H| · diag < [`MIN_MEAN_CURVATURE`] (left out of the
-    /// fit; all in the boundary strip, else the check refuses).
+    /// fit): in the boundary strip or in a speck, else the check refuses.
     pub excluded: Vec<usize>,
-    /// A warning when H turns in the boundary strip.
-    pub warning: Option<String>,
+    /// When H turns in the boundary strip, and when a speck of the other sign is run through.
+    pub warnings: Vec<String>,
 }
 
-/// The sign check of the module docs; `diag` is the bounding-box diagonal.
-pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64) -> Result<MeanCurvatureSigns, SqError> {
+/// Largest share of the area a speck of the other sign of H may cover inside the patch.
+pub const MAX_SPECK_SHARE: f64 = 0.05;
+/// A speck of the other sign is run through when, over one panel of the mesh asked for (edge
+/// h = √(area / faces)), the surface bends the wrong way by at most this much of the diagonal:
+/// max |H| · h² / 8 over the speck, the sagitta a panel of the dominant sign (at most a plane)
+/// cannot follow.
+pub const SPECK_TOLERANCE: f64 = 1e-3;
+
+/// At most this share of G's points inside the patch may be left out of the radius fit.
+pub const MAX_EXCLUDED_SHARE: f64 = 0.25;
+
+/// The sign check of the module docs; `diag` is the bounding-box diagonal and `faces` the
+/// number of panels asked for (the panel size of the speck test).
+pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64, faces: usize) -> Result<MeanCurvatureSigns, SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let n = grid.n;
     // The strip between the boundary and G's second row, in parameters.
@@ -106,46 +121,80 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
             } else if h < 0.0 {
                 neg += area;
             }
-            cells.push((u, v, h));
+            cells.push((u, v, h, area));
         }
     }
     let total = (pos + neg).max(f64::MIN_POSITIVE);
     let (positive_share, negative_share) = (pos / total, neg / total);
     let sign = if pos >= neg { 1.0 } else { -1.0 };
+    let other = if sign > 0.0 { "<" } else { ">" };
     let wrong = |h: f64| !(h * sign * diag >= MIN_MEAN_CURVATURE);
-    let flipped_inside = cells.iter().any(|&(u, v, h)| h * sign < 0.0 && !in_strip(u, v));
-    if flipped_inside {
-        return Err(SqError::MeanCurvatureSignChange { positive_share, negative_share });
+    // The speck: cells of the other sign inside the patch.
+    let (mut speck_area, mut worst, mut worst_uv) = (0.0, 0.0f64, [u0, v0]);
+    for &(u, v, h, area) in &cells {
+        if h * sign < 0.0 && !in_strip(u, v) {
+            speck_area += area;
+            if h.abs() > worst {
+                (worst, worst_uv) = (h.abs(), [u, v]);
+            }
+        }
+    }
+    let speck_share = speck_area / total;
+    let area = total * (u1 - u0) * (v1 - v0) / (SIGN_GRID * SIGN_GRID) as f64;
+    let sagitta = worst * area / faces.max(1) as f64 / 8.0;
+    let refusal = SqError::MeanCurvatureSignChange { positive_share, negative_share, at: Some(worst_uv) };
+    if speck_area > 0.0 && !(speck_share <= MAX_SPECK_SHARE && sagitta <= SPECK_TOLERANCE * diag) {
+        return Err(refusal);
     }
     let mut excluded = Vec::new();
+    let mut in_speck = 0;
     for (p, f) in grid.frames.iter().enumerate() {
         if wrong(f.mean) {
             let uv = grid.uv[p];
             if !in_strip(uv[0], uv[1]) {
-                return Err(if f.mean * sign < 0.0 {
-                    SqError::MeanCurvatureSignChange { positive_share, negative_share }
-                } else {
-                    SqError::MeanCurvatureNearZero { uv, h_diag: f.mean * diag }
-                });
+                // Inside: a point of the speck, or where H nearly vanishes, bending the wrong way
+                // by at most the speck's tolerance over a panel.
+                let bend = f.mean.abs() * area / faces.max(1) as f64 / 8.0;
+                if !(bend <= SPECK_TOLERANCE * diag) || (f.mean * sign < 0.0 && speck_area == 0.0) {
+                    return Err(if f.mean * sign < 0.0 { refusal } else { SqError::MeanCurvatureNearZero { uv, h_diag: f.mean * diag } });
+                }
+                in_speck += 1;
             }
             excluded.push(p);
         }
     }
-    if excluded.len() == grid.point_count() {
-        return Err(SqError::MeanCurvatureSignChange { positive_share, negative_share });
+    if excluded.len() == grid.point_count() || in_speck as f64 > MAX_EXCLUDED_SHARE * grid.point_count() as f64 {
+        return Err(match excluded.iter().find(|&&p| grid.frames[p].mean * sign >= 0.0) {
+            Some(&p) if speck_area == 0.0 => SqError::MeanCurvatureNearZero { uv: grid.uv[p], h_diag: grid.frames[p].mean * diag },
+            _ => refusal,
+        });
     }
-    let strip_flips = cells.iter().any(|&(_, _, h)| h * sign < 0.0) || !excluded.is_empty();
-    let warning = strip_flips.then(|| {
-        format!(
-            "the mean curvature turns near the boundary (H {} 0 on {:.2} % of the area, within one grid row of the edge); \
+    let mut warnings = Vec::new();
+    let strip_flips = cells.iter().any(|&(u, v, h, _)| h * sign < 0.0 && in_strip(u, v)) || excluded.len() > in_speck;
+    if strip_flips {
+        warnings.push(format!(
+            "the mean curvature turns near the boundary (H {other} 0 on {:.2} % of the area, within one grid row of the edge); \
              {} of the {} grid points there are left out of the radius fit",
-            if sign > 0.0 { "<" } else { ">" },
-            100.0 * if sign > 0.0 { negative_share } else { positive_share },
-            excluded.len(),
+            100.0 * if sign > 0.0 { negative_share } else { positive_share } - 100.0 * speck_share,
+            excluded.len() - in_speck,
             grid.point_count()
-        )
-    });
-    Ok(MeanCurvatureSigns { positive_share, negative_share, sign, excluded, warning })
+        ));
+    }
+    if speck_area > 0.0 || in_speck > 0 {
+        warnings.push(format!(
+            "a speck of the other sign of the mean curvature: H {other} 0 on {:.2} % of the area inside the patch, around \
+             (u, v) = ({:.3}, {:.3}), |H| up to {:.2e}; it bends a panel the wrong way by at most {:.1e} of the diagonal, so \
+             spheres of the dominant sign still approximate it; {in_speck} of the {} grid points there are left out of the \
+             radius fit",
+            100.0 * speck_share,
+            worst_uv[0],
+            worst_uv[1],
+            worst,
+            sagitta / diag,
+            grid.point_count()
+        ));
+    }
+    Ok(MeanCurvatureSigns { positive_share, negative_share, sign, excluded, warnings })
 }
 
 /// The fitted radius function and how well it matches r = 1/H on G.

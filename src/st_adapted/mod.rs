@@ -68,6 +68,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod boundary_arcs;
+pub mod guarantees;
 pub mod initialization;
 pub mod metrics;
 pub mod optimization;
@@ -301,7 +302,7 @@ pub fn compute(
     timings.lap("metrics");
     let angle_iteration_median_ms = median(&iteration_ms);
     let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
-    warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg()));
+    warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
     if let Some(epsilon) = params.epsilon() {
         warnings.extend(coarseness_warning(reference, epsilon));
     }

@@ -26,7 +26,13 @@ pub const BOUNDARY_POINT_FACTOR: f64 = 10.0;
 /// Least oriented area a face keeps, as a fraction of its initial area ([`FaceOrientation`]).
 pub const MIN_AREA_FRACTION: f64 = 0.2;
 
-/// Face orientation (no folded panels while vertices glide): per face, the residual
+/// The share of its initial oriented area along the reference normal that a face keeps in every
+/// step ([`FaceOrientation::along`]): a margin, since that normal is taken at the centroid's
+/// initial closest point.
+pub const UNFOLDED_AREA_FRACTION: f64 = 0.1;
+
+/// Face orientation (no folded panels while vertices glide; the optimization also takes no step
+/// that folds a face, [`FaceOrientation::keeps_orientation`]): per face, the residual
 /// g = τ − ((b − a) × (c − a))·n / A₀ with n the face's initial unit normal and A₀ its initial
 /// |(b − a) × (c − a)|. Under [`Hinge`] it is the inequality "oriented area ≥ τ × initial area".
 pub struct FaceOrientation {
@@ -48,6 +54,44 @@ impl FaceOrientation {
             inv_areas.push(if len > 0.0 { 1.0 / len } else { 0.0 });
         }
         Self { items, normals, inv_areas, tau }
+    }
+}
+
+impl FaceOrientation {
+    /// The faces with `normal(centroid)` as their normals, each signed to the side its face
+    /// starts on (zero where there is none or the face is degenerate).
+    pub fn along(items: Vec<[usize; 3]>, x: &[f64], normal: impl Fn(DVec3) -> Option<DVec3>) -> Self {
+        let normals = items
+            .iter()
+            .map(|o| {
+                let [a, b, c] = o.map(|k| DVec3::new(x[k], x[k + 1], x[k + 2]));
+                let side = (b - a).cross(c - a);
+                match normal((a + b + c) / 3.0) {
+                    Some(n) if side.dot(n) != 0.0 => n * side.dot(n).signum(),
+                    _ => DVec3::ZERO,
+                }
+            })
+            .collect();
+        // Each face keeps at least this share of its initial oriented area along its normal.
+        let inv_areas = items
+            .iter()
+            .zip(&normals)
+            .map(|(o, n): (&[usize; 3], &DVec3)| {
+                let [a, b, c] = o.map(|k| DVec3::new(x[k], x[k + 1], x[k + 2]));
+                let area = (b - a).cross(c - a).dot(*n);
+                if area > 0.0 { 1.0 / area } else { 0.0 }
+            })
+            .collect();
+        Self { items, normals, inv_areas, tau: UNFOLDED_AREA_FRACTION }
+    }
+
+    /// Whether every face (with an initial orientation) keeps a positive oriented area along its
+    /// normal: no face folds over.
+    pub fn keeps_orientation(&self, x: &[f64]) -> bool {
+        self.items.iter().zip(&self.normals).zip(&self.inv_areas).all(|((o, n), inv)| {
+            let [a, b, c] = o.map(|i| DVec3::new(x[i], x[i + 1], x[i + 2]));
+            *n == DVec3::ZERO || (b - a).cross(c - a).dot(*n) * inv > self.tau
+        })
     }
 }
 
@@ -444,6 +488,10 @@ pub fn build_problem<'a>(
             problem.add_term(Band::new(face, tau).with_name("face_tolerance"), weights.tolerance),
         ]
     });
+    // No step folds a face: each keeps the side of the reference normal at its centroid's closest
+    // point that it starts on (the folded-face count of the metrics, with normals held fixed).
+    let unfolded = FaceOrientation::along(corners.clone(), x, |c| reference.closest_point(c).and_then(|p| p.normal));
+    problem.set_admissible(move |x| unfolded.keeps_orientation(x));
     let orientation =
         problem.add_term(Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"), weights.orientation);
     // (f, g, offset of p, offset of q) per interior edge pq.

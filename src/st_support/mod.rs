@@ -284,7 +284,7 @@ pub fn compute(
     };
     let mut result = on_mesh(work.mesh(), work.topology(), &field, params, clock, progress)?;
     result.warnings = warnings;
-    result.warnings.extend(kink_warning(&result.sphere_mesh.kink_angles_deg()));
+    result.warnings.extend(kink_warning(&result.sphere_mesh.kink_angles_deg(), work));
     if remeshed.is_some() {
         result.timings_ms.insert(0, timings.laps.remove(0));
     }

@@ -135,5 +135,11 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         .with_extras(serde_json::json!({ "variant": variant }))
         .with_deviations(&result.panel_deviations)
         .with_warnings(&result.warnings);
-    export_panels(reference, export, clock)
+    let (mut report, mut files) = export_panels(reference, export, clock);
+    report.set_verdict(&crate::st_adapted::guarantees::verdict(m));
+    // report.json carries the verdict too.
+    if let Some(f) = files.iter_mut().find(|f| f.name == "report.json") {
+        f.bytes = report.to_json().into_bytes();
+    }
+    (report, files)
 }
