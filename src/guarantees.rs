@@ -66,7 +66,9 @@ impl fmt::Display for Guarantee {
                 format!("{x:.digits$e}")
             }
         };
-        let digits = (2..9).find(|&d| format!("{:.d$e}", self.measured) != format!("{:.d$e}", self.limit)).unwrap_or(9);
+        let fixed = self.unit.is_empty() || self.unit == "deg";
+        let shown = |x: f64, d: usize| if fixed { format!("{x:.d$}") } else { format!("{x:.d$e}") };
+        let digits = (2..9).find(|&d| shown(self.measured, d) != shown(self.limit, d)).unwrap_or(9);
         write!(f, "{} {}{} (must be {op} {}{})", self.name, number(self.measured, digits), unit, number(self.limit, 2), unit)
     }
 }
