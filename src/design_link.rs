@@ -7,7 +7,7 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use crate::samples::Sample;
-use crate::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
@@ -270,6 +270,10 @@ impl Design {
                     sq.faces,
                     sq.until.key()
                 );
+                // The starting congruence only when not the default, so older links stay as they were.
+                if sq.start != RadiusStart::Auto {
+                    s += &format!("&start={}", sq.start.key());
+                }
             }
         }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
@@ -371,6 +375,7 @@ impl Design {
                 "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64).map(|x| d.sq.grid = x as usize).is_some(),
                 "rs" => parse_in(v, RECOMPUTE_RANGE.0 as i64, RECOMPUTE_RANGE.1 as i64).map(|x| d.sq.recompute_every = x as usize).is_some(),
                 "until" => Until::from_key(v).map(|u| d.sq.until = u).is_some(),
+                "start" => RadiusStart::from_key(v).map(|r| d.sq.start = r).is_some(),
                 "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),

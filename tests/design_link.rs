@@ -7,7 +7,7 @@ use spherical_faces::panels::edge_arcs::EdgeArcs;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
 use spherical_faces::pipeline::protocol::StageRequest;
-use spherical_faces::sq::params::SqParams;
+use spherical_faces::sq::params::{RadiusStart, SqParams};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
 
@@ -175,7 +175,12 @@ fn sq_parameters_round_trip() {
     assert!(notices.is_empty(), "{notices:?}");
     assert_eq!(back, d);
     assert!(matches!(back.stage_requests().last(), Some(StageRequest::Sq(p)) if *p == d.sq));
-    let (bad, notices) = Design::from_fragment("#v=1&sample=vault&method=sq&theta=95&alpha=0&grid=2&rs=x");
+    assert!(!fragment.contains("start="), "the default start is left out: {fragment}");
+    let constant = Design { sq: SqParams { start: RadiusStart::Constant, ..d.sq.clone() }, ..d.clone() };
+    let fragment = constant.to_fragment();
+    assert!(fragment.contains("&start=constant"), "{fragment}");
+    assert_eq!(Design::from_fragment(&fragment).0, constant);
+    let (bad, notices) = Design::from_fragment("#v=1&sample=vault&method=sq&theta=95&alpha=0&grid=2&rs=x&start=1/H");
     assert_eq!(bad.sq, SqParams::default());
-    assert_eq!(notices.len(), 4, "{notices:?}");
+    assert_eq!(notices.len(), 5, "{notices:?}");
 }

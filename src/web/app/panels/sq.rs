@@ -7,7 +7,7 @@
 use egui::{Color32, RichText};
 
 use crate::pipeline::fields::Energy;
-use crate::sq::params::{SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
+use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
 use crate::web::app::plots::{key_values, term_plot};
 use crate::web::app::state::SqView;
 
@@ -52,6 +52,15 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
             }
         });
     egui::CollapsingHeader::new("advanced").id_salt("sq-advanced").show(ui, |ui| {
+        egui::ComboBox::from_label("starting congruence")
+            .selected_text(params.start.key())
+            .show_ui(ui, |ui| {
+                for s in RadiusStart::ALL {
+                    ui.selectable_value(&mut params.start, s, s.key());
+                }
+            })
+            .response
+            .on_hover_text("auto: the central congruence r = 1/H, then constant radii when it misses θ or α (Sec. 5.1, 6.3)");
         ui.add(egui::Slider::new(&mut params.recompute_every, 1..=50).text("RS"))
             .on_hover_text("The torsal directions and planes are recomputed every RS iterations");
         ui.add(egui::Slider::new(&mut params.lc_iterations, 1..=500).text("step 1 iterations"));
