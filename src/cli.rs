@@ -713,5 +713,9 @@ fn range_usize<const R: u8>(s: &str) -> Result<usize, String> {
         _ => FACES_RANGE,
     };
     let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
-    if (lo..=hi).contains(&n) { Ok(n) } else { Err(format!("{n} is not in [{lo}, {hi}]")) }
+    match (lo..=hi).contains(&n) {
+        true => Ok(n),
+        false if R == FACES && n > hi => Err(format!("{n} is more quads than SQ finishes within a minute and 1 GB; at most {hi}")),
+        false => Err(format!("{n} is not in [{lo}, {hi}]")),
+    }
 }

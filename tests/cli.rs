@@ -225,6 +225,7 @@ fn sq_refuses_bad_input_with_one_line() {
         (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "'95' for '--theta <DEG>'"),
         (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "'panels' for '--until <STAGE>'"),
         (vec!["sq", "sample:vault"], "--out"),
+        (vec!["sq", "sample:vault", "--faces", "20000", "--out", "/tmp/sf-sq-x"], "at most 3000"),
     ] {
         let out = run(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
