@@ -119,7 +119,13 @@ fn no_generated_roof_misses_a_guarantee_silently() {
             assert!(!result.verdict.failure_text().is_empty());
         }
         met += usize::from(result.verdict.holds());
-        rows.push(format!("{kind:?} {k}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
+        let fallback = result.quad_mesh.as_ref().is_some_and(|q| q.parameter_lines);
+        rows.push(format!(
+            "{kind:?} {k}: start {:?}, {}{}",
+            result.congruence.start,
+            if fallback { "parameter lines, " } else { "" },
+            if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }
+        ));
     }
     println!("{}", rows.join("\n"));
     // The method is meant to hold on such roofs: most runs meet every guarantee.
@@ -158,4 +164,39 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
         assert!(!must_meet || result.verdict.holds(), "{name}: {}", result.verdict.failure_text());
     }
+}
+
+/// The final check on a deliberately broken SQ mesh: one vertex of the vault's exact mesh moved
+/// off its spheres by 1e-4 of the diagonal fails the vertex–sphere guarantee, and the report of
+/// such a result says `meets_guarantees: false` with the figure.
+#[test]
+fn a_broken_sq_mesh_fails_its_final_check() {
+    use spherical_faces::geometry::mesh::PolyMesh;
+    use spherical_faces::samples::Sample;
+    use spherical_faces::sq::guarantees::{verdict, Delivered};
+    use spherical_faces::sq::sq_mesh::sq_mesh;
+    let reference = Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap();
+    let params = SqParams::default();
+    let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
+    let f = result.sq_mesh.as_ref().unwrap();
+    let (diag, sm) = (reference.diagonal(), &f.mesh.sphere_mesh);
+    let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
+    let mut positions = sm.mesh.positions.clone();
+    let v = positions.len() / 2;
+    positions[v] += 1e-4 * diag * normals[v];
+    let broken = PolyMesh::new(positions, sm.mesh.faces.clone());
+    let stars = QuadStars::new(&broken);
+    let out = sq_mesh(broken, sm.face_spheres.clone(), &normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
+    let check = verdict(&result.congruence.figures, Delivered::SqMesh(&out.sphere_mesh.mesh, &out.figures), params.theta_deg, params.alpha_deg);
+    assert!(!check.holds());
+    let missed: Vec<&str> = check.failures().map(|g| g.name.as_str()).collect();
+    assert!(missed.contains(&"max_vertex_sphere_residual"), "{missed:?}");
+    let g = check.failures().find(|g| g.name == "max_vertex_sphere_residual").unwrap();
+    assert!((g.measured - 1e-4).abs() < 2e-5, "the figure measures the move: {}", g.measured);
+    let mut report = spherical_faces::export::Report::new("sq");
+    report.set_verdict(&check);
+    let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+    assert_eq!(json["meets_guarantees"], false);
+    assert!(report.failure_text().contains("max_vertex_sphere_residual 1.0"), "{}", report.failure_text());
 }

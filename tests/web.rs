@@ -181,8 +181,8 @@ fn field_lengths_do_not_wrap_on_wasm32() {
     assert!(Field::from_bytes(&header, &[0, 0, 0, 0]).is_err());
 }
 
-/// SQ in wasm reaches the verdict it reaches natively: on `tunnel_arch` (θ 20°, α 75°) and the
-/// saddle roof (θ 15°, α 45°) the congruence holds θ on every grid point and every grid quad has
+/// SQ in wasm reaches the verdict it reaches natively: on `tunnel_arch` and the vault sample
+/// (θ 20°, α 75°) and the saddle roof (θ 15°, α 45°) the congruence holds θ on every grid point and every grid quad has
 /// real torsal directions with planes at ≥ α, recomputed here from the congruence's own points
 /// and lines, and the SQ mesh meets every guarantee.
 #[wasm_bindgen_test]
@@ -196,9 +196,15 @@ fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
         ("tunnel_arch.json", include_bytes!("../../shared/data/bsplines/tunnel_arch.json"), 20.0, 75.0),
         ("saddle_roof.json", include_bytes!("../../shared/data/bsplines/saddle_roof.json"), 15.0, 45.0),
     ];
-    for (name, bytes, theta, alpha) in roofs {
-        let Ok(ImportedFile::BSpline(b)) = import_file(bytes, name) else { panic!("{name}: a B-spline") };
-        let reference = Reference::from_bspline(b.surface).unwrap();
+    let surfaces = roofs
+        .into_iter()
+        .map(|(name, bytes, theta, alpha)| match import_file(bytes, name) {
+            Ok(ImportedFile::BSpline(b)) => (name, b.surface, theta, alpha),
+            _ => panic!("{name}: a B-spline"),
+        })
+        .chain([("sample:vault", Sample::Vault.bspline().unwrap(), 20.0, 75.0)]);
+    for (name, surface, theta, alpha) in surfaces {
+        let reference = Reference::from_bspline(surface).unwrap();
         let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
         let result = spherical_faces::sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap();
         let c = &result.congruence;

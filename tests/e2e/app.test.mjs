@@ -476,6 +476,8 @@ for (const project of PROJECTS) {
         t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; metrics ${JSON.stringify(r.metrics)}; timings ${JSON.stringify(r.timings_ms)}`);
         assert.ok(!s.error, `error: ${s.error}`);
         assert.equal(r.stopped_after, 'final');
+        assert.equal(r.meets_guarantees, true, `the verdict: ${JSON.stringify(r.guarantees)}`);
+        assert.equal(s.missed_guarantees, null, 'no miss in the status bar');
         for (const part of ['faces=237', 'until=final']) {
           assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
         }
@@ -510,6 +512,22 @@ for (const project of PROJECTS) {
         await download.saveAs(file);
         const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
         assert.equal(v.status, 0, `the Khronos validator accepts the SQ panels GLB: ${v.stdout}${v.stderr}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] n2. an SQ result that misses a guarantee says so in the status bar, with its figure`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      // Torsal planes at exactly 90° are more than a discrete mesh reaches.
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=90&grid=12&rs=10&faces=60&until=final';
+      await withApp(t, browser, server, project, { name: 'n2-sq-miss', fragment }, async (app) => {
+        const s = await waitForState(app, 'sq finished', (s) => s.sq && s.sq.ready && !s.busy, { timeout: T.load });
+        const r = s.sq.report;
+        t.diagnostic(`missed: ${s.missed_guarantees}; guarantees ${JSON.stringify(r.guarantees)}`);
+        assert.equal(r.meets_guarantees, false);
+        assert.ok(r.guarantees.some((g) => g.name === 'min_support_plane_angle_deg' && !g.holds), 'the missed guarantee in the report');
+        assert.ok(s.missed_guarantees && s.missed_guarantees.includes('min_support_plane_angle_deg') && s.missed_guarantees.includes('≥ 90'), `status bar: ${s.missed_guarantees}`);
+        assert.ok(!s.missed_guarantees.includes('exact'), 'no word of exactness');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

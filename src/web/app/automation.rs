@@ -42,6 +42,8 @@ impl App {
             "edges": self.design.edges,
             "jet_degree": self.design.jet.degree,
             "error": self.error,
+            // The status bar's line when the last result misses its method's guarantees.
+            "missed_guarantees": self.missed_guarantees,
             "notices": self.notices,
             "design_link": self.last_fragment,
             "clear_color": [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],

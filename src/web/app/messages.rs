@@ -174,6 +174,7 @@ impl App {
                         }
                     }
                     StageResult::StAdapted(summary) => {
+                        self.missed_guarantees = super::panels::missed_guarantees(&summary.report);
                         if let Some(a) = self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()) {
                             a.summary = Some(*summary);
                         }

@@ -38,6 +38,7 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
         energy_plot(ui, &a.energy);
     }
     let Some(sum) = &a.summary else { return };
+    super::verdict(ui, &sum.report);
     let m = &sum.report.metrics;
     let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3e}"));
     let mut rows = vec![
