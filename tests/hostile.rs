@@ -297,7 +297,7 @@ fn slivers_are_counted_and_tessellation_is_bounded() {
     let ngon = load(&Path::new(OWN).join("ngon_1500.obj")).unwrap().surface;
     let result = spherical_faces::st_support::compute(&ngon, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
     let triangles: usize = result.panels.iter().map(|p| p.triangles.len()).sum();
-    let zippers = result.panels.len() * 4 * (4 * level_cap(result.panels.len()) + 2);
+    let zippers = result.panels.len() * 4 * (4 * level_cap(result.panels.len(), PANEL_TRIANGLE_BUDGET, 32) + 2);
     assert!(triangles <= PANEL_TRIANGLE_BUDGET + zippers, "{triangles} triangles for {} panels", result.panels.len());
 }
 

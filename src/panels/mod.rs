@@ -98,20 +98,33 @@ pub fn build_panels(sm: &SphereMesh, chord_tolerance: f64) -> Vec<Panel> {
 /// [`tessellate::MAX_PANEL_TRIANGLES`] each.
 pub const PANEL_TRIANGLE_BUDGET: usize = 4_000_000;
 
-/// The subdivision level cap of each of `faces` panels under [`PANEL_TRIANGLE_BUDGET`]: at
-/// least 32, at most [`tessellate::MAX_LEVEL`].
-pub fn level_cap(faces: usize) -> usize {
-    let level = (PANEL_TRIANGLE_BUDGET as f64 / (2 * faces.max(1)) as f64).sqrt() as usize;
-    level.clamp(32, tessellate::MAX_LEVEL)
+/// The budget of a live view's panels, sent every 100 ms while an optimization runs: a diverging
+/// run's huge spheres must not bring the view to a crawl (glass panels stay far below it).
+pub const LIVE_PANEL_TRIANGLE_BUDGET: usize = 250_000;
+
+/// The subdivision level cap of each of `faces` panels under `budget` triangles: at least
+/// `min_level`, at most [`tessellate::MAX_LEVEL`].
+pub fn level_cap(faces: usize, budget: usize, min_level: usize) -> usize {
+    let level = (budget as f64 / (2 * faces.max(1)) as f64).sqrt() as usize;
+    level.clamp(min_level, tessellate::MAX_LEVEL)
 }
 
 pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
+    build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), PANEL_TRIANGLE_BUDGET, 32))
+}
+
+/// The panels of a live view: [`build_panels_with`] under [`LIVE_PANEL_TRIANGLE_BUDGET`].
+pub fn build_live_panels(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
+    build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), LIVE_PANEL_TRIANGLE_BUDGET, 4))
+}
+
+/// [`build_panels_with`] with each panel's subdivision level at most `max_level`.
+fn build_panels_within(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs, max_level: usize) -> Vec<Panel> {
     let mesh = &sm.mesh;
     let topo = sm.topology();
     let diag = mesh.bbox_diagonal().max(f64::MIN_POSITIVE);
     let tol = if chord_tolerance > 0.0 && chord_tolerance.is_finite() { chord_tolerance } else { 1e-4 * diag };
     let faces = mesh.face_count();
-    let max_level = level_cap(faces);
     let spheres: Vec<Sphere> = (0..faces)
         .map(|f| {
             let s = sm.face_spheres.get(f).copied().unwrap_or(Sphere { a: f64::NAN, b: DVec3::NAN, c: f64::NAN });

@@ -18,7 +18,8 @@ use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::{write_mesh_obj, ExportFile, Metrics, Report};
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
-use crate::panels::build_panels;
+use crate::panels::build_live_panels;
+use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field};
 use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
@@ -207,7 +208,7 @@ fn live_panels(positions: &[DVec3], faces: &[crate::geometry::mesh::Face], spher
         return Vec::new();
     }
     let sm = SphereMesh::new(PolyMesh::new(positions.to_vec(), faces.to_vec()), spheres.to_vec(), BoundaryArcRule::Parallel(DVec3::ZERO));
-    let mut fields = panel_fields(&build_panels(&sm, LIVE_PANEL_TOLERANCE * diag));
+    let mut fields = panel_fields(&build_live_panels(&sm, LIVE_PANEL_TOLERANCE * diag, EdgeArcs::Intersection));
     fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&sm.mesh)));
     fields
 }

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::StageError;
 use crate::export::{ExportFile, Metrics, Report};
 use crate::geometry::mesh::TriMesh;
-use crate::panels::build_panels_with;
+use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field};
@@ -101,7 +101,7 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
 
 /// A panel snapshot of the method's stage at `iteration`.
 fn send_panels(sink: &mut dyn Sink, sm: &SphereMesh, iteration: u32, chord_tolerance: f64, variant: EdgeArcs) {
-    sink.snapshot(STAGE, iteration, panel_fields(&build_panels_with(sm, chord_tolerance, variant)));
+    sink.snapshot(STAGE, iteration, panel_fields(&build_live_panels(sm, chord_tolerance, variant)));
 }
 
 /// The report (method "st") and the export files of a result. `max_distance_to_reference` comes
