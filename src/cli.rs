@@ -183,10 +183,9 @@ impl Failure {
         Self { message: message.into(), code: 1 }
     }
 
-    /// The files are written, but the result misses a guarantee of its method: `summary` (what was
-    /// written) goes to stdout, the misses to stderr.
-    fn missed(summary: &str, report: &Report) -> Self {
-        println!("{summary}");
+    /// The files are written, but the result misses a guarantee of its method: the misses, for
+    /// stderr.
+    fn missed(report: &Report) -> Self {
         Self {
             message: format!("the result misses its guarantees: {}", report.failure_text()),
             code: spherical_faces::guarantees::MISSED_GUARANTEES_EXIT_CODE,
@@ -471,12 +470,14 @@ fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut Pr
     verdict(summary, &report)
 }
 
-/// The summary when the report meets its guarantees, else the failure with exit code 3.
+/// The summary when the report meets its guarantees; else the summary (what was written) goes
+/// to stdout at once and the failure, with exit code 3, to stderr.
 fn verdict(summary: String, report: &Report) -> Result<String, Failure> {
-    match report.meets_guarantees {
-        Some(true) => Ok(summary),
-        _ => Err(Failure::missed(&summary, report)),
+    if report.meets_guarantees == Some(true) {
+        return Ok(summary);
     }
+    println!("{summary}");
+    Err(Failure::missed(report))
 }
 
 /// `sq SURFACE [options] --out DIR`.

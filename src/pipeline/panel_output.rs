@@ -1,6 +1,7 @@
 //! What every panel method sends and writes, in one place: display fields of meshes, panels,
 //! support structure and curvature, and the export files with the shared report.
 
+use crate::guarantees::Verdict;
 use glam::DVec3;
 
 use super::fields::{field, Field};
@@ -108,6 +109,8 @@ pub struct PanelExport<'a> {
     pub warnings: Vec<String>,
     /// Each panel's largest distance to the reference, when the method measured it already.
     pub deviations: Option<&'a [f64]>,
+    /// The method's verdict on the result, for the report.
+    pub verdict: Option<&'a Verdict>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -140,7 +143,13 @@ impl<'a> PanelExport<'a> {
             support_elements: None,
             warnings: Vec::new(),
             deviations: None,
+            verdict: None,
         }
+    }
+
+    /// The verdict the report carries ([`crate::guarantees`]).
+    pub fn with_verdict(self, verdict: &'a Verdict) -> Self {
+        Self { verdict: Some(verdict), ..self }
     }
 
     /// The warnings the report carries (the failed assumptions of the reference).
@@ -196,6 +205,9 @@ pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Re
     );
     report.add_timing("export", clock.now() - t0);
     report.warnings = e.warnings;
+    if let Some(v) = e.verdict {
+        report.set_verdict(v);
+    }
     let mut files = panel_files(glb, obj, &schedule, &report);
     if !schedule.support_elements.is_empty() {
         let csv = SupportRecord::to_csv(&schedule.support_elements);

@@ -179,7 +179,13 @@ pub struct CongruenceAttempt {
     pub figures: CongruenceFigures,
     /// Grid points beyond θ, quads without real torsal directions and quads below α.
     pub misses: usize,
-    pub meets_guarantees: bool,
+}
+
+impl CongruenceAttempt {
+    /// θ and α hold on all of G.
+    pub fn meets_guarantees(&self) -> bool {
+        self.misses == 0
+    }
 }
 
 /// The optimized state of one start.
@@ -228,7 +234,8 @@ pub fn compute_congruence(
         RadiusStart::Constant => &[RadiusStart::Constant],
     };
     let mut attempts: Vec<CongruenceAttempt> = Vec::new();
-    let mut best: Option<(usize, Optimized, Vec<DVec3>, Vec<DVec3>)> = None;
+    // The kept start: the first that meets θ and α, else the first with the fewest misses.
+    let mut best: Option<(usize, Optimized, Vec<DVec3>, Vec<DVec3>, Vec<Option<TorsalPair>>)> = None;
     for (k, &start) in starts.iter().enumerate() {
         let function = match start {
             RadiusStart::Constant => constant_function(&fit.function, constant_radius(grid, signs.sign)),
@@ -250,22 +257,18 @@ pub fn compute_congruence(
         let pairs = torsal_pairs(grid, &lines);
         let figures = CongruenceFigures::of(grid, &lines, &pairs);
         let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-        let meets = misses == 0;
-        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses, meets_guarantees: meets });
-        if best.as_ref().is_none_or(|b| misses < b.0) {
-            best = Some((misses, optimized, initial_lines, lines));
+        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses });
+        if best.as_ref().is_none_or(|b| misses < attempts[b.0].misses) {
+            best = Some((k, optimized, initial_lines, lines, pairs));
         }
-        if meets {
+        if misses == 0 {
             break;
         }
     }
     timings.lap("congruence");
-    let (_, optimized, initial_lines, lines) = best.expect("at least one start");
-    // The kept start: the first that meets θ and α, else the first with the fewest misses.
-    let chosen = (0..attempts.len()).min_by_key(|&i| attempts[i].misses).unwrap_or(0);
+    let (chosen, optimized, initial_lines, lines, pairs) = best.expect("at least one start");
+    let figures = attempts[chosen].figures.clone();
     let x = optimized.x;
-    let pairs = torsal_pairs(grid, &lines);
-    let figures = CongruenceFigures::of(grid, &lines, &pairs);
     let lc_residual = problem.lc_residual(&x);
     let coefficients: Vec<f64> = x[problem.layout.radius.clone()].iter().map(|c| c * s).collect();
     let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv])))).collect();
@@ -373,7 +376,7 @@ fn spherical_congruence(
     let function = BSplineFunction::constant(sphere.1, domain);
     timings.lap("radius");
     let misses = metrics::misses(&grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses, meets_guarantees: misses == 0 };
+    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses };
     SqCongruence {
         grid: params.grid,
         uv: grid.uv.clone(),

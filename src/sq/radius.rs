@@ -141,7 +141,9 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
     }
     let speck_share = speck_area / total;
     let area = total * (u1 - u0) * (v1 - v0) / (SIGN_GRID * SIGN_GRID) as f64;
-    let sagitta = worst * area / faces.max(1) as f64 / 8.0;
+    // The sagitta |H| h² / 8 over a panel of edge h = √(area / faces).
+    let bend = |h: f64| h.abs() * area / faces.max(1) as f64 / 8.0;
+    let sagitta = bend(worst);
     let refusal = SqError::MeanCurvatureSignChange { positive_share, negative_share, at: Some(worst_uv) };
     if speck_area > 0.0 && !(speck_share <= MAX_SPECK_SHARE && sagitta <= SPECK_TOLERANCE * diag) {
         return Err(refusal);
@@ -154,8 +156,7 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
             if !in_strip(uv[0], uv[1]) {
                 // Inside: a point of the speck, or where H nearly vanishes, bending the wrong way
                 // by at most the speck's tolerance over a panel.
-                let bend = f.mean.abs() * area / faces.max(1) as f64 / 8.0;
-                if !(bend <= SPECK_TOLERANCE * diag) || (f.mean * sign < 0.0 && speck_area == 0.0) {
+                if !(bend(f.mean) <= SPECK_TOLERANCE * diag) || (f.mean * sign < 0.0 && speck_area == 0.0) {
                     return Err(if f.mean * sign < 0.0 { refusal } else { SqError::MeanCurvatureNearZero { uv, h_diag: f.mean * diag } });
                 }
                 in_speck += 1;

@@ -127,6 +127,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         max_panel_arc_gap: gap,
         ..Metrics::default()
     };
+    let verdict = crate::st_adapted::guarantees::verdict(m);
     let mut timings = result.timings_ms.clone();
     if let Some(med) = result.angle_iteration_median_ms {
         timings.push(("angle_iteration_median".into(), med));
@@ -134,12 +135,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
     let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &timings)
         .with_extras(serde_json::json!({ "variant": variant }))
         .with_deviations(&result.panel_deviations)
-        .with_warnings(&result.warnings);
-    let (mut report, mut files) = export_panels(reference, export, clock);
-    report.set_verdict(&crate::st_adapted::guarantees::verdict(m));
-    // report.json carries the verdict too.
-    if let Some(f) = files.iter_mut().find(|f| f.name == "report.json") {
-        f.bytes = report.to_json().into_bytes();
-    }
-    (report, files)
+        .with_warnings(&result.warnings)
+        .with_verdict(&verdict);
+    export_panels(reference, export, clock)
 }
