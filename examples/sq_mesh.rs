@@ -64,8 +64,8 @@ fn main() {
                 v.iter().cloned().fold(0.0, f64::max),
             )
         };
-        println!("{a}: {ms:.0} ms, faces {} coverage {:.3} dropped {} param-lines {} remesh angles {:?} Q' angles {:?} final angles {:?}",
-            q.mesh.face_count(), q.coverage, q.dropped, q.parameter_lines, stat(&q.remesh_edge_angles_deg), stat(&q.edge_angles_deg), stat(&f.edge_angles_deg));
+        println!("{a}: {ms:.0} ms, faces {} coverage {:.3} dropped {} singular vertices {} remesh angles {:?} Q' angles {:?} final angles {:?}",
+            q.mesh.face_count(), q.coverage, q.dropped, q.singular.len(), stat(&q.remesh_edge_angles_deg), stat(&q.edge_angles_deg), stat(&f.edge_angles_deg));
         println!("  {:?}", f.mesh.figures);
         println!(
             "  iterations {} {} {} final it median {:?} timings {:?}",

@@ -66,13 +66,15 @@ fn recheck(mesh: &spherical_faces::sq::sq_mesh::SqMesh, normals: &[DVec3], diag:
     }
     for (_, faces) in &QuadStars::new(m).stars {
         let c: Vec<DVec3> = faces.iter().map(|&f| sm.face_spheres[f as usize].center().unwrap_or(DVec3::splat(f64::NAN))).collect();
-        // The volume of the four centres' tetrahedron over the scale of its edges.
-        let volume = (c[1] - c[0]).cross(c[2] - c[0]).dot(c[3] - c[0]).abs();
-        let edge = (c[1] - c[0]).length().max((c[2] - c[0]).length()).max((c[3] - c[0]).length());
-        // A plane through three centres leaves the fourth |volume| / |area vector| away.
-        let area = (c[1] - c[0]).cross(c[2] - c[0]).length().max((c[2] - c[0]).cross(c[3] - c[0]).length());
-        if !(volume <= 1e-8 * diag * area.max(1e-300)) && edge > 0.0 {
-            misses.push(format!("centres not coplanar: {:.1e}", volume / area / diag));
+        // Every further centre against the plane of the first three (three centres always lie
+        // in a plane: a singular vertex of valence 3): |volume| / |area vector| away.
+        for k in 3..c.len() {
+            let volume = (c[1] - c[0]).cross(c[2] - c[0]).dot(c[k] - c[0]).abs();
+            let edge = (c[1] - c[0]).length().max((c[2] - c[0]).length()).max((c[k] - c[0]).length());
+            let area = (c[1] - c[0]).cross(c[2] - c[0]).length().max((c[2] - c[0]).cross(c[k] - c[0]).length());
+            if !(volume <= 1e-8 * diag * area.max(1e-300)) && edge > 0.0 {
+                misses.push(format!("centres not coplanar: {:.1e}", volume / area / diag));
+            }
         }
     }
     for ((_, d), n) in mesh.node_axes.iter().zip(normals) {
@@ -119,11 +121,11 @@ fn no_generated_roof_misses_a_guarantee_silently() {
             assert!(!result.verdict.failure_text().is_empty());
         }
         met += usize::from(result.verdict.holds());
-        let fallback = result.quad_mesh.as_ref().is_some_and(|q| q.parameter_lines);
+        let singular = result.quad_mesh.as_ref().filter(|q| q.parameter_lines).map_or(0, |q| q.singular_points.len());
         rows.push(format!(
             "{kind:?} {k}: start {:?}, {}{}",
             result.congruence.start,
-            if fallback { "parameter lines, " } else { "" },
+            if singular > 0 { format!("parameter lines ({singular} singular points), ") } else { String::new() },
             if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }
         ));
     }

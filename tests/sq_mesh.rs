@@ -120,7 +120,7 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
     let params = SqParams { until: Until::Congruence, ..SqParams::default() };
     let c = compute_congruence(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
     let surface = loaded.surface.spline().unwrap();
-    let field = CrossField::comb(surface, c.grid, &c.torsal_uv).unwrap();
+    let field = CrossField::new(surface, c.grid, &c.torsal_uv).unwrap();
     for n in [100, 237, 500] {
         let m = quad_remesh(surface, &field, &QuadRemeshParams { target_faces: n, ..QuadRemeshParams::default() }).unwrap();
         let faces = m.mesh.face_count();
@@ -149,9 +149,9 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
     }
 }
 
-/// The paraboloid of revolution is umbilic at its apex: its torsal field turns about it, no
-/// singularity-free quad mesh follows it, and the remesh says so and follows the parameter
-/// lines (a conjugate net of this surface: its second fundamental form is a multiple of
+/// The paraboloid of revolution is umbilic at its apex: its torsal field turns about it, the remesh
+/// finds the singular points a quad mesh along it would need, and says so and follows the
+/// parameter lines (a conjugate net of this surface: its second fundamental form is a multiple of
 /// dx² + dy²).
 #[test]
 fn a_singular_torsal_field_falls_back_to_the_parameter_lines_and_says_so() {
@@ -160,6 +160,9 @@ fn a_singular_torsal_field_falls_back_to_the_parameter_lines_and_says_so() {
     let r = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
     let q = r.quad_mesh.unwrap();
     assert!(q.parameter_lines);
-    assert!(r.warnings.iter().any(|w| w.contains("umbilic")), "{:?}", r.warnings);
+    assert!(!q.singular_points.is_empty());
+    assert!(q.singular_points.iter().all(|s| s.quarters.abs() == 1), "{:?}", q.singular_points);
+    assert!(q.singular.is_empty());
+    assert!(r.warnings.iter().any(|w| w.contains("umbilic") && w.contains("valence 5")), "{:?}", r.warnings);
     assert!(r.sq_mesh.is_none());
 }

@@ -130,7 +130,9 @@ fn final_optimization_terms_match_finite_differences() {
         let x = sphere_point(seed);
         let s = |k: usize| 5 * k;
         let v = |k: usize| 30 + 3 * k;
-        assert_fd(&CentrePlanarity { stars: vec![([s(0), s(1), s(2), s(3)], v(4)), ([s(2), s(3), s(4), s(5)], v(5))] }, &x);
+        // Stars of four faces, and of three and five at singular vertices (Sec. 5.2).
+        let stars = vec![(vec![s(0), s(1), s(2), s(3)], v(4)), (vec![s(2), s(3), s(4), s(5)], v(5)), (vec![s(0), s(2), s(4)], v(6)), (vec![s(1), s(2), s(3), s(4), s(5)], v(7))];
+        assert_fd(&CentrePlanarity { stars }, &x);
         let edges = vec![
             (v(0), v(1), NodeAxis::Variable(v(4)), NodeAxis::Variable(v(5)), v(6)),
             (v(1), v(2), NodeAxis::Fixed(glam::DVec3::new(0.1, 0.2, 0.97)), NodeAxis::Variable(v(5)), v(7)),
@@ -140,8 +142,9 @@ fn final_optimization_terms_match_finite_differences() {
         assert_fd(&CentreProximity { faces: vec![(s(0), glam::DVec3::new(0.5, 0.1, -0.3), n), (s(5), glam::DVec3::ZERO, n)], epsilon: 0.01 }, &x);
         // Hinges active and inactive: wide and narrow angles.
         for cos2 in [0.0, 0.3, 0.95] {
-            assert_fd(&CentreQuadAngle { stars: vec![[s(0), s(1), s(2), s(3)], [s(5), s(4), s(3), s(2)]], cos2 }, &x);
-            assert_fd(&Hinge::new(CentreQuadAngle { stars: vec![[s(0), s(1), s(2), s(3)]], cos2 }), &x);
+            let stars = vec![(vec![s(0), s(1), s(2), s(3)], cos2), (vec![s(5), s(4), s(3), s(2)], cos2), (vec![s(0), s(3), s(5)], 0.5 * cos2), (vec![s(0), s(1), s(2), s(4), s(5)], cos2)];
+            assert_fd(&CentreQuadAngle { stars: stars.clone() }, &x);
+            assert_fd(&Hinge::new(CentreQuadAngle { stars }), &x);
             let normals = VertexNormals::new(&loaded.surface, vec![v(0), v(1)], vec![n, glam::DVec3::Z], &x);
             assert_fd(&AxisNormalAngle { axes: vec![(v(4), 0), (v(5), 1)], normals: normals.clone(), cos2 }, &x);
             assert_fd(&FanAxisAngle { fans: vec![([s(0), s(1), s(2)], 0), ([s(3), s(4), s(5)], 1)], normals, cos2 }, &x);

@@ -16,7 +16,9 @@
 
 pub mod influence_zones;
 pub mod pliant;
+pub mod cross_field;
 pub mod quad_remeshing;
+pub mod seamless;
 
 use serde::{Deserialize, Serialize};
 

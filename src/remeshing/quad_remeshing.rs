@@ -3,40 +3,39 @@
 //!
 //! The paper used Rhino plug-ins (libigl anisotropic remeshing, libQEx). Here the reference is one
 //! patch f(u, v) over a rectangle and the cross field is known on a grid of that rectangle, so the
-//! field is integrated directly in the parameter domain:
+//! field is integrated in the parameter domain, on a fine triangulated grid of the domain extended
+//! by a margin:
 //!
-//! 1. **Combing** ([`CrossField::comb`]): the two directions of every grid cell are labelled
-//!    family 0 and 1 and given signs consistently, by a breadth-first walk that matches each cell
-//!    to an already combed neighbour (in 3D, through f_u and f_v). Cells without directions take
-//!    their neighbours' mean. [`CrossField::at`] interpolates bilinearly between cell centres.
-//! 2. **Integration** ([`integrate`]): two scalar functions φ0, φ1, piecewise linear on a fine
-//!    triangulated grid of the domain extended by a margin. φ0 is constant along family 1 and grows
-//!    at unit 3D speed along family 0, and vice versa, in the least-squares sense per triangle:
-//!    w_dir ⟨∇φ0, t1⟩ = 0 and ⟨∇φ0, t0⟩ = 1, with t_k the parameter vector of family k scaled to
-//!    unit length in 3D. The direction rows weigh more, so the level sets follow the field and the
-//!    spacing stays as even as the field allows. One sparse linear solve per function.
+//! 1. **The field** ([`CrossField`], [`super::cross_field`]): one cross per fine triangle, from
+//!    the cells' crosses without combing. Its singular points and their indices are found; a
+//!    cluster of them (a dome's umbilic turns the field by a full turn) becomes quarter-turn
+//!    points, the only ones a quad mesh has ([`split_singularities`]).
+//! 2. **Integration** ([`integrate`]): two scalar functions φ0, φ1, piecewise linear on the fine
+//!    grid. φ0 is constant along family 1 and grows at unit 3D speed along family 0, and vice
+//!    versa, in the least-squares sense per triangle: w_dir ⟨∇φ0, t1⟩ = 0 and ⟨∇φ0, t0⟩ = 1, with
+//!    t_k the parameter vector of family k scaled to unit length in 3D. The direction rows weigh
+//!    more, so the level sets follow the field and the spacing stays as even as the field allows.
+//!    With singular points, the grid is cut from each to the border and the functions jump across
+//!    the cuts by the seamless transitions of [`super::seamless`], with the singular points on
+//!    lattice points (the integer step of MIQ).
 //! 3. **Extraction** ([`quad_remesh`]): the vertices are the points where (φ0, φ1) hits the
-//!    lattice (o0 + k h, o1 + l h), found per fine triangle by inverting the linear map. Lattice
-//!    points outside the patch are moved to where their iso-line meets the patch boundary (a root
-//!    of the other φ along the boundary); the faces are the lattice cells whose four corners exist.
-//!    Cells that come out degenerate (an edge < 0.15 h, area < 0.15 h², a fold or a corner angle
-//!    over 170°) are dropped, and so is the smaller outer quad at a vertex with three (no
-//!    re-entrant corners in the outline). h is chosen for the target face count and the lattice offsets for the
+//!    lattice (o0 + k h, o1 + l h), found per fine triangle by inverting the linear map; beside a
+//!    cut they are also known by their index on the other side, so the cells across a cut close
+//!    up (libQEx's idea, on a grid). Lattice points outside the patch are moved to where their
+//!    iso-line meets the patch boundary (a root of the other φ along the boundary); the faces are
+//!    the lattice cells whose four corners exist. Cells that come out degenerate (an edge < 0.15 h,
+//!    area < 0.15 h², a fold or a corner angle over 170°) are dropped, and so is the smaller outer
+//!    quad at a vertex with three that is not singular (no re-entrant corners in the outline). h is
+//!    chosen for the target face count and, without singular points, the lattice offsets for the
 //!    largest covered area.
 //!
-//! **Why this route.** A stripe pattern (Knöppel et al. 2015) or a seamless parametrization with
-//! quantization (Bommes et al., libQEx) handle singular cross fields on surfaces of any topology;
-//! they need a global mixed-integer or eigenvalue solve, and a cut graph. Our field lives on one
-//! disk-like patch and is the torsal field of a congruence with real torsal directions everywhere,
-//! so it has no singularities and combs globally: two real-valued functions suffice, and their
-//! lattice is a regular quad mesh by construction (every face a quad, no T-junctions, no folds as
-//! long as the two families stay apart). The price is that a field with singularities cannot be
-//! meshed this way; combing then leaves a seam, which the remesh reports as folded triangles.
+//! The result is quads only: valence 4 inside, 3 at a point of index +1/4 and 5 at −1/4
+//! ([`QuadRemesh::singular`]).
 
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{HashMap, HashSet};
 use std::fmt;
 
 use glam::{DVec2, DVec3};
@@ -45,142 +44,9 @@ use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::{Face, PolyMesh};
 use crate::solver::{Linear, Problem, Solver, SolverOptions};
 
-/// A cross field on an n × n grid of a rectangle: per cell (i + (n − 1) j) two parameter
-/// directions, family 0 and family 1, combed (consistent labels and signs).
-#[derive(Clone, Debug, PartialEq)]
-pub struct CrossField {
-    /// Points per direction of the grid.
-    pub n: usize,
-    pub domain: ((f64, f64), (f64, f64)),
-    /// Per cell: the two directions (du, dv), any length.
-    pub directions: Vec<[DVec2; 2]>,
-    /// Cells that had no directions of their own (filled from their neighbours).
-    pub filled: usize,
-}
+pub use super::cross_field::{split_singularities, Cross, CrossField, FineGrid, SingularPoint};
+use super::seamless::{turn, Cuts};
 
-impl CrossField {
-    /// Combs per-cell direction pairs (unordered, unsigned; None where a cell has none) on the
-    /// surface `surface` (see the module docs). None when no cell has directions.
-    pub fn comb(surface: &BSplineSurface, n: usize, raw: &[Option<[[f64; 2]; 2]>]) -> Option<Self> {
-        let cells = n - 1;
-        assert_eq!(raw.len(), cells * cells, "one entry per grid cell");
-        let domain = surface.domain();
-        let ((u0, u1), (v0, v1)) = domain;
-        let centre = |q: usize| {
-            let (i, j) = (q % cells, q / cells);
-            (u0 + (i as f64 + 0.5) * (u1 - u0) / cells as f64, v0 + (j as f64 + 0.5) * (v1 - v0) / cells as f64)
-        };
-        let tangents: Vec<(DVec3, DVec3)> = (0..raw.len())
-            .map(|q| {
-                let (u, v) = centre(q);
-                let d = surface.derivatives(u, v);
-                (d.su, d.sv)
-            })
-            .collect();
-        let in3d = |q: usize, d: DVec2| (tangents[q].0 * d.x + tangents[q].1 * d.y).normalize_or_zero();
-        let start = {
-            let mid = (cells / 2) + cells * (cells / 2);
-            if raw[mid].is_some() { Some(mid) } else { raw.iter().position(Option::is_some) }
-        }?;
-        let mut out: Vec<Option<[DVec2; 2]>> = vec![None; raw.len()];
-        // The start cell: family 0 is the one nearer f_u.
-        let [a, b] = raw[start].unwrap().map(DVec2::from);
-        let su = tangents[start].0.normalize_or_zero();
-        let (a, b) = if in3d(start, a).dot(su).abs() >= in3d(start, b).dot(su).abs() { (a, b) } else { (b, a) };
-        let a = if in3d(start, a).dot(su) < 0.0 { -a } else { a };
-        let sv = tangents[start].1.normalize_or_zero();
-        let b = if in3d(start, b).dot(sv) < 0.0 { -b } else { b };
-        out[start] = Some([a, b]);
-        let neighbours = |q: usize| {
-            let (i, j) = (q % cells, q / cells);
-            let mut v = Vec::with_capacity(4);
-            if i > 0 {
-                v.push(q - 1);
-            }
-            if i + 1 < cells {
-                v.push(q + 1);
-            }
-            if j > 0 {
-                v.push(q - cells);
-            }
-            if j + 1 < cells {
-                v.push(q + cells);
-            }
-            v
-        };
-        // Breadth first over the cells with directions, then fill the others.
-        let mut queue = VecDeque::from([start]);
-        let mut seen = vec![false; raw.len()];
-        seen[start] = true;
-        while let Some(q) = queue.pop_front() {
-            let [a0, b0] = out[q].unwrap();
-            let (ta, tb) = (in3d(q, a0), in3d(q, b0));
-            for r in neighbours(q) {
-                if seen[r] {
-                    continue;
-                }
-                let Some(pair) = raw[r] else { continue };
-                seen[r] = true;
-                let [x, y] = pair.map(DVec2::from);
-                let (tx, ty) = (in3d(r, x), in3d(r, y));
-                let (x, y, tx, ty) =
-                    if tx.dot(ta).abs() + ty.dot(tb).abs() >= ty.dot(ta).abs() + tx.dot(tb).abs() { (x, y, tx, ty) } else { (y, x, ty, tx) };
-                let x = if tx.dot(ta) < 0.0 { -x } else { x };
-                let y = if ty.dot(tb) < 0.0 { -y } else { y };
-                out[r] = Some([x, y]);
-                queue.push_back(r);
-            }
-        }
-        let mut filled = 0;
-        loop {
-            let missing: Vec<usize> = (0..raw.len()).filter(|&q| out[q].is_none()).collect();
-            if missing.is_empty() {
-                break;
-            }
-            let mut progress = false;
-            for q in missing {
-                let known: Vec<[DVec2; 2]> = neighbours(q).into_iter().filter_map(|r| out[r]).collect();
-                if known.is_empty() {
-                    continue;
-                }
-                let sum = known.iter().fold([DVec2::ZERO; 2], |s, k| [s[0] + k[0], s[1] + k[1]]);
-                out[q] = Some(sum);
-                filled += 1;
-                progress = true;
-            }
-            if !progress {
-                break;
-            }
-        }
-        let directions = out.into_iter().map(|d| d.unwrap_or([DVec2::X, DVec2::Y])).collect();
-        Some(Self { n, domain, directions, filled })
-    }
-
-    /// The two directions at (u, v), bilinear between cell centres (clamped to the domain).
-    pub fn at(&self, u: f64, v: f64) -> [DVec2; 2] {
-        let cells = self.n - 1;
-        let ((u0, u1), (v0, v1)) = self.domain;
-        let s = ((u - u0) / (u1 - u0) * cells as f64 - 0.5).clamp(0.0, (cells - 1) as f64);
-        let t = ((v - v0) / (v1 - v0) * cells as f64 - 0.5).clamp(0.0, (cells - 1) as f64);
-        let (i, j) = ((s.floor() as usize).min(cells.saturating_sub(2)), (t.floor() as usize).min(cells.saturating_sub(2)));
-        if cells == 1 {
-            return self.directions[0];
-        }
-        let (fs, ft) = (s - i as f64, t - j as f64);
-        let d = |a: usize, b: usize| self.directions[(i + a) + cells * (j + b)];
-        let mut out = [DVec2::ZERO; 2];
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = (1.0 - fs) * (1.0 - ft) * d(0, 0)[k] + fs * (1.0 - ft) * d(1, 0)[k] + (1.0 - fs) * ft * d(0, 1)[k] + fs * ft * d(1, 1)[k];
-        }
-        out
-    }
-
-    /// The two directions at (u, v) as unit 3D tangent vectors of `surface`.
-    pub fn at_3d(&self, surface: &BSplineSurface, u: f64, v: f64) -> [DVec3; 2] {
-        let d = surface.derivatives(u, v);
-        self.at(u, v).map(|t| (d.su * t.x + d.sv * t.y).normalize_or_zero())
-    }
-}
 
 /// Settings of the remesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -225,92 +91,185 @@ impl std::error::Error for QuadRemeshError {}
 /// The two functions of the integration on a fine grid over the extended domain.
 #[derive(Clone, Debug)]
 pub struct Integration {
-    /// Nodes per direction; node (i, j) at i + nu j.
-    pub nu: usize,
-    pub nv: usize,
-    /// Parameters of node (0, 0) and the spacing.
-    pub origin: [f64; 2],
-    pub step: [f64; 2],
+    pub grid: FineGrid,
     /// Node indices of the domain's corners: [i0, i1] along u, [j0, j1] along v.
     pub inside: [[usize; 2]; 2],
-    /// φ0 and φ1 per node.
+    /// φ0 and φ1 per node (on a cut: its left copy).
     pub phi: [Vec<f64>; 2],
+    /// Per triangle: (φ0, φ1) at its corners, with the transitions across the cuts.
+    pub corners: Vec<[DVec2; 3]>,
+    /// The singular points of the field that was integrated (quarter turns only).
+    pub singular: Vec<SingularPoint>,
+    /// The cuts through them (none without singular points).
+    pub cuts: Cuts,
+    /// Per cut: the lattice index of its singular point (φ(s) / h, integers).
+    pub cone_keys: Vec<[i32; 2]>,
 }
 
 impl Integration {
-    fn uv(&self, i: usize, j: usize) -> DVec2 {
-        DVec2::new(self.origin[0] + i as f64 * self.step[0], self.origin[1] + j as f64 * self.step[1])
-    }
-
     /// φ_k at (u, v), linear on the grid's triangles.
     pub fn value(&self, k: usize, p: DVec2) -> f64 {
-        let s = ((p.x - self.origin[0]) / self.step[0]).clamp(0.0, (self.nu - 1) as f64);
-        let t = ((p.y - self.origin[1]) / self.step[1]).clamp(0.0, (self.nv - 1) as f64);
-        let (i, j) = ((s.floor() as usize).min(self.nu - 2), (t.floor() as usize).min(self.nv - 2));
+        let g = &self.grid;
+        let s = ((p.x - g.origin[0]) / g.step[0]).clamp(0.0, (g.nu - 1) as f64);
+        let t = ((p.y - g.origin[1]) / g.step[1]).clamp(0.0, (g.nv - 1) as f64);
+        let (i, j) = ((s.floor() as usize).min(g.nu - 2), (t.floor() as usize).min(g.nv - 2));
         let (fs, ft) = (s - i as f64, t - j as f64);
-        let f = &self.phi[k];
-        let at = |a: usize, b: usize| f[(i + a) + self.nu * (j + b)];
+        let cell = 2 * (i + (g.nu - 1) * j);
         if fs + ft <= 1.0 {
-            at(0, 0) + fs * (at(1, 0) - at(0, 0)) + ft * (at(0, 1) - at(0, 0))
+            let c = self.corners[cell];
+            c[0][k] + fs * (c[1][k] - c[0][k]) + ft * (c[2][k] - c[0][k])
         } else {
-            at(1, 1) + (1.0 - fs) * (at(0, 1) - at(1, 1)) + (1.0 - ft) * (at(1, 0) - at(1, 1))
+            // Corners (1, 1), (0, 1), (1, 0).
+            let c = self.corners[cell + 1];
+            c[0][k] + (1.0 - fs) * (c[1][k] - c[0][k]) + (1.0 - ft) * (c[2][k] - c[0][k])
         }
     }
 }
 
-/// Integrates the field (step 2 of the module docs) on a grid of `cells` × `cells` fine cells
-/// over the domain plus `margin` cells on every side.
-pub fn integrate(surface: &BSplineSurface, field: &CrossField, cells: usize, margin: usize, direction_weight: f64) -> Result<Integration, QuadRemeshError> {
+/// The fine grid of `cells` × `cells` cells over the domain plus `margin` on every side, the
+/// surface's derivatives and the field's cross per triangle, with its singular points split into
+/// quarter turns (step 1 of the module docs).
+fn field_on_grid(
+    surface: &BSplineSurface,
+    field: &CrossField,
+    cells: usize,
+    margin: usize,
+    spacing: f64,
+    reach: f64,
+) -> (FineGrid, Vec<crate::geometry::bspline::SurfaceDerivatives>, Vec<Cross>, Vec<SingularPoint>) {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let step = [(u1 - u0) / cells as f64, (v1 - v0) / cells as f64];
     let (nu, nv) = (cells + 2 * margin + 1, cells + 2 * margin + 1);
-    let origin = [u0 - margin as f64 * step[0], v0 - margin as f64 * step[1]];
-    let node = |i: usize, j: usize| i + nu * j;
-    let n = nu * nv;
+    let grid = FineGrid { nu, nv, origin: [u0 - margin as f64 * step[0], v0 - margin as f64 * step[1]], step };
+    let nt = grid.triangle_count();
+    let frames: Vec<_> = (0..nt)
+        .map(|t| {
+            let c = grid.centroid(t);
+            let c = surface.clamp([c.x, c.y]);
+            surface.derivatives(c[0], c[1])
+        })
+        .collect();
+    let mut crosses: Vec<Cross> = (0..nt)
+        .map(|t| {
+            let c = grid.centroid(t);
+            let c = surface.clamp([c.x, c.y]);
+            field.cross_at(c[0], c[1])
+        })
+        .collect();
+    let scale = {
+        let k = frames.len() as f64;
+        DVec2::new(frames.iter().map(|d| d.su.length()).sum::<f64>() / k, frames.iter().map(|d| d.sv.length()).sum::<f64>() / k)
+    };
+    let singular = split_singularities(&grid, &mut crosses, reach, spacing, scale);
+    (grid, frames, crosses, singular)
+}
+
+/// The fine grid's cells and margin, the first lattice spacing and the cluster reach for a remesh
+/// with `params` (see [`quad_remesh`]).
+fn sizes(surface: &BSplineSurface, params: &QuadRemeshParams) -> (usize, usize, f64, f64) {
+    let (mesh, _) = surface.tessellate([32, 32]);
+    let patch_area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
+    let per_side = (params.target_faces as f64).sqrt();
+    let cells = ((params.resolution.max(2) as f64) * per_side).ceil() as usize;
+    let margin = (cells as f64 * 2.5 / per_side).ceil() as usize + 2;
+    let h = (patch_area / params.target_faces as f64).sqrt();
+    // Singular points within four spacings of each other are one cluster (an umbilic's noise).
+    (cells, margin, h, 4.0 * h)
+}
+
+/// The singular points a remesh with `params` places for `field`: quarter turns, after the
+/// clusters of an umbilic are split (no solve).
+pub fn singular_points_of(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Vec<SingularPoint> {
+    let (cells, margin, h, reach) = sizes(surface, params);
+    field_on_grid(surface, field, cells, margin, h, reach).3
+}
+
+/// Integrates the field (step 2 of the module docs) on a grid of `cells` × `cells` fine cells
+/// over the domain plus `margin` cells on every side, with lattice spacing `spacing` for the
+/// singular points; singular points closer than `reach` (3D length) form one cluster.
+pub fn integrate(surface: &BSplineSurface, field: &CrossField, cells: usize, margin: usize, direction_weight: f64, spacing: f64, reach: f64) -> Result<Integration, QuadRemeshError> {
+    let (grid, frames, crosses, singular) = field_on_grid(surface, field, cells, margin, spacing, reach);
+    let (nu, nv) = (grid.nu, grid.nv);
+    let n = grid.node_count();
+    let nt = grid.triangle_count();
+    let cuts = Cuts::new(&grid, &crosses, &singular);
     // Two unknown vectors side by side: φ0 at [0, n), φ1 at [n, 2n).
+    let var = |node: usize, k: usize| k * n + node;
     let mut rows = Linear::new();
-    for j in 0..nv - 1 {
-        for i in 0..nu - 1 {
-            let centre = [origin[0] + (i as f64 + 0.5) * step[0], origin[1] + (j as f64 + 0.5) * step[1]];
-            let c = surface.clamp(centre);
-            let d = surface.derivatives(c[0], c[1]);
-            let t = field.at(c[0], c[1]).map(|t| {
-                let len = (d.su * t.x + d.sv * t.y).length();
-                if len > 0.0 { t / len } else { DVec2::ZERO }
-            });
-            // Two triangles: (00, 10, 01) with ∇φ = ((φ10 − φ00)/Δu, (φ01 − φ00)/Δv), and
-            // (11, 01, 10) with ∇φ = ((φ11 − φ01)/Δu, (φ11 − φ10)/Δv).
-            let tris = [
-                [(node(i + 1, j), node(i, j)), (node(i, j + 1), node(i, j))],
-                [(node(i + 1, j + 1), node(i, j + 1)), (node(i + 1, j + 1), node(i + 1, j))],
-            ];
-            for [(ua, ub), (va, vb)] in tris {
-                for k in 0..2 {
-                    let off = k * n;
-                    // ⟨∇φ_k, t⟩ as a linear row: (φ[ua] − φ[ub]) t.x/Δu + (φ[va] − φ[vb]) t.y/Δv.
-                    let row = |t: DVec2, w: f64| {
-                        let (a, b) = (w * t.x / step[0], w * t.y / step[1]);
-                        [(off + ua, a), (off + ub, -a), (off + va, b), (off + vb, -b)]
-                    };
-                    rows.push_row(&row(t[1 - k], direction_weight), 0.0);
-                    rows.push_row(&row(t[k], 1.0), -1.0);
+    let mut merged: HashMap<usize, f64> = HashMap::new();
+    for (t, d) in frames.iter().enumerate() {
+        let dirs = cuts.combed[t].directions().map(|t| {
+            let len = (d.su * t.x + d.sv * t.y).length();
+            if len > 0.0 { t / len } else { DVec2::ZERO }
+        });
+        // ∇φ on the triangle from its corners: φ = φ_a + (x − x_a)·∇φ.
+        let c = grid.triangle(t);
+        let p = c.map(|node| grid.uv(node));
+        let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+        let det = e1.perp_dot(e2);
+        // ∇φ = [(φ1 − φ0) e2⊥ − (φ2 − φ0) e1⊥] / det with e⊥ = (e.y, −e.x).
+        let g1 = DVec2::new(e2.y, -e2.x) / det;
+        let g2 = DVec2::new(-e1.y, e1.x) / det;
+        for k in 0..2 {
+            for (dir, w, target) in [(dirs[1 - k], direction_weight, 0.0), (dirs[k], 1.0, 1.0)] {
+                // ⟨∇φ_k, dir⟩ = Σ corner coefficient · φ_k(corner).
+                let coeff = [-(g1 + g2).dot(dir), g1.dot(dir), g2.dot(dir)];
+                merged.clear();
+                for (corner, &node) in c.iter().enumerate() {
+                    for (nd, j, a) in cuts.corner_terms(t, node, k) {
+                        *merged.entry(var(nd, j)).or_insert(0.0) += w * coeff[corner] * a;
+                    }
                 }
+                let mut row: Vec<(usize, f64)> = merged.iter().map(|(&j, &a)| (j, a)).filter(|(_, a)| *a != 0.0).collect();
+                row.sort_unstable_by_key(|(j, _)| *j);
+                rows.push_row(&row, -w * target);
             }
         }
     }
     let mut problem = Problem::new(2 * n);
     problem.add_term(rows.with_name("cross_field_integration"), 1.0);
-    let mid = node(nu / 2, nv / 2);
-    problem.fix(mid);
-    problem.fix(n + mid);
+    let mid = grid.node(nu / 2, nv / 2);
+    problem.fix(var(mid, 0));
+    problem.fix(var(mid, 1));
     let mut x = vec![0.0; 2 * n];
     let mut solver = Solver::new(SolverOptions { max_iterations: 4, initial_epsilon: 1e-6, min_epsilon: 1e-9, ..SolverOptions::default() });
     solver.solve(&mut problem, &mut x, |_| true);
+    // The integer step (greedy, as MIQ): the singular point nearest to a free lattice point is
+    // fixed there and the rest solved again, until all are fixed.
+    let mut keys: Vec<Option<[i32; 2]>> = vec![None; cuts.cuts.len()];
+    let mut taken = HashSet::new();
+    while keys.iter().any(Option::is_none) {
+        let nearest = |c: usize| {
+            let s = cuts.cuts[c].path[0];
+            let p = DVec2::new(x[var(s, 0)], x[var(s, 1)]) / spacing;
+            let base = p.round();
+            (-1..=1)
+                .flat_map(|a| (-1..=1).map(move |b| [base.x as i32 + a, base.y as i32 + b]))
+                .filter(|k| !taken.contains(k))
+                .map(|k| (p.distance(DVec2::new(k[0] as f64, k[1] as f64)), k))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .unwrap_or((f64::INFINITY, [base.x as i32, base.y as i32]))
+        };
+        let (c, (_, key)) = (0..keys.len()).filter(|&c| keys[c].is_none()).map(|c| (c, nearest(c))).min_by(|a, b| a.1 .0.total_cmp(&b.1 .0)).unwrap();
+        taken.insert(key);
+        keys[c] = Some(key);
+        let s = cuts.cuts[c].path[0];
+        for k in 0..2 {
+            x[var(s, k)] = key[k] as f64 * spacing;
+            problem.fix(var(s, k));
+        }
+        problem.unfix(var(mid, 0));
+        problem.unfix(var(mid, 1));
+        solver.solve(&mut problem, &mut x, |_| true);
+    }
+    let cone_keys: Vec<[i32; 2]> = keys.into_iter().map(Option::unwrap).collect();
     if x.iter().any(|v| !v.is_finite()) {
         return Err(QuadRemeshError::NotFinite);
     }
     let phi = [x[..n].to_vec(), x[n..].to_vec()];
-    Ok(Integration { nu, nv, origin, step, inside: [[margin, margin + cells], [margin, margin + cells]], phi })
+    let at = |node: usize| DVec2::new(phi[0][node], phi[1][node]);
+    let corners = (0..nt).map(|t| grid.triangle(t).map(|node| cuts.corner_value(t, node, at))).collect();
+    Ok(Integration { grid, inside: [[margin, margin + cells], [margin, margin + cells]], phi, corners, singular, cuts, cone_keys })
 }
 
 /// The quad mesh of a remesh.
@@ -320,16 +279,18 @@ pub struct QuadRemesh {
     pub mesh: PolyMesh,
     /// (u, v) of every vertex.
     pub uv: Vec<[f64; 2]>,
-    /// The lattice index (k, l) of every vertex.
-    pub lattice: Vec<[i32; 2]>,
+    /// The lattice polylines as triples (a, v, b) of consecutive vertices, straight on through v.
+    pub polylines: Vec<[u32; 3]>,
     /// Vertices moved onto the patch boundary.
     pub on_boundary: Vec<bool>,
     /// The lattice spacing h (3D length) and the faces it gave.
     pub spacing: f64,
     /// Cells dropped as degenerate.
     pub dropped: usize,
-    /// Fine triangles whose image is folded (0 for a combable field).
+    /// Fine triangles whose image is folded (0 when the integration follows the field).
     pub folded_triangles: usize,
+    /// The singular vertices: (vertex, index in quarter turns), valence 4 − index.
+    pub singular: Vec<(u32, i32)>,
 }
 
 /// Where the patch boundary is: the domain rectangle.
@@ -369,60 +330,135 @@ impl Rect {
 
 /// The lattice's vertices before the faces are chosen.
 struct Lattice {
-    points: HashMap<(i32, i32), DVec2>,
+    /// Per point: its parameters, its lattice coordinates (k, l) in the chart of the triangle it
+    /// was found in, and that triangle.
+    points: Vec<(DVec2, [i32; 2], usize)>,
+    /// Per point and direction (+k, +l, −k, −l): the neighbouring lattice point and the quarter
+    /// turns from this point's directions to the neighbour's (non-zero across a cut).
+    next: Vec<[Option<(usize, i32)>; 4]>,
     folded: usize,
 }
 
-/// The lattice points (o0 + k h, o1 + l h) of (φ0, φ1), per fine triangle.
+/// The unit step of direction d (0: +k, 1: +l, 2: −k, 3: −l).
+fn step(d: i32) -> DVec2 {
+    match d.rem_euclid(4) {
+        0 => DVec2::X,
+        1 => DVec2::Y,
+        2 => -DVec2::X,
+        _ => -DVec2::Y,
+    }
+}
+
+/// The lattice points (o0 + k h, o1 + l h) of (φ0, φ1), per fine triangle, and their neighbours.
 fn lattice_points(g: &Integration, h: f64, offset: [f64; 2]) -> Lattice {
-    let mut points = HashMap::new();
+    let mut points: Vec<(DVec2, [i32; 2], usize)> = Vec::new();
     let mut folded = 0;
-    let node = |i: usize, j: usize| i + g.nu * j;
-    for j in 0..g.nv - 1 {
-        for i in 0..g.nu - 1 {
-            for tri in [[(i, j), (i + 1, j), (i, j + 1)], [(i + 1, j + 1), (i, j + 1), (i + 1, j)]] {
-                let uv = tri.map(|(a, b)| g.uv(a, b));
-                let ph = tri.map(|(a, b)| DVec2::new(g.phi[0][node(a, b)], g.phi[1][node(a, b)]));
-                let (e1, e2) = (ph[1] - ph[0], ph[2] - ph[0]);
-                let det = e1.perp_dot(e2);
-                if det == 0.0 || !det.is_finite() {
+    let mut by_position: HashMap<(i64, i64), usize> = HashMap::new();
+    let mut in_triangle: Vec<Vec<usize>> = vec![Vec::new(); g.corners.len()];
+    let quantum = 1e-9 * (g.grid.step[0] + g.grid.step[1]);
+    let o = DVec2::from(offset);
+    // Corners in lattice units.
+    let corners: Vec<[DVec2; 3]> = g.corners.iter().map(|c| c.map(|p| (p - o) / h)).collect();
+    for (t, ph) in corners.iter().enumerate() {
+        let uv = g.grid.triangle(t).map(|node| g.grid.uv(node));
+        let (e1, e2) = (ph[1] - ph[0], ph[2] - ph[0]);
+        let det = e1.perp_dot(e2);
+        if det == 0.0 || !det.is_finite() {
+            continue;
+        }
+        let orient = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
+        if det * orient < 0.0 {
+            folded += 1;
+        }
+        let lo = ph[0].min(ph[1]).min(ph[2]);
+        let hi = ph[0].max(ph[1]).max(ph[2]);
+        for k in lo.x.ceil() as i32..=hi.x.floor() as i32 {
+            for l in lo.y.ceil() as i32..=hi.y.floor() as i32 {
+                let p = DVec2::new(k as f64, l as f64) - ph[0];
+                let b1 = p.perp_dot(e2) / det;
+                let b2 = e1.perp_dot(p) / det;
+                let eps = -1e-12;
+                if !(b1 >= eps && b2 >= eps && b1 + b2 <= 1.0 - eps) {
                     continue;
                 }
-                let orient = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
-                if det * orient < 0.0 {
-                    folded += 1;
+                let x = uv[0] + b1 * (uv[1] - uv[0]) + b2 * (uv[2] - uv[0]);
+                let cell = ((x.x / quantum).round() as i64, (x.y / quantum).round() as i64);
+                by_position.entry(cell).or_insert_with(|| {
+                    points.push((x, [k, l], t));
+                    in_triangle[t].push(points.len() - 1);
+                    points.len() - 1
+                });
+            }
+        }
+    }
+    let mut next = vec![[None; 4]; points.len()];
+    // Without cuts the chart is one and a lattice index names one point.
+    if g.cuts.cuts.is_empty() {
+        let index: HashMap<[i32; 2], usize> = points.iter().enumerate().map(|(id, p)| (p.1, id)).collect();
+        for (id, p) in points.iter().enumerate() {
+            for d in 0..4 {
+                let e = step(d as i32);
+                next[id][d] = index.get(&[p.1[0] + e.x as i32, p.1[1] + e.y as i32]).map(|&q| (q, 0));
+            }
+        }
+        return Lattice { points, next, folded };
+    }
+    // Neighbours: a walk over the triangles near the segment to the neighbour's lattice point, in
+    // this point's chart (across a cut, the transition x_from = M^σ (x_to − s) + s).
+    let cones: Vec<DVec2> = g.cone_keys.iter().map(|k| DVec2::new(k[0] as f64, k[1] as f64)).collect();
+    // Per triangle: the walk that last reached it and its chart there (ρ, shift).
+    let mut stamp: Vec<u32> = vec![u32::MAX; corners.len()];
+    let mut chart: Vec<(i32, DVec2)> = vec![(0, DVec2::ZERO); corners.len()];
+    let mut walk = 0u32;
+    let mut queue: Vec<usize> = Vec::new();
+    for (id, &(_, key, start)) in points.iter().enumerate() {
+        let here = DVec2::new(key[0] as f64, key[1] as f64);
+        for d in 0..4 {
+            let target = here + step(d);
+            walk += 1;
+            queue.clear();
+            stamp[start] = walk;
+            chart[start] = (0, DVec2::ZERO);
+            queue.push(start);
+            let mut head = 0;
+            'walk: while head < queue.len() {
+                let t = queue[head];
+                head += 1;
+                let (rho, shift) = chart[t];
+                for &q in &in_triangle[t] {
+                    let kq = points[q].1;
+                    let x = turn(rho, DVec2::new(kq[0] as f64, kq[1] as f64)) + shift;
+                    if q != id && x.distance(target) < 0.25 {
+                        next[id][d as usize] = Some((q, rho));
+                        break 'walk;
+                    }
                 }
-                let lo = ph[0].min(ph[1]).min(ph[2]);
-                let hi = ph[0].max(ph[1]).max(ph[2]);
-                let k0 = ((lo.x - offset[0]) / h).ceil() as i32;
-                let k1 = ((hi.x - offset[0]) / h).floor() as i32;
-                let l0 = ((lo.y - offset[1]) / h).ceil() as i32;
-                let l1 = ((hi.y - offset[1]) / h).floor() as i32;
-                for k in k0..=k1 {
-                    for l in l0..=l1 {
-                        if points.contains_key(&(k, l)) {
-                            continue;
-                        }
-                        let p = DVec2::new(offset[0] + k as f64 * h, offset[1] + l as f64 * h) - ph[0];
-                        let b1 = p.perp_dot(e2) / det;
-                        let b2 = e1.perp_dot(p) / det;
-                        let eps = -1e-12;
-                        if b1 >= eps && b2 >= eps && b1 + b2 <= 1.0 - eps {
-                            points.insert((k, l), uv[0] + b1 * (uv[1] - uv[0]) + b2 * (uv[2] - uv[0]));
-                        }
+                for &(s, _) in &g.cuts.adjacency[t] {
+                    if stamp[s] == walk {
+                        continue;
+                    }
+                    let (rho_s, shift_s) = match g.cuts.crossings.get(&(t, s)) {
+                        None => (rho, shift),
+                        Some(&(c, sigma)) => (rho + sigma, shift + turn(rho, cones[c] - turn(sigma, cones[c]))),
+                    };
+                    let near = corners[s].iter().any(|p| (turn(rho_s, *p) + shift_s).distance(target) <= 1.3);
+                    if near {
+                        stamp[s] = walk;
+                        chart[s] = (rho_s, shift_s);
+                        queue.push(s);
                     }
                 }
             }
         }
     }
-    Lattice { points, folded }
+    Lattice { points, next, folded }
 }
 
 /// The point on side `side` of the rectangle near `x` where φ_k = value (linear search over the
 /// fine grid nodes of that side, nearest root to `x`), or `x` when there is none within `reach`.
 fn boundary_root(g: &Integration, rect: Rect, side: usize, k: usize, value: f64, x: DVec2, reach: f64) -> DVec2 {
     let along_u = side >= 2;
-    let (count, step) = if along_u { (g.inside[0][1] - g.inside[0][0], g.step[0]) } else { (g.inside[1][1] - g.inside[1][0], g.step[1]) };
+    let (count, step) = if along_u { (g.inside[0][1] - g.inside[0][0], g.grid.step[0]) } else { (g.inside[1][1] - g.inside[1][0], g.grid.step[1]) };
     let point = |m: usize| -> DVec2 {
         let t = m as f64 * step;
         match side {
@@ -463,9 +499,12 @@ fn quad_area_vector(pts: &[DVec3], f: &[u32]) -> DVec3 {
     0.5 * (p(2) - p(0)).cross(p(3) - p(1))
 }
 
-/// No re-entrant corners: a vertex with three quads (a dropped cell beside it) loses the smaller
-/// of its two outer quads, until none is left. Returns how many were dropped.
-fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3]) -> usize {
+/// Re-entrant corners: at a vertex with three quads that do not close around it (a missing cell
+/// beside it, not a singular vertex), the smaller of its two outer quads is dropped. With
+/// `repeat`, until no such corner is left (an outline without re-entrant corners, for a lattice
+/// that runs along the patch boundary); otherwise once, so that a lattice running across the
+/// boundary does not lose its outline cell by cell. Returns how many were dropped.
+fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], repeat: bool) -> usize {
     let mut dropped = 0;
     loop {
         let mut incident: HashMap<u32, Vec<usize>> = HashMap::new();
@@ -478,7 +517,7 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3]) -> usize {
         keys.sort_unstable();
         let shares = |a: usize, b: usize| faces[a].iter().filter(|x| faces[b].contains(x)).count() >= 2;
         // The outer two of the three share an edge with one other quad only.
-        let drop: Vec<usize> = keys
+        let mut drop: Vec<usize> = keys
             .iter()
             .filter_map(|v| {
                 let fs = &incident[v];
@@ -486,9 +525,21 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3]) -> usize {
                 outer.min_by(|&a, &b| quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b])))
             })
             .collect();
-        let Some(&f) = drop.first() else { break };
-        faces.swap_remove(f);
-        dropped += 1;
+        if drop.is_empty() {
+            break;
+        }
+        if repeat {
+            faces.swap_remove(drop[0]);
+            dropped += 1;
+            continue;
+        }
+        drop.sort_unstable();
+        drop.dedup();
+        for &f in drop.iter().rev() {
+            faces.remove(f);
+        }
+        dropped += drop.len();
+        break;
     }
     dropped
 }
@@ -501,30 +552,29 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
     let lattice = lattice_points(g, h, offset);
     let inside = |p: DVec2| rect.contains(p, eps);
     // Outside points with inside neighbours move to the boundary.
-    let mut positions: HashMap<(i32, i32), (DVec2, bool)> = HashMap::new();
-    let reach = 4.0 * (g.step[0].max(g.step[1])) * 8.0;
-    for (&(k, l), &p) in &lattice.points {
+    let mut positions: Vec<Option<(DVec2, bool)>> = vec![None; lattice.points.len()];
+    let reach = 4.0 * (g.grid.step[0].max(g.grid.step[1])) * 8.0;
+    for (id, &(p, [k, l], _)) in lattice.points.iter().enumerate() {
         if inside(p) {
-            positions.insert((k, l), (rect.clamp(p), false));
+            positions[id] = Some((rect.clamp(p), false));
             continue;
         }
         let mut crossings = Vec::new();
-        for (dk, dl) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
-            let Some(&q) = lattice.points.get(&(k + dk, l + dl)) else { continue };
+        for d in 0..4 {
+            let Some((q, _)) = lattice.next[id][d] else { continue };
+            let q = lattice.points[q].0;
             if !inside(q) {
                 continue;
             }
             let (x, side) = rect.exit(q, p);
             // Along a k-edge φ1 is constant (= its lattice value), along an l-edge φ0.
-            let (fk, value) = if dk != 0 { (1, offset[1] + l as f64 * h) } else { (0, offset[0] + k as f64 * h) };
+            let (fk, value) = if d % 2 == 0 { (1, offset[1] + l as f64 * h) } else { (0, offset[0] + k as f64 * h) };
             let root = boundary_root(g, rect, side, fk, value, x, reach);
             crossings.push((root, side));
         }
         match crossings.as_slice() {
             [] => {}
-            [(x, _)] => {
-                positions.insert((k, l), (*x, true));
-            }
+            [(x, _)] => positions[id] = Some((*x, true)),
             many => {
                 let mean = many.iter().fold(DVec2::ZERO, |s, (x, _)| s + *x) / many.len() as f64;
                 // The nearest boundary point of the mean.
@@ -539,58 +589,90 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
                     2 => DVec2::new(mean.x, v0),
                     _ => DVec2::new(mean.x, v1),
                 };
-                positions.insert((k, l), (rect.clamp(snapped), true));
+                positions[id] = Some((rect.clamp(snapped), true));
             }
         }
     }
-    // Faces: lattice cells with four corners, at least one of them inside.
-    let mut keys: Vec<(i32, i32)> = positions.keys().copied().collect();
-    keys.sort_unstable();
-    let mut index: HashMap<(i32, i32), u32> = HashMap::new();
-    let mut uv = Vec::new();
-    let mut pts = Vec::new();
-    let mut lattice_ids = Vec::new();
-    let mut boundary = Vec::new();
-    for key in &keys {
-        let (p, b) = positions[key];
-        index.insert(*key, uv.len() as u32);
-        uv.push([p.x, p.y]);
-        pts.push(surface.point(p.x, p.y));
-        lattice_ids.push([key.0, key.1]);
-        boundary.push(b);
-    }
+    let uv: Vec<[f64; 2]> = positions.iter().map(|p| p.map_or([0.0; 2], |(p, _)| [p.x, p.y])).collect();
+    let pts: Vec<DVec3> = uv.iter().zip(&positions).map(|(w, p)| if p.is_some() { surface.point(w[0], w[1]) } else { DVec3::ZERO }).collect();
+    let boundary: Vec<bool> = positions.iter().map(|p| p.is_some_and(|(_, b)| b)).collect();
+    // The singular points' vertices: each cut's cone, where its node is.
+    let cones: HashMap<usize, i32> = g
+        .cuts
+        .cuts
+        .iter()
+        .filter_map(|cut| {
+            let at = g.grid.uv(cut.path[0]);
+            let id = lattice.points.iter().position(|p| p.0.distance(at) < 1e-9 * (g.grid.step[0] + g.grid.step[1]))?;
+            Some((id, g.singular.iter().find(|s| s.node == cut.path[0]).map_or(0, |s| s.quarters)))
+        })
+        .collect();
+    // Faces: from every point in every direction, four steps turning left each time (in the
+    // chart of the point reached), back to the start; at least one corner inside.
+    let mut seen: HashSet<[u32; 4]> = HashSet::new();
     let mut faces = Vec::new();
     let mut dropped = 0;
     let mut area = 0.0;
     let min_edge = 0.15 * h;
-    for &(k, l) in &keys {
-        let corners = [(k, l), (k + 1, l), (k + 1, l + 1), (k, l + 1)];
-        let Some(ids) = corners.iter().map(|c| index.get(c).copied()).collect::<Option<Vec<u32>>>() else { continue };
-        if ids.iter().all(|&i| boundary[i as usize]) {
+    for start in 0..lattice.points.len() {
+        if positions[start].is_none() {
             continue;
         }
-        let p: Vec<DVec3> = ids.iter().map(|&i| pts[i as usize]).collect();
-        let mid = uv[ids[0] as usize];
-        let d = surface.derivatives(mid[0], mid[1]);
-        let normal = d.su.cross(d.sv).normalize_or_zero();
-        let a = quad_area_vector(&pts, &ids);
-        let short = (0..4).any(|c| p[c].distance(p[(c + 1) % 4]) < min_edge);
-        // Corner angle over 170° or a corner turning the wrong way (both sides of the normal).
-        let bad_corner = (0..4).any(|c| {
-            let (prev, next) = (p[(c + 3) % 4] - p[c], p[(c + 1) % 4] - p[c]);
-            let turn = next.cross(prev).dot(normal);
-            prev.normalize_or_zero().dot(next.normalize_or_zero()) < (170f64).to_radians().cos() || turn.abs() < 1e-12 * h * h
-        });
-        let signed = a.dot(normal);
-        if short || bad_corner || signed.abs() < 0.15 * h * h {
-            dropped += 1;
-            continue;
+        // Closed by the last corner's step, or (when the last corner is singular, whose steps miss
+        // the directions beyond a quarter turn) by the start's own step back.
+        'cell: for (d0, close_at_start) in (0..4i32).flat_map(|d| [(d, false), (d, true)]) {
+            if close_at_start && cones.contains_key(&start) {
+                continue;
+            }
+            let mut ids = vec![start as u32];
+            let (mut at, mut d) = (start, d0);
+            for corner in 0..3 {
+                let Some((n, rho)) = lattice.next[at][d.rem_euclid(4) as usize] else { continue 'cell };
+                if positions[n].is_none() || (close_at_start && corner < 2 && cones.contains_key(&n)) {
+                    continue 'cell;
+                }
+                (at, d) = (n, d + rho + 1);
+                ids.push(n as u32);
+            }
+            let closes = if close_at_start {
+                lattice.next[start][(d0 + 1).rem_euclid(4) as usize].map(|(n, _)| n) == Some(at)
+            } else {
+                lattice.next[at][d.rem_euclid(4) as usize].map(|(n, _)| n) == Some(start)
+            };
+            if !closes {
+                continue;
+            }
+            let mut sorted = [ids[0], ids[1], ids[2], ids[3]];
+            sorted.sort_unstable();
+            if sorted.windows(2).any(|w| w[0] == w[1]) || !seen.insert(sorted) {
+                continue;
+            }
+            if ids.iter().all(|&i| boundary[i as usize]) {
+                continue;
+            }
+            let p: Vec<DVec3> = ids.iter().map(|&i| pts[i as usize]).collect();
+            let mid = uv[ids[0] as usize];
+            let dv = surface.derivatives(mid[0], mid[1]);
+            let normal = dv.su.cross(dv.sv).normalize_or_zero();
+            let a = quad_area_vector(&pts, &ids);
+            let short = (0..4).any(|c| p[c].distance(p[(c + 1) % 4]) < min_edge);
+            // Corner angle over 170° or a corner turning the wrong way (both sides of the normal).
+            let bad_corner = (0..4).any(|c| {
+                let (prev, next) = (p[(c + 3) % 4] - p[c], p[(c + 1) % 4] - p[c]);
+                let turn = next.cross(prev).dot(normal);
+                prev.normalize_or_zero().dot(next.normalize_or_zero()) < (170f64).to_radians().cos() || turn.abs() < 1e-12 * h * h
+            });
+            let signed = a.dot(normal);
+            if short || bad_corner || signed.abs() < 0.15 * h * h {
+                dropped += 1;
+                continue;
+            }
+            area += a.length();
+            faces.push(ids);
         }
-        area += a.length();
-        faces.push(ids);
     }
     if final_pass {
-        dropped += drop_reentrant_corners(&mut faces, &pts);
+        dropped += drop_reentrant_corners(&mut faces, &pts, g.cuts.cuts.is_empty());
         area = faces.iter().map(|f| quad_area(&pts, f)).sum();
     }
     if faces.is_empty() {
@@ -606,9 +688,9 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
     let mut used = vec![u32::MAX; uv.len()];
     let mut out_uv = Vec::new();
     let mut out_pts = Vec::new();
-    let mut out_lat = Vec::new();
     let mut out_b = Vec::new();
     let mut out_faces = Vec::new();
+    let mut singular = Vec::new();
     for f in faces {
         let f: Vec<u32> = if positive { f } else { f.into_iter().rev().collect() };
         let ids: Vec<u32> = f
@@ -616,9 +698,11 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
             .map(|&i| {
                 if used[i as usize] == u32::MAX {
                     used[i as usize] = out_uv.len() as u32;
+                    if let Some(&q) = cones.get(&(i as usize)) {
+                        singular.push((out_uv.len() as u32, q));
+                    }
                     out_uv.push(uv[i as usize]);
                     out_pts.push(pts[i as usize]);
-                    out_lat.push(lattice_ids[i as usize]);
                     out_b.push(boundary[i as usize]);
                 }
                 used[i as usize]
@@ -626,14 +710,29 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
             .collect();
         out_faces.push(Face::quad([ids[0], ids[1], ids[2], ids[3]]));
     }
+    // Polylines: straight on through every regular vertex.
+    let mut polylines = Vec::new();
+    for (id, next) in lattice.next.iter().enumerate() {
+        if used[id] == u32::MAX || cones.contains_key(&id) {
+            continue;
+        }
+        for d in 0..2 {
+            if let (Some((a, _)), Some((b, _))) = (next[d + 2], next[d]) {
+                if used[a] != u32::MAX && used[b] != u32::MAX {
+                    polylines.push([used[a], used[id], used[b]]);
+                }
+            }
+        }
+    }
     let remesh = QuadRemesh {
         mesh: PolyMesh::new(out_pts, out_faces),
         uv: out_uv,
-        lattice: out_lat,
+        polylines,
         on_boundary: out_b,
         spacing: h,
         dropped,
         folded_triangles: lattice.folded,
+        singular,
     };
     Some((remesh, area))
 }
@@ -646,10 +745,18 @@ pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRe
     }
     let (mesh, _) = surface.tessellate([32, 32]);
     let patch_area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
-    let per_side = (target as f64).sqrt();
-    let cells = ((params.resolution.max(2) as f64) * per_side).ceil() as usize;
-    let margin = (cells as f64 * 2.5 / per_side).ceil() as usize + 2;
-    let g = integrate(surface, field, cells, margin, params.direction_weight)?;
+    let (cells, margin, mut h, reach) = sizes(surface, params);
+    let mut g = integrate(surface, field, cells, margin, params.direction_weight, h, reach)?;
+    if !g.singular.is_empty() {
+        // The singular points sit on the lattice of spacing h, offset 0: one correction of h
+        // for the face count, then the mesh.
+        let count = extract(surface, &g, h, [0.0; 2], false).map_or(0, |(m, _)| m.mesh.face_count());
+        if count > 0 && (count as f64 - target as f64).abs() > 0.1 * target as f64 {
+            h *= (count as f64 / target as f64).sqrt();
+            g = integrate(surface, field, cells, margin, params.direction_weight, h, reach)?;
+        }
+        return extract(surface, &g, h, [0.0; 2], true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty);
+    }
     let [i0, i1] = g.inside[0];
     let [j0, j1] = g.inside[1];
     let range = |k: usize| {
@@ -657,7 +764,7 @@ pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRe
         let mut hi = f64::NEG_INFINITY;
         for j in j0..=j1 {
             for i in i0..=i1 {
-                let v = g.phi[k][i + g.nu * j];
+                let v = g.phi[k][g.grid.node(i, j)];
                 lo = lo.min(v);
                 hi = hi.max(v);
             }
@@ -666,7 +773,6 @@ pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRe
     };
     let ranges = [range(0), range(1)];
     // h for the target count: faces ≈ covered area / h²; a few corrections, then the offsets.
-    let mut h = (patch_area / target as f64).sqrt();
     let centred = |h: f64, shift: [f64; 2]| [0, 1].map(|k| 0.5 * (ranges[k].0 + ranges[k].1) + shift[k] * h);
     for _ in 0..4 {
         let Some((m, _)) = extract(surface, &g, h, centred(h, [0.0, 0.0]), false) else { break };

@@ -6,12 +6,16 @@
 //! - **SQ mesh** (from the final vertices and face spheres, [`super::sq_mesh`]): quads only,
 //!   every vertex on its faces' spheres and the centres around every inner vertex coplanar
 //!   (≤ [`EXACT`] of the diagonal: an exact SQ mesh with a torsion-free support structure), node
-//!   axes within θ of the normals, support planes at a node meeting at ≥ α.
+//!   axes within θ of the normals, support planes at a node meeting at ≥ α; at a singular vertex
+//!   of valence m at ≥ min(α, bound(m) − 1°), since m planes through one axis cannot all meet
+//!   wider than bound(m) ([`super::sphere_terms::support_plane_bound_deg`]: 60° at three edges,
+//!   72° at five).
 
 use crate::geometry::mesh::PolyMesh;
 use crate::guarantees::{Guarantee, Verdict};
 
 use super::metrics::CongruenceFigures;
+use super::sphere_terms::support_plane_aim_deg;
 use super::sq_mesh::SqMeshFigures;
 
 /// Exactness: vertex–sphere residual and centre-face planarity, relative to the diagonal.
@@ -29,14 +33,23 @@ pub fn congruence_guarantees(f: &CongruenceFigures, theta_deg: f64, alpha_deg: f
 /// The SQ mesh's guarantees at θ and α (degrees).
 pub fn mesh_guarantees(mesh: &PolyMesh, f: &SqMeshFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
     let not_quads = mesh.faces.iter().filter(|face| face.len() != 4).count();
-    vec![
+    let mut all = vec![
         Guarantee::at_least("faces", mesh.faces.len() as f64, 1.0, ""),
         Guarantee::count_at_most("faces_not_quads", not_quads, 0),
         Guarantee::at_most("max_vertex_sphere_residual", f.max_vertex_sphere_residual, EXACT, "of the diagonal"),
         Guarantee::at_most("max_centre_face_planarity", f.max_centre_face_planarity, EXACT, "of the diagonal"),
         Guarantee::at_most("max_axis_normal_angle_deg", f.max_axis_normal_angle_deg, theta_deg, "deg"),
         Guarantee::at_least("min_support_plane_angle_deg", f.min_torsal_plane_angle_deg, alpha_deg, "deg"),
-    ]
+    ];
+    for (valence, name, figure) in [
+        (3, "min_support_plane_angle_valence_3_deg", f.min_support_plane_angle_valence_3_deg),
+        (5, "min_support_plane_angle_valence_5_deg", f.min_support_plane_angle_valence_5_deg),
+    ] {
+        if let Some(worst) = figure {
+            all.push(Guarantee::at_least(name, worst, support_plane_aim_deg(valence, alpha_deg), "deg"));
+        }
+    }
+    all
 }
 
 /// What a run delivers, as far as it went.

@@ -535,7 +535,7 @@ fn final_mesh(
     if let Some((centre, r)) = congruence.sphere {
         return Ok(spherical_mesh(reference, quad, &stars, centre, r, params, timings));
     }
-    let input = SphereInput { mesh: &frame_mesh, radii: &radii, lines: &lines, normals: &normals, lattice: &quad.lattice,
+    let input = SphereInput { mesh: &frame_mesh, radii: &radii, lines: &lines, normals: &normals, polylines: &quad.polylines,
         on_boundary: &quad.on_boundary,
         reference: &framed,
         cos2_theta: params.target_theta_deg().to_radians().cos().powi(2),

@@ -10,11 +10,14 @@
 //!    remesh put them (on the boundary curve).
 //! 3. Each vertex's (u, v) is its closest point on the reference.
 //!
-//! A torsal field with a singularity (an umbilic, where the directions turn about a point, as on
-//! a paraboloid of revolution) cannot be combed into two functions: its integration folds. Then
-//! the remesh follows the parameter lines instead, and the result says so in a warning.
+//! A torsal field with singular points (an umbilic, where the directions turn about a point, as on
+//! a paraboloid of revolution) needs singular vertices there: valence 3 at a quarter turn, 5 at
+//! minus one ([`crate::remeshing::seamless`]). At such a vertex the support planes cannot meet at
+//! more than 60° (three) or 72° (five), and the final optimization does not yet reach its
+//! guarantees from such a mesh, so the remesh then follows the parameter lines, and the result
+//! says so in a warning with the singular points it found.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 
 use glam::DVec3;
 
@@ -22,7 +25,7 @@ use crate::geometry::mesh::PolyMesh;
 use crate::progress::Clock;
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
-use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, quad_remesh, CrossField, QuadRemesh, QuadRemeshParams};
+use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, quad_remesh, singular_points_of, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint};
 use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats, Termination};
 
 use super::error::SqError;
@@ -33,14 +36,21 @@ use super::params::SqParams;
 pub struct SqQuadMesh {
     /// The combed torsal field.
     pub torsal: CrossField,
-    /// Whether the remesh had to follow the parameter lines (a singular torsal field).
+    /// The singular points of the torsal field (on the remesh's fine grid, index in quarter
+    /// turns), and whether the mesh follows the parameter lines because of them.
+    pub singular_points: Vec<SingularPoint>,
     pub parameter_lines: bool,
+    /// The singular vertices of the mesh: (vertex, index in quarter turns), valence 4 − index.
+    pub singular: Vec<(u32, i32)>,
+    /// Fine triangles the integration folded (0 when the mesh follows the field).
+    pub folded_triangles: usize,
     /// The mesh as extracted, and Q′.
     pub remesh: PolyMesh,
     pub mesh: PolyMesh,
     /// (u, v) of Q′'s vertices (closest points).
     pub uv: Vec<[f64; 2]>,
-    pub lattice: Vec<[i32; 2]>,
+    /// The lattice polylines as triples (a, v, b), straight on through v.
+    pub polylines: Vec<[u32; 3]>,
     pub on_boundary: Vec<bool>,
     /// Covered share of the patch's area.
     pub coverage: f64,
@@ -57,24 +67,20 @@ pub struct SqQuadMesh {
 /// vertices (model units); false cancels.
 pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> bool + 'h;
 
-/// Second differences along the lattice polylines (both neighbours present and joined by mesh
-/// edges), per coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the
-/// patch boundary are left out: the boundary cuts the last segment of a polyline short, and
-/// fairing it would drag the polyline off the torsal direction.
-pub fn polyline_fairness(lattice: &[[i32; 2]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
-    let index: HashMap<[i32; 2], u32> = lattice.iter().enumerate().map(|(v, &k)| (k, v as u32)).collect();
+/// Second differences along the lattice polylines (triples a, v, b joined by mesh edges), per
+/// coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the patch
+/// boundary are left out: the boundary cuts the last segment of a polyline short, and fairing it
+/// would drag the polyline off the torsal direction.
+pub fn polyline_fairness(polylines: &[[u32; 3]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
     let edge_set: HashSet<[u32; 2]> = edges.iter().copied().collect();
     let joined = |a: u32, b: u32| edge_set.contains(&[a.min(b), a.max(b)]);
     let mut fair = Linear::new();
-    for (v, &[k, l]) in lattice.iter().enumerate() {
-        for (dk, dl) in [(1, 0), (0, 1)] {
-            let (Some(&a), Some(&b)) = (index.get(&[k - dk, l - dl]), index.get(&[k + dk, l + dl])) else { continue };
-            if !(joined(a, v as u32) && joined(v as u32, b)) || [a as usize, v, b as usize].iter().any(|&i| on_boundary[i]) {
-                continue;
-            }
-            for c in 0..3 {
-                fair.push_row(&[(offset(a as usize) + c, 1.0), (offset(v) + c, -2.0), (offset(b as usize) + c, 1.0)], 0.0);
-            }
+    for &[a, v, b] in polylines {
+        if !(joined(a, v) && joined(v, b)) || [a, v, b].iter().any(|&i| on_boundary[i as usize]) {
+            continue;
+        }
+        for c in 0..3 {
+            fair.push_row(&[(offset(a as usize) + c, 1.0), (offset(v as usize) + c, -2.0), (offset(b as usize) + c, 1.0)], 0.0);
         }
     }
     fair.with_name("fairness")
@@ -93,23 +99,29 @@ pub fn quad_mesh(
     hook: &mut FairingHook,
 ) -> Result<SqQuadMesh, SqError> {
     let surface = reference.spline().ok_or(SqError::NotBSpline)?;
-    let torsal = CrossField::comb(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
+    let torsal = CrossField::new(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
     let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
     let mut warnings = Vec::new();
-    let (remesh, parameter_lines) = match quad_remesh(surface, &torsal, &remesh_params)? {
-        r if r.folded_triangles == 0 => (r, false),
-        folded => {
-            let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
-            let field = CrossField::comb(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
-            let r = quad_remesh(surface, &field, &remesh_params)?;
-            warnings.push(format!(
-                "the torsal directions turn about a point (an umbilic or a singularity of the cross field: {} folded triangles in its integration), so no quad mesh without singular vertices follows them; the quad mesh follows the parameter lines instead, which the final optimization starts from",
-                folded.folded_triangles
-            ));
-            (r, true)
-        }
+    let singular_points = singular_points_of(surface, &torsal, &remesh_params);
+    let remesh = if singular_points.is_empty() {
+        quad_remesh(surface, &torsal, &remesh_params)?
+    } else {
+        let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
+        let field = CrossField::new(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
+        let (three, five) = (singular_points.iter().filter(|s| s.quarters > 0).count(), singular_points.iter().filter(|s| s.quarters < 0).count());
+        warnings.push(format!(
+            "the torsal directions turn about a point (an umbilic): a quad mesh along them needs singular vertices, {three} of valence 3 and {five} of valence 5, where the support planes cannot meet at more than 60° and 72°; the final optimization does not yet reach its guarantees from such a mesh, so the quad mesh follows the parameter lines instead, which it starts from"
+        ));
+        quad_remesh(surface, &field, &remesh_params)?
     };
-    let QuadRemesh { mesh: remesh, uv, lattice, on_boundary, dropped, .. } = remesh;
+    if remesh.folded_triangles > 0 {
+        warnings.push(format!(
+            "integrating the torsal field folded {} fine triangles: the quad mesh leaves the torsal directions there",
+            remesh.folded_triangles
+        ));
+    }
+    let parameter_lines = !singular_points.is_empty();
+    let QuadRemesh { mesh: remesh, uv, polylines, on_boundary, dropped, singular, folded_triangles, .. } = remesh;
     let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
 
     // Q′ in the frame of the bounding box.
@@ -126,7 +138,7 @@ pub fn quad_mesh(
     problem.add_term(tangent.with_name("glide_tangent"), 1.0);
     problem.add_term(point.with_name("glide_point"), 1.0);
     let edges = crate::geometry::mesh::topology::Topology::new(&remesh).edges().to_vec();
-    problem.add_term(polyline_fairness(&lattice, &on_boundary, &edges, |v| 3 * v), params.fairing_weight);
+    problem.add_term(polyline_fairness(&polylines, &on_boundary, &edges, |v| 3 * v), params.fairing_weight);
     problem.add_term(Proximal::new((0..3 * nv).collect()), 0.05);
     for (v, &b) in on_boundary.iter().enumerate() {
         problem.group_variables(3 * v..3 * v + 3);
@@ -160,11 +172,14 @@ pub fn quad_mesh(
     }
     Ok(SqQuadMesh {
         torsal,
+        singular_points,
         parameter_lines,
+        singular,
+        folded_triangles,
         remesh,
         mesh,
         uv: q_uv,
-        lattice,
+        polylines,
         on_boundary,
         coverage,
         dropped,

@@ -75,8 +75,10 @@ pub type SphereHook<'h> = dyn FnMut(SpherePhase, usize, &[TermStats], &[DVec3], 
 /// The combinatorics the optimization needs.
 #[derive(Clone, Debug)]
 pub struct QuadStars {
-    /// Per inner vertex (four faces in a closed cycle): the vertex and its faces in order.
-    pub stars: Vec<(u32, [u32; 4])>,
+    /// Per inner vertex (four faces in a closed cycle, or three or five at a singular vertex,
+    /// Sec. 5.2):
+    /// the vertex and its faces in order.
+    pub stars: Vec<(u32, Vec<u32>)>,
     /// Per vertex: its star index, if inner.
     pub star_of: Vec<Option<usize>>,
     /// Per vertex with three faces: the vertex and its faces.
@@ -103,30 +105,31 @@ impl QuadStars {
             if let &[f, g, h] = faces.as_slice() {
                 fans.push((v, [f, g, h]));
             }
-            if faces.len() != 4 {
+            let m = faces.len();
+            if !(3..=5).contains(&m) {
                 continue;
             }
             // Walk around v: from face f, the next face contains v and f's corner after v.
-            let mut order = [faces[0]; 4];
+            let mut order = vec![faces[0]; m];
             let mut closed = true;
-            for k in 1..=4 {
+            for k in 1..=m {
                 let f = order[k - 1];
                 let c = mesh.faces[f as usize].corners();
                 let next = c[(corner(f, v).unwrap() + 1) % c.len()];
                 let g = faces.iter().copied().find(|&g| g != f && corner(g, next).is_some());
-                match (k, g) {
-                    (4, Some(g)) => closed &= g == order[0],
-                    (_, Some(g)) => order[k] = g,
+                match (k == m, g) {
+                    (true, Some(g)) => closed &= g == order[0],
+                    (false, Some(g)) => order[k] = g,
                     (_, None) => closed = false,
                 }
                 if !closed {
                     break;
                 }
             }
-            let mut distinct = order.to_vec();
+            let mut distinct = order.clone();
             distinct.sort_unstable();
             distinct.dedup();
-            if closed && distinct.len() == 4 {
+            if closed && distinct.len() == m {
                 star_of[v as usize] = Some(stars.len());
                 stars.push((v, order));
             }
@@ -173,8 +176,8 @@ pub struct SphereInput<'a> {
     pub radii: &'a [f64],
     pub lines: &'a [DVec3],
     pub normals: &'a [DVec3],
-    /// Per vertex: its lattice index (k, l), for the polylines of the fairness term.
-    pub lattice: &'a [[i32; 2]],
+    /// The lattice polylines (a, v, b), for the fairness term.
+    pub polylines: &'a [[u32; 3]],
     pub on_boundary: &'a [bool],
     /// The reference in the frame.
     pub reference: &'a Reference,
@@ -264,8 +267,8 @@ pub fn optimize_spheres(
     let sphere_id = problem.add_term(PointOnSphere::new(pairs).with_name("sphere"), w.sphere);
     let sphere_offsets: Vec<usize> = (0..layout.faces).map(|f| layout.sphere(f)).collect();
     let unit_id = problem.add_term(UnitLength::spheres(sphere_offsets).with_name("sphere_unit"), w.unit);
-    let star_terms: Vec<([usize; 4], usize)> =
-        stars.stars.iter().enumerate().map(|(s, (_, faces))| (faces.map(|f| layout.sphere(f as usize)), layout.star_normal(s))).collect();
+    let star_terms: Vec<(Vec<usize>, usize)> =
+        stars.stars.iter().enumerate().map(|(s, (_, faces))| (faces.iter().map(|&f| layout.sphere(f as usize)).collect(), layout.star_normal(s))).collect();
     let supp_id = problem.add_term(CentrePlanarity { stars: star_terms }, w.supp);
     let star_normals: Vec<usize> = (0..layout.stars).map(|s| layout.star_normal(s)).collect();
     let star_unit_id = problem.add_term(UnitLength::vectors(star_normals).with_name("axis_unit"), w.unit);
@@ -289,8 +292,8 @@ pub fn optimize_spheres(
         })
         .collect();
     let centre_id = problem.add_term(CentreProximity { faces: centre_faces, epsilon: w.epsilon }, w.prox_c);
-    let fair_id = problem.add_term(polyline_fairness(input.lattice, input.on_boundary, &stars.edges, |v| layout.vertex(v)), w.fair);
-    let quads: Vec<[usize; 4]> = stars.stars.iter().map(|(_, faces)| faces.map(|f| layout.sphere(f as usize))).collect();
+    let fair_id = problem.add_term(polyline_fairness(input.polylines, input.on_boundary, &stars.edges, |v| layout.vertex(v)), w.fair);
+    let quads: Vec<Vec<usize>> = stars.stars.iter().map(|(_, faces)| faces.iter().map(|&f| layout.sphere(f as usize)).collect()).collect();
     let axes: Vec<(usize, usize)> = stars.stars.iter().enumerate().map(|(s, &(v, _))| (layout.star_normal(s), v as usize)).collect();
     let fans: Vec<([usize; 3], usize)> = stars.fans.iter().map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize)).collect();
     // The proximity terms come first, so their lookups are fresh when the hinges prepare.
@@ -298,7 +301,10 @@ pub fn optimize_spheres(
     // The hinges at the targets (with margins) for the optimization, and at θ and α themselves
     // (less a margin) for the projection.
     let mut hinges = |cos2_alpha: f64, cos2_theta: f64, suffix: &str| {
-        let angle = Hinge::new(CentreQuadAngle { stars: quads.clone(), cos2: cos2_alpha }).with_name(format!("support_plane_angle{suffix}"));
+        // At a singular vertex the planes aim at most at what its valence allows.
+        let alpha = cos2_alpha.sqrt().acos().to_degrees();
+        let stars = quads.iter().map(|q| (q.clone(), super::sphere_terms::support_plane_aim_deg(q.len(), alpha).to_radians().cos().powi(2))).collect();
+        let angle = Hinge::new(CentreQuadAngle { stars }).with_name(format!("support_plane_angle{suffix}"));
         let axis = Hinge::new(AxisNormalAngle { axes: axes.clone(), normals: normals.clone(), cos2: cos2_theta }).with_name(format!("axis_normal_angle{suffix}"));
         let fan = Hinge::new(FanAxisAngle { fans: fans.clone(), normals: normals.clone(), cos2: cos2_theta }).with_name(format!("fan_axis_normal_angle{suffix}"));
         (problem.add_term(angle, 0.0), problem.add_term(axis, 0.0), problem.add_term(fan, 0.0))

@@ -61,7 +61,8 @@ fn add_centre_gradient(jac: &mut JacobianSink, row: usize, o: usize, a: f64, b: 
 /// normal n_cq.
 #[derive(Clone, Debug)]
 pub struct CentrePlanarity {
-    pub stars: Vec<([usize; 4], usize)>,
+    /// Per star: its 3 to 5 sphere offsets in order around the vertex, and the offset of n_cq.
+    pub stars: Vec<(Vec<usize>, usize)>,
 }
 
 impl Term for CentrePlanarity {
@@ -69,19 +70,21 @@ impl Term for CentrePlanarity {
         "centre_planarity"
     }
     fn residual_count(&self) -> usize {
-        4 * self.stars.len()
+        self.stars.iter().map(|(s, _)| s.len()).sum()
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
-        for (s, (spheres, no)) in self.stars.iter().enumerate() {
+        let mut row = 0;
+        for (spheres, no) in &self.stars {
             let n = v3(x, *no);
-            let c = spheres.map(|o| centre(x, o));
-            for k in 0..4 {
-                let row = 4 * s + k;
-                let (ci, cj) = (c[k], c[(k + 1) % 4]);
+            let c: Vec<_> = spheres.iter().map(|&o| centre(x, o)).collect();
+            let m = spheres.len();
+            for k in 0..m {
+                let (ci, cj) = (c[k], c[(k + 1) % m]);
                 r[row] = (ci.0 - cj.0).dot(n);
                 add_centre_gradient(jac, row, spheres[k], ci.1, ci.2, n, 1.0);
-                add_centre_gradient(jac, row, spheres[(k + 1) % 4], cj.1, cj.2, n, -1.0);
+                add_centre_gradient(jac, row, spheres[(k + 1) % m], cj.1, cj.2, n, -1.0);
                 jac.add_block(row, *no, &(ci.0 - cj.0).to_array());
+                row += 1;
             }
         }
     }
@@ -173,12 +176,29 @@ impl Term for CentreProximity {
     }
 }
 
-/// Per star: its four sphere offsets in order around the vertex; four residuals each (see the
-/// module docs).
+/// The widest angle that m support planes through one node axis can all keep between
+/// neighbours: they divide the turn about the axis, so some neighbour pair is at most 360°/m apart
+/// and, as planes, at most min(360°/m, 180° − 360°/m): 60° at three edges, 90° at four, 72° at
+/// five. At a singular vertex α cannot hold beyond it.
+pub fn support_plane_bound_deg(valence: usize) -> f64 {
+    let even = 360.0 / valence.max(1) as f64;
+    even.min(180.0 - even).max(0.0)
+}
+
+/// How far below the bound of a singular vertex its support planes may meet (degrees).
+pub const SINGULAR_MARGIN_DEG: f64 = 1.0;
+
+/// The angle the support planes at a vertex of `valence` edges are held to at α (degrees).
+pub fn support_plane_aim_deg(valence: usize, alpha_deg: f64) -> f64 {
+    if valence == 4 { alpha_deg } else { alpha_deg.min(support_plane_bound_deg(valence) - SINGULAR_MARGIN_DEG) }
+}
+
+/// Per star: its 3 to 5 sphere offsets in order around the vertex; one residual per face (see
+/// the module docs).
 #[derive(Clone, Debug)]
 pub struct CentreQuadAngle {
-    pub stars: Vec<[usize; 4]>,
-    pub cos2: f64,
+    /// Per star: its sphere offsets and cos² of the angle its support planes aim at.
+    pub stars: Vec<(Vec<usize>, f64)>,
 }
 
 impl Term for CentreQuadAngle {
@@ -186,14 +206,15 @@ impl Term for CentreQuadAngle {
         "support_plane_angle"
     }
     fn residual_count(&self) -> usize {
-        4 * self.stars.len()
+        self.stars.iter().map(|(s, _)| s.len()).sum()
     }
     fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
-        for (s, spheres) in self.stars.iter().enumerate() {
-            let c = spheres.map(|o| centre(x, o));
-            for k in 0..4 {
-                let row = 4 * s + k;
-                let (i, j, l) = (k, (k + 1) % 4, (k + 2) % 4);
+        let mut row = 0;
+        for (spheres, cos2) in &self.stars {
+            let c: Vec<_> = spheres.iter().map(|&o| centre(x, o)).collect();
+            let m = spheres.len();
+            for k in 0..m {
+                let (i, j, l) = (k, (k + 1) % m, (k + 2) % m);
                 let (da, db) = (c[i].0 - c[j].0, c[j].0 - c[l].0);
                 let (aa, bb, ab) = (da.length_squared(), db.length_squared(), da.dot(db));
                 if !(aa > 0.0 && bb > 0.0) {
@@ -201,16 +222,18 @@ impl Term for CentreQuadAngle {
                     for &o in &[spheres[i], spheres[j], spheres[l]] {
                         add_centre_gradient(jac, row, o, 1.0, DVec3::ZERO, DVec3::ZERO, 0.0);
                     }
+                    row += 1;
                     continue;
                 }
                 let g = ab * ab / (aa * bb);
-                r[row] = g - self.cos2;
+                r[row] = g - cos2;
                 // ∂g/∂da = 2ab/(aa bb) db − 2g da/aa; ∂g/∂db = 2ab/(aa bb) da − 2g db/bb.
                 let ga = 2.0 * ab / (aa * bb) * db - 2.0 * g / aa * da;
                 let gb = 2.0 * ab / (aa * bb) * da - 2.0 * g / bb * db;
                 add_centre_gradient(jac, row, spheres[i], c[i].1, c[i].2, ga, 1.0);
                 add_centre_gradient(jac, row, spheres[j], c[j].1, c[j].2, gb - ga, 1.0);
                 add_centre_gradient(jac, row, spheres[l], c[l].1, c[l].2, -gb, 1.0);
+                row += 1;
             }
         }
     }

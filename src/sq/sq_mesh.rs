@@ -57,8 +57,13 @@ pub struct SqMeshFigures {
     /// Angle between node axes and the reference normals (deg).
     pub max_axis_normal_angle_deg: f64,
     pub mean_axis_normal_angle_deg: f64,
-    /// min over inner vertices of the angle between the support planes of two consecutive edges.
+    /// min over inner vertices of four edges of the angle between the support planes of two
+    /// consecutive edges.
     pub min_torsal_plane_angle_deg: f64,
+    /// The same at the singular vertices of three and of five edges (None without any), for the
+    /// bound of [`super::sphere_terms::support_plane_bound_deg`].
+    pub min_support_plane_angle_valence_3_deg: Option<f64>,
+    pub min_support_plane_angle_valence_5_deg: Option<f64>,
     /// max distance of a vertex to the reference.
     pub max_vertex_distance_to_reference: f64,
     /// Vertices whose node axis comes from three or more spheres.
@@ -204,12 +209,13 @@ fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], norm
     let mut out = SqMeshFigures { min_torsal_plane_angle_deg: 90.0, ..SqMeshFigures::default() };
     out.max_vertex_sphere_residual = sm.max_vertex_sphere_residual() / diag;
     for (v, faces) in &stars.stars {
+        let m = faces.len();
         let centres: Vec<DVec3> = faces.iter().filter_map(|&f| spheres[f as usize].center()).collect();
-        if centres.len() < 4 {
+        if centres.len() < m {
             out.max_centre_face_planarity = f64::INFINITY;
             continue;
         }
-        let mid = centres.iter().sum::<DVec3>() / 4.0;
+        let mid = centres.iter().sum::<DVec3>() / m as f64;
         let rows: Vec<[f64; 3]> = centres.iter().map(|c| (*c - mid).to_array()).collect();
         let n = DVec3::from_array(Svd::new(&rows).v[2]).normalize_or_zero();
         let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
@@ -218,20 +224,31 @@ fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], norm
         // shared edge runs from v to their other common corner. A plane that cannot be measured
         // fails the figure (NaN).
         let p = mesh.positions[*v as usize];
-        let planes: Vec<Option<DVec3>> = (0..4)
+        let planes: Vec<Option<DVec3>> = (0..m)
             .map(|k| {
-                let (f, g) = (faces[k] as usize, faces[(k + 1) % 4] as usize);
+                let (f, g) = (faces[k] as usize, faces[(k + 1) % m] as usize);
                 let other = mesh.faces[f].corners().iter().copied().find(|&c| c != *v && mesh.faces[g].corners().contains(&c))?;
                 support_plane_normal(&spheres[f], &spheres[g], [p, mesh.positions[other as usize]], [axes[*v as usize].1, axes[other as usize].1])
             })
             .collect();
-        for k in 0..4 {
-            let angle = match (planes[k], planes[(k + 1) % 4]) {
+        let mut star_min = 90.0f64;
+        for k in 0..m {
+            let angle = match (planes[k], planes[(k + 1) % m]) {
                 (Some(a), Some(b)) => a.dot(b).abs().min(1.0).acos().to_degrees(),
                 _ => f64::NAN,
             };
+            star_min = if angle.is_nan() || star_min.is_nan() { f64::NAN } else { star_min.min(angle) };
+        }
+        if m == 4 {
             let so_far = out.min_torsal_plane_angle_deg;
-            out.min_torsal_plane_angle_deg = if angle.is_nan() || so_far.is_nan() { f64::NAN } else { so_far.min(angle) };
+            out.min_torsal_plane_angle_deg = if star_min.is_nan() || so_far.is_nan() { f64::NAN } else { so_far.min(star_min) };
+        } else {
+            let slot = if m == 3 { &mut out.min_support_plane_angle_valence_3_deg } else { &mut out.min_support_plane_angle_valence_5_deg };
+            *slot = Some(match *slot {
+                Some(a) if a.is_nan() || star_min.is_nan() => f64::NAN,
+                Some(a) => a.min(star_min),
+                None => star_min,
+            });
         }
     }
     let topo = sm.topology();
