@@ -5,7 +5,7 @@ use spherical_faces::progress::Clock;
 use spherical_faces::sq::compute;
 use spherical_faces::sq::params::SqParams;
 use spherical_faces::sq::sphere_optimization::QuadStars;
-use spherical_faces::sq::sq_mesh::support_plane_normal;
+use spherical_faces::sq::sq_mesh::star_support_plane_angle_deg;
 
 fn main() {
     let name = std::env::args().nth(1).unwrap();
@@ -16,23 +16,15 @@ fn main() {
     let f = r.sq_mesh.as_ref().unwrap();
     let sm = &f.mesh.sphere_mesh;
     let mesh = &sm.mesh;
-    let axes = &f.mesh.node_axes;
     let cones: Vec<[f64; 2]> = q.singular.iter().map(|(v, _)| q.uv[*v as usize]).collect();
     let stars = QuadStars::new(mesh);
     let mut low = Vec::new();
     for (v, faces) in &stars.stars {
-        let m = faces.len();
-        let p = mesh.positions[*v as usize];
-        let planes: Vec<Option<glam::DVec3>> = (0..m).map(|k| {
-            let (a, b) = (faces[k] as usize, faces[(k + 1) % m] as usize);
-            let other = mesh.faces[a].corners().iter().copied().find(|&c| c != *v && mesh.faces[b].corners().contains(&c))?;
-            support_plane_normal(&sm.face_spheres[a], &sm.face_spheres[b], [p, mesh.positions[other as usize]], [axes[*v as usize].1, axes[other as usize].1])
-        }).collect();
-        let worst = (0..m).map(|k| match (planes[k], planes[(k + 1) % m]) { (Some(a), Some(b)) => a.dot(b).abs().min(1.0).acos().to_degrees(), _ => f64::NAN }).fold(90.0, f64::min);
+        let worst = star_support_plane_angle_deg(sm, &f.mesh.node_axes, *v, faces);
         if worst < params.alpha_deg {
             let uv = f.uv[*v as usize];
             let d = cones.iter().map(|c| ((c[0] - uv[0]).powi(2) + (c[1] - uv[1]).powi(2)).sqrt()).fold(f64::INFINITY, f64::min);
-            low.push((worst, m, uv, d));
+            low.push((worst, faces.len(), uv, d));
         }
     }
     low.sort_by(|a, b| a.0.total_cmp(&b.0));

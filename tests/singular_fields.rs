@@ -6,7 +6,7 @@ use std::f64::consts::FRAC_PI_2;
 use glam::{DVec2, DVec3};
 use spherical_faces::geometry::bspline::{BSplineBasis, BSplineSurface};
 use spherical_faces::remeshing::cross_field::{singular_points, split_singularities, Cross, CrossField, FineGrid};
-use spherical_faces::remeshing::quad_remeshing::{integrate, quad_remesh, QuadRemeshParams};
+use spherical_faces::remeshing::quad_remeshing::{integrate, quad_remesh, FieldGrid, QuadRemeshParams};
 use spherical_faces::remeshing::seamless::turn;
 use spherical_faces::rng::Rng;
 use spherical_faces::sq::sphere_terms::support_plane_bound_deg;
@@ -113,7 +113,7 @@ fn the_parametrization_jumps_by_lattice_translations_across_its_cuts() {
     for q in [1.0, -1.0] {
         let field = turning_field(&surface, DVec2::new(0.23, 0.11), q);
         let h = 0.27;
-        let g = integrate(&surface, &field, 60, 12, 10.0, h, 4.0 * h).unwrap();
+        let g = integrate(&FieldGrid::new(&surface, &field, 60, 12, h, 4.0 * h), 10.0, h).unwrap();
         assert_eq!(g.singular.len(), 1);
         assert_eq!(g.cuts.cuts.len(), 1);
         let cut = &g.cuts.cuts[0];

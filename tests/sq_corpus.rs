@@ -121,7 +121,7 @@ fn no_generated_roof_misses_a_guarantee_silently() {
             assert!(!result.verdict.failure_text().is_empty());
         }
         met += usize::from(result.verdict.holds());
-        let singular = result.quad_mesh.as_ref().filter(|q| q.parameter_lines).map_or(0, |q| q.singular_points.len());
+        let singular = result.quad_mesh.as_ref().filter(|q| q.parameter_lines()).map_or(0, |q| q.singular_points.len());
         rows.push(format!(
             "{kind:?} {k}: start {:?}, {}{}",
             result.congruence.start,

@@ -40,7 +40,7 @@ use std::fmt;
 
 use glam::{DVec2, DVec3};
 
-use crate::geometry::bspline::BSplineSurface;
+use crate::geometry::bspline::{BSplineSurface, SurfaceDerivatives};
 use crate::geometry::mesh::{Face, PolyMesh};
 use crate::solver::{Linear, Problem, Solver, SolverOptions};
 
@@ -126,77 +126,81 @@ impl Integration {
     }
 }
 
-/// The fine grid of `cells` × `cells` cells over the domain plus `margin` on every side, the
-/// surface's derivatives and the field's cross per triangle, with its singular points split into
-/// quarter turns (step 1 of the module docs).
-fn field_on_grid(
-    surface: &BSplineSurface,
-    field: &CrossField,
-    cells: usize,
-    margin: usize,
-    spacing: f64,
-    reach: f64,
-) -> (FineGrid, Vec<crate::geometry::bspline::SurfaceDerivatives>, Vec<Cross>, Vec<SingularPoint>) {
-    let ((u0, u1), (v0, v1)) = surface.domain();
-    let step = [(u1 - u0) / cells as f64, (v1 - v0) / cells as f64];
-    let (nu, nv) = (cells + 2 * margin + 1, cells + 2 * margin + 1);
-    let grid = FineGrid { nu, nv, origin: [u0 - margin as f64 * step[0], v0 - margin as f64 * step[1]], step };
-    let nt = grid.triangle_count();
-    let frames: Vec<_> = (0..nt)
-        .map(|t| {
-            let c = grid.centroid(t);
-            let c = surface.clamp([c.x, c.y]);
-            surface.derivatives(c[0], c[1])
-        })
-        .collect();
-    let mut crosses: Vec<Cross> = (0..nt)
-        .map(|t| {
-            let c = grid.centroid(t);
-            let c = surface.clamp([c.x, c.y]);
-            field.cross_at(c[0], c[1])
-        })
-        .collect();
-    let scale = {
-        let k = frames.len() as f64;
-        DVec2::new(frames.iter().map(|d| d.su.length()).sum::<f64>() / k, frames.iter().map(|d| d.sv.length()).sum::<f64>() / k)
-    };
-    let singular = split_singularities(&grid, &mut crosses, reach, spacing, scale);
-    (grid, frames, crosses, singular)
+/// The field on the fine grid (step 1 of the module docs): `cells` × `cells` cells over the
+/// domain plus `margin` on every side, the surface's derivatives and the field's cross per
+/// triangle, its singular points split into quarter turns for lattice spacing `spacing`
+/// (singular points closer than `reach`, a 3D length, form one cluster).
+#[derive(Clone, Debug)]
+pub struct FieldGrid {
+    pub grid: FineGrid,
+    pub cells: usize,
+    pub margin: usize,
+    pub frames: Vec<SurfaceDerivatives>,
+    pub crosses: Vec<Cross>,
+    pub singular: Vec<SingularPoint>,
 }
 
-/// The fine grid's cells and margin, the first lattice spacing and the cluster reach for a remesh
-/// with `params` (see [`quad_remesh`]).
-fn sizes(surface: &BSplineSurface, params: &QuadRemeshParams) -> (usize, usize, f64, f64) {
+impl FieldGrid {
+    pub fn new(surface: &BSplineSurface, field: &CrossField, cells: usize, margin: usize, spacing: f64, reach: f64) -> Self {
+        let ((u0, u1), (v0, v1)) = surface.domain();
+        let step = [(u1 - u0) / cells as f64, (v1 - v0) / cells as f64];
+        let (nu, nv) = (cells + 2 * margin + 1, cells + 2 * margin + 1);
+        let grid = FineGrid { nu, nv, origin: [u0 - margin as f64 * step[0], v0 - margin as f64 * step[1]], step };
+        let centres: Vec<[f64; 2]> = (0..grid.triangle_count())
+            .map(|t| {
+                let c = grid.centroid(t);
+                surface.clamp([c.x, c.y])
+            })
+            .collect();
+        let frames: Vec<SurfaceDerivatives> = centres.iter().map(|c| surface.derivatives(c[0], c[1])).collect();
+        let mut crosses: Vec<Cross> = centres.iter().map(|c| field.cross_at(c[0], c[1])).collect();
+        let k = frames.len() as f64;
+        let scale = DVec2::new(frames.iter().map(|d| d.su.length()).sum::<f64>() / k, frames.iter().map(|d| d.sv.length()).sum::<f64>() / k);
+        let singular = split_singularities(&grid, &mut crosses, reach, spacing, scale);
+        Self { grid, cells, margin, frames, crosses, singular }
+    }
+}
+
+/// A remesh before its integration: the sizes for `params` and the field on the fine grid, whose
+/// singular points tell what the remesh will place ([`prepare`]).
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The patch's area (a 32 × 32 tessellation) and the first lattice spacing h.
+    pub patch_area: f64,
+    pub spacing: f64,
+    /// Singular points within this distance of each other are one cluster (an umbilic's noise).
+    pub reach: f64,
+    pub field: FieldGrid,
+}
+
+/// The sizes of a remesh with `params` and the field on its fine grid (no solve).
+pub fn prepare(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Result<Prepared, QuadRemeshError> {
+    let target = params.target_faces;
+    if !(4..=100_000).contains(&target) {
+        return Err(QuadRemeshError::TargetFaces(target));
+    }
     let (mesh, _) = surface.tessellate([32, 32]);
     let patch_area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
-    let per_side = (params.target_faces as f64).sqrt();
+    let per_side = (target as f64).sqrt();
     let cells = ((params.resolution.max(2) as f64) * per_side).ceil() as usize;
     let margin = (cells as f64 * 2.5 / per_side).ceil() as usize + 2;
-    let h = (patch_area / params.target_faces as f64).sqrt();
-    // Singular points within four spacings of each other are one cluster (an umbilic's noise).
-    (cells, margin, h, 4.0 * h)
+    let spacing = (patch_area / target as f64).sqrt();
+    let reach = 4.0 * spacing;
+    Ok(Prepared { patch_area, spacing, reach, field: FieldGrid::new(surface, field, cells, margin, spacing, reach) })
 }
 
-/// The singular points a remesh with `params` places for `field`: quarter turns, after the
-/// clusters of an umbilic are split (no solve).
-pub fn singular_points_of(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Vec<SingularPoint> {
-    let (cells, margin, h, reach) = sizes(surface, params);
-    field_on_grid(surface, field, cells, margin, h, reach).3
-}
-
-/// Integrates the field (step 2 of the module docs) on a grid of `cells` × `cells` fine cells
-/// over the domain plus `margin` cells on every side, with lattice spacing `spacing` for the
-/// singular points; singular points closer than `reach` (3D length) form one cluster.
-pub fn integrate(surface: &BSplineSurface, field: &CrossField, cells: usize, margin: usize, direction_weight: f64, spacing: f64, reach: f64) -> Result<Integration, QuadRemeshError> {
-    let (grid, frames, crosses, singular) = field_on_grid(surface, field, cells, margin, spacing, reach);
+/// Integrates the field on its fine grid (step 2 of the module docs), with lattice spacing
+/// `spacing` for the singular points.
+pub fn integrate(fg: &FieldGrid, direction_weight: f64, spacing: f64) -> Result<Integration, QuadRemeshError> {
+    let FieldGrid { grid, cells, margin, frames, crosses, singular } = fg;
+    let (grid, cells, margin, singular) = (*grid, *cells, *margin, singular.clone());
     let (nu, nv) = (grid.nu, grid.nv);
     let n = grid.node_count();
     let nt = grid.triangle_count();
-    let cuts = Cuts::new(&grid, &crosses, &singular);
+    let cuts = Cuts::new(&grid, crosses, &singular);
     // Two unknown vectors side by side: φ0 at [0, n), φ1 at [n, 2n).
     let var = |node: usize, k: usize| k * n + node;
     let mut rows = Linear::new();
-    let mut merged: HashMap<usize, f64> = HashMap::new();
     for (t, d) in frames.iter().enumerate() {
         let dirs = cuts.combed[t].directions().map(|t| {
             let len = (d.su * t.x + d.sv * t.y).length();
@@ -214,14 +218,12 @@ pub fn integrate(surface: &BSplineSurface, field: &CrossField, cells: usize, mar
             for (dir, w, target) in [(dirs[1 - k], direction_weight, 0.0), (dirs[k], 1.0, 1.0)] {
                 // ⟨∇φ_k, dir⟩ = Σ corner coefficient · φ_k(corner).
                 let coeff = [-(g1 + g2).dot(dir), g1.dot(dir), g2.dot(dir)];
-                merged.clear();
-                for (corner, &node) in c.iter().enumerate() {
-                    for (nd, j, a) in cuts.corner_terms(t, node, k) {
-                        *merged.entry(var(nd, j)).or_insert(0.0) += w * coeff[corner] * a;
-                    }
-                }
-                let mut row: Vec<(usize, f64)> = merged.iter().map(|(&j, &a)| (j, a)).filter(|(_, a)| *a != 0.0).collect();
-                row.sort_unstable_by_key(|(j, _)| *j);
+                // Columns may repeat (a cut corner refers to its singular point): the solver sums them.
+                let row: Vec<(usize, f64)> = c
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(corner, &node)| cuts.corner_terms(t, node, k).into_iter().map(move |(nd, j, a)| (var(nd, j), w * coeff[corner] * a)))
+                    .collect();
                 rows.push_row(&row, -w * target);
             }
         }
@@ -739,21 +741,22 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
 
 /// Remeshes the patch along `field` (see the module docs) for about `params.target_faces` quads.
 pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
+    quad_remesh_prepared(surface, field, prepare(surface, field, params)?, params)
+}
+
+/// [`quad_remesh`] from its [`prepare`]d field.
+pub fn quad_remesh_prepared(surface: &BSplineSurface, field: &CrossField, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
     let target = params.target_faces;
-    if !(4..=100_000).contains(&target) {
-        return Err(QuadRemeshError::TargetFaces(target));
-    }
-    let (mesh, _) = surface.tessellate([32, 32]);
-    let patch_area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
-    let (cells, margin, mut h, reach) = sizes(surface, params);
-    let mut g = integrate(surface, field, cells, margin, params.direction_weight, h, reach)?;
+    let Prepared { patch_area, spacing: mut h, reach, field: fg } = prepared;
+    let mut g = integrate(&fg, params.direction_weight, h)?;
     if !g.singular.is_empty() {
         // The singular points sit on the lattice of spacing h, offset 0: one correction of h
         // for the face count, then the mesh.
         let count = extract(surface, &g, h, [0.0; 2], false).map_or(0, |(m, _)| m.mesh.face_count());
         if count > 0 && (count as f64 - target as f64).abs() > 0.1 * target as f64 {
             h *= (count as f64 / target as f64).sqrt();
-            g = integrate(surface, field, cells, margin, params.direction_weight, h, reach)?;
+            let fg = FieldGrid::new(surface, field, fg.cells, fg.margin, h, reach);
+            g = integrate(&fg, params.direction_weight, h)?;
         }
         return extract(surface, &g, h, [0.0; 2], true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty);
     }

@@ -17,6 +17,7 @@
 //!    and fixed, and the solve is repeated (direct rounding, as MIQ's greedy rounding does in one
 //!    pass when the points are few).
 
+use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, VecDeque};
 
 use glam::DVec2;
@@ -250,11 +251,13 @@ fn cut_paths(grid: &FineGrid, singular: &[SingularPoint]) -> Vec<Vec<usize>> {
     for s in singular {
         let mut dist = vec![f64::INFINITY; n];
         let mut prev = vec![usize::MAX; n];
+        // Smallest distance first: non-negative floats order as their bits.
         let mut heap = BinaryHeap::new();
         dist[s.node] = 0.0;
-        heap.push(Node(0.0, s.node));
+        heap.push((Reverse(0f64.to_bits()), s.node));
         let mut end = None;
-        while let Some(Node(d, v)) = heap.pop() {
+        while let Some((Reverse(bits), v)) = heap.pop() {
+            let d = f64::from_bits(bits);
             if d > dist[v] {
                 continue;
             }
@@ -270,7 +273,7 @@ fn cut_paths(grid: &FineGrid, singular: &[SingularPoint]) -> Vec<Vec<usize>> {
                 if nd < dist[w] {
                     dist[w] = nd;
                     prev[w] = v;
-                    heap.push(Node(nd, w));
+                    heap.push((Reverse(nd.to_bits()), w));
                 }
             }
         }
@@ -287,22 +290,4 @@ fn cut_paths(grid: &FineGrid, singular: &[SingularPoint]) -> Vec<Vec<usize>> {
         paths.push(path);
     }
     paths
-}
-
-/// A heap entry ordered by smallest distance first.
-#[derive(PartialEq)]
-struct Node(f64, usize);
-
-impl Eq for Node {}
-
-impl PartialOrd for Node {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Node {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
-    }
 }

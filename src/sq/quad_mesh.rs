@@ -25,11 +25,12 @@ use crate::geometry::mesh::PolyMesh;
 use crate::progress::Clock;
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
-use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, quad_remesh, singular_points_of, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint};
+use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint};
 use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats, Termination};
 
 use super::error::SqError;
 use super::params::SqParams;
+use super::sphere_terms::support_plane_bound_deg;
 
 /// The quad mesh of Sec. 5.2 before the final optimization (model units).
 #[derive(Clone, Debug)]
@@ -37,9 +38,8 @@ pub struct SqQuadMesh {
     /// The combed torsal field.
     pub torsal: CrossField,
     /// The singular points of the torsal field (on the remesh's fine grid, index in quarter
-    /// turns), and whether the mesh follows the parameter lines because of them.
+    /// turns); with any, the mesh follows the parameter lines ([`SqQuadMesh::parameter_lines`]).
     pub singular_points: Vec<SingularPoint>,
-    pub parameter_lines: bool,
     /// The singular vertices of the mesh: (vertex, index in quarter turns), valence 4 − index.
     pub singular: Vec<(u32, i32)>,
     /// Fine triangles the integration folded (0 when the mesh follows the field).
@@ -61,6 +61,13 @@ pub struct SqQuadMesh {
     pub edge_angles_deg: Vec<f64>,
     pub fairing_iterations: usize,
     pub warnings: Vec<String>,
+}
+
+impl SqQuadMesh {
+    /// Whether the mesh follows the parameter lines: the torsal field has singular points.
+    pub fn parameter_lines(&self) -> bool {
+        !self.singular_points.is_empty()
+    }
 }
 
 /// Called after every fairing iteration with the iteration, the term statistics and the
@@ -102,15 +109,18 @@ pub fn quad_mesh(
     let torsal = CrossField::new(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
     let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
     let mut warnings = Vec::new();
-    let singular_points = singular_points_of(surface, &torsal, &remesh_params);
+    let prepared = prepare(surface, &torsal, &remesh_params)?;
+    let singular_points = prepared.field.singular.clone();
     let remesh = if singular_points.is_empty() {
-        quad_remesh(surface, &torsal, &remesh_params)?
+        quad_remesh_prepared(surface, &torsal, prepared, &remesh_params)?
     } else {
         let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
         let field = CrossField::new(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
         let (three, five) = (singular_points.iter().filter(|s| s.quarters > 0).count(), singular_points.iter().filter(|s| s.quarters < 0).count());
         warnings.push(format!(
-            "the torsal directions turn about a point (an umbilic): a quad mesh along them needs singular vertices, {three} of valence 3 and {five} of valence 5, where the support planes cannot meet at more than 60° and 72°; the final optimization does not yet reach its guarantees from such a mesh, so the quad mesh follows the parameter lines instead, which it starts from"
+            "the torsal directions turn about a point (an umbilic): a quad mesh along them needs singular vertices, {three} of valence 3 and {five} of valence 5, where the support planes cannot meet at more than {}° and {}°; the final optimization does not yet reach its guarantees from such a mesh, so the quad mesh follows the parameter lines instead, which it starts from",
+            support_plane_bound_deg(3),
+            support_plane_bound_deg(5)
         ));
         quad_remesh(surface, &field, &remesh_params)?
     };
@@ -120,7 +130,6 @@ pub fn quad_mesh(
             remesh.folded_triangles
         ));
     }
-    let parameter_lines = !singular_points.is_empty();
     let QuadRemesh { mesh: remesh, uv, polylines, on_boundary, dropped, singular, folded_triangles, .. } = remesh;
     let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
 
@@ -173,7 +182,6 @@ pub fn quad_mesh(
     Ok(SqQuadMesh {
         torsal,
         singular_points,
-        parameter_lines,
         singular,
         folded_triangles,
         remesh,

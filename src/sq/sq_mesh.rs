@@ -202,10 +202,36 @@ pub fn sq_mesh(mesh: PolyMesh, spheres: Vec<Sphere>, normals: &[DVec3], stars: &
     SqMesh { sphere_mesh: sm, panels, node_axes: axes, axis_from_spheres, support_elements, support_geometry, axis_length, figures }
 }
 
+/// The smaller of two figures, NaN when either is (a figure that cannot be measured fails).
+fn nan_min(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() { f64::NAN } else { a.min(b) }
+}
+
+/// The smallest angle (deg) between the support planes of consecutive edges at vertex `v`, whose
+/// faces are `faces` in order around it: the planes of consecutive face pairs, whose shared edge
+/// runs from v to their other common corner. NaN when a plane cannot be measured.
+pub fn star_support_plane_angle_deg(sm: &SphereMesh, axes: &[(DVec3, DVec3)], v: u32, faces: &[u32]) -> f64 {
+    let (mesh, spheres) = (&sm.mesh, &sm.face_spheres);
+    let m = faces.len();
+    let p = mesh.positions[v as usize];
+    let planes: Vec<Option<DVec3>> = (0..m)
+        .map(|k| {
+            let (f, g) = (faces[k] as usize, faces[(k + 1) % m] as usize);
+            let other = mesh.faces[f].corners().iter().copied().find(|&c| c != v && mesh.faces[g].corners().contains(&c))?;
+            support_plane_normal(&spheres[f], &spheres[g], [p, mesh.positions[other as usize]], [axes[v as usize].1, axes[other as usize].1])
+        })
+        .collect();
+    (0..m)
+        .map(|k| match (planes[k], planes[(k + 1) % m]) {
+            (Some(a), Some(b)) => a.dot(b).abs().min(1.0).acos().to_degrees(),
+            _ => f64::NAN,
+        })
+        .fold(90.0, nan_min)
+}
+
 /// The figures of [`SqMeshFigures`] except the distance to the reference.
 fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], normals: &[DVec3], stars: &QuadStars, diag: f64) -> SqMeshFigures {
     let spheres = &sm.face_spheres;
-    let mesh = &sm.mesh;
     let mut out = SqMeshFigures { min_torsal_plane_angle_deg: 90.0, ..SqMeshFigures::default() };
     out.max_vertex_sphere_residual = sm.max_vertex_sphere_residual() / diag;
     for (v, faces) in &stars.stars {
@@ -220,35 +246,12 @@ fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], norm
         let n = DVec3::from_array(Svd::new(&rows).v[2]).normalize_or_zero();
         let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
         out.max_centre_face_planarity = out.max_centre_face_planarity.max(worst / diag);
-        // Support planes of consecutive edges at the vertex: those of consecutive face pairs, whose
-        // shared edge runs from v to their other common corner. A plane that cannot be measured
-        // fails the figure (NaN).
-        let p = mesh.positions[*v as usize];
-        let planes: Vec<Option<DVec3>> = (0..m)
-            .map(|k| {
-                let (f, g) = (faces[k] as usize, faces[(k + 1) % m] as usize);
-                let other = mesh.faces[f].corners().iter().copied().find(|&c| c != *v && mesh.faces[g].corners().contains(&c))?;
-                support_plane_normal(&spheres[f], &spheres[g], [p, mesh.positions[other as usize]], [axes[*v as usize].1, axes[other as usize].1])
-            })
-            .collect();
-        let mut star_min = 90.0f64;
-        for k in 0..m {
-            let angle = match (planes[k], planes[(k + 1) % m]) {
-                (Some(a), Some(b)) => a.dot(b).abs().min(1.0).acos().to_degrees(),
-                _ => f64::NAN,
-            };
-            star_min = if angle.is_nan() || star_min.is_nan() { f64::NAN } else { star_min.min(angle) };
-        }
+        let star_min = star_support_plane_angle_deg(sm, axes, *v, faces);
         if m == 4 {
-            let so_far = out.min_torsal_plane_angle_deg;
-            out.min_torsal_plane_angle_deg = if star_min.is_nan() || so_far.is_nan() { f64::NAN } else { so_far.min(star_min) };
+            out.min_torsal_plane_angle_deg = nan_min(out.min_torsal_plane_angle_deg, star_min);
         } else {
             let slot = if m == 3 { &mut out.min_support_plane_angle_valence_3_deg } else { &mut out.min_support_plane_angle_valence_5_deg };
-            *slot = Some(match *slot {
-                Some(a) if a.is_nan() || star_min.is_nan() => f64::NAN,
-                Some(a) => a.min(star_min),
-                None => star_min,
-            });
+            *slot = Some(slot.map_or(star_min, |a| nan_min(a, star_min)));
         }
     }
     let topo = sm.topology();
