@@ -13,12 +13,12 @@
 use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
+use spherical_faces::bench_workloads::{
+    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, SqWorkload,
+    ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
+};
 use spherical_faces::progress::{native_clock_ms, Clock};
 use spherical_faces::solver::PhaseTimes;
-use spherical_faces::bench_workloads::{
-    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES,
-    REMESH_SAMPLES, SQ_SAMPLES,
-};
 
 static SCALE: OnceLock<Scale> = OnceLock::new();
 /// (benchmark, milliseconds) of every timed sample, in order.
@@ -37,7 +37,6 @@ fn info(name: &str, line: String) {
 fn scale() -> Scale {
     *SCALE.get().unwrap_or(&Scale::Tiny)
 }
-
 
 fn record(name: &str, ms: impl IntoIterator<Item = f64>) {
     let mut r = RESULTS.lock().unwrap();
@@ -58,7 +57,9 @@ fn remesh_workload() -> &'static RemeshWorkload {
 
 fn main() {
     let bench_mode = std::env::args().any(|a| a == "--bench");
-    SCALE.set(if bench_mode { Scale::Full } else { Scale::Tiny }).unwrap();
+    SCALE
+        .set(if bench_mode { Scale::Full } else { Scale::Tiny })
+        .unwrap();
     native_clock_ms();
     divan::main();
     if bench_mode {
@@ -74,7 +75,11 @@ fn main() {
             println!("{line}");
         }
         for name in names {
-            let ms: Vec<f64> = results.iter().filter(|(n, _)| n == name).map(|&(_, ms)| ms).collect();
+            let ms: Vec<f64> = results
+                .iter()
+                .filter(|(n, _)| n == name)
+                .map(|&(_, ms)| ms)
+                .collect();
             println!("{}", result_line(name, &ms));
         }
     }
@@ -84,7 +89,10 @@ fn main() {
 #[divan::bench(sample_count = JET_SAMPLES as u32, sample_size = 1)]
 fn jet_fit(bencher: Bencher) {
     let w = JetWorkload::new(scale());
-    info("jet_fit", format!("# jet_fit: {} vertices", w.mesh.vertex_count()));
+    info(
+        "jet_fit",
+        format!("# jet_fit: {} vertices", w.mesh.vertex_count()),
+    );
     bencher.bench_local(|| timed("jet_fit", || w.run()));
 }
 
@@ -96,11 +104,16 @@ fn remesh_round(bencher: Bencher, sizing: Sizing) {
         Sizing::Uniform => "remesh_round_uniform",
         Sizing::Adaptive => "remesh_round_adaptive",
     };
-    bencher.with_inputs(|| w.remesher(sizing)).bench_local_values(|mut r| {
-        let st = timed(name, || RemeshWorkload::round(&mut r));
-        info(name, format!("# {name}: {} faces, {st:?}", w.reference.face_count()));
-        r // dropped outside the timing
-    });
+    bencher
+        .with_inputs(|| w.remesher(sizing))
+        .bench_local_values(|mut r| {
+            let st = timed(name, || RemeshWorkload::round(&mut r));
+            info(
+                name,
+                format!("# {name}: {} faces, {st:?}", w.reference.face_count()),
+            );
+            r // dropped outside the timing
+        });
 }
 
 /// `ANGLE_ITERATIONS_PER_SAMPLE` LM iterations from the initial point (divan times the whole
@@ -112,7 +125,14 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     let mut solver = w.solver(Clock(Some(native_clock_ms)));
     w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
     let name = format!("angle_iteration_{faces}");
-    info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
+    info(
+        &name,
+        format!(
+            "# {name}: {} faces, {} vertices",
+            w.faces(),
+            w.frame.mesh.vertex_count()
+        ),
+    );
     let (mut phases, mut iterations) = (PhaseTimes::default(), 0);
     bencher.bench_local(|| {
         let (ms, p) = w.sample_with_phases(&mut problem, &mut solver);
@@ -120,7 +140,10 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
         iterations += ms.len();
         record(&name, ms)
     });
-    info(&format!("{name} phases"), phase_line(&name, &phases, iterations));
+    info(
+        &format!("{name} phases"),
+        phase_line(&name, &phases, iterations),
+    );
 }
 
 /// One whole SQ run on tunnel_arch (20×20 grid, about 237 quads) per sample; the `bench` lines

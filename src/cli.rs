@@ -21,7 +21,10 @@ use spherical_faces::progress::{Clock, Progress};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
-use spherical_faces::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use spherical_faces::sq::params::{
+    RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE,
+    THETA_RANGE,
+};
 use spherical_faces::sq::SqEvent;
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_adapted::StAdaptedEvent;
@@ -176,18 +179,27 @@ struct Failure {
 
 impl Failure {
     fn input(message: impl Into<String>) -> Self {
-        Self { message: message.into(), code: 2 }
+        Self {
+            message: message.into(),
+            code: 2,
+        }
     }
 
     fn output(message: impl Into<String>) -> Self {
-        Self { message: message.into(), code: 1 }
+        Self {
+            message: message.into(),
+            code: 1,
+        }
     }
 
     /// The files are written, but the result misses a guarantee of its method: the misses, for
     /// stderr.
     fn missed(report: &Report) -> Self {
         Self {
-            message: format!("the result misses its guarantees: {}", report.failure_text()),
+            message: format!(
+                "the result misses its guarantees: {}",
+                report.failure_text()
+            ),
             code: spherical_faces::guarantees::MISSED_GUARANTEES_EXIT_CODE,
         }
     }
@@ -222,7 +234,13 @@ pub fn main() -> ExitCode {
                 .filter(|l| !l.is_empty() && !l.starts_with("tip:"))
                 .collect();
             let message = message.join(" ");
-            return fail(json, &Failure::input(format!("{} (see --help)", message.trim_start_matches("error: "))));
+            return fail(
+                json,
+                &Failure::input(format!(
+                    "{} (see --help)",
+                    message.trim_start_matches("error: ")
+                )),
+            );
         }
     };
     let mode = match (cli.quiet, std::io::stderr().is_terminal()) {
@@ -232,17 +250,49 @@ pub fn main() -> ExitCode {
     };
     let mut progress = ProgressLine::new(mode);
     let result = match cli.command {
-        Command::Info { input, list_objects } => info(&input, list_objects),
-        Command::St { input, epsilon, faces, variant, output } => {
+        Command::Info {
+            input,
+            list_objects,
+        } => info(&input, list_objects),
+        Command::St {
+            input,
+            epsilon,
+            faces,
+            variant,
+            output,
+        } => {
             let sizing = match faces {
                 Some(n) => Sizing::UniformFaces(n),
-                None => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
+                None => Sizing::Adaptive {
+                    epsilon: epsilon.unwrap_or(DEFAULT_EPSILON),
+                },
             };
-            st(&input, StAdaptedParams { sizing, variant, ..StAdaptedParams::default() }, &output, &mut progress)
+            st(
+                &input,
+                StAdaptedParams {
+                    sizing,
+                    variant,
+                    ..StAdaptedParams::default()
+                },
+                &output,
+                &mut progress,
+            )
         }
-        Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, output } => {
+        Command::StSupport {
+            input,
+            optimize_radius,
+            depth,
+            axis_length,
+            radius_tolerance,
+            adaptive,
+            epsilon,
+            faces,
+            output,
+        } => {
             let remesh = match (adaptive, faces) {
-                (true, _) => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
+                (true, _) => Sizing::Adaptive {
+                    epsilon: epsilon.unwrap_or(DEFAULT_EPSILON),
+                },
                 (false, Some(n)) => Sizing::UniformFaces(n),
                 (false, None) => Sizing::None,
             };
@@ -256,7 +306,18 @@ pub fn main() -> ExitCode {
             };
             st_support(&input, params, &output, &mut progress)
         }
-        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, output } => {
+        Command::Sq {
+            input,
+            theta,
+            alpha,
+            grid,
+            rs,
+            faces,
+            until,
+            start,
+            depth,
+            output,
+        } => {
             let params = SqParams {
                 theta_deg: theta,
                 alpha_deg: alpha,
@@ -285,7 +346,10 @@ pub fn main() -> ExitCode {
 fn fail(json: bool, f: &Failure) -> ExitCode {
     let message = printable(&f.message);
     if json {
-        eprintln!("{}", serde_json::json!({ "error": message, "exit_code": f.code }));
+        eprintln!(
+            "{}",
+            serde_json::json!({ "error": message, "exit_code": f.code })
+        );
     } else {
         eprintln!("error: {message}");
     }
@@ -313,17 +377,26 @@ struct ProgressLine {
 
 impl ProgressLine {
     fn new(mode: ProgressMode) -> Self {
-        Self { mode, started: std::time::Instant::now(), last: None, drawn: false }
+        Self {
+            mode,
+            started: std::time::Instant::now(),
+            last: None,
+            drawn: false,
+        }
     }
 
     fn show(&mut self, p: &Progress) {
-        let since = |t: Option<std::time::Instant>| t.map_or(u128::MAX, |t| t.elapsed().as_millis());
+        let since =
+            |t: Option<std::time::Instant>| t.map_or(u128::MAX, |t| t.elapsed().as_millis());
         match self.mode {
             ProgressMode::Off => return,
             ProgressMode::JsonLines => {
                 if self.started.elapsed().as_millis() >= 1000 && since(self.last) >= 1000 {
                     self.last = Some(std::time::Instant::now());
-                    eprintln!("{}", serde_json::json!({ "progress": { "step": p.step, "done": p.done, "total": p.total } }));
+                    eprintln!(
+                        "{}",
+                        serde_json::json!({ "progress": { "step": p.step, "done": p.done, "total": p.total } })
+                    );
                 }
                 return;
             }
@@ -331,7 +404,11 @@ impl ProgressLine {
             ProgressMode::Line => {}
         }
         self.last = Some(std::time::Instant::now());
-        let text = if p.total > 0 { format!("{} {}/{}", p.step, p.done, p.total) } else { p.step.to_string() };
+        let text = if p.total > 0 {
+            format!("{} {}/{}", p.step, p.done, p.total)
+        } else {
+            p.step.to_string()
+        };
         eprint!("\r{text:<60}");
         let _ = std::io::stderr().flush();
         self.drawn = true;
@@ -351,11 +428,16 @@ fn load(input: &Input) -> Result<Loaded, Failure> {
     if let Some(key) = path.strip_prefix("sample:") {
         let sample = Sample::from_key(key).ok_or_else(|| {
             let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-            Failure::input(format!("sample:{key}: no such sample (samples: {})", names.join(", ")))
+            Failure::input(format!(
+                "sample:{key}: no such sample (samples: {})",
+                names.join(", ")
+            ))
         })?;
         return Ok(Loaded::from_sample(sample));
     }
-    let name = Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
+    let name = Path::new(path)
+        .file_name()
+        .map_or(path.into(), |n| n.to_string_lossy().into_owned());
     if rhino::is_3dm(path) {
         let (text, object_name) = rhino::convert(path, input.object)?;
         let name = format!("{name} ({object_name})");
@@ -372,12 +454,19 @@ fn load(input: &Input) -> Result<Loaded, Failure> {
 fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
     let file = std::fs::File::open(path).map_err(|e| Failure::input(format!("{path}: {e}")))?;
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let too_large = |n: u64| Failure::input(format!("{path}: {n} bytes exceed the limit of {MAX_BYTES} ({} MiB)", MAX_BYTES >> 20));
+    let too_large = |n: u64| {
+        Failure::input(format!(
+            "{path}: {n} bytes exceed the limit of {MAX_BYTES} ({} MiB)",
+            MAX_BYTES >> 20
+        ))
+    };
     if len > MAX_BYTES as u64 {
         return Err(too_large(len));
     }
     let mut bytes = Vec::with_capacity(len as usize);
-    file.take(MAX_BYTES as u64 + 1).read_to_end(&mut bytes).map_err(|e| Failure::input(format!("{path}: {e}")))?;
+    file.take(MAX_BYTES as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Failure::input(format!("{path}: {e}")))?;
     if bytes.len() > MAX_BYTES {
         return Err(too_large(bytes.len() as u64));
     }
@@ -387,7 +476,8 @@ fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
 /// Creates `dir` and proves it writable before any work, so a bad `--out` loses nothing.
 fn check_output(output: &Output) -> Result<(), Failure> {
     let dir = &output.out;
-    let bad = |e: std::io::Error| Failure::output(format!("{}: cannot write there: {e}", dir.display()));
+    let bad =
+        |e: std::io::Error| Failure::output(format!("{}: cannot write there: {e}", dir.display()));
     std::fs::create_dir_all(dir).map_err(bad)?;
     let probe = dir.join(".spherical-faces-write-test");
     std::fs::write(&probe, b"").map_err(bad)?;
@@ -399,7 +489,8 @@ fn check_output(output: &Output) -> Result<(), Failure> {
 fn write_files(output: &Output, files: &[ExportFile], report: &Report) -> Result<(), Failure> {
     for f in files {
         let path = output.out.join(&f.name);
-        std::fs::write(&path, &f.bytes).map_err(|e| Failure::output(format!("{}: {e}", path.display())))?;
+        std::fs::write(&path, &f.bytes)
+            .map_err(|e| Failure::output(format!("{}: {e}", path.display())))?;
     }
     for w in &report.warnings {
         eprintln!("warning: {}", printable(w));
@@ -412,7 +503,12 @@ fn reference(input: &Input) -> Result<Reference, Failure> {
 }
 
 /// `st-support SURFACE [options] --out DIR`.
-fn st_support(input: &Input, params: StSupportParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn st_support(
+    input: &Input,
+    params: StSupportParams,
+    output: &Output,
+    progress: &mut ProgressLine,
+) -> Result<String, Failure> {
     check_output(output)?;
     let clock = Clock::native();
     let t0 = clock.now();
@@ -423,12 +519,17 @@ fn st_support(input: &Input, params: StSupportParams, output: &Output, progress:
         progress.show(&p);
         Ok(())
     };
-    reference.curvature(&params.jet, &mut on_progress).map_err(|_| Failure::input("cancelled"))?;
+    reference
+        .curvature(&params.jet, &mut on_progress)
+        .map_err(|_| Failure::input("cancelled"))?;
     let curvature_ms = clock.now() - t1;
-    let mut result = spherical_faces::st_support::compute(&reference, &params, clock, &mut on_progress)
-        .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
+    let mut result =
+        spherical_faces::st_support::compute(&reference, &params, clock, &mut on_progress)
+            .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
     // The report's timings include reading and curvature, which the CLI did itself.
-    result.timings_ms.insert(0, ("curvature".into(), curvature_ms));
+    result
+        .timings_ms
+        .insert(0, ("curvature".into(), curvature_ms));
     result.timings_ms.insert(0, ("import".into(), import_ms));
     let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
     progress.clear();
@@ -443,13 +544,20 @@ fn st_support(input: &Input, params: StSupportParams, output: &Output, progress:
 }
 
 /// `st SURFACE [--epsilon E | --faces N] [--variant a|b] --out DIR`.
-fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn st(
+    input: &Input,
+    params: StAdaptedParams,
+    output: &Output,
+    progress: &mut ProgressLine,
+) -> Result<String, Failure> {
     check_output(output)?;
     let reference = reference(input)?;
     let clock = Clock::native();
     let result = spherical_faces::st_adapted::compute(&reference, &params, clock, &mut |e| {
         match e {
-            StAdaptedEvent::Progress(p) | StAdaptedEvent::Iteration { progress: p, .. } => progress.show(&p),
+            StAdaptedEvent::Progress(p) | StAdaptedEvent::Iteration { progress: p, .. } => {
+                progress.show(&p)
+            }
             _ => {}
         }
         Ok(())
@@ -481,7 +589,12 @@ fn verdict(summary: String, report: &Report) -> Result<String, Failure> {
 }
 
 /// `sq SURFACE [options] --out DIR`.
-fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn sq(
+    input: &Input,
+    params: SqParams,
+    output: &Output,
+    progress: &mut ProgressLine,
+) -> Result<String, Failure> {
     check_output(output)?;
     let reference = reference(input)?;
     let clock = Clock::native();
@@ -554,7 +667,10 @@ fn info(input: &Input, list_objects: bool) -> Result<String, Failure> {
         return rhino::list(&input.surface);
     }
     let loaded = load(input)?;
-    let field = loaded.surface.curvature(&JetParams::default(), &mut |_| Ok(())).map_err(|_| Failure::input("cancelled"))?;
+    let field = loaded
+        .surface
+        .curvature(&JetParams::default(), &mut |_| Ok(()))
+        .map_err(|_| Failure::input("cancelled"))?;
     let s = &loaded.info.stats;
     let c = &field.summary;
     let mut json = serde_json::json!({
@@ -588,7 +704,8 @@ mod rhino {
 
     /// The converter script: `SF_RHINO3DM_CLI`, else the one in this source tree.
     fn script() -> String {
-        std::env::var("SF_RHINO3DM_CLI").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/www/rhino3dm/cli.mjs").into())
+        std::env::var("SF_RHINO3DM_CLI")
+            .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/www/rhino3dm/cli.mjs").into())
     }
 
     pub fn is_3dm(path: &str) -> bool {
@@ -605,11 +722,22 @@ mod rhino {
     }
 
     fn node(args: &[&str]) -> Result<Vec<u8>, Failure> {
-        let out = Command::new("node").arg(script()).args(args).output().map_err(|e| Failure::input(format!("node: {e}; {}", how_to())))?;
+        let out = Command::new("node")
+            .arg(script())
+            .args(args)
+            .output()
+            .map_err(|e| Failure::input(format!("node: {e}; {}", how_to())))?;
         if !out.status.success() {
             let err = String::from_utf8_lossy(&out.stderr);
-            let first = err.lines().find(|l| !l.trim().is_empty()).unwrap_or("the converter failed");
-            let hint = if first.contains("npm ci") || first.contains("Cannot find") { format!(" ({})", how_to()) } else { String::new() };
+            let first = err
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("the converter failed");
+            let hint = if first.contains("npm ci") || first.contains("Cannot find") {
+                format!(" ({})", how_to())
+            } else {
+                String::new()
+            };
             return Err(Failure::input(format!("{first}{hint}")));
         }
         Ok(out.stdout)
@@ -624,12 +752,20 @@ mod rhino {
     /// The chosen object as our B-spline JSON or OBJ text, and its description.
     pub fn convert(path: &str, object: Option<usize>) -> Result<(String, String), Failure> {
         let listing = list(path)?;
-        let objects: Vec<serde_json::Value> = listing.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
+        let objects: Vec<serde_json::Value> = listing
+            .lines()
+            .filter_map(|l| serde_json::from_str(l).ok())
+            .collect();
         let pick = match object {
             Some(k) => objects
                 .iter()
                 .find(|o| o["index"].as_u64() == Some(k as u64))
-                .ok_or_else(|| Failure::input(format!("{path}: no object {k} (objects: {})", summary(&objects))))?,
+                .ok_or_else(|| {
+                    Failure::input(format!(
+                        "{path}: no object {k} (objects: {})",
+                        summary(&objects)
+                    ))
+                })?,
             None => objects
                 .iter()
                 .find(|o| o["kind"] == "surface")
@@ -640,15 +776,28 @@ mod rhino {
         if object.is_none() && objects.len() > 1 {
             eprintln!("note: {path} holds {} objects ({}); using object {index}, pick another with --object K", objects.len(), summary(&objects));
         }
-        let text = String::from_utf8(node(&[path, "--object", &index])?).map_err(|e| Failure::input(format!("{path}: {e}")))?;
-        let name = pick["name"].as_str().filter(|n| !n.is_empty()).map_or(format!("object {index}"), str::to_string);
+        let text = String::from_utf8(node(&[path, "--object", &index])?)
+            .map_err(|e| Failure::input(format!("{path}: {e}")))?;
+        let name = pick["name"]
+            .as_str()
+            .filter(|n| !n.is_empty())
+            .map_or(format!("object {index}"), str::to_string);
         Ok((text, name))
     }
 
     fn summary(objects: &[serde_json::Value]) -> String {
         objects
             .iter()
-            .map(|o| format!("{}: {} {}", o["index"], o["kind"].as_str().unwrap_or("?"), o["name"].as_str().unwrap_or("")).trim_end().to_string())
+            .map(|o| {
+                format!(
+                    "{}: {} {}",
+                    o["index"],
+                    o["kind"].as_str().unwrap_or("?"),
+                    o["name"].as_str().unwrap_or("")
+                )
+                .trim_end()
+                .to_string()
+            })
             .collect::<Vec<_>>()
             .join(", ")
     }
@@ -657,30 +806,51 @@ mod rhino {
 // --- value parsers: every count and number the user types is checked here ------------------------
 
 fn number(s: &str) -> Result<f64, String> {
-    s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("'{s}' is not a number"))
+    s.parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| format!("'{s}' is not a number"))
 }
 
 /// A number in [LO, HI].
 fn fraction_in<const LO: u32, const HI: u32>(s: &str) -> Result<f64, String> {
     let x = number(s)?;
-    if (LO as f64..=HI as f64).contains(&x) { Ok(x) } else { Err(format!("{x} is not in [{LO}, {HI}]")) }
+    if (LO as f64..=HI as f64).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} is not in [{LO}, {HI}]"))
+    }
 }
 
 /// ε: a number in (0, 1).
 fn open_fraction(s: &str) -> Result<f64, String> {
     let x = number(s)?;
-    if x > 0.0 && x < 1.0 { Ok(x) } else { Err(format!("{x} is not in (0, 1)")) }
+    if x > 0.0 && x < 1.0 {
+        Ok(x)
+    } else {
+        Err(format!("{x} is not in (0, 1)"))
+    }
 }
 
 fn radius_tolerance(s: &str) -> Result<f64, String> {
     let x = number(s)?;
-    if (1e-9..=1.0).contains(&x) { Ok(x) } else { Err(format!("{x} is not in [1e-9, 1]")) }
+    if (1e-9..=1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} is not in [1e-9, 1]"))
+    }
 }
 
 /// A remesh's face count: [`MIN_FACES`] to [`MAX_FACES`], as in the design link and the app.
 fn face_count(s: &str) -> Result<usize, String> {
-    let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
-    if (MIN_FACES..=MAX_FACES).contains(&n) { Ok(n) } else { Err(format!("{n} is not in [{MIN_FACES}, {MAX_FACES}]")) }
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("'{s}' is not a whole number"))?;
+    if (MIN_FACES..=MAX_FACES).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("{n} is not in [{MIN_FACES}, {MAX_FACES}]"))
+    }
 }
 
 fn variant(s: &str) -> Result<EdgeArcs, String> {
@@ -704,7 +874,11 @@ const FACES: u8 = 4;
 fn range_f64<const R: u8>(s: &str) -> Result<f64, String> {
     let (lo, hi) = if R == THETA { THETA_RANGE } else { ALPHA_RANGE };
     let x = number(s)?;
-    if (lo..=hi).contains(&x) { Ok(x) } else { Err(format!("{x} is not in [{lo}, {hi}]")) }
+    if (lo..=hi).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} is not in [{lo}, {hi}]"))
+    }
 }
 
 fn range_usize<const R: u8>(s: &str) -> Result<usize, String> {
@@ -713,10 +887,14 @@ fn range_usize<const R: u8>(s: &str) -> Result<usize, String> {
         RECOMPUTE => RECOMPUTE_RANGE,
         _ => FACES_RANGE,
     };
-    let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("'{s}' is not a whole number"))?;
     match (lo..=hi).contains(&n) {
         true => Ok(n),
-        false if R == FACES && n > hi => Err(format!("{n} is more quads than SQ finishes within a minute and 1 GB; at most {hi}")),
+        false if R == FACES && n > hi => Err(format!(
+            "{n} is more quads than SQ finishes within a minute and 1 GB; at most {hi}"
+        )),
         false => Err(format!("{n} is not in [{lo}, {hi}]")),
     }
 }

@@ -7,7 +7,10 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use crate::samples::Sample;
-use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use crate::sq::params::{
+    RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE,
+    THETA_RANGE,
+};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
@@ -25,8 +28,14 @@ pub enum ColorBy {
 }
 
 impl ColorBy {
-    pub const ALL: [ColorBy; 6] =
-        [ColorBy::MeanCurvature, ColorBy::K1, ColorBy::K2, ColorBy::K1MinusK2, ColorBy::Sizing, ColorBy::None];
+    pub const ALL: [ColorBy; 6] = [
+        ColorBy::MeanCurvature,
+        ColorBy::K1,
+        ColorBy::K2,
+        ColorBy::K1MinusK2,
+        ColorBy::Sizing,
+        ColorBy::None,
+    ];
 
     pub fn key(self) -> &'static str {
         match self {
@@ -93,7 +102,12 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 4] = [Method::Curvature, Method::StAdapted, Method::StSupport, Method::Sq];
+    pub const ALL: [Method; 4] = [
+        Method::Curvature,
+        Method::StAdapted,
+        Method::StSupport,
+        Method::Sq,
+    ];
 
     /// The link key (`method=…`).
     pub fn key(self) -> &'static str {
@@ -241,7 +255,10 @@ impl Design {
             Reference::OwnFile(name) => s += &format!("&sample=file&file={}", percent_encode(name)),
         }
         s += &format!("&method={}", self.method.key());
-        s += &format!("&jet_degree={}&jet_rings={}", self.jet.degree, self.jet.max_rings);
+        s += &format!(
+            "&jet_degree={}&jet_rings={}",
+            self.jet.degree, self.jet.max_rings
+        );
         match self.method {
             Method::Curvature => {}
             Method::StAdapted => {
@@ -276,7 +293,12 @@ impl Design {
                 }
             }
         }
-        s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
+        s += &format!(
+            "&color={}&shading={}&edges={}",
+            self.color.key(),
+            self.shading.key(),
+            self.edges as u8
+        );
         if let Some(c) = self.camera {
             s += &format!(
                 "&cam={},{},{},{},{},{}",
@@ -297,8 +319,14 @@ impl Design {
         let mut stages = vec![StageRequest::Curvature(self.jet.clone())];
         match self.method {
             Method::Curvature => {}
-            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams { jet: self.jet.clone(), ..self.st_adapted.clone() })),
-            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams { jet: self.jet.clone(), ..self.st_support.clone() })),
+            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams {
+                jet: self.jet.clone(),
+                ..self.st_adapted.clone()
+            })),
+            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams {
+                jet: self.jet.clone(),
+                ..self.st_support.clone()
+            })),
             Method::Sq => stages.push(StageRequest::Sq(self.sq.clone())),
         }
         stages
@@ -320,9 +348,16 @@ impl Design {
                 (percent_decode(k), percent_decode(v))
             })
             .collect();
-        match pairs.iter().find(|(k, _)| k == "v").map(|(_, v)| v.as_str()) {
+        match pairs
+            .iter()
+            .find(|(k, _)| k == "v")
+            .map(|(_, v)| v.as_str())
+        {
             Some("1") => {}
-            Some(other) => notices.push(format!("design link version '{}' is not supported; read as version 1", clip(other))),
+            Some(other) => notices.push(format!(
+                "design link version '{}' is not supported; read as version 1",
+                clip(other)
+            )),
             None => notices.push("design link has no version (v=1); read as version 1".into()),
         }
         let mut file_name = None;
@@ -343,18 +378,26 @@ impl Design {
                     }
                     None => {
                         let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-                        notices.push(format!("ignored unknown sample '{}' (samples: {})", clip(v), names.join(", ")));
+                        notices.push(format!(
+                            "ignored unknown sample '{}' (samples: {})",
+                            clip(v),
+                            names.join(", ")
+                        ));
                         continue;
                     }
                 },
                 // An empty name is no name: the design then asks for "your file".
-                "file" => !v.is_empty() && {
-                    file_name = Some(clip(v));
-                    true
-                },
+                "file" => {
+                    !v.is_empty() && {
+                        file_name = Some(clip(v));
+                        true
+                    }
+                }
                 "method" => Method::from_key(v).map(|m| d.method = m).is_some(),
                 "jet_degree" => parse_in(v, 2, 4).map(|x| d.jet.degree = x as u8).is_some(),
-                "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
+                "jet_rings" => parse_in(v, 1, 8)
+                    .map(|x| d.jet.max_rings = x as usize)
+                    .is_some(),
                 "opt_r" => match v.as_str() {
                     "0" | "1" => {
                         d.st_support.optimize_radius = v == "1";
@@ -362,21 +405,43 @@ impl Design {
                     }
                     _ => false,
                 },
-                "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st_support.support_depth = x).is_some(),
-                "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st_support.axis_length = x).is_some(),
-                "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st_support.radius_tolerance = x).is_some(),
-                "remesh" => SizingKind::from_key(v).map(|k| support_remesh = Some(k)).is_some(),
-                "sizing" => SizingKind::from_key(v).map(|k| adapted_sizing = Some(k)).is_some(),
+                "depth" => parse_f64_in(v, 0.0, 1.0)
+                    .map(|x| d.st_support.support_depth = x)
+                    .is_some(),
+                "axis" => parse_f64_in(v, 0.0, 10.0)
+                    .map(|x| d.st_support.axis_length = x)
+                    .is_some(),
+                "rtol" => parse_f64_in(v, 1e-9, 1.0)
+                    .map(|x| d.st_support.radius_tolerance = x)
+                    .is_some(),
+                "remesh" => SizingKind::from_key(v)
+                    .map(|k| support_remesh = Some(k))
+                    .is_some(),
+                "sizing" => SizingKind::from_key(v)
+                    .map(|k| adapted_sizing = Some(k))
+                    .is_some(),
                 // ε and N belong to the method the link names (applied below).
                 "eps" => parse_f64_in(v, 1e-7, 0.1).map(|x| eps = Some(x)).is_some(),
-                "faces" => parse_in(v, MIN_FACES as i64, MAX_FACES as i64).map(|x| faces = Some(x as usize)).is_some(),
-                "theta" => parse_f64_in(v, THETA_RANGE.0, THETA_RANGE.1).map(|x| d.sq.theta_deg = x).is_some(),
-                "alpha" => parse_f64_in(v, ALPHA_RANGE.0, ALPHA_RANGE.1).map(|x| d.sq.alpha_deg = x).is_some(),
-                "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64).map(|x| d.sq.grid = x as usize).is_some(),
-                "rs" => parse_in(v, RECOMPUTE_RANGE.0 as i64, RECOMPUTE_RANGE.1 as i64).map(|x| d.sq.recompute_every = x as usize).is_some(),
+                "faces" => parse_in(v, MIN_FACES as i64, MAX_FACES as i64)
+                    .map(|x| faces = Some(x as usize))
+                    .is_some(),
+                "theta" => parse_f64_in(v, THETA_RANGE.0, THETA_RANGE.1)
+                    .map(|x| d.sq.theta_deg = x)
+                    .is_some(),
+                "alpha" => parse_f64_in(v, ALPHA_RANGE.0, ALPHA_RANGE.1)
+                    .map(|x| d.sq.alpha_deg = x)
+                    .is_some(),
+                "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64)
+                    .map(|x| d.sq.grid = x as usize)
+                    .is_some(),
+                "rs" => parse_in(v, RECOMPUTE_RANGE.0 as i64, RECOMPUTE_RANGE.1 as i64)
+                    .map(|x| d.sq.recompute_every = x as usize)
+                    .is_some(),
                 "until" => Until::from_key(v).map(|u| d.sq.until = u).is_some(),
                 "start" => RadiusStart::from_key(v).map(|r| d.sq.start = r).is_some(),
-                "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
+                "variant" => EdgeArcs::from_key(v)
+                    .map(|x| d.st_adapted.variant = x)
+                    .is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
                 "edges" => match v.as_str() {
@@ -393,7 +458,11 @@ impl Design {
                 }
             };
             if !ok {
-                notices.push(format!("ignored invalid value for '{}': '{}'", clip(k), clip(v)));
+                notices.push(format!(
+                    "ignored invalid value for '{}': '{}'",
+                    clip(k),
+                    clip(v)
+                ));
             }
         }
         // A sizing kind takes ε and N from the link when it names the method they belong to.
@@ -422,14 +491,19 @@ impl Design {
             if (FACES_RANGE.0..=FACES_RANGE.1).contains(&n) {
                 d.sq.faces = n;
             } else {
-                notices.push(format!("ignored invalid value for 'faces': '{n}' (SQ takes {} to {})", FACES_RANGE.0, FACES_RANGE.1));
+                notices.push(format!(
+                    "ignored invalid value for 'faces': '{n}' (SQ takes {} to {})",
+                    FACES_RANGE.0, FACES_RANGE.1
+                ));
             }
         }
         d.st_adapted.jet = d.jet.clone();
         d.st_support.jet = d.jet.clone();
         if wants_file {
             let name = file_name.unwrap_or_else(|| "your file".into());
-            notices.push(format!("this design uses the file '{name}': drop it on the viewport to continue"));
+            notices.push(format!(
+                "this design uses the file '{name}': drop it on the viewport to continue"
+            ));
             d.reference = Reference::OwnFile(name);
         }
         (d, notices)
@@ -441,15 +515,26 @@ fn parse_in(v: &str, lo: i64, hi: i64) -> Option<i64> {
 }
 
 fn parse_f64_in(v: &str, lo: f64, hi: f64) -> Option<f64> {
-    v.parse::<f64>().ok().filter(|x| x.is_finite() && (lo..=hi).contains(x))
+    v.parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && (lo..=hi).contains(x))
 }
 
 fn parse_camera(v: &str) -> Option<CameraState> {
-    let n: Vec<f64> = v.split(',').map(|x| x.parse::<f64>()).collect::<Result<_, _>>().ok()?;
+    let n: Vec<f64> = v
+        .split(',')
+        .map(|x| x.parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()?;
     if n.len() != 6 || n.iter().any(|x| !x.is_finite()) || n[2] <= 0.0 {
         return None;
     }
-    Some(CameraState { yaw: n[0], pitch: n[1].clamp(-1.55, 1.55), distance: n[2], target: [n[3], n[4], n[5]] })
+    Some(CameraState {
+        yaw: n[0],
+        pitch: n[1].clamp(-1.55, 1.55),
+        distance: n[2],
+        target: [n[3], n[4], n[5]],
+    })
 }
 
 /// A parameter exactly: the shorter of the plain and the exponent form of the shortest
@@ -459,7 +544,11 @@ fn fmt_num(x: f64) -> String {
         return "0".into();
     }
     let (plain, exp) = (format!("{x}"), format!("{x:e}"));
-    if exp.len() < plain.len() { exp } else { plain }
+    if exp.len() < plain.len() {
+        exp
+    } else {
+        plain
+    }
 }
 
 /// A camera coordinate to six significant digits: short, and a fixed point of reading and

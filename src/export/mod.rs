@@ -26,13 +26,30 @@ pub struct ExportFile {
 
 /// The files every panel method writes, in this order: `panels.glb`, `panels.obj`, the schedule
 /// as `panels.csv` and `panels.json`, and `report.json`.
-pub fn panel_files(glb: Vec<u8>, obj: String, schedule: &PanelSchedule, report: &Report) -> Vec<ExportFile> {
-    let file = |name: &str, mime: &str, bytes: Vec<u8>| ExportFile { name: name.into(), mime: mime.into(), bytes };
+pub fn panel_files(
+    glb: Vec<u8>,
+    obj: String,
+    schedule: &PanelSchedule,
+    report: &Report,
+) -> Vec<ExportFile> {
+    let file = |name: &str, mime: &str, bytes: Vec<u8>| ExportFile {
+        name: name.into(),
+        mime: mime.into(),
+        bytes,
+    };
     vec![
         file("panels.glb", "model/gltf-binary", glb),
         file("panels.obj", "text/plain", obj.into_bytes()),
         file("panels.csv", "text/csv", schedule.to_csv().into_bytes()),
-        file("panels.json", "application/json", schedule.to_json().into_bytes()),
-        file("report.json", "application/json", report.to_json().into_bytes()),
+        file(
+            "panels.json",
+            "application/json",
+            schedule.to_json().into_bytes(),
+        ),
+        file(
+            "report.json",
+            "application/json",
+            report.to_json().into_bytes(),
+        ),
     ]
 }

@@ -55,12 +55,20 @@ pub struct AbsoluteSphereReport {
 impl From<&AbsoluteSphere> for AbsoluteSphereReport {
     fn from(o: &AbsoluteSphere) -> Self {
         match *o {
-            AbsoluteSphere::Sphere { center, r2 } => {
-                Self { center: Some(center.to_array()), r2: Some(r2), at_infinity: false, axis: None, d: None }
-            }
-            AbsoluteSphere::Plane { axis, d } => {
-                Self { center: None, r2: None, at_infinity: true, axis: Some(axis.to_array()), d: Some(d) }
-            }
+            AbsoluteSphere::Sphere { center, r2 } => Self {
+                center: Some(center.to_array()),
+                r2: Some(r2),
+                at_infinity: false,
+                axis: None,
+                d: None,
+            },
+            AbsoluteSphere::Plane { axis, d } => Self {
+                center: None,
+                r2: None,
+                at_infinity: true,
+                axis: Some(axis.to_array()),
+                d: Some(d),
+            },
         }
     }
 }
@@ -227,7 +235,10 @@ pub struct Report {
 
 impl Report {
     pub fn new(method: impl Into<String>) -> Self {
-        Self { method: method.into(), ..Self::default() }
+        Self {
+            method: method.into(),
+            ..Self::default()
+        }
     }
 
     /// The report of a panel method: the counts of its input and output, Ω if it has one, its

@@ -106,15 +106,27 @@ pub struct FieldHeader {
 
 impl Field {
     pub fn f32(name: &str, dim: u32, values: Vec<f32>) -> Self {
-        Self { name: name.into(), dim, data: FieldData::F32(values) }
+        Self {
+            name: name.into(),
+            dim,
+            data: FieldData::F32(values),
+        }
     }
 
     pub fn u32(name: &str, dim: u32, values: Vec<u32>) -> Self {
-        Self { name: name.into(), dim, data: FieldData::U32(values) }
+        Self {
+            name: name.into(),
+            dim,
+            data: FieldData::U32(values),
+        }
     }
 
     pub fn bytes(name: &str, bytes: Vec<u8>) -> Self {
-        Self { name: name.into(), dim: 1, data: FieldData::Bytes(bytes) }
+        Self {
+            name: name.into(),
+            dim: 1,
+            data: FieldData::Bytes(bytes),
+        }
     }
 
     pub fn header(&self) -> FieldHeader {
@@ -123,7 +135,12 @@ impl Field {
             FieldData::U32(v) => (FieldKind::U32, v.len()),
             FieldData::Bytes(v) => (FieldKind::U8, v.len()),
         };
-        FieldHeader { name: self.name.clone(), kind, dim: self.dim, len: len as u32 }
+        FieldHeader {
+            name: self.name.clone(),
+            kind,
+            dim: self.dim,
+            len: len as u32,
+        }
     }
 
     pub fn as_f32(&self) -> Option<&[f32]> {
@@ -162,8 +179,13 @@ impl Field {
         // In u64: on wasm32 a crafted `len` would wrap a 32-bit usize product.
         let expected = (header.len as u64).checked_mul(width);
         if expected != Some(bytes.len() as u64) {
-            let expected = expected.map_or(usize::MAX, |e| usize::try_from(e).unwrap_or(usize::MAX));
-            return Err(FieldLengthError { name: header.name.clone(), expected, got: bytes.len() });
+            let expected =
+                expected.map_or(usize::MAX, |e| usize::try_from(e).unwrap_or(usize::MAX));
+            return Err(FieldLengthError {
+                name: header.name.clone(),
+                expected,
+                got: bytes.len(),
+            });
         }
         let words = bytes.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]);
         let data = match header.kind {
@@ -171,7 +193,11 @@ impl Field {
             FieldKind::U32 => FieldData::U32(words.map(u32::from_le_bytes).collect()),
             FieldKind::U8 => FieldData::Bytes(bytes.to_vec()),
         };
-        Ok(Self { name: header.name.clone(), dim: header.dim, data })
+        Ok(Self {
+            name: header.name.clone(),
+            dim: header.dim,
+            data,
+        })
     }
 }
 
@@ -185,7 +211,11 @@ pub struct FieldLengthError {
 
 impl std::fmt::Display for FieldLengthError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "field '{}': expected {} bytes, got {}", self.name, self.expected, self.got)
+        write!(
+            f,
+            "field '{}': expected {} bytes, got {}",
+            self.name, self.expected, self.got
+        )
     }
 }
 

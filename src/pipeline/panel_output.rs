@@ -7,12 +7,14 @@ use glam::DVec3;
 use super::fields::{field, Field};
 use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{SupportElement, SupportGeometry};
-use crate::export::schedule::SupportRecord;
 use crate::export::report::{InputCounts, OutputCounts};
-use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, Metrics, Report};
+use crate::export::schedule::SupportRecord;
+use crate::export::{
+    build_schedule_with, panel_files, write_glb, write_obj, ExportFile, Metrics, Report,
+};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::TriMesh;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::progress::Clock;
@@ -20,7 +22,9 @@ use crate::reference::Reference;
 
 /// Points as f32 triples.
 pub fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
-    points.flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()
+    points
+        .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32])
+        .collect()
 }
 
 /// Positions, normals, triangles and the edges to draw (of the faces as loaded: a quad's
@@ -29,7 +33,11 @@ pub fn mesh_fields(mesh: &TriMesh, edges: &[[u32; 2]]) -> Vec<Field> {
     vec![
         Field::f32(field::POSITIONS, 3, f32s(mesh.positions.iter().copied())),
         Field::f32(field::NORMALS, 3, f32s(mesh.vertex_normals().into_iter())),
-        Field::u32(field::TRIANGLES, 3, mesh.triangles.iter().flatten().copied().collect()),
+        Field::u32(
+            field::TRIANGLES,
+            3,
+            mesh.triangles.iter().flatten().copied().collect(),
+        ),
         Field::u32(field::EDGES, 2, edges.iter().flatten().copied().collect()),
     ]
 }
@@ -43,16 +51,32 @@ pub fn triangle_mesh_fields(mesh: &TriMesh) -> Vec<Field> {
 pub fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
     let v = &c.vertices;
     vec![
-        Field::f32(field::MEAN_CURVATURE, 1, v.iter().map(|x| x.mean as f32).collect()),
+        Field::f32(
+            field::MEAN_CURVATURE,
+            1,
+            v.iter().map(|x| x.mean as f32).collect(),
+        ),
         Field::f32(field::K1, 1, v.iter().map(|x| x.k1 as f32).collect()),
         Field::f32(field::K2, 1, v.iter().map(|x| x.k2 as f32).collect()),
-        Field::f32(field::K1_MINUS_K2, 1, v.iter().map(|x| (x.k1 - x.k2).abs() as f32).collect()),
+        Field::f32(
+            field::K1_MINUS_K2,
+            1,
+            v.iter().map(|x| (x.k1 - x.k2).abs() as f32).collect(),
+        ),
         Field::f32(
             field::CENTRAL_SPHERES,
             5,
-            c.central_spheres.iter().flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c]).map(|x| x as f32).collect(),
+            c.central_spheres
+                .iter()
+                .flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c])
+                .map(|x| x as f32)
+                .collect(),
         ),
-        Field::u32(field::BOUNDARY, 1, c.boundary.iter().map(|&b| b as u32).collect()),
+        Field::u32(
+            field::BOUNDARY,
+            1,
+            c.boundary.iter().map(|&b| b as u32).collect(),
+        ),
     ]
 }
 
@@ -82,9 +106,21 @@ pub fn panel_fields(panels: &[Panel]) -> Vec<Field> {
 /// The support strips and the node axes (segments) as display fields.
 pub fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec<Field> {
     vec![
-        Field::f32(field::SUPPORT_POSITIONS, 3, f32s(support.positions.iter().copied())),
-        Field::u32(field::SUPPORT_TRIANGLES, 3, support.triangles.iter().flatten().copied().collect()),
-        Field::f32(field::AXES_POSITIONS, 3, f32s(axes.iter().flat_map(|&(a, b)| [a, b]))),
+        Field::f32(
+            field::SUPPORT_POSITIONS,
+            3,
+            f32s(support.positions.iter().copied()),
+        ),
+        Field::u32(
+            field::SUPPORT_TRIANGLES,
+            3,
+            support.triangles.iter().flatten().copied().collect(),
+        ),
+        Field::f32(
+            field::AXES_POSITIONS,
+            3,
+            f32s(axes.iter().flat_map(|&(a, b)| [a, b])),
+        ),
         Field::u32(field::AXES_LINES, 2, (0..2 * axes.len() as u32).collect()),
     ]
 }
@@ -149,12 +185,18 @@ impl<'a> PanelExport<'a> {
 
     /// The verdict the report carries ([`crate::guarantees`]).
     pub fn with_verdict(self, verdict: &'a Verdict) -> Self {
-        Self { verdict: Some(verdict), ..self }
+        Self {
+            verdict: Some(verdict),
+            ..self
+        }
     }
 
     /// The warnings the report carries (the failed assumptions of the reference).
     pub fn with_warnings(self, warnings: &[impl ToString]) -> Self {
-        Self { warnings: warnings.iter().map(ToString::to_string).collect(), ..self }
+        Self {
+            warnings: warnings.iter().map(ToString::to_string).collect(),
+            ..self
+        }
     }
 
     pub fn with_extras(self, extras: serde_json::Value) -> Self {
@@ -162,28 +204,56 @@ impl<'a> PanelExport<'a> {
     }
 
     /// The support structure (its strips and elements) and the node axes.
-    pub fn with_support(self, support: &'a SupportGeometry, elements: &'a [SupportElement], node_axes: &'a [(DVec3, DVec3)]) -> Self {
-        Self { support: Some(support), support_elements: Some(elements), node_axes: Some(node_axes), ..self }
+    pub fn with_support(
+        self,
+        support: &'a SupportGeometry,
+        elements: &'a [SupportElement],
+        node_axes: &'a [(DVec3, DVec3)],
+    ) -> Self {
+        Self {
+            support: Some(support),
+            support_elements: Some(elements),
+            node_axes: Some(node_axes),
+            ..self
+        }
     }
 
     /// Each panel's [`crate::panels::deviation::max_deviation`] from the reference, measured by
     /// the method: the schedule takes them instead of measuring again.
     pub fn with_deviations(self, deviations: &'a [f64]) -> Self {
-        Self { deviations: Some(deviations), ..self }
+        Self {
+            deviations: Some(deviations),
+            ..self
+        }
     }
 
     /// The Ω the node axes pass through (Sec. 4).
     pub fn with_absolute_sphere(self, omega: &'a AbsoluteSphere) -> Self {
-        Self { absolute_sphere: Some(omega), ..self }
+        Self {
+            absolute_sphere: Some(omega),
+            ..self
+        }
     }
 }
 
 /// The report and the files of a panel method: `panels.glb`, `panels.obj`, the schedule as
 /// `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `report.json`.
-pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
+pub fn export_panels(
+    reference: &Reference,
+    e: PanelExport,
+    clock: Clock,
+) -> (Report, Vec<ExportFile>) {
     let t0 = clock.now();
-    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations);
-    schedule.support_elements = e.support_elements.map(SupportRecord::of).unwrap_or_default();
+    let mut schedule = build_schedule_with(
+        e.panels,
+        reference,
+        e.radius_tolerance * e.diag,
+        e.deviations,
+    );
+    schedule.support_elements = e
+        .support_elements
+        .map(SupportRecord::of)
+        .unwrap_or_default();
     let mut extras = e.extras;
     extras["method"] = e.method.into();
     let glb = write_glb(e.panels, e.support, e.node_axes, extras);
@@ -197,8 +267,15 @@ pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Re
     let output = &e.sphere_mesh.mesh;
     let mut report = Report::for_panels(
         e.method,
-        InputCounts { vertices: mesh.vertex_count(), faces: mesh.face_count() },
-        OutputCounts { vertices: output.vertex_count(), faces: output.face_count(), panels: e.panels.len() },
+        InputCounts {
+            vertices: mesh.vertex_count(),
+            faces: mesh.face_count(),
+        },
+        OutputCounts {
+            vertices: output.vertex_count(),
+            faces: output.face_count(),
+            panels: e.panels.len(),
+        },
         e.absolute_sphere,
         metrics,
         e.timings,
@@ -211,7 +288,14 @@ pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Re
     let mut files = panel_files(glb, obj, &schedule, &report);
     if !schedule.support_elements.is_empty() {
         let csv = SupportRecord::to_csv(&schedule.support_elements);
-        files.insert(4, ExportFile { name: "support.csv".into(), mime: "text/csv".into(), bytes: csv.into_bytes() });
+        files.insert(
+            4,
+            ExportFile {
+                name: "support.csv".into(),
+                mime: "text/csv".into(),
+                bytes: csv.into_bytes(),
+            },
+        );
     }
     (report, files)
 }

@@ -10,11 +10,11 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::fields::{Field, FieldHeader, FieldLengthError, StageProgress};
-use crate::reference::bspline::BSplineInfo;
 use super::stages::{curvature, sq, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::geometry::mesh::topology::MeshStats;
 use crate::import::Format;
+use crate::reference::bspline::BSplineInfo;
 use crate::samples::Sample;
 use crate::sq::params::SqParams;
 use crate::st_adapted::params::StAdaptedParams;
@@ -68,7 +68,9 @@ impl StageRequest {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum ToWorker {
     LoadSample(Sample),
-    LoadFile { name: String },
+    LoadFile {
+        name: String,
+    },
     /// Loads another object of the multi-object file loaded last.
     PickObject(usize),
     Run(Box<StageRequest>),
@@ -123,11 +125,25 @@ pub enum FromWorker {
     Loaded(ReferenceInfo),
     Progress(StageProgress),
     /// A snapshot: the stage's geometry and per-vertex data as fields.
-    Snapshot { stage: String, iteration: u32, fields: Vec<FieldHeader> },
+    Snapshot {
+        stage: String,
+        iteration: u32,
+        fields: Vec<FieldHeader>,
+    },
     /// Files for download (fields of raw bytes named by file name), with their MIME types.
-    Files { stage: String, fields: Vec<FieldHeader>, mime: Vec<String> },
-    Finished { stage: String, result: StageResult, elapsed_ms: f64 },
-    Cancelled { stage: String },
+    Files {
+        stage: String,
+        fields: Vec<FieldHeader>,
+        mime: Vec<String>,
+    },
+    Finished {
+        stage: String,
+        result: StageResult,
+        elapsed_ms: f64,
+    },
+    Cancelled {
+        stage: String,
+    },
     /// An error a user can act on. The previous design stays loaded. `remesh_to`: the method
     /// refused its input's size and asks for a remesh to about this many faces first.
     Error {
@@ -158,7 +174,10 @@ pub enum ProtocolError {
     /// The JSON header is not a message.
     Json(String),
     /// A snapshot lists another number of fields than it carries buffers.
-    FieldCount { listed: usize, carried: usize },
+    FieldCount {
+        listed: usize,
+        carried: usize,
+    },
     Field(FieldLengthError),
 }
 
@@ -167,7 +186,10 @@ impl fmt::Display for ProtocolError {
         match self {
             ProtocolError::Json(e) => write!(f, "bad message: {e}"),
             ProtocolError::FieldCount { listed, carried } => {
-                write!(f, "snapshot lists {listed} fields but carries {carried} buffers")
+                write!(
+                    f,
+                    "snapshot lists {listed} fields but carries {carried} buffers"
+                )
             }
             ProtocolError::Field(e) => e.fmt(f),
         }
@@ -178,11 +200,21 @@ impl std::error::Error for ProtocolError {}
 
 /// Decodes a message from the worker; snapshot fields are rebuilt from the bodies.
 pub fn decode_from_worker(env: &Envelope) -> Result<(FromWorker, Vec<Field>), ProtocolError> {
-    let msg: FromWorker = serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
+    let msg: FromWorker =
+        serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
     let mut fields = Vec::new();
-    if let FromWorker::Snapshot { fields: headers, .. } | FromWorker::Files { fields: headers, .. } = &msg {
+    if let FromWorker::Snapshot {
+        fields: headers, ..
+    }
+    | FromWorker::Files {
+        fields: headers, ..
+    } = &msg
+    {
         if headers.len() != env.bodies.len() {
-            return Err(ProtocolError::FieldCount { listed: headers.len(), carried: env.bodies.len() });
+            return Err(ProtocolError::FieldCount {
+                listed: headers.len(),
+                carried: env.bodies.len(),
+            });
         }
         for (h, b) in headers.iter().zip(&env.bodies) {
             fields.push(Field::from_bytes(h, b).map_err(ProtocolError::Field)?);
@@ -200,7 +232,8 @@ pub fn encode_to_worker(msg: &ToWorker, file_bytes: Option<Vec<u8>>) -> Envelope
 }
 
 pub fn decode_to_worker(env: &Envelope) -> Result<(ToWorker, Option<&[u8]>), ProtocolError> {
-    let msg: ToWorker = serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
+    let msg: ToWorker =
+        serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
     Ok((msg, env.bodies.first().map(|b| b.as_slice())))
 }
 
@@ -228,7 +261,10 @@ mod tests {
 
     #[test]
     fn files_round_trip() {
-        let fields = vec![Field::bytes("panels.glb", b"glTF\x02\x00\x00\x00abc".to_vec()), Field::bytes("panels.csv", b"id\n".to_vec())];
+        let fields = vec![
+            Field::bytes("panels.glb", b"glTF\x02\x00\x00\x00abc".to_vec()),
+            Field::bytes("panels.csv", b"id\n".to_vec()),
+        ];
         let msg = FromWorker::Files {
             stage: "st-support".into(),
             fields: fields.iter().map(Field::header).collect(),

@@ -21,7 +21,13 @@ pub trait Sink {
 
 /// Reports `p` as progress of `stage` (started at `start` ms, with `energies` of an iteration),
 /// then answers whether the stage goes on.
-pub fn report(sink: &mut dyn Sink, stage: &str, p: Progress, energies: Vec<Energy>, start: f64) -> Result<(), Cancelled> {
+pub fn report(
+    sink: &mut dyn Sink,
+    stage: &str,
+    p: Progress,
+    energies: Vec<Energy>,
+    start: f64,
+) -> Result<(), Cancelled> {
     let elapsed_ms = sink.now_ms() - start;
     sink.progress(StageProgress {
         stage: stage.into(),

@@ -42,7 +42,11 @@ pub enum SurfaceWarning {
     Slivers { faces: usize },
     /// The result's panels meet at more than [`KINK_WARNING_DEG`] at `edges` edges, where the
     /// reference's own facets meet at up to `reference_max_deg`.
-    Kinks { edges: usize, max_deg: f64, reference_max_deg: f64 },
+    Kinks {
+        edges: usize,
+        max_deg: f64,
+        reference_max_deg: f64,
+    },
     /// The reference's median facet lies farther than the tolerance `epsilon` from the smooth
     /// surface through its vertices (its
     /// [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta), `sagitta`; both
@@ -91,7 +95,11 @@ impl fmt::Display for SurfaceWarning {
 }
 
 /// The failed assumptions of `mesh` with its topology and curvature.
-pub fn surface_warnings(mesh: &TriMesh, topo: &Topology, field: &CurvatureField) -> Vec<SurfaceWarning> {
+pub fn surface_warnings(
+    mesh: &TriMesh,
+    topo: &Topology,
+    field: &CurvatureField,
+) -> Vec<SurfaceWarning> {
     let mut warnings = Vec::new();
     warnings.extend(sign_change(mesh, field));
     let folds = fold_edges(mesh, topo);
@@ -106,7 +114,13 @@ pub fn surface_warnings(mesh: &TriMesh, topo: &Topology, field: &CurvatureField)
 /// [`SIGN_RELATIVE`] of max |H| on [`SIGN_FRACTION`] of the vertices each (a curved surface only:
 /// max |H| · diag ≥ 10 × [`PLANAR_TOLERANCE`]).
 fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<SurfaceWarning> {
-    let h = || field.vertices.iter().map(|c| c.mean).filter(|h| h.is_finite());
+    let h = || {
+        field
+            .vertices
+            .iter()
+            .map(|c| c.mean)
+            .filter(|h| h.is_finite())
+    };
     let max_abs = h().fold(0.0, |m: f64, x| m.max(x.abs()));
     let diag = mesh.bbox_diagonal();
     let threshold = if field.summary.h_changes_sign {
@@ -125,29 +139,48 @@ fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<SurfaceWarning>
 
 /// The kink warning of a result whose interior edges meet at `kinks_deg`, beside the reference's
 /// own largest dihedral angle.
-pub fn kink_warning(kinks_deg: &[f64], reference: &crate::reference::Reference) -> Option<SurfaceWarning> {
-    let edges = kinks_deg.iter().filter(|&&k| !(k <= KINK_WARNING_DEG)).count();
+pub fn kink_warning(
+    kinks_deg: &[f64],
+    reference: &crate::reference::Reference,
+) -> Option<SurfaceWarning> {
+    let edges = kinks_deg
+        .iter()
+        .filter(|&&k| !(k <= KINK_WARNING_DEG))
+        .count();
     let max_deg = kinks_deg.iter().copied().fold(0.0, f64::max);
-    (edges > 0).then(|| SurfaceWarning::Kinks { edges, max_deg, reference_max_deg: reference.max_dihedral_angle_deg() })
+    (edges > 0).then(|| SurfaceWarning::Kinks {
+        edges,
+        max_deg,
+        reference_max_deg: reference.max_dihedral_angle_deg(),
+    })
 }
 
 /// The coarseness warning of a reference for the tolerance `epsilon` (relative to the
 /// diagonal): its [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta)
 /// exceeds ε (never for a B-spline reference).
-pub fn coarseness_warning(reference: &crate::reference::Reference, epsilon: f64) -> Option<SurfaceWarning> {
+pub fn coarseness_warning(
+    reference: &crate::reference::Reference,
+    epsilon: f64,
+) -> Option<SurfaceWarning> {
     let sagitta = reference.facet_sagitta();
     (sagitta > epsilon).then_some(SurfaceWarning::CoarserThanTolerance { sagitta, epsilon })
 }
 
 /// The sliver warning of `mesh`, if it has slivers.
 pub fn sliver_warning(mesh: &TriMesh) -> Option<SurfaceWarning> {
-    let faces = (0..mesh.face_count()).filter(|&f| is_sliver(mesh.face_points(f))).count();
+    let faces = (0..mesh.face_count())
+        .filter(|&f| is_sliver(mesh.face_points(f)))
+        .count();
     (faces > 0).then_some(SurfaceWarning::Slivers { faces })
 }
 
 /// The warnings of a method that ran on `work`, a remesh of the reference when given: H and
 /// folds are the reference's, slivers those of the mesh the method used.
-pub fn method_warnings(reference: &crate::reference::Reference, field: &CurvatureField, work: Option<&TriMesh>) -> Vec<SurfaceWarning> {
+pub fn method_warnings(
+    reference: &crate::reference::Reference,
+    field: &CurvatureField,
+    work: Option<&TriMesh>,
+) -> Vec<SurfaceWarning> {
     let mut warnings = surface_warnings(reference.mesh(), reference.topology(), field);
     if let Some(work) = work {
         warnings.retain(|w| !matches!(w, SurfaceWarning::Slivers { .. }));
@@ -159,7 +192,10 @@ pub fn method_warnings(reference: &crate::reference::Reference, field: &Curvatur
 /// Whether the triangle's height over its longest edge is below [`SLIVER_ASPECT`] (a repeated
 /// corner counts: degenerate faces are slivers too).
 pub fn is_sliver(p: [DVec3; 3]) -> bool {
-    let l2 = (p[1] - p[0]).length_squared().max((p[2] - p[1]).length_squared()).max((p[0] - p[2]).length_squared());
+    let l2 = (p[1] - p[0])
+        .length_squared()
+        .max((p[2] - p[1]).length_squared())
+        .max((p[0] - p[2]).length_squared());
     let twice_area = (p[1] - p[0]).cross(p[2] - p[0]).length();
     !(twice_area > SLIVER_ASPECT * l2)
 }
@@ -175,16 +211,23 @@ pub fn fold_edges(mesh: &TriMesh, topo: &Topology) -> usize {
             continue;
         }
         let (pa, pb) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
-        let Some(axis) = (pb - pa).try_normalize() else { continue };
+        let Some(axis) = (pb - pa).try_normalize() else {
+            continue;
+        };
         let away: Vec<DVec3> = faces
             .iter()
             .filter_map(|&(f, _)| {
-                let c = mesh.triangles[f as usize].into_iter().find(|&v| v != *a && v != *b)?;
+                let c = mesh.triangles[f as usize]
+                    .into_iter()
+                    .find(|&v| v != *a && v != *b)?;
                 let w = mesh.positions[c as usize] - pa;
                 (w - w.dot(axis) * axis).try_normalize()
             })
             .collect();
-        let folded = away.iter().enumerate().any(|(i, u)| away[i + 1..].iter().any(|w| u.dot(*w) > cos_fold));
+        let folded = away
+            .iter()
+            .enumerate()
+            .any(|(i, u)| away[i + 1..].iter().any(|w| u.dot(*w) > cos_fold));
         if folded {
             folds += 1;
         }

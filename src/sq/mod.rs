@@ -48,42 +48,70 @@ use crate::stats::median;
 
 pub use self::error::SqError;
 use self::guarantees::Delivered;
-use crate::guarantees::Verdict;
 use self::metrics::{torsal_pairs, CongruenceFigures};
 use self::optimization::{CongruenceProblem, SqStep};
-use self::params::{RadiusBasis, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
+use self::params::{
+    RadiusBasis, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE,
+    RECOMPUTE_RANGE, THETA_RANGE,
+};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
-use self::sphere_optimization::{on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase};
+use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
+use self::sphere_optimization::{
+    on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase,
+};
 use self::sq_mesh::{sq_mesh, SqMesh};
+use self::start::{constant_function, constant_radius, spherical_reference};
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
+use crate::guarantees::Verdict;
 use crate::remeshing::quad_remeshing::edge_field_angles;
-use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
-use self::start::{constant_function, constant_radius, spherical_reference};
 
 /// What the method reports while it runs.
 pub enum SqEvent<'a> {
     Progress(Progress<'a>),
     /// Once, before the optimization: the points of G (model units) and the unit lines of the
     /// fitted central congruence.
-    Started { points: &'a [DVec3], lines: &'a [DVec3] },
+    Started {
+        points: &'a [DVec3],
+        lines: &'a [DVec3],
+    },
     /// After every solver iteration: the step, the iteration within it, the term statistics and
     /// the current unit lines of G.
-    Iteration { step: SqStep, iteration: usize, terms: &'a [TermStats], lines: Vec<DVec3> },
+    Iteration {
+        step: SqStep,
+        iteration: usize,
+        terms: &'a [TermStats],
+        lines: Vec<DVec3>,
+    },
     /// The first start missed θ or α: the optimization starts again from `start`, with these
     /// unit lines.
-    Restarted { start: RadiusStart, lines: &'a [DVec3] },
+    Restarted {
+        start: RadiusStart,
+        lines: &'a [DVec3],
+    },
     /// Steps 1–3 are done.
     Congruence(&'a SqCongruence),
     /// The quad mesh as the remesh extracted it (before Q′).
-    Remeshed { mesh: &'a PolyMesh },
+    Remeshed {
+        mesh: &'a PolyMesh,
+    },
     /// After every fairing iteration of Q′: the term statistics and the vertices.
-    Fairing { iteration: usize, terms: &'a [TermStats], positions: &'a [DVec3] },
+    Fairing {
+        iteration: usize,
+        terms: &'a [TermStats],
+        positions: &'a [DVec3],
+    },
     /// Q′ is done.
     QuadMesh(&'a SqQuadMesh),
     /// After every iteration of the final optimization: its phase, the iteration within the
     /// phase, the term statistics, the vertices and the face spheres (model units).
-    Spheres { phase: SpherePhase, iteration: usize, terms: &'a [TermStats], positions: &'a [DVec3], spheres: &'a [Sphere] },
+    Spheres {
+        phase: SpherePhase,
+        iteration: usize,
+        terms: &'a [TermStats],
+        positions: &'a [DVec3],
+        spheres: &'a [Sphere],
+    },
 }
 
 /// The optimized congruence on G, in model units.
@@ -141,24 +169,56 @@ impl SqCongruence {
 
 /// Checks the parameters' ranges.
 pub fn validate(params: &SqParams) -> Result<(), SqError> {
-    let bad = |what: &str, v: String, lo: String, hi: String| Err(SqError::Parameter(format!("{what} {v} is outside [{lo}, {hi}]")));
+    let bad = |what: &str, v: String, lo: String, hi: String| {
+        Err(SqError::Parameter(format!(
+            "{what} {v} is outside [{lo}, {hi}]"
+        )))
+    };
     if !(GRID_RANGE.0..=GRID_RANGE.1).contains(&params.grid) {
-        return bad("grid", params.grid.to_string(), GRID_RANGE.0.to_string(), GRID_RANGE.1.to_string());
+        return bad(
+            "grid",
+            params.grid.to_string(),
+            GRID_RANGE.0.to_string(),
+            GRID_RANGE.1.to_string(),
+        );
     }
     if !(THETA_RANGE.0..=THETA_RANGE.1).contains(&params.theta_deg) {
-        return bad("θ", params.theta_deg.to_string(), THETA_RANGE.0.to_string(), THETA_RANGE.1.to_string());
+        return bad(
+            "θ",
+            params.theta_deg.to_string(),
+            THETA_RANGE.0.to_string(),
+            THETA_RANGE.1.to_string(),
+        );
     }
     if !(ALPHA_RANGE.0..=ALPHA_RANGE.1).contains(&params.alpha_deg) {
-        return bad("α", params.alpha_deg.to_string(), ALPHA_RANGE.0.to_string(), ALPHA_RANGE.1.to_string());
+        return bad(
+            "α",
+            params.alpha_deg.to_string(),
+            ALPHA_RANGE.0.to_string(),
+            ALPHA_RANGE.1.to_string(),
+        );
     }
     if !(FACES_RANGE.0..=FACES_RANGE.1).contains(&params.faces) {
-        return bad("faces", params.faces.to_string(), FACES_RANGE.0.to_string(), FACES_RANGE.1.to_string());
+        return bad(
+            "faces",
+            params.faces.to_string(),
+            FACES_RANGE.0.to_string(),
+            FACES_RANGE.1.to_string(),
+        );
     }
     if !(params.support_depth > 0.0 && params.support_depth < 1.0) {
-        return Err(SqError::Parameter(format!("support depth {} is outside (0, 1) of the diagonal", params.support_depth)));
+        return Err(SqError::Parameter(format!(
+            "support depth {} is outside (0, 1) of the diagonal",
+            params.support_depth
+        )));
     }
     if !(RECOMPUTE_RANGE.0..=RECOMPUTE_RANGE.1).contains(&params.recompute_every) {
-        return bad("RS", params.recompute_every.to_string(), RECOMPUTE_RANGE.0.to_string(), RECOMPUTE_RANGE.1.to_string());
+        return bad(
+            "RS",
+            params.recompute_every.to_string(),
+            RECOMPUTE_RANGE.0.to_string(),
+            RECOMPUTE_RANGE.1.to_string(),
+        );
     }
     let b = params.radius_basis;
     if !(1..=15).contains(&b.degree) || b.controls <= b.degree || b.controls > 40 {
@@ -220,7 +280,15 @@ pub fn compute_congruence(
     let model_points: Vec<DVec3> = grid.frames.iter().map(|f| t + s * f.point).collect();
     if let Some((centre, radius)) = spherical_reference(&grid) {
         let sphere = (t + s * centre, s * radius);
-        return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
+        return Ok(spherical_congruence(
+            grid,
+            model_points,
+            sphere,
+            params,
+            [du, dv],
+            spline.domain(),
+            timings,
+        ));
     }
     let signs = check_mean_curvature(&surface, &grid, (hi - lo).length() / s, params.faces)?;
     let fit = fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?;
@@ -235,10 +303,18 @@ pub fn compute_congruence(
     };
     let mut attempts: Vec<CongruenceAttempt> = Vec::new();
     // The kept start: the first that meets θ and α, else the first with the fewest misses.
-    let mut best: Option<(usize, Optimized, Vec<DVec3>, Vec<DVec3>, Vec<Option<TorsalPair>>)> = None;
+    let mut best: Option<(
+        usize,
+        Optimized,
+        Vec<DVec3>,
+        Vec<DVec3>,
+        Vec<Option<TorsalPair>>,
+    )> = None;
     for (k, &start) in starts.iter().enumerate() {
         let function = match start {
-            RadiusStart::Constant => constant_function(&fit.function, constant_radius(grid, signs.sign)),
+            RadiusStart::Constant => {
+                constant_function(&fit.function, constant_radius(grid, signs.sign))
+            }
             _ => fit.function.clone(),
         };
         let initial_lines = match start {
@@ -246,18 +322,37 @@ pub fn compute_congruence(
             RadiusStart::Constant => grid.frames.iter().map(|f| f.normal).collect(),
             _ => problem.congruence_lines(&function.coefficients)?,
         };
-        let initial_figures = CongruenceFigures::of(grid, &initial_lines, &torsal_pairs(grid, &initial_lines));
+        let initial_figures =
+            CongruenceFigures::of(grid, &initial_lines, &torsal_pairs(grid, &initial_lines));
         if k == 0 {
-            on_event(SqEvent::Started { points: &model_points, lines: &initial_lines })?;
+            on_event(SqEvent::Started {
+                points: &model_points,
+                lines: &initial_lines,
+            })?;
         } else {
-            on_event(SqEvent::Restarted { start, lines: &initial_lines })?;
+            on_event(SqEvent::Restarted {
+                start,
+                lines: &initial_lines,
+            })?;
         }
-        let optimized = optimize(&problem, &function.coefficients, &initial_lines, params, clock, on_event)?;
+        let optimized = optimize(
+            &problem,
+            &function.coefficients,
+            &initial_lines,
+            params,
+            clock,
+            on_event,
+        )?;
         let lines = problem.measured_lines(&optimized.x);
         let pairs = torsal_pairs(grid, &lines);
         let figures = CongruenceFigures::of(grid, &lines, &pairs);
         let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses });
+        attempts.push(CongruenceAttempt {
+            start,
+            initial_figures,
+            figures,
+            misses,
+        });
         if best.as_ref().is_none_or(|b| misses < attempts[b.0].misses) {
             best = Some((k, optimized, initial_lines, lines, pairs));
         }
@@ -270,10 +365,23 @@ pub fn compute_congruence(
     let figures = attempts[chosen].figures.clone();
     let x = optimized.x;
     let lc_residual = problem.lc_residual(&x);
-    let coefficients: Vec<f64> = x[problem.layout.radius.clone()].iter().map(|c| c * s).collect();
-    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv])))).collect();
-    let radius = BSplineFunction { coefficients, ..fit.function.clone() };
-    let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
+    let coefficients: Vec<f64> = x[problem.layout.radius.clone()]
+        .iter()
+        .map(|c| c * s)
+        .collect();
+    let torsal_uv = pairs
+        .iter()
+        .map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv]))))
+        .collect();
+    let radius = BSplineFunction {
+        coefficients,
+        ..fit.function.clone()
+    };
+    let radii = grid
+        .uv
+        .iter()
+        .map(|p| radius.evaluate(p[0], p[1]).0)
+        .collect();
     timings.lap("metrics");
     let mut warnings = Vec::new();
     warnings.extend(signs.warnings);
@@ -337,7 +445,13 @@ fn optimize(
     on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
 ) -> Result<Optimized, SqError> {
     let mut hook = |step: SqStep, iteration: usize, terms: &[TermStats], x: &[f64]| {
-        on_event(SqEvent::Iteration { step, iteration, terms, lines: problem.lines(x) }).is_ok()
+        on_event(SqEvent::Iteration {
+            step,
+            iteration,
+            terms,
+            lines: problem.lines(x),
+        })
+        .is_ok()
     };
     let mut x = problem.initial_point(coefficients, lines, params);
     let lc = problem.line_congruence_step(&mut x, params, clock, &mut hook);
@@ -350,7 +464,12 @@ fn optimize(
     if torsal.cancelled {
         return Err(SqError::Cancelled);
     }
-    Ok(Optimized { x, lc_residual_step1, lc, torsal })
+    Ok(Optimized {
+        x,
+        lc_residual_step1,
+        lc,
+        torsal,
+    })
 }
 
 /// The trivial case: a sphere patch (see [`start`]). The lines are the normals, and every
@@ -372,11 +491,19 @@ fn spherical_congruence(
         })
         .collect();
     let figures = CongruenceFigures::of(&grid, &lines, &pairs);
-    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, spacing)))).collect();
+    let torsal_uv = pairs
+        .iter()
+        .map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, spacing))))
+        .collect();
     let function = BSplineFunction::constant(sphere.1, domain);
     timings.lap("radius");
     let misses = metrics::misses(&grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses };
+    let attempt = CongruenceAttempt {
+        start: RadiusStart::Central,
+        initial_figures: figures.clone(),
+        figures: figures.clone(),
+        misses,
+    };
     SqCongruence {
         grid: params.grid,
         uv: grid.uv.clone(),
@@ -437,7 +564,9 @@ pub struct SqResult {
 impl SqResult {
     /// Median time of a full-optimization iteration (ms).
     pub fn final_iteration_median_ms(&self) -> Option<f64> {
-        self.sq_mesh.as_ref().and_then(|f| median(&f.outcome.iteration_ms))
+        self.sq_mesh
+            .as_ref()
+            .and_then(|f| median(&f.outcome.iteration_ms))
     }
 }
 
@@ -453,16 +582,35 @@ pub fn compute(
     let mut warnings = congruence.warnings.clone();
     let (theta, alpha) = (params.theta_deg, params.alpha_deg);
     let verdict = guarantees::verdict(&congruence.figures, Delivered::Congruence, theta, alpha);
-    let mut result = SqResult { congruence, quad_mesh: None, sq_mesh: None, timings_ms: Vec::new(), warnings: Vec::new(), verdict };
+    let mut result = SqResult {
+        congruence,
+        quad_mesh: None,
+        sq_mesh: None,
+        timings_ms: Vec::new(),
+        warnings: Vec::new(),
+        verdict,
+    };
     if params.until == Until::Congruence {
         result.warnings = warnings;
         return Ok(result);
     }
     let mut timings = Timings::start(clock);
     on_event(SqEvent::Progress(Progress::new("remesh", 0, 1)))?;
-    let quad = quad_mesh(reference, result.congruence.grid, &result.congruence.torsal_uv, params, clock, &mut |iteration, terms, positions| {
-        on_event(SqEvent::Fairing { iteration, terms, positions }).is_ok()
-    });
+    let quad = quad_mesh(
+        reference,
+        result.congruence.grid,
+        &result.congruence.torsal_uv,
+        params,
+        clock,
+        &mut |iteration, terms, positions| {
+            on_event(SqEvent::Fairing {
+                iteration,
+                terms,
+                positions,
+            })
+            .is_ok()
+        },
+    );
     let quad = match quad {
         Err(SqError::Cancelled) => return Err(SqError::Cancelled),
         other => other?,
@@ -472,14 +620,32 @@ pub fn compute(
     timings.lap("remesh");
     warnings.extend(quad.warnings.iter().cloned());
     if params.until == Until::Remesh {
-        result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::QuadMesh(&quad.mesh), theta, alpha);
+        result.verdict = guarantees::verdict(
+            &result.congruence.figures,
+            Delivered::QuadMesh(&quad.mesh),
+            theta,
+            alpha,
+        );
         result.quad_mesh = Some(quad);
         result.timings_ms = timings.laps;
         result.warnings = warnings;
         return Ok(result);
     }
-    let done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
-    result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::SqMesh(&done.mesh.sphere_mesh.mesh, &done.mesh.figures), theta, alpha);
+    let done = final_mesh(
+        reference,
+        &result.congruence,
+        &quad,
+        params,
+        clock,
+        &mut timings,
+        on_event,
+    )?;
+    result.verdict = guarantees::verdict(
+        &result.congruence.figures,
+        Delivered::SqMesh(&done.mesh.sphere_mesh.mesh, &done.mesh.figures),
+        theta,
+        alpha,
+    );
     result.quad_mesh = Some(quad);
     result.sq_mesh = Some(done);
     result.timings_ms = timings.laps;
@@ -489,18 +655,50 @@ pub fn compute(
 
 /// The trivial case: on one sphere every quad mesh is exact (see [`start`]): each vertex of Q′
 /// on the sphere, every face sphere the sphere itself.
-fn spherical_mesh(reference: &Reference, quad: &SqQuadMesh, stars: &QuadStars, centre: DVec3, r: f64, params: &SqParams, timings: &mut Timings) -> SqFinal {
+fn spherical_mesh(
+    reference: &Reference,
+    quad: &SqQuadMesh,
+    stars: &QuadStars,
+    centre: DVec3,
+    r: f64,
+    params: &SqParams,
+    timings: &mut Timings,
+) -> SqFinal {
     let diag = reference.diagonal();
-    let positions: Vec<DVec3> = quad.mesh.positions.iter().map(|p| centre + r * (*p - centre).normalize_or(DVec3::Z)).collect();
+    let positions: Vec<DVec3> = quad
+        .mesh
+        .positions
+        .iter()
+        .map(|p| centre + r * (*p - centre).normalize_or(DVec3::Z))
+        .collect();
     let normals: Vec<DVec3> = positions.iter().map(|p| (centre - *p) / r).collect();
     let sphere = Sphere::from_center_radius(centre, r).normalized();
     let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
     let spheres = vec![sphere; mesh.face_count()];
-    let mut out = sq_mesh(mesh, spheres, &normals, stars, diag, params.support_depth * diag, params.axis_length * diag);
-    let distance = out.sphere_mesh.mesh.positions.iter().map(|p| (p.distance(centre) - r).abs()).fold(0.0, f64::max);
+    let mut out = sq_mesh(
+        mesh,
+        spheres,
+        &normals,
+        stars,
+        diag,
+        params.support_depth * diag,
+        params.axis_length * diag,
+    );
+    let distance = out
+        .sphere_mesh
+        .mesh
+        .positions
+        .iter()
+        .map(|p| (p.distance(centre) - r).abs())
+        .fold(0.0, f64::max);
     out.figures.max_vertex_distance_to_reference = distance / diag;
     timings.lap("panels");
-    SqFinal { mesh: out, uv: quad.uv.clone(), edge_angles_deg: quad.edge_angles_deg.clone(), outcome: SphereOutcome::default() }
+    SqFinal {
+        mesh: out,
+        uv: quad.uv.clone(),
+        edge_angles_deg: quad.edge_angles_deg.clone(),
+        outcome: SphereOutcome::default(),
+    }
 }
 
 /// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
@@ -519,43 +717,91 @@ fn final_mesh(
     let (t, s) = (0.5 * (lo + hi), reference.diagonal());
     let framed = reference.in_frame(t, s);
     let mesh = &quad.mesh;
-    let frame_mesh = PolyMesh::new(mesh.positions.iter().map(|p| (*p - t) / s).collect(), mesh.faces.clone());
-    let radii: Vec<f64> = quad.uv.iter().map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s).collect();
-    let normals: Vec<DVec3> = quad.uv.iter().map(|uv| surface.derivatives(uv[0], uv[1]).normal().unwrap_or(DVec3::Z)).collect();
+    let frame_mesh = PolyMesh::new(
+        mesh.positions.iter().map(|p| (*p - t) / s).collect(),
+        mesh.faces.clone(),
+    );
+    let radii: Vec<f64> = quad
+        .uv
+        .iter()
+        .map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s)
+        .collect();
+    let normals: Vec<DVec3> = quad
+        .uv
+        .iter()
+        .map(|uv| {
+            surface
+                .derivatives(uv[0], uv[1])
+                .normal()
+                .unwrap_or(DVec3::Z)
+        })
+        .collect();
     let lines: Vec<DVec3> = quad
         .uv
         .iter()
         .zip(&normals)
         .map(|(uv, n)| {
             let l = on_grid(surface, congruence.grid, &congruence.lines, *uv).normalize_or_zero();
-            if l.dot(*n) < 0.0 { -l } else { l }
+            if l.dot(*n) < 0.0 {
+                -l
+            } else {
+                l
+            }
         })
         .collect();
     let stars = QuadStars::new(mesh);
     if let Some((centre, r)) = congruence.sphere {
-        return Ok(spherical_mesh(reference, quad, &stars, centre, r, params, timings));
+        return Ok(spherical_mesh(
+            reference, quad, &stars, centre, r, params, timings,
+        ));
     }
-    let input = SphereInput { mesh: &frame_mesh, radii: &radii, lines: &lines, normals: &normals, polylines: &quad.polylines,
+    let input = SphereInput {
+        mesh: &frame_mesh,
+        radii: &radii,
+        lines: &lines,
+        normals: &normals,
+        polylines: &quad.polylines,
         on_boundary: &quad.on_boundary,
         reference: &framed,
         cos2_theta: params.target_theta_deg().to_radians().cos().powi(2),
         cos2_alpha: params.target_alpha_deg().to_radians().cos().powi(2),
-        limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
+        limits: [
+            params.theta_deg - PROJECTION_MARGIN_DEG,
+            (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0),
+        ],
     };
     // The Spheres event carries the phase and iteration: it is the progress of this step.
-    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, params, clock, &mut |phase, iteration, terms, v, sp| {
-        let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
-        let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
-        on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres }).is_ok()
-    });
+    let (vertices, spheres, outcome) = optimize_spheres(
+        &input,
+        &stars,
+        params,
+        clock,
+        &mut |phase, iteration, terms, v, sp| {
+            let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
+            let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+            on_event(SqEvent::Spheres {
+                phase,
+                iteration,
+                terms,
+                positions: &positions,
+                spheres: &spheres,
+            })
+            .is_ok()
+        },
+    );
     if outcome.cancelled {
         return Err(SqError::Cancelled);
     }
     timings.lap("spheres");
     let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
-    let spheres: Vec<Sphere> = spheres.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+    let spheres: Vec<Sphere> = spheres
+        .iter()
+        .map(|x| x.from_frame(t, s).normalized())
+        .collect();
     if positions.iter().any(|p| !p.is_finite()) || spheres.iter().any(|x| !x.is_finite()) {
-        return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
+        return Err(SqError::FinalOptimization(
+            "a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into(),
+        ));
     }
     on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
     // The reference's closest points: (u, v), normals and the vertices' distance.
@@ -571,9 +817,22 @@ fn final_mesh(
     let diag = reference.diagonal();
     let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
     let edge_angles_deg = edge_field_angles(surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
-    let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
+    let mut out = sq_mesh(
+        mesh,
+        spheres,
+        &final_normals,
+        &stars,
+        diag,
+        params.support_depth * diag,
+        params.axis_length * diag,
+    );
     out.figures.max_vertex_distance_to_reference = distance / diag;
     on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
     timings.lap("panels");
-    Ok(SqFinal { mesh: out, uv, edge_angles_deg, outcome })
+    Ok(SqFinal {
+        mesh: out,
+        uv,
+        edge_angles_deg,
+        outcome,
+    })
 }

@@ -21,12 +21,16 @@ use crate::congruence::torsal::{quadratic_roots, torsal_quadratic};
 use crate::geometry::bspline::{BSplineFunction, FunctionRow};
 use crate::progress::Clock;
 use crate::solver::terms::v3;
-use crate::solver::{Hinge, PhaseTimes, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength};
+use crate::solver::{
+    Hinge, PhaseTimes, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength,
+};
 
+use super::error::SqError;
 use super::params::{Inequality, SqParams};
 use super::radius::SamplingGrid;
-use super::terms::{line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalPlane};
-use super::error::SqError;
+use super::terms::{
+    line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalPlane,
+};
 
 /// The two steps, as reported to the hook.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,7 +76,11 @@ pub struct CongruenceProblem {
 
 impl CongruenceProblem {
     pub fn new(grid: SamplingGrid, radius: &BSplineFunction, inequality: Inequality) -> Self {
-        let rows = grid.uv.iter().map(|p| BSplineFunction::row(&radius.u, &radius.v, p[0], p[1])).collect();
+        let rows = grid
+            .uv
+            .iter()
+            .map(|p| BSplineFunction::row(&radius.u, &radius.v, p[0], p[1]))
+            .collect();
         let quads: Vec<[usize; 4]> = (0..grid.quad_count()).map(|q| grid.quad(q)).collect();
         let diagonals = quads
             .iter()
@@ -81,8 +89,19 @@ impl CongruenceProblem {
                 (f[2] - f[0], f[1] - f[3])
             })
             .collect();
-        let layout = Layout::new(radius.coefficients.len(), grid.point_count(), quads.len(), inequality == Inequality::Slack);
-        Self { grid, rows, layout, quads, diagonals }
+        let layout = Layout::new(
+            radius.coefficients.len(),
+            grid.point_count(),
+            quads.len(),
+            inequality == Inequality::Slack,
+        );
+        Self {
+            grid,
+            rows,
+            layout,
+            quads,
+            diagonals,
+        }
     }
 
     /// The lines of the congruence with radius coefficients `coefficients`; an error where the
@@ -96,20 +115,29 @@ impl CongruenceProblem {
             .zip(&self.rows)
             .map(|(f, row)| {
                 let c = centre_derivatives(f, row.apply(coefficients));
-                c.line(f.normal, f.su.length() * f.sv.length()).unwrap_or_else(|| {
-                    singular += 1;
-                    f.normal
-                })
+                c.line(f.normal, f.su.length() * f.sv.length())
+                    .unwrap_or_else(|| {
+                        singular += 1;
+                        f.normal
+                    })
             })
             .collect();
         if singular > 0 {
-            return Err(SqError::SingularCentreSurface { points: singular, total: lines.len() });
+            return Err(SqError::SingularCentreSurface {
+                points: singular,
+                total: lines.len(),
+            });
         }
         Ok(lines)
     }
 
     /// The starting point of step 1: coefficients, lines and (slack form) line slacks.
-    pub fn initial_point(&self, coefficients: &[f64], lines: &[DVec3], params: &SqParams) -> Vec<f64> {
+    pub fn initial_point(
+        &self,
+        coefficients: &[f64],
+        lines: &[DVec3],
+        params: &SqParams,
+    ) -> Vec<f64> {
         let lay = &self.layout;
         let mut x = vec![0.0; lay.line_variables()];
         x[lay.radius.clone()].copy_from_slice(coefficients);
@@ -137,7 +165,11 @@ impl CongruenceProblem {
             .iter()
             .zip(&self.rows)
             .zip(variables)
-            .map(|((f, row), l)| centre_derivatives(f, row.apply(coefficients)).line(f.normal, f.su.length() * f.sv.length()).unwrap_or(l))
+            .map(|((f, row), l)| {
+                centre_derivatives(f, row.apply(coefficients))
+                    .line(f.normal, f.su.length() * f.sv.length())
+                    .unwrap_or(l)
+            })
             .collect()
     }
 
@@ -146,7 +178,11 @@ impl CongruenceProblem {
         (0..self.layout.points)
             .map(|p| {
                 let l = v3(x, self.layout.line(p)).normalize_or_zero();
-                if l.dot(self.grid.frames[p].normal) < 0.0 { -l } else { l }
+                if l.dot(self.grid.frames[p].normal) < 0.0 {
+                    -l
+                } else {
+                    l
+                }
             })
             .collect()
     }
@@ -158,7 +194,11 @@ impl CongruenceProblem {
     }
 
     fn line_congruence(&self) -> LineCongruence<'_> {
-        LineCongruence { frames: &self.grid.frames, rows: &self.rows, layout: &self.layout }
+        LineCongruence {
+            frames: &self.grid.frames,
+            rows: &self.rows,
+            layout: &self.layout,
+        }
     }
 
     fn line_normal_angle(&self, params: &SqParams) -> Box<dyn Term + '_> {
@@ -174,7 +214,9 @@ impl CongruenceProblem {
     }
 
     fn line_offsets(&self) -> Vec<usize> {
-        (0..self.layout.points).map(|p| self.layout.line(p)).collect()
+        (0..self.layout.points)
+            .map(|p| self.layout.line(p))
+            .collect()
     }
 
     fn group_blocks(&self, problem: &mut Problem) {
@@ -193,7 +235,13 @@ impl CongruenceProblem {
     }
 
     /// Step 1 (see the module docs); `x` from [`Self::initial_point`].
-    pub fn line_congruence_step(&self, x: &mut [f64], params: &SqParams, clock: Clock, hook: &mut IterationHook) -> StepOutcome {
+    pub fn line_congruence_step(
+        &self,
+        x: &mut [f64],
+        params: &SqParams,
+        clock: Clock,
+        hook: &mut IterationHook,
+    ) -> StepOutcome {
         let w = params.lc_weights;
         let mut problem = Problem::new(self.layout.line_variables());
         problem.add_term(self.line_congruence(), w.lc);
@@ -201,8 +249,15 @@ impl CongruenceProblem {
         problem.add_term(UnitLength::vectors(self.line_offsets()), w.unit);
         self.group_blocks(&mut problem);
         // Lines in 3 × 3 blocks with the radius coefficients as a dense border: supernodal is faster.
-        let mut solver = Solver::new(SolverOptions { max_iterations: params.lc_iterations, clock: clock.0, supernodal: true, ..SolverOptions::default() });
-        let report = solver.solve(&mut problem, x, |it| hook(SqStep::LineCongruence, it.iteration, it.terms, it.x));
+        let mut solver = Solver::new(SolverOptions {
+            max_iterations: params.lc_iterations,
+            clock: clock.0,
+            supernodal: true,
+            ..SolverOptions::default()
+        });
+        let report = solver.solve(&mut problem, x, |it| {
+            hook(SqStep::LineCongruence, it.iteration, it.terms, it.x)
+        });
         // Back to unit lines on the side of n.
         for (p, l) in self.lines(x).into_iter().enumerate() {
             x[self.layout.line(p)..self.layout.line(p) + 3].copy_from_slice(&l.to_array());
@@ -283,7 +338,13 @@ impl CongruenceProblem {
     }
 
     /// Step 2 (see the module docs); `x` from [`Self::extend_for_torsal`].
-    pub fn torsal_step(&self, x: &mut [f64], params: &SqParams, clock: Clock, hook: &mut IterationHook) -> StepOutcome {
+    pub fn torsal_step(
+        &self,
+        x: &mut [f64],
+        params: &SqParams,
+        clock: Clock,
+        hook: &mut IterationHook,
+    ) -> StepOutcome {
         let w = params.torsal_weights;
         let lay = &self.layout;
         let cos2_alpha = params.target_alpha_deg().to_radians().cos().powi(2);
@@ -291,15 +352,35 @@ impl CongruenceProblem {
         problem.add_term(self.line_congruence(), w.lc);
         problem.add_boxed(self.line_normal_angle(params), w.lc_orth);
         problem.add_term(UnitLength::vectors(self.line_offsets()), w.unit);
-        let normals: Vec<usize> = (0..lay.quad_count).flat_map(|q| [lay.plane_normal(q, 0), lay.plane_normal(q, 1)]).collect();
-        problem.add_term(UnitLength::vectors(normals.clone()).with_name("plane_normal_unit"), w.unit);
-        problem.add_term(TorsalPlane { quads: self.quads.clone(), diagonals: self.diagonals.clone(), layout: lay }, w.torsal);
-        let angle = TorsalAngle { cos2: cos2_alpha, layout: lay };
+        let normals: Vec<usize> = (0..lay.quad_count)
+            .flat_map(|q| [lay.plane_normal(q, 0), lay.plane_normal(q, 1)])
+            .collect();
+        problem.add_term(
+            UnitLength::vectors(normals.clone()).with_name("plane_normal_unit"),
+            w.unit,
+        );
+        problem.add_term(
+            TorsalPlane {
+                quads: self.quads.clone(),
+                diagonals: self.diagonals.clone(),
+                layout: lay,
+            },
+            w.torsal,
+        );
+        let angle = TorsalAngle {
+            cos2: cos2_alpha,
+            layout: lay,
+        };
         let angle_id = match params.inequality {
-            Inequality::Hinge => problem.add_term(Hinge::new(angle).with_name("torsal_angle"), w.angle),
+            Inequality::Hinge => {
+                problem.add_term(Hinge::new(angle).with_name("torsal_angle"), w.angle)
+            }
             Inequality::Slack => problem.add_term(angle, w.angle),
         };
-        let fair_id = problem.add_term(line_fairness(self.grid.n, lay).with_name("line_fairness"), w.fair);
+        let fair_id = problem.add_term(
+            line_fairness(self.grid.n, lay).with_name("line_fairness"),
+            w.fair,
+        );
         let reg: Vec<usize> = normals.iter().flat_map(|&o| o..o + 3).collect();
         problem.add_term(Proximal::new(reg), w.reg);
         self.group_blocks(&mut problem);
@@ -307,7 +388,10 @@ impl CongruenceProblem {
         let total = params.torsal_iterations;
         let final_from = total.saturating_sub(params.final_iterations);
         let every = params.recompute_every.max(1);
-        let mut solver = Solver::new(SolverOptions { clock: clock.0, ..SolverOptions::default() });
+        let mut solver = Solver::new(SolverOptions {
+            clock: clock.0,
+            ..SolverOptions::default()
+        });
         let mut outcome = StepOutcome::default();
         let mut done = 0;
         while done < total {
@@ -326,7 +410,9 @@ impl CongruenceProblem {
             }
             solver.options.max_iterations = end - done;
             let offset = done;
-            let report = solver.solve(&mut problem, x, |it| hook(SqStep::Torsal, offset + it.iteration, it.terms, it.x));
+            let report = solver.solve(&mut problem, x, |it| {
+                hook(SqStep::Torsal, offset + it.iteration, it.terms, it.x)
+            });
             outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
             outcome.phase_ms.add(&report.phase_ms);
             if report.termination == crate::solver::Termination::Cancelled {

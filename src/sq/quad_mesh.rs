@@ -25,7 +25,10 @@ use crate::geometry::mesh::PolyMesh;
 use crate::progress::Clock;
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
-use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint};
+use crate::remeshing::quad_remeshing::{
+    coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField,
+    QuadRemesh, QuadRemeshParams, SingularPoint,
+};
 use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats, Termination};
 
 use super::error::SqError;
@@ -78,7 +81,12 @@ pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> bool + 'h
 /// coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the patch
 /// boundary are left out: the boundary cuts the last segment of a polyline short, and fairing it
 /// would drag the polyline off the torsal direction.
-pub fn polyline_fairness(polylines: &[[u32; 3]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
+pub fn polyline_fairness(
+    polylines: &[[u32; 3]],
+    on_boundary: &[bool],
+    edges: &[[u32; 2]],
+    offset: impl Fn(usize) -> usize,
+) -> Linear {
     let edge_set: HashSet<[u32; 2]> = edges.iter().copied().collect();
     let joined = |a: u32, b: u32| edge_set.contains(&[a.min(b), a.max(b)]);
     let mut fair = Linear::new();
@@ -87,7 +95,14 @@ pub fn polyline_fairness(polylines: &[[u32; 3]], on_boundary: &[bool], edges: &[
             continue;
         }
         for c in 0..3 {
-            fair.push_row(&[(offset(a as usize) + c, 1.0), (offset(v as usize) + c, -2.0), (offset(b as usize) + c, 1.0)], 0.0);
+            fair.push_row(
+                &[
+                    (offset(a as usize) + c, 1.0),
+                    (offset(v as usize) + c, -2.0),
+                    (offset(b as usize) + c, 1.0),
+                ],
+                0.0,
+            );
         }
     }
     fair.with_name("fairness")
@@ -107,7 +122,10 @@ pub fn quad_mesh(
 ) -> Result<SqQuadMesh, SqError> {
     let surface = reference.spline().ok_or(SqError::NotBSpline)?;
     let torsal = CrossField::new(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
-    let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
+    let remesh_params = QuadRemeshParams {
+        target_faces: params.faces,
+        ..QuadRemeshParams::default()
+    };
     let mut warnings = Vec::new();
     let prepared = prepare(surface, &torsal, &remesh_params)?;
     let singular_points = prepared.field.singular.clone();
@@ -116,7 +134,10 @@ pub fn quad_mesh(
     } else {
         let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
         let field = CrossField::new(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
-        let (three, five) = (singular_points.iter().filter(|s| s.quarters > 0).count(), singular_points.iter().filter(|s| s.quarters < 0).count());
+        let (three, five) = (
+            singular_points.iter().filter(|s| s.quarters > 0).count(),
+            singular_points.iter().filter(|s| s.quarters < 0).count(),
+        );
         warnings.push(format!(
             "the torsal directions turn about a point (an umbilic): a quad mesh along them needs singular vertices, {three} of valence 3 and {five} of valence 5, where the support planes cannot meet at more than {}° and {}°; the final optimization does not yet reach its guarantees from such a mesh, so the quad mesh follows the parameter lines instead, which it starts from",
             support_plane_bound_deg(3),
@@ -130,7 +151,16 @@ pub fn quad_mesh(
             remesh.folded_triangles
         ));
     }
-    let QuadRemesh { mesh: remesh, uv, polylines, on_boundary, dropped, singular, folded_triangles, .. } = remesh;
+    let QuadRemesh {
+        mesh: remesh,
+        uv,
+        polylines,
+        on_boundary,
+        dropped,
+        singular,
+        folded_triangles,
+        ..
+    } = remesh;
     let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
 
     // Q′ in the frame of the bounding box.
@@ -138,16 +168,29 @@ pub fn quad_mesh(
     let (t, s) = (0.5 * (lo + hi), reference.diagonal());
     let framed = reference.in_frame(t, s);
     let nv = remesh.vertex_count();
-    let mut x: Vec<f64> = remesh.positions.iter().flat_map(|p| ((*p - t) / s).to_array()).collect();
+    let mut x: Vec<f64> = remesh
+        .positions
+        .iter()
+        .flat_map(|p| ((*p - t) / s).to_array())
+        .collect();
     let offsets: Vec<usize> = (0..nv).map(|v| 3 * v).collect();
     let mut problem = Problem::new(3 * nv);
     let tangent = ReferenceProximity::tangent(&framed, offsets.clone());
-    let mut point = ReferenceProximity::point(&framed, offsets, vec![params.sphere_weights.epsilon.sqrt(); nv]);
+    let mut point = ReferenceProximity::point(
+        &framed,
+        offsets,
+        vec![params.sphere_weights.epsilon.sqrt(); nv],
+    );
     point.share_closest_with(&tangent);
     problem.add_term(tangent.with_name("glide_tangent"), 1.0);
     problem.add_term(point.with_name("glide_point"), 1.0);
-    let edges = crate::geometry::mesh::topology::Topology::new(&remesh).edges().to_vec();
-    problem.add_term(polyline_fairness(&polylines, &on_boundary, &edges, |v| 3 * v), params.fairing_weight);
+    let edges = crate::geometry::mesh::topology::Topology::new(&remesh)
+        .edges()
+        .to_vec();
+    problem.add_term(
+        polyline_fairness(&polylines, &on_boundary, &edges, |v| 3 * v),
+        params.fairing_weight,
+    );
     problem.add_term(Proximal::new((0..3 * nv).collect()), 0.05);
     for (v, &b) in on_boundary.iter().enumerate() {
         problem.group_variables(3 * v..3 * v + 3);
@@ -155,9 +198,16 @@ pub fn quad_mesh(
             problem.fix_range(3 * v..3 * v + 3);
         }
     }
-    let mut solver = Solver::new(SolverOptions { max_iterations: params.fairing_iterations, clock: clock.0, ..SolverOptions::default() });
+    let mut solver = Solver::new(SolverOptions {
+        max_iterations: params.fairing_iterations,
+        clock: clock.0,
+        ..SolverOptions::default()
+    });
     let report = solver.solve(&mut problem, &mut x, |it| {
-        let pts: Vec<DVec3> = it.x.chunks(3).map(|c| t + s * DVec3::new(c[0], c[1], c[2])).collect();
+        let pts: Vec<DVec3> =
+            it.x.chunks(3)
+                .map(|c| t + s * DVec3::new(c[0], c[1], c[2]))
+                .collect();
         hook(it.iteration, it.terms, &pts)
     });
     if report.termination == Termination::Cancelled {
@@ -177,7 +227,10 @@ pub fn quad_mesh(
     let edge_angles_deg = edge_field_angles(surface, &torsal, &mesh, &q_uv, &on_boundary);
     let coverage = coverage(surface, &mesh);
     if coverage < 0.9 {
-        warnings.push(format!("the quad mesh covers {:.1} % of the patch", 100.0 * coverage));
+        warnings.push(format!(
+            "the quad mesh covers {:.1} % of the patch",
+            100.0 * coverage
+        ));
     }
     Ok(SqQuadMesh {
         torsal,

@@ -18,7 +18,9 @@
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame};
+use crate::geometry::bspline::{
+    BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame,
+};
 use crate::sq::params::RadiusBasis;
 
 use super::error::SqError;
@@ -31,7 +33,12 @@ pub const SIGN_GRID: usize = 200;
 /// The corners of quad q = i + (n − 1) j of an n × n grid: (i, j), (i+1, j), (i+1, j+1), (i, j+1).
 pub fn grid_quad(n: usize, q: usize) -> [usize; 4] {
     let (i, j) = (q % (n - 1), q / (n - 1));
-    [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)]
+    [
+        i + n * j,
+        i + 1 + n * j,
+        i + 1 + n * (j + 1),
+        i + n * (j + 1),
+    ]
 }
 
 /// The sampling grid G with the surface's frames.
@@ -45,11 +52,23 @@ pub struct SamplingGrid {
 impl SamplingGrid {
     pub fn new(surface: &BSplineSurface, n: usize) -> Result<Self, SqError> {
         let ((u0, u1), (v0, v1)) = surface.domain();
-        let at = |a: f64, b: f64, k: usize| if k + 1 == n { b } else { a + (b - a) * k as f64 / (n - 1) as f64 };
-        let uv: Vec<[f64; 2]> = (0..n).flat_map(|j| (0..n).map(move |i| [at(u0, u1, i), at(v0, v1, j)])).collect();
+        let at = |a: f64, b: f64, k: usize| {
+            if k + 1 == n {
+                b
+            } else {
+                a + (b - a) * k as f64 / (n - 1) as f64
+            }
+        };
+        let uv: Vec<[f64; 2]> = (0..n)
+            .flat_map(|j| (0..n).map(move |i| [at(u0, u1, i), at(v0, v1, j)]))
+            .collect();
         let frames = uv
             .iter()
-            .map(|p| surface.frame(p[0], p[1]).ok_or(SqError::Singular { uv: *p }))
+            .map(|p| {
+                surface
+                    .frame(p[0], p[1])
+                    .ok_or(SqError::Singular { uv: *p })
+            })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self { n, uv, frames })
     }
@@ -102,7 +121,12 @@ pub const MAX_EXCLUDED_SHARE: f64 = 0.25;
 
 /// The sign check of the module docs; `diag` is the bounding-box diagonal and `faces` the
 /// number of panels asked for (the panel size of the speck test).
-pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64, faces: usize) -> Result<MeanCurvatureSigns, SqError> {
+pub fn check_mean_curvature(
+    surface: &BSplineSurface,
+    grid: &SamplingGrid,
+    diag: f64,
+    faces: usize,
+) -> Result<MeanCurvatureSigns, SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let n = grid.n;
     // The strip between the boundary and G's second row, in parameters.
@@ -112,7 +136,10 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
     let mut cells = Vec::with_capacity(SIGN_GRID * SIGN_GRID);
     for j in 0..SIGN_GRID {
         for i in 0..SIGN_GRID {
-            let (u, v) = (u0 + (u1 - u0) * (i as f64 + 0.5) / SIGN_GRID as f64, v0 + (v1 - v0) * (j as f64 + 0.5) / SIGN_GRID as f64);
+            let (u, v) = (
+                u0 + (u1 - u0) * (i as f64 + 0.5) / SIGN_GRID as f64,
+                v0 + (v1 - v0) * (j as f64 + 0.5) / SIGN_GRID as f64,
+            );
             let d = surface.derivatives(u, v);
             let area = d.su.cross(d.sv).length();
             let h = d.frame().map_or(0.0, |f| f.mean);
@@ -144,7 +171,11 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
     // The sagitta |H| h² / 8 over a panel of edge h = √(area / faces).
     let bend = |h: f64| h.abs() * area / faces.max(1) as f64 / 8.0;
     let sagitta = bend(worst);
-    let refusal = SqError::MeanCurvatureSignChange { positive_share, negative_share, at: Some(worst_uv) };
+    let refusal = SqError::MeanCurvatureSignChange {
+        positive_share,
+        negative_share,
+        at: Some(worst_uv),
+    };
     if speck_area > 0.0 && !(speck_share <= MAX_SPECK_SHARE && sagitta <= SPECK_TOLERANCE * diag) {
         return Err(refusal);
     }
@@ -156,22 +187,44 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
             if !in_strip(uv[0], uv[1]) {
                 // Inside: a point of the speck, or where H nearly vanishes, bending the wrong way
                 // by at most the speck's tolerance over a panel.
-                if !(bend(f.mean) <= SPECK_TOLERANCE * diag) || (f.mean * sign < 0.0 && speck_area == 0.0) {
-                    return Err(if f.mean * sign < 0.0 { refusal } else { SqError::MeanCurvatureNearZero { uv, h_diag: f.mean * diag } });
+                if !(bend(f.mean) <= SPECK_TOLERANCE * diag)
+                    || (f.mean * sign < 0.0 && speck_area == 0.0)
+                {
+                    return Err(if f.mean * sign < 0.0 {
+                        refusal
+                    } else {
+                        SqError::MeanCurvatureNearZero {
+                            uv,
+                            h_diag: f.mean * diag,
+                        }
+                    });
                 }
                 in_speck += 1;
             }
             excluded.push(p);
         }
     }
-    if excluded.len() == grid.point_count() || in_speck as f64 > MAX_EXCLUDED_SHARE * grid.point_count() as f64 {
-        return Err(match excluded.iter().find(|&&p| grid.frames[p].mean * sign >= 0.0) {
-            Some(&p) if speck_area == 0.0 => SqError::MeanCurvatureNearZero { uv: grid.uv[p], h_diag: grid.frames[p].mean * diag },
-            _ => refusal,
-        });
+    if excluded.len() == grid.point_count()
+        || in_speck as f64 > MAX_EXCLUDED_SHARE * grid.point_count() as f64
+    {
+        return Err(
+            match excluded
+                .iter()
+                .find(|&&p| grid.frames[p].mean * sign >= 0.0)
+            {
+                Some(&p) if speck_area == 0.0 => SqError::MeanCurvatureNearZero {
+                    uv: grid.uv[p],
+                    h_diag: grid.frames[p].mean * diag,
+                },
+                _ => refusal,
+            },
+        );
     }
     let mut warnings = Vec::new();
-    let strip_flips = cells.iter().any(|&(u, v, h, _)| h * sign < 0.0 && in_strip(u, v)) || excluded.len() > in_speck;
+    let strip_flips = cells
+        .iter()
+        .any(|&(u, v, h, _)| h * sign < 0.0 && in_strip(u, v))
+        || excluded.len() > in_speck;
     if strip_flips {
         warnings.push(format!(
             "the mean curvature turns near the boundary (H {other} 0 on {:.2} % of the area, within one grid row of the edge); \
@@ -195,7 +248,13 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
             grid.point_count()
         ));
     }
-    Ok(MeanCurvatureSigns { positive_share, negative_share, sign, excluded, warnings })
+    Ok(MeanCurvatureSigns {
+        positive_share,
+        negative_share,
+        sign,
+        excluded,
+        warnings,
+    })
 }
 
 /// The fitted radius function and how well it matches r = 1/H on G.
@@ -210,13 +269,31 @@ pub struct RadiusFit {
 }
 
 /// Fits r = 1/H over G (minus `excluded`) with the basis `basis` on the surface's domain.
-pub fn fit_radius(surface: &BSplineSurface, grid: &SamplingGrid, basis: RadiusBasis, excluded: &[usize]) -> Result<RadiusFit, SqError> {
+pub fn fit_radius(
+    surface: &BSplineSurface,
+    grid: &SamplingGrid,
+    basis: RadiusBasis,
+    excluded: &[usize],
+) -> Result<RadiusFit, SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
-    let make = |lo: f64, hi: f64| BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi)).map_err(|e| SqError::RadiusBasis(e.to_string()));
+    let make = |lo: f64, hi: f64| {
+        BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi))
+            .map_err(|e| SqError::RadiusBasis(e.to_string()))
+    };
     let (bu, bv) = (make(u0, u1)?, make(v0, v1)?);
-    let samples: Vec<([f64; 2], f64)> =
-        (0..grid.point_count()).filter(|p| !excluded.contains(p)).map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean)).collect();
-    let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit { samples: samples.len(), coefficients: basis.controls * basis.controls })?;
+    let samples: Vec<([f64; 2], f64)> = (0..grid.point_count())
+        .filter(|p| !excluded.contains(p))
+        .map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean))
+        .collect();
+    let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit {
+        samples: samples.len(),
+        coefficients: basis.controls * basis.controls,
+    })?;
     let mean = samples.iter().map(|s| s.1.abs()).sum::<f64>() / samples.len() as f64;
-    Ok(RadiusFit { function, error, relative_error: error.max / mean, samples: samples.len() })
+    Ok(RadiusFit {
+        function,
+        error,
+        relative_error: error.max / mean,
+        samples: samples.len(),
+    })
 }

@@ -27,7 +27,9 @@ use std::collections::HashMap;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::congruence::support_structure::{support_element, support_strips, SupportElement, SupportGeometry};
+use crate::congruence::support_structure::{
+    support_element, support_strips, SupportElement, SupportGeometry,
+};
 
 /// Least σ₂/σ₁ of the stacked circle-plane normals at a vertex for its axis to count as
 /// determined by the spheres.
@@ -88,14 +90,20 @@ pub struct SqMesh {
 impl SqMesh {
     /// The node axes as display segments toward the support side.
     pub fn node_axis_segments(&self) -> Vec<(DVec3, DVec3)> {
-        self.node_axes.iter().map(|&(v, d)| (v, v + self.axis_length * d)).collect()
+        self.node_axes
+            .iter()
+            .map(|&(v, d)| (v, v + self.axis_length * d))
+            .collect()
     }
 }
 
 /// The circle of two neighbouring face spheres, None when they coincide (to 1e-9 of the radius:
 /// the two panels lie on one sphere and their common edge has no circle of its own).
 pub fn edge_circle(s1: &Sphere, s2: &Sphere) -> Option<Circle> {
-    if let (Some((c1, r1)), Some((c2, r2))) = (s1.center().zip(s1.signed_radius()), s2.center().zip(s2.signed_radius())) {
+    if let (Some((c1, r1)), Some((c2, r2))) = (
+        s1.center().zip(s1.signed_radius()),
+        s2.center().zip(s2.signed_radius()),
+    ) {
         if c1.distance(c2) + (r1 - r2).abs() <= 1e-9 * r1.abs().max(r2.abs()) {
             return None;
         }
@@ -106,7 +114,12 @@ pub fn edge_circle(s1: &Sphere, s2: &Sphere) -> Option<Circle> {
 /// The unit normal of the support plane of edge uw between two face spheres: the plane of their
 /// circle; where the two spheres coincide (panels of one sphere, whose common edge may be any
 /// circle through u and w), the plane through the edge and the mean of its node axes `axes`.
-pub fn support_plane_normal(s1: &Sphere, s2: &Sphere, [u, w]: [DVec3; 2], axes: [DVec3; 2]) -> Option<DVec3> {
+pub fn support_plane_normal(
+    s1: &Sphere,
+    s2: &Sphere,
+    [u, w]: [DVec3; 2],
+    axes: [DVec3; 2],
+) -> Option<DVec3> {
     match edge_circle(s1, s2) {
         Some(c) => Some(c.normal),
         None => (w - u).cross(axes[0] + axes[1]).try_normalize(),
@@ -158,7 +171,10 @@ pub fn node_axes(sm: &SphereMesh, normals: &[DVec3]) -> (Vec<(DVec3, DVec3)>, Ve
                 }
             };
             // Toward the centres of the spheres around v.
-            let side = centres[v].iter().map(|c| (*c - p).dot(direction)).sum::<f64>();
+            let side = centres[v]
+                .iter()
+                .map(|c| (*c - p).dot(direction))
+                .sum::<f64>();
             (p, if side < 0.0 { -direction } else { direction })
         })
         .collect();
@@ -167,14 +183,25 @@ pub fn node_axes(sm: &SphereMesh, normals: &[DVec3]) -> (Vec<(DVec3, DVec3)>, Ve
 
 /// Builds the SQ mesh from the optimized vertices and face spheres (model units); `normals` are
 /// the reference normals at the vertices; `depth` and `axis_length` absolute.
-pub fn sq_mesh(mesh: PolyMesh, spheres: Vec<Sphere>, normals: &[DVec3], stars: &QuadStars, diag: f64, depth: f64, axis_length: f64) -> SqMesh {
+pub fn sq_mesh(
+    mesh: PolyMesh,
+    spheres: Vec<Sphere>,
+    normals: &[DVec3],
+    stars: &QuadStars,
+    diag: f64,
+    depth: f64,
+    axis_length: f64,
+) -> SqMesh {
     let sm = SphereMesh::new(mesh, spheres, BoundaryArcRule::Parallel(DVec3::ZERO));
     let (axes, axis_from_spheres) = node_axes(&sm, normals);
     let topo = sm.topology();
     let mut planes = HashMap::new();
     for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
         if topo.edge_faces(e).len() == 1 {
-            let (p, q) = (sm.mesh.positions[lo as usize], sm.mesh.positions[hi as usize]);
+            let (p, q) = (
+                sm.mesh.positions[lo as usize],
+                sm.mesh.positions[hi as usize],
+            );
             let d = axes[lo as usize].1 + axes[hi as usize].1;
             if let Some(n) = (q - p).cross(d).try_normalize() {
                 planes.insert([lo, hi], n);
@@ -192,33 +219,71 @@ pub fn sq_mesh(mesh: PolyMesh, spheres: Vec<Sphere>, normals: &[DVec3], stars: &
         }
         let (f, k) = faces[0];
         let circle = panels[f as usize].arcs[k as usize].circle;
-        let (u, w) = (sm.mesh.positions[lo as usize], sm.mesh.positions[hi as usize]);
-        if let Some(el) = support_element([lo, hi], circle, [u, w], [axes[lo as usize].1, axes[hi as usize].1], depth) {
+        let (u, w) = (
+            sm.mesh.positions[lo as usize],
+            sm.mesh.positions[hi as usize],
+        );
+        if let Some(el) = support_element(
+            [lo, hi],
+            circle,
+            [u, w],
+            [axes[lo as usize].1, axes[hi as usize].1],
+            depth,
+        ) {
             support_elements.push(el);
         }
     }
-    let support_geometry = support_strips(&support_elements, |el| edge_arc_points(&sm, &panels, el.edge));
+    let support_geometry = support_strips(&support_elements, |el| {
+        edge_arc_points(&sm, &panels, el.edge)
+    });
     let figures = figures(&sm, &axes, &axis_from_spheres, normals, stars, diag);
-    SqMesh { sphere_mesh: sm, panels, node_axes: axes, axis_from_spheres, support_elements, support_geometry, axis_length, figures }
+    SqMesh {
+        sphere_mesh: sm,
+        panels,
+        node_axes: axes,
+        axis_from_spheres,
+        support_elements,
+        support_geometry,
+        axis_length,
+        figures,
+    }
 }
 
 /// The smaller of two figures, NaN when either is (a figure that cannot be measured fails).
 fn nan_min(a: f64, b: f64) -> f64 {
-    if a.is_nan() || b.is_nan() { f64::NAN } else { a.min(b) }
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.min(b)
+    }
 }
 
 /// The smallest angle (deg) between the support planes of consecutive edges at vertex `v`, whose
 /// faces are `faces` in order around it: the planes of consecutive face pairs, whose shared edge
 /// runs from v to their other common corner. NaN when a plane cannot be measured.
-pub fn star_support_plane_angle_deg(sm: &SphereMesh, axes: &[(DVec3, DVec3)], v: u32, faces: &[u32]) -> f64 {
+pub fn star_support_plane_angle_deg(
+    sm: &SphereMesh,
+    axes: &[(DVec3, DVec3)],
+    v: u32,
+    faces: &[u32],
+) -> f64 {
     let (mesh, spheres) = (&sm.mesh, &sm.face_spheres);
     let m = faces.len();
     let p = mesh.positions[v as usize];
     let planes: Vec<Option<DVec3>> = (0..m)
         .map(|k| {
             let (f, g) = (faces[k] as usize, faces[(k + 1) % m] as usize);
-            let other = mesh.faces[f].corners().iter().copied().find(|&c| c != v && mesh.faces[g].corners().contains(&c))?;
-            support_plane_normal(&spheres[f], &spheres[g], [p, mesh.positions[other as usize]], [axes[v as usize].1, axes[other as usize].1])
+            let other = mesh.faces[f]
+                .corners()
+                .iter()
+                .copied()
+                .find(|&c| c != v && mesh.faces[g].corners().contains(&c))?;
+            support_plane_normal(
+                &spheres[f],
+                &spheres[g],
+                [p, mesh.positions[other as usize]],
+                [axes[v as usize].1, axes[other as usize].1],
+            )
         })
         .collect();
     (0..m)
@@ -230,13 +295,26 @@ pub fn star_support_plane_angle_deg(sm: &SphereMesh, axes: &[(DVec3, DVec3)], v:
 }
 
 /// The figures of [`SqMeshFigures`] except the distance to the reference.
-fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], normals: &[DVec3], stars: &QuadStars, diag: f64) -> SqMeshFigures {
+fn figures(
+    sm: &SphereMesh,
+    axes: &[(DVec3, DVec3)],
+    from_spheres: &[bool],
+    normals: &[DVec3],
+    stars: &QuadStars,
+    diag: f64,
+) -> SqMeshFigures {
     let spheres = &sm.face_spheres;
-    let mut out = SqMeshFigures { min_torsal_plane_angle_deg: 90.0, ..SqMeshFigures::default() };
+    let mut out = SqMeshFigures {
+        min_torsal_plane_angle_deg: 90.0,
+        ..SqMeshFigures::default()
+    };
     out.max_vertex_sphere_residual = sm.max_vertex_sphere_residual() / diag;
     for (v, faces) in &stars.stars {
         let m = faces.len();
-        let centres: Vec<DVec3> = faces.iter().filter_map(|&f| spheres[f as usize].center()).collect();
+        let centres: Vec<DVec3> = faces
+            .iter()
+            .filter_map(|&f| spheres[f as usize].center())
+            .collect();
         if centres.len() < m {
             out.max_centre_face_planarity = f64::INFINITY;
             continue;
@@ -244,28 +322,44 @@ fn figures(sm: &SphereMesh, axes: &[(DVec3, DVec3)], from_spheres: &[bool], norm
         let mid = centres.iter().sum::<DVec3>() / m as f64;
         let rows: Vec<[f64; 3]> = centres.iter().map(|c| (*c - mid).to_array()).collect();
         let n = DVec3::from_array(Svd::new(&rows).v[2]).normalize_or_zero();
-        let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
+        let worst = centres
+            .iter()
+            .map(|c| (*c - mid).dot(n).abs())
+            .fold(0.0, f64::max);
         out.max_centre_face_planarity = out.max_centre_face_planarity.max(worst / diag);
         let star_min = star_support_plane_angle_deg(sm, axes, *v, faces);
         if m == 4 {
             out.min_torsal_plane_angle_deg = nan_min(out.min_torsal_plane_angle_deg, star_min);
         } else {
-            let slot = if m == 3 { &mut out.min_support_plane_angle_valence_3_deg } else { &mut out.min_support_plane_angle_valence_5_deg };
+            let slot = if m == 3 {
+                &mut out.min_support_plane_angle_valence_3_deg
+            } else {
+                &mut out.min_support_plane_angle_valence_5_deg
+            };
             *slot = Some(slot.map_or(star_min, |a| nan_min(a, star_min)));
         }
     }
     let topo = sm.topology();
     for (e, &[u, w]) in topo.edges().iter().enumerate() {
-        let [(f, _), (g, _)] = topo.edge_faces(e) else { continue };
+        let [(f, _), (g, _)] = topo.edge_faces(e) else {
+            continue;
+        };
         if !(from_spheres[u as usize] && from_spheres[w as usize]) {
             continue;
         }
         if let Some(c) = edge_circle(&spheres[*f as usize], &spheres[*g as usize]) {
             let (du, dw) = (axes[u as usize].1, axes[w as usize].1);
-            out.max_torsal_plane_residual = out.max_torsal_plane_residual.max(du.dot(c.normal).abs()).max(dw.dot(c.normal).abs());
+            out.max_torsal_plane_residual = out
+                .max_torsal_plane_residual
+                .max(du.dot(c.normal).abs())
+                .max(dw.dot(c.normal).abs());
         }
     }
-    let angles: Vec<f64> = axes.iter().zip(normals).map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees()).collect();
+    let angles: Vec<f64> = axes
+        .iter()
+        .zip(normals)
+        .map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees())
+        .collect();
     out.max_axis_normal_angle_deg = angles.iter().copied().fold(0.0, f64::max);
     out.mean_axis_normal_angle_deg = angles.iter().sum::<f64>() / angles.len().max(1) as f64;
     out.axes_from_spheres = from_spheres.iter().filter(|&&b| b).count();

@@ -63,7 +63,6 @@
 //! centre (a great-circle arc; straight for planes). The initial mesh and the live snapshots
 //! use that rule throughout.
 
-
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -86,9 +85,13 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
+use crate::reference::assumptions::{
+    coarseness_warning, kink_warning, method_warnings, SurfaceWarning,
+};
 use crate::reference::{Reference, ReferenceError};
-use crate::reference::assumptions::{coarseness_warning, kink_warning, method_warnings, SurfaceWarning};
-use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, pliant_remesh, RemeshError, SizingBounds};
+use crate::remeshing::{
+    pliant_remesh, RemeshError, RemeshRefused, SizingBounds, TooManyFaces, MAX_METHOD_FACES,
+};
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
 use initialization::initial_spheres;
@@ -110,7 +113,13 @@ pub enum StAdaptedEvent<'a> {
     /// After every solver iteration: the optimizer stage, the iteration over all stages (`done`
     /// of `total`), its energy and per-term statistics, and the current vertices and face
     /// spheres (model coordinates).
-    Iteration { progress: Progress<'a>, energy: f64, terms: &'a [TermStats], vertices: &'a [DVec3], spheres: &'a [Sphere] },
+    Iteration {
+        progress: Progress<'a>,
+        energy: f64,
+        terms: &'a [TermStats],
+        vertices: &'a [DVec3],
+        spheres: &'a [Sphere],
+    },
 }
 
 /// Why the method gave no mesh.
@@ -158,7 +167,10 @@ impl From<RemeshError> for StAdaptedError {
         match e {
             RemeshError::Cancelled => StAdaptedError::Cancelled,
             RemeshError::NoFaces => StAdaptedError::NoFaces,
-            error @ RemeshError::TargetMissed { .. } => StAdaptedError::Remesh(RemeshRefused { error, warnings: Vec::new() }),
+            error @ RemeshError::TargetMissed { .. } => StAdaptedError::Remesh(RemeshRefused {
+                error,
+                warnings: Vec::new(),
+            }),
         }
     }
 }
@@ -217,7 +229,12 @@ pub fn compute(
     timings.skip();
     let field = reference.curvature(&params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
     field
-        .usable_central_spheres(mesh.vertex_count(), diag, params.min_curvature_ratio, params.min_usable_fraction)
+        .usable_central_spheres(
+            mesh.vertex_count(),
+            diag,
+            params.min_curvature_ratio,
+            params.min_usable_fraction,
+        )
         .map_err(StAdaptedError::NoCentralSpheres)?;
     timings.lap("jet_fit");
 
@@ -225,24 +242,43 @@ pub fn compute(
     step(on_event, "remesh")?;
     timings.skip();
     let topo = reference.topology();
-    let sphere_of =
-        |i: usize| field.central_spheres.get(i).copied().unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z));
+    let sphere_of = |i: usize| {
+        field
+            .central_spheres
+            .get(i)
+            .copied()
+            .unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z))
+    };
     let bounds = SizingBounds::for_mesh(mesh, topo);
-    let sizing = params.sizing.field(mesh, topo, &sphere_of, bounds, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
+    let sizing = params
+        .sizing
+        .field(mesh, topo, &sphere_of, bounds, &mut |p| {
+            on_event(StAdaptedEvent::Progress(p))
+        })?;
     timings.lap("sizing");
-    params.sizing.check_size(mesh, sizing.as_ref(), MAX_METHOD_FACES).map_err(StAdaptedError::TooManyFaces)?;
+    params
+        .sizing
+        .check_size(mesh, sizing.as_ref(), MAX_METHOD_FACES)
+        .map_err(StAdaptedError::TooManyFaces)?;
     if let Some(s) = &sizing {
         on_event(StAdaptedEvent::Sizing { values: s.values() })?;
     }
     timings.skip();
     let remeshed = match &sizing {
-        Some(s) => pliant_remesh(mesh, s, &params.remesh, &mut |p| on_event(StAdaptedEvent::Progress(p)))?,
+        Some(s) => pliant_remesh(mesh, s, &params.remesh, &mut |p| {
+            on_event(StAdaptedEvent::Progress(p))
+        })?,
         None => mesh.clone(),
     };
     params
         .sizing
         .check_reached(remeshed.face_count())
-        .map_err(|error| StAdaptedError::Remesh(RemeshRefused { error, warnings: method_warnings(reference, &field, None) }))?;
+        .map_err(|error| {
+            StAdaptedError::Remesh(RemeshRefused {
+                error,
+                warnings: method_warnings(reference, &field, None),
+            })
+        })?;
     timings.lap("remesh");
     on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
 
@@ -258,7 +294,9 @@ pub fn compute(
     let rule = BoundaryArcRule::Parallel(DVec3::ZERO);
     let initial_sphere_mesh = SphereMesh::new(&remeshed, init.clone(), rule);
     timings.lap("init");
-    on_event(StAdaptedEvent::Initialized { sphere_mesh: &initial_sphere_mesh })?;
+    on_event(StAdaptedEvent::Initialized {
+        sphere_mesh: &initial_sphere_mesh,
+    })?;
 
     // Optimization in the normalized frame.
     step(on_event, "optimize")?;
@@ -266,20 +304,30 @@ pub fn compute(
     let frame = OptimizationFrame::new(reference, &remeshed, &init, params);
     let mut x = frame.x0.clone();
     let (mut problem, ids) = frame.problem(&params.variant_weights());
-    let mut solver = Solver::new(SolverOptions { clock: clock.0, ..SolverOptions::default() });
+    let mut solver = Solver::new(SolverOptions {
+        clock: clock.0,
+        ..SolverOptions::default()
+    });
     let total = params.total_iterations();
     let mut iteration = 0usize;
-    let run = run_stages(&mut problem, &ids, &mut x, params, &mut solver, &mut |name, rep| {
-        iteration += 1;
-        let (vertices, spheres) = frame.to_model(rep.x);
-        on_event(StAdaptedEvent::Iteration {
-            progress: Progress::new(name, iteration, total),
-            energy: rep.energy,
-            terms: rep.terms,
-            vertices: &vertices,
-            spheres: &spheres,
-        })
-    });
+    let run = run_stages(
+        &mut problem,
+        &ids,
+        &mut x,
+        params,
+        &mut solver,
+        &mut |name, rep| {
+            iteration += 1;
+            let (vertices, spheres) = frame.to_model(rep.x);
+            on_event(StAdaptedEvent::Iteration {
+                progress: Progress::new(name, iteration, total),
+                energy: rep.energy,
+                terms: rep.terms,
+                vertices: &vertices,
+                spheres: &spheres,
+            })
+        },
+    );
     if run.cancelled {
         return Err(StAdaptedError::Cancelled);
     }
@@ -298,7 +346,8 @@ pub fn compute(
     step(on_event, "metrics")?;
     timings.skip();
     let initial_shape = shape(&initial_sphere_mesh, reference);
-    let (final_metrics, panels, panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
+    let (final_metrics, panels, panel_deviations) =
+        metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
     let angle_iteration_median_ms = median(&iteration_ms);
     let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
@@ -318,11 +367,14 @@ pub fn compute(
         iteration_ms,
         angle_iteration_median_ms,
         supernodal,
-        timings_ms: if clock.0.is_some() { timings.laps } else { Vec::new() },
+        timings_ms: if clock.0.is_some() {
+            timings.laps
+        } else {
+            Vec::new()
+        },
         diag,
         variant: params.variant,
         terms,
         warnings,
     })
 }
-

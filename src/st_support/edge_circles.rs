@@ -19,7 +19,13 @@ use crate::panels::sphere_mesh::BoundaryArcRule;
 /// sin φ ≥ sin ∠(w − u, m − u) (resp. ∠(w − u, a)), else the rule plane's cut of s1 (or s2 if s1
 /// is a plane), its normal oriented like c₁ − c₂. Boundary edges: the rule plane. None when no
 /// real circle results (e.g. both spheres planes).
-pub fn edge_circle(s1: &Sphere, s2: Option<&Sphere>, u: DVec3, w: DVec3, rule: &BoundaryArcRule) -> Option<Circle> {
+pub fn edge_circle(
+    s1: &Sphere,
+    s2: Option<&Sphere>,
+    u: DVec3,
+    w: DVec3,
+    rule: &BoundaryArcRule,
+) -> Option<Circle> {
     let e = w - u;
     let (n, q_plane) = match *rule {
         BoundaryArcRule::Through(m) => {
@@ -41,7 +47,11 @@ pub fn edge_circle(s1: &Sphere, s2: Option<&Sphere>, u: DVec3, w: DVec3, rule: &
         }
     }
     let cut = |s: &Sphere| Circle::plane_cut(s, u, n);
-    let plane_circle = if s1.a != 0.0 { cut(s1) } else { s2.and_then(cut) };
+    let plane_circle = if s1.a != 0.0 {
+        cut(s1)
+    } else {
+        s2.and_then(cut)
+    };
     match plane_circle {
         Some(mut c) => {
             if let (Some(c1), Some(c2)) = (s1.center(), s2.and_then(|s| s.center())) {

@@ -27,7 +27,6 @@
 //! 7. The panels ([`crate::panels::build_panels`]), their support strips and the node axes as
 //!    segments: what is exported and shown.
 
-
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
@@ -47,18 +46,23 @@ use crate::congruence::support_structure::{
     STAR_AXIS_MIN_CONDITION,
 };
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
 use crate::progress::{Cancelled, Clock, OnProgress, Progress, Timings};
-use crate::reference::{Reference, ReferenceError};
 use crate::reference::assumptions::{is_sliver, kink_warning, method_warnings, SurfaceWarning};
-use crate::remeshing::{RemeshRefused, MAX_METHOD_FACES, TooManyFaces, local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams, Sizing, SizingBounds};
+use crate::reference::{Reference, ReferenceError};
+use crate::remeshing::{
+    local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams,
+    RemeshRefused, Sizing, SizingBounds, TooManyFaces, MAX_METHOD_FACES,
+};
 use crate::stats::mean;
-use absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams};
+use absolute_sphere::{
+    estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams,
+};
 use edge_circles::edge_circle;
 use optimize_radius::{optimize_parameter, parameter_of, with_parameter};
 
@@ -170,7 +174,10 @@ impl From<RemeshError> for StSupportError {
         match e {
             RemeshError::Cancelled => StSupportError::Cancelled,
             RemeshError::NoFaces => StSupportError::NoFaces,
-            error @ RemeshError::TargetMissed { .. } => StSupportError::Remesh(RemeshRefused { error, warnings: Vec::new() }),
+            error @ RemeshError::TargetMissed { .. } => StSupportError::Remesh(RemeshRefused {
+                error,
+                warnings: Vec::new(),
+            }),
         }
     }
 }
@@ -239,26 +246,48 @@ fn remeshed_reference(
     let (mesh, topo) = (reference.mesh(), reference.topology());
     let sizing = match params.remesh {
         Sizing::None => {
-            params.remesh.check_size(mesh, None, MAX_METHOD_FACES).map_err(StSupportError::TooManyFaces)?;
+            params
+                .remesh
+                .check_size(mesh, None, MAX_METHOD_FACES)
+                .map_err(StSupportError::TooManyFaces)?;
             return Ok(None);
         }
-        Sizing::UniformFaces(_) => params.remesh.field(mesh, topo, &|i| Sphere::plane(mesh.positions[i], DVec3::Z), SizingBounds::for_mesh(mesh, topo), progress)?,
+        Sizing::UniformFaces(_) => params.remesh.field(
+            mesh,
+            topo,
+            &|i| Sphere::plane(mesh.positions[i], DVec3::Z),
+            SizingBounds::for_mesh(mesh, topo),
+            progress,
+        )?,
         Sizing::Adaptive { .. } => {
             progress(Progress::new("sizing", 0, 1))?;
             let estimate = estimate_absolute_sphere(mesh, field, &AbsoluteSphereParams::default())?;
-            let spheres = local_spheres_orthogonal(mesh, topo, &estimate.omega, LOCAL_SPHERE_POINTS);
+            let spheres =
+                local_spheres_orthogonal(mesh, topo, &estimate.omega, LOCAL_SPHERE_POINTS);
             let mut bounds = SizingBounds::for_mesh(mesh, topo);
             bounds.g_min = mean_edge_length(mesh, topo).min(bounds.g_max);
-            params.remesh.field(mesh, topo, &|i| spheres[i], bounds, progress)?
+            params
+                .remesh
+                .field(mesh, topo, &|i| spheres[i], bounds, progress)?
         }
     };
-    let Some(sizing) = sizing else { return Ok(None) };
-    params.remesh.check_size(mesh, Some(&sizing), MAX_METHOD_FACES).map_err(StSupportError::TooManyFaces)?;
+    let Some(sizing) = sizing else {
+        return Ok(None);
+    };
+    params
+        .remesh
+        .check_size(mesh, Some(&sizing), MAX_METHOD_FACES)
+        .map_err(StSupportError::TooManyFaces)?;
     let remeshed = pliant_remesh(mesh, &sizing, &RemeshParams::default(), progress)?;
     params
         .remesh
         .check_reached(remeshed.face_count())
-        .map_err(|error| StSupportError::Remesh(RemeshRefused { error, warnings: method_warnings(reference, field, None) }))?;
+        .map_err(|error| {
+            StSupportError::Remesh(RemeshRefused {
+                error,
+                warnings: method_warnings(reference, field, None),
+            })
+        })?;
     Ok(Some(Reference::from_triangles(remeshed)))
 }
 
@@ -282,9 +311,18 @@ pub fn compute(
         }
         None => (reference, field),
     };
-    let mut result = on_mesh(work.mesh(), work.topology(), &field, params, clock, progress)?;
+    let mut result = on_mesh(
+        work.mesh(),
+        work.topology(),
+        &field,
+        params,
+        clock,
+        progress,
+    )?;
     result.warnings = warnings;
-    result.warnings.extend(kink_warning(&result.sphere_mesh.kink_angles_deg(), work));
+    result
+        .warnings
+        .extend(kink_warning(&result.sphere_mesh.kink_angles_deg(), work));
     if remeshed.is_some() {
         result.timings_ms.insert(0, timings.laps.remove(0));
     }
@@ -294,7 +332,9 @@ pub fn compute(
     let diag = result.diag;
     result.panels = build_panels(&result.sphere_mesh, DEFAULT_CHORD_TOLERANCE * diag);
     let (sm, panels) = (&result.sphere_mesh, &result.panels);
-    result.support_geometry = support_strips(&result.support_elements, |el| edge_arc_points(sm, panels, el.edge));
+    result.support_geometry = support_strips(&result.support_elements, |el| {
+        edge_arc_points(sm, panels, el.edge)
+    });
     progress(Progress::new("panels", 1, 1))?;
     timings.lap("panels");
     result.timings_ms.extend(timings.laps);
@@ -333,12 +373,16 @@ fn on_mesh(
     // --- Optimize R² (or d) ---
     let mut omega = absolute.omega;
     let mut optimized_parameter = None;
-    let families: Option<Vec<[Sphere; 2]>> =
-        params.optimize_radius.then(|| (0..nf).map(|f| Sphere::through_points_family(work.face_points(f))).collect());
+    let families: Option<Vec<[Sphere; 2]>> = params.optimize_radius.then(|| {
+        (0..nf)
+            .map(|f| Sphere::through_points_family(work.face_points(f)))
+            .collect()
+    });
     let mean_kink_estimate_deg;
     if let Some(families) = &families {
         progress(Progress::new("optimize_radius", 0, 1))?;
-        let (best, value, initial) = optimize_parameter(&work, &absolute, families, &interior, progress)?;
+        let (best, value, initial) =
+            optimize_parameter(&work, &absolute, families, &interior, progress)?;
         mean_kink_estimate_deg = initial;
         if value < initial {
             omega = with_parameter(&absolute.omega, best);
@@ -377,9 +421,17 @@ fn on_mesh(
     timer.lap("face_spheres");
     let kinks: Vec<f64> = interior
         .iter()
-        .map(|[f, g]| face_spheres[*f as usize].kink_angle(&face_spheres[*g as usize]).to_degrees())
+        .map(|[f, g]| {
+            face_spheres[*f as usize]
+                .kink_angle(&face_spheres[*g as usize])
+                .to_degrees()
+        })
         .collect();
-    let mean_kink_estimate_deg = if mean_kink_estimate_deg.is_nan() { mean(&kinks) } else { mean_kink_estimate_deg };
+    let mean_kink_estimate_deg = if mean_kink_estimate_deg.is_nan() {
+        mean(&kinks)
+    } else {
+        mean_kink_estimate_deg
+    };
     // --- Node axes ---
     let m = omega.center();
     let support_dir = |v: DVec3, n: DVec3| -> DVec3 {
@@ -399,10 +451,18 @@ fn on_mesh(
         let p = work.positions[v];
         let toward = support_dir(p, normals[v]);
         star.clear();
-        star.extend(topo.vertex_faces(v).iter().map(|&f| face_spheres[f as usize]));
+        star.extend(
+            topo.vertex_faces(v)
+                .iter()
+                .map(|&f| face_spheres[f as usize]),
+        );
         let mut dir = toward;
         if let Some(axis) = star_axis(&star, p).filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION) {
-            dir = if axis.direction.dot(toward) < 0.0 { -axis.direction } else { axis.direction };
+            dir = if axis.direction.dot(toward) < 0.0 {
+                -axis.direction
+            } else {
+                axis.direction
+            };
             second_points[v] = axis.second_point;
             axis_from_spheres[v] = true;
         }
@@ -424,20 +484,33 @@ fn on_mesh(
             progress(Progress::new("support_elements", e, topo.edges().len()))?;
         }
         let faces: Vec<u32> = topo.edge_faces(e).iter().map(|&(f, _)| f).collect();
-        let (u, w) = (work.positions[edge[0] as usize], work.positions[edge[1] as usize]);
+        let (u, w) = (
+            work.positions[edge[0] as usize],
+            work.positions[edge[1] as usize],
+        );
         let circle = faces.first().and_then(|&f1| {
             let s2 = (faces.len() == 2).then(|| &face_spheres[faces[1] as usize]);
             edge_circle(&face_spheres[f1 as usize], s2, u, w, &rule)
         });
         let element = circle.and_then(|c| {
-            support_element(*edge, c, [u, w], [node_axes[edge[0] as usize].1, node_axes[edge[1] as usize].1], depth)
+            support_element(
+                *edge,
+                c,
+                [u, w],
+                [node_axes[edge[0] as usize].1, node_axes[edge[1] as usize].1],
+                depth,
+            )
         });
         match element {
             Some(el) => support_elements.push(el),
             None => edges_without_support += 1,
         }
     }
-    progress(Progress::new("support_elements", topo.edges().len(), topo.edges().len()))?;
+    progress(Progress::new(
+        "support_elements",
+        topo.edges().len(),
+        topo.edges().len(),
+    ))?;
     timer.lap("support_elements");
 
     // --- Second envelope ---
@@ -462,23 +535,33 @@ fn on_mesh(
     };
     for (f, s) in face_spheres.iter().enumerate() {
         for p in work.face_points(f) {
-            metrics.max_vertex_sphere_residual = metrics.max_vertex_sphere_residual.max(s.distance(p) / diag);
+            metrics.max_vertex_sphere_residual =
+                metrics.max_vertex_sphere_residual.max(s.distance(p) / diag);
         }
         let defect = omega.orthogonality_defect(s);
         match omega {
             AbsoluteSphere::Sphere { .. } => {
-                let rel = if s.a.abs() > 1e-300 { defect / (diag * diag) } else { defect / diag };
+                let rel = if s.a.abs() > 1e-300 {
+                    defect / (diag * diag)
+                } else {
+                    defect / diag
+                };
                 metrics.max_orthogonality_residual = metrics.max_orthogonality_residual.max(rel);
             }
             AbsoluteSphere::Plane { .. } => {
-                metrics.max_center_plane_residual = metrics.max_center_plane_residual.max(defect / diag);
+                metrics.max_center_plane_residual =
+                    metrics.max_center_plane_residual.max(defect / diag);
             }
         }
     }
     let mut angle_sum = 0.0;
     for v in 0..nv {
         let (p, d) = node_axes[v];
-        let a = d.cross(normals[v]).length().atan2(d.dot(normals[v]).abs()).to_degrees();
+        let a = d
+            .cross(normals[v])
+            .length()
+            .atan2(d.dot(normals[v]).abs())
+            .to_degrees();
         angle_sum += a;
         metrics.max_axis_normal_angle_deg = metrics.max_axis_normal_angle_deg.max(a);
         if axis_from_spheres[v] {

@@ -11,7 +11,11 @@ use crate::reference::Reference;
 pub const STAGE: &str = "curvature";
 
 /// Fits the jets (or takes the cached fit), sends the per-vertex fields, returns the summary.
-pub fn run(reference: &Reference, params: &JetParams, sink: &mut dyn Sink) -> Result<CurvatureSummary, StageError> {
+pub fn run(
+    reference: &Reference,
+    params: &JetParams,
+    sink: &mut dyn Sink,
+) -> Result<CurvatureSummary, StageError> {
     let start = sink.now_ms();
     let field = reference.curvature(params, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
     sink.snapshot(STAGE, 1, curvature_fields(&field));

@@ -8,7 +8,9 @@ use super::StageError;
 use crate::export::{ExportFile, Metrics, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field};
-use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
+use crate::pipeline::panel_output::{
+    export_panels, f32s, panel_fields, support_fields, PanelExport,
+};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
 use crate::reference::Reference;
@@ -35,14 +37,25 @@ pub struct StSupportSummary {
 }
 
 /// Runs the method on `reference`, sends its display fields and files; returns the summary.
-pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<StSupportSummary, StageError> {
+pub fn run(
+    reference: &Reference,
+    params: &StSupportParams,
+    clock: Clock,
+    sink: &mut dyn Sink,
+) -> Result<StSupportSummary, StageError> {
     let start = sink.now_ms();
-    let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
+    let result = compute(reference, params, clock, &mut |p| {
+        report(sink, STAGE, p, Vec::new(), start)
+    })?;
     let (report, files) = export(reference, &result, params, clock);
     sink.snapshot(STAGE, 1, display_fields(&result));
     sink.files(STAGE, files);
     let a = &result.absolute;
-    let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
+    let r2_values = if a.at_infinity {
+        &a.d_samples
+    } else {
+        &a.r2_samples
+    };
     Ok(StSupportSummary {
         distinct_radii: report.metrics.distinct_radii.unwrap_or(0),
         report,
@@ -58,7 +71,12 @@ pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: 
 
 /// The report (method "st-support") and the export files of a result; distances are measured to
 /// the reference as loaded, also when the method remeshed it.
-pub fn export(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>) {
+pub fn export(
+    reference: &Reference,
+    result: &StSupportResult,
+    params: &StSupportParams,
+    clock: Clock,
+) -> (Report, Vec<ExportFile>) {
     let m = &result.metrics;
     let metrics = Metrics {
         max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
@@ -75,21 +93,40 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
         ..Metrics::default()
     };
     let axes = result.node_axis_segments();
-    let export = PanelExport::new(STAGE, &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, metrics, &result.timings_ms)
-        .with_extras(crate::export::absolute_sphere_extras(&result.omega))
-        .with_support(&result.support_geometry, &result.support_elements, &axes)
-        .with_absolute_sphere(&result.omega)
-        .with_warnings(&result.warnings);
+    let export = PanelExport::new(
+        STAGE,
+        &result.sphere_mesh,
+        &result.panels,
+        result.diag,
+        params.radius_tolerance,
+        metrics,
+        &result.timings_ms,
+    )
+    .with_extras(crate::export::absolute_sphere_extras(&result.omega))
+    .with_support(&result.support_geometry, &result.support_elements, &axes)
+    .with_absolute_sphere(&result.omega)
+    .with_warnings(&result.warnings);
     export_panels(reference, export, clock)
 }
 
 /// Display fields: panels, support, node axes, second envelope.
 pub fn display_fields(result: &StSupportResult) -> Vec<Field> {
     let mut fields = panel_fields(&result.panels);
-    fields.extend(support_fields(&result.support_geometry, &result.node_axis_segments()));
+    fields.extend(support_fields(
+        &result.support_geometry,
+        &result.node_axis_segments(),
+    ));
     if let Some(env) = &result.second_envelope {
-        fields.push(Field::f32(field::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));
-        fields.push(Field::u32(field::ENVELOPE_TRIANGLES, 3, env.triangles.iter().flatten().copied().collect()));
+        fields.push(Field::f32(
+            field::ENVELOPE_POSITIONS,
+            3,
+            f32s(env.positions.iter().copied()),
+        ));
+        fields.push(Field::u32(
+            field::ENVELOPE_TRIANGLES,
+            3,
+            env.triangles.iter().flatten().copied().collect(),
+        ));
     }
     fields
 }

@@ -6,7 +6,10 @@ use crate::stats::percentile;
 
 /// Whether the page is cross-origin isolated (shared memory, so Cancel reaches the worker).
 fn cross_origin_isolated() -> bool {
-    js_sys::Reflect::get(&js_sys::global(), &"crossOriginIsolated".into()).ok().and_then(|v| v.as_bool()).unwrap_or(false)
+    js_sys::Reflect::get(&js_sys::global(), &"crossOriginIsolated".into())
+        .ok()
+        .and_then(|v| v.as_bool())
+        .unwrap_or(false)
 }
 
 impl App {
@@ -21,8 +24,11 @@ impl App {
             ),
             None => (0, 0, 0, 0, String::new()),
         };
-        let curvature_ready =
-            self.loaded.as_ref().and_then(|l| l.curvature.as_ref()).is_some_and(|c| c.summary.is_some());
+        let curvature_ready = self
+            .loaded
+            .as_ref()
+            .and_then(|l| l.curvature.as_ref())
+            .is_some_and(|c| c.summary.is_some());
         let vp = self.viewport;
         let mut state = serde_json::json!({
             "ready": self.drawn,
@@ -71,17 +77,21 @@ impl App {
             "ready": st_support.is_some_and(|s| s.summary.is_some()),
             "panels": st_support.and_then(|s| s.summary.as_ref()).map_or(0, |s| s.report.output.panels),
         });
-        state["st_adapted"] = serde_json::json!(self.loaded.as_ref().and_then(|l| l.st_adapted.as_ref()).map(|a| serde_json::json!({
-            "sizing": a.sizing.as_ref().map_or(0, Vec::len),
-            "remeshed_faces": a.remeshed.as_ref().map_or(0, |m| m.triangles.len() / 3),
-            "panel_iteration": a.panel_iteration,
-            "panel_snapshots": a.panel_snapshots,
-            "panel_triangles": a.panels.as_ref().map_or(0, |m| m.triangles.len() / 3),
-            "energies": a.energy.len(),
-            "ready": a.summary.is_some(),
-            "panels": a.summary.as_ref().map_or(0, |s| s.report.output.panels),
-            "timings_ms": a.summary.as_ref().map(|s| &s.report.timings_ms),
-        })));
+        state["st_adapted"] = serde_json::json!(self
+            .loaded
+            .as_ref()
+            .and_then(|l| l.st_adapted.as_ref())
+            .map(|a| serde_json::json!({
+                "sizing": a.sizing.as_ref().map_or(0, Vec::len),
+                "remeshed_faces": a.remeshed.as_ref().map_or(0, |m| m.triangles.len() / 3),
+                "panel_iteration": a.panel_iteration,
+                "panel_snapshots": a.panel_snapshots,
+                "panel_triangles": a.panels.as_ref().map_or(0, |m| m.triangles.len() / 3),
+                "energies": a.energy.len(),
+                "ready": a.summary.is_some(),
+                "panels": a.summary.as_ref().map_or(0, |s| s.report.output.panels),
+                "timings_ms": a.summary.as_ref().map(|s| &s.report.timings_ms),
+            })));
         state["sq"] = serde_json::json!(self.loaded.as_ref().and_then(|l| l.sq.as_ref()).map(|v| serde_json::json!({
             "line_snapshots": v.line_snapshots,
             "line_iteration": v.line_iteration,
@@ -108,7 +118,10 @@ impl App {
         })));
         let state = state.to_string();
         if state != self.last_state {
-            if let Some(el) = web_sys::window().and_then(|w| w.document()).and_then(|d| d.get_element_by_id("sf-state")) {
+            if let Some(el) = web_sys::window()
+                .and_then(|w| w.document())
+                .and_then(|d| d.get_element_by_id("sf-state"))
+            {
                 el.set_text_content(Some(&state));
             }
             self.last_state = state;

@@ -4,7 +4,9 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::state::{mesh_from_fields, CurvatureView, Download, Loaded, StSupportView, MESH_FIELDS, PANEL_FIELDS};
+use super::state::{
+    mesh_from_fields, CurvatureView, Download, Loaded, StSupportView, MESH_FIELDS, PANEL_FIELDS,
+};
 use super::App;
 use crate::design_link::Reference;
 use crate::pipeline::fields::{field, find, Field, FieldData};
@@ -17,10 +19,14 @@ use crate::web::worker_client::Incoming;
 impl App {
     pub(super) fn handle_messages(&mut self) {
         loop {
-            let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) else { break };
+            let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) else {
+                break;
+            };
             match item {
                 Incoming::Crashed(message) => {
-                    self.error = Some(format!("{message}. The worker was restarted; your design is kept."));
+                    self.error = Some(format!(
+                        "{message}. The worker was restarted; your design is kept."
+                    ));
                     self.busy = None;
                     if let Some(w) = self.worker.as_mut() {
                         w.restart();
@@ -40,7 +46,11 @@ impl App {
         let polled = self.worker.as_ref().map_or(0, |w| w.polled());
         if self.cancel_posted.is_some_and(|posted| polled >= posted) {
             self.cancel_posted = None;
-            let energies = self.loaded.as_ref().and_then(|l| l.st_adapted.as_ref()).map_or(0, |a| a.energy.len());
+            let energies = self
+                .loaded
+                .as_ref()
+                .and_then(|l| l.st_adapted.as_ref())
+                .map_or(0, |a| a.energy.len());
             self.iterations_at_cancel = Some(energies);
         }
     }
@@ -82,13 +92,19 @@ impl App {
                 }
                 self.loaded = Some(Loaded::new(info));
             }
-            FromWorker::Snapshot { stage, .. } if stage == "reference" => self.install_geometry(&fields),
+            FromWorker::Snapshot { stage, .. } if stage == "reference" => {
+                self.install_geometry(&fields)
+            }
             FromWorker::Files { mime, .. } => {
                 self.downloads = fields
                     .into_iter()
                     .zip(mime)
                     .filter_map(|(f, m)| match f.data {
-                        FieldData::Bytes(b) => Some(Download { name: f.name, mime: m, bytes: b }),
+                        FieldData::Bytes(b) => Some(Download {
+                            name: f.name,
+                            mime: m,
+                            bytes: b,
+                        }),
                         _ => None,
                     })
                     .collect();
@@ -98,31 +114,53 @@ impl App {
                     l.st_support = Some(StSupportView::from_fields(&fields, &mut self.generation));
                 }
             }
-            FromWorker::Snapshot { stage, iteration, .. }
-                if [st_adapted::STAGE, st_adapted::SIZING_STAGE, st_adapted::REMESHED_STAGE].contains(&stage.as_str()) =>
+            FromWorker::Snapshot {
+                stage, iteration, ..
+            } if [
+                st_adapted::STAGE,
+                st_adapted::SIZING_STAGE,
+                st_adapted::REMESHED_STAGE,
+            ]
+            .contains(&stage.as_str()) =>
             {
-                let Some(a) = self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()) else { return };
+                let Some(a) = self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()) else {
+                    return;
+                };
                 if stage == st_adapted::SIZING_STAGE {
-                    a.sizing = find(&fields, field::SIZING).and_then(Field::as_f32).map(<[f32]>::to_vec);
+                    a.sizing = find(&fields, field::SIZING)
+                        .and_then(Field::as_f32)
+                        .map(<[f32]>::to_vec);
                     self.scalars = None;
                 } else if stage == st_adapted::REMESHED_STAGE {
                     a.remeshed = Some(mesh_from_fields(&fields, &mut self.generation, MESH_FIELDS));
                 } else {
-                    a.panels = Some(mesh_from_fields(&fields, &mut self.generation, PANEL_FIELDS));
+                    a.panels = Some(mesh_from_fields(
+                        &fields,
+                        &mut self.generation,
+                        PANEL_FIELDS,
+                    ));
                     a.panel_iteration = iteration;
                     a.panel_snapshots += 1;
                 }
             }
-            FromWorker::Snapshot { stage, iteration, .. } if stage == sq::STAGE => {
+            FromWorker::Snapshot {
+                stage, iteration, ..
+            } if stage == sq::STAGE => {
                 if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
                     v.install(&fields, iteration, &mut self.generation);
                 }
             }
             FromWorker::Snapshot { stage, .. } if stage == sq::REFUSED_STAGE => {
                 if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()) {
-                    let values = find(&fields, field::MEAN_CURVATURE).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
+                    let values = find(&fields, field::MEAN_CURVATURE)
+                        .and_then(Field::as_f32)
+                        .map(<[f32]>::to_vec)
+                        .unwrap_or_default();
                     self.generation += 1;
-                    v.refused_h = Some(Arc::new(crate::web::viewer::ScalarData { generation: self.generation, values }));
+                    v.refused_h = Some(Arc::new(crate::web::viewer::ScalarData {
+                        generation: self.generation,
+                        values,
+                    }));
                 }
             }
             FromWorker::Snapshot { .. } => {
@@ -133,13 +171,22 @@ impl App {
                 }
             }
             FromWorker::Progress(p) => {
-                if let (Some(a), Some(total)) = (self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()), p.energies.first()) {
+                if let (Some(a), Some(total)) = (
+                    self.loaded.as_mut().and_then(|l| l.st_adapted.as_mut()),
+                    p.energies.first(),
+                ) {
                     if p.stage == st_adapted::STAGE {
                         a.energy.push((p.iteration, p.detail.clone(), total.value));
                     }
                 }
-                if let Some(v) = self.loaded.as_mut().and_then(|l| l.sq.as_mut()).filter(|_| p.stage == sq::STAGE && !p.energies.is_empty()) {
-                    v.energy.push((p.iteration, p.detail.clone(), p.energies.clone()));
+                if let Some(v) = self
+                    .loaded
+                    .as_mut()
+                    .and_then(|l| l.sq.as_mut())
+                    .filter(|_| p.stage == sq::STAGE && !p.energies.is_empty())
+                {
+                    v.energy
+                        .push((p.iteration, p.detail.clone(), p.energies.clone()));
                 }
                 if let Some(b) = self.busy.as_mut() {
                     b.progress = Some(p);
@@ -196,9 +243,21 @@ impl App {
     }
 
     fn install_geometry(&mut self, fields: &[Field]) {
-        let Some(l) = self.loaded.as_mut() else { return };
-        let get_f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
-        let get_u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+        let Some(l) = self.loaded.as_mut() else {
+            return;
+        };
+        let get_f = |n| {
+            find(fields, n)
+                .and_then(Field::as_f32)
+                .map(<[f32]>::to_vec)
+                .unwrap_or_default()
+        };
+        let get_u = |n| {
+            find(fields, n)
+                .and_then(Field::as_u32)
+                .map(<[u32]>::to_vec)
+                .unwrap_or_default()
+        };
         self.generation += 1;
         let mesh = MeshData {
             generation: self.generation,
@@ -231,10 +290,10 @@ impl App {
             self.camera.yaw = c.yaw as f32;
             self.camera.pitch = c.pitch as f32;
             self.camera.distance = c.distance as f32;
-            self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
+            self.camera.target =
+                Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
         }
         self.busy = None;
         self.run_method();
     }
 }
-

@@ -117,7 +117,10 @@ impl App {
     pub fn new(cc: &eframe::CreationContext<'_>) -> Self {
         let mut backend = String::new();
         if let Some(rs) = cc.wgpu_render_state.as_ref() {
-            rs.renderer.write().callback_resources.insert(ViewerResources::new(&rs.device, rs.target_format));
+            rs.renderer
+                .write()
+                .callback_resources
+                .insert(ViewerResources::new(&rs.device, rs.target_format));
             backend = match rs.adapter.get_info().backend {
                 egui_wgpu::wgpu::Backend::BrowserWebGpu => "WebGPU".into(),
                 egui_wgpu::wgpu::Backend::Gl => "WebGL2".into(),
@@ -130,7 +133,9 @@ impl App {
         let ctx = cc.egui_ctx.clone();
         let repaint: Rc<dyn Fn(Wake)> = Rc::new(move |wake| match wake {
             Wake::Now => ctx.request_repaint(),
-            Wake::Soon => ctx.request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS)),
+            Wake::Soon => {
+                ctx.request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS))
+            }
         });
         let (worker, error) = match WorkerClient::spawn(repaint) {
             Ok(w) => (Some(w), None),
@@ -146,13 +151,16 @@ impl App {
         let download_requests = Rc::new(RefCell::new(Vec::new()));
         let download_listener = {
             let (queue, ctx) = (download_requests.clone(), cc.egui_ctx.clone());
-            let c = Closure::<dyn FnMut(web_sys::CustomEvent)>::new(move |ev: web_sys::CustomEvent| {
-                if let Some(name) = ev.detail().as_string() {
-                    queue.borrow_mut().push(name);
-                    ctx.request_repaint();
-                }
+            let c =
+                Closure::<dyn FnMut(web_sys::CustomEvent)>::new(move |ev: web_sys::CustomEvent| {
+                    if let Some(name) = ev.detail().as_string() {
+                        queue.borrow_mut().push(name);
+                        ctx.request_repaint();
+                    }
+                });
+            web_sys::window().map(|w| {
+                w.add_event_listener_with_callback("sf-download", c.as_ref().unchecked_ref())
             });
-            web_sys::window().map(|w| w.add_event_listener_with_callback("sf-download", c.as_ref().unchecked_ref()));
             Some(c)
         };
         let mut app = Self {
@@ -243,7 +251,9 @@ impl App {
     fn send(&mut self, msg: &ToWorker, file: Option<&web_sys::File>) {
         match &self.worker {
             Some(w) => w.send(msg, file),
-            None => self.error = Some("The pipeline worker is not running; reload the page.".into()),
+            None => {
+                self.error = Some("The pipeline worker is not running; reload the page.".into())
+            }
         }
     }
 
@@ -272,7 +282,10 @@ impl App {
             self.scalars = None;
         }
         self.downloads.clear();
-        let last = stages.last().map(|s| s.name().to_string()).unwrap_or_default();
+        let last = stages
+            .last()
+            .map(|s| s.name().to_string())
+            .unwrap_or_default();
         self.busy = Some(Busy::new(last));
         for stage in stages {
             self.send(&ToWorker::Run(Box::new(stage)), None);
@@ -289,7 +302,8 @@ impl App {
                 self.note_cancel_point();
             } else {
                 // Without shared memory the worker was replaced; its Ready reloads the design.
-                self.notices.push("Cancelled (the worker was restarted).".into());
+                self.notices
+                    .push("Cancelled (the worker was restarted).".into());
             }
         }
         self.busy = None;
@@ -335,144 +349,169 @@ impl App {
     }
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
-        let out = egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-            if let Some(err) = self.error.clone() {
-                egui::Frame::new().fill(Color32::from_rgb(90, 24, 24)).inner_margin(6.0).corner_radius(4.0).show(ui, |ui| {
-                    ui.label(RichText::new(err).color(Color32::WHITE));
-                    ui.horizontal(|ui| {
-                        if let Some(n) = self.remesh_to {
-                            if ui.small_button(format!("Remesh to about {n} faces and run")).clicked() {
-                                match self.design.method {
-                                    Method::StAdapted => self.design.st_adapted.sizing = Sizing::UniformFaces(n),
-                                    Method::StSupport => self.design.st_support.remesh = Sizing::UniformFaces(n),
-                                    _ => {}
+        let out = egui::ScrollArea::vertical()
+            .auto_shrink([false, false])
+            .show(ui, |ui| {
+                if let Some(err) = self.error.clone() {
+                    egui::Frame::new()
+                        .fill(Color32::from_rgb(90, 24, 24))
+                        .inner_margin(6.0)
+                        .corner_radius(4.0)
+                        .show(ui, |ui| {
+                            ui.label(RichText::new(err).color(Color32::WHITE));
+                            ui.horizontal(|ui| {
+                                if let Some(n) = self.remesh_to {
+                                    if ui
+                                        .small_button(format!("Remesh to about {n} faces and run"))
+                                        .clicked()
+                                    {
+                                        match self.design.method {
+                                            Method::StAdapted => {
+                                                self.design.st_adapted.sizing =
+                                                    Sizing::UniformFaces(n)
+                                            }
+                                            Method::StSupport => {
+                                                self.design.st_support.remesh =
+                                                    Sizing::UniformFaces(n)
+                                            }
+                                            _ => {}
+                                        }
+                                        (self.error, self.remesh_to) = (None, None);
+                                        self.run_method();
+                                    }
                                 }
-                                (self.error, self.remesh_to) = (None, None);
-                                self.run_method();
-                            }
-                        }
-                        if ui.small_button("Dismiss").clicked() {
-                            (self.error, self.remesh_to) = (None, None);
+                                if ui.small_button("Dismiss").clicked() {
+                                    (self.error, self.remesh_to) = (None, None);
+                                }
+                            });
+                        });
+                    ui.add_space(6.0);
+                }
+                ui.strong("Method");
+                let mut method = self.design.method;
+                egui::ComboBox::from_id_salt("method")
+                    .selected_text(method.title())
+                    .show_ui(ui, |ui| {
+                        for m in Method::ALL {
+                            ui.selectable_value(&mut method, m, m.title());
                         }
                     });
-                });
-                ui.add_space(6.0);
-            }
-            ui.strong("Method");
-            let mut method = self.design.method;
-            egui::ComboBox::from_id_salt("method").selected_text(method.title()).show_ui(ui, |ui| {
-                for m in Method::ALL {
-                    ui.selectable_value(&mut method, m, m.title());
-                }
-            });
-            if method != self.design.method {
-                self.design.method = method;
-                if method == Method::StAdapted && self.design.color == ColorBy::MeanCurvature {
-                    self.design.color = ColorBy::Sizing;
-                } else if method != Method::StAdapted && self.design.color == ColorBy::Sizing {
-                    self.design.color = ColorBy::MeanCurvature;
-                }
-                self.run_method();
-            }
-            ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
-            let mut jet = self.design.jet.clone();
-            let mut degree = jet.degree as u32;
-            ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
-            jet.degree = degree as u8;
-            ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
-            if jet != self.design.jet {
-                self.design.jet = jet;
-                self.run_method();
-            }
-            let changed = match self.design.method {
-                Method::Curvature => false,
-                Method::StAdapted => panels::st_adapted::controls(
-                    ui,
-                    &mut self.design.st_adapted,
-                    &mut self.st_adapted_sizing,
-                    &mut self.show_reference,
-                    &mut self.show_remeshed,
-                ),
-                Method::StSupport => panels::st_support::controls(
-                    ui,
-                    &mut self.design.st_support,
-                    &mut self.st_support_remesh,
-                    &mut self.show_reference,
-                    &mut self.show_envelope,
-                ),
-                Method::Sq => panels::sq::controls(ui, &mut self.design.sq, &mut self.sq_display),
-            };
-            self.params_dirty |= changed;
-            if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
-                self.params_dirty = false;
-                self.run_method();
-            }
-            ui.separator();
-            ui.strong("Display");
-            ui.horizontal(|ui| {
-                for s in Shading::ALL {
-                    ui.radio_value(&mut self.design.shading, s, s.key());
-                }
-            });
-            ui.checkbox(&mut self.design.edges, "edges");
-            egui::ComboBox::from_label("colour by").selected_text(self.design.color.label()).show_ui(ui, |ui| {
-                for c in ColorBy::ALL {
-                    ui.selectable_value(&mut self.design.color, c, c.label());
-                }
-            });
-            ui.separator();
-            if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
-                self.send(&ToWorker::PickObject(k), None);
-                self.busy = Some(Busy::new("import"));
-            }
-            if let Some(l) = &self.loaded {
-                let results = ui.scope(|ui| match self.design.method {
-                    Method::Curvature => {}
-                    Method::StAdapted => {
-                        if let Some(v) = &l.st_adapted {
-                            panels::st_adapted::results(ui, v);
-                        }
+                if method != self.design.method {
+                    self.design.method = method;
+                    if method == Method::StAdapted && self.design.color == ColorBy::MeanCurvature {
+                        self.design.color = ColorBy::Sizing;
+                    } else if method != Method::StAdapted && self.design.color == ColorBy::Sizing {
+                        self.design.color = ColorBy::MeanCurvature;
                     }
-                    Method::StSupport => {
-                        if let Some(v) = &l.st_support {
-                            panels::st_support::results(ui, v);
-                        }
-                    }
+                    self.run_method();
+                }
+                ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
+                let mut jet = self.design.jet.clone();
+                let mut degree = jet.degree as u32;
+                ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
+                jet.degree = degree as u8;
+                ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
+                if jet != self.design.jet {
+                    self.design.jet = jet;
+                    self.run_method();
+                }
+                let changed = match self.design.method {
+                    Method::Curvature => false,
+                    Method::StAdapted => panels::st_adapted::controls(
+                        ui,
+                        &mut self.design.st_adapted,
+                        &mut self.st_adapted_sizing,
+                        &mut self.show_reference,
+                        &mut self.show_remeshed,
+                    ),
+                    Method::StSupport => panels::st_support::controls(
+                        ui,
+                        &mut self.design.st_support,
+                        &mut self.st_support_remesh,
+                        &mut self.show_reference,
+                        &mut self.show_envelope,
+                    ),
                     Method::Sq => {
-                        if let Some(v) = &l.sq {
-                            panels::sq::results(ui, v, &self.design.sq);
-                        }
+                        panels::sq::controls(ui, &mut self.design.sq, &mut self.sq_display)
+                    }
+                };
+                self.params_dirty |= changed;
+                if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
+                    self.params_dirty = false;
+                    self.run_method();
+                }
+                ui.separator();
+                ui.strong("Display");
+                ui.horizontal(|ui| {
+                    for s in Shading::ALL {
+                        ui.radio_value(&mut self.design.shading, s, s.key());
                     }
                 });
-                let bottom = results.response.rect.left_bottom() + egui::vec2(1.0, -1.0);
-                self.results_visible = ui.clip_rect().contains(bottom);
-            }
-            if !self.downloads.is_empty() {
+                ui.checkbox(&mut self.design.edges, "edges");
+                egui::ComboBox::from_label("colour by")
+                    .selected_text(self.design.color.label())
+                    .show_ui(ui, |ui| {
+                        for c in ColorBy::ALL {
+                            ui.selectable_value(&mut self.design.color, c, c.label());
+                        }
+                    });
                 ui.separator();
-                ui.strong("Downloads");
-                ui.horizontal_wrapped(|ui| {
-                    for d in &self.downloads {
-                        if ui.button(&d.name).on_hover_text(format!("{} bytes", d.bytes.len())).clicked() {
-                            if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
-                                self.error = Some(format!("could not save {}: {e:?}", d.name));
+                if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
+                    self.send(&ToWorker::PickObject(k), None);
+                    self.busy = Some(Busy::new("import"));
+                }
+                if let Some(l) = &self.loaded {
+                    let results = ui.scope(|ui| match self.design.method {
+                        Method::Curvature => {}
+                        Method::StAdapted => {
+                            if let Some(v) = &l.st_adapted {
+                                panels::st_adapted::results(ui, v);
                             }
                         }
-                    }
-                });
-            }
-            if !self.notices.is_empty() {
-                ui.separator();
-                ui.horizontal(|ui| {
-                    ui.strong("Notices");
-                    if ui.small_button("clear").clicked() {
-                        self.notices.clear();
-                    }
-                });
-                for n in self.notices.iter().rev().take(8) {
-                    ui.label(RichText::new(n).small());
+                        Method::StSupport => {
+                            if let Some(v) = &l.st_support {
+                                panels::st_support::results(ui, v);
+                            }
+                        }
+                        Method::Sq => {
+                            if let Some(v) = &l.sq {
+                                panels::sq::results(ui, v, &self.design.sq);
+                            }
+                        }
+                    });
+                    let bottom = results.response.rect.left_bottom() + egui::vec2(1.0, -1.0);
+                    self.results_visible = ui.clip_rect().contains(bottom);
                 }
-            }
-        });
+                if !self.downloads.is_empty() {
+                    ui.separator();
+                    ui.strong("Downloads");
+                    ui.horizontal_wrapped(|ui| {
+                        for d in &self.downloads {
+                            if ui
+                                .button(&d.name)
+                                .on_hover_text(format!("{} bytes", d.bytes.len()))
+                                .clicked()
+                            {
+                                if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
+                                    self.error = Some(format!("could not save {}: {e:?}", d.name));
+                                }
+                            }
+                        }
+                    });
+                }
+                if !self.notices.is_empty() {
+                    ui.separator();
+                    ui.horizontal(|ui| {
+                        ui.strong("Notices");
+                        if ui.small_button("clear").clicked() {
+                            self.notices.clear();
+                        }
+                    });
+                    for n in self.notices.iter().rev().take(8) {
+                        ui.label(RichText::new(n).small());
+                    }
+                }
+            });
         self.side_panel_heights = (out.content_size.y, out.inner_rect.height());
     }
 
@@ -502,7 +541,9 @@ impl eframe::App for App {
                         self.error = Some(format!("could not save {name}: {e:?}"));
                     }
                 }
-                None => self.notices.push(format!("no file named '{name}' to download yet")),
+                None => self
+                    .notices
+                    .push(format!("no file named '{name}' to download yet")),
             }
         }
         let crashes = std::mem::take(&mut *self.crash_requests.borrow_mut());
@@ -514,8 +555,13 @@ impl eframe::App for App {
         }
 
         // Dropped files (eframe) and picked files (the Open… dialog).
-        let dropped: Vec<web_sys::File> =
-            ui.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.web_file().cloned()).collect());
+        let dropped: Vec<web_sys::File> = ui.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .filter_map(|f| f.web_file().cloned())
+                .collect()
+        });
         let picked: Vec<web_sys::File> = self.picked_files.borrow_mut().drain(..).collect();
         if let Some(f) = dropped.into_iter().chain(picked).last() {
             self.load_file(f);
@@ -526,8 +572,17 @@ impl eframe::App for App {
             egui::Panel::bottom("progress").show(ui, |ui| {
                 ui.horizontal(|ui| {
                     let (frac, text) = match self.busy.as_ref().and_then(|b| b.progress.as_ref()) {
-                        Some(p) if p.total > 0 => (p.iteration as f32 / p.total as f32, format!("{} {} {}/{}", p.stage, p.detail, p.iteration, p.total)),
-                        _ => (0.0, self.busy.as_ref().map(|b| b.stage.clone()).unwrap_or_default()),
+                        Some(p) if p.total > 0 => (
+                            p.iteration as f32 / p.total as f32,
+                            format!("{} {} {}/{}", p.stage, p.detail, p.iteration, p.total),
+                        ),
+                        _ => (
+                            0.0,
+                            self.busy
+                                .as_ref()
+                                .map(|b| b.stage.clone())
+                                .unwrap_or_default(),
+                        ),
                     };
                     if ui.button("Cancel").clicked() {
                         self.cancel();
@@ -538,16 +593,29 @@ impl eframe::App for App {
         }
         if let (None, Some(missed)) = (&self.busy, &self.missed_guarantees) {
             egui::Panel::bottom("verdict").show(ui, |ui| {
-                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {missed}")).strong());
+                ui.colored_label(
+                    panels::MISSED_COLOR,
+                    RichText::new(format!("✘ {missed}")).strong(),
+                );
             });
         }
-        egui::Panel::left("side").default_size(290.0).resizable(true).show(ui, |ui| self.side_panel(ui));
+        egui::Panel::left("side")
+            .default_size(290.0)
+            .resizable(true)
+            .show(ui, |ui| self.side_panel(ui));
         let hovering = ui.input(|i| !i.raw.hovered_files.is_empty());
         egui::CentralPanel::no_frame().show(ui, |ui| {
             self.viewport(ui);
             if hovering {
-                ui.painter().rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
-                ui.painter().text(self.viewport.center(), egui::Align2::CENTER_CENTER, "Drop OBJ, glTF, GLB, a B-spline .json or a Rhino .3dm to load", egui::FontId::proportional(22.0), Color32::WHITE);
+                ui.painter()
+                    .rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
+                ui.painter().text(
+                    self.viewport.center(),
+                    egui::Align2::CENTER_CENTER,
+                    "Drop OBJ, glTF, GLB, a B-spline .json or a Rhino .3dm to load",
+                    egui::FontId::proportional(22.0),
+                    Color32::WHITE,
+                );
             }
         });
         let dragging = ui.input(|i| i.pointer.any_down());
@@ -561,7 +629,8 @@ impl eframe::App for App {
             ui.ctx().request_repaint();
         } else if self.busy.is_some() {
             // The elapsed time ticks; worker messages wake the view sooner.
-            ui.ctx().request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS));
+            ui.ctx()
+                .request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS));
         }
     }
 

@@ -7,9 +7,9 @@ use glam::Vec3;
 
 use crate::congruence::central_spheres::CurvatureSummary;
 use crate::design_link::ColorBy;
+use crate::pipeline::fields::Energy;
 use crate::pipeline::fields::{field, find, Field, StageProgress};
 use crate::pipeline::protocol::ReferenceInfo;
-use crate::pipeline::fields::Energy;
 use crate::pipeline::stages::sq::SqSummary;
 use crate::pipeline::stages::st_adapted::StAdaptedSummary;
 use crate::pipeline::stages::st_support::StSupportSummary;
@@ -105,14 +105,23 @@ pub const CROSS_FIELD_BINS: usize = 6;
 
 /// Line segments (point pairs) of field `name` as a display mesh of edges.
 pub fn segments_mesh(fields: &[Field], name: &str, generation: &mut u64) -> Option<Arc<MeshData>> {
-    Some(segment_mesh(find(fields, name).and_then(Field::as_f32)?.to_vec(), generation))
+    Some(segment_mesh(
+        find(fields, name).and_then(Field::as_f32)?.to_vec(),
+        generation,
+    ))
 }
 
 /// Point pairs as a display mesh of edges, with a fresh generation.
 fn segment_mesh(positions: Vec<f32>, generation: &mut u64) -> Arc<MeshData> {
     *generation += 1;
     let edges = (0..(positions.len() / 3) as u32).collect();
-    Arc::new(MeshData { generation: *generation, positions, normals: Vec::new(), triangles: Vec::new(), edges })
+    Arc::new(MeshData {
+        generation: *generation,
+        positions,
+        normals: Vec::new(),
+        triangles: Vec::new(),
+        edges,
+    })
 }
 
 impl SqView {
@@ -139,41 +148,81 @@ impl SqView {
             self.support = Some(mesh_from_fields(fields, generation, SUPPORT_FIELDS));
             self.axes = Some(mesh_from_fields(fields, generation, AXES_FIELDS));
         }
-        let (Some(arms), Some(angles)) =
-            (find(fields, field::SQ_CROSS_FIELD).and_then(Field::as_f32), find(fields, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32))
-        else {
+        let (Some(arms), Some(angles)) = (
+            find(fields, field::SQ_CROSS_FIELD).and_then(Field::as_f32),
+            find(fields, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32),
+        ) else {
             return;
         };
-        let lo = angles.iter().copied().fold(90.0f32, f32::min).floor().min(89.0);
+        let lo = angles
+            .iter()
+            .copied()
+            .fold(90.0f32, f32::min)
+            .floor()
+            .min(89.0);
         let mut bins = vec![Vec::new(); CROSS_FIELD_BINS];
         for (k, &a) in angles.iter().enumerate() {
-            let b = (((a - lo) / (90.0 - lo) * CROSS_FIELD_BINS as f32) as usize).min(CROSS_FIELD_BINS - 1);
+            let b = (((a - lo) / (90.0 - lo) * CROSS_FIELD_BINS as f32) as usize)
+                .min(CROSS_FIELD_BINS - 1);
             bins[b].extend_from_slice(&arms[6 * k..6 * k + 6]);
         }
-        self.cross_field = bins.into_iter().map(|positions| segment_mesh(positions, generation)).collect();
+        self.cross_field = bins
+            .into_iter()
+            .map(|positions| segment_mesh(positions, generation))
+            .collect();
         self.cross_field_range = (lo, 90.0);
         self.cross_field_arms = angles.len();
     }
 }
 
 /// The field names of a display mesh: positions, normals, triangles, edges.
-pub const PANEL_FIELDS: [&str; 4] = [field::PANEL_POSITIONS, field::PANEL_NORMALS, field::PANEL_TRIANGLES, field::PANEL_EDGES];
-pub const MESH_FIELDS: [&str; 4] = [field::POSITIONS, field::NORMALS, field::TRIANGLES, field::EDGES];
+pub const PANEL_FIELDS: [&str; 4] = [
+    field::PANEL_POSITIONS,
+    field::PANEL_NORMALS,
+    field::PANEL_TRIANGLES,
+    field::PANEL_EDGES,
+];
+pub const MESH_FIELDS: [&str; 4] = [
+    field::POSITIONS,
+    field::NORMALS,
+    field::TRIANGLES,
+    field::EDGES,
+];
 pub const SUPPORT_FIELDS: [&str; 4] = [field::SUPPORT_POSITIONS, "", field::SUPPORT_TRIANGLES, ""];
 pub const AXES_FIELDS: [&str; 4] = [field::AXES_POSITIONS, "", "", field::AXES_LINES];
 
 /// A display mesh from snapshot fields (missing fields are empty), with a fresh generation.
 pub fn mesh_from_fields(fields: &[Field], generation: &mut u64, names: [&str; 4]) -> Arc<MeshData> {
-    let f = |n| find(fields, n).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
-    let u = |n| find(fields, n).and_then(Field::as_u32).map(<[u32]>::to_vec).unwrap_or_default();
+    let f = |n| {
+        find(fields, n)
+            .and_then(Field::as_f32)
+            .map(<[f32]>::to_vec)
+            .unwrap_or_default()
+    };
+    let u = |n| {
+        find(fields, n)
+            .and_then(Field::as_u32)
+            .map(<[u32]>::to_vec)
+            .unwrap_or_default()
+    };
     *generation += 1;
-    Arc::new(MeshData { generation: *generation, positions: f(names[0]), normals: f(names[1]), triangles: u(names[2]), edges: u(names[3]) })
+    Arc::new(MeshData {
+        generation: *generation,
+        positions: f(names[0]),
+        normals: f(names[1]),
+        triangles: u(names[2]),
+        edges: u(names[3]),
+    })
 }
 
 impl StSupportView {
     pub fn from_fields(fields: &[Field], generation: &mut u64) -> Self {
         let envelope = find(fields, field::ENVELOPE_POSITIONS).is_some().then(|| {
-            mesh_from_fields(fields, generation, [field::ENVELOPE_POSITIONS, "", field::ENVELOPE_TRIANGLES, ""])
+            mesh_from_fields(
+                fields,
+                generation,
+                [field::ENVELOPE_POSITIONS, "", field::ENVELOPE_TRIANGLES, ""],
+            )
         });
         Self {
             panels: mesh_from_fields(fields, generation, PANEL_FIELDS),
@@ -202,7 +251,11 @@ pub struct Busy {
 
 impl Busy {
     pub fn new(stage: impl Into<String>) -> Self {
-        Self { stage: stage.into(), progress: None, since_ms: super::dom::now_ms() }
+        Self {
+            stage: stage.into(),
+            progress: None,
+            since_ms: super::dom::now_ms(),
+        }
     }
 }
 
@@ -215,5 +268,11 @@ pub struct ScalarView {
 }
 
 pub fn empty_mesh() -> MeshData {
-    MeshData { generation: 0, positions: Vec::new(), normals: Vec::new(), triangles: Vec::new(), edges: Vec::new() }
+    MeshData {
+        generation: 0,
+        positions: Vec::new(),
+        normals: Vec::new(),
+        triangles: Vec::new(),
+        edges: Vec::new(),
+    }
 }

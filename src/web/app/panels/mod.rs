@@ -19,7 +19,10 @@ pub struct SizingMemory {
 impl SizingMemory {
     /// Remembers the values of `sizing`, defaults for the others.
     pub fn of(sizing: Sizing) -> Self {
-        let mut m = Self { epsilon: DEFAULT_EPSILON, faces: DEFAULT_FACES };
+        let mut m = Self {
+            epsilon: DEFAULT_EPSILON,
+            faces: DEFAULT_FACES,
+        };
         m.remember(sizing);
         m
     }
@@ -34,13 +37,21 @@ impl SizingMemory {
 }
 
 /// Remeshing controls: kind, ε (log slider) or the face count.
-pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory: &mut SizingMemory, kinds: &[SizingKind]) {
+pub fn sizing_controls(
+    ui: &mut egui::Ui,
+    id: &str,
+    sizing: &mut Sizing,
+    memory: &mut SizingMemory,
+    kinds: &[SizingKind],
+) {
     let mut kind = SizingKind::of(*sizing);
-    egui::ComboBox::from_id_salt(id).selected_text(kind.label()).show_ui(ui, |ui| {
-        for &k in kinds {
-            ui.selectable_value(&mut kind, k, k.label());
-        }
-    });
+    egui::ComboBox::from_id_salt(id)
+        .selected_text(kind.label())
+        .show_ui(ui, |ui| {
+            for &k in kinds {
+                ui.selectable_value(&mut kind, k, k.label());
+            }
+        });
     let (mut epsilon, mut faces) = (memory.epsilon, memory.faces);
     match kind {
         SizingKind::Adaptive => {
@@ -49,7 +60,11 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
         }
         SizingKind::Faces => {
             // The methods' own cap: more faces are refused with an offer to remesh.
-            ui.add(egui::Slider::new(&mut faces, 50..=crate::remeshing::MAX_METHOD_FACES).logarithmic(true).text("faces"));
+            ui.add(
+                egui::Slider::new(&mut faces, 50..=crate::remeshing::MAX_METHOD_FACES)
+                    .logarithmic(true)
+                    .text("faces"),
+            );
         }
         SizingKind::None => {}
     }
@@ -63,14 +78,25 @@ pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);
 
 /// The status line of a result that misses its method's guarantees, None when it meets them.
 pub fn missed_guarantees(report: &crate::export::Report) -> Option<String> {
-    (report.meets_guarantees == Some(false)).then(|| format!("The result misses its guarantees: {}", report.failure_text()))
+    (report.meets_guarantees == Some(false)).then(|| {
+        format!(
+            "The result misses its guarantees: {}",
+            report.failure_text()
+        )
+    })
 }
 
 /// The verdict at the top of a method's results: the missed guarantees in red, or a check mark.
 pub fn verdict(ui: &mut egui::Ui, report: &crate::export::Report) {
     match missed_guarantees(report) {
-        Some(text) => ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {text}")).strong()),
-        None if report.meets_guarantees == Some(true) => ui.colored_label(egui::Color32::from_rgb(120, 200, 120), "✔ Meets every guarantee (see the figures below)"),
+        Some(text) => ui.colored_label(
+            MISSED_COLOR,
+            egui::RichText::new(format!("✘ {text}")).strong(),
+        ),
+        None if report.meets_guarantees == Some(true) => ui.colored_label(
+            egui::Color32::from_rgb(120, 200, 120),
+            "✔ Meets every guarantee (see the figures below)",
+        ),
         None => return,
     };
 }

@@ -7,7 +7,9 @@
 use egui::{Color32, RichText};
 
 use crate::pipeline::fields::Energy;
-use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
+use crate::sq::params::{
+    RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE,
+};
 use crate::web::app::plots::{key_values, term_plot};
 use crate::web::app::state::SqView;
 
@@ -26,7 +28,16 @@ pub struct SqDisplay {
 
 impl Default for SqDisplay {
     fn default() -> Self {
-        Self { initial_lines: false, lines: true, cross_field: true, surface: true, quad_mesh: true, panels: true, support: true, axes: true }
+        Self {
+            initial_lines: false,
+            lines: true,
+            cross_field: true,
+            surface: true,
+            quad_mesh: true,
+            panels: true,
+            support: true,
+            axes: true,
+        }
     }
 }
 
@@ -35,15 +46,25 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
     let before = params.clone();
     ui.label(RichText::new("Needs a B-spline reference (.json, or the vault sample)").small());
     ui.add(egui::Slider::new(&mut params.theta_deg, THETA_RANGE.0..=THETA_RANGE.1).text("θ (°)"))
-        .on_hover_text("Largest angle between a line of the congruence and the surface normal (Sec. 5.1)");
+        .on_hover_text(
+            "Largest angle between a line of the congruence and the surface normal (Sec. 5.1)",
+        );
     ui.add(egui::Slider::new(&mut params.alpha_deg, ALPHA_RANGE.0..=ALPHA_RANGE.1).text("α (°)"))
         .on_hover_text("Smallest angle between the two torsal planes of a grid quad (Sec. 5.1)");
     ui.add(egui::Slider::new(&mut params.grid, GRID_RANGE.0..=GRID_RANGE.1.min(60)).text("grid"))
         .on_hover_text("Points per direction of the sampling grid G");
-    ui.add(egui::Slider::new(&mut params.faces, FACES_RANGE.0.max(16)..=FACES_RANGE.1).logarithmic(true).text("faces"))
-        .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
-    ui.add(egui::Slider::new(&mut params.support_depth, 0.002..=0.1).logarithmic(true).text("support depth"))
-        .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
+    ui.add(
+        egui::Slider::new(&mut params.faces, FACES_RANGE.0.max(16)..=FACES_RANGE.1)
+            .logarithmic(true)
+            .text("faces"),
+    )
+    .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
+    ui.add(
+        egui::Slider::new(&mut params.support_depth, 0.002..=0.1)
+            .logarithmic(true)
+            .text("support depth"),
+    )
+    .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
     egui::ComboBox::from_label("run until")
         .selected_text(params.until.key())
         .show_ui(ui, |ui| {
@@ -98,7 +119,10 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
         }
     });
     ui.checkbox(&mut display.lines, "optimized lines");
-    ui.checkbox(&mut display.initial_lines, "lines of the central congruence (before)");
+    ui.checkbox(
+        &mut display.initial_lines,
+        "lines of the central congruence (before)",
+    );
     ui.checkbox(&mut display.cross_field, "torsal cross field");
     ui.checkbox(&mut display.surface, "reference surface");
     ui.checkbox(&mut display.quad_mesh, "quad mesh");
@@ -109,7 +133,11 @@ pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDispla
 }
 
 fn weight(ui: &mut egui::Ui, w: &mut f64, label: &str) {
-    ui.add(egui::Slider::new(w, 0.0..=10.0).logarithmic(true).text(label));
+    ui.add(
+        egui::Slider::new(w, 0.0..=10.0)
+            .logarithmic(true)
+            .text(label),
+    );
 }
 
 /// The live energy of every term and, when done, the figures before and after.
@@ -117,12 +145,25 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
     ui.separator();
     ui.strong("SQ mesh with support structure (Sec. 5)");
     if v.refused_h.is_some() {
-        ui.colored_label(Color32::from_rgb(240, 180, 80), "The surface is coloured by the sign of H: red H > 0, blue H < 0.");
+        ui.colored_label(
+            Color32::from_rgb(240, 180, 80),
+            "The surface is coloured by the sign of H: red H > 0, blue H < 0.",
+        );
     }
     for (title, steps) in ENERGY_PLOTS {
-        let series: Vec<(u32, String, Vec<Energy>)> = v.energy.iter().filter(|(_, step, _)| steps.contains(&step.as_str())).cloned().collect();
+        let series: Vec<(u32, String, Vec<Energy>)> = v
+            .energy
+            .iter()
+            .filter(|(_, step, _)| steps.contains(&step.as_str()))
+            .cloned()
+            .collect();
         if !series.is_empty() {
-            ui.label(RichText::new(format!("{title}: energy of every term per iteration (log scale)")).small());
+            ui.label(
+                RichText::new(format!(
+                    "{title}: energy of every term per iteration (log scale)"
+                ))
+                .small(),
+            );
             term_plot(ui, &series);
         }
     }
@@ -161,32 +202,105 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         ),
         (
             "quads without real torsal directions",
-            format!("{} → {}", i.quads_without_real_torsal_directions, f.quads_without_real_torsal_directions),
+            format!(
+                "{} → {}",
+                i.quads_without_real_torsal_directions, f.quads_without_real_torsal_directions
+            ),
         ),
-        ("E_LC per term, step 1 / final", format!("{} / {}", g(m.lc_residual_step1), g(m.lc_residual))),
+        (
+            "E_LC per term, step 1 / final",
+            format!("{} / {}", g(m.lc_residual_step1), g(m.lc_residual)),
+        ),
         ("radius fit error", g(m.radius_fit_error)),
-        ("iterations", format!("{} + {}", m.line_congruence_iterations.unwrap_or(0), m.torsal_iterations.unwrap_or(0))),
+        (
+            "iterations",
+            format!(
+                "{} + {}",
+                m.line_congruence_iterations.unwrap_or(0),
+                m.torsal_iterations.unwrap_or(0)
+            ),
+        ),
     ];
-    if let (Some(lc), Some(t)) = (r.timings_ms.get("lc_iteration_median"), r.timings_ms.get("torsal_iteration_median")) {
-        rows.push(("median iteration, step 1 / 2", format!("{lc:.2} / {t:.2} ms")));
+    if let (Some(lc), Some(t)) = (
+        r.timings_ms.get("lc_iteration_median"),
+        r.timings_ms.get("torsal_iteration_median"),
+    ) {
+        rows.push((
+            "median iteration, step 1 / 2",
+            format!("{lc:.2} / {t:.2} ms"),
+        ));
     }
     key_values(ui, "sq-metrics", &rows);
     if let Some(mf) = &sum.mesh {
         ui.strong("SQ mesh (Sec. 5.2)");
         let e = |x: f64| format!("{x:.1e}");
         let mut rows = vec![
-            ("faces", format!("{} quads, {:.1} % of the patch", r.output.faces, 100.0 * m.coverage.unwrap_or(0.0))),
-            ("vertex–sphere residual / diag", format!("{} {}", e(mf.max_vertex_sphere_residual), ok(mf.max_vertex_sphere_residual <= 1e-8))),
-            ("centre-face planarity / diag", format!("{} {}", e(mf.max_centre_face_planarity), ok(mf.max_centre_face_planarity <= 1e-8))),
-            ("torsal-plane residual", format!("{} {}", e(mf.max_torsal_plane_residual), ok(mf.max_torsal_plane_residual <= 1e-8))),
-            ("max ∠(node axis, n)", format!("{:.2}° {} (θ {}°)", mf.max_axis_normal_angle_deg, ok(mf.max_axis_normal_angle_deg <= params.theta_deg), params.theta_deg)),
-            ("min support-plane angle", format!("{:.2}° {} (α {}°)", mf.min_torsal_plane_angle_deg, ok(mf.min_torsal_plane_angle_deg >= params.alpha_deg), params.alpha_deg)),
-            ("max distance to the reference / diag", g(m.max_distance_to_reference)),
+            (
+                "faces",
+                format!(
+                    "{} quads, {:.1} % of the patch",
+                    r.output.faces,
+                    100.0 * m.coverage.unwrap_or(0.0)
+                ),
+            ),
+            (
+                "vertex–sphere residual / diag",
+                format!(
+                    "{} {}",
+                    e(mf.max_vertex_sphere_residual),
+                    ok(mf.max_vertex_sphere_residual <= 1e-8)
+                ),
+            ),
+            (
+                "centre-face planarity / diag",
+                format!(
+                    "{} {}",
+                    e(mf.max_centre_face_planarity),
+                    ok(mf.max_centre_face_planarity <= 1e-8)
+                ),
+            ),
+            (
+                "torsal-plane residual",
+                format!(
+                    "{} {}",
+                    e(mf.max_torsal_plane_residual),
+                    ok(mf.max_torsal_plane_residual <= 1e-8)
+                ),
+            ),
+            (
+                "max ∠(node axis, n)",
+                format!(
+                    "{:.2}° {} (θ {}°)",
+                    mf.max_axis_normal_angle_deg,
+                    ok(mf.max_axis_normal_angle_deg <= params.theta_deg),
+                    params.theta_deg
+                ),
+            ),
+            (
+                "min support-plane angle",
+                format!(
+                    "{:.2}° {} (α {}°)",
+                    mf.min_torsal_plane_angle_deg,
+                    ok(mf.min_torsal_plane_angle_deg >= params.alpha_deg),
+                    params.alpha_deg
+                ),
+            ),
+            (
+                "max distance to the reference / diag",
+                g(m.max_distance_to_reference),
+            ),
             (
                 "edges off the torsal directions",
-                format!("{:.2}° mean, {:.2}° max", m.mean_edge_torsal_angle_deg.unwrap_or(0.0), m.max_edge_torsal_angle_deg.unwrap_or(0.0)),
+                format!(
+                    "{:.2}° mean, {:.2}° max",
+                    m.mean_edge_torsal_angle_deg.unwrap_or(0.0),
+                    m.max_edge_torsal_angle_deg.unwrap_or(0.0)
+                ),
             ),
-            ("distinct radii", m.distinct_radii.map_or("–".into(), |d| d.to_string())),
+            (
+                "distinct radii",
+                m.distinct_radii.map_or("–".into(), |d| d.to_string()),
+            ),
         ];
         if let Some(t) = r.timings_ms.get("final_iteration_median") {
             rows.push(("median final iteration", format!("{t:.2} ms")));
@@ -200,5 +314,8 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
 }
 
 /// The energy plots: one per stage, with the progress steps that belong to it.
-const ENERGY_PLOTS: [(&str, &[&str]); 3] =
-    [("congruence", &["line_congruence", "torsal"]), ("Q′", &["fairing"]), ("spheres", &["warm_up", "spheres", "projection"])];
+const ENERGY_PLOTS: [(&str, &[&str]); 3] = [
+    ("congruence", &["line_congruence", "torsal"]),
+    ("Q′", &["fairing"]),
+    ("spheres", &["warm_up", "spheres", "projection"]),
+];

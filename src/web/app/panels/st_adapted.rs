@@ -11,18 +11,43 @@ use crate::web::app::plots::{energy_plot, key_values};
 use crate::web::app::state::StAdaptedView;
 
 /// The method's controls; true when a parameter changed.
-pub fn controls(ui: &mut egui::Ui, params: &mut StAdaptedParams, memory: &mut SizingMemory, show_reference: &mut bool, show_remeshed: &mut bool) -> bool {
+pub fn controls(
+    ui: &mut egui::Ui,
+    params: &mut StAdaptedParams,
+    memory: &mut SizingMemory,
+    show_reference: &mut bool,
+    show_remeshed: &mut bool,
+) -> bool {
     let before = params.clone();
-    sizing_controls(ui, "st-sizing", &mut params.sizing, memory, &SizingKind::ALL);
+    sizing_controls(
+        ui,
+        "st-sizing",
+        &mut params.sizing,
+        memory,
+        &SizingKind::ALL,
+    );
     ui.horizontal(|ui| {
         ui.label("edges");
-        ui.radio_value(&mut params.variant, EdgeArcs::Intersection, "(a) sphere intersections")
-            .on_hover_text("Fig. 12 (a): edges are the intersection circles of adjacent face spheres");
-        ui.radio_value(&mut params.variant, EdgeArcs::BisectingPlanes, "(b) bisecting planes")
-            .on_hover_text("Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain");
+        ui.radio_value(
+            &mut params.variant,
+            EdgeArcs::Intersection,
+            "(a) sphere intersections",
+        )
+        .on_hover_text("Fig. 12 (a): edges are the intersection circles of adjacent face spheres");
+        ui.radio_value(
+            &mut params.variant,
+            EdgeArcs::BisectingPlanes,
+            "(b) bisecting planes",
+        )
+        .on_hover_text(
+            "Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain",
+        );
     });
     ui.checkbox(show_reference, "show reference surface (sizing colours)");
-    ui.checkbox(show_remeshed, "overlay the remeshed triangulation (before optimization)");
+    ui.checkbox(
+        show_remeshed,
+        "overlay the remeshed triangulation (before optimization)",
+    );
     *params != before
 }
 
@@ -31,10 +56,20 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     ui.separator();
     ui.strong("ST mesh, adapted face size");
     if let Some(m) = &a.remeshed {
-        ui.label(RichText::new(format!("remeshed: {} faces; panels at iteration {}", m.triangles.len() / 3, a.panel_iteration)).small());
+        ui.label(
+            RichText::new(format!(
+                "remeshed: {} faces; panels at iteration {}",
+                m.triangles.len() / 3,
+                a.panel_iteration
+            ))
+            .small(),
+        );
     }
     if !a.energy.is_empty() {
-        ui.label(RichText::new("energy per iteration (log scale; weights change between stages)").small());
+        ui.label(
+            RichText::new("energy per iteration (log scale; weights change between stages)")
+                .small(),
+        );
         energy_plot(ui, &a.energy);
     }
     let Some(sum) = &a.summary else { return };
@@ -44,8 +79,20 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     let mut rows = vec![
         ("panels", sum.report.output.panels.to_string()),
         ("iterations", sum.iterations.to_string()),
-        ("kink mean, initial → final", format!("{:.3}° → {:.3}°", sum.initial.mean_kink_angle_deg, sum.metrics.mean_kink_angle_deg)),
-        ("kink max, initial → final", format!("{:.3}° → {:.3}°", sum.initial.max_kink_angle_deg, sum.metrics.max_kink_angle_deg)),
+        (
+            "kink mean, initial → final",
+            format!(
+                "{:.3}° → {:.3}°",
+                sum.initial.mean_kink_angle_deg, sum.metrics.mean_kink_angle_deg
+            ),
+        ),
+        (
+            "kink max, initial → final",
+            format!(
+                "{:.3}° → {:.3}°",
+                sum.initial.max_kink_angle_deg, sum.metrics.max_kink_angle_deg
+            ),
+        ),
         ("vertex–sphere residual", g(m.max_vertex_sphere_residual)),
         ("distance to reference", g(m.max_distance_to_reference)),
     ];
@@ -60,7 +107,13 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     }
     key_values(ui, "st-adapted-metrics", &rows);
     if sum.metrics.flipped_faces > 0 {
-        ui.colored_label(Color32::from_rgb(240, 180, 80), format!("{} faces ended flipped against the reference.", sum.metrics.flipped_faces));
+        ui.colored_label(
+            Color32::from_rgb(240, 180, 80),
+            format!(
+                "{} faces ended flipped against the reference.",
+                sum.metrics.flipped_faces
+            ),
+        );
     }
     super::warnings(ui, &sum.report.warnings);
 }
