@@ -250,16 +250,6 @@ impl AngleWorkload {
         (report.iteration_ms, report.phase_ms)
     }
 
-    /// `n` samples; the per-iteration times of all of them. A first, untimed sample does the
-    /// symbolic analysis, which later samples reuse.
-    pub fn time_iterations(&self, clock: Clock, n: usize) -> Vec<f64> {
-        let mut problem = self.problem();
-        let mut solver = self.solver(clock);
-        self.sample(&mut problem, &mut solver);
-        (0..n)
-            .flat_map(|_| self.sample(&mut problem, &mut solver))
-            .collect()
-    }
 }
 
 /// The phase times per iteration of `phases` summed over `iterations`, as an informational line:

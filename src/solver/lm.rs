@@ -248,11 +248,6 @@ impl Solver {
         self.numeric_factorizations
     }
 
-    /// Drops the cached pattern (the next solve redoes the symbolic analysis).
-    pub fn reset(&mut self) {
-        self.system = None;
-    }
-
     /// Minimizes the problem's energy starting from `x` (updated in place to the last accepted
     /// point). `hook` is called after every iteration; returning false cancels the run at once.
     pub fn solve<F>(&mut self, problem: &mut Problem, x: &mut [f64], mut hook: F) -> SolveReport

@@ -87,12 +87,6 @@ impl<'s> JacobianSink<'s> {
         self.active[row] = false;
     }
 
-    /// Whether residual `row` is active (all are at the start of `eval`).
-    #[inline]
-    pub fn is_active(&self, row: usize) -> bool {
-        self.active[row]
-    }
-
     /// The term's residual count.
     #[inline]
     pub fn residual_count(&self) -> usize {
@@ -214,11 +208,6 @@ impl<'a> Problem<'a> {
         &mut *self.terms[id.0].term
     }
 
-    /// Total residual count.
-    pub fn num_residuals(&self) -> usize {
-        self.terms.iter().map(|t| t.term.residual_count()).sum()
-    }
-
     /// Hard-fixes variable `i`: excluded from the solve, its value never changes.
     pub fn fix(&mut self, i: usize) {
         self.fixed[i] = true;
@@ -233,14 +222,6 @@ impl<'a> Problem<'a> {
 
     pub fn unfix(&mut self, i: usize) {
         self.fixed[i] = false;
-    }
-
-    pub fn set_fixed(&mut self, i: usize, fixed: bool) {
-        self.fixed[i] = fixed;
-    }
-
-    pub fn is_fixed(&self, i: usize) -> bool {
-        self.fixed[i]
     }
 
     pub fn fixed_mask(&self) -> &[bool] {

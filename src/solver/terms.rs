@@ -143,9 +143,6 @@ impl Anchor {
         Self::new(indices, targets)
     }
 
-    pub fn targets_mut(&mut self) -> &mut [f64] {
-        &mut self.targets
-    }
 }
 
 impl Term for Anchor {

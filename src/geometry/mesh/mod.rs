@@ -240,10 +240,6 @@ impl PolyMesh {
         )
     }
 
-    /// Whether every face is a triangle.
-    pub fn is_triangle_mesh(&self) -> bool {
-        self.faces.iter().all(|f| f.len() == 3)
-    }
 }
 
 impl From<TriMesh> for PolyMesh {
