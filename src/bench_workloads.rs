@@ -228,7 +228,7 @@ impl AngleWorkload {
         Solver::new(SolverOptions {
             max_iterations: ANGLE_ITERATIONS_PER_SAMPLE,
             initial_epsilon: self.params.initial_epsilon,
-            clock: clock.0,
+            clock,
             ..SolverOptions::default()
         })
     }
@@ -246,10 +246,9 @@ impl AngleWorkload {
         solver: &mut Solver,
     ) -> (Vec<f64>, PhaseTimes) {
         let mut x = self.frame.x0.clone();
-        let report = solver.solve(problem, &mut x, |_| true);
+        let report = solver.solve(problem, &mut x, |_| Ok(()));
         (report.iteration_ms, report.phase_ms)
     }
-
 }
 
 /// The phase times per iteration of `phases` summed over `iterations`, as an informational line:

@@ -21,7 +21,7 @@ use spherical_faces::panels::{level_cap, PANEL_TRIANGLE_BUDGET};
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{ignore, Clock};
-use spherical_faces::reference::assumptions::SurfaceWarning;
+use spherical_faces::reference::assumptions::Warning;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{
     face_cap, pliant_remesh_with_stats, RemeshParams, Sizing, SizingField, MAX_METHOD_FACES,
@@ -428,7 +428,7 @@ fn slivers_are_counted_and_tessellation_is_bounded() {
         result
             .warnings
             .iter()
-            .any(|w| matches!(w, SurfaceWarning::Slivers { faces } if *faces >= 1)),
+            .any(|w| matches!(w, Warning::Slivers { faces } if *faces >= 1)),
         "{:?}",
         result.warnings
     );
@@ -496,7 +496,7 @@ fn a_folded_flap_is_warned_about_and_remeshes_within_bounds() {
         refused
             .warnings
             .iter()
-            .any(|w| matches!(w, SurfaceWarning::Folds { .. })),
+            .any(|w| matches!(w, Warning::Folds { .. })),
         "{err}"
     );
     assert!(err.to_string().contains("folds back"), "{err}");

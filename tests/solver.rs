@@ -1,6 +1,7 @@
 //! Tests of the sparse nonlinear least-squares solver (`spherical_faces::solver`).
 
 use glam::DVec3;
+use spherical_faces::progress::{Cancelled, Clock};
 use spherical_faces::solver::*;
 
 /// Small deterministic generator (splitmix64).
@@ -258,7 +259,7 @@ fn sphere_fit_to_noisy_points() {
     let centroid = pts.iter().copied().sum::<DVec3>() / pts.len() as f64;
     let mut x = normalized_sphere(centroid + DVec3::new(0.2, 0.1, -0.3), 1.0).to_vec();
     let mut solver = Solver::default();
-    let rep = solver.solve(&mut problem, &mut x, |_| true);
+    let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
     assert!(rep.termination.converged(), "{:?}", rep.termination);
     let (a, b, c) = (x[0], DVec3::new(x[1], x[2], x[3]), x[4]);
     let fit_center = b / (2.0 * a);
@@ -380,7 +381,7 @@ fn planarize_quad_mesh() {
         energies.clear();
         let rep = solver.solve(&mut p.problem, &mut p.x, |it| {
             energies.push(it.energy);
-            true
+            Ok(())
         });
         println!(
             "closeness {w:e}: {} iterations ({} accepted), energy {:.3e} → {:.3e}, {:?}, terms {:?}",
@@ -419,7 +420,7 @@ fn hinge_one_sided() {
     problem.add_term(Hinge::new(ge1).with_name("x>=1"), 1e6);
     let mut x = vec![3.0, 5.0];
     let mut solver = Solver::default();
-    let rep = solver.solve(&mut problem, &mut x, |_| true);
+    let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
     println!(
         "hinge: x = {:?}, {:?}, {} iterations",
         x, rep.termination, rep.iterations
@@ -448,7 +449,7 @@ fn fixed_variables_stay_bit_identical() {
     let x0 = p.x.clone();
     let mut solver = Solver::default();
     p.problem.set_weight(p.closeness, 1e-4);
-    let rep = solver.solve(&mut p.problem, &mut p.x, |_| true);
+    let rep = solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
     assert!(rep.accepted_steps > 0);
     assert_eq!(rep.free_variables, p.x.len() - fixed.len());
     let after: Vec<u64> = fixed.iter().map(|&i| p.x[i].to_bits()).collect();
@@ -471,7 +472,7 @@ fn symbolic_factorization_is_reused() {
     });
     for w in [1e-1, 1e-2, 1e-3, 1e-4] {
         p.problem.set_weight(p.closeness, w);
-        solver.solve(&mut p.problem, &mut p.x, |_| true);
+        solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
     }
     assert!(
         solver.numeric_factorizations() >= 20,
@@ -483,14 +484,14 @@ fn symbolic_factorization_is_reused() {
     // A new term changes the pattern: one more analysis, then reuse again.
     let n = p.problem.num_variables();
     p.problem.add_term(Anchor::new(vec![0], vec![p.x[0]]), 1.0);
-    let rep = solver.solve(&mut p.problem, &mut p.x, |_| true);
+    let rep = solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
     assert_eq!(rep.symbolic_analyses, 1);
     assert_eq!(solver.symbolic_analyses(), 2);
-    let rep = solver.solve(&mut p.problem, &mut p.x, |_| true);
+    let rep = solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
     assert_eq!(rep.symbolic_analyses, 0);
     // Fixing a variable changes the pattern too.
     p.problem.fix(n - 1);
-    solver.solve(&mut p.problem, &mut p.x, |_| true);
+    solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
     assert_eq!(solver.symbolic_analyses(), 3);
 }
 
@@ -516,7 +517,7 @@ fn structure_change_during_a_run_is_detected() {
     problem.add_term(t, 1.0);
     let mut x = vec![1.0, 3.0];
     let mut solver = Solver::default();
-    let rep = solver.solve(&mut problem, &mut x, |_| true);
+    let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
     assert!(rep.termination.converged(), "{:?}", rep.termination);
     assert_eq!(rep.symbolic_analyses, 2);
     assert!(
@@ -536,7 +537,11 @@ fn cancel_via_hook_stops_immediately() {
         assert_eq!(it.iteration, calls);
         assert_eq!(it.terms.len(), 3);
         last_x = it.x.to_vec();
-        it.iteration < 3
+        if it.iteration < 3 {
+            Ok(())
+        } else {
+            Err(Cancelled)
+        }
     });
     assert_eq!(calls, 3);
     assert_eq!(rep.iterations, 3);
@@ -567,7 +572,7 @@ fn reports_per_term_statistics() {
     let mut xs = x.clone();
     let rep = solver.solve(&mut problem, &mut xs, |it| {
         serde_json::to_string(it).unwrap();
-        true
+        Ok(())
     });
     let json = serde_json::to_string(&rep).unwrap();
     let back: SolveReport = serde_json::from_str(&json).unwrap();
@@ -591,7 +596,7 @@ fn auxiliary_variables() {
         problem.fix(i);
     }
     let mut x = vec![1.0, 2.0, 4.0, 9.0, 0.0];
-    let rep = Solver::default().solve(&mut problem, &mut x, |_| true);
+    let rep = Solver::default().solve(&mut problem, &mut x, |_| Ok(()));
     assert!(rep.termination.converged(), "{:?}", rep.termination);
     assert!((x[4] - 4.0).abs() < 1e-10, "{x:?}");
 }
@@ -606,7 +611,7 @@ fn all_fixed_or_empty_problems() {
     assert_eq!(rep.termination, Termination::NoFreeVariables);
     assert_eq!(x, vec![0.0, 0.0]);
     let mut empty = Problem::new(3);
-    let rep = Solver::default().solve(&mut empty, &mut [1.0, 2.0, 3.0], |_| true);
+    let rep = Solver::default().solve(&mut empty, &mut [1.0, 2.0, 3.0], |_| Ok(()));
     assert_eq!(rep.termination, Termination::EnergyTolerance);
 }
 
@@ -712,7 +717,7 @@ fn st_like_problem_converges_small() {
         assert!(check_jacobian(term, &x, FD_H) < FD_TOL, "{}", term.name());
     }
     let mut solver = Solver::default();
-    let rep = solver.solve(&mut problem, &mut x, |_| true);
+    let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
     assert!(rep.energy < rep.initial_energy);
     assert_eq!(rep.symbolic_analyses, 1);
 }
@@ -742,7 +747,7 @@ fn orderings_agree() {
             ordering,
             ..Default::default()
         });
-        let rep = solver.solve(&mut problem, &mut x, |_| true);
+        let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
         assert_eq!(rep.symbolic_analyses, 1);
         match ordering {
             Ordering::Auto => assert!(matches!(
@@ -782,11 +787,11 @@ fn timing_synthetic_600_faces() {
             max_iterations: 30,
             step_tolerance: 0.0,
             relative_decrease_tolerance: 0.0,
-            clock: Some(now_ms),
+            clock: Clock(Some(now_ms)),
             ..Default::default()
         });
         let t0 = now_ms();
-        let rep = solver.solve(&mut problem, &mut x, |_| true);
+        let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
         let total = now_ms() - t0;
         let mut ms = rep.iteration_ms.clone();
         ms.sort_by(|a, b| a.partial_cmp(b).unwrap());

@@ -674,7 +674,7 @@ fn profile_optimization() {
             _ => Ordering::Auto,
         };
         let mut solver = Solver::new(SolverOptions {
-            clock: Clock::native().0,
+            clock: Clock::native(),
             ordering,
             ..SolverOptions::default()
         });
@@ -691,7 +691,8 @@ fn profile_optimization() {
                 &params,
                 &mut solver,
                 &mut |_, _| Ok(()),
-            );
+            )
+            .unwrap();
             if rep == 0 {
                 symbolic = r.phase_ms.symbolic;
             } else {
@@ -880,7 +881,7 @@ fn boundary_arcs_follow_the_reference_boundary() {
 /// A reference coarser than ε gets the warning (the 91-vertex dome at ε = 2e-3), a fine one not.
 #[test]
 fn a_reference_coarser_than_epsilon_is_named() {
-    use spherical_faces::reference::assumptions::{coarseness_warning, SurfaceWarning};
+    use spherical_faces::reference::assumptions::{coarseness_warning, Warning};
     use spherical_faces::samples::sphere_cap;
     use spherical_faces::stats::median;
     for rings in [6, 12, 36] {
@@ -900,7 +901,7 @@ fn a_reference_coarser_than_epsilon_is_named() {
     let dome = load_reference("tri_dome");
     let warning = coarseness_warning(&dome, 2e-3).expect("the dome is coarser than 2e-3");
     assert!(
-        matches!(warning, SurfaceWarning::CoarserThanTolerance { sagitta, .. } if sagitta > 4e-3 && sagitta < 6e-3),
+        matches!(warning, Warning::CoarserThanTolerance { sagitta, .. } if sagitta > 4e-3 && sagitta < 6e-3),
         "{warning:?}"
     );
     assert!(

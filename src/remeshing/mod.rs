@@ -27,7 +27,7 @@ use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, OnProgress};
-use crate::reference::assumptions::SurfaceWarning;
+use crate::reference::assumptions::Warning;
 
 pub use influence_zones::{
     influence_zone, local_spheres_orthogonal, mean_edge_length, zone_diameter, SizingBounds,
@@ -48,7 +48,7 @@ pub const MIN_FACES: usize = 4;
 #[derive(Clone, Debug, PartialEq)]
 pub struct RemeshRefused {
     pub error: pliant::RemeshError,
-    pub warnings: Vec<SurfaceWarning>,
+    pub warnings: Vec<Warning>,
 }
 
 impl std::fmt::Display for RemeshRefused {

@@ -301,7 +301,7 @@ pub fn integrate(
         min_epsilon: 1e-9,
         ..SolverOptions::default()
     });
-    solver.solve(&mut problem, &mut x, |_| true);
+    solver.solve(&mut problem, &mut x, |_| Ok(()));
     // The integer step (greedy, as MIQ): the singular point nearest to a free lattice point is
     // fixed there and the rest solved again, until all are fixed.
     let mut keys: Vec<Option<[i32; 2]>> = vec![None; cuts.cuts.len()];
@@ -332,7 +332,7 @@ pub fn integrate(
         }
         problem.unfix(var(mid, 0));
         problem.unfix(var(mid, 1));
-        solver.solve(&mut problem, &mut x, |_| true);
+        solver.solve(&mut problem, &mut x, |_| Ok(()));
     }
     let cone_keys: Vec<[i32; 2]> = keys.into_iter().map(Option::unwrap).collect();
     if x.iter().any(|v| !v.is_finite()) {

@@ -3,6 +3,7 @@
 use super::assembly::{evaluate, weighted_energy, EvalBuffers, System};
 use super::ordering::Ordering;
 use super::problem::Problem;
+use crate::progress::{Cancelled, Clock};
 use serde::{Deserialize, Serialize};
 
 /// Solver settings. All tolerances are absolute unless stated.
@@ -25,10 +26,10 @@ pub struct SolverOptions {
     pub gradient_tolerance: f64,
     /// Stop when an accepted step lowers the energy by ≤ this fraction of it.
     pub relative_decrease_tolerance: f64,
-    /// Optional clock in milliseconds (e.g. `performance.now()` in the browser); when set, every
-    /// iteration is timed (`IterationReport::ms`, `SolveReport::iteration_ms`).
+    /// The caller's clock (e.g. `performance.now()` in the browser); with one, every iteration
+    /// is timed (`IterationReport::ms`, `SolveReport::iteration_ms`).
     #[serde(skip)]
-    pub clock: Option<fn() -> f64>,
+    pub clock: Clock,
     /// Fill-reducing ordering of the normal matrix (computed once per sparsity pattern).
     pub ordering: Ordering,
     /// Always factorize supernodally; otherwise faer chooses by flops per factor entry. An
@@ -49,7 +50,7 @@ impl Default for SolverOptions {
             energy_tolerance: 0.0,
             gradient_tolerance: 0.0,
             relative_decrease_tolerance: 1e-14,
-            clock: None,
+            clock: Clock::default(),
             ordering: Ordering::BlockAmd,
             supernodal: false,
         }
@@ -106,7 +107,7 @@ pub enum Termination {
     MaxIterations,
     /// ε reached `max_epsilon` (no descent found).
     DampingLimit,
-    /// The hook returned false.
+    /// The hook returned `Err(Cancelled)`.
     Cancelled,
     /// The energy at the starting point is not finite.
     NonFinite,
@@ -249,15 +250,16 @@ impl Solver {
     }
 
     /// Minimizes the problem's energy starting from `x` (updated in place to the last accepted
-    /// point). `hook` is called after every iteration; returning false cancels the run at once.
+    /// point). `hook` is called after every iteration; `Err(Cancelled)` ends the run at once
+    /// (`Termination::Cancelled`).
     pub fn solve<F>(&mut self, problem: &mut Problem, x: &mut [f64], mut hook: F) -> SolveReport
     where
-        F: FnMut(&IterationReport) -> bool,
+        F: FnMut(&IterationReport) -> Result<(), Cancelled>,
     {
         let n = problem.num_variables();
         assert_eq!(x.len(), n, "variable vector has the wrong length");
         let opts = self.options.clone();
-        let clock = opts.clock;
+        let clock = opts.clock.0;
         let tick = || clock.map_or(0.0, |c| c());
         let sym0 = self.symbolic_analyses;
         let fac0 = self.numeric_factorizations;
@@ -472,7 +474,7 @@ impl Solver {
                 ms,
                 x,
             };
-            if !hook(&ir) {
+            if hook(&ir).is_err() {
                 return finish(report, self, energy, mu, phase, Termination::Cancelled);
             }
             let x_norm = sys

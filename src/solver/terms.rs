@@ -142,7 +142,6 @@ impl Anchor {
         let targets = indices.iter().map(|&i| x[i]).collect();
         Self::new(indices, targets)
     }
-
 }
 
 impl Term for Anchor {

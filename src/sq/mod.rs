@@ -42,6 +42,7 @@ use glam::DVec3;
 use crate::congruence::torsal::{parameter_pair, TorsalPair};
 use crate::geometry::bspline::BSplineFunction;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
+use crate::reference::assumptions::Warning;
 use crate::reference::Reference;
 use crate::solver::TermStats;
 use crate::stats::median;
@@ -154,7 +155,7 @@ pub struct SqCongruence {
     pub torsal_iteration_ms: Vec<f64>,
     /// Step timings (ms): radius, line_congruence, torsal, metrics.
     pub timings_ms: Vec<(String, f64)>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 impl SqCongruence {
@@ -387,15 +388,13 @@ pub fn compute_congruence(
     warnings.extend(signs.warnings);
     if chosen > 0 {
         let a = &attempts[0];
-        warnings.push(format!(
-            "the central congruence (r = 1/H) ended with lines up to {:.1}° off the normals (θ = {}°), {} grid quads without real \
-             torsal directions and torsal planes at ≥ {:.1}° (α = {}°); the congruence starts from constant radii instead (Sec. 6.3)",
-            a.figures.max_line_normal_angle_deg,
-            params.theta_deg,
-            a.figures.quads_without_real_torsal_directions,
-            a.figures.min_torsal_plane_angle_deg,
-            params.alpha_deg
-        ));
+        warnings.push(Warning::CentralCongruenceReplaced {
+            max_line_normal_angle_deg: a.figures.max_line_normal_angle_deg,
+            theta_deg: params.theta_deg,
+            quads_without_real_torsal_directions: a.figures.quads_without_real_torsal_directions,
+            min_torsal_plane_angle_deg: a.figures.min_torsal_plane_angle_deg,
+            alpha_deg: params.alpha_deg,
+        });
     }
     let initial_figures = attempts[0].initial_figures.clone();
     Ok(SqCongruence {
@@ -451,19 +450,12 @@ fn optimize(
             terms,
             lines: problem.lines(x),
         })
-        .is_ok()
     };
     let mut x = problem.initial_point(coefficients, lines, params);
-    let lc = problem.line_congruence_step(&mut x, params, clock, &mut hook);
-    if lc.cancelled {
-        return Err(SqError::Cancelled);
-    }
+    let lc = problem.line_congruence_step(&mut x, params, clock, &mut hook)?;
     let lc_residual_step1 = problem.lc_residual(&x);
     let mut x = problem.extend_for_torsal(&x);
-    let torsal = problem.torsal_step(&mut x, params, clock, &mut hook);
-    if torsal.cancelled {
-        return Err(SqError::Cancelled);
-    }
+    let torsal = problem.torsal_step(&mut x, params, clock, &mut hook)?;
     Ok(Optimized {
         x,
         lc_residual_step1,
@@ -529,7 +521,7 @@ fn spherical_congruence(
         lc_iteration_ms: Vec::new(),
         torsal_iteration_ms: Vec::new(),
         timings_ms: timings.laps,
-        warnings: vec!["the surface is one sphere: every central sphere is the surface itself, so the panels all lie on that sphere and the node axes pass through its centre".into()],
+        warnings: vec![Warning::OneSphere],
     }
 }
 
@@ -556,7 +548,7 @@ pub struct SqResult {
     pub sq_mesh: Option<SqFinal>,
     /// Step timings (ms) after the congruence: remesh (with Q′), spheres, panels.
     pub timings_ms: Vec<(String, f64)>,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
     /// The guarantees of what the run delivers ([`guarantees`]), measured on it.
     pub verdict: Verdict,
 }
@@ -608,7 +600,6 @@ pub fn compute(
                 terms,
                 positions,
             })
-            .is_ok()
         },
     );
     let quad = match quad {
@@ -786,12 +777,8 @@ fn final_mesh(
                 positions: &positions,
                 spheres: &spheres,
             })
-            .is_ok()
         },
-    );
-    if outcome.cancelled {
-        return Err(SqError::Cancelled);
-    }
+    )?;
     timings.lap("spheres");
     let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
     let spheres: Vec<Sphere> = spheres

@@ -19,7 +19,7 @@ use glam::DVec3;
 use crate::congruence::line_congruence::centre_derivatives;
 use crate::congruence::torsal::{quadratic_roots, torsal_quadratic};
 use crate::geometry::bspline::{BSplineFunction, FunctionRow};
-use crate::progress::Clock;
+use crate::progress::{Cancelled, Clock};
 use crate::solver::terms::v3;
 use crate::solver::{
     Hinge, PhaseTimes, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength,
@@ -49,8 +49,9 @@ impl SqStep {
 }
 
 /// Called after every solver iteration with the step, the iteration (1-based within the step),
-/// the term statistics and the variables; false cancels.
-pub type IterationHook<'h> = dyn FnMut(SqStep, usize, &[TermStats], &[f64]) -> bool + 'h;
+/// the term statistics and the variables; `Err(Cancelled)` stops the step.
+pub type IterationHook<'h> =
+    dyn FnMut(SqStep, usize, &[TermStats], &[f64]) -> Result<(), Cancelled> + 'h;
 
 /// What a step did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -60,7 +61,6 @@ pub struct StepOutcome {
     pub iteration_ms: Vec<f64>,
     /// Where the time went (with a clock).
     pub phase_ms: PhaseTimes,
-    pub cancelled: bool,
 }
 
 /// The optimization's fixed data, in the normalized frame.
@@ -241,7 +241,7 @@ impl CongruenceProblem {
         params: &SqParams,
         clock: Clock,
         hook: &mut IterationHook,
-    ) -> StepOutcome {
+    ) -> Result<StepOutcome, Cancelled> {
         let w = params.lc_weights;
         let mut problem = Problem::new(self.layout.line_variables());
         problem.add_term(self.line_congruence(), w.lc);
@@ -251,7 +251,7 @@ impl CongruenceProblem {
         // Lines in 3 × 3 blocks with the radius coefficients as a dense border: supernodal is faster.
         let mut solver = Solver::new(SolverOptions {
             max_iterations: params.lc_iterations,
-            clock: clock.0,
+            clock,
             supernodal: true,
             ..SolverOptions::default()
         });
@@ -262,12 +262,14 @@ impl CongruenceProblem {
         for (p, l) in self.lines(x).into_iter().enumerate() {
             x[self.layout.line(p)..self.layout.line(p) + 3].copy_from_slice(&l.to_array());
         }
-        StepOutcome {
+        if report.termination == crate::solver::Termination::Cancelled {
+            return Err(Cancelled);
+        }
+        Ok(StepOutcome {
             iterations: report.iterations,
             iteration_ms: report.iteration_ms,
             phase_ms: report.phase_ms,
-            cancelled: report.termination == crate::solver::Termination::Cancelled,
-        }
+        })
     }
 
     /// Extends step 1's variables with the per-quad unknowns of the torsal directions.
@@ -344,7 +346,7 @@ impl CongruenceProblem {
         params: &SqParams,
         clock: Clock,
         hook: &mut IterationHook,
-    ) -> StepOutcome {
+    ) -> Result<StepOutcome, Cancelled> {
         let w = params.torsal_weights;
         let lay = &self.layout;
         let cos2_alpha = params.target_alpha_deg().to_radians().cos().powi(2);
@@ -389,7 +391,7 @@ impl CongruenceProblem {
         let final_from = total.saturating_sub(params.final_iterations);
         let every = params.recompute_every.max(1);
         let mut solver = Solver::new(SolverOptions {
-            clock: clock.0,
+            clock,
             ..SolverOptions::default()
         });
         let mut outcome = StepOutcome::default();
@@ -416,14 +418,12 @@ impl CongruenceProblem {
             outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
             outcome.phase_ms.add(&report.phase_ms);
             if report.termination == crate::solver::Termination::Cancelled {
-                outcome.iterations = done + report.iterations;
-                outcome.cancelled = true;
-                return outcome;
+                return Err(Cancelled);
             }
             // A converged round still counts as its iterations: the recomputation moves on.
             done = end;
         }
         outcome.iterations = done;
-        outcome
+        Ok(outcome)
     }
 }

@@ -22,7 +22,8 @@ use std::collections::HashSet;
 use glam::DVec3;
 
 use crate::geometry::mesh::PolyMesh;
-use crate::progress::Clock;
+use crate::progress::{Cancelled, Clock};
+use crate::reference::assumptions::Warning;
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
 use crate::remeshing::quad_remeshing::{
@@ -63,7 +64,7 @@ pub struct SqQuadMesh {
     pub remesh_edge_angles_deg: Vec<f64>,
     pub edge_angles_deg: Vec<f64>,
     pub fairing_iterations: usize,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 impl SqQuadMesh {
@@ -75,7 +76,7 @@ impl SqQuadMesh {
 
 /// Called after every fairing iteration with the iteration, the term statistics and the
 /// vertices (model units); false cancels.
-pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> bool + 'h;
+pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> Result<(), Cancelled> + 'h;
 
 /// Second differences along the lattice polylines (triples a, v, b joined by mesh edges), per
 /// coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the patch
@@ -138,18 +139,17 @@ pub fn quad_mesh(
             singular_points.iter().filter(|s| s.quarters > 0).count(),
             singular_points.iter().filter(|s| s.quarters < 0).count(),
         );
-        warnings.push(format!(
-            "the torsal directions turn about a point (an umbilic): a quad mesh along them needs singular vertices, {three} of valence 3 and {five} of valence 5, where the support planes cannot meet at more than {}° and {}°; the final optimization does not yet reach its guarantees from such a mesh, so the quad mesh follows the parameter lines instead, which it starts from",
-            support_plane_bound_deg(3),
-            support_plane_bound_deg(5)
-        ));
+        warnings.push(Warning::SingularTorsalField {
+            valence_3: three,
+            valence_5: five,
+            bound_deg: [support_plane_bound_deg(3), support_plane_bound_deg(5)],
+        });
         quad_remesh(surface, &field, &remesh_params)?
     };
     if remesh.folded_triangles > 0 {
-        warnings.push(format!(
-            "integrating the torsal field folded {} fine triangles: the quad mesh leaves the torsal directions there",
-            remesh.folded_triangles
-        ));
+        warnings.push(Warning::FoldedFieldTriangles {
+            triangles: remesh.folded_triangles,
+        });
     }
     let QuadRemesh {
         mesh: remesh,
@@ -200,7 +200,7 @@ pub fn quad_mesh(
     }
     let mut solver = Solver::new(SolverOptions {
         max_iterations: params.fairing_iterations,
-        clock: clock.0,
+        clock,
         ..SolverOptions::default()
     });
     let report = solver.solve(&mut problem, &mut x, |it| {
@@ -227,10 +227,7 @@ pub fn quad_mesh(
     let edge_angles_deg = edge_field_angles(surface, &torsal, &mesh, &q_uv, &on_boundary);
     let coverage = coverage(surface, &mesh);
     if coverage < 0.9 {
-        warnings.push(format!(
-            "the quad mesh covers {:.1} % of the patch",
-            100.0 * coverage
-        ));
+        warnings.push(Warning::PartialCoverage { coverage });
     }
     Ok(SqQuadMesh {
         torsal,

@@ -21,6 +21,7 @@
 use crate::geometry::bspline::{
     BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame,
 };
+use crate::reference::assumptions::Warning;
 use crate::sq::params::RadiusBasis;
 
 use super::error::SqError;
@@ -105,7 +106,7 @@ pub struct MeanCurvatureSigns {
     /// fit): in the boundary strip or in a speck, else the check refuses.
     pub excluded: Vec<usize>,
     /// When H turns in the boundary strip, and when a speck of the other sign is run through.
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
 }
 
 /// Largest share of the area a speck of the other sign of H may cover inside the patch.
@@ -154,7 +155,6 @@ pub fn check_mean_curvature(
     let total = (pos + neg).max(f64::MIN_POSITIVE);
     let (positive_share, negative_share) = (pos / total, neg / total);
     let sign = if pos >= neg { 1.0 } else { -1.0 };
-    let other = if sign > 0.0 { "<" } else { ">" };
     let wrong = |h: f64| !(h * sign * diag >= MIN_MEAN_CURVATURE);
     // The speck: cells of the other sign inside the patch.
     let (mut speck_area, mut worst, mut worst_uv) = (0.0, 0.0f64, [u0, v0]);
@@ -225,28 +225,31 @@ pub fn check_mean_curvature(
         .iter()
         .any(|&(u, v, h, _)| h * sign < 0.0 && in_strip(u, v))
         || excluded.len() > in_speck;
+    let other_positive = sign < 0.0;
     if strip_flips {
-        warnings.push(format!(
-            "the mean curvature turns near the boundary (H {other} 0 on {:.2} % of the area, within one grid row of the edge); \
-             {} of the {} grid points there are left out of the radius fit",
-            100.0 * if sign > 0.0 { negative_share } else { positive_share } - 100.0 * speck_share,
-            excluded.len() - in_speck,
-            grid.point_count()
-        ));
+        warnings.push(Warning::MeanCurvatureTurnsNearBoundary {
+            other_positive,
+            share_percent: 100.0
+                * if sign > 0.0 {
+                    negative_share
+                } else {
+                    positive_share
+                }
+                - 100.0 * speck_share,
+            left_out: excluded.len() - in_speck,
+            grid_points: grid.point_count(),
+        });
     }
     if speck_area > 0.0 || in_speck > 0 {
-        warnings.push(format!(
-            "a speck of the other sign of the mean curvature: H {other} 0 on {:.2} % of the area inside the patch, around \
-             (u, v) = ({:.3}, {:.3}), |H| up to {:.2e}; it bends a panel the wrong way by at most {:.1e} of the diagonal, so \
-             spheres of the dominant sign still approximate it; {in_speck} of the {} grid points there are left out of the \
-             radius fit",
-            100.0 * speck_share,
-            worst_uv[0],
-            worst_uv[1],
-            worst,
-            sagitta / diag,
-            grid.point_count()
-        ));
+        warnings.push(Warning::MeanCurvatureSpeck {
+            other_positive,
+            share_percent: 100.0 * speck_share,
+            uv: worst_uv,
+            max_abs_mean: worst,
+            sagitta: sagitta / diag,
+            left_out: in_speck,
+            grid_points: grid.point_count(),
+        });
     }
     Ok(MeanCurvatureSigns {
         positive_share,

@@ -37,7 +37,7 @@ use glam::DVec3;
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
-use crate::progress::Clock;
+use crate::progress::{Cancelled, Clock};
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
 use crate::solver::terms::v3;
@@ -77,7 +77,7 @@ impl SpherePhase {
 /// Called after every iteration with the phase, the iteration within it, the term statistics,
 /// the vertices and the spheres (frame units); false cancels.
 pub type SphereHook<'h> =
-    dyn FnMut(SpherePhase, usize, &[TermStats], &[DVec3], &[Sphere]) -> bool + 'h;
+    dyn FnMut(SpherePhase, usize, &[TermStats], &[DVec3], &[Sphere]) -> Result<(), Cancelled> + 'h;
 
 /// The combinatorics the optimization needs.
 #[derive(Clone, Debug)]
@@ -218,7 +218,6 @@ pub struct SphereOutcome {
     pub phase_ms: PhaseTimes,
     /// The terms after the full optimization (before the projection).
     pub terms: Vec<TermStats>,
-    pub cancelled: bool,
 }
 
 /// The initial spheres of Fig. 24 (left): per face, the mean of its corners' centres
@@ -267,7 +266,7 @@ pub fn optimize_spheres(
     params: &SqParams,
     clock: Clock,
     hook: &mut SphereHook,
-) -> (Vec<DVec3>, Vec<Sphere>, SphereOutcome) {
+) -> Result<(Vec<DVec3>, Vec<Sphere>, SphereOutcome), Cancelled> {
     let (w, iterations) = (&params.sphere_weights, params.sphere_iterations);
     let mesh = input.mesh;
     let layout = SphereLayout {
@@ -506,7 +505,7 @@ pub fn optimize_spheres(
 
     let mut outcome = SphereOutcome::default();
     let mut solver = Solver::new(SolverOptions {
-        clock: clock.0,
+        clock,
         ..SolverOptions::default()
     });
     let mut run = |problem: &mut Problem,
@@ -515,7 +514,7 @@ pub fn optimize_spheres(
                    max: usize,
                    solver: &mut Solver,
                    outcome: &mut SphereOutcome|
-     -> usize {
+     -> Result<usize, Cancelled> {
         solver.options.max_iterations = max;
         let report = solver.solve(problem, x, |it| {
             let (v, s) = unpack(&layout, it.x);
@@ -526,8 +525,10 @@ pub fn optimize_spheres(
             outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
             outcome.terms = report.terms.clone();
         }
-        outcome.cancelled |= report.termination == Termination::Cancelled;
-        report.iterations
+        if report.termination == Termination::Cancelled {
+            return Err(Cancelled);
+        }
+        Ok(report.iterations)
     };
 
     // Warm-up: the spheres and the star normals move; sphericity and a small support weight.
@@ -581,11 +582,7 @@ pub fn optimize_spheres(
         iterations[0],
         &mut solver,
         &mut outcome,
-    );
-    if outcome.cancelled {
-        let (v, s) = unpack(&layout, &x);
-        return (v, s, outcome);
-    }
+    )?;
 
     // The full optimization (Eq. 10).
     set(
@@ -620,11 +617,7 @@ pub fn optimize_spheres(
         iterations[1],
         &mut solver,
         &mut outcome,
-    );
-    if outcome.cancelled {
-        let (v, s) = unpack(&layout, &x);
-        return (v, s, outcome);
-    }
+    )?;
 
     // Projection: only the equations of exactness, Gauss–Newton with a tiny damping.
     // First with the hinges at θ and α (the exact solutions form a large family: land on one
@@ -644,7 +637,7 @@ pub fn optimize_spheres(
     );
     problem.fix_range(layout.edge_normal(0)..layout.len());
     let mut projection = Solver::new(SolverOptions {
-        clock: clock.0,
+        clock,
         min_epsilon: 1e-7,
         energy_tolerance: 1e-27,
         relative_decrease_tolerance: 0.0,
@@ -658,11 +651,7 @@ pub fn optimize_spheres(
         iterations[2],
         &mut projection,
         &mut outcome,
-    );
-    if outcome.cancelled {
-        let (v, s) = unpack(&layout, &x);
-        return (v, s, outcome);
-    }
+    )?;
     set(
         &mut problem,
         &[
@@ -679,9 +668,9 @@ pub fn optimize_spheres(
         iterations[2],
         &mut projection,
         &mut outcome,
-    );
+    )?;
     let (v, s) = unpack(&layout, &x);
-    (v, s.into_iter().map(|s| s.normalized()).collect(), outcome)
+    Ok((v, s.into_iter().map(|s| s.normalized()).collect(), outcome))
 }
 
 /// The congruence's line and radius at a parameter: bilinear in the points of the grid G

@@ -85,9 +85,7 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
-use crate::reference::assumptions::{
-    coarseness_warning, kink_warning, method_warnings, SurfaceWarning,
-};
+use crate::reference::assumptions::{coarseness_warning, kink_warning, method_warnings, Warning};
 use crate::reference::{Reference, ReferenceError};
 use crate::remeshing::{
     pliant_remesh, RemeshError, RemeshRefused, SizingBounds, TooManyFaces, MAX_METHOD_FACES,
@@ -206,7 +204,7 @@ pub struct StAdaptedResult {
     pub terms: Vec<TermStats>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers, not
     /// coarser than ε) and the kinks over the warning angle.
-    pub warnings: Vec<SurfaceWarning>,
+    pub warnings: Vec<Warning>,
 }
 
 /// The angle-minimizing ST method end to end (see the module docs).
@@ -305,7 +303,7 @@ pub fn compute(
     let mut x = frame.x0.clone();
     let (mut problem, ids) = frame.problem(&params.variant_weights());
     let mut solver = Solver::new(SolverOptions {
-        clock: clock.0,
+        clock,
         ..SolverOptions::default()
     });
     let total = params.total_iterations();
@@ -327,10 +325,8 @@ pub fn compute(
                 spheres: &spheres,
             })
         },
-    );
-    if run.cancelled {
-        return Err(StAdaptedError::Cancelled);
-    }
+    )
+    .map_err(|Cancelled| StAdaptedError::Cancelled)?;
     let iteration_ms = run.iteration_ms;
     let supernodal = run.last.as_ref().is_some_and(|r| r.supernodal);
     problem.prepare(&x);

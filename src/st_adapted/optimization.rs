@@ -23,15 +23,13 @@ pub struct StageRun {
     pub phase_ms: PhaseTimes,
     /// Numeric factorizations over all stages.
     pub numeric_factorizations: usize,
-    /// Whether the hook cancelled.
-    pub cancelled: bool,
     /// The last stage's report.
     pub last: Option<SolveReport>,
 }
 
 /// Runs the optimization stages of `params` on a problem from [`build_problem`] (weights set per
 /// stage, ε carried from stage to stage), starting at `x` (updated). `hook(stage, report)` is
-/// called after every iteration; `Err(Cancelled)` stops the run (`StageRun::cancelled`).
+/// called after every iteration; `Err(Cancelled)` stops the run and is returned.
 pub fn run_stages(
     problem: &mut Problem,
     ids: &StAdaptedTerms,
@@ -39,7 +37,7 @@ pub fn run_stages(
     params: &StAdaptedParams,
     solver: &mut Solver,
     hook: &mut dyn FnMut(&str, &IterationReport) -> Result<(), Cancelled>,
-) -> StageRun {
+) -> Result<StageRun, Cancelled> {
     let mut run = StageRun::default();
     let mut epsilon = params.initial_epsilon;
     let w = &params.weights;
@@ -56,20 +54,18 @@ pub fn run_stages(
         solver.options.max_iterations = stage.iterations;
         solver.options.initial_epsilon = epsilon;
         let name = stage.name.as_str();
-        let report = solver.solve(problem, x, |rep| hook(name, rep).is_ok());
+        let report = solver.solve(problem, x, |rep| hook(name, rep));
         run.iterations += report.iterations;
         run.iteration_ms.extend_from_slice(&report.iteration_ms);
         run.numeric_factorizations += report.numeric_factorizations;
         run.phase_ms.add(&report.phase_ms);
         epsilon = report.epsilon.max(1e-6);
-        let cancelled = report.termination == Termination::Cancelled;
-        run.last = Some(report);
-        if cancelled {
-            run.cancelled = true;
-            break;
+        if report.termination == Termination::Cancelled {
+            return Err(Cancelled);
         }
+        run.last = Some(report);
     }
-    run
+    Ok(run)
 }
 
 /// The optimization in its normalized frame: the reference and the remeshed mesh moved by the

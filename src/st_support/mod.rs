@@ -53,7 +53,7 @@ use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
 use crate::progress::{Cancelled, Clock, OnProgress, Progress, Timings};
-use crate::reference::assumptions::{is_sliver, kink_warning, method_warnings, SurfaceWarning};
+use crate::reference::assumptions::{is_sliver, kink_warning, method_warnings, Warning};
 use crate::reference::{Reference, ReferenceError};
 use crate::remeshing::{
     local_spheres_orthogonal, mean_edge_length, pliant_remesh, RemeshError, RemeshParams,
@@ -222,7 +222,7 @@ pub struct StSupportResult {
     /// (step, milliseconds) in execution order.
     pub timings_ms: Vec<(String, f64)>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers).
-    pub warnings: Vec<SurfaceWarning>,
+    pub warnings: Vec<Warning>,
 }
 
 impl StSupportResult {

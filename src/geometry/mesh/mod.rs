@@ -239,7 +239,6 @@ impl PolyMesh {
             self.faces.iter().flat_map(|f| f.triangles()).collect(),
         )
     }
-
 }
 
 impl From<TriMesh> for PolyMesh {

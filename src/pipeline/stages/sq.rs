@@ -446,7 +446,7 @@ pub fn sq_report(reference: &Reference, result: &SqCongruence, params: &SqParams
     report.alpha_deg = Some(params.alpha_deg);
     report.radius_basis = Some(result.radius_basis);
     report.stopped_after = Some(params.until.key().into());
-    report.warnings = result.warnings.clone();
+    report.warnings = result.warnings.iter().map(ToString::to_string).collect();
     report
 }
 
@@ -493,7 +493,7 @@ pub fn export(
     for (step, ms) in &result.timings_ms {
         report.add_timing(step.clone(), *ms);
     }
-    report.warnings = result.warnings.clone();
+    report.warnings = result.warnings.iter().map(ToString::to_string).collect();
     if let Some(q) = &result.quad_mesh {
         let m = &mut report.metrics;
         m.coverage = Some(q.coverage);
