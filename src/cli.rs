@@ -96,13 +96,13 @@ enum Command {
         #[arg(long)]
         optimize_radius: bool,
         /// Depth of the support elements, relative to the diagonal.
-        #[arg(long, value_name = "D", default_value_t = 0.02, value_parser = fraction_in::<0, 1>)]
+        #[arg(long, value_name = "D", default_value_t = StSupportParams::default().support_depth, value_parser = fraction_in::<0, 1>)]
         depth: f64,
         /// Length of the drawn node axes, relative to the diagonal.
-        #[arg(long, value_name = "L", default_value_t = 0.1, value_parser = fraction_in::<0, 10>)]
+        #[arg(long, value_name = "L", default_value_t = StSupportParams::default().axis_length, value_parser = fraction_in::<0, 10>)]
         axis_length: f64,
         /// Radii closer than T × the diagonal count as one in the schedule.
-        #[arg(long, value_name = "T", default_value_t = 0.001, value_parser = radius_tolerance)]
+        #[arg(long, value_name = "T", default_value_t = StSupportParams::default().radius_tolerance, value_parser = radius_tolerance)]
         radius_tolerance: f64,
         /// Remesh first with the sizing field of the local spheres orthogonal to Ω (Fig. 16,
         /// bottom).

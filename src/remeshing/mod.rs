@@ -65,6 +65,16 @@ impl std::error::Error for RemeshRefused {}
 /// 500 MB schedule), so the user is asked to remesh first.
 pub const MAX_METHOD_FACES: usize = 40_000;
 
+/// Why [`Sizing::guarded_field`] or [`Sizing::remesh_to`] gave no mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GuardedRemeshError {
+    Cancelled,
+    NoFaces,
+    /// The remesh missed its target, with the reference's failed assumptions.
+    Refused(RemeshRefused),
+    TooManyFaces(TooManyFaces),
+}
+
 /// A method's size guard: it would work on more faces than it handles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TooManyFaces {
@@ -148,6 +158,50 @@ impl Sizing {
         } else {
             Ok(())
         }
+    }
+
+    /// The sizing field a method asks for ([`Self::field`]) behind the size guard
+    /// ([`Self::check_size`], before any remeshing); None for [`Sizing::None`], the mesh checked
+    /// for size. [`Self::remesh_to`] remeshes to it.
+    pub fn guarded_field(
+        &self,
+        mesh: &TriMesh,
+        topo: &Topology,
+        sphere_of: &dyn Fn(usize) -> Sphere,
+        bounds: SizingBounds,
+        progress: &mut OnProgress,
+    ) -> Result<Option<SizingField>, GuardedRemeshError> {
+        let field = self
+            .field(mesh, topo, sphere_of, bounds, progress)
+            .map_err(|Cancelled| GuardedRemeshError::Cancelled)?;
+        self.check_size(mesh, field.as_ref(), MAX_METHOD_FACES)
+            .map_err(GuardedRemeshError::TooManyFaces)?;
+        Ok(field)
+    }
+
+    /// The pliant remesh to `field` behind the target guard ([`Self::check_reached`]). A
+    /// refusal carries `warnings()`, the reference's failed assumptions.
+    pub fn remesh_to(
+        &self,
+        mesh: &TriMesh,
+        field: &SizingField,
+        params: &RemeshParams,
+        warnings: &dyn Fn() -> Vec<Warning>,
+        progress: &mut OnProgress,
+    ) -> Result<TriMesh, GuardedRemeshError> {
+        let refused = |error| {
+            GuardedRemeshError::Refused(RemeshRefused {
+                error,
+                warnings: warnings(),
+            })
+        };
+        let remeshed = pliant_remesh(mesh, field, params, progress).map_err(|e| match e {
+            pliant::RemeshError::Cancelled => GuardedRemeshError::Cancelled,
+            pliant::RemeshError::NoFaces => GuardedRemeshError::NoFaces,
+            error => refused(error),
+        })?;
+        self.check_reached(remeshed.face_count()).map_err(refused)?;
+        Ok(remeshed)
     }
 
     /// Refuses a uniform remesh whose `faces` miss the target N by more than [`TARGET_FACTOR`].

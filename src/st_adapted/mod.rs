@@ -87,9 +87,7 @@ use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::assumptions::{coarseness_warning, kink_warning, method_warnings, Warning};
 use crate::reference::{Reference, ReferenceError};
-use crate::remeshing::{
-    pliant_remesh, RemeshError, RemeshRefused, SizingBounds, TooManyFaces, MAX_METHOD_FACES,
-};
+use crate::remeshing::{GuardedRemeshError, RemeshRefused, SizingBounds, TooManyFaces};
 use crate::solver::{Solver, SolverOptions, TermStats};
 use crate::stats::median;
 use initialization::initial_spheres;
@@ -160,15 +158,13 @@ impl From<Cancelled> for StAdaptedError {
     }
 }
 
-impl From<RemeshError> for StAdaptedError {
-    fn from(e: RemeshError) -> Self {
+impl From<GuardedRemeshError> for StAdaptedError {
+    fn from(e: GuardedRemeshError) -> Self {
         match e {
-            RemeshError::Cancelled => StAdaptedError::Cancelled,
-            RemeshError::NoFaces => StAdaptedError::NoFaces,
-            error @ RemeshError::TargetMissed { .. } => StAdaptedError::Remesh(RemeshRefused {
-                error,
-                warnings: Vec::new(),
-            }),
+            GuardedRemeshError::Cancelled => StAdaptedError::Cancelled,
+            GuardedRemeshError::NoFaces => StAdaptedError::NoFaces,
+            GuardedRemeshError::Refused(r) => StAdaptedError::Remesh(r),
+            GuardedRemeshError::TooManyFaces(t) => StAdaptedError::TooManyFaces(t),
         }
     }
 }
@@ -250,33 +246,26 @@ pub fn compute(
     let bounds = SizingBounds::for_mesh(mesh, topo);
     let sizing = params
         .sizing
-        .field(mesh, topo, &sphere_of, bounds, &mut |p| {
+        .guarded_field(mesh, topo, &sphere_of, bounds, &mut |p| {
             on_event(StAdaptedEvent::Progress(p))
         })?;
     timings.lap("sizing");
-    params
-        .sizing
-        .check_size(mesh, sizing.as_ref(), MAX_METHOD_FACES)
-        .map_err(StAdaptedError::TooManyFaces)?;
-    if let Some(s) = &sizing {
-        on_event(StAdaptedEvent::Sizing { values: s.values() })?;
-    }
-    timings.skip();
     let remeshed = match &sizing {
-        Some(s) => pliant_remesh(mesh, s, &params.remesh, &mut |p| {
-            on_event(StAdaptedEvent::Progress(p))
-        })?,
+        Some(sizing) => {
+            on_event(StAdaptedEvent::Sizing {
+                values: sizing.values(),
+            })?;
+            timings.skip();
+            let warnings = || method_warnings(reference, &field, None);
+            params
+                .sizing
+                .remesh_to(mesh, sizing, &params.remesh, &warnings, &mut |p| {
+                    on_event(StAdaptedEvent::Progress(p))
+                })?
+        }
         None => mesh.clone(),
     };
-    params
-        .sizing
-        .check_reached(remeshed.face_count())
-        .map_err(|error| {
-            StAdaptedError::Remesh(RemeshRefused {
-                error,
-                warnings: method_warnings(reference, &field, None),
-            })
-        })?;
+    let remeshed_by_sizing = sizing.is_some();
     timings.lap("remesh");
     on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
 
@@ -284,9 +273,10 @@ pub fn compute(
     // fit on the coarser remeshed mesh would be noisier where its faces are large).
     step(on_event, "init")?;
     timings.skip();
-    let central_spheres = match &sizing {
-        Some(_) => reference.central_spheres_at(&field, &remeshed.positions),
-        None => field.central_spheres.clone(),
+    let central_spheres = if remeshed_by_sizing {
+        reference.central_spheres_at(&field, &remeshed.positions)
+    } else {
+        field.central_spheres.clone()
     };
     let init = initial_spheres(&remeshed, &central_spheres);
     let rule = BoundaryArcRule::Parallel(DVec3::ZERO);
@@ -346,7 +336,7 @@ pub fn compute(
         metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
     let angle_iteration_median_ms = median(&iteration_ms);
-    let mut warnings = method_warnings(reference, &field, sizing.is_some().then_some(&remeshed));
+    let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
     if let Some(epsilon) = params.epsilon() {
         warnings.extend(coarseness_warning(reference, epsilon));

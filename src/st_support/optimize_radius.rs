@@ -127,3 +127,50 @@ pub fn optimize_parameter(
     }
     Ok((x_of(best.0), best.1, initial))
 }
+
+/// The Ω of step 3: the estimate, or with `optimize` the R² (or d) of least mean kink.
+pub struct ChosenOmega {
+    pub omega: AbsoluteSphere,
+    /// The optimized parameter when optimized (the estimate's when the scan found nothing
+    /// better).
+    pub optimized_parameter: Option<f64>,
+    /// The mean kink angle (deg) with the estimate, when optimized.
+    pub mean_kink_estimate_deg: Option<f64>,
+}
+
+/// Step 3 on the working `mesh` with its `interior` edges (face pairs).
+pub fn choose_omega(
+    mesh: &TriMesh,
+    absolute: &AbsoluteSphereEstimate,
+    interior: &[[u32; 2]],
+    optimize: bool,
+    progress: &mut OnProgress,
+) -> Result<ChosenOmega, Cancelled> {
+    if !optimize {
+        return Ok(ChosenOmega {
+            omega: absolute.omega,
+            optimized_parameter: None,
+            mean_kink_estimate_deg: None,
+        });
+    }
+    progress(Progress::new("optimize_radius", 0, 1))?;
+    let families: Vec<[Sphere; 2]> = (0..mesh.face_count())
+        .map(|f| Sphere::through_points_family(mesh.face_points(f)))
+        .collect();
+    let (best, value, initial) = optimize_parameter(mesh, absolute, &families, interior, progress)?;
+    let chosen = if value < initial {
+        ChosenOmega {
+            omega: with_parameter(&absolute.omega, best),
+            optimized_parameter: Some(best),
+            mean_kink_estimate_deg: Some(initial),
+        }
+    } else {
+        ChosenOmega {
+            omega: absolute.omega,
+            optimized_parameter: Some(parameter_of(&absolute.omega)),
+            mean_kink_estimate_deg: Some(initial),
+        }
+    };
+    progress(Progress::new("optimize_radius", 1, 1))?;
+    Ok(chosen)
+}

@@ -1,0 +1,45 @@
+//! The parameters of ST meshes with support structure (Sec. 4), their defaults written once
+//! here: the CLI, the app and the design link read them.
+
+use serde::{Deserialize, Serialize};
+
+use super::absolute_sphere::AbsoluteSphereParams;
+use crate::congruence::central_spheres::JetParams;
+use crate::remeshing::Sizing;
+
+/// Neighbours of a local sphere orthogonal to Ω (remeshing with `Sizing::Adaptive`).
+pub const LOCAL_SPHERE_POINTS: usize = 16;
+
+/// Parameters of the method ([`compute`]); lengths relative to the bbox diagonal. The defaults
+/// are written here only.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StSupportParams {
+    /// Choose R² (or d) minimizing the mean kink angle instead of the mean of the R_i².
+    pub optimize_radius: bool,
+    /// Depth of the support elements. Default 0.02.
+    pub support_depth: f64,
+    /// Length of the displayed node-axis segments. Default 0.1.
+    pub axis_length: f64,
+    /// Radii closer than this count as one in the panel schedule. Default 1e-3.
+    pub radius_tolerance: f64,
+    /// Remesh first: adaptively with the sizing field of the local spheres orthogonal to Ω
+    /// (Fig. 16, bottom; ε × diag), uniformly to about N faces, or not at all (the default).
+    pub remesh: Sizing,
+    pub jet: JetParams,
+    pub absolute: AbsoluteSphereParams,
+}
+
+impl Default for StSupportParams {
+    fn default() -> Self {
+        Self {
+            optimize_radius: false,
+            support_depth: 0.02,
+            axis_length: 0.1,
+            radius_tolerance: 1e-3,
+            remesh: Sizing::None,
+            jet: JetParams::default(),
+            absolute: AbsoluteSphereParams::default(),
+        }
+    }
+}
