@@ -14,8 +14,8 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
-    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, Scale, Sizing, SqWorkload,
-    ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
+    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, RoundSizing, Scale,
+    SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
 };
 use spherical_faces::progress::{native_clock_ms, Clock};
 use spherical_faces::solver::PhaseTimes;
@@ -97,12 +97,12 @@ fn jet_fit(bencher: Bencher) {
 }
 
 /// One pliant remeshing round of the ~100k-triangle dome (fresh remesher per sample, not timed).
-#[divan::bench(args = [Sizing::Uniform, Sizing::Adaptive], sample_count = REMESH_SAMPLES as u32, sample_size = 1)]
-fn remesh_round(bencher: Bencher, sizing: Sizing) {
+#[divan::bench(args = [RoundSizing::Uniform, RoundSizing::Adaptive], sample_count = REMESH_SAMPLES as u32, sample_size = 1)]
+fn remesh_round(bencher: Bencher, sizing: RoundSizing) {
     let w = remesh_workload();
     let name = match sizing {
-        Sizing::Uniform => "remesh_round_uniform",
-        Sizing::Adaptive => "remesh_round_adaptive",
+        RoundSizing::Uniform => "remesh_round_uniform",
+        RoundSizing::Adaptive => "remesh_round_adaptive",
     };
     bencher
         .with_inputs(|| w.remesher(sizing))

@@ -6,7 +6,7 @@
 //! depends only on `spherical_faces` and `std`.
 #![allow(dead_code)]
 
-use spherical_faces::design_link::{Design, Reference};
+use spherical_faces::design_link::{Design, DesignSurface};
 use spherical_faces::import::{import_file, Imported, ImportedBSpline, ImportedFile};
 use spherical_faces::pipeline::fields::Field;
 use spherical_faces::pipeline::protocol::{
@@ -177,7 +177,7 @@ pub fn design_link(data: &[u8]) {
     let (d, _) = Design::from_fragment(&text);
     let first = d.to_fragment();
     let (d2, notices) = Design::from_fragment(&first);
-    let own_file = matches!(d2.reference, Reference::OwnFile(_));
+    let own_file = matches!(d2.reference, DesignSurface::OwnFile(_));
     let notices: Vec<&String> = notices
         .iter()
         .filter(|n| !(own_file && n.starts_with("this design uses the file")))

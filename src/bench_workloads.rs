@@ -117,7 +117,7 @@ impl JetWorkload {
 
 /// Which sizing field the remeshing round uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sizing {
+pub enum RoundSizing {
     /// g = the reference's mean edge length.
     Uniform,
     /// Influence zones of the reference's central spheres, ε = [`ADAPTIVE_EPSILON`].
@@ -150,15 +150,15 @@ impl RemeshWorkload {
         }
     }
 
-    pub fn sizing(&self, sizing: Sizing) -> &SizingField {
+    pub fn sizing(&self, sizing: RoundSizing) -> &SizingField {
         match sizing {
-            Sizing::Uniform => &self.uniform,
-            Sizing::Adaptive => &self.adaptive,
+            RoundSizing::Uniform => &self.uniform,
+            RoundSizing::Adaptive => &self.adaptive,
         }
     }
 
     /// Untimed setup of one sample: a fresh remesher on the reference.
-    pub fn remesher(&self, sizing: Sizing) -> Remesher<'_> {
+    pub fn remesher(&self, sizing: RoundSizing) -> Remesher<'_> {
         Remesher::new(&self.reference, self.sizing(sizing), &self.params)
     }
 
@@ -168,7 +168,12 @@ impl RemeshWorkload {
     }
 
     /// Times `n` rounds, each on a fresh remesher (built and dropped outside the timing).
-    pub fn time_rounds(&self, sizing: Sizing, clock: Clock, n: usize) -> (Vec<f64>, RoundStats) {
+    pub fn time_rounds(
+        &self,
+        sizing: RoundSizing,
+        clock: Clock,
+        n: usize,
+    ) -> (Vec<f64>, RoundStats) {
         let mut stats = RoundStats::default();
         let ms = (0..n)
             .map(|_| {
@@ -386,8 +391,8 @@ where
     let remesh = RemeshWorkload::new(scale);
     pause().await;
     for (name, sizing) in [
-        ("remesh_round_uniform", Sizing::Uniform),
-        ("remesh_round_adaptive", Sizing::Adaptive),
+        ("remesh_round_uniform", RoundSizing::Uniform),
+        ("remesh_round_adaptive", RoundSizing::Adaptive),
     ] {
         let (mut ms, mut st) = (Vec::new(), RoundStats::default());
         for _ in 0..REMESH_SAMPLES {

@@ -22,8 +22,8 @@ use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::params::{
-    RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE,
-    THETA_RANGE,
+    ParamRange, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE,
+    RECOMPUTE_RANGE, THETA_RANGE,
 };
 use spherical_faces::sq::SqEvent;
 use spherical_faces::st_adapted::params::StAdaptedParams;
@@ -125,19 +125,19 @@ enum Command {
         #[command(flatten)]
         input: Input,
         /// Largest angle between the lines and the normals (degrees).
-        #[arg(long, value_name = "DEG", default_value_t = SqParams::default().theta_deg, value_parser = range_f64::<THETA>)]
+        #[arg(long, value_name = "DEG", default_value_t = SqParams::default().theta_deg, value_parser = in_range_f64(THETA_RANGE))]
         theta: f64,
         /// Smallest angle between the torsal planes (degrees).
-        #[arg(long, value_name = "DEG", default_value_t = SqParams::default().alpha_deg, value_parser = range_f64::<ALPHA>)]
+        #[arg(long, value_name = "DEG", default_value_t = SqParams::default().alpha_deg, value_parser = in_range_f64(ALPHA_RANGE))]
         alpha: f64,
         /// Points per direction of the sampling grid G.
-        #[arg(long, value_name = "N", default_value_t = SqParams::default().grid, value_parser = range_usize::<GRID>)]
+        #[arg(long, value_name = "N", default_value_t = SqParams::default().grid, value_parser = in_range_usize(GRID_RANGE))]
         grid: usize,
         /// Recompute the exact torsal directions every K iterations.
-        #[arg(long, value_name = "K", default_value_t = SqParams::default().recompute_every, value_parser = range_usize::<RECOMPUTE>)]
+        #[arg(long, value_name = "K", default_value_t = SqParams::default().recompute_every, value_parser = in_range_usize(RECOMPUTE_RANGE))]
         rs: usize,
         /// About this many quads.
-        #[arg(long, value_name = "N", default_value_t = SqParams::default().faces, value_parser = range_usize::<FACES>)]
+        #[arg(long, value_name = "N", default_value_t = SqParams::default().faces, value_parser = in_range_usize(FACES_RANGE))]
         faces: usize,
         /// Stop after this stage.
         #[arg(long, value_name = "STAGE", default_value = "final", value_parser = until)]
@@ -865,36 +865,22 @@ fn until(s: &str) -> Result<Until, String> {
     Until::from_key(s).ok_or_else(|| format!("'{s}': expected congruence, remesh or final"))
 }
 
-const THETA: u8 = 0;
-const ALPHA: u8 = 1;
-const GRID: u8 = 2;
-const RECOMPUTE: u8 = 3;
-const FACES: u8 = 4;
-
-fn range_f64<const R: u8>(s: &str) -> Result<f64, String> {
-    let (lo, hi) = if R == THETA { THETA_RANGE } else { ALPHA_RANGE };
-    let x = number(s)?;
-    if (lo..=hi).contains(&x) {
-        Ok(x)
-    } else {
-        Err(format!("{x} is not in [{lo}, {hi}]"))
-    }
+/// A number checked against its range (the method's own check, [`ParamRange::check`]).
+fn in_range_f64(range: ParamRange<f64>) -> impl Fn(&str) -> Result<f64, String> + Clone {
+    move |s| range.check(number(s)?).map_err(|e| e.to_string())
 }
 
-fn range_usize<const R: u8>(s: &str) -> Result<usize, String> {
-    let (lo, hi) = match R {
-        GRID => GRID_RANGE,
-        RECOMPUTE => RECOMPUTE_RANGE,
-        _ => FACES_RANGE,
-    };
-    let n: usize = s
-        .parse()
-        .map_err(|_| format!("'{s}' is not a whole number"))?;
-    match (lo..=hi).contains(&n) {
-        true => Ok(n),
-        false if R == FACES && n > hi => Err(format!(
-            "{n} is more quads than SQ finishes within a minute and 1 GB; at most {hi}"
-        )),
-        false => Err(format!("{n} is not in [{lo}, {hi}]")),
+fn in_range_usize(range: ParamRange<usize>) -> impl Fn(&str) -> Result<usize, String> + Clone {
+    move |s| {
+        let n: usize = s
+            .parse()
+            .map_err(|_| format!("'{s}' is not a whole number"))?;
+        match range.check(n) {
+            Err(_) if range == FACES_RANGE && n > range.hi => Err(format!(
+                "{n} is more quads than SQ finishes within a minute and 1 GB; at most {}",
+                range.hi
+            )),
+            checked => checked.map_err(|e| e.to_string()),
+        }
     }
 }

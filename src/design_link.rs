@@ -5,7 +5,7 @@
 use crate::congruence::central_spheres::JetParams;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
-use crate::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
+use crate::remeshing::{Sizing, DEFAULT_EPSILON, DEFAULT_FACES, MAX_FACES, MIN_FACES};
 use crate::samples::Sample;
 use crate::sq::params::{
     RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE,
@@ -96,8 +96,8 @@ pub enum Method {
     StAdapted,
     /// ST mesh with support structure (Sec. 4).
     StSupport,
-    /// SQ mesh with support structure (Sec. 5): a B-spline reference, up to the torsal cross
-    /// field (Sec. 5.1).
+    /// SQ mesh with support structure (Sec. 5): a B-spline reference; the congruence (5.1) and
+    /// the quad mesh with its spheres, panels and support structure (5.2).
     Sq,
 }
 
@@ -182,9 +182,6 @@ impl SizingKind {
     }
 }
 
-/// Default face count of uniform remeshing.
-pub const DEFAULT_FACES: usize = 600;
-
 /// `&{key}=kind` and the value the kind uses (`&eps=…` or `&faces=…`).
 fn sizing_fragment(key: &str, sizing: Sizing) -> String {
     let kind = SizingKind::of(sizing).key();
@@ -197,7 +194,7 @@ fn sizing_fragment(key: &str, sizing: Sizing) -> String {
 
 /// The reference surface of a design.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Reference {
+pub enum DesignSurface {
     Sample(Sample),
     /// The user's own file: a link can only name it; the user drops it again.
     OwnFile(String),
@@ -214,7 +211,7 @@ pub struct CameraState {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Design {
-    pub reference: Reference,
+    pub reference: DesignSurface,
     pub method: Method,
     /// The jet fit of every method (their own `jet` follows this one).
     pub jet: JetParams,
@@ -231,7 +228,7 @@ pub struct Design {
 impl Default for Design {
     fn default() -> Self {
         Self {
-            reference: Reference::Sample(Sample::Dome),
+            reference: DesignSurface::Sample(Sample::Dome),
             method: Method::Curvature,
             jet: JetParams::default(),
             st_adapted: StAdaptedParams::default(),
@@ -250,9 +247,11 @@ impl Design {
     pub fn to_fragment(&self) -> String {
         let mut s = format!("#v={VERSION}");
         match &self.reference {
-            Reference::Sample(x) => s += &format!("&sample={}", x.key()),
-            Reference::OwnFile(name) if name.is_empty() => s += "&sample=file",
-            Reference::OwnFile(name) => s += &format!("&sample=file&file={}", percent_encode(name)),
+            DesignSurface::Sample(x) => s += &format!("&sample={}", x.key()),
+            DesignSurface::OwnFile(name) if name.is_empty() => s += "&sample=file",
+            DesignSurface::OwnFile(name) => {
+                s += &format!("&sample=file&file={}", percent_encode(name))
+            }
         }
         s += &format!("&method={}", self.method.key());
         s += &format!(
@@ -373,7 +372,7 @@ impl Design {
                 }
                 "sample" => match Sample::from_key(v) {
                     Some(s) => {
-                        d.reference = Reference::Sample(s);
+                        d.reference = DesignSurface::Sample(s);
                         true
                     }
                     None => {
@@ -425,16 +424,16 @@ impl Design {
                 "faces" => parse_in(v, MIN_FACES as i64, MAX_FACES as i64)
                     .map(|x| faces = Some(x as usize))
                     .is_some(),
-                "theta" => parse_f64_in(v, THETA_RANGE.0, THETA_RANGE.1)
+                "theta" => parse_f64_in(v, THETA_RANGE.lo, THETA_RANGE.hi)
                     .map(|x| d.sq.theta_deg = x)
                     .is_some(),
-                "alpha" => parse_f64_in(v, ALPHA_RANGE.0, ALPHA_RANGE.1)
+                "alpha" => parse_f64_in(v, ALPHA_RANGE.lo, ALPHA_RANGE.hi)
                     .map(|x| d.sq.alpha_deg = x)
                     .is_some(),
-                "grid" => parse_in(v, GRID_RANGE.0 as i64, GRID_RANGE.1 as i64)
+                "grid" => parse_in(v, GRID_RANGE.lo as i64, GRID_RANGE.hi as i64)
                     .map(|x| d.sq.grid = x as usize)
                     .is_some(),
-                "rs" => parse_in(v, RECOMPUTE_RANGE.0 as i64, RECOMPUTE_RANGE.1 as i64)
+                "rs" => parse_in(v, RECOMPUTE_RANGE.lo as i64, RECOMPUTE_RANGE.hi as i64)
                     .map(|x| d.sq.recompute_every = x as usize)
                     .is_some(),
                 "until" => Until::from_key(v).map(|u| d.sq.until = u).is_some(),
@@ -488,12 +487,12 @@ impl Design {
         }
         // For SQ, N is the remesh's face count.
         if let Some(n) = faces.filter(|_| applies(Method::Sq)) {
-            if (FACES_RANGE.0..=FACES_RANGE.1).contains(&n) {
+            if FACES_RANGE.contains(n) {
                 d.sq.faces = n;
             } else {
                 notices.push(format!(
                     "ignored invalid value for 'faces': '{n}' (SQ takes {} to {})",
-                    FACES_RANGE.0, FACES_RANGE.1
+                    FACES_RANGE.lo, FACES_RANGE.hi
                 ));
             }
         }
@@ -504,7 +503,7 @@ impl Design {
             notices.push(format!(
                 "this design uses the file '{name}': drop it on the viewport to continue"
             ));
-            d.reference = Reference::OwnFile(name);
+            d.reference = DesignSurface::OwnFile(name);
         }
         (d, notices)
     }

@@ -33,7 +33,8 @@ pub mod rng;
 pub mod samples;
 /// Sparse Levenberg–Marquardt on faer: residual terms, finite-difference checks, ordering.
 pub mod solver;
-/// Sec. 5: SQ meshes with support structure (the congruence and its torsal directions).
+/// Sec. 5: SQ meshes with support structure (5.1: the congruence and its torsal directions;
+/// 5.2: the quad mesh, the final sphere optimization, panels and support structure).
 pub mod sq;
 /// Sec. 3: ST meshes with adapted face size (the angle-minimizing ST mesh).
 pub mod st_adapted;

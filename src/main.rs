@@ -1,4 +1,4 @@
-//! `spherical-faces`: the native command line (`info`, `st-support`). Not built for wasm32,
+//! `spherical-faces`: the native command line (`info`, `st`, `st-support`, `sq`). Not built for wasm32,
 //! where the same pipeline runs in the browser's worker instead.
 
 #[cfg(not(target_arch = "wasm32"))]

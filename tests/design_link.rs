@@ -14,7 +14,7 @@ use spherical_faces::st_support::StSupportParams;
 #[test]
 fn round_trip() {
     let d = Design {
-        reference: Reference::Sample(Sample::TorusPatch),
+        reference: DesignSurface::Sample(Sample::TorusPatch),
         method: Method::Curvature,
         jet: JetParams {
             degree: 2,
@@ -127,7 +127,7 @@ fn old_links_open_the_same_designs() {
         "#v=1&sample=torus&method=st-support&jet_degree=3&jet_rings=4&opt_r=1&depth=0.03&axis=0.2&rtol=0.002&remesh=faces&eps=4e-4&faces=300&color=H&shading=reflective&edges=1&cam=0.5,0.3,6,0,0,0",
     );
     assert!(notices.is_empty(), "{notices:?}");
-    assert_eq!(d.reference, Reference::Sample(Sample::TorusPatch));
+    assert_eq!(d.reference, DesignSurface::Sample(Sample::TorusPatch));
     assert_eq!(d.method, Method::StSupport);
     let st = &d.st_support;
     assert!(
@@ -153,7 +153,7 @@ fn old_links_open_the_same_designs() {
 fn unknown_and_invalid_fields_are_reported() {
     let (d, notices) =
         Design::from_fragment("#v=1&sample=torus&bogus=7&color=purple&jet_degree=9&cam=1,2");
-    assert_eq!(d.reference, Reference::Sample(Sample::TorusPatch));
+    assert_eq!(d.reference, DesignSurface::Sample(Sample::TorusPatch));
     assert_eq!(d.color, ColorBy::MeanCurvature);
     assert_eq!(d.jet.degree, JetParams::default().degree);
     assert_eq!(d.camera, None);
@@ -175,7 +175,7 @@ fn an_unknown_sample_lists_the_samples() {
 #[test]
 fn file_names_are_data() {
     let d = Design {
-        reference: Reference::OwnFile("<img src=x onerror=alert(1)>.obj".into()),
+        reference: DesignSurface::OwnFile("<img src=x onerror=alert(1)>.obj".into()),
         ..Design::default()
     };
     let frag = d.to_fragment();
@@ -197,7 +197,7 @@ fn empty_and_garbage_fragments_give_defaults() {
 #[test]
 fn sq_parameters_round_trip() {
     let d = Design {
-        reference: Reference::Sample(Sample::Vault),
+        reference: DesignSurface::Sample(Sample::Vault),
         method: Method::Sq,
         sq: SqParams {
             theta_deg: 17.5,

@@ -92,7 +92,9 @@ fn every_target_is_replayed() {
 
 mod seeds {
     use super::{fuzz_dir, oracles};
-    use spherical_faces::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading};
+    use spherical_faces::design_link::{
+        CameraState, ColorBy, Design, DesignSurface, Method, Shading,
+    };
     use spherical_faces::pipeline::fields::{Field, FieldData};
     use spherical_faces::pipeline::protocol::*;
     use spherical_faces::pipeline::{Outbox, Session};
@@ -296,7 +298,7 @@ mod seeds {
                 "app_st.frag",
                 Design {
                     method: Method::StAdapted,
-                    reference: Reference::Sample(Sample::SphereCap),
+                    reference: DesignSurface::Sample(Sample::SphereCap),
                     color: ColorBy::Sizing,
                     shading: Shading::Flat,
                     edges: true,
@@ -320,14 +322,14 @@ mod seeds {
                 "app_sq.frag",
                 Design {
                     method: Method::Sq,
-                    reference: Reference::Sample(Sample::Vault),
+                    reference: DesignSurface::Sample(Sample::Vault),
                     ..Design::default()
                 },
             ),
             (
                 "app_file.frag",
                 Design {
-                    reference: Reference::OwnFile("my roof #2.obj".into()),
+                    reference: DesignSurface::OwnFile("my roof #2.obj".into()),
                     ..Design::default()
                 },
             ),

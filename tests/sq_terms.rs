@@ -13,7 +13,7 @@ use spherical_faces::sq::optimization::CongruenceProblem;
 use spherical_faces::sq::params::Inequality;
 use spherical_faces::sq::radius::SamplingGrid;
 use spherical_faces::sq::terms::{
-    line_fairness, LineCongruence, LineNormalAngle, TorsalAngle, TorsalPlane,
+    line_fairness, LineCongruence, LineNormalAngle, TorsalAngle, TorsalDirection,
 };
 
 const FD_H: f64 = 1e-6;
@@ -105,7 +105,7 @@ fn line_congruence_terms_match_finite_differences() {
 fn torsal_terms_match_finite_differences() {
     for inequality in [Inequality::Hinge, Inequality::Slack] {
         let (p, x) = setup(inequality);
-        let plane = TorsalPlane {
+        let plane = TorsalDirection {
             quads: p.quads.clone(),
             diagonals: p.diagonals.clone(),
             layout: &p.layout,
@@ -145,7 +145,7 @@ use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::sphere_terms::{
     AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation,
-    FanAxisAngle, NodeAxis, TorsalPlane as EdgeTorsalPlane, VertexNormals,
+    FanAxisAngle, NodeAxis, TorsalPlane, VertexNormals,
 };
 
 /// Six spheres (5 blocks with a in ±[0.2, 0.5]), four vertices and four unit-ish normals.
@@ -203,7 +203,7 @@ fn final_optimization_terms_match_finite_differences() {
                 v(7),
             ),
         ];
-        assert_fd(&EdgeTorsalPlane { edges }, &x);
+        assert_fd(&TorsalPlane { edges }, &x);
         let n = glam::DVec3::new(0.3, -0.2, 0.9).normalize();
         assert_fd(
             &CentreProximity {

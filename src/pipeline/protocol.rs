@@ -47,8 +47,9 @@ pub enum StageRequest {
     StAdapted(StAdaptedParams),
     /// ST mesh with support structure (Sec. 4), with panels and exports.
     StSupport(StSupportParams),
-    /// SQ mesh with support structure (Sec. 5): up to the torsal cross field (Sec. 5.1), with
-    /// its files.
+    /// SQ mesh with support structure (Sec. 5): the congruence and its torsal field (5.1), the
+    /// quad mesh, the final sphere optimization, panels and support structure (5.2), as far as
+    /// its `until` asks, with its files.
     Sq(SqParams),
 }
 

@@ -5,13 +5,15 @@ use std::fmt;
 use crate::progress::Cancelled;
 use crate::remeshing::quad_remeshing::QuadRemeshError;
 
+use super::params::ParamError;
+
 /// Why the SQ method cannot run (or stopped).
 #[derive(Clone, Debug, PartialEq)]
 pub enum SqError {
     /// The reference is a mesh.
     NotBSpline,
     /// A parameter out of range.
-    Parameter(String),
+    Parameter(ParamError),
     /// S_u × S_v vanishes at a point of G.
     Singular {
         uv: [f64; 2],
@@ -55,7 +57,7 @@ impl fmt::Display for SqError {
             SqError::NotBSpline => f.write_str(
                 "SQ meshes need a B-spline reference surface (Sec. 5): load a B-spline .json file or the vault sample",
             ),
-            SqError::Parameter(m) => f.write_str(m),
+            SqError::Parameter(e) => e.fmt(f),
             SqError::Singular { uv } => {
                 write!(f, "the surface has no normal at (u, v) = ({:.6}, {:.6}) (S_u × S_v = 0)", uv[0], uv[1])
             }

@@ -1,4 +1,5 @@
-//! Sec. 5: SQ meshes with support structure, up to the torsal cross field (Sec. 5, 5.1).
+//! Sec. 5: SQ meshes with support structure: the congruence and its torsal cross field (5.1), the
+//! quad mesh along it, the final sphere optimization, panels and support structure (5.2).
 //!
 //! The reference is a B-spline surface f(u, v) ([`crate::reference::bspline`]). The sphere
 //! congruence has centres c = f + r n (Eq. 1) and radius r(u, v), a B-spline function (Eq. 8).
@@ -51,10 +52,7 @@ pub use self::error::SqError;
 use self::guarantees::Delivered;
 use self::metrics::{torsal_pairs, CongruenceFigures};
 use self::optimization::{CongruenceProblem, SqStep};
-use self::params::{
-    RadiusBasis, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE,
-    RECOMPUTE_RANGE, THETA_RANGE,
-};
+use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
 use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
 use self::sphere_optimization::{
@@ -168,67 +166,9 @@ impl SqCongruence {
     }
 }
 
-/// Checks the parameters' ranges.
+/// Checks the parameters' ranges ([`SqParams::check`]).
 pub fn validate(params: &SqParams) -> Result<(), SqError> {
-    let bad = |what: &str, v: String, lo: String, hi: String| {
-        Err(SqError::Parameter(format!(
-            "{what} {v} is outside [{lo}, {hi}]"
-        )))
-    };
-    if !(GRID_RANGE.0..=GRID_RANGE.1).contains(&params.grid) {
-        return bad(
-            "grid",
-            params.grid.to_string(),
-            GRID_RANGE.0.to_string(),
-            GRID_RANGE.1.to_string(),
-        );
-    }
-    if !(THETA_RANGE.0..=THETA_RANGE.1).contains(&params.theta_deg) {
-        return bad(
-            "θ",
-            params.theta_deg.to_string(),
-            THETA_RANGE.0.to_string(),
-            THETA_RANGE.1.to_string(),
-        );
-    }
-    if !(ALPHA_RANGE.0..=ALPHA_RANGE.1).contains(&params.alpha_deg) {
-        return bad(
-            "α",
-            params.alpha_deg.to_string(),
-            ALPHA_RANGE.0.to_string(),
-            ALPHA_RANGE.1.to_string(),
-        );
-    }
-    if !(FACES_RANGE.0..=FACES_RANGE.1).contains(&params.faces) {
-        return bad(
-            "faces",
-            params.faces.to_string(),
-            FACES_RANGE.0.to_string(),
-            FACES_RANGE.1.to_string(),
-        );
-    }
-    if !(params.support_depth > 0.0 && params.support_depth < 1.0) {
-        return Err(SqError::Parameter(format!(
-            "support depth {} is outside (0, 1) of the diagonal",
-            params.support_depth
-        )));
-    }
-    if !(RECOMPUTE_RANGE.0..=RECOMPUTE_RANGE.1).contains(&params.recompute_every) {
-        return bad(
-            "RS",
-            params.recompute_every.to_string(),
-            RECOMPUTE_RANGE.0.to_string(),
-            RECOMPUTE_RANGE.1.to_string(),
-        );
-    }
-    let b = params.radius_basis;
-    if !(1..=15).contains(&b.degree) || b.controls <= b.degree || b.controls > 40 {
-        return Err(SqError::Parameter(format!(
-            "radius basis: degree {} with {} coefficients per direction (degree 1..=15, more coefficients than the degree, at most 40)",
-            b.degree, b.controls
-        )));
-    }
-    Ok(())
+    params.check().map_err(SqError::Parameter)
 }
 
 /// One start of the congruence optimization and what it reached.
@@ -524,10 +464,6 @@ fn spherical_congruence(
         warnings: vec![Warning::OneSphere],
     }
 }
-
-/// The projection's hinges keep θ and α by this much (degrees): its last, pure Gauss–Newton
-/// steps may still move the angles by a few tenths.
-pub const PROJECTION_MARGIN_DEG: f64 = 0.5;
 
 /// The final SQ mesh (Sec. 5.2) with what the final optimization did.
 #[derive(Clone, Debug)]

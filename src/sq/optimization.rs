@@ -29,7 +29,7 @@ use super::error::SqError;
 use super::params::{Inequality, SqParams};
 use super::radius::SamplingGrid;
 use super::terms::{
-    line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalPlane,
+    line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalDirection,
 };
 
 /// The two steps, as reported to the hook.
@@ -362,7 +362,7 @@ impl CongruenceProblem {
             w.unit,
         );
         problem.add_term(
-            TorsalPlane {
+            TorsalDirection {
                 quads: self.quads.clone(),
                 diagonals: self.diagonals.clone(),
                 layout: lay,

@@ -271,6 +271,26 @@ impl Default for SqParams {
 }
 
 impl SqParams {
+    /// Every parameter against its range, checked once here.
+    pub fn check(&self) -> Result<(), ParamError> {
+        GRID_RANGE.check(self.grid)?;
+        THETA_RANGE.check(self.theta_deg)?;
+        ALPHA_RANGE.check(self.alpha_deg)?;
+        FACES_RANGE.check(self.faces)?;
+        if !(self.support_depth > 0.0 && self.support_depth < 1.0) {
+            return Err(ParamError::SupportDepth(self.support_depth));
+        }
+        RECOMPUTE_RANGE.check(self.recompute_every)?;
+        let b = self.radius_basis;
+        if !(1..=15).contains(&b.degree) || b.controls <= b.degree || b.controls > 40 {
+            return Err(ParamError::RadiusBasis {
+                degree: b.degree,
+                controls: b.controls,
+            });
+        }
+        Ok(())
+    }
+
     /// The angle the line-normal term aims at: θ − margins[0] (at least half of θ).
     pub fn target_theta_deg(&self) -> f64 {
         (self.theta_deg - self.margins_deg[0]).max(0.5 * self.theta_deg)
@@ -282,12 +302,104 @@ impl SqParams {
     }
 }
 
-/// The accepted ranges, for the CLI, the design link and the app.
-pub const GRID_RANGE: (usize, usize) = (4, 100);
-pub const THETA_RANGE: (f64, f64) = (1.0, 89.0);
-pub const ALPHA_RANGE: (f64, f64) = (1.0, 90.0);
-pub const RECOMPUTE_RANGE: (usize, usize) = (1, 1000);
+/// An inclusive range a parameter must lie in, with its name: the one check of that parameter,
+/// which the method, the CLI, the design link and the app's sliders all read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamRange<T> {
+    pub name: &'static str,
+    pub lo: T,
+    pub hi: T,
+}
+
+impl<T: PartialOrd + Copy + std::fmt::Display> ParamRange<T> {
+    pub fn contains(&self, x: T) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+
+    /// `x`, or why it is outside.
+    pub fn check(&self, x: T) -> Result<T, ParamError> {
+        if self.contains(x) {
+            Ok(x)
+        } else {
+            Err(ParamError::OutOfRange {
+                name: self.name,
+                value: x.to_string(),
+                lo: self.lo.to_string(),
+                hi: self.hi.to_string(),
+            })
+        }
+    }
+
+    pub fn range(&self) -> std::ops::RangeInclusive<T> {
+        self.lo..=self.hi
+    }
+}
+
+/// Why [`SqParams::check`] refuses the parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamError {
+    OutOfRange {
+        name: &'static str,
+        value: String,
+        lo: String,
+        hi: String,
+    },
+    /// The support depth, relative to the diagonal, is not in (0, 1).
+    SupportDepth(f64),
+    RadiusBasis {
+        degree: usize,
+        controls: usize,
+    },
+}
+
+impl std::fmt::Display for ParamError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamError::OutOfRange { name, value, lo, hi } => write!(f, "{name} {value} is outside [{lo}, {hi}]"),
+            ParamError::SupportDepth(d) => write!(f, "support depth {d} is outside (0, 1) of the diagonal"),
+            ParamError::RadiusBasis { degree, controls } => write!(
+                f,
+                "radius basis: degree {degree} with {controls} coefficients per direction (degree 1..=15, more coefficients than the degree, at most 40)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ParamError {}
+
+/// The accepted ranges.
+pub const GRID_RANGE: ParamRange<usize> = ParamRange {
+    name: "grid",
+    lo: 4,
+    hi: 100,
+};
+pub const THETA_RANGE: ParamRange<f64> = ParamRange {
+    name: "θ",
+    lo: 1.0,
+    hi: 89.0,
+};
+pub const ALPHA_RANGE: ParamRange<f64> = ParamRange {
+    name: "α",
+    lo: 1.0,
+    hi: 90.0,
+};
+pub const RECOMPUTE_RANGE: ParamRange<usize> = ParamRange {
+    name: "RS",
+    lo: 1,
+    hi: 1000,
+};
 /// Quads: at most what finishes within a minute and 1 GB natively on 2 cores. Measured with
 /// --faces 5000: `tunnel_arch` 23 s and 0.52 GB, the saddle roof 24 s, `paraboloid_dome` 77 s and
 /// 0.72 GB (the remesh and the final optimization both grow faster than linearly).
-pub const FACES_RANGE: (usize, usize) = (4, 3_000);
+pub const FACES_RANGE: ParamRange<usize> = ParamRange {
+    name: "faces",
+    lo: 4,
+    hi: 3_000,
+};
+
+/// How far below the bound of a singular vertex its support planes may meet (degrees).
+pub const SINGULAR_MARGIN_DEG: f64 = 1.0;
+
+/// The projection's hinges keep θ and α by this much (degrees): its last, pure Gauss–Newton
+/// steps may still move the angles by a few tenths.
+pub const PROJECTION_MARGIN_DEG: f64 = 0.5;

@@ -36,6 +36,7 @@ use std::rc::Rc;
 
 use glam::DVec3;
 
+use super::params::SINGULAR_MARGIN_DEG;
 use crate::reference::proximity::ClosestLookups;
 use crate::reference::Reference;
 use crate::solver::terms::v3;
@@ -200,9 +201,6 @@ pub fn support_plane_bound_deg(valence: usize) -> f64 {
     let even = 360.0 / valence.max(1) as f64;
     even.min(180.0 - even).max(0.0)
 }
-
-/// How far below the bound of a singular vertex its support planes may meet (degrees).
-pub const SINGULAR_MARGIN_DEG: f64 = 1.0;
 
 /// The angle the support planes at a vertex of `valence` edges are held to at α (degrees).
 pub fn support_plane_aim_deg(valence: usize, alpha_deg: f64) -> f64 {

@@ -6,7 +6,7 @@
 //!   the authors' code does), c_u = f_u + r_u n + r n_u.
 //! - [`LineNormalAngle`] (E_LC_orth): ∠(l, n) ≤ θ as cos²θ − ⟨l, n⟩² ≤ 0 (hinge) or
 //!   ⟨l, n⟩² − cos²θ − μ² (the paper's slack μ).
-//! - [`TorsalPlane`] (E_torsal): ⟨l_t/|l_t|, n*⟩, ⟨l_c/|l_c|, n*⟩, ⟨t, n*⟩ and |t|² − 1, with
+//! - [`TorsalDirection`] (E_torsal): ⟨l_t/|l_t|, n*⟩, ⟨l_c/|l_c|, n*⟩, ⟨t, n*⟩ and |t|² − 1, with
 //!   t = μ0 d⁺ + μ1 d⁻ and l_t = μ0 l⁺ + μ1 l⁻ (Fig. 20, [`crate::congruence::torsal`]).
 //! - [`TorsalAngle`] (E_angle): torsal planes meeting at ≥ α as ⟨n*₁, n*₂⟩² − cos²α ≤ 0 (hinge)
 //!   or ⟨n*₁, n*₂⟩² − cos²α + ν² (slack ν).
@@ -170,16 +170,16 @@ impl Term for LineNormalAngle<'_> {
 }
 
 /// E_torsal and |t| = 1: four residuals per quad and torsal direction.
-pub struct TorsalPlane<'a> {
+pub struct TorsalDirection<'a> {
     pub quads: Vec<[usize; 4]>,
     /// d⁺ and d⁻ of every quad.
     pub diagonals: Vec<(DVec3, DVec3)>,
     pub layout: &'a Layout,
 }
 
-impl Term for TorsalPlane<'_> {
+impl Term for TorsalDirection<'_> {
     fn name(&self) -> &str {
-        "torsal_plane"
+        "torsal_direction"
     }
     fn residual_count(&self) -> usize {
         8 * self.quads.len()

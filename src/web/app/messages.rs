@@ -5,10 +5,10 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::state::{
-    mesh_from_fields, CurvatureView, Download, Loaded, StSupportView, MESH_FIELDS, PANEL_FIELDS,
+    mesh_from_fields, CurvatureView, Download, Scene, StSupportView, MESH_FIELDS, PANEL_FIELDS,
 };
 use super::App;
-use crate::design_link::Reference;
+use crate::design_link::DesignSurface;
 use crate::pipeline::fields::{field, find, Field, FieldData};
 use crate::pipeline::protocol::{FromWorker, Source, StageResult, ToWorker};
 use crate::pipeline::stages::{sq, st_adapted, st_support};
@@ -77,11 +77,11 @@ impl App {
                 }
                 match &info.source {
                     Source::Sample(s) => {
-                        self.design.reference = Reference::Sample(*s);
+                        self.design.reference = DesignSurface::Sample(*s);
                         self.file = None;
                     }
                     Source::File(name) => {
-                        self.design.reference = Reference::OwnFile(name.clone());
+                        self.design.reference = DesignSurface::OwnFile(name.clone());
                         if let Some(f) = self.file_in_flight.take() {
                             self.file = Some(f);
                         }
@@ -90,7 +90,7 @@ impl App {
                 for n in &info.notes {
                     self.notices.push(n.clone());
                 }
-                self.loaded = Some(Loaded::new(info));
+                self.loaded = Some(Scene::new(info));
             }
             FromWorker::Snapshot { stage, .. } if stage == "reference" => {
                 self.install_geometry(&fields)

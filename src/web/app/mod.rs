@@ -26,7 +26,7 @@ use egui::{Color32, Rect, RichText};
 use glam::Vec3;
 use wasm_bindgen::prelude::*;
 
-use crate::design_link::{CameraState, ColorBy, Design, Method, Reference, Shading};
+use crate::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
 use crate::pipeline::protocol::ToWorker;
 use crate::remeshing::Sizing;
 use crate::samples::Sample;
@@ -35,7 +35,7 @@ use crate::web::viewer::ViewerResources;
 use crate::web::worker_client::{Wake, WorkerClient, LIVE_REPAINT_MS};
 use dom::{count_events, make_file_input, now_ms, save_file};
 use panels::SizingMemory;
-use state::{Busy, Download, Loaded, ScalarView, SqView, StAdaptedView};
+use state::{Busy, Download, ScalarView, Scene, SqView, StAdaptedView};
 
 /// How many frames' `ui` times are kept for the state's percentiles.
 const UI_TIMES: usize = 120;
@@ -53,7 +53,7 @@ pub struct App {
     /// The method refused its input's size: a remesh to about this many faces is offered.
     remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
-    loaded: Option<Loaded>,
+    loaded: Option<Scene>,
     /// The file behind the loaded design, kept to restore it in a fresh worker.
     file: Option<web_sys::File>,
     /// A file sent to the worker but not yet confirmed as loaded.
@@ -220,8 +220,8 @@ impl App {
     /// Sends the design's reference surface to the worker (own files need the file itself).
     fn load_design_reference(&mut self) {
         let sample = match &self.design.reference {
-            Reference::Sample(s) => *s,
-            Reference::OwnFile(_) => match self.file.clone() {
+            DesignSurface::Sample(s) => *s,
+            DesignSurface::OwnFile(_) => match self.file.clone() {
                 Some(f) => return self.load_file(f),
                 // The link names a file we do not have: open on the default sample meanwhile.
                 None => Sample::Dome,
@@ -316,12 +316,12 @@ impl App {
             ui.heading("Spherical Faces");
             ui.separator();
             let current = match &self.design.reference {
-                Reference::Sample(s) => s.title().to_string(),
-                Reference::OwnFile(name) => name.clone(),
+                DesignSurface::Sample(s) => s.title().to_string(),
+                DesignSurface::OwnFile(name) => name.clone(),
             };
             egui::ComboBox::from_id_salt("sample").selected_text(current).show_ui(ui, |ui| {
                 for s in Sample::ALL {
-                    let selected = self.design.reference == Reference::Sample(s);
+                    let selected = self.design.reference == DesignSurface::Sample(s);
                     if ui.selectable_label(selected, s.title()).on_hover_text(s.description()).clicked() && !selected {
                         self.send(&ToWorker::LoadSample(s), None);
                         self.busy = Some(Busy::new("import"));

@@ -16,7 +16,7 @@ use crate::pipeline::stages::st_support::StSupportSummary;
 use crate::web::viewer::{MeshData, ScalarData};
 
 /// The loaded reference and what the stages made of it.
-pub struct Loaded {
+pub struct Scene {
     pub info: ReferenceInfo,
     pub mesh: Arc<MeshData>,
     pub center: Vec3,
@@ -27,7 +27,7 @@ pub struct Loaded {
     pub sq: Option<SqView>,
 }
 
-impl Loaded {
+impl Scene {
     pub fn new(info: ReferenceInfo) -> Self {
         Self {
             info,

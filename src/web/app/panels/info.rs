@@ -5,10 +5,10 @@ use egui::{Color32, RichText};
 use crate::geometry::sphere::Sphere;
 use crate::pipeline::fields::{field, find, Field};
 use crate::web::app::plots::key_values;
-use crate::web::app::state::{CurvatureView, Loaded};
+use crate::web::app::state::{CurvatureView, Scene};
 
 /// The reference section; returns the object picked of a file holding several.
-pub fn show(ui: &mut egui::Ui, loaded: Option<&Loaded>, selected: Option<usize>) -> Option<usize> {
+pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) -> Option<usize> {
     ui.strong("Reference");
     let Some(l) = loaded else {
         ui.label("loading…");

@@ -6,7 +6,8 @@ pub mod sq;
 pub mod st_adapted;
 pub mod st_support;
 
-use crate::design_link::{SizingKind, DEFAULT_FACES};
+use crate::design_link::SizingKind;
+use crate::remeshing::DEFAULT_FACES;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON};
 
 /// ε and N as last set, so that switching the sizing kind back and forth keeps them.

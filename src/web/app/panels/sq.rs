@@ -45,16 +45,16 @@ impl Default for SqDisplay {
 pub fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -> bool {
     let before = params.clone();
     ui.label(RichText::new("Needs a B-spline reference (.json, or the vault sample)").small());
-    ui.add(egui::Slider::new(&mut params.theta_deg, THETA_RANGE.0..=THETA_RANGE.1).text("θ (°)"))
+    ui.add(egui::Slider::new(&mut params.theta_deg, THETA_RANGE.range()).text("θ (°)"))
         .on_hover_text(
             "Largest angle between a line of the congruence and the surface normal (Sec. 5.1)",
         );
-    ui.add(egui::Slider::new(&mut params.alpha_deg, ALPHA_RANGE.0..=ALPHA_RANGE.1).text("α (°)"))
+    ui.add(egui::Slider::new(&mut params.alpha_deg, ALPHA_RANGE.range()).text("α (°)"))
         .on_hover_text("Smallest angle between the two torsal planes of a grid quad (Sec. 5.1)");
-    ui.add(egui::Slider::new(&mut params.grid, GRID_RANGE.0..=GRID_RANGE.1.min(60)).text("grid"))
+    ui.add(egui::Slider::new(&mut params.grid, GRID_RANGE.lo..=GRID_RANGE.hi.min(60)).text("grid"))
         .on_hover_text("Points per direction of the sampling grid G");
     ui.add(
-        egui::Slider::new(&mut params.faces, FACES_RANGE.0.max(16)..=FACES_RANGE.1)
+        egui::Slider::new(&mut params.faces, FACES_RANGE.lo.max(16)..=FACES_RANGE.hi)
             .logarithmic(true)
             .text("faces"),
     )
