@@ -25,6 +25,7 @@ use spherical_faces::sq::params::{
     ParamRange, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE,
     RECOMPUTE_RANGE, THETA_RANGE,
 };
+use spherical_faces::sq::report::SqSection;
 use spherical_faces::sq::SqEvent;
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_adapted::StAdaptedEvent;
@@ -539,7 +540,10 @@ fn st_support(
         result.panels.len(),
         output.out.display(),
         result.metrics.max_kink_angle_deg,
-        report.metrics.max_distance_to_reference.unwrap_or(f64::NAN)
+        report
+            .metrics
+            .as_ref()
+            .map_or(f64::NAN, |m| m.max_distance_to_reference)
     ))
 }
 
@@ -609,49 +613,56 @@ fn sq(
     let (report, files) = stages::sq::export(&reference, &result, &params, &segments, clock);
     progress.clear();
     write_files(output, &files, &report)?;
-    let m = &report.metrics;
-    let g = |x: Option<f64>| x.unwrap_or(f64::NAN);
-    let summary = match params.until {
-        Until::Final => format!(
-            "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
-             planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
-             ≥ {:.2}° (α = {}°); max distance to the reference {:.2e} of the diagonal; edges off the torsal directions by {:.2}° on \
-             average; {} distinct radii; {:.0} ms.",
-            report.output.panels,
-            output.out.display(),
-            g(m.max_vertex_sphere_residual),
-            g(m.max_centre_face_planarity),
-            g(m.max_torsal_plane_residual),
-            g(m.max_axis_normal_angle_deg),
-            params.theta_deg,
-            g(m.min_torsal_plane_angle_deg),
-            params.alpha_deg,
-            g(m.max_distance_to_reference),
-            g(m.mean_edge_torsal_angle_deg),
-            m.distinct_radii.unwrap_or(0),
-            report.timings_ms.get("total").copied().unwrap_or(0.0),
-        ),
-        Until::Remesh => format!(
+    let sq = SqSection::of(&result, &params);
+    let panels = report.metrics.clone().unwrap_or_default();
+    let quads = sq.quad_mesh.as_ref();
+    let summary = match (params.until, &sq.sq_mesh) {
+        (Until::Final, Some(mesh)) => {
+            let f = &mesh.figures;
+            format!(
+                "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
+                 planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
+                 ≥ {:.2}° (α = {}°); max distance to the reference {:.2e} of the diagonal; edges off the torsal directions by {:.2}° on \
+                 average; {} distinct radii; {:.0} ms.",
+                report.output.panels,
+                output.out.display(),
+                f.max_vertex_sphere_residual,
+                f.max_centre_face_planarity,
+                f.max_torsal_plane_residual,
+                f.max_axis_normal_angle_deg,
+                params.theta_deg,
+                f.min_torsal_plane_angle_deg,
+                params.alpha_deg,
+                panels.max_distance_to_reference,
+                quads.map_or(f64::NAN, |q| q.mean_edge_torsal_angle_deg),
+                panels.distinct_radii,
+                report.timings_ms.get("total").copied().unwrap_or(0.0),
+            )
+        }
+        (Until::Final | Until::Remesh, _) => format!(
             "wrote the quad mesh Q′ ({} quads, {:.1} % of the patch, edges off the torsal directions by {:.2}° on average, at most {:.2}°) \
              and the congruence to {}.",
             report.output.faces,
-            100.0 * g(m.coverage),
-            g(m.mean_edge_torsal_angle_deg),
-            g(m.max_edge_torsal_angle_deg),
+            100.0 * quads.map_or(f64::NAN, |q| q.coverage),
+            quads.map_or(f64::NAN, |q| q.mean_edge_torsal_angle_deg),
+            quads.map_or(f64::NAN, |q| q.max_edge_torsal_angle_deg),
             output.out.display()
         ),
-        Until::Congruence => format!(
-            "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, \
-             α = {}°; {} quads without real torsal directions; E_LC per term {:.2e}).",
-            output.out.display(),
-            g(m.max_line_normal_angle_deg),
-            params.theta_deg,
-            g(m.min_torsal_plane_angle_deg),
-            params.alpha_deg,
-            m.quads_without_real_torsal_directions.unwrap_or(0),
-            g(m.lc_residual),
-            n = params.grid,
-        ),
+        (Until::Congruence, _) => {
+            let c = &sq.congruence;
+            format!(
+                "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, \
+                 α = {}°; {} quads without real torsal directions; E_LC per term {:.2e}).",
+                output.out.display(),
+                c.figures.max_line_normal_angle_deg,
+                params.theta_deg,
+                c.figures.min_torsal_plane_angle_deg,
+                params.alpha_deg,
+                c.figures.quads_without_real_torsal_directions,
+                c.lc_residual,
+                n = params.grid,
+            )
+        }
     };
     verdict(summary, &report)
 }

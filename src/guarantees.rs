@@ -22,12 +22,19 @@ pub enum Bound {
     AtLeast,
 }
 
+/// Reads a figure that JSON wrote as null (a NaN) back as NaN: `#[serde(deserialize_with)]` on
+/// every f64 of a report that can be NaN.
+pub fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Option::<f64>::deserialize(d).map(|x| x.unwrap_or(f64::NAN))
+}
+
 /// One promise of a method about its result.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Guarantee {
     /// What is measured, in the report's words ("max_vertex_sphere_residual").
     pub name: String,
     /// The measured figure (NaN is written as null and never holds).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub measured: f64,
     pub bound: Bound,
     pub limit: f64,

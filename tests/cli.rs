@@ -93,24 +93,26 @@ fn st_support_writes_panels_and_report() {
     assert_eq!(r["method"], "st-support");
     assert_eq!(r["input"]["vertices"], 272);
     assert_eq!(r["output"]["panels"], 480);
-    let m = &r["metrics"];
+    assert_eq!(r["schema"], 2);
+    let (m, s) = (&r["metrics"], &r["st-support"]);
     for k in [
         "max_vertex_sphere_residual",
         "max_orthogonality_residual",
         "max_node_axis_offset",
     ] {
-        assert!(m[k].as_f64().unwrap() <= 1e-9, "{k} = {}", m[k]);
+        assert!(s[k].as_f64().unwrap() <= 1e-9, "{k} = {}", s[k]);
+    }
+    for k in ["mean_axis_normal_angle_deg", "max_axis_normal_angle_deg"] {
+        assert!(s[k].as_f64().unwrap().is_finite(), "{k}");
     }
     for k in [
-        "mean_axis_normal_angle_deg",
-        "max_axis_normal_angle_deg",
         "mean_kink_angle_deg",
         "max_kink_angle_deg",
         "max_distance_to_reference",
     ] {
         assert!(m[k].as_f64().unwrap().is_finite(), "{k}");
     }
-    assert!(r["absolute_sphere"]["r2"].is_number());
+    assert!(s["absolute_sphere"]["r2"].is_number());
     assert!(r["timings_ms"]["face_spheres"].is_number());
     let csv = std::fs::read_to_string(dir.join("panels.csv")).unwrap();
     assert_eq!(csv.lines().count(), 481, "header plus one row per panel");
@@ -158,7 +160,7 @@ fn st_writes_panels_and_report_or_refuses() {
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "st");
-    assert!(r["metrics"]["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8);
+    assert!(r["st"]["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8);
     assert!(r["timings_ms"]["angle_iteration_median"].is_number());
     assert!(dir.join("panels.glb").exists() && dir.join("panels.csv").exists());
     let bad = run(&[
@@ -237,9 +239,9 @@ fn st_support_remeshes_first() {
         "about 300 faces: {}",
         faces(&ru)
     );
-    assert_eq!(rc["metrics"]["remesh"]["Adaptive"]["epsilon"], 2e-3);
+    assert_eq!(rc["st-support"]["remesh"]["Adaptive"]["epsilon"], 2e-3);
     for r in [&rf, &rc, &ru] {
-        let m = &r["metrics"];
+        let m = &r["st-support"];
         for k in [
             "max_vertex_sphere_residual",
             "max_orthogonality_residual",
@@ -314,11 +316,17 @@ fn sq_writes_the_congruence_and_its_report() {
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "sq");
-    assert_eq!(r["grid"], 12);
-    assert_eq!(r["theta_deg"], 20.0);
-    assert_eq!(r["alpha_deg"], 75.0);
-    assert_eq!(r["stopped_after"], "congruence");
-    let m = &r["metrics"];
+    let sq = &r["sq"];
+    assert_eq!(sq["grid"], 12);
+    assert_eq!(sq["theta_deg"], 20.0);
+    assert_eq!(sq["alpha_deg"], 75.0);
+    assert_eq!(sq["stopped_after"], "congruence");
+    assert!(
+        r.get("metrics").is_none(),
+        "no panels, no shared panel metrics"
+    );
+    let c = &sq["congruence"];
+    let m = &c["figures"];
     assert!(
         m["max_line_normal_angle_deg"].as_f64().unwrap() <= 20.0,
         "{m}"
@@ -328,15 +336,15 @@ fn sq_writes_the_congruence_and_its_report() {
         "{m}"
     );
     assert_eq!(m["quads_without_real_torsal_directions"], 0);
-    assert!(m["lc_residual"].as_f64().unwrap().is_finite());
-    assert!(m["radius_fit_error"].as_f64().unwrap() < 0.1);
+    assert!(c["lc_residual"].as_f64().unwrap().is_finite());
+    assert!(c["radius_fit_error"].as_f64().unwrap() < 0.1);
     for k in ["lc_iteration_median", "torsal_iteration_median", "total"] {
         assert!(r["timings_ms"][k].as_f64().unwrap() > 0.0, "timings_ms.{k}");
     }
     assert_eq!(
-        r["iterations"].as_u64().unwrap(),
-        m["line_congruence_iterations"].as_u64().unwrap()
-            + m["torsal_iterations"].as_u64().unwrap()
+        sq["iterations"].as_u64().unwrap(),
+        c["line_congruence_iterations"].as_u64().unwrap()
+            + c["torsal_iterations"].as_u64().unwrap()
     );
     let c: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("congruence.json")).unwrap()).unwrap();
@@ -469,7 +477,7 @@ fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
     let r: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["meets_guarantees"], true, "{}", r["guarantees"]);
-    let m = &r["metrics"];
+    let m = &r["sq"]["sq_mesh"];
     assert!(
         m["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8
             && m["max_centre_face_planarity"].as_f64().unwrap() <= 1e-8,

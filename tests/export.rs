@@ -36,6 +36,7 @@ use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use spherical_faces::panels::tessellate::triangle_chord_error;
 use spherical_faces::panels::*;
 use spherical_faces::reference::Reference;
+use spherical_faces::st_support::report::AbsoluteSphereSection;
 
 /// The corners of triangle face `f`.
 fn tri(sm: &SphereMesh, f: usize) -> [DVec3; 3] {
@@ -1318,12 +1319,13 @@ fn distinct_radii_counting() {
 }
 
 #[test]
-fn panel_files_are_the_five_files() {
+fn panel_files_are_the_four_files_and_the_report_follows() {
     let s = scene();
     let sched = build_schedule(&s.panels, &reference_of(&s.sm), 1e-4);
     let glb = write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone());
     let obj = write_obj(&s.panels, Some(&s.support), Some(&s.axes));
-    let files = panel_files(glb, obj, &sched, &Report::new("st-support"));
+    let mut files = panel_files(glb, obj, &sched);
+    files.push(report_file(&Report::new("st-support")));
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(
         names,
@@ -1370,17 +1372,18 @@ fn report_schema() {
         faces: 72,
         panels: 72,
     };
-    r.absolute_sphere = Some(
-        (&AbsoluteSphere::Sphere {
-            center: M_STRESS,
-            r2: 2.0,
-        })
-            .into(),
-    );
-    r.metrics.max_vertex_sphere_residual = Some(1e-13);
-    r.metrics.max_kink_angle_deg = Some(3.5);
-    r.metrics.max_distance_to_reference = Some(2e-3);
-    r.metrics.distinct_radii = Some(15);
+    r.metrics = Some(PanelMetrics {
+        mean_kink_angle_deg: 1.25,
+        max_kink_angle_deg: 3.5,
+        max_distance_to_reference: 2e-3,
+        distinct_radii: 15,
+    });
+    let omega: AbsoluteSphereSection = (&AbsoluteSphere::Sphere {
+        center: M_STRESS,
+        r2: 2.0,
+    })
+        .into();
+    r.set_section(&serde_json::json!({ "absolute_sphere": omega, "max_node_axis_offset": 1e-13 }));
     r.add_timing("absolute_sphere", 1.5);
     r.add_timing("panels", 2.0);
     r.add_timing("panels", 1.0);
@@ -1388,34 +1391,48 @@ fn report_schema() {
     let v: Value = serde_json::from_str(&text).unwrap();
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
     for k in [
+        "schema",
         "method",
         "input",
         "output",
-        "absolute_sphere",
         "metrics",
+        "st-support",
         "timings_ms",
     ] {
         assert!(keys.iter().any(|x| *x == k), "{k}");
     }
+    assert_eq!(v["schema"], REPORT_SCHEMA);
     assert_eq!(v["method"], "st-support");
     assert_eq!(v["output"]["panels"], 72);
-    assert_eq!(v["absolute_sphere"]["center"][2], M_STRESS.z);
-    assert_eq!(v["absolute_sphere"]["at_infinity"], false);
-    assert!(v["absolute_sphere"]["axis"].is_null());
-    assert!(v["absolute_sphere"].get("d").is_none());
+    let section = &v["st-support"];
+    assert_eq!(section["absolute_sphere"]["center"][2], M_STRESS.z);
+    assert_eq!(section["absolute_sphere"]["at_infinity"], false);
+    assert!(section["absolute_sphere"]["axis"].is_null());
+    assert!(section["absolute_sphere"].get("d").is_none());
+    assert_eq!(section["max_node_axis_offset"], 1e-13);
     let m = v["metrics"].as_object().unwrap();
-    assert_eq!(m.len(), 4, "None metrics are left out: {m:?}");
+    assert_eq!(m.len(), 4, "the shared section: {m:?}");
     assert_eq!(m["max_kink_angle_deg"], 3.5);
     assert_eq!(m["distinct_radii"], 15);
-    assert!(!m.contains_key("max_node_axis_offset"));
+    assert!(
+        !m.contains_key("max_node_axis_offset"),
+        "a method's figure stays in its section"
+    );
     assert_eq!(v["timings_ms"]["panels"], 3.0);
     assert_close(
         &serde_json::to_value(Report::from_json(&text).unwrap()).unwrap(),
         &serde_json::to_value(&r).unwrap(),
     );
+    // The section reads back as a type; a NaN written as null reads back as NaN.
+    let back: Value = r.section().unwrap();
+    assert_eq!(back["max_node_axis_offset"], 1e-13);
+    let mut nan = r.clone();
+    nan.metrics.as_mut().unwrap().max_kink_angle_deg = f64::NAN;
+    let read = Report::from_json(&nan.to_json()).unwrap();
+    assert!(read.metrics.unwrap().max_kink_angle_deg.is_nan());
 
-    // Ω at infinity; a method without Ω.
-    let inf: AbsoluteSphereReport = (&AbsoluteSphere::Plane {
+    // Ω at infinity; a method without panels or a section.
+    let inf: AbsoluteSphereSection = (&AbsoluteSphere::Plane {
         axis: DVec3::Z,
         d: 0.5,
     })
@@ -1425,8 +1442,7 @@ fn report_schema() {
     assert_eq!(v["axis"], serde_json::json!([0.0, 0.0, 1.0]));
     let plain = Report::new("other");
     let v: Value = serde_json::from_str(&plain.to_json()).unwrap();
-    assert!(v.get("absolute_sphere").is_none());
-    assert!(v["metrics"].as_object().unwrap().is_empty());
+    assert!(v.get("metrics").is_none() && v.get("other").is_none());
 
     let dir = temp_dir("report");
     let path = r.write(&dir).unwrap();

@@ -284,10 +284,10 @@ fn st_support_streams_panels_files_and_a_report() {
     else {
         panic!()
     };
-    let m = &summary.report.metrics;
-    assert!(m.max_vertex_sphere_residual.unwrap() <= 1e-9);
-    assert!(m.max_orthogonality_residual.unwrap() <= 1e-9);
-    assert!(m.max_node_axis_offset.unwrap() <= 1e-9);
+    let m = &summary.section;
+    assert!(m.max_vertex_sphere_residual <= 1e-9);
+    assert!(m.max_orthogonality_residual <= 1e-9);
+    assert!(m.max_node_axis_offset <= 1e-9);
     assert_eq!(summary.report.output.panels, summary.report.input.faces);
     let report: serde_json::Value = serde_json::from_slice(bodies[5].as_bytes().unwrap()).unwrap();
     assert_eq!(report["method"], "st-support");
@@ -613,17 +613,14 @@ fn sq_streams_lines_and_energies_then_files() {
     else {
         panic!("{:?}", r.messages.last())
     };
-    let report = &summary.report;
     assert_eq!(
-        Some(energies),
-        report.iterations,
+        energies, summary.section.iterations,
         "one energy report per iteration"
     );
+    let figures = &summary.section.congruence.figures;
     assert!(
-        summary.figures.max_line_normal_angle_deg <= 20.0
-            && summary.figures.min_torsal_plane_angle_deg >= 75.0,
-        "{:?}",
-        summary.figures
+        figures.max_line_normal_angle_deg <= 20.0 && figures.min_torsal_plane_angle_deg >= 75.0,
+        "{figures:?}"
     );
     let snapshots: Vec<&Vec<Field>> = r
         .messages
@@ -679,12 +676,17 @@ fn sq_streams_lines_and_energies_then_files() {
             .any(|f| find(f, field::PANEL_TRIANGLES).is_some()),
         "live panels"
     );
-    let mesh = summary.mesh.expect("the SQ mesh's figures");
+    let mesh = summary
+        .section
+        .sq_mesh
+        .as_ref()
+        .expect("the SQ mesh's figures")
+        .figures;
     assert!(
         mesh.max_vertex_sphere_residual <= 1e-8 && mesh.max_centre_face_planarity <= 1e-8,
         "{mesh:?}"
     );
-    assert_eq!(report.stopped_after.as_deref(), Some("final"));
+    assert_eq!(summary.section.stopped_after, "final");
     let files: Vec<&str> = r
         .messages
         .iter()

@@ -13,7 +13,7 @@ pub mod schedule;
 
 pub use glb::{absolute_sphere_extras, write_glb};
 pub use obj::{write_mesh_obj, write_obj};
-pub use report::{AbsoluteSphereReport, Metrics, Report};
+pub use report::{PanelMetrics, Report, REPORT_SCHEMA};
 pub use schedule::{build_schedule, build_schedule_with, count_distinct_radii, PanelSchedule};
 
 /// A file for download or for the CLI's output folder.
@@ -24,19 +24,29 @@ pub struct ExportFile {
     pub bytes: Vec<u8>,
 }
 
-/// The files every panel method writes, in this order: `panels.glb`, `panels.obj`, the schedule
-/// as `panels.csv` and `panels.json`, and `report.json`.
-pub fn panel_files(
-    glb: Vec<u8>,
-    obj: String,
-    schedule: &PanelSchedule,
-    report: &Report,
-) -> Vec<ExportFile> {
-    let file = |name: &str, mime: &str, bytes: Vec<u8>| ExportFile {
-        name: name.into(),
-        mime: mime.into(),
-        bytes,
-    };
+impl ExportFile {
+    pub fn new(name: &str, mime: &str, bytes: Vec<u8>) -> Self {
+        Self {
+            name: name.into(),
+            mime: mime.into(),
+            bytes,
+        }
+    }
+}
+
+/// `report.json`, the last file of every run.
+pub fn report_file(report: &Report) -> ExportFile {
+    ExportFile::new(
+        "report.json",
+        "application/json",
+        report.to_json().into_bytes(),
+    )
+}
+
+/// The panel files every panel method writes, in this order: `panels.glb`, `panels.obj`, the
+/// schedule as `panels.csv` and `panels.json` (`report.json` follows with [`report_file`]).
+pub fn panel_files(glb: Vec<u8>, obj: String, schedule: &PanelSchedule) -> Vec<ExportFile> {
+    let file = ExportFile::new;
     vec![
         file("panels.glb", "model/gltf-binary", glb),
         file("panels.obj", "text/plain", obj.into_bytes()),
@@ -45,11 +55,6 @@ pub fn panel_files(
             "panels.json",
             "application/json",
             schedule.to_json().into_bytes(),
-        ),
-        file(
-            "report.json",
-            "application/json",
-            report.to_json().into_bytes(),
         ),
     ]
 }

@@ -10,9 +10,8 @@ use crate::congruence::support_structure::{SupportElement, SupportGeometry};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::schedule::SupportRecord;
 use crate::export::{
-    build_schedule_with, panel_files, write_glb, write_obj, ExportFile, Metrics, Report,
+    build_schedule_with, panel_files, write_glb, write_obj, ExportFile, PanelMetrics, Report,
 };
-use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::panels::panel::Panel;
@@ -132,13 +131,13 @@ pub struct PanelExport<'a> {
     pub panels: &'a [Panel],
     pub diag: f64,
     pub radius_tolerance: f64,
-    pub metrics: Metrics,
+    /// The method's own section of the report.
+    pub section: serde_json::Value,
     pub timings: &'a [(String, f64)],
     /// Goes to the GLB's `asset.extras` (with the method).
     pub extras: serde_json::Value,
     pub support: Option<&'a SupportGeometry>,
     pub node_axes: Option<&'a [(DVec3, DVec3)]>,
-    pub absolute_sphere: Option<&'a AbsoluteSphere>,
     /// The support elements for the schedule (`support.csv` and the JSON).
     pub support_elements: Option<&'a [SupportElement]>,
     /// The report's warnings.
@@ -152,15 +151,15 @@ pub struct PanelExport<'a> {
 impl<'a> PanelExport<'a> {
     /// The export of a panel method (its key in reports and files: "st", "st-support"): its
     /// sphere mesh and panels, lengths relative to `diag` (of the mesh the method ran on), radii
-    /// closer than `radius_tolerance` × `diag` counted as one, and its metrics
-    /// (`max_distance_to_reference` and `distinct_radii` come from the schedule) and timings.
+    /// closer than `radius_tolerance` × `diag` counted as one, its own section of the report
+    /// (a serializable type of the method's) and its timings.
     pub fn new(
         method: &'a str,
         sphere_mesh: &'a SphereMesh,
         panels: &'a [Panel],
         diag: f64,
         radius_tolerance: f64,
-        metrics: Metrics,
+        section: &impl serde::Serialize,
         timings: &'a [(String, f64)],
     ) -> Self {
         let extras = serde_json::json!({});
@@ -170,12 +169,11 @@ impl<'a> PanelExport<'a> {
             panels,
             diag,
             radius_tolerance,
-            metrics,
+            section: serde_json::to_value(section).expect("a report section serializes"),
             timings,
             extras,
             support: None,
             node_axes: None,
-            absolute_sphere: None,
             support_elements: None,
             warnings: Vec::new(),
             deviations: None,
@@ -226,18 +224,11 @@ impl<'a> PanelExport<'a> {
             ..self
         }
     }
-
-    /// The Ω the node axes pass through (Sec. 4).
-    pub fn with_absolute_sphere(self, omega: &'a AbsoluteSphere) -> Self {
-        Self {
-            absolute_sphere: Some(omega),
-            ..self
-        }
-    }
 }
 
-/// The report and the files of a panel method: `panels.glb`, `panels.obj`, the schedule as
-/// `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `report.json`.
+/// The report and the panel files of a panel method: `panels.glb`, `panels.obj`, the schedule
+/// as `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `support.csv`;
+/// the caller adds `report.json` ([`crate::export::report_file`]) once the report is complete.
 pub fn export_panels(
     reference: &Reference,
     e: PanelExport,
@@ -258,44 +249,36 @@ pub fn export_panels(
     extras["method"] = e.method.into();
     let glb = write_glb(e.panels, e.support, e.node_axes, extras);
     let obj = write_obj(e.panels, e.support, e.node_axes);
-    let metrics = Metrics {
-        max_distance_to_reference: Some(schedule.max_deviation / e.diag),
-        distinct_radii: Some(schedule.distinct_radii),
-        ..e.metrics
-    };
+    let kinks = e.sphere_mesh.kink_angles_deg();
     let mesh = reference.mesh();
     let output = &e.sphere_mesh.mesh;
-    let mut report = Report::for_panels(
-        e.method,
-        InputCounts {
-            vertices: mesh.vertex_count(),
-            faces: mesh.face_count(),
-        },
-        OutputCounts {
-            vertices: output.vertex_count(),
-            faces: output.face_count(),
-            panels: e.panels.len(),
-        },
-        e.absolute_sphere,
-        metrics,
-        e.timings,
-    );
+    let mut report = Report::new(e.method);
+    report.input = InputCounts {
+        vertices: mesh.vertex_count(),
+        faces: mesh.face_count(),
+    };
+    report.output = OutputCounts {
+        vertices: output.vertex_count(),
+        faces: output.face_count(),
+        panels: e.panels.len(),
+    };
+    report.metrics = Some(PanelMetrics {
+        mean_kink_angle_deg: crate::stats::mean(&kinks),
+        max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),
+        max_distance_to_reference: schedule.max_deviation / e.diag,
+        distinct_radii: schedule.distinct_radii,
+    });
+    report.sections.insert(e.method.to_string(), e.section);
+    report.add_timings(e.timings);
     report.add_timing("export", clock.now() - t0);
     report.warnings = e.warnings;
     if let Some(v) = e.verdict {
         report.set_verdict(v);
     }
-    let mut files = panel_files(glb, obj, &schedule, &report);
+    let mut files = panel_files(glb, obj, &schedule);
     if !schedule.support_elements.is_empty() {
         let csv = SupportRecord::to_csv(&schedule.support_elements);
-        files.insert(
-            4,
-            ExportFile {
-                name: "support.csv".into(),
-                mime: "text/csv".into(),
-                bytes: csv.into_bytes(),
-            },
-        );
+        files.push(ExportFile::new("support.csv", "text/csv", csv.into_bytes()));
     }
     (report, files)
 }

@@ -31,6 +31,7 @@ pub mod optimization;
 pub mod params;
 pub mod quad_mesh;
 pub mod radius;
+pub mod report;
 pub mod segments;
 pub mod sphere_optimization;
 pub mod sphere_terms;

@@ -72,6 +72,7 @@ pub mod initialization;
 pub mod metrics;
 pub mod optimization;
 pub mod params;
+pub mod report;
 pub mod terms;
 
 use std::fmt;

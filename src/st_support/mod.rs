@@ -37,6 +37,7 @@ pub mod metrics;
 pub mod node_axes;
 pub mod optimize_radius;
 pub mod params;
+pub mod report;
 pub mod second_envelope;
 pub mod support_elements;
 

@@ -421,26 +421,29 @@ for (const project of PROJECTS) {
           { timeout: T.load },
         );
         const r = s.sq.report;
-        t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; metrics ${JSON.stringify(r.metrics)}`);
+        const sq = r.sq;
+        const c = sq.congruence;
+        t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; section ${JSON.stringify(sq)}`);
         assert.equal(s.method, 'sq');
+        assert.equal(r.schema, 2);
         assert.ok(!s.error, `error: ${s.error}`);
         assert.equal(s.source, 'sample:vault');
         for (const part of ['method=sq&', 'theta=20&alpha=75&grid=20&rs=10']) {
           assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
         }
-        assert.equal(r.grid, 20);
-        assert.equal(r.stopped_after, 'congruence');
-        assert.ok(r.metrics.max_line_normal_angle_deg <= 20, `max ∠(l, n) ${r.metrics.max_line_normal_angle_deg}° ≤ θ`);
-        assert.ok(r.metrics.min_torsal_plane_angle_deg >= 75, `min torsal-plane angle ${r.metrics.min_torsal_plane_angle_deg}° ≥ α`);
-        assert.equal(r.metrics.quads_without_real_torsal_directions, 0);
-        assert.ok(r.metrics.lc_residual_step1 <= 1e-12, `E_LC per term after step 1: ${r.metrics.lc_residual_step1}`);
-        assert.ok(Number.isFinite(r.metrics.lc_residual), 'E_LC after step 2 reported');
+        assert.equal(sq.grid, 20);
+        assert.equal(sq.stopped_after, 'congruence');
+        assert.ok(c.figures.max_line_normal_angle_deg <= 20, `max ∠(l, n) ${c.figures.max_line_normal_angle_deg}° ≤ θ`);
+        assert.ok(c.figures.min_torsal_plane_angle_deg >= 75, `min torsal-plane angle ${c.figures.min_torsal_plane_angle_deg}° ≥ α`);
+        assert.equal(c.figures.quads_without_real_torsal_directions, 0);
+        assert.ok(c.lc_residual_step1 <= 1e-12, `E_LC per term after step 1: ${c.lc_residual_step1}`);
+        assert.ok(Number.isFinite(c.lc_residual), 'E_LC after step 2 reported');
         assert.equal(s.sq.lines, 400, 'one line segment per grid point');
         assert.equal(s.sq.initial_lines, 400);
         assert.equal(s.sq.cross_field_arms, 2 * 361, 'two torsal arms per grid quad');
-        assert.equal(s.sq.energies, r.iterations, 'one energy report per solver iteration');
+        assert.equal(s.sq.energies, sq.iterations, 'one energy report per solver iteration');
         assert.equal(s.sq.quad_mesh_edges, 0, 'stopped after the congruence: no quad mesh');
-        for (const term of ['total', 'line_congruence', 'line_normal_angle', 'torsal_plane', 'torsal_angle', 'line_fairness']) {
+        for (const term of ['total', 'line_congruence', 'line_normal_angle', 'torsal_direction', 'torsal_angle', 'line_fairness']) {
           assert.ok(s.sq.terms.some((n) => n.startsWith(term)), `term ${term} plotted (${s.sq.terms})`);
         }
         for (const f of ['congruence.glb', 'congruence.json', 'report.json']) {
@@ -473,15 +476,16 @@ for (const project of PROJECTS) {
           { timeout: T.load },
         );
         const r = s.sq.report;
-        t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; metrics ${JSON.stringify(r.metrics)}; timings ${JSON.stringify(r.timings_ms)}`);
+        t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; section ${JSON.stringify(r.sq)}; metrics ${JSON.stringify(r.metrics)}; timings ${JSON.stringify(r.timings_ms)}`);
         assert.ok(!s.error, `error: ${s.error}`);
-        assert.equal(r.stopped_after, 'final');
+        assert.equal(r.sq.stopped_after, 'final');
         assert.equal(r.meets_guarantees, true, `the verdict: ${JSON.stringify(r.guarantees)}`);
         assert.equal(s.missed_guarantees, null, 'no miss in the status bar');
         for (const part of ['faces=237', 'until=final']) {
           assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
         }
-        const m = r.metrics;
+        const m = r.sq.sq_mesh;
+        const q = r.sq.quad_mesh;
         assert.ok(r.output.faces >= 150 && r.output.faces <= 330, `about 237 quads: ${r.output.faces}`);
         assert.equal(r.output.panels, r.output.faces, 'one panel per quad');
         assert.ok(m.max_vertex_sphere_residual <= 1e-8, `vertex–sphere residual ${m.max_vertex_sphere_residual}`);
@@ -489,9 +493,9 @@ for (const project of PROJECTS) {
         assert.ok(m.max_torsal_plane_residual <= 1e-8, `torsal-plane residual ${m.max_torsal_plane_residual}`);
         assert.ok(m.max_axis_normal_angle_deg <= 20, `node axes within θ: ${m.max_axis_normal_angle_deg}`);
         assert.ok(m.min_torsal_plane_angle_deg >= 75, `support planes at ≥ α: ${m.min_torsal_plane_angle_deg}`);
-        assert.ok(m.max_distance_to_reference < 0.01, `distance to the reference ${m.max_distance_to_reference}`);
-        assert.ok(m.mean_edge_torsal_angle_deg <= 5, `edges along the torsal directions: ${m.mean_edge_torsal_angle_deg}`);
-        assert.ok(m.coverage >= 0.9, `coverage ${m.coverage}`);
+        assert.ok(r.metrics.max_distance_to_reference < 0.01, `distance to the reference ${r.metrics.max_distance_to_reference}`);
+        assert.ok(q.mean_edge_torsal_angle_deg <= 5, `edges along the torsal directions: ${q.mean_edge_torsal_angle_deg}`);
+        assert.ok(q.coverage >= 0.9, `coverage ${q.coverage}`);
         for (const k of ['remesh', 'final_iteration_median', 'total']) {
           assert.ok(r.timings_ms[k] > 0, `timings_ms.${k}`);
         }

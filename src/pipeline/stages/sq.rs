@@ -15,7 +15,7 @@ use super::StageError;
 use crate::congruence::central_spheres::JetParams;
 use crate::export::congruence::{congruence_glb, CongruenceJson, CongruenceSegments};
 use crate::export::report::{InputCounts, OutputCounts};
-use crate::export::{write_mesh_obj, ExportFile, Metrics, Report};
+use crate::export::{report_file, write_mesh_obj, ExportFile, Report};
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
@@ -29,12 +29,10 @@ use crate::pipeline::sink::{report, Sink};
 use crate::progress::{ignore, Clock, Progress};
 use crate::reference::Reference;
 use crate::solver::TermStats;
-use crate::sq::metrics::CongruenceFigures;
 use crate::sq::params::{SqParams, Until};
+use crate::sq::report::SqSection;
 use crate::sq::segments::{grid_spacing, line_segments, LINE_LENGTH};
-use crate::sq::sq_mesh::SqMeshFigures;
-use crate::sq::{compute, SqCongruence, SqError, SqEvent, SqResult};
-use crate::stats::mean;
+use crate::sq::{compute, SqError, SqEvent, SqResult};
 
 /// Stage name of the method in the worker protocol (the design link's `method=sq`).
 pub const STAGE: &str = "sq";
@@ -49,12 +47,9 @@ pub const LIVE_PANEL_TOLERANCE: f64 = 2e-3;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SqSummary {
     pub report: Report,
-    /// Of the central congruence of the fitted r, and of the optimized one.
-    pub initial: CongruenceFigures,
-    pub figures: CongruenceFigures,
-    /// How exact the SQ mesh is, when the run got there.
-    #[serde(default)]
-    pub mesh: Option<SqMeshFigures>,
+    /// The report's section, typed: the congruence's figures, the quad mesh's and the SQ
+    /// mesh's where the run got there.
+    pub section: SqSection,
 }
 
 /// The energies of an iteration: the total first, then every term (with `switched_on_only`,
@@ -342,12 +337,9 @@ pub fn run(
     }
     sink.snapshot(STAGE, planned as u32, fields);
     sink.files(STAGE, files);
-    let c = &result.congruence;
     Ok(SqSummary {
+        section: SqSection::of(&result, params),
         report,
-        initial: c.initial_figures.clone(),
-        figures: c.figures.clone(),
-        mesh: result.sq_mesh.as_ref().map(|f| f.mesh.figures),
     })
 }
 
@@ -399,60 +391,10 @@ pub fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
     ]
 }
 
-/// The report (method "sq") of the congruence part of a run.
-pub fn sq_report(reference: &Reference, result: &SqCongruence, params: &SqParams) -> Report {
-    let (f, i) = (&result.figures, &result.initial_figures);
-    let mut report = Report::new(STAGE);
-    let mesh = reference.mesh();
-    report.input = InputCounts {
-        vertices: mesh.positions.len(),
-        faces: reference.surface().face_count(),
-    };
-    report.output = OutputCounts {
-        vertices: result.points.len(),
-        faces: result.torsal.len(),
-        panels: 0,
-    };
-    report.metrics = Metrics {
-        max_line_normal_angle_deg: Some(f.max_line_normal_angle_deg),
-        initial_max_line_normal_angle_deg: Some(i.max_line_normal_angle_deg),
-        mean_line_normal_angle_deg: Some(f.mean_line_normal_angle_deg),
-        min_torsal_plane_angle_deg: Some(f.min_torsal_plane_angle_deg),
-        initial_min_torsal_plane_angle_deg: Some(i.min_torsal_plane_angle_deg),
-        mean_torsal_plane_angle_deg: Some(f.mean_torsal_plane_angle_deg),
-        quads_without_real_torsal_directions: Some(f.quads_without_real_torsal_directions),
-        initial_quads_without_real_torsal_directions: Some(i.quads_without_real_torsal_directions),
-        lc_residual: Some(result.lc_residual),
-        lc_residual_step1: Some(result.lc_residual_step1),
-        radius_fit_error: Some(result.radius_fit_error),
-        line_congruence_iterations: Some(result.lc_iterations),
-        torsal_iterations: Some(result.torsal_iterations),
-        ..Metrics::default()
-    };
-    for (step, ms) in &result.timings_ms {
-        report.add_timing(step.clone(), *ms);
-    }
-    report.add_timing(
-        "lc_iteration_median",
-        result.lc_iteration_median_ms().unwrap_or(0.0),
-    );
-    report.add_timing(
-        "torsal_iteration_median",
-        result.torsal_iteration_median_ms().unwrap_or(0.0),
-    );
-    report.iterations = Some(result.lc_iterations + result.torsal_iterations);
-    report.grid = Some(result.grid);
-    report.theta_deg = Some(params.theta_deg);
-    report.alpha_deg = Some(params.alpha_deg);
-    report.radius_basis = Some(result.radius_basis);
-    report.stopped_after = Some(params.until.key().into());
-    report.warnings = result.warnings.iter().map(ToString::to_string).collect();
-    report
-}
-
-/// The report and the files: `congruence.json`, `congruence.glb`; with the quad mesh
-/// `mesh.obj` (Q′, or the SQ mesh's vertices and quads); with the SQ mesh `panels.glb`,
-/// `panels.obj`, the schedule (`panels.csv`, `panels.json`, `support.csv`); and `report.json`.
+/// The report (method "sq", its section [`SqSection`]) and the files: `congruence.json`,
+/// `congruence.glb`; with the quad mesh `mesh.obj` (Q′, or the SQ mesh's vertices and quads);
+/// with the SQ mesh `panels.glb`, `panels.obj`, the schedule (`panels.csv`, `panels.json`,
+/// `support.csv`); and `report.json`.
 pub fn export(
     reference: &Reference,
     result: &SqResult,
@@ -461,7 +403,7 @@ pub fn export(
     clock: Clock,
 ) -> (Report, Vec<ExportFile>) {
     let c = &result.congruence;
-    let mut report = sq_report(reference, c, params);
+    let section = SqSection::of(result, params);
     let ((u0, u1), (v0, v1)) = reference
         .spline()
         .map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
@@ -471,86 +413,80 @@ pub fn export(
         "theta_deg": params.theta_deg,
         "alpha_deg": params.alpha_deg,
         "grid": c.grid,
-        "metrics": &report.metrics,
+        "congruence": &section.congruence,
     });
-    let file = |name: &str, mime: &str, bytes: Vec<u8>| ExportFile {
-        name: name.into(),
-        mime: mime.into(),
-        bytes,
-    };
     let mut files = vec![
-        file(
+        ExportFile::new(
             "congruence.glb",
             "model/gltf-binary",
             congruence_glb(reference.mesh(), segments, extras),
         ),
-        file(
+        ExportFile::new(
             "congruence.json",
             "application/json",
             json.to_json().into_bytes(),
         ),
     ];
-    for (step, ms) in &result.timings_ms {
-        report.add_timing(step.clone(), *ms);
-    }
-    report.warnings = result.warnings.iter().map(ToString::to_string).collect();
-    if let Some(q) = &result.quad_mesh {
-        let m = &mut report.metrics;
-        m.coverage = Some(q.coverage);
-        let angles = result
+    let mut timings = c.timings_ms.clone();
+    timings.push((
+        "lc_iteration_median".into(),
+        c.lc_iteration_median_ms().unwrap_or(0.0),
+    ));
+    timings.push((
+        "torsal_iteration_median".into(),
+        c.torsal_iteration_median_ms().unwrap_or(0.0),
+    ));
+    timings.extend(result.timings_ms.iter().cloned());
+    let mesh = result.quad_mesh.as_ref().map(|q| {
+        result
             .sq_mesh
             .as_ref()
-            .map_or(&q.edge_angles_deg, |f| &f.edge_angles_deg);
-        m.mean_edge_torsal_angle_deg = Some(mean(angles));
-        m.max_edge_torsal_angle_deg = Some(angles.iter().copied().fold(0.0, f64::max));
-        let mesh = result
-            .sq_mesh
-            .as_ref()
-            .map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
-        report.output = OutputCounts {
-            vertices: mesh.vertex_count(),
-            faces: mesh.face_count(),
-            panels: 0,
-        };
-        files.push(file(
+            .map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh)
+    });
+    if let Some(mesh) = mesh {
+        files.push(ExportFile::new(
             "mesh.obj",
             "text/plain",
             write_mesh_obj(mesh, "sq_mesh").into_bytes(),
         ));
     }
-    if let Some(f) = &result.sq_mesh {
-        let g = &f.mesh.figures;
-        let m = &mut report.metrics;
-        m.congruence_min_torsal_plane_angle_deg = m.min_torsal_plane_angle_deg;
-        m.max_vertex_sphere_residual = Some(g.max_vertex_sphere_residual);
-        m.max_centre_face_planarity = Some(g.max_centre_face_planarity);
-        m.max_torsal_plane_residual = Some(g.max_torsal_plane_residual);
-        m.max_axis_normal_angle_deg = Some(g.max_axis_normal_angle_deg);
-        m.mean_axis_normal_angle_deg = Some(g.mean_axis_normal_angle_deg);
-        m.min_torsal_plane_angle_deg = Some(g.min_torsal_plane_angle_deg);
-        m.max_vertex_distance_to_reference = Some(g.max_vertex_distance_to_reference);
-        m.axes_from_spheres = Some(g.axes_from_spheres);
-        let o = &f.outcome;
-        m.final_iterations = Some([o.warm_up_iterations, o.iterations, o.projection_iterations]);
-        report.add_timing(
-            "final_iteration_median",
-            result.final_iteration_median_ms().unwrap_or(0.0),
-        );
-        let axes = f.mesh.node_axis_segments();
-        let timings: Vec<(String, f64)> = report
-            .timings_ms
-            .iter()
-            .map(|(k, v)| (k.clone(), *v))
-            .collect();
-        let export = PanelExport::new(STAGE, &f.mesh.sphere_mesh, &f.mesh.panels, reference.diagonal(), params.radius_tolerance, report.metrics.clone(), &timings)
-            .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
-            .with_support(&f.mesh.support_geometry, &f.mesh.support_elements, &axes);
-        let (panel_report, panel_files) = export_panels(reference, export, clock);
-        report.metrics = panel_report.metrics;
-        report.output = panel_report.output;
-        report.timings_ms = panel_report.timings_ms;
-        files.extend(panel_files.into_iter().filter(|f| f.name != "report.json"));
-    }
+    let mut report = match &result.sq_mesh {
+        Some(f) => {
+            timings.push((
+                "final_iteration_median".into(),
+                result.final_iteration_median_ms().unwrap_or(0.0),
+            ));
+            let axes = f.mesh.node_axis_segments();
+            let export = PanelExport::new(STAGE, &f.mesh.sphere_mesh, &f.mesh.panels, reference.diagonal(), params.radius_tolerance, &section, &timings)
+                .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
+                .with_support(&f.mesh.support_geometry, &f.mesh.support_elements, &axes);
+            let (report, panel_files) = export_panels(reference, export, clock);
+            files.extend(panel_files);
+            report
+        }
+        None => {
+            let mut report = Report::new(STAGE);
+            report.set_section(&section);
+            report.add_timings(&timings);
+            report
+        }
+    };
+    report.input = InputCounts {
+        vertices: reference.mesh().positions.len(),
+        faces: reference.surface().face_count(),
+    };
+    report.output = match mesh {
+        Some(m) => OutputCounts {
+            vertices: m.vertex_count(),
+            faces: m.face_count(),
+            panels: report.output.panels,
+        },
+        None => OutputCounts {
+            vertices: c.points.len(),
+            faces: c.torsal.len(),
+            panels: 0,
+        },
+    };
     let total: f64 = c
         .timings_ms
         .iter()
@@ -558,20 +494,8 @@ pub fn export(
         .map(|(_, ms)| ms)
         .sum();
     report.timings_ms.insert("total".into(), total);
-    // Every solver iteration of the run: the congruence's, Q′'s and the final optimization's.
-    let fairing = result
-        .quad_mesh
-        .as_ref()
-        .map_or(0, |q| q.fairing_iterations);
-    let spheres = result.sq_mesh.as_ref().map_or(0, |f| {
-        f.outcome.warm_up_iterations + f.outcome.iterations + f.outcome.projection_iterations
-    });
-    report.iterations = Some(c.lc_iterations + c.torsal_iterations + fairing + spheres);
+    report.warnings = result.warnings.iter().map(ToString::to_string).collect();
     report.set_verdict(&result.verdict);
-    files.push(file(
-        "report.json",
-        "application/json",
-        report.to_json().into_bytes(),
-    ));
+    files.push(report_file(&report));
     (report, files)
 }

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::StageError;
-use crate::export::{ExportFile, Metrics, Report};
+use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
@@ -19,6 +19,7 @@ use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
 use crate::st_adapted::metrics::{StAdaptedMetrics, StAdaptedShape};
 use crate::st_adapted::params::StAdaptedParams;
+use crate::st_adapted::report::StAdaptedSection;
 use crate::st_adapted::{compute, StAdaptedEvent, StAdaptedResult};
 
 /// Stage name of the method in the worker protocol (the design link's `method=st`).
@@ -176,23 +177,7 @@ pub fn export(
 ) -> (Report, Vec<ExportFile>) {
     let m = &result.metrics;
     let variant = result.variant.key();
-    let gap = m.max_gap;
-    let metrics = Metrics {
-        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
-        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
-        max_kink_angle_deg: Some(m.max_kink_angle_deg),
-        angle_iterations: Some(result.iterations),
-        variant: Some(variant.into()),
-        flipped_faces: Some(m.flipped_faces),
-        initial_flipped_faces: Some(result.initial_shape.flipped_faces),
-        max_vertex_distance_to_reference: Some(m.max_vertex_distance_to_reference),
-        initial_mean_kink_angle_deg: Some(result.initial_shape.mean_kink_angle_deg),
-        initial_max_kink_angle_deg: Some(result.initial_shape.max_kink_angle_deg),
-        // One gap measure: the panels' own arcs (`panels::gaps`), written under both keys.
-        max_gap: gap,
-        max_panel_arc_gap: gap,
-        ..Metrics::default()
-    };
+    let section = StAdaptedSection::of(result);
     let verdict = crate::st_adapted::guarantees::verdict(m);
     let mut timings = result.timings_ms.clone();
     if let Some(med) = result.angle_iteration_median_ms {
@@ -204,12 +189,14 @@ pub fn export(
         &result.panels,
         result.diag,
         params.radius_tolerance,
-        metrics,
+        &section,
         &timings,
     )
     .with_extras(serde_json::json!({ "variant": variant }))
     .with_deviations(&result.panel_deviations)
     .with_warnings(&result.warnings)
     .with_verdict(&verdict);
-    export_panels(reference, export, clock)
+    let (report, mut files) = export_panels(reference, export, clock);
+    files.push(report_file(&report));
+    (report, files)
 }

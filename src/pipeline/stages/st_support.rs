@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::StageError;
-use crate::export::{ExportFile, Metrics, Report};
+use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field};
 use crate::pipeline::panel_output::{
@@ -14,6 +14,7 @@ use crate::pipeline::panel_output::{
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
 use crate::reference::Reference;
+use crate::st_support::report::StSupportSection;
 use crate::st_support::{compute, StSupportParams, StSupportResult};
 use crate::stats::Histogram;
 
@@ -24,6 +25,8 @@ pub const STAGE: &str = "st-support";
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StSupportSummary {
     pub report: Report,
+    /// The report's section, typed.
+    pub section: StSupportSection,
     pub omega: AbsoluteSphere,
     pub m0: [f64; 3],
     pub m: [f64; 3],
@@ -57,7 +60,8 @@ pub fn run(
         &a.r2_samples
     };
     Ok(StSupportSummary {
-        distinct_radii: report.metrics.distinct_radii.unwrap_or(0),
+        section: StSupportSection::of(&result, params.remesh),
+        distinct_radii: report.metrics.as_ref().map_or(0, |m| m.distinct_radii),
         report,
         omega: result.omega,
         m0: a.m0.to_array(),
@@ -77,21 +81,7 @@ pub fn export(
     params: &StSupportParams,
     clock: Clock,
 ) -> (Report, Vec<ExportFile>) {
-    let m = &result.metrics;
-    let metrics = Metrics {
-        max_vertex_sphere_residual: Some(m.max_vertex_sphere_residual),
-        max_orthogonality_residual: Some(m.max_orthogonality_residual),
-        max_node_axis_offset: Some(m.max_node_axis_offset),
-        mean_axis_normal_angle_deg: Some(m.mean_axis_normal_angle_deg),
-        max_axis_normal_angle_deg: Some(m.max_axis_normal_angle_deg),
-        mean_kink_angle_deg: Some(m.mean_kink_angle_deg),
-        max_kink_angle_deg: Some(m.max_kink_angle_deg),
-        max_center_plane_residual: Some(m.max_center_plane_residual),
-        axes_from_spheres: Some(m.axes_from_spheres),
-        degenerate_faces: Some(m.degenerate_faces),
-        remesh: Some(params.remesh),
-        ..Metrics::default()
-    };
+    let section = StSupportSection::of(result, params.remesh);
     let axes = result.node_axis_segments();
     let export = PanelExport::new(
         STAGE,
@@ -99,14 +89,15 @@ pub fn export(
         &result.panels,
         result.diag,
         params.radius_tolerance,
-        metrics,
+        &section,
         &result.timings_ms,
     )
     .with_extras(crate::export::absolute_sphere_extras(&result.omega))
     .with_support(&result.support_geometry, &result.support_elements, &axes)
-    .with_absolute_sphere(&result.omega)
     .with_warnings(&result.warnings);
-    export_panels(reference, export, clock)
+    let (report, mut files) = export_panels(reference, export, clock);
+    files.push(report_file(&report));
+    (report, files)
 }
 
 /// Display fields: panels, support, node axes, second envelope.

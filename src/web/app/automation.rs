@@ -111,7 +111,7 @@ impl App {
             "panel_triangles": v.panels.as_ref().map_or(0, |m| m.triangles.len() / 3),
             "support_triangles": v.support.as_ref().map_or(0, |m| m.triangles.len() / 3),
             "axes": v.axes.as_ref().map_or(0, |m| m.edges.len() / 2),
-            "mesh": v.summary.as_ref().and_then(|s| s.mesh),
+            "mesh": v.summary.as_ref().and_then(|s| s.section.sq_mesh.as_ref().map(|m| m.figures)),
             "refused": v.refused_h.is_some(),
             "ready": v.summary.is_some(),
             "report": v.summary.as_ref().map(|s| &s.report),

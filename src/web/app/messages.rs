@@ -211,7 +211,7 @@ impl App {
                     StageResult::Sq(summary) => {
                         // With the SQ mesh done, the panels take the stage: the congruence and
                         // the reference step back (each can be switched on again).
-                        if summary.mesh.is_some() {
+                        if summary.section.sq_mesh.is_some() {
                             let d = &mut self.sq_display;
                             (d.lines, d.cross_field, d.surface) = (false, false, false);
                         }

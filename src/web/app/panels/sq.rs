@@ -173,11 +173,13 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         }
         return;
     };
-    let (i, f) = (&sum.initial, &sum.figures);
+    let sec = &sum.section;
+    let c = &sec.congruence;
+    let (i, f) = (&c.initial, &c.figures);
     let r = &sum.report;
     super::verdict(ui, r);
-    let m = &r.metrics;
-    let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.2e}"));
+    let panels = r.metrics.clone();
+    let g = |x: f64| format!("{x:.2e}");
     let ok = |good: bool| if good { "✔" } else { "✘" };
     let mut rows = vec![
         (
@@ -209,16 +211,12 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         ),
         (
             "E_LC per term, step 1 / final",
-            format!("{} / {}", g(m.lc_residual_step1), g(m.lc_residual)),
+            format!("{} / {}", g(c.lc_residual_step1), g(c.lc_residual)),
         ),
-        ("radius fit error", g(m.radius_fit_error)),
+        ("radius fit error", g(c.radius_fit_error)),
         (
             "iterations",
-            format!(
-                "{} + {}",
-                m.line_congruence_iterations.unwrap_or(0),
-                m.torsal_iterations.unwrap_or(0)
-            ),
+            format!("{} + {}", c.line_congruence_iterations, c.torsal_iterations),
         ),
     ];
     if let (Some(lc), Some(t)) = (
@@ -231,7 +229,8 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         ));
     }
     key_values(ui, "sq-metrics", &rows);
-    if let Some(mf) = &sum.mesh {
+    if let Some(mf) = sec.sq_mesh.as_ref().map(|m| &m.figures) {
+        let quads = sec.quad_mesh.as_ref();
         ui.strong("SQ mesh (Sec. 5.2)");
         let e = |x: f64| format!("{x:.1e}");
         let mut rows = vec![
@@ -240,7 +239,7 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
                 format!(
                     "{} quads, {:.1} % of the patch",
                     r.output.faces,
-                    100.0 * m.coverage.unwrap_or(0.0)
+                    100.0 * quads.map_or(0.0, |q| q.coverage)
                 ),
             ),
             (
@@ -287,19 +286,23 @@ pub fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
             ),
             (
                 "max distance to the reference / diag",
-                g(m.max_distance_to_reference),
+                panels
+                    .as_ref()
+                    .map_or("–".into(), |p| g(p.max_distance_to_reference)),
             ),
             (
                 "edges off the torsal directions",
                 format!(
                     "{:.2}° mean, {:.2}° max",
-                    m.mean_edge_torsal_angle_deg.unwrap_or(0.0),
-                    m.max_edge_torsal_angle_deg.unwrap_or(0.0)
+                    quads.map_or(0.0, |q| q.mean_edge_torsal_angle_deg),
+                    quads.map_or(0.0, |q| q.max_edge_torsal_angle_deg)
                 ),
             ),
             (
                 "distinct radii",
-                m.distinct_radii.map_or("–".into(), |d| d.to_string()),
+                panels
+                    .as_ref()
+                    .map_or("–".into(), |p| p.distinct_radii.to_string()),
             ),
         ];
         if let Some(t) = r.timings_ms.get("final_iteration_median") {

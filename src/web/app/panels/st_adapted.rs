@@ -74,7 +74,6 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     }
     let Some(sum) = &a.summary else { return };
     super::verdict(ui, &sum.report);
-    let m = &sum.report.metrics;
     let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3e}"));
     let mut rows = vec![
         ("panels", sum.report.output.panels.to_string()),
@@ -93,8 +92,14 @@ pub fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
                 sum.initial.max_kink_angle_deg, sum.metrics.max_kink_angle_deg
             ),
         ),
-        ("vertex–sphere residual", g(m.max_vertex_sphere_residual)),
-        ("distance to reference", g(m.max_distance_to_reference)),
+        (
+            "vertex–sphere residual",
+            g(Some(sum.metrics.max_vertex_sphere_residual)),
+        ),
+        (
+            "distance to reference",
+            g(Some(sum.metrics.max_distance_to_reference)),
+        ),
     ];
     if let Some(gap) = sum.metrics.max_gap {
         rows.push(("max gap (b)", format!("{gap:.3e}")));

@@ -66,9 +66,9 @@ pub fn results(ui: &mut egui::Ui, view: &StSupportView) {
     };
     ui.label(RichText::new(omega).monospace().small());
     let r = &sum.report;
-    let m = &r.metrics;
-    let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3e}"));
-    let d = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3}°"));
+    let (s, m) = (&sum.section, r.metrics.clone().unwrap_or_default());
+    let g = |x: f64| format!("{x:.3e}");
+    let d = |x: f64| format!("{x:.3}°");
     key_values(
         ui,
         "st-support-metrics",
@@ -83,13 +83,13 @@ pub fn results(ui: &mut egui::Ui, view: &StSupportView) {
                 "axis–normal mean / max",
                 format!(
                     "{} / {}",
-                    d(m.mean_axis_normal_angle_deg),
-                    d(m.max_axis_normal_angle_deg)
+                    d(s.mean_axis_normal_angle_deg),
+                    d(s.max_axis_normal_angle_deg)
                 ),
             ),
-            ("vertex–sphere residual", g(m.max_vertex_sphere_residual)),
-            ("orthogonality residual", g(m.max_orthogonality_residual)),
-            ("node-axis offset", g(m.max_node_axis_offset)),
+            ("vertex–sphere residual", g(s.max_vertex_sphere_residual)),
+            ("orthogonality residual", g(s.max_orthogonality_residual)),
+            ("node-axis offset", g(s.max_node_axis_offset)),
             ("distance to reference", g(m.max_distance_to_reference)),
         ],
     );
