@@ -20,7 +20,7 @@ fn main() {
     let stars = QuadStars::new(mesh);
     let mut low = Vec::new();
     for (v, faces) in &stars.stars {
-        let worst = star_support_plane_angle_deg(sm, &f.mesh.node_axes, *v, faces);
+        let worst = star_support_plane_angle_deg(sm, &f.mesh.support.node_axes.axes, *v, faces);
         if worst < params.alpha_deg {
             let uv = f.uv[*v as usize];
             let d = cones

@@ -19,7 +19,7 @@ use common::{khronos_validate, temp_dir};
 use glam::DVec3;
 use serde_json::Value;
 use spherical_faces::congruence::support_structure::{
-    support_element, support_strips, SupportElement, SupportGeometry, SupportStructure,
+    support_element, support_strips, NodeAxes, SupportElement, SupportGeometry, SupportStructure,
 };
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::report::{InputCounts, OutputCounts};
@@ -328,14 +328,22 @@ fn arc_points(p: &Panel, k: usize) -> Vec<DVec3> {
 }
 
 fn support_for(sm: &SphereMesh, m: DVec3, depth: f64) -> SupportStructure {
+    let axes: Vec<(DVec3, DVec3)> = sm
+        .mesh
+        .positions
+        .iter()
+        .map(|&v| (v, (m - v).normalize()))
+        .collect();
+    let n = axes.len();
     SupportStructure {
-        node_axes: sm
-            .mesh
-            .positions
-            .iter()
-            .map(|&v| (v, (m - v).normalize()))
-            .collect(),
+        node_axes: NodeAxes {
+            axes,
+            second_points: vec![None; n],
+            from_spheres: vec![false; n],
+        },
         depth,
+        axis_length: 0.1,
+        ..SupportStructure::default()
     }
 }
 
@@ -764,8 +772,8 @@ fn elements(sm: &SphereMesh, panels: &[Panel], support: &SupportStructure) -> Ve
             let arc = panels[f as usize].arcs[k as usize];
             let (p, q) = (sm.mesh.positions[a as usize], sm.mesh.positions[b as usize]);
             let dirs = [
-                support.node_axes[a as usize].1,
-                support.node_axes[b as usize].1,
+                support.node_axes.axes[a as usize].1,
+                support.node_axes.axes[b as usize].1,
             ];
             (!arc.is_straight())
                 .then(|| support_element([a, b], arc.circle, [p, q], dirs, support.depth))
@@ -827,7 +835,7 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
     // support side, on the inner circle, and the strip reaches them.
     for el in &els {
         for (k, &v) in el.edge.iter().enumerate() {
-            let (pv, d) = support.node_axes[v as usize];
+            let (pv, d) = support.node_axes.axes[v as usize];
             let inner = el.corners[3 - k];
             assert!(
                 (inner - pv).cross(d).length() < 1e-9 * diag,
@@ -867,9 +875,9 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
         }
     )
     .is_empty());
-    let segs = support.axis_segments(0.1);
+    let segs = support.axis_segments();
     assert_eq!(segs.len(), sm.mesh.vertex_count());
-    for (s, (v, _)) in segs.iter().zip(&support.node_axes) {
+    for (s, (v, _)) in segs.iter().zip(&support.node_axes.axes) {
         assert!((s.0.distance(s.1) - 0.1).abs() < 1e-12 && s.0 == *v);
     }
 }
@@ -891,7 +899,11 @@ fn scene() -> Scene {
     let panels = build_panels(&sm, tol_for(&sm));
     let st = support_for(&sm, M_REAL, 0.03 * diag);
     let support = strips(&sm, &panels, &elements(&sm, &panels, &st));
-    let axes = st.axis_segments(0.1 * diag);
+    let axes = SupportStructure {
+        axis_length: 0.1 * diag,
+        ..st
+    }
+    .axis_segments();
     let extras = absolute_sphere_extras(&AbsoluteSphere::Sphere {
         center: M_REAL,
         r2: R2_REAL,

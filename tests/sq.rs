@@ -154,7 +154,7 @@ fn a_sphere_patch_gives_one_sphere_with_node_axes_through_its_centre() {
             "vertex on the sphere: {p}"
         );
     }
-    for &(p, d) in &m.node_axes {
+    for &(p, d) in &m.support.node_axes.axes {
         // The distance of the centre 0 from the axis through p along d.
         assert!(
             p.cross(d).length() < 1e-9,

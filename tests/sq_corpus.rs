@@ -106,7 +106,7 @@ fn recheck(
             }
         }
     }
-    for ((_, d), n) in mesh.node_axes.iter().zip(normals) {
+    for ((_, d), n) in mesh.support.node_axes.axes.iter().zip(normals) {
         let angle = d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees();
         if !(angle <= theta) {
             misses.push(format!("node axis {angle:.2}° off the normal"));

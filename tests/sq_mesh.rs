@@ -139,8 +139,8 @@ fn check(name: &str) {
     assert!(interior_arcs > 0);
 
     // Support elements: planar, between the node axes of their edge.
-    assert!(!f.mesh.support_elements.is_empty());
-    for el in &f.mesh.support_elements {
+    assert!(!f.mesh.support.elements.is_empty());
+    for el in &f.mesh.support.elements {
         let n = el.circle.normal;
         for c in el.corners {
             assert!(
@@ -149,16 +149,16 @@ fn check(name: &str) {
             );
         }
     }
-    let geometry = &f.mesh.support_geometry;
+    let geometry = &f.mesh.support.geometry;
     assert!(!geometry.triangles.is_empty());
-    for el in &f.mesh.support_elements {
+    for el in &f.mesh.support.elements {
         assert!(
             el.inner_circle.normal.cross(el.circle.normal).length() <= 1e-9,
             "{name}: inner and outer arc in one plane"
         );
     }
     // Node axes: unit, through their vertex, toward the sphere centres.
-    for (v, &(p, d)) in f.mesh.node_axes.iter().enumerate() {
+    for (v, &(p, d)) in f.mesh.support.node_axes.axes.iter().enumerate() {
         assert!((d.length() - 1.0).abs() < 1e-12);
         assert_eq!(p, sm.mesh.positions[v]);
     }

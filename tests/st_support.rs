@@ -197,6 +197,7 @@ fn sphere_cap_stays_trivial() {
     assert!(r
         .support
         .node_axes
+        .axes
         .iter()
         .all(|(p, d)| d.is_finite() && p.is_finite()));
 }
@@ -221,9 +222,9 @@ fn distant_centre_makes_omega_a_plane() {
     assert!(m.max_vertex_sphere_residual < 1e-9);
     assert!(m.max_node_axis_offset < 1e-9, "{m:?}");
     // Node axes are parallel to a, toward −a; the second points are the reflections.
-    for (v, (p, dir)) in r.support.node_axes.iter().enumerate() {
+    for (v, (p, dir)) in r.support.node_axes.axes.iter().enumerate() {
         assert!(dir.dot(-axis) > 1.0 - 1e-12);
-        if let Some(q) = r.second_points[v] {
+        if let Some(q) = r.support.node_axes.second_points[v] {
             let refl = *p - 2.0 * (p.dot(axis) - d) * axis;
             assert!((q - refl).length() < 1e-9 * (refl - *p).length().max(r.diag));
         }
@@ -316,7 +317,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
     assert_eq!(m.axes_from_spheres, with_star, "{name}");
     let sm = &r.sphere_mesh;
     assert_eq!(sm.face_spheres.len(), mesh.face_count());
-    assert_eq!(r.support_elements.len(), topo.edges().len());
+    assert_eq!(r.support.elements.len(), topo.edges().len());
     // Face spheres are oriented like the (working) faces.
     for (f, s) in sm.face_spheres.iter().enumerate() {
         let p = sm.mesh.face_points(f);
@@ -333,7 +334,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
             // For R² > 0 every star's second common point is the inversion of v in Ω (and for
             // R² < 0 the anti-inversion).
             let mut checked = 0;
-            for (v, q) in r.second_points.iter().enumerate() {
+            for (v, q) in r.support.node_axes.second_points.iter().enumerate() {
                 if let Some(q) = q {
                     let p = sm.mesh.positions[v];
                     let inv = r.omega.invert(p).unwrap();
@@ -358,7 +359,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
             }
             // Support elements: planar, through m, bounded by the node axes.
             let depth = r.support.depth;
-            for el in &r.support_elements {
+            for el in &r.support.elements {
                 let c = el.circle;
                 let off = m_dist(center, c.center, c.normal) / r.diag;
                 assert!(
@@ -373,7 +374,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
                     assert!(m_dist(p, c.center, c.normal) < 1e-9 * r.diag);
                     // The inner corner is on the node axis, in the plane, on the inner circle.
                     let q = el.corners[3 - k];
-                    let (_, dir) = r.support.node_axes[*v as usize];
+                    let (_, dir) = r.support.node_axes.axes[*v as usize];
                     assert!(
                         (q - p).cross(dir).length() < 1e-9 * r.diag,
                         "{name}: inner corner off the axis"

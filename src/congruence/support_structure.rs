@@ -5,9 +5,17 @@
 //! the node axis is the line v v̄ ([`star_axis`]). For an ST mesh with support structure every
 //! node axis passes through the centre m of the absolute sphere Ω (Sec. 2.4).
 //!
+//! [`node_axes`] is the one definition every method uses: from the star's spheres where they
+//! determine the line, else a direction the method gives (toward m, or the normal), projected
+//! into the plane of the vertex's one edge circle where it has exactly one.
+//!
+//! **Edge circles.** [`edge_circle`]: the circle of an edge's arc, in the radical plane of its two
+//! face spheres, or in a plane through the edge the method names ([`EdgePlane`]).
+//!
 //! **Support elements.** Per edge, the annulus sector in the plane of the edge's circle between
 //! the two node axes ([`support_element`]); [`support_strips`] tessellates them along the panels'
-//! own arc points, so the support meets the panels exactly.
+//! own arc points, so the support meets the panels exactly. [`SupportStructure`] holds the node
+//! axes, the elements and their strips: the one result shape of every method with support.
 
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -17,8 +25,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::circle::Circle;
 use crate::geometry::linalg::Svd;
+use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
+use crate::progress::{Cancelled, OnProgress, Progress};
 
 /// The node axis of a vertex star: the line through v and the second common point v̄ of the
 /// spheres around v. See [`star_axis`].
@@ -106,14 +116,235 @@ pub fn second_common_point(spheres: &[Sphere], v: DVec3) -> Option<DVec3> {
         .and_then(|a| a.second_point)
 }
 
-/// The torsion-free support structure of an ST mesh (Sec. 2.2, 4, Fig. 1).
-#[derive(Clone, Debug, PartialEq)]
+/// The node axes of a sphere mesh (Sec. 2.2), from [`node_axes`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeAxes {
+    /// Per vertex: the vertex and its unit node axis, toward the support side.
+    pub axes: Vec<(DVec3, DVec3)>,
+    /// Per vertex: v̄ from the star's spheres (None where they do not determine it, or at
+    /// infinity).
+    pub second_points: Vec<Option<DVec3>>,
+    /// Per vertex: whether its axis comes from its star's spheres ([`star_axis`] with condition
+    /// at least [`STAR_AXIS_MIN_CONDITION`]).
+    pub from_spheres: Vec<bool>,
+}
+
+impl NodeAxes {
+    /// The axes as display segments (v, v + length · direction), toward the support side.
+    pub fn segments(&self, length: f64) -> Vec<(DVec3, DVec3)> {
+        self.axes
+            .iter()
+            .filter_map(|&(v, d)| Some((v, v + length * d.try_normalize()?)))
+            .collect()
+    }
+
+    /// Per vertex: the angle (deg) between its node axis, as a line, and `normals[v]`.
+    pub fn normal_angles_deg(&self, normals: &[DVec3]) -> Vec<f64> {
+        self.axes
+            .iter()
+            .zip(normals)
+            .map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees())
+            .collect()
+    }
+
+    /// Vertices whose axis comes from their star's spheres.
+    pub fn count_from_spheres(&self) -> usize {
+        self.from_spheres.iter().filter(|&&b| b).count()
+    }
+}
+
+/// The node axes of the sphere mesh with vertices `positions`, connectivity `topo` and a sphere
+/// per face: at v, the line v v̄ of [`star_axis`] when its condition reaches
+/// [`STAR_AXIS_MIN_CONDITION`]; else `toward(v)`, projected into the plane of v's edge circle
+/// ([`edge_circle`] with `plane`) when v has exactly one interior edge. Every axis is oriented
+/// like `toward(v)`, the support side.
+pub fn node_axes(
+    positions: &[DVec3],
+    topo: &Topology,
+    spheres: &[Sphere],
+    toward: &dyn Fn(usize) -> DVec3,
+    plane: &dyn Fn([DVec3; 2]) -> EdgePlane,
+    progress: &mut OnProgress,
+) -> Result<NodeAxes, Cancelled> {
+    let nv = positions.len();
+    // The one interior edge of a vertex, where it has exactly one.
+    let mut interior: Vec<(u32, Option<usize>)> = vec![(0, None); nv];
+    for (e, edge) in topo.edges().iter().enumerate() {
+        if topo.edge_faces(e).len() == 2 {
+            for &v in edge {
+                let slot = &mut interior[v as usize];
+                slot.0 += 1;
+                slot.1 = Some(e);
+            }
+        }
+    }
+    let mut out = NodeAxes {
+        axes: Vec::with_capacity(nv),
+        second_points: vec![None; nv],
+        from_spheres: vec![false; nv],
+    };
+    let mut star = Vec::new();
+    for v in 0..nv {
+        if v % 1024 == 0 {
+            progress(Progress::new("node_axes", v, nv))?;
+        }
+        let p = positions[v];
+        let side = toward(v);
+        star.clear();
+        star.extend(topo.vertex_faces(v).iter().map(|&f| spheres[f as usize]));
+        let direction = match star_axis(&star, p).filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION)
+        {
+            Some(axis) => {
+                out.second_points[v] = axis.second_point;
+                out.from_spheres[v] = true;
+                axis.direction
+            }
+            None => match interior[v] {
+                (1, Some(e)) => {
+                    let [(f, _), (g, _)] = topo.edge_faces(e) else {
+                        unreachable!("an interior edge has two faces")
+                    };
+                    let ends = topo.edges()[e].map(|i| positions[i as usize]);
+                    edge_circle(
+                        &spheres[*f as usize],
+                        Some(&spheres[*g as usize]),
+                        ends,
+                        plane(ends),
+                    )
+                    .and_then(|c| (side - side.dot(c.normal) * c.normal).try_normalize())
+                    .unwrap_or(side)
+                }
+                _ => side,
+            },
+        };
+        out.axes.push((
+            p,
+            if direction.dot(side) < 0.0 {
+                -direction
+            } else {
+                direction
+            },
+        ));
+    }
+    progress(Progress::new("node_axes", nv, nv))?;
+    Ok(out)
+}
+
+/// A plane through an edge (u, w) that a method offers beside the radical plane of the edge's two
+/// face spheres ([`edge_circle`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EdgePlane {
+    /// Through the edge and a point (m of Ω, Sec. 4): the radical plane in theory, as it contains
+    /// both node axes; the better conditioned of the two is used.
+    Through(DVec3),
+    /// Through the edge, parallel to a direction (the axis a of a plane Ω): likewise.
+    Parallel(DVec3),
+    /// Through the edge with this normal, used only where the two spheres coincide (their
+    /// common edge may then be any circle through u and w); a zero normal offers none.
+    WhereCoincident(DVec3),
+}
+
+/// The circle of the arc of edge (u, w) on face sphere `s1` (and `s2`, the other face's sphere,
+/// for an interior edge), with `plane` beside the radical plane of s1 and s2.
+///
+/// [`EdgePlane::Through`] and [`EdgePlane::Parallel`]: in theory the arc's plane is both the
+/// radical plane and that plane, since it contains u, w, ū, w̄ and so both node axes.
+/// Numerically the radical plane is ill-conditioned when the two spheres nearly coincide (its tilt
+/// errs by ≈ ε / sin φ, φ the kink angle: 1e-7 rad at φ ≈ 1e-9 rad, which occurs after optimizing
+/// R), and the other plane when m is nearly on the edge's line. So the better conditioned of the
+/// two is used: the radical circle ([`Circle::intersection`]) when sin φ ≥ sin ∠(w − u, m − u)
+/// (resp. ∠(w − u, a)), else the plane's cut of s1 (or s2 if s1 is a plane), its normal oriented
+/// like c₁ − c₂. Boundary edges: the plane's cut.
+///
+/// [`EdgePlane::WhereCoincident`]: the radical circle, and the plane's cut of s1 where the two
+/// spheres coincide (centres and radii within 1e-9 of the radius) or the edge is a boundary edge.
+///
+/// None when no real circle results (e.g. both spheres planes, or coincident spheres without a
+/// plane).
+pub fn edge_circle(
+    s1: &Sphere,
+    s2: Option<&Sphere>,
+    [u, w]: [DVec3; 2],
+    plane: EdgePlane,
+) -> Option<Circle> {
+    let e = w - u;
+    let cut = |s: &Sphere, n: DVec3| Circle::plane_cut(s, u, n);
+    let (n, q_plane) = match plane {
+        EdgePlane::WhereCoincident(n) => {
+            return match s2 {
+                Some(s2) if !coincide(s1, s2) => Circle::intersection(s1, s2),
+                _ => cut(s1, n),
+            };
+        }
+        EdgePlane::Through(m) => {
+            let n = e.cross(m - u);
+            (n, n.length() / (e.length() * (m - u).length()))
+        }
+        EdgePlane::Parallel(a) => {
+            let n = e.cross(a);
+            (n, n.length() / (e.length() * a.length()))
+        }
+    };
+    let q_plane = if q_plane.is_finite() { q_plane } else { 0.0 };
+    let radical = |s2: &Sphere| Circle::intersection(s1, s2);
+    if let Some(s2) = s2 {
+        if s1.kink_angle(s2).sin() >= q_plane {
+            if let Some(c) = radical(s2) {
+                return Some(c);
+            }
+        }
+    }
+    let plane_circle = if s1.a != 0.0 {
+        cut(s1, n)
+    } else {
+        s2.and_then(|s| cut(s, n))
+    };
+    match plane_circle {
+        Some(mut c) => {
+            if let (Some(c1), Some(c2)) = (s1.center(), s2.and_then(|s| s.center())) {
+                if c.normal.dot(c1 - c2) < 0.0 {
+                    c.normal = -c.normal;
+                }
+            }
+            Some(c)
+        }
+        None => s2.and_then(radical),
+    }
+}
+
+/// Two spheres that are one: centres and radii within 1e-9 of the radius.
+fn coincide(s1: &Sphere, s2: &Sphere) -> bool {
+    match (
+        s1.center().zip(s1.signed_radius()),
+        s2.center().zip(s2.signed_radius()),
+    ) {
+        (Some((c1, r1)), Some((c2, r2))) => {
+            c1.distance(c2) + (r1 - r2).abs() <= 1e-9 * r1.abs().max(r2.abs())
+        }
+        _ => false,
+    }
+}
+
+/// The torsion-free support structure of a sphere mesh (Sec. 2.2, 4, 5.2, Fig. 1): its node axes,
+/// the planar support elements between them and their strips along the panels' arcs; the one
+/// result shape of ST meshes with support structure and SQ meshes.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SupportStructure {
-    /// Per vertex: a point on the node axis (the vertex itself) and its unit direction, pointing
-    /// from the vertex toward the support side (toward m, or along −a).
-    pub node_axes: Vec<(DVec3, DVec3)>,
-    /// Depth of the planar support elements, along the node axes.
+    pub node_axes: NodeAxes,
+    /// Depth of the support elements, along the node axes (absolute).
     pub depth: f64,
+    pub elements: Vec<SupportElement>,
+    /// The elements as strips along the panels' arcs.
+    pub geometry: SupportGeometry,
+    /// Length of the displayed axis segments (absolute).
+    pub axis_length: f64,
+}
+
+impl SupportStructure {
+    /// The node axes as display segments of `axis_length`, toward the support side.
+    pub fn axis_segments(&self) -> Vec<(DVec3, DVec3)> {
+        self.node_axes.segments(self.axis_length)
+    }
 }
 
 /// A planar support element of an ST mesh with support structure (Sec. 2.2, 4, Fig. 1): the
@@ -134,19 +365,6 @@ pub struct SupportElement {
     /// runs from corners[0] to corners[1] (the shorter way), the inner arc from corners[3] to
     /// corners[2].
     pub corners: [DVec3; 4],
-}
-
-impl SupportStructure {
-    /// The node axes as display segments (v, v + length · direction), toward the support side.
-    pub fn axis_segments(&self, length: f64) -> Vec<(DVec3, DVec3)> {
-        self.node_axes
-            .iter()
-            .filter_map(|&(v, d)| {
-                let d = d.try_normalize()?;
-                Some((v, v + length * d))
-            })
-            .collect()
-    }
 }
 
 /// Triangles of the support structure: one planar strip per support element.

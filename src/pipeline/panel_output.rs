@@ -6,7 +6,7 @@ use glam::DVec3;
 
 use super::fields::{field, Field};
 use crate::congruence::central_spheres::CurvatureField;
-use crate::congruence::support_structure::{SupportElement, SupportGeometry};
+use crate::congruence::support_structure::{SupportGeometry, SupportStructure};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::schedule::SupportRecord;
 use crate::export::{
@@ -136,10 +136,9 @@ pub struct PanelExport<'a> {
     pub timings: &'a [(String, f64)],
     /// Goes to the GLB's `asset.extras` (with the method).
     pub extras: serde_json::Value,
-    pub support: Option<&'a SupportGeometry>,
-    pub node_axes: Option<&'a [(DVec3, DVec3)]>,
-    /// The support elements for the schedule (`support.csv` and the JSON).
-    pub support_elements: Option<&'a [SupportElement]>,
+    /// The support structure: its strips and node axes for the GLB and OBJ, its elements for
+    /// the schedule (`support.csv` and the JSON).
+    pub support: Option<&'a SupportStructure>,
     /// The report's warnings.
     pub warnings: Vec<String>,
     /// Each panel's largest distance to the reference, when the method measured it already.
@@ -173,8 +172,6 @@ impl<'a> PanelExport<'a> {
             timings,
             extras,
             support: None,
-            node_axes: None,
-            support_elements: None,
             warnings: Vec::new(),
             deviations: None,
             verdict: None,
@@ -202,16 +199,9 @@ impl<'a> PanelExport<'a> {
     }
 
     /// The support structure (its strips and elements) and the node axes.
-    pub fn with_support(
-        self,
-        support: &'a SupportGeometry,
-        elements: &'a [SupportElement],
-        node_axes: &'a [(DVec3, DVec3)],
-    ) -> Self {
+    pub fn with_support(self, support: &'a SupportStructure) -> Self {
         Self {
             support: Some(support),
-            support_elements: Some(elements),
-            node_axes: Some(node_axes),
             ..self
         }
     }
@@ -242,13 +232,15 @@ pub fn export_panels(
         e.deviations,
     );
     schedule.support_elements = e
-        .support_elements
-        .map(SupportRecord::of)
+        .support
+        .map(|s| SupportRecord::of(&s.elements))
         .unwrap_or_default();
     let mut extras = e.extras;
     extras["method"] = e.method.into();
-    let glb = write_glb(e.panels, e.support, e.node_axes, extras);
-    let obj = write_obj(e.panels, e.support, e.node_axes);
+    let axes = e.support.map(SupportStructure::axis_segments);
+    let (geometry, axes) = (e.support.map(|s| &s.geometry), axes.as_deref());
+    let glb = write_glb(e.panels, geometry, axes, extras);
+    let obj = write_obj(e.panels, geometry, axes);
     let kinks = e.sphere_mesh.kink_angles_deg();
     let mesh = reference.mesh();
     let output = &e.sphere_mesh.mesh;

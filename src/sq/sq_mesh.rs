@@ -6,14 +6,11 @@
 //!   circle of its two face spheres through its end vertices. A boundary edge's arc is its face
 //!   sphere cut by the plane through the edge that contains the mean of its two node axes, the
 //!   plane its support element would lie in.
-//! - **Node axes**: at a vertex with two or more interior edges, the common line of the planes of
-//!   their circles (least squares: the right singular vector of the stacked plane normals), which
-//!   is the line through the vertex and the second common point of its spheres and, for four
-//!   faces, orthogonal to the plane of their centres. Computed from the spheres, not assumed; the
-//!   planes meet at about α, so it is well conditioned even where the spheres are nearly coaxal
-//!   and the second point is far. With one interior edge, the reference normal projected into
-//!   its circle's plane; with none, the reference normal. Axes point to the side
-//!   of the sphere centres (the support side).
+//! - **Node axes** ([`crate::congruence::support_structure::node_axes`], the one definition):
+//!   the line through the vertex and the second common point of its spheres, computed from the
+//!   spheres, not assumed; where they do not determine it (a boundary vertex of two faces, a
+//!   corner), the reference normal, projected into the plane of the vertex's one edge circle
+//!   where it has one. Axes point to the side of the sphere centres (the support side).
 //! - **Support elements**: per interior edge, the planar element in the plane of the edge's circle
 //!   between the two node axes, of the settable depth
 //!   ([`crate::congruence::support_structure::support_element`]), tessellated along the panels'
@@ -28,13 +25,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::congruence::support_structure::{
-    support_element, support_strips, SupportElement, SupportGeometry,
+    edge_circle, node_axes, support_element, support_strips, EdgePlane, NodeAxes, SupportStructure,
 };
-
-/// Least σ₂/σ₁ of the stacked circle-plane normals at a vertex for its axis to count as
-/// determined by the spheres.
-pub const AXIS_MIN_CONDITION: f64 = 1e-3;
-use crate::geometry::circle::Circle;
 use crate::geometry::linalg::Svd;
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
@@ -77,38 +69,9 @@ pub struct SqMeshFigures {
 pub struct SqMesh {
     pub sphere_mesh: SphereMesh,
     pub panels: Vec<Panel>,
-    /// Per vertex: (vertex, unit node axis toward the support side).
-    pub node_axes: Vec<(DVec3, DVec3)>,
-    pub axis_from_spheres: Vec<bool>,
-    pub support_elements: Vec<SupportElement>,
-    pub support_geometry: SupportGeometry,
-    /// Length of the displayed axis segments.
-    pub axis_length: f64,
+    /// Node axes toward the support side, support elements and their strips.
+    pub support: SupportStructure,
     pub figures: SqMeshFigures,
-}
-
-impl SqMesh {
-    /// The node axes as display segments toward the support side.
-    pub fn node_axis_segments(&self) -> Vec<(DVec3, DVec3)> {
-        self.node_axes
-            .iter()
-            .map(|&(v, d)| (v, v + self.axis_length * d))
-            .collect()
-    }
-}
-
-/// The circle of two neighbouring face spheres, None when they coincide (to 1e-9 of the radius:
-/// the two panels lie on one sphere and their common edge has no circle of its own).
-pub fn edge_circle(s1: &Sphere, s2: &Sphere) -> Option<Circle> {
-    if let (Some((c1, r1)), Some((c2, r2))) = (
-        s1.center().zip(s1.signed_radius()),
-        s2.center().zip(s2.signed_radius()),
-    ) {
-        if c1.distance(c2) + (r1 - r2).abs() <= 1e-9 * r1.abs().max(r2.abs()) {
-            return None;
-        }
-    }
-    Circle::intersection(s1, s2)
 }
 
 /// The unit normal of the support plane of edge uw between two face spheres: the plane of their
@@ -120,65 +83,8 @@ pub fn support_plane_normal(
     [u, w]: [DVec3; 2],
     axes: [DVec3; 2],
 ) -> Option<DVec3> {
-    match edge_circle(s1, s2) {
-        Some(c) => Some(c.normal),
-        None => (w - u).cross(axes[0] + axes[1]).try_normalize(),
-    }
-}
-
-/// Node axes of the SQ mesh (see the module docs), with whether each comes from its spheres.
-pub fn node_axes(sm: &SphereMesh, normals: &[DVec3]) -> (Vec<(DVec3, DVec3)>, Vec<bool>) {
-    let mesh = &sm.mesh;
-    let spheres = &sm.face_spheres;
-    let nv = mesh.vertex_count();
-    let topo = sm.topology();
-    // The planes of the interior edges' circles at every vertex.
-    let mut planes: Vec<Vec<DVec3>> = vec![Vec::new(); nv];
-    for (e, edge) in topo.edges().iter().enumerate() {
-        if let [(f, _), (g, _)] = topo.edge_faces(e) {
-            if let Some(c) = edge_circle(&spheres[*f as usize], &spheres[*g as usize]) {
-                for &v in edge {
-                    planes[v as usize].push(c.normal);
-                }
-            }
-        }
-    }
-    let mut centres: Vec<Vec<DVec3>> = vec![Vec::new(); nv];
-    for (f, face) in mesh.faces.iter().enumerate() {
-        if let Some(c) = spheres[f].center() {
-            for &v in face.corners() {
-                centres[v as usize].push(c);
-            }
-        }
-    }
-    let mut from_spheres = vec![false; nv];
-    let axes = (0..nv)
-        .map(|v| {
-            let p = mesh.positions[v];
-            let n = normals[v];
-            let direction = match planes[v].as_slice() {
-                [] => n,
-                [c] => (n - n.dot(*c) * *c).try_normalize().unwrap_or(n),
-                many => {
-                    let rows: Vec<[f64; 3]> = many.iter().map(|c| c.to_array()).collect();
-                    let svd = Svd::new(&rows);
-                    if svd.sigma[1] > AXIS_MIN_CONDITION * svd.sigma[0] {
-                        from_spheres[v] = true;
-                        DVec3::from_array(svd.v[2]).normalize_or_zero()
-                    } else {
-                        n
-                    }
-                }
-            };
-            // Toward the centres of the spheres around v.
-            let side = centres[v]
-                .iter()
-                .map(|c| (*c - p).dot(direction))
-                .sum::<f64>();
-            (p, if side < 0.0 { -direction } else { direction })
-        })
-        .collect();
-    (axes, from_spheres)
+    let substitute = (w - u).cross(axes[0] + axes[1]);
+    edge_circle(s1, Some(s2), [u, w], EdgePlane::WhereCoincident(substitute)).map(|c| c.normal)
 }
 
 /// Builds the SQ mesh from the optimized vertices and face spheres (model units); `normals` are
@@ -193,7 +99,8 @@ pub fn sq_mesh(
     axis_length: f64,
 ) -> SqMesh {
     let sm = SphereMesh::new(mesh, spheres, BoundaryArcRule::Parallel(DVec3::ZERO));
-    let (axes, axis_from_spheres) = node_axes(&sm, normals);
+    let node_axes = support_side_axes(&sm, normals);
+    let axes = &node_axes.axes;
     let topo = sm.topology();
     let mut planes = HashMap::new();
     for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
@@ -236,17 +143,50 @@ pub fn sq_mesh(
     let support_geometry = support_strips(&support_elements, |el| {
         edge_arc_points(&sm, &panels, el.edge)
     });
-    let figures = figures(&sm, &axes, &axis_from_spheres, normals, stars, diag);
+    let figures = figures(&sm, &node_axes, normals, stars, diag);
     SqMesh {
         sphere_mesh: sm,
         panels,
-        node_axes: axes,
-        axis_from_spheres,
-        support_elements,
-        support_geometry,
-        axis_length,
+        support: SupportStructure {
+            node_axes,
+            depth,
+            elements: support_elements,
+            geometry: support_geometry,
+            axis_length,
+        },
         figures,
     }
+}
+
+/// The node axes of the SQ mesh: toward the side of the sphere centres around each vertex, the
+/// reference normal where the spheres do not determine them.
+fn support_side_axes(sm: &SphereMesh, normals: &[DVec3]) -> NodeAxes {
+    let (mesh, spheres) = (&sm.mesh, &sm.face_spheres);
+    let topo = sm.topology();
+    let toward = |v: usize| {
+        let p = mesh.positions[v];
+        let side: f64 = topo
+            .vertex_faces(v)
+            .iter()
+            .filter_map(|&f| spheres[f as usize].center())
+            .map(|c| (c - p).dot(normals[v]))
+            .sum();
+        if side < 0.0 {
+            -normals[v]
+        } else {
+            normals[v]
+        }
+    };
+    let none = |_: [DVec3; 2]| EdgePlane::WhereCoincident(DVec3::ZERO);
+    node_axes(
+        &mesh.positions,
+        topo,
+        spheres,
+        &toward,
+        &none,
+        &mut crate::progress::ignore,
+    )
+    .expect("ignore never cancels")
 }
 
 /// The smaller of two figures, NaN when either is (a figure that cannot be measured fails).
@@ -297,12 +237,12 @@ pub fn star_support_plane_angle_deg(
 /// The figures of [`SqMeshFigures`] except the distance to the reference.
 fn figures(
     sm: &SphereMesh,
-    axes: &[(DVec3, DVec3)],
-    from_spheres: &[bool],
+    node_axes: &NodeAxes,
     normals: &[DVec3],
     stars: &QuadStars,
     diag: f64,
 ) -> SqMeshFigures {
+    let (axes, from_spheres) = (&node_axes.axes, &node_axes.from_spheres);
     let spheres = &sm.face_spheres;
     let mut out = SqMeshFigures {
         min_torsal_plane_angle_deg: 90.0,
@@ -347,7 +287,14 @@ fn figures(
         if !(from_spheres[u as usize] && from_spheres[w as usize]) {
             continue;
         }
-        if let Some(c) = edge_circle(&spheres[*f as usize], &spheres[*g as usize]) {
+        let ends = [sm.mesh.positions[u as usize], sm.mesh.positions[w as usize]];
+        let plane = EdgePlane::WhereCoincident(DVec3::ZERO);
+        if let Some(c) = edge_circle(
+            &spheres[*f as usize],
+            Some(&spheres[*g as usize]),
+            ends,
+            plane,
+        ) {
             let (du, dw) = (axes[u as usize].1, axes[w as usize].1);
             out.max_torsal_plane_residual = out
                 .max_torsal_plane_residual
@@ -355,13 +302,9 @@ fn figures(
                 .max(dw.dot(c.normal).abs());
         }
     }
-    let angles: Vec<f64> = axes
-        .iter()
-        .zip(normals)
-        .map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees())
-        .collect();
+    let angles = node_axes.normal_angles_deg(normals);
     out.max_axis_normal_angle_deg = angles.iter().copied().fold(0.0, f64::max);
     out.mean_axis_normal_angle_deg = angles.iter().sum::<f64>() / angles.len().max(1) as f64;
-    out.axes_from_spheres = from_spheres.iter().filter(|&&b| b).count();
+    out.axes_from_spheres = node_axes.count_from_spheres();
     out
 }

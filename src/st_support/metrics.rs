@@ -5,7 +5,7 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::node_axes::NodeAxes;
+use crate::congruence::support_structure::NodeAxes;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::stats::mean;
@@ -87,15 +87,9 @@ pub fn metrics(
         }
     }
     let m = omega.center();
-    let mut angle_sum = 0.0;
+    let angles = axes.normal_angles_deg(normals);
+    metrics.max_axis_normal_angle_deg = angles.iter().copied().fold(0.0, f64::max);
     for (v, &(p, d)) in axes.axes.iter().enumerate() {
-        let a = d
-            .cross(normals[v])
-            .length()
-            .atan2(d.dot(normals[v]).abs())
-            .to_degrees();
-        angle_sum += a;
-        metrics.max_axis_normal_angle_deg = metrics.max_axis_normal_angle_deg.max(a);
         if axes.from_spheres[v] {
             metrics.axes_from_spheres += 1;
             let offset = match (m, omega) {
@@ -106,7 +100,7 @@ pub fn metrics(
             metrics.max_node_axis_offset = metrics.max_node_axis_offset.max(offset);
         }
     }
-    metrics.mean_axis_normal_angle_deg = angle_sum / axes.axes.len() as f64;
+    metrics.mean_axis_normal_angle_deg = angles.iter().sum::<f64>() / angles.len() as f64;
     metrics.mean_kink_angle_deg = mean(&kinks);
     metrics.max_kink_angle_deg = kinks.iter().copied().fold(0.0, f64::max);
     metrics

@@ -12,13 +12,15 @@
 //!    it must), oriented like the (working) face normal.
 //! 3. Option `optimize_radius` (Fig. 16 right, [`optimize_radius`]::[`choose_omega`]): R² (or the plane offset d)
 //!    minimizing the mean kink angle, the vertices and m (or a) fixed.
-//! 4. [`node_axes`]: the line through v and the second common point v̄ of the spheres around v, from
-//!    those spheres ([`crate::congruence::support_structure::star_axis`]), not assumed. Where a star does not determine it (fewer than 3
-//!    faces, or nearly coaxal spheres: condition below `STAR_AXIS_MIN_CONDITION`) the axis is the
-//!    line v m (or parallel to a) and does not count in `max_node_axis_offset`.
-//! 5. [`support_elements`]: per edge the arc circle (interior edges: the intersection circle of the
-//!    two face spheres; boundary edges: the [`BoundaryArcRule`] plane through the edge and m, or
-//!    parallel to a), and the annulus sector between the node axes with the given depth
+//! 4. Node axes ([`crate::congruence::support_structure::node_axes`], the one definition): the
+//!    line through v and the second common point v̄ of the spheres around v, from those spheres,
+//!    not assumed. Where a star does not determine it (fewer than 3 faces, or nearly coaxal
+//!    spheres) the axis is the line v m (or parallel to a) and does not count in
+//!    `max_node_axis_offset`.
+//! 5. [`support_elements`]: per edge the arc circle
+//!    ([`crate::congruence::support_structure::edge_circle`]: interior edges the intersection
+//!    circle of the two face spheres, boundary edges the plane through the edge and m, or parallel
+//!    to a), and the annulus sector between the node axes with the given depth
 //!    ([`crate::congruence::support_structure::SupportElement`]), tessellated along the panels'
 //!    own arcs for display and export.
 //! 6. [`second_envelope`]: the mesh inverted in Ω (same triangles). Given for R² > 0 (Fig. 10),
@@ -31,10 +33,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod absolute_sphere;
-pub mod edge_circles;
 pub mod face_spheres;
 pub mod metrics;
-pub mod node_axes;
 pub mod optimize_radius;
 pub mod params;
 pub mod report;
@@ -48,7 +48,7 @@ use glam::DVec3;
 
 use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{
-    support_strips, SupportElement, SupportGeometry, SupportStructure,
+    node_axes, support_strips, EdgePlane, SupportStructure,
 };
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::topology::Topology;
@@ -70,7 +70,6 @@ use absolute_sphere::{
 use face_spheres::face_spheres;
 pub use metrics::StSupportMetrics;
 use metrics::{metrics, Counts};
-use node_axes::node_axes;
 use optimize_radius::choose_omega;
 pub use params::{StSupportParams, LOCAL_SPHERE_POINTS};
 use second_envelope::second_envelope;
@@ -136,11 +135,8 @@ pub struct StSupportResult {
     pub sphere_mesh: SphereMesh,
     /// The panels, tessellated to [`DEFAULT_CHORD_TOLERANCE`] of the diagonal.
     pub panels: Vec<Panel>,
-    /// Node axes (vertex, unit direction toward the support side) and the absolute depth.
+    /// Node axes (toward the support side), support elements and their strips.
     pub support: SupportStructure,
-    pub support_elements: Vec<SupportElement>,
-    /// The support elements as strips along the panels' arcs.
-    pub support_geometry: SupportGeometry,
     /// The estimate of Sec. 4 with the histogram data (its `omega` is the mean-R² estimate).
     pub absolute: AbsoluteSphereEstimate,
     /// The Ω the face spheres are orthogonal to: the estimate, or the optimized R² / d.
@@ -150,12 +146,6 @@ pub struct StSupportResult {
     /// Mean kink angle (deg) with the mean-R² estimate (equals the metric unless optimized).
     pub mean_kink_estimate_deg: f64,
     pub second_envelope: Option<TriMesh>,
-    /// Per vertex: v̄ computed from the star's spheres (None where not determined).
-    pub second_points: Vec<Option<DVec3>>,
-    /// Per vertex: whether its node axis comes from its star's spheres.
-    pub axis_from_spheres: Vec<bool>,
-    /// Length of the displayed axis segments (absolute).
-    pub axis_length: f64,
     /// The bounding-box diagonal of the mesh the method ran on (the remeshed one, if any).
     pub diag: f64,
     pub metrics: StSupportMetrics,
@@ -163,14 +153,6 @@ pub struct StSupportResult {
     pub timings_ms: Vec<(String, f64)>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers).
     pub warnings: Vec<Warning>,
-}
-
-impl StSupportResult {
-    /// The node axes as display segments (v, v + axis_length · direction), toward the support
-    /// side.
-    pub fn node_axis_segments(&self) -> Vec<(DVec3, DVec3)> {
-        self.support.axis_segments(self.axis_length)
-    }
 }
 
 /// The reference remeshed as `params.remesh` asks, or None. The adaptive sizing field uses local
@@ -282,12 +264,26 @@ fn steps(
     let omega = chosen.omega;
     let (spheres, degenerate_faces) = face_spheres(&work, &omega, progress)?;
     timings.lap("face_spheres");
-    let axes = node_axes(&work, topo, &spheres, &omega, &absolute.normals, progress)?;
+    let toward = |v: usize| match omega {
+        AbsoluteSphere::Sphere { center, .. } => (center - work.positions[v])
+            .try_normalize()
+            .unwrap_or(-absolute.normals[v]),
+        AbsoluteSphere::Plane { axis, .. } => -axis,
+    };
+    let plane = |_: [DVec3; 2]| edge_plane(&omega);
+    let axes = node_axes(&work.positions, topo, &spheres, &toward, &plane, progress)?;
     timings.lap("node_axes");
     let depth = params.support_depth * diag;
     let rule = boundary_arc_rule(&omega);
-    let (elements, edges_without_support) =
-        support_elements(&work, topo, &spheres, &axes.axes, &rule, depth, progress)?;
+    let (elements, edges_without_support) = support_elements(
+        &work,
+        topo,
+        &spheres,
+        &axes.axes,
+        edge_plane(&omega),
+        depth,
+        progress,
+    )?;
     timings.lap("support_elements");
     let second_envelope = second_envelope(&work, &omega);
     timings.lap("second_envelope");
@@ -314,18 +310,16 @@ fn steps(
         sphere_mesh,
         panels,
         support: SupportStructure {
-            node_axes: axes.axes,
+            node_axes: axes,
             depth,
+            elements,
+            geometry: support_geometry,
+            axis_length: params.axis_length * diag,
         },
-        support_elements: elements,
-        support_geometry,
         absolute,
         omega,
         optimized_parameter: chosen.optimized_parameter,
         second_envelope,
-        second_points: axes.second_points,
-        axis_from_spheres: axes.from_spheres,
-        axis_length: params.axis_length * diag,
         diag,
         metrics,
         timings_ms: Vec::new(),
@@ -342,6 +336,14 @@ fn working_orientation(mesh: &TriMesh, flipped: bool) -> TriMesh {
         mesh.triangles.clone()
     };
     TriMesh::new(mesh.positions.clone(), triangles)
+}
+
+/// The plane through an edge beside its radical plane: through m, or parallel to a (step 5).
+fn edge_plane(omega: &AbsoluteSphere) -> EdgePlane {
+    match *omega {
+        AbsoluteSphere::Sphere { center, .. } => EdgePlane::Through(center),
+        AbsoluteSphere::Plane { axis, .. } => EdgePlane::Parallel(axis),
+    }
 }
 
 /// The plane of a boundary edge's arc: through m, or parallel to a (step 5).

@@ -1,16 +1,16 @@
 //! Step 5 of Sec. 4: the support elements. Per edge the arc circle ([`edge_circle`]: interior
-//! edges the intersection circle of the two face spheres, boundary edges the [`BoundaryArcRule`]
-//! plane through the edge and m, or parallel to a) and the annulus sector between the node axes
-//! with the given depth ([`support_element`]).
+//! edges the intersection circle of the two face spheres, boundary edges the plane through the
+//! edge and m, or parallel to a) and the annulus sector between the node axes with the given
+//! depth ([`support_element`]).
 
 use glam::DVec3;
 
-use super::edge_circles::edge_circle;
-use crate::congruence::support_structure::{support_element, SupportElement};
+use crate::congruence::support_structure::{
+    edge_circle, support_element, EdgePlane, SupportElement,
+};
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
-use crate::panels::sphere_mesh::BoundaryArcRule;
 use crate::progress::{Cancelled, OnProgress, Progress};
 
 /// The support elements of `mesh` (absolute `depth`), and how many edges have none (both face
@@ -20,7 +20,7 @@ pub fn support_elements(
     topo: &Topology,
     face_spheres: &[Sphere],
     node_axes: &[(DVec3, DVec3)],
-    rule: &BoundaryArcRule,
+    plane: EdgePlane,
     depth: f64,
     progress: &mut OnProgress,
 ) -> Result<(Vec<SupportElement>, usize), Cancelled> {
@@ -38,7 +38,7 @@ pub fn support_elements(
         );
         let circle = faces.first().and_then(|&f1| {
             let s2 = (faces.len() == 2).then(|| &face_spheres[faces[1] as usize]);
-            edge_circle(&face_spheres[f1 as usize], s2, u, w, rule)
+            edge_circle(&face_spheres[f1 as usize], s2, [u, w], plane)
         });
         let element = circle.and_then(|c| {
             support_element(

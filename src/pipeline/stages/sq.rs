@@ -331,8 +331,8 @@ pub fn run(
     if let Some(f) = &result.sq_mesh {
         fields.extend(panel_fields(&f.mesh.panels));
         fields.extend(support_fields(
-            &f.mesh.support_geometry,
-            &f.mesh.node_axis_segments(),
+            &f.mesh.support.geometry,
+            &f.mesh.support.axis_segments(),
         ));
     }
     sink.snapshot(STAGE, planned as u32, fields);
@@ -456,10 +456,9 @@ pub fn export(
                 "final_iteration_median".into(),
                 result.final_iteration_median_ms().unwrap_or(0.0),
             ));
-            let axes = f.mesh.node_axis_segments();
             let export = PanelExport::new(STAGE, &f.mesh.sphere_mesh, &f.mesh.panels, reference.diagonal(), params.radius_tolerance, &section, &timings)
                 .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
-                .with_support(&f.mesh.support_geometry, &f.mesh.support_elements, &axes);
+                .with_support(&f.mesh.support);
             let (report, panel_files) = export_panels(reference, export, clock);
             files.extend(panel_files);
             report

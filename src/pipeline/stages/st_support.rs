@@ -82,7 +82,6 @@ pub fn export(
     clock: Clock,
 ) -> (Report, Vec<ExportFile>) {
     let section = StSupportSection::of(result, params.remesh);
-    let axes = result.node_axis_segments();
     let export = PanelExport::new(
         STAGE,
         &result.sphere_mesh,
@@ -93,7 +92,7 @@ pub fn export(
         &result.timings_ms,
     )
     .with_extras(crate::export::absolute_sphere_extras(&result.omega))
-    .with_support(&result.support_geometry, &result.support_elements, &axes)
+    .with_support(&result.support)
     .with_warnings(&result.warnings);
     let (report, mut files) = export_panels(reference, export, clock);
     files.push(report_file(&report));
@@ -104,8 +103,8 @@ pub fn export(
 pub fn display_fields(result: &StSupportResult) -> Vec<Field> {
     let mut fields = panel_fields(&result.panels);
     fields.extend(support_fields(
-        &result.support_geometry,
-        &result.node_axis_segments(),
+        &result.support.geometry,
+        &result.support.axis_segments(),
     ));
     if let Some(env) = &result.second_envelope {
         fields.push(Field::f32(
