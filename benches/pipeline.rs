@@ -14,8 +14,8 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
-    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, RoundSizing, Scale,
-    SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, JET_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
+    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES,
+    JET_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
 };
 use spherical_faces::progress::{native_clock_ms, Clock};
 use spherical_faces::solver::PhaseTimes;
@@ -57,9 +57,7 @@ fn remesh_workload() -> &'static RemeshWorkload {
 
 fn main() {
     let bench_mode = std::env::args().any(|a| a == "--bench");
-    SCALE
-        .set(if bench_mode { Scale::Full } else { Scale::Tiny })
-        .unwrap();
+    SCALE.set(if bench_mode { Scale::Full } else { Scale::Tiny }).unwrap();
     native_clock_ms();
     divan::main();
     if bench_mode {
@@ -75,11 +73,7 @@ fn main() {
             println!("{line}");
         }
         for name in names {
-            let ms: Vec<f64> = results
-                .iter()
-                .filter(|(n, _)| n == name)
-                .map(|&(_, ms)| ms)
-                .collect();
+            let ms: Vec<f64> = results.iter().filter(|(n, _)| n == name).map(|&(_, ms)| ms).collect();
             println!("{}", result_line(name, &ms));
         }
     }
@@ -89,10 +83,7 @@ fn main() {
 #[divan::bench(sample_count = JET_SAMPLES as u32, sample_size = 1)]
 fn jet_fit(bencher: Bencher) {
     let w = JetWorkload::new(scale());
-    info(
-        "jet_fit",
-        format!("# jet_fit: {} vertices", w.mesh.vertex_count()),
-    );
+    info("jet_fit", format!("# jet_fit: {} vertices", w.mesh.vertex_count()));
     bencher.bench_local(|| timed("jet_fit", || w.run()));
 }
 
@@ -104,16 +95,11 @@ fn remesh_round(bencher: Bencher, sizing: RoundSizing) {
         RoundSizing::Uniform => "remesh_round_uniform",
         RoundSizing::Adaptive => "remesh_round_adaptive",
     };
-    bencher
-        .with_inputs(|| w.remesher(sizing))
-        .bench_local_values(|mut r| {
-            let st = timed(name, || RemeshWorkload::round(&mut r));
-            info(
-                name,
-                format!("# {name}: {} faces, {st:?}", w.reference.face_count()),
-            );
-            r // dropped outside the timing
-        });
+    bencher.with_inputs(|| w.remesher(sizing)).bench_local_values(|mut r| {
+        let st = timed(name, || RemeshWorkload::round(&mut r));
+        info(name, format!("# {name}: {} faces, {st:?}", w.reference.face_count()));
+        r // dropped outside the timing
+    });
 }
 
 /// `ANGLE_ITERATIONS_PER_SAMPLE` LM iterations from the initial point (divan times the whole
@@ -125,14 +111,7 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
     let mut solver = w.solver(Clock(Some(native_clock_ms)));
     w.sample(&mut problem, &mut solver); // symbolic analysis, reused afterwards
     let name = format!("angle_iteration_{faces}");
-    info(
-        &name,
-        format!(
-            "# {name}: {} faces, {} vertices",
-            w.faces(),
-            w.frame.mesh.vertex_count()
-        ),
-    );
+    info(&name, format!("# {name}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
     let (mut phases, mut iterations) = (PhaseTimes::default(), 0);
     bencher.bench_local(|| {
         let (ms, p) = w.sample_with_phases(&mut problem, &mut solver);
@@ -140,10 +119,7 @@ fn angle_iterations(bencher: Bencher, faces: usize) {
         iterations += ms.len();
         record(&name, ms)
     });
-    info(
-        &format!("{name} phases"),
-        phase_line(&name, &phases, iterations),
-    );
+    info(&format!("{name} phases"), phase_line(&name, &phases, iterations));
 }
 
 /// One whole SQ run on tunnel_arch (20×20 grid, about 237 quads) per sample; the `bench` lines

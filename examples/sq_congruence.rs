@@ -9,10 +9,7 @@ use spherical_faces::sq::params::{Inequality, SqParams};
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     if args.is_empty() {
-        args = vec![
-            "../shared/data/bsplines/tunnel_arch.json".into(),
-            "sample:vault".into(),
-        ];
+        args = vec!["../shared/data/bsplines/tunnel_arch.json".into(), "sample:vault".into()];
     }
     let slack = std::env::var("SQ_SLACK").is_ok();
     for a in args {
@@ -20,43 +17,20 @@ fn main() {
             Some(k) => Loaded::from_sample(Sample::from_key(k).expect("a sample")),
             None => Loaded::from_file(&std::fs::read(&a).expect("readable"), &a).expect("loads"),
         };
-        let mut params = SqParams {
-            inequality: if slack {
-                Inequality::Slack
-            } else {
-                Inequality::Hinge
-            },
-            ..SqParams::default()
-        };
-        if let Some(m) = std::env::var("SQ_MARGIN_THETA")
-            .ok()
-            .and_then(|m| m.parse().ok())
-        {
+        let mut params = SqParams { inequality: if slack { Inequality::Slack } else { Inequality::Hinge }, ..SqParams::default() };
+        if let Some(m) = std::env::var("SQ_MARGIN_THETA").ok().and_then(|m| m.parse().ok()) {
             params.margins_deg[0] = m;
         }
-        if let Some(m) = std::env::var("SQ_MARGIN_ALPHA")
-            .ok()
-            .and_then(|m| m.parse().ok())
-        {
+        if let Some(m) = std::env::var("SQ_MARGIN_ALPHA").ok().and_then(|m| m.parse().ok()) {
             params.margins_deg[1] = m;
         }
         if let Some(w) = std::env::var("SQ_ORTH").ok().and_then(|m| m.parse().ok()) {
             params.torsal_weights.lc_orth = w;
         }
         let t0 = std::time::Instant::now();
-        match spherical_faces::sq::compute_congruence(
-            &loaded.surface,
-            &params,
-            Clock::native(),
-            &mut |_| Ok(()),
-        ) {
+        match spherical_faces::sq::compute_congruence(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())) {
             Ok(r) => {
-                println!(
-                    "{a}: {:.0} ms, iterations {} + {}",
-                    t0.elapsed().as_secs_f64() * 1e3,
-                    r.lc_iterations,
-                    r.torsal_iterations
-                );
+                println!("{a}: {:.0} ms, iterations {} + {}", t0.elapsed().as_secs_f64() * 1e3, r.lc_iterations, r.torsal_iterations);
                 println!("  initial {:?}", r.initial_figures);
                 println!("  final   {:?}", r.figures);
                 println!(

@@ -9,18 +9,14 @@ use spherical_faces::sq::radius::{check_mean_curvature, fit_radius, SamplingGrid
 
 fn main() {
     let bytes = std::fs::read("../shared/data/bsplines/tunnel_arch.json").expect("../shared");
-    let Ok(ImportedFile::BSpline(b)) = import_file(&bytes, "tunnel_arch.json") else {
-        panic!()
-    };
+    let Ok(ImportedFile::BSpline(b)) = import_file(&bytes, "tunnel_arch.json") else { panic!() };
     let s = b.surface.in_frame(glam::DVec3::new(0.0, 6.0, 2.2), 16.75);
     let params = SqParams::default();
     let grid = SamplingGrid::new(&s, params.grid).unwrap();
     let signs = check_mean_curvature(&s, &grid, 1.0, SqParams::default().faces).unwrap();
     let fit = fit_radius(&s, &grid, params.radius_basis, &signs.excluded).unwrap();
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
-    let lines = problem
-        .congruence_lines(&fit.function.coefficients)
-        .unwrap();
+    let lines = problem.congruence_lines(&fit.function.coefficients).unwrap();
     let clock = Clock::native();
     for _ in 0..3 {
         let mut x = problem.initial_point(&fit.function.coefficients, &lines, &params);

@@ -23,23 +23,13 @@ fn main() {
         let worst = star_support_plane_angle_deg(sm, &f.mesh.support.node_axes.axes, *v, faces);
         if worst < params.alpha_deg {
             let uv = f.uv[*v as usize];
-            let d = cones
-                .iter()
-                .map(|c| ((c[0] - uv[0]).powi(2) + (c[1] - uv[1]).powi(2)).sqrt())
-                .fold(f64::INFINITY, f64::min);
+            let d = cones.iter().map(|c| ((c[0] - uv[0]).powi(2) + (c[1] - uv[1]).powi(2)).sqrt()).fold(f64::INFINITY, f64::min);
             low.push((worst, faces.len(), uv, d));
         }
     }
     low.sort_by(|a, b| a.0.total_cmp(&b.0));
-    println!(
-        "{} stars, {} below α; singular at {cones:?}",
-        stars.stars.len(),
-        low.len()
-    );
+    println!("{} stars, {} below α; singular at {cones:?}", stars.stars.len(), low.len());
     for (w, m, uv, d) in low.iter().take(25) {
-        println!(
-            "  {w:.2}° valence {m} at ({:.2}, {:.2}), {d:.2} from a singular vertex",
-            uv[0], uv[1]
-        );
+        println!("  {w:.2}° valence {m} at ({:.2}, {:.2}), {d:.2} from a singular vertex", uv[0], uv[1]);
     }
 }

@@ -16,64 +16,34 @@ use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
+use spherical_faces::st_adapted::terms::boundary_vertices;
 use spherical_faces::st_adapted::compute;
 use spherical_faces::st_adapted::params::StAdaptedParams;
-use spherical_faces::st_adapted::terms::boundary_vertices;
 use spherical_faces::stats::{median, percentile};
 
-const MESHES: [&str; 8] = [
-    "tri_dome",
-    "tri_mesh",
-    "botanic-garden-bubble-0",
-    "cmc1",
-    "flower_cmc1",
-    "chebyshev_sphere",
-    "conical1",
-    "enneper2",
-];
+const MESHES: [&str; 8] =
+    ["tri_dome", "tri_mesh", "botanic-garden-bubble-0", "cmc1", "flower_cmc1", "chebyshev_sphere", "conical1", "enneper2"];
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let epsilon: f64 = args
-        .first()
-        .map_or(2e-3, |s| s.parse().expect("EPSILON is a number"));
-    let names: Vec<String> = if args.len() > 1 {
-        args[1..].to_vec()
-    } else {
-        MESHES.iter().map(|s| s.to_string()).collect()
-    };
+    let epsilon: f64 = args.first().map_or(2e-3, |s| s.parse().expect("EPSILON is a number"));
+    let names: Vec<String> = if args.len() > 1 { args[1..].to_vec() } else { MESHES.iter().map(|s| s.to_string()).collect() };
     println!("ε = {epsilon} (relative to the diagonal)\n");
     println!("| reference | variant | faces | panel distance: median / p99 / max | boundary panels max | max vertex distance | max / ε |");
     println!("|---|---|---|---|---|---|---|");
     let mut quality = Vec::new();
     for name in &names {
         let reference = match name.strip_prefix("sample:") {
-            Some(key) => {
-                Reference::from_triangles(Sample::from_key(key).expect("a sample's key").mesh())
-            }
+            Some(key) => Reference::from_triangles(Sample::from_key(key).expect("a sample's key").mesh()),
             None => {
-                let path = format!(
-                    "{}/../shared/data/meshes/{name}.obj",
-                    env!("CARGO_MANIFEST_DIR")
-                );
+                let path = format!("{}/../shared/data/meshes/{name}.obj", env!("CARGO_MANIFEST_DIR"));
                 let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-                Reference::from_triangles(
-                    import_mesh(&bytes, &format!("{name}.obj"))
-                        .expect("imports")
-                        .mesh,
-                )
+                Reference::from_triangles(import_mesh(&bytes, &format!("{name}.obj")).expect("imports").mesh)
             }
         };
         for variant in [EdgeArcs::Intersection, EdgeArcs::BisectingPlanes] {
-            let mut params = StAdaptedParams {
-                sizing: Sizing::Adaptive { epsilon },
-                variant,
-                ..Default::default()
-            };
-            if let Some(w) = std::env::var("ST_EDGE_CIRCLE")
-                .ok()
-                .and_then(|s| s.parse().ok())
-            {
+            let mut params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon }, variant, ..Default::default() };
+            if let Some(w) = std::env::var("ST_EDGE_CIRCLE").ok().and_then(|s| s.parse().ok()) {
                 params.weights.edge_circle = w;
             }
             let t0 = std::time::Instant::now();
@@ -88,11 +58,7 @@ fn main() {
             let diag = r.diag;
             let topo = Topology::new(&r.sphere_mesh.mesh);
             let boundary = boundary_vertices(&topo);
-            let distances: Vec<f64> = r
-                .panels
-                .iter()
-                .map(|p| max_deviation(p, reference.bvh()) / diag)
-                .collect();
+            let distances: Vec<f64> = r.panels.iter().map(|p| max_deviation(p, reference.bvh()) / diag).collect();
             let boundary_max = r
                 .sphere_mesh
                 .mesh
@@ -108,11 +74,7 @@ fn main() {
             let m = &r.metrics;
             println!(
                 "| {name} | {} | {} | {:.4} / {:.4} / {:.4} | {:.4} | {:.4} | {:.1} |",
-                if variant == EdgeArcs::Intersection {
-                    "a"
-                } else {
-                    "b"
-                },
+                if variant == EdgeArcs::Intersection { "a" } else { "b" },
                 m.faces,
                 median(&distances).unwrap_or(0.0),
                 percentile(distances.iter().copied(), 0.99),
@@ -122,10 +84,7 @@ fn main() {
                 m.max_distance_to_reference / epsilon,
             );
             if r.initial_shape.flipped_faces + m.flipped_faces > 0 {
-                println!(
-                    "<!-- {name}: flipped faces {} initially, {} at the end -->",
-                    r.initial_shape.flipped_faces, m.flipped_faces
-                );
+                println!("<!-- {name}: flipped faces {} initially, {} at the end -->", r.initial_shape.flipped_faces, m.flipped_faces);
                 let mesh = &r.sphere_mesh.mesh;
                 for f in 0..mesh.face_count() {
                     let pts = mesh.face_points(f);
@@ -141,15 +100,7 @@ fn main() {
             for w in &r.warnings {
                 println!("<!-- {name} ({variant:?}): warning: {w} -->");
             }
-            quality.push((
-                name.clone(),
-                variant,
-                m.clone(),
-                r.iterations,
-                r.angle_iteration_median_ms,
-                seconds,
-                r.warnings.len(),
-            ));
+            quality.push((name.clone(), variant, m.clone(), r.iterations, r.angle_iteration_median_ms, seconds, r.warnings.len()));
         }
     }
     println!("\n| reference | variant | kink mean / max (°) | vertex–sphere residual | flipped faces | iterations | median iteration (ms) | total (s) | warnings |");
@@ -170,26 +121,14 @@ fn main() {
 /// The worst panels: each interior edge's kink angle and the tilt of its intersection circle's
 /// plane against the reference normal at the edge midpoint (sin φ = |⟨m̂, n⟩|, 0 when the plane
 /// contains the normal), and where the farthest sample lies.
-fn detail(
-    reference: &Reference,
-    r: &spherical_faces::st_adapted::StAdaptedResult,
-    distances: &[f64],
-    boundary: &[bool],
-) {
+fn detail(reference: &Reference, r: &spherical_faces::st_adapted::StAdaptedResult, distances: &[f64], boundary: &[bool]) {
     use glam::DVec3;
     let sm = &r.sphere_mesh;
     let topo = sm.topology();
     let mut order: Vec<usize> = (0..distances.len()).collect();
     order.sort_by(|&a, &b| distances[b].total_cmp(&distances[a]));
-    let initial_panels = spherical_faces::panels::build_panels_with(
-        &r.initial_sphere_mesh,
-        1e-4 * r.diag,
-        r.variant,
-    );
-    let initial: Vec<f64> = initial_panels
-        .iter()
-        .map(|p| max_deviation(p, reference.bvh()) / r.diag)
-        .collect();
+    let initial_panels = spherical_faces::panels::build_panels_with(&r.initial_sphere_mesh, 1e-4 * r.diag, r.variant);
+    let initial: Vec<f64> = initial_panels.iter().map(|p| max_deviation(p, reference.bvh()) / r.diag).collect();
     println!(
         "  initial sphere mesh: panel distance median {:.4} / p99 {:.4} / max {:.4}",
         median(&initial).unwrap_or(0.0),
@@ -201,12 +140,7 @@ fn detail(
         let on_boundary: Vec<bool> = face.iter().map(|&v| boundary[v as usize]).collect();
         let far = spherical_faces::panels::deviation::panel_samples(&r.panels[f])
             .into_iter()
-            .max_by(|a, b| {
-                reference
-                    .bvh()
-                    .distance(*a)
-                    .total_cmp(&reference.bvh().distance(*b))
-            })
+            .max_by(|a, b| reference.bvh().distance(*a).total_cmp(&reference.bvh().distance(*b)))
             .unwrap();
         let hit = reference.closest_point(far).unwrap();
         let on_ref_boundary = hit.barycentric.iter().any(|&b| b < 1e-9);
@@ -220,13 +154,9 @@ fn detail(
             let (pa, pb) = (sm.mesh.positions[a as usize], sm.mesh.positions[b as usize]);
             let (sg, sh) = (sm.face_spheres[g], sm.face_spheres[h]);
             let m = sh.a * sg.b - sg.a * sh.b;
-            let n = reference
-                .closest_point(0.5 * (pa + pb))
-                .and_then(|p| p.normal)
-                .unwrap_or(DVec3::Z);
+            let n = reference.closest_point(0.5 * (pa + pb)).and_then(|p| p.normal).unwrap_or(DVec3::Z);
             let tilt = (m.normalize_or_zero().dot(n)).abs();
-            let arc =
-                spherical_faces::panels::edge_arc_points(sm, &r.panels, [a, b]).unwrap_or_default();
+            let arc = spherical_faces::panels::edge_arc_points(sm, &r.panels, [a, b]).unwrap_or_default();
             let dir = (pb - pa).normalize();
             let side = n.cross(dir);
             let (mut sideways, mut along_n) = (0.0f64, 0.0f64);

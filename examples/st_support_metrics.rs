@@ -14,22 +14,13 @@ use spherical_faces::stats::summary_stats;
 
 fn main() {
     for name in ["tri_mesh", "botanic-garden-bubble-0", "cmc1"] {
-        let path = format!(
-            "{}/../shared/data/meshes/{name}.obj",
-            env!("CARGO_MANIFEST_DIR")
-        );
+        let path = format!("{}/../shared/data/meshes/{name}.obj", env!("CARGO_MANIFEST_DIR"));
         let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        let mesh = import_mesh(&bytes, &format!("{name}.obj"))
-            .expect("imports")
-            .mesh;
+        let mesh = import_mesh(&bytes, &format!("{name}.obj")).expect("imports").mesh;
         let reference = Reference::from_triangles(mesh);
         for optimize_radius in [false, true] {
-            let params = StSupportParams {
-                optimize_radius,
-                ..Default::default()
-            };
-            let r = compute(&reference, &params, Clock::native(), &mut ignore)
-                .expect("st-support succeeds");
+            let params = StSupportParams { optimize_radius, ..Default::default() };
+            let r = compute(&reference, &params, Clock::native(), &mut ignore).expect("st-support succeeds");
             let est = &r.absolute;
             let (a0, m0med, m0max) = summary_stats(&est.angles_m0_deg);
             let (a1, m1med, m1max) = summary_stats(&est.angles_m_deg);
@@ -37,31 +28,14 @@ fn main() {
             let m = &r.metrics;
             let omega = match r.omega {
                 AbsoluteSphere::Sphere { center, r2 } => {
-                    format!(
-                        "m = {:.4?}, R² = {r2:.4} ({:.4} diag²)",
-                        center.to_array(),
-                        r2 / (r.diag * r.diag)
-                    )
+                    format!("m = {:.4?}, R² = {r2:.4} ({:.4} diag²)", center.to_array(), r2 / (r.diag * r.diag))
                 }
-                AbsoluteSphere::Plane { axis, d } => {
-                    format!("plane a = {:.4?}, d = {d:.4}", axis.to_array())
-                }
+                AbsoluteSphere::Plane { axis, d } => format!("plane a = {:.4?}, d = {d:.4}", axis.to_array()),
             };
             let mesh = reference.mesh();
-            println!(
-                "== {name} (V {}, F {}, diag {:.4}) optimize_radius = {optimize_radius}",
-                mesh.vertex_count(),
-                mesh.face_count(),
-                r.diag
-            );
-            println!(
-                "   Ω: {omega}; at_infinity {}; flipped {}; mean-R² estimate {:?}",
-                est.at_infinity, est.flipped, est.omega
-            );
-            println!(
-                "   m0 = {:.4?}  angle(v−m0, n) mean/median/max = {a0:.3}/{m0med:.3}/{m0max:.3}°",
-                est.m0.to_array()
-            );
+            println!("== {name} (V {}, F {}, diag {:.4}) optimize_radius = {optimize_radius}", mesh.vertex_count(), mesh.face_count(), r.diag);
+            println!("   Ω: {omega}; at_infinity {}; flipped {}; mean-R² estimate {:?}", est.at_infinity, est.flipped, est.omega);
+            println!("   m0 = {:.4?}  angle(v−m0, n) mean/median/max = {a0:.3}/{m0med:.3}/{m0max:.3}°", est.m0.to_array());
             println!(
                 "   m  = {:.4?}  angle(v−m,  n) mean/median/max = {a1:.3}/{m1med:.3}/{m1max:.3}°  (E_center {:.4} → {:.4}, E_∞ {:.4}, {} LM its)",
                 est.m.to_array(),
@@ -84,11 +58,7 @@ fn main() {
                 r.mean_kink_estimate_deg,
                 m.axes_from_spheres
             );
-            let t: Vec<String> = r
-                .timings_ms
-                .iter()
-                .map(|(s, t)| format!("{s} {t:.1}"))
-                .collect();
+            let t: Vec<String> = r.timings_ms.iter().map(|(s, t)| format!("{s} {t:.1}")).collect();
             println!("   timings ms: {}", t.join(", "));
         }
     }

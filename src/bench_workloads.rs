@@ -22,22 +22,23 @@
 //!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
+
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
-use crate::import::{import_file, ImportedFile};
+use crate::geometry::mesh::topology::Topology;
 use crate::progress::ignore;
-use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::remeshing::pliant::Remesher;
 use crate::remeshing::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
+use crate::import::{import_file, ImportedFile};
 use crate::samples;
-use crate::solver::{PhaseTimes, Problem, Solver, SolverOptions};
 use crate::sq;
 use crate::sq::params::SqParams;
+use crate::solver::{PhaseTimes, Problem, Solver, SolverOptions};
 use crate::st_adapted::initialization::initial_spheres;
 use crate::st_adapted::optimization::OptimizationFrame;
 use crate::st_adapted::params::StAdaptedParams;
+use crate::progress::Clock;
 use crate::stats;
 
 /// Workload size: `Full` for benchmarking, `Tiny` to exercise the code quickly (`cargo test`).
@@ -100,11 +101,7 @@ impl JetWorkload {
     pub fn new(scale: Scale) -> Self {
         let mesh = dome(JET_RINGS, scale);
         let topo = Topology::new(&mesh);
-        Self {
-            mesh,
-            topo,
-            params: JetParams::default(),
-        }
+        Self { mesh, topo, params: JetParams::default() }
     }
 
     /// The timed work: one jet fit of every vertex.
@@ -139,15 +136,9 @@ impl RemeshWorkload {
         let reference = dome(REMESH_RINGS, scale);
         let topo = Topology::new(&reference);
         let uniform = SizingField::uniform(&reference, mean_edge_length(&reference, &topo));
-        let field =
-            jet_fit(&reference, &topo, &JetParams::default(), &mut ignore).expect("jet fit");
+        let field = jet_fit(&reference, &topo, &JetParams::default(), &mut ignore).expect("jet fit");
         let adaptive = SizingField::from_curvature(&reference, &topo, &field, ADAPTIVE_EPSILON);
-        Self {
-            reference,
-            uniform,
-            adaptive,
-            params: RemeshParams::default(),
-        }
+        Self { reference, uniform, adaptive, params: RemeshParams::default() }
     }
 
     pub fn sizing(&self, sizing: RoundSizing) -> &SizingField {
@@ -168,12 +159,7 @@ impl RemeshWorkload {
     }
 
     /// Times `n` rounds, each on a fresh remesher (built and dropped outside the timing).
-    pub fn time_rounds(
-        &self,
-        sizing: RoundSizing,
-        clock: Clock,
-        n: usize,
-    ) -> (Vec<f64>, RoundStats) {
+    pub fn time_rounds(&self, sizing: RoundSizing, clock: Clock, n: usize) -> (Vec<f64>, RoundStats) {
         let mut stats = RoundStats::default();
         let ms = (0..n)
             .map(|_| {
@@ -210,8 +196,7 @@ impl AngleWorkload {
         let params = StAdaptedParams::default();
         let reference = Reference::from_triangles(samples::Sample::Dome.mesh());
         let sizing = SizingField::uniform_for_face_count(reference.mesh(), target_faces);
-        let remeshed =
-            pliant_remesh(reference.mesh(), &sizing, &params.remesh, &mut ignore).expect("remesh");
+        let remeshed = pliant_remesh(reference.mesh(), &sizing, &params.remesh, &mut ignore).expect("remesh");
         let rtopo = Topology::new(&remeshed);
         let rfield = jet_fit(&remeshed, &rtopo, &params.jet, &mut ignore).expect("jet fit");
         let init = initial_spheres(&remeshed, &rfield.central_spheres);
@@ -245,11 +230,7 @@ impl AngleWorkload {
     }
 
     /// [`Self::sample`] with the solver's phase times (evaluate, assemble, factorize + solve).
-    pub fn sample_with_phases(
-        &self,
-        problem: &mut Problem<'_>,
-        solver: &mut Solver,
-    ) -> (Vec<f64>, PhaseTimes) {
+    pub fn sample_with_phases(&self, problem: &mut Problem<'_>, solver: &mut Solver) -> (Vec<f64>, PhaseTimes) {
         let mut x = self.frame.x0.clone();
         let report = solver.solve(problem, &mut x, |_| Ok(()));
         (report.iteration_ms, report.phase_ms)
@@ -282,9 +263,7 @@ pub struct SqWorkload {
 
 impl SqWorkload {
     pub fn new(scale: Scale) -> Self {
-        let ImportedFile::BSpline(b) =
-            import_file(TUNNEL_ARCH.as_bytes(), "tunnel_arch.json").expect("tunnel_arch imports")
-        else {
+        let ImportedFile::BSpline(b) = import_file(TUNNEL_ARCH.as_bytes(), "tunnel_arch.json").expect("tunnel_arch imports") else {
             unreachable!("tunnel_arch.json is a B-spline")
         };
         let reference = Reference::from_bspline(b.surface).expect("tunnel_arch is regular");
@@ -308,18 +287,14 @@ impl SqWorkload {
     /// final optimization, and the run's total (ms).
     pub fn sample(&self, clock: Clock) -> SqSample {
         let t0 = clock.now();
-        let r = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(()))
-            .expect("tunnel_arch runs");
+        let r = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
         let total_ms = clock.now() - t0;
         let faces = r.sq_mesh.as_ref().map_or(0, |f| f.mesh.panels.len());
         let c = r.congruence;
         SqSample {
             lc_ms: c.lc_iteration_ms,
             torsal_ms: c.torsal_iteration_ms,
-            final_ms: r
-                .sq_mesh
-                .map(|f| f.outcome.iteration_ms)
-                .unwrap_or_default(),
+            final_ms: r.sq_mesh.map(|f| f.outcome.iteration_ms).unwrap_or_default(),
             total_ms,
             faces,
         }
@@ -390,10 +365,7 @@ where
 
     let remesh = RemeshWorkload::new(scale);
     pause().await;
-    for (name, sizing) in [
-        ("remesh_round_uniform", RoundSizing::Uniform),
-        ("remesh_round_adaptive", RoundSizing::Adaptive),
-    ] {
+    for (name, sizing) in [("remesh_round_uniform", RoundSizing::Uniform), ("remesh_round_adaptive", RoundSizing::Adaptive)] {
         let (mut ms, mut st) = (Vec::new(), RoundStats::default());
         for _ in 0..REMESH_SAMPLES {
             let (m, s) = remesh.time_rounds(sizing, clock, 1);
@@ -401,21 +373,14 @@ where
             st = s;
             pause().await;
         }
-        out(&format!(
-            "# {name}: {} faces, {st:?}",
-            remesh.reference.face_count()
-        ));
+        out(&format!("# {name}: {} faces, {st:?}", remesh.reference.face_count()));
         out(&result_line(name, &ms));
     }
     drop(remesh);
 
     for faces in ANGLE_FACES {
         let w = AngleWorkload::new(faces, scale);
-        out(&format!(
-            "# angle_iteration_{faces}: {} faces, {} vertices",
-            w.faces(),
-            w.frame.mesh.vertex_count()
-        ));
+        out(&format!("# angle_iteration_{faces}: {} faces, {} vertices", w.faces(), w.frame.mesh.vertex_count()));
         pause().await;
         let mut problem = w.problem();
         let mut solver = w.solver(clock);
@@ -428,11 +393,7 @@ where
             phases.add(&p);
             pause().await;
         }
-        out(&phase_line(
-            &format!("angle_iteration_{faces}"),
-            &phases,
-            ms.len(),
-        ));
+        out(&phase_line(&format!("angle_iteration_{faces}"), &phases, ms.len()));
         out(&result_line(&format!("angle_iteration_{faces}"), &ms));
     }
 

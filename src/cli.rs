@@ -22,8 +22,7 @@ use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::params::{
-    ParamRange, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE,
-    RECOMPUTE_RANGE, THETA_RANGE,
+    ParamRange, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE,
 };
 use spherical_faces::sq::report::SqSection;
 use spherical_faces::sq::SqEvent;
@@ -180,27 +179,18 @@ struct Failure {
 
 impl Failure {
     fn input(message: impl Into<String>) -> Self {
-        Self {
-            message: message.into(),
-            code: 2,
-        }
+        Self { message: message.into(), code: 2 }
     }
 
     fn output(message: impl Into<String>) -> Self {
-        Self {
-            message: message.into(),
-            code: 1,
-        }
+        Self { message: message.into(), code: 1 }
     }
 
     /// The files are written, but the result misses a guarantee of its method: the misses, for
     /// stderr.
     fn missed(report: &Report) -> Self {
         Self {
-            message: format!(
-                "the result misses its guarantees: {}",
-                report.failure_text()
-            ),
+            message: format!("the result misses its guarantees: {}", report.failure_text()),
             code: spherical_faces::guarantees::MISSED_GUARANTEES_EXIT_CODE,
         }
     }
@@ -235,13 +225,7 @@ pub fn main() -> ExitCode {
                 .filter(|l| !l.is_empty() && !l.starts_with("tip:"))
                 .collect();
             let message = message.join(" ");
-            return fail(
-                json,
-                &Failure::input(format!(
-                    "{} (see --help)",
-                    message.trim_start_matches("error: ")
-                )),
-            );
+            return fail(json, &Failure::input(format!("{} (see --help)", message.trim_start_matches("error: "))));
         }
     };
     let mode = match (cli.quiet, std::io::stderr().is_terminal()) {
@@ -251,49 +235,17 @@ pub fn main() -> ExitCode {
     };
     let mut progress = ProgressLine::new(mode);
     let result = match cli.command {
-        Command::Info {
-            input,
-            list_objects,
-        } => info(&input, list_objects),
-        Command::St {
-            input,
-            epsilon,
-            faces,
-            variant,
-            output,
-        } => {
+        Command::Info { input, list_objects } => info(&input, list_objects),
+        Command::St { input, epsilon, faces, variant, output } => {
             let sizing = match faces {
                 Some(n) => Sizing::UniformFaces(n),
-                None => Sizing::Adaptive {
-                    epsilon: epsilon.unwrap_or(DEFAULT_EPSILON),
-                },
+                None => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
             };
-            st(
-                &input,
-                StAdaptedParams {
-                    sizing,
-                    variant,
-                    ..StAdaptedParams::default()
-                },
-                &output,
-                &mut progress,
-            )
+            st(&input, StAdaptedParams { sizing, variant, ..StAdaptedParams::default() }, &output, &mut progress)
         }
-        Command::StSupport {
-            input,
-            optimize_radius,
-            depth,
-            axis_length,
-            radius_tolerance,
-            adaptive,
-            epsilon,
-            faces,
-            output,
-        } => {
+        Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, output } => {
             let remesh = match (adaptive, faces) {
-                (true, _) => Sizing::Adaptive {
-                    epsilon: epsilon.unwrap_or(DEFAULT_EPSILON),
-                },
+                (true, _) => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
                 (false, Some(n)) => Sizing::UniformFaces(n),
                 (false, None) => Sizing::None,
             };
@@ -307,18 +259,7 @@ pub fn main() -> ExitCode {
             };
             st_support(&input, params, &output, &mut progress)
         }
-        Command::Sq {
-            input,
-            theta,
-            alpha,
-            grid,
-            rs,
-            faces,
-            until,
-            start,
-            depth,
-            output,
-        } => {
+        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, output } => {
             let params = SqParams {
                 theta_deg: theta,
                 alpha_deg: alpha,
@@ -347,10 +288,7 @@ pub fn main() -> ExitCode {
 fn fail(json: bool, f: &Failure) -> ExitCode {
     let message = printable(&f.message);
     if json {
-        eprintln!(
-            "{}",
-            serde_json::json!({ "error": message, "exit_code": f.code })
-        );
+        eprintln!("{}", serde_json::json!({ "error": message, "exit_code": f.code }));
     } else {
         eprintln!("error: {message}");
     }
@@ -378,26 +316,17 @@ struct ProgressLine {
 
 impl ProgressLine {
     fn new(mode: ProgressMode) -> Self {
-        Self {
-            mode,
-            started: std::time::Instant::now(),
-            last: None,
-            drawn: false,
-        }
+        Self { mode, started: std::time::Instant::now(), last: None, drawn: false }
     }
 
     fn show(&mut self, p: &Progress) {
-        let since =
-            |t: Option<std::time::Instant>| t.map_or(u128::MAX, |t| t.elapsed().as_millis());
+        let since = |t: Option<std::time::Instant>| t.map_or(u128::MAX, |t| t.elapsed().as_millis());
         match self.mode {
             ProgressMode::Off => return,
             ProgressMode::JsonLines => {
                 if self.started.elapsed().as_millis() >= 1000 && since(self.last) >= 1000 {
                     self.last = Some(std::time::Instant::now());
-                    eprintln!(
-                        "{}",
-                        serde_json::json!({ "progress": { "step": p.step, "done": p.done, "total": p.total } })
-                    );
+                    eprintln!("{}", serde_json::json!({ "progress": { "step": p.step, "done": p.done, "total": p.total } }));
                 }
                 return;
             }
@@ -405,11 +334,7 @@ impl ProgressLine {
             ProgressMode::Line => {}
         }
         self.last = Some(std::time::Instant::now());
-        let text = if p.total > 0 {
-            format!("{} {}/{}", p.step, p.done, p.total)
-        } else {
-            p.step.to_string()
-        };
+        let text = if p.total > 0 { format!("{} {}/{}", p.step, p.done, p.total) } else { p.step.to_string() };
         eprint!("\r{text:<60}");
         let _ = std::io::stderr().flush();
         self.drawn = true;
@@ -429,16 +354,11 @@ fn load(input: &Input) -> Result<Loaded, Failure> {
     if let Some(key) = path.strip_prefix("sample:") {
         let sample = Sample::from_key(key).ok_or_else(|| {
             let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-            Failure::input(format!(
-                "sample:{key}: no such sample (samples: {})",
-                names.join(", ")
-            ))
+            Failure::input(format!("sample:{key}: no such sample (samples: {})", names.join(", ")))
         })?;
         return Ok(Loaded::from_sample(sample));
     }
-    let name = Path::new(path)
-        .file_name()
-        .map_or(path.into(), |n| n.to_string_lossy().into_owned());
+    let name = Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
     if rhino::is_3dm(path) {
         let (text, object_name) = rhino::convert(path, input.object)?;
         let name = format!("{name} ({object_name})");
@@ -455,19 +375,12 @@ fn load(input: &Input) -> Result<Loaded, Failure> {
 fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
     let file = std::fs::File::open(path).map_err(|e| Failure::input(format!("{path}: {e}")))?;
     let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let too_large = |n: u64| {
-        Failure::input(format!(
-            "{path}: {n} bytes exceed the limit of {MAX_BYTES} ({} MiB)",
-            MAX_BYTES >> 20
-        ))
-    };
+    let too_large = |n: u64| Failure::input(format!("{path}: {n} bytes exceed the limit of {MAX_BYTES} ({} MiB)", MAX_BYTES >> 20));
     if len > MAX_BYTES as u64 {
         return Err(too_large(len));
     }
     let mut bytes = Vec::with_capacity(len as usize);
-    file.take(MAX_BYTES as u64 + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| Failure::input(format!("{path}: {e}")))?;
+    file.take(MAX_BYTES as u64 + 1).read_to_end(&mut bytes).map_err(|e| Failure::input(format!("{path}: {e}")))?;
     if bytes.len() > MAX_BYTES {
         return Err(too_large(bytes.len() as u64));
     }
@@ -477,8 +390,7 @@ fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
 /// Creates `dir` and proves it writable before any work, so a bad `--out` loses nothing.
 fn check_output(output: &Output) -> Result<(), Failure> {
     let dir = &output.out;
-    let bad =
-        |e: std::io::Error| Failure::output(format!("{}: cannot write there: {e}", dir.display()));
+    let bad = |e: std::io::Error| Failure::output(format!("{}: cannot write there: {e}", dir.display()));
     std::fs::create_dir_all(dir).map_err(bad)?;
     let probe = dir.join(".spherical-faces-write-test");
     std::fs::write(&probe, b"").map_err(bad)?;
@@ -490,8 +402,7 @@ fn check_output(output: &Output) -> Result<(), Failure> {
 fn write_files(output: &Output, files: &[ExportFile], report: &Report) -> Result<(), Failure> {
     for f in files {
         let path = output.out.join(&f.name);
-        std::fs::write(&path, &f.bytes)
-            .map_err(|e| Failure::output(format!("{}: {e}", path.display())))?;
+        std::fs::write(&path, &f.bytes).map_err(|e| Failure::output(format!("{}: {e}", path.display())))?;
     }
     for w in &report.warnings {
         eprintln!("warning: {}", printable(w));
@@ -504,12 +415,7 @@ fn reference(input: &Input) -> Result<Reference, Failure> {
 }
 
 /// `st-support SURFACE [options] --out DIR`.
-fn st_support(
-    input: &Input,
-    params: StSupportParams,
-    output: &Output,
-    progress: &mut ProgressLine,
-) -> Result<String, Failure> {
+fn st_support(input: &Input, params: StSupportParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
     check_output(output)?;
     let clock = Clock::native();
     let t0 = clock.now();
@@ -520,17 +426,12 @@ fn st_support(
         progress.show(&p);
         Ok(())
     };
-    reference
-        .curvature(&params.jet, &mut on_progress)
-        .map_err(|_| Failure::input("cancelled"))?;
+    reference.curvature(&params.jet, &mut on_progress).map_err(|_| Failure::input("cancelled"))?;
     let curvature_ms = clock.now() - t1;
-    let mut result =
-        spherical_faces::st_support::compute(&reference, &params, clock, &mut on_progress)
-            .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
+    let mut result = spherical_faces::st_support::compute(&reference, &params, clock, &mut on_progress)
+        .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
     // The report's timings include reading and curvature, which the CLI did itself.
-    result
-        .timings_ms
-        .insert(0, ("curvature".into(), curvature_ms));
+    result.timings_ms.insert(0, ("curvature".into(), curvature_ms));
     result.timings_ms.insert(0, ("import".into(), import_ms));
     let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
     progress.clear();
@@ -540,28 +441,18 @@ fn st_support(
         result.panels.len(),
         output.out.display(),
         result.metrics.max_kink_angle_deg,
-        report
-            .metrics
-            .as_ref()
-            .map_or(f64::NAN, |m| m.max_distance_to_reference)
+        report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
     ))
 }
 
 /// `st SURFACE [--epsilon E | --faces N] [--variant a|b] --out DIR`.
-fn st(
-    input: &Input,
-    params: StAdaptedParams,
-    output: &Output,
-    progress: &mut ProgressLine,
-) -> Result<String, Failure> {
+fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
     check_output(output)?;
     let reference = reference(input)?;
     let clock = Clock::native();
     let result = spherical_faces::st_adapted::compute(&reference, &params, clock, &mut |e| {
         match e {
-            StAdaptedEvent::Progress(p) | StAdaptedEvent::Iteration { progress: p, .. } => {
-                progress.show(&p)
-            }
+            StAdaptedEvent::Progress(p) | StAdaptedEvent::Iteration { progress: p, .. } => progress.show(&p),
             _ => {}
         }
         Ok(())
@@ -593,12 +484,7 @@ fn verdict(summary: String, report: &Report) -> Result<String, Failure> {
 }
 
 /// `sq SURFACE [options] --out DIR`.
-fn sq(
-    input: &Input,
-    params: SqParams,
-    output: &Output,
-    progress: &mut ProgressLine,
-) -> Result<String, Failure> {
+fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
     check_output(output)?;
     let reference = reference(input)?;
     let clock = Clock::native();
@@ -678,10 +564,7 @@ fn info(input: &Input, list_objects: bool) -> Result<String, Failure> {
         return rhino::list(&input.surface);
     }
     let loaded = load(input)?;
-    let field = loaded
-        .surface
-        .curvature(&JetParams::default(), &mut |_| Ok(()))
-        .map_err(|_| Failure::input("cancelled"))?;
+    let field = loaded.surface.curvature(&JetParams::default(), &mut |_| Ok(())).map_err(|_| Failure::input("cancelled"))?;
     let s = &loaded.info.stats;
     let c = &field.summary;
     let mut json = serde_json::json!({
@@ -715,8 +598,7 @@ mod rhino {
 
     /// The converter script: `SF_RHINO3DM_CLI`, else the one in this source tree.
     fn script() -> String {
-        std::env::var("SF_RHINO3DM_CLI")
-            .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/www/rhino3dm/cli.mjs").into())
+        std::env::var("SF_RHINO3DM_CLI").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/www/rhino3dm/cli.mjs").into())
     }
 
     pub fn is_3dm(path: &str) -> bool {
@@ -733,22 +615,11 @@ mod rhino {
     }
 
     fn node(args: &[&str]) -> Result<Vec<u8>, Failure> {
-        let out = Command::new("node")
-            .arg(script())
-            .args(args)
-            .output()
-            .map_err(|e| Failure::input(format!("node: {e}; {}", how_to())))?;
+        let out = Command::new("node").arg(script()).args(args).output().map_err(|e| Failure::input(format!("node: {e}; {}", how_to())))?;
         if !out.status.success() {
             let err = String::from_utf8_lossy(&out.stderr);
-            let first = err
-                .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("the converter failed");
-            let hint = if first.contains("npm ci") || first.contains("Cannot find") {
-                format!(" ({})", how_to())
-            } else {
-                String::new()
-            };
+            let first = err.lines().find(|l| !l.trim().is_empty()).unwrap_or("the converter failed");
+            let hint = if first.contains("npm ci") || first.contains("Cannot find") { format!(" ({})", how_to()) } else { String::new() };
             return Err(Failure::input(format!("{first}{hint}")));
         }
         Ok(out.stdout)
@@ -763,20 +634,12 @@ mod rhino {
     /// The chosen object as our B-spline JSON or OBJ text, and its description.
     pub fn convert(path: &str, object: Option<usize>) -> Result<(String, String), Failure> {
         let listing = list(path)?;
-        let objects: Vec<serde_json::Value> = listing
-            .lines()
-            .filter_map(|l| serde_json::from_str(l).ok())
-            .collect();
+        let objects: Vec<serde_json::Value> = listing.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
         let pick = match object {
             Some(k) => objects
                 .iter()
                 .find(|o| o["index"].as_u64() == Some(k as u64))
-                .ok_or_else(|| {
-                    Failure::input(format!(
-                        "{path}: no object {k} (objects: {})",
-                        summary(&objects)
-                    ))
-                })?,
+                .ok_or_else(|| Failure::input(format!("{path}: no object {k} (objects: {})", summary(&objects))))?,
             None => objects
                 .iter()
                 .find(|o| o["kind"] == "surface")
@@ -785,14 +648,14 @@ mod rhino {
         };
         let index = pick["index"].as_u64().unwrap_or(0).to_string();
         if object.is_none() && objects.len() > 1 {
-            eprintln!("note: {path} holds {} objects ({}); using object {index}, pick another with --object K", objects.len(), summary(&objects));
+            eprintln!(
+                "note: {path} holds {} objects ({}); using object {index}, pick another with --object K",
+                objects.len(),
+                summary(&objects)
+            );
         }
-        let text = String::from_utf8(node(&[path, "--object", &index])?)
-            .map_err(|e| Failure::input(format!("{path}: {e}")))?;
-        let name = pick["name"]
-            .as_str()
-            .filter(|n| !n.is_empty())
-            .map_or(format!("object {index}"), str::to_string);
+        let text = String::from_utf8(node(&[path, "--object", &index])?).map_err(|e| Failure::input(format!("{path}: {e}")))?;
+        let name = pick["name"].as_str().filter(|n| !n.is_empty()).map_or(format!("object {index}"), str::to_string);
         Ok((text, name))
     }
 
@@ -800,14 +663,7 @@ mod rhino {
         objects
             .iter()
             .map(|o| {
-                format!(
-                    "{}: {} {}",
-                    o["index"],
-                    o["kind"].as_str().unwrap_or("?"),
-                    o["name"].as_str().unwrap_or("")
-                )
-                .trim_end()
-                .to_string()
+                format!("{}: {} {}", o["index"], o["kind"].as_str().unwrap_or("?"), o["name"].as_str().unwrap_or("")).trim_end().to_string()
             })
             .collect::<Vec<_>>()
             .join(", ")
@@ -817,10 +673,7 @@ mod rhino {
 // --- value parsers: every count and number the user types is checked here ------------------------
 
 fn number(s: &str) -> Result<f64, String> {
-    s.parse::<f64>()
-        .ok()
-        .filter(|x| x.is_finite())
-        .ok_or_else(|| format!("'{s}' is not a number"))
+    s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("'{s}' is not a number"))
 }
 
 /// A number in [LO, HI].
@@ -854,9 +707,7 @@ fn radius_tolerance(s: &str) -> Result<f64, String> {
 
 /// A remesh's face count: [`MIN_FACES`] to [`MAX_FACES`], as in the design link and the app.
 fn face_count(s: &str) -> Result<usize, String> {
-    let n: usize = s
-        .parse()
-        .map_err(|_| format!("'{s}' is not a whole number"))?;
+    let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
     if (MIN_FACES..=MAX_FACES).contains(&n) {
         Ok(n)
     } else {
@@ -883,14 +734,11 @@ fn in_range_f64(range: ParamRange<f64>) -> impl Fn(&str) -> Result<f64, String> 
 
 fn in_range_usize(range: ParamRange<usize>) -> impl Fn(&str) -> Result<usize, String> + Clone {
     move |s| {
-        let n: usize = s
-            .parse()
-            .map_err(|_| format!("'{s}' is not a whole number"))?;
+        let n: usize = s.parse().map_err(|_| format!("'{s}' is not a whole number"))?;
         match range.check(n) {
-            Err(_) if range == FACES_RANGE && n > range.hi => Err(format!(
-                "{n} is more quads than SQ finishes within a minute and 1 GB; at most {}",
-                range.hi
-            )),
+            Err(_) if range == FACES_RANGE && n > range.hi => {
+                Err(format!("{n} is more quads than SQ finishes within a minute and 1 GB; at most {}", range.hi))
+            }
             checked => checked.map_err(|e| e.to_string()),
         }
     }

@@ -7,10 +7,7 @@ use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::protocol::StageRequest;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON, DEFAULT_FACES, MAX_FACES, MIN_FACES};
 use crate::samples::Sample;
-use crate::sq::params::{
-    RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE,
-    THETA_RANGE,
-};
+use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
@@ -28,14 +25,7 @@ pub enum ColorBy {
 }
 
 impl ColorBy {
-    pub const ALL: [ColorBy; 6] = [
-        ColorBy::MeanCurvature,
-        ColorBy::K1,
-        ColorBy::K2,
-        ColorBy::K1MinusK2,
-        ColorBy::Sizing,
-        ColorBy::None,
-    ];
+    pub const ALL: [ColorBy; 6] = [ColorBy::MeanCurvature, ColorBy::K1, ColorBy::K2, ColorBy::K1MinusK2, ColorBy::Sizing, ColorBy::None];
 
     pub fn key(self) -> &'static str {
         match self {
@@ -102,12 +92,7 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 4] = [
-        Method::Curvature,
-        Method::StAdapted,
-        Method::StSupport,
-        Method::Sq,
-    ];
+    pub const ALL: [Method; 4] = [Method::Curvature, Method::StAdapted, Method::StSupport, Method::Sq];
 
     /// The link key (`method=…`).
     pub fn key(self) -> &'static str {
@@ -249,15 +234,10 @@ impl Design {
         match &self.reference {
             DesignSurface::Sample(x) => s += &format!("&sample={}", x.key()),
             DesignSurface::OwnFile(name) if name.is_empty() => s += "&sample=file",
-            DesignSurface::OwnFile(name) => {
-                s += &format!("&sample=file&file={}", percent_encode(name))
-            }
+            DesignSurface::OwnFile(name) => s += &format!("&sample=file&file={}", percent_encode(name)),
         }
         s += &format!("&method={}", self.method.key());
-        s += &format!(
-            "&jet_degree={}&jet_rings={}",
-            self.jet.degree, self.jet.max_rings
-        );
+        s += &format!("&jet_degree={}&jet_rings={}", self.jet.degree, self.jet.max_rings);
         match self.method {
             Method::Curvature => {}
             Method::StAdapted => {
@@ -292,12 +272,7 @@ impl Design {
                 }
             }
         }
-        s += &format!(
-            "&color={}&shading={}&edges={}",
-            self.color.key(),
-            self.shading.key(),
-            self.edges as u8
-        );
+        s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
         if let Some(c) = self.camera {
             s += &format!(
                 "&cam={},{},{},{},{},{}",
@@ -318,14 +293,8 @@ impl Design {
         let mut stages = vec![StageRequest::Curvature(self.jet.clone())];
         match self.method {
             Method::Curvature => {}
-            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams {
-                jet: self.jet.clone(),
-                ..self.st_adapted.clone()
-            })),
-            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams {
-                jet: self.jet.clone(),
-                ..self.st_support.clone()
-            })),
+            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams { jet: self.jet.clone(), ..self.st_adapted.clone() })),
+            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams { jet: self.jet.clone(), ..self.st_support.clone() })),
             Method::Sq => stages.push(StageRequest::Sq(self.sq.clone())),
         }
         stages
@@ -347,16 +316,9 @@ impl Design {
                 (percent_decode(k), percent_decode(v))
             })
             .collect();
-        match pairs
-            .iter()
-            .find(|(k, _)| k == "v")
-            .map(|(_, v)| v.as_str())
-        {
+        match pairs.iter().find(|(k, _)| k == "v").map(|(_, v)| v.as_str()) {
             Some("1") => {}
-            Some(other) => notices.push(format!(
-                "design link version '{}' is not supported; read as version 1",
-                clip(other)
-            )),
+            Some(other) => notices.push(format!("design link version '{}' is not supported; read as version 1", clip(other))),
             None => notices.push("design link has no version (v=1); read as version 1".into()),
         }
         let mut file_name = None;
@@ -377,11 +339,7 @@ impl Design {
                     }
                     None => {
                         let names: Vec<&str> = Sample::ALL.iter().map(|s| s.key()).collect();
-                        notices.push(format!(
-                            "ignored unknown sample '{}' (samples: {})",
-                            clip(v),
-                            names.join(", ")
-                        ));
+                        notices.push(format!("ignored unknown sample '{}' (samples: {})", clip(v), names.join(", ")));
                         continue;
                     }
                 },
@@ -394,9 +352,7 @@ impl Design {
                 }
                 "method" => Method::from_key(v).map(|m| d.method = m).is_some(),
                 "jet_degree" => parse_in(v, 2, 4).map(|x| d.jet.degree = x as u8).is_some(),
-                "jet_rings" => parse_in(v, 1, 8)
-                    .map(|x| d.jet.max_rings = x as usize)
-                    .is_some(),
+                "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
                 "opt_r" => match v.as_str() {
                     "0" | "1" => {
                         d.st_support.optimize_radius = v == "1";
@@ -404,43 +360,23 @@ impl Design {
                     }
                     _ => false,
                 },
-                "depth" => parse_f64_in(v, 0.0, 1.0)
-                    .map(|x| d.st_support.support_depth = x)
-                    .is_some(),
-                "axis" => parse_f64_in(v, 0.0, 10.0)
-                    .map(|x| d.st_support.axis_length = x)
-                    .is_some(),
-                "rtol" => parse_f64_in(v, 1e-9, 1.0)
-                    .map(|x| d.st_support.radius_tolerance = x)
-                    .is_some(),
-                "remesh" => SizingKind::from_key(v)
-                    .map(|k| support_remesh = Some(k))
-                    .is_some(),
-                "sizing" => SizingKind::from_key(v)
-                    .map(|k| adapted_sizing = Some(k))
-                    .is_some(),
+                "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st_support.support_depth = x).is_some(),
+                "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st_support.axis_length = x).is_some(),
+                "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st_support.radius_tolerance = x).is_some(),
+                "remesh" => SizingKind::from_key(v).map(|k| support_remesh = Some(k)).is_some(),
+                "sizing" => SizingKind::from_key(v).map(|k| adapted_sizing = Some(k)).is_some(),
                 // ε and N belong to the method the link names (applied below).
                 "eps" => parse_f64_in(v, 1e-7, 0.1).map(|x| eps = Some(x)).is_some(),
-                "faces" => parse_in(v, MIN_FACES as i64, MAX_FACES as i64)
-                    .map(|x| faces = Some(x as usize))
-                    .is_some(),
-                "theta" => parse_f64_in(v, THETA_RANGE.lo, THETA_RANGE.hi)
-                    .map(|x| d.sq.theta_deg = x)
-                    .is_some(),
-                "alpha" => parse_f64_in(v, ALPHA_RANGE.lo, ALPHA_RANGE.hi)
-                    .map(|x| d.sq.alpha_deg = x)
-                    .is_some(),
-                "grid" => parse_in(v, GRID_RANGE.lo as i64, GRID_RANGE.hi as i64)
-                    .map(|x| d.sq.grid = x as usize)
-                    .is_some(),
-                "rs" => parse_in(v, RECOMPUTE_RANGE.lo as i64, RECOMPUTE_RANGE.hi as i64)
-                    .map(|x| d.sq.recompute_every = x as usize)
-                    .is_some(),
+                "faces" => parse_in(v, MIN_FACES as i64, MAX_FACES as i64).map(|x| faces = Some(x as usize)).is_some(),
+                "theta" => parse_f64_in(v, THETA_RANGE.lo, THETA_RANGE.hi).map(|x| d.sq.theta_deg = x).is_some(),
+                "alpha" => parse_f64_in(v, ALPHA_RANGE.lo, ALPHA_RANGE.hi).map(|x| d.sq.alpha_deg = x).is_some(),
+                "grid" => parse_in(v, GRID_RANGE.lo as i64, GRID_RANGE.hi as i64).map(|x| d.sq.grid = x as usize).is_some(),
+                "rs" => {
+                    parse_in(v, RECOMPUTE_RANGE.lo as i64, RECOMPUTE_RANGE.hi as i64).map(|x| d.sq.recompute_every = x as usize).is_some()
+                }
                 "until" => Until::from_key(v).map(|u| d.sq.until = u).is_some(),
                 "start" => RadiusStart::from_key(v).map(|r| d.sq.start = r).is_some(),
-                "variant" => EdgeArcs::from_key(v)
-                    .map(|x| d.st_adapted.variant = x)
-                    .is_some(),
+                "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
                 "edges" => match v.as_str() {
@@ -457,11 +393,7 @@ impl Design {
                 }
             };
             if !ok {
-                notices.push(format!(
-                    "ignored invalid value for '{}': '{}'",
-                    clip(k),
-                    clip(v)
-                ));
+                notices.push(format!("ignored invalid value for '{}': '{}'", clip(k), clip(v)));
             }
         }
         // A sizing kind takes ε and N from the link when it names the method they belong to.
@@ -490,19 +422,14 @@ impl Design {
             if FACES_RANGE.contains(n) {
                 d.sq.faces = n;
             } else {
-                notices.push(format!(
-                    "ignored invalid value for 'faces': '{n}' (SQ takes {} to {})",
-                    FACES_RANGE.lo, FACES_RANGE.hi
-                ));
+                notices.push(format!("ignored invalid value for 'faces': '{n}' (SQ takes {} to {})", FACES_RANGE.lo, FACES_RANGE.hi));
             }
         }
         d.st_adapted.jet = d.jet.clone();
         d.st_support.jet = d.jet.clone();
         if wants_file {
             let name = file_name.unwrap_or_else(|| "your file".into());
-            notices.push(format!(
-                "this design uses the file '{name}': drop it on the viewport to continue"
-            ));
+            notices.push(format!("this design uses the file '{name}': drop it on the viewport to continue"));
             d.reference = DesignSurface::OwnFile(name);
         }
         (d, notices)
@@ -514,26 +441,15 @@ fn parse_in(v: &str, lo: i64, hi: i64) -> Option<i64> {
 }
 
 fn parse_f64_in(v: &str, lo: f64, hi: f64) -> Option<f64> {
-    v.parse::<f64>()
-        .ok()
-        .filter(|x| x.is_finite() && (lo..=hi).contains(x))
+    v.parse::<f64>().ok().filter(|x| x.is_finite() && (lo..=hi).contains(x))
 }
 
 fn parse_camera(v: &str) -> Option<CameraState> {
-    let n: Vec<f64> = v
-        .split(',')
-        .map(|x| x.parse::<f64>())
-        .collect::<Result<_, _>>()
-        .ok()?;
+    let n: Vec<f64> = v.split(',').map(|x| x.parse::<f64>()).collect::<Result<_, _>>().ok()?;
     if n.len() != 6 || n.iter().any(|x| !x.is_finite()) || n[2] <= 0.0 {
         return None;
     }
-    Some(CameraState {
-        yaw: n[0],
-        pitch: n[1].clamp(-1.55, 1.55),
-        distance: n[2],
-        target: [n[3], n[4], n[5]],
-    })
+    Some(CameraState { yaw: n[0], pitch: n[1].clamp(-1.55, 1.55), distance: n[2], target: [n[3], n[4], n[5]] })
 }
 
 /// A parameter exactly: the shorter of the plain and the exponent form of the shortest

@@ -45,25 +45,11 @@ pub struct Guarantee {
 
 impl Guarantee {
     pub fn at_most(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
-        Self {
-            name: name.into(),
-            measured,
-            bound: Bound::AtMost,
-            limit,
-            unit: unit.into(),
-            holds: measured <= limit,
-        }
+        Self { name: name.into(), measured, bound: Bound::AtMost, limit, unit: unit.into(), holds: measured <= limit }
     }
 
     pub fn at_least(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
-        Self {
-            name: name.into(),
-            measured,
-            bound: Bound::AtLeast,
-            limit,
-            unit: unit.into(),
-            holds: measured >= limit,
-        }
+        Self { name: name.into(), measured, bound: Bound::AtLeast, limit, unit: unit.into(), holds: measured >= limit }
     }
 
     /// A count that must not exceed `limit`.
@@ -78,43 +64,19 @@ impl fmt::Display for Guarantee {
             Bound::AtMost => "≤",
             Bound::AtLeast => "≥",
         };
-        let unit = if self.unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {}", self.unit)
-        };
+        let unit = if self.unit.is_empty() { String::new() } else { format!(" {}", self.unit) };
         // Enough digits that a miss does not print as its limit.
         let number = |x: f64, digits: usize| {
             if self.unit.is_empty() || self.unit == "deg" {
-                if x.fract() == 0.0 && x.abs() < 1e15 {
-                    format!("{x:.0}")
-                } else {
-                    format!("{x:.digits$}")
-                }
+                if x.fract() == 0.0 && x.abs() < 1e15 { format!("{x:.0}") } else { format!("{x:.digits$}") }
             } else {
                 format!("{x:.digits$e}")
             }
         };
         let fixed = self.unit.is_empty() || self.unit == "deg";
-        let shown = |x: f64, d: usize| {
-            if fixed {
-                format!("{x:.d$}")
-            } else {
-                format!("{x:.d$e}")
-            }
-        };
-        let digits = (2..9)
-            .find(|&d| shown(self.measured, d) != shown(self.limit, d))
-            .unwrap_or(9);
-        write!(
-            f,
-            "{} {}{} (must be {op} {}{})",
-            self.name,
-            number(self.measured, digits),
-            unit,
-            number(self.limit, 2),
-            unit
-        )
+        let shown = |x: f64, d: usize| if fixed { format!("{x:.d$}") } else { format!("{x:.d$e}") };
+        let digits = (2..9).find(|&d| shown(self.measured, d) != shown(self.limit, d)).unwrap_or(9);
+        write!(f, "{} {}{} (must be {op} {}{})", self.name, number(self.measured, digits), unit, number(self.limit, 2), unit)
     }
 }
 
@@ -140,10 +102,7 @@ impl Verdict {
 
     /// The missed guarantees in one line ("" when all hold).
     pub fn failure_text(&self) -> String {
-        self.failures()
-            .map(|g| g.to_string())
-            .collect::<Vec<_>>()
-            .join("; ")
+        self.failures().map(|g| g.to_string()).collect::<Vec<_>>().join("; ")
     }
 }
 
@@ -159,23 +118,11 @@ mod tests {
         assert!(Verdict::new(vec![ok.clone()]).holds());
         let v = Verdict::new(vec![ok, angle]);
         assert!(!v.holds());
-        assert_eq!(
-            v.failure_text(),
-            "min_support_plane_angle_deg 44.50 deg (must be ≥ 45 deg)"
-        );
-        assert!(
-            !Verdict::default().holds(),
-            "no guarantee measured is no verdict"
-        );
-        assert!(
-            !Guarantee::at_most("x", f64::NAN, 1.0, "").holds,
-            "NaN never holds"
-        );
+        assert_eq!(v.failure_text(), "min_support_plane_angle_deg 44.50 deg (must be ≥ 45 deg)");
+        assert!(!Verdict::default().holds(), "no guarantee measured is no verdict");
+        assert!(!Guarantee::at_most("x", f64::NAN, 1.0, "").holds, "NaN never holds");
         assert!(!Guarantee::count_at_most("folded_faces", 2, 0).holds);
         let close = Guarantee::at_least("min_support_plane_angle_deg", 89.999_7, 90.0, "deg");
-        assert_eq!(
-            close.to_string(),
-            "min_support_plane_angle_deg 89.9997 deg (must be ≥ 90 deg)"
-        );
+        assert_eq!(close.to_string(), "min_support_plane_angle_deg 89.9997 deg (must be ≥ 90 deg)");
     }
 }

@@ -65,11 +65,7 @@ impl Clock {
 
 impl fmt::Debug for Clock {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(if self.0.is_some() {
-            "Clock(Some)"
-        } else {
-            "Clock(None)"
-        })
+        f.write_str(if self.0.is_some() { "Clock(Some)" } else { "Clock(None)" })
     }
 }
 
@@ -99,11 +95,7 @@ pub struct Timings {
 
 impl Timings {
     pub fn start(clock: Clock) -> Self {
-        Self {
-            clock,
-            last: clock.now(),
-            laps: Vec::new(),
-        }
+        Self { clock, last: clock.now(), laps: Vec::new() }
     }
 
     /// Records `step` as lasting from the previous lap (or the start) until now.

@@ -23,13 +23,7 @@ pub enum Sample {
 }
 
 impl Sample {
-    pub const ALL: [Sample; 5] = [
-        Sample::Dome,
-        Sample::TorusPatch,
-        Sample::SphereCap,
-        Sample::WaveRoof,
-        Sample::Vault,
-    ];
+    pub const ALL: [Sample; 5] = [Sample::Dome, Sample::TorusPatch, Sample::SphereCap, Sample::WaveRoof, Sample::Vault];
 
     /// Stable key for URLs and the CLI.
     pub fn key(self) -> &'static str {
@@ -102,9 +96,7 @@ impl Sample {
             Sample::WaveRoof => wave_roof(48, 30),
             Sample::Vault => {
                 let v = vault();
-                v.tessellate(v.tessellation_segments(TESSELLATION_TOLERANCE))
-                    .0
-                    .triangulated()
+                v.tessellate(v.tessellation_segments(TESSELLATION_TOLERANCE)).0.triangulated()
             }
         }
     }
@@ -139,16 +131,9 @@ pub fn vault() -> BSplineSurface {
     let mut control = Vec::with_capacity(ACROSS * ALONG);
     for j in 0..ALONG {
         let t = j as f64 / (ALONG - 1) as f64;
-        let (sx, sz) = (
-            1.0 + VAULT_BULGE[0] * (PI * t).sin(),
-            1.0 + VAULT_BULGE[1] * (PI * t).sin(),
-        );
+        let (sx, sz) = (1.0 + VAULT_BULGE[0] * (PI * t).sin(), 1.0 + VAULT_BULGE[1] * (PI * t).sin());
         for &(x, z) in &arch {
-            control.push(DVec3::new(
-                VAULT_HALF_SPAN * sx * x,
-                VAULT_LENGTH * t,
-                VAULT_HEIGHT * sz * z,
-            ));
+            control.push(DVec3::new(VAULT_HALF_SPAN * sx * x, VAULT_LENGTH * t, VAULT_HEIGHT * sz * z));
         }
     }
     let u = BSplineBasis::clamped_uniform(5, ACROSS, (0.0, 1.0)).expect("a valid basis");
@@ -181,11 +166,7 @@ pub fn dome(rings: usize) -> TriMesh {
         // A ρ⁴ − ρ² + 1 = 0 with A = c cos²φ sin²φ.
         let (s, c) = phi.sin_cos();
         let a4 = DOME_SQUARE * c * c * s * s;
-        let r2 = if a4 > 1e-12 {
-            (1.0 - (1.0 - 4.0 * a4).sqrt()) / (2.0 * a4)
-        } else {
-            1.0
-        };
+        let r2 = if a4 > 1e-12 { (1.0 - (1.0 - 4.0 * a4).sqrt()) / (2.0 * a4) } else { 1.0 };
         let (u, v) = (rho * r2.sqrt() * c, rho * r2.sqrt() * s);
         DVec3::new(DOME_A * u, DOME_B * v, dome_height(u, v))
     })
@@ -207,8 +188,7 @@ pub fn sphere_cap(radius: f64, base_radius: f64, rings: usize) -> TriMesh {
 pub fn wave_roof(nx: usize, ny: usize) -> TriMesh {
     grid_mesh(nx, ny, false, false, |s, t| {
         let (x, y) = (-16.0 + 32.0 * s, -10.0 + 20.0 * t);
-        let z = 6.0
-            + 0.9 * (TAU * x / 16.0 + 0.4 * y / 10.0).cos() * (1.0 - 0.3 * (y / 10.0).powi(2))
+        let z = 6.0 + 0.9 * (TAU * x / 16.0 + 0.4 * y / 10.0).cos() * (1.0 - 0.3 * (y / 10.0).powi(2))
             - 1.5 * (y / 10.0).powi(2);
         DVec3::new(x, y, z)
     })
@@ -249,21 +229,13 @@ pub fn torus_closed_form(big_r: f64, small_r: f64, v: f64) -> (f64, f64) {
 /// normals (κ = −1/R w.r.t. them).
 pub fn sphere_patch(radius: f64, half_angle: f64, n: usize) -> TriMesh {
     let t = half_angle.tan();
-    grid_mesh(n, n, false, false, |s, q| {
-        radius * DVec3::new(t * (2.0 * s - 1.0), t * (2.0 * q - 1.0), 1.0).normalize()
-    })
+    grid_mesh(n, n, false, false, |s, q| radius * DVec3::new(t * (2.0 * s - 1.0), t * (2.0 * q - 1.0), 1.0).normalize())
 }
 
 /// A cylinder patch of radius `radius` with axis along y, spanning the angle `angle` around +z
 /// and the length `length` (centred at y = 0), `n_around` × `n_along` cells, outward normals
 /// (κ1 = 0 along the axis, κ2 = −1/r around it, H = −1/(2r)).
-pub fn cylinder_patch(
-    radius: f64,
-    angle: f64,
-    length: f64,
-    n_around: usize,
-    n_along: usize,
-) -> TriMesh {
+pub fn cylinder_patch(radius: f64, angle: f64, length: f64, n_around: usize, n_along: usize) -> TriMesh {
     grid_mesh(n_around, n_along, false, false, |s, t| {
         let phi = (s - 0.5) * angle;
         DVec3::new(radius * phi.sin(), (t - 0.5) * length, radius * phi.cos())
@@ -272,9 +244,7 @@ pub fn cylinder_patch(
 
 /// The rectangle [−w/2, w/2] × [−h/2, h/2] in z = 0, `nx` × `ny` cells, normals +z.
 pub fn plane_patch(width: f64, height: f64, nx: usize, ny: usize) -> TriMesh {
-    grid_mesh(nx, ny, false, false, |s, t| {
-        DVec3::new((s - 0.5) * width, (t - 0.5) * height, 0.0)
-    })
+    grid_mesh(nx, ny, false, false, |s, t| DVec3::new((s - 0.5) * width, (t - 0.5) * height, 0.0))
 }
 
 // --- Triangulations --------------------------------------------------------------------------
@@ -282,18 +252,9 @@ pub fn plane_patch(width: f64, height: f64, nx: usize, ny: usize) -> TriMesh {
 /// A regular grid of `nu` × `nv` cells over (s, t) ∈ [0, 1]², each cell split along the same
 /// diagonal (valence 6 inside). Triangles are counter-clockwise in (s, t), so normals follow
 /// ∂p/∂s × ∂p/∂t. Wrapped directions identify s = 1 with s = 0 (t likewise).
-fn grid_mesh(
-    nu: usize,
-    nv: usize,
-    wrap_u: bool,
-    wrap_v: bool,
-    pos: impl Fn(f64, f64) -> DVec3,
-) -> TriMesh {
+fn grid_mesh(nu: usize, nv: usize, wrap_u: bool, wrap_v: bool, pos: impl Fn(f64, f64) -> DVec3) -> TriMesh {
     let (nu, nv) = (nu.max(1), nv.max(1));
-    let (cu, cv) = (
-        if wrap_u { nu } else { nu + 1 },
-        if wrap_v { nv } else { nv + 1 },
-    );
+    let (cu, cv) = (if wrap_u { nu } else { nu + 1 }, if wrap_v { nv } else { nv + 1 });
     let mut positions = Vec::with_capacity(cu * cv);
     for j in 0..cv {
         for i in 0..cu {
@@ -358,9 +319,7 @@ mod tests {
     #[test]
     fn disc_counts() {
         for r in 1..5 {
-            let m = disc_mesh(r, |rho, phi| {
-                DVec3::new(rho * phi.cos(), rho * phi.sin(), 0.0)
-            });
+            let m = disc_mesh(r, |rho, phi| DVec3::new(rho * phi.cos(), rho * phi.sin(), 0.0));
             assert_eq!(m.vertex_count(), 1 + 3 * r * (r + 1));
             assert_eq!(m.face_count(), 6 * r * r);
             for f in 0..m.face_count() {

@@ -19,11 +19,7 @@ pub fn median(values: &[f64]) -> Option<f64> {
     let mut s = values.to_vec();
     s.sort_by(f64::total_cmp);
     let n = s.len();
-    Some(if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    })
+    Some(if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) })
 }
 
 /// The q-quantile by nearest rank (q in [0, 1]); 0 for no values.
@@ -41,11 +37,7 @@ pub fn summary_stats(values: &[f64]) -> (f64, f64, f64) {
     let v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
     match median(&v) {
         None => (0.0, 0.0, 0.0),
-        Some(m) => (
-            mean(&v),
-            m,
-            v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        ),
+        Some(m) => (mean(&v), m, v.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
     }
 }
 
@@ -62,18 +54,10 @@ impl Histogram {
     pub fn new(values: &[f64], bins: usize) -> Self {
         let bins = bins.max(1);
         let finite = values.iter().copied().filter(|v| v.is_finite());
-        let (lo, hi) = finite
-            .clone()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                (l.min(v), h.max(v))
-            });
+        let (lo, hi) = finite.clone().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
         let mut counts = vec![0u32; bins];
         if lo > hi {
-            return Self {
-                lo: 0.0,
-                hi: 0.0,
-                counts,
-            };
+            return Self { lo: 0.0, hi: 0.0, counts };
         }
         let w = (hi - lo).max(f64::MIN_POSITIVE);
         for v in finite {

@@ -12,46 +12,30 @@ use std::path::Path;
 type Files = BTreeMap<String, String>;
 
 fn read_tree(dir: &Path, prefix: &str, out: &mut Files) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
+    let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
     entries.sort();
     for p in entries {
         let name = p.file_name().unwrap().to_string_lossy().to_string();
         if p.is_dir() {
             read_tree(&p, &format!("{prefix}{name}/"), out);
         } else if name.ends_with(".rs") {
-            out.insert(
-                format!("{prefix}{name}"),
-                std::fs::read_to_string(&p).unwrap(),
-            );
+            out.insert(format!("{prefix}{name}"), std::fs::read_to_string(&p).unwrap());
         }
     }
 }
 
 fn source_files() -> Files {
     let mut files = Files::new();
-    read_tree(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"),
-        "",
-        &mut files,
-    );
+    read_tree(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"), "", &mut files);
     files
 }
 
 /// The layer table of ARCHITECTURE.md: module → row (lowest 0).
 fn layers(markdown: &str) -> BTreeMap<String, usize> {
-    let start = markdown
-        .find("<!-- layers")
-        .expect("ARCHITECTURE.md has the layer table");
-    let end = markdown
-        .find("<!-- /layers -->")
-        .expect("the layer table ends");
+    let start = markdown.find("<!-- layers").expect("ARCHITECTURE.md has the layer table");
+    let end = markdown.find("<!-- /layers -->").expect("the layer table ends");
     let mut out = BTreeMap::new();
-    let rows = markdown[start..end]
-        .lines()
-        .filter(|l| l.starts_with('|') && !l.starts_with("|---") && !l.starts_with("| layer"));
+    let rows = markdown[start..end].lines().filter(|l| l.starts_with('|') && !l.starts_with("|---") && !l.starts_with("| layer"));
     for (row, line) in rows.enumerate() {
         let modules = line.split('|').nth(2).expect("a modules column");
         for m in modules.split(',') {
@@ -92,21 +76,14 @@ fn without_comments_and_strings(text: &str) -> String {
                 }
             }
             // A raw string r"…", r#"…"#, br"…": no escapes inside.
-            'r' if !is_ident(prev)
-                || (prev == 'b' && !out[..out.len() - 1].ends_with(is_ident)) =>
-            {
-                let rest: String = chars
-                    .clone()
-                    .take_while(|&c| c == '#' || c == '"')
-                    .collect();
+            'r' if !is_ident(prev) || (prev == 'b' && !out[..out.len() - 1].ends_with(is_ident)) => {
+                let rest: String = chars.clone().take_while(|&c| c == '#' || c == '"').collect();
                 let hashes = rest.chars().take_while(|&c| c == '#').count();
                 if rest.len() > hashes && rest.as_bytes()[hashes] == b'"' {
                     for _ in 0..=hashes {
                         chars.next();
                     }
-                    let close: String = std::iter::once('"')
-                        .chain(std::iter::repeat_n('#', hashes))
-                        .collect();
+                    let close: String = std::iter::once('"').chain(std::iter::repeat_n('#', hashes)).collect();
                     let mut body = String::new();
                     for c in chars.by_ref() {
                         body.push(c);
@@ -133,13 +110,7 @@ fn without_comments_and_strings(text: &str) -> String {
             // A char literal ('x', '\n', '"'), not a lifetime.
             '\'' => {
                 let rest: String = chars.clone().take(3).collect();
-                let len = if rest.starts_with('\\') {
-                    rest.find('\'').map_or(0, |i| i + 1)
-                } else if rest.chars().nth(1) == Some('\'') {
-                    2
-                } else {
-                    0
-                };
+                let len = if rest.starts_with('\\') { rest.find('\'').map_or(0, |i| i + 1) } else if rest.chars().nth(1) == Some('\'') { 2 } else { 0 };
                 for _ in 0..len {
                     chars.next();
                 }
@@ -161,10 +132,7 @@ fn strip_test_modules(code: &str) -> String {
         out.push_str(&rest[..i]);
         let after = &rest[i + "#[cfg(test)]".len()..];
         let trimmed = after.trim_start();
-        let is_mod = trimmed
-            .trim_start_matches("pub ")
-            .trim_start_matches("pub(crate) ")
-            .starts_with("mod ");
+        let is_mod = trimmed.trim_start_matches("pub ").trim_start_matches("pub(crate) ").starts_with("mod ");
         match trimmed.find(['{', ';']) {
             Some(open) if is_mod && trimmed.as_bytes()[open] == b'{' => {
                 let mut depth = 0;
@@ -196,11 +164,7 @@ fn strip_test_modules(code: &str) -> String {
 
 /// The module path of a file: "a/b.rs" → [a, b], "a/mod.rs" → [a], "lib.rs" → [].
 fn module_path(file: &str) -> Vec<String> {
-    let mut parts: Vec<String> = file
-        .trim_end_matches(".rs")
-        .split('/')
-        .map(String::from)
-        .collect();
+    let mut parts: Vec<String> = file.trim_end_matches(".rs").split('/').map(String::from).collect();
     if matches!(parts.last().map(String::as_str), Some("mod" | "lib")) {
         parts.pop();
     }
@@ -211,9 +175,7 @@ fn module_path(file: &str) -> Vec<String> {
 fn resolve(files: &Files, path: &[String]) -> Option<String> {
     (1..=path.len()).rev().find_map(|n| {
         let p = path[..n].join("/");
-        [format!("{p}.rs"), format!("{p}/mod.rs")]
-            .into_iter()
-            .find(|f| files.contains_key(f))
+        [format!("{p}.rs"), format!("{p}/mod.rs")].into_iter().find(|f| files.contains_key(f))
     })
 }
 
@@ -249,10 +211,7 @@ fn use_tree(s: &str) -> Vec<Vec<String>> {
     }
     let rest = &s[ident.len()..];
     match rest.trim_start().strip_prefix("::") {
-        Some(more) => use_tree(more)
-            .into_iter()
-            .map(|p| [vec![ident.clone()], p].concat())
-            .collect(),
+        Some(more) => use_tree(more).into_iter().map(|p| [vec![ident.clone()], p].concat()).collect(),
         None => vec![vec![ident]],
     }
 }
@@ -272,13 +231,7 @@ fn references(file: &str, text: &str) -> Vec<(Vec<String>, Root)> {
     // `mod name;` declarations: a `use name::…` refers to the child.
     let children: BTreeSet<String> = code
         .lines()
-        .filter_map(|l| {
-            l.trim()
-                .trim_start_matches("pub ")
-                .strip_prefix("mod ")
-                .and_then(|r| r.strip_suffix(';'))
-                .map(String::from)
-        })
+        .filter_map(|l| l.trim().trim_start_matches("pub ").strip_prefix("mod ").and_then(|r| r.strip_suffix(';')).map(String::from))
         .collect();
     // `super` is the module above this one; `self` and child modules are this one's.
     let above: Vec<String> = here[..here.len().saturating_sub(1)].to_vec();
@@ -306,8 +259,7 @@ fn references(file: &str, text: &str) -> Vec<(Vec<String>, Root)> {
             Some((6, here.clone(), Root::Relative))
         } else {
             let ident: String = rest.chars().take_while(|&c| is_ident(c)).collect();
-            (children.contains(&ident) && rest[ident.len()..].starts_with("::"))
-                .then(|| (0, here.clone(), Root::Relative))
+            (children.contains(&ident) && rest[ident.len()..].starts_with("::")).then(|| (0, here.clone(), Root::Relative))
         };
         match base {
             Some((skip, base, root)) => {
@@ -329,9 +281,7 @@ fn graph(files: &Files) -> (BTreeMap<String, BTreeSet<String>>, Vec<String>) {
     for (file, text) in files {
         let entry = g.entry(file.clone()).or_default();
         for alias in aliases_of_crate(&code(text)) {
-            unfollowed.push(format!(
-                "{file}: `{alias}` hides the paths it names from this check"
-            ));
+            unfollowed.push(format!("{file}: `{alias}` hides the paths it names from this check"));
         }
         for (path, root) in references(file, text) {
             match resolve(files, &path) {
@@ -340,13 +290,12 @@ fn graph(files: &Files) -> (BTreeMap<String, BTreeSet<String>>, Vec<String>) {
                 }
                 Some(_) => {}
                 None if root == Root::Relative => {}
-                None if path.is_empty() => unfollowed.push(format!(
-                    "{file}: a glob or `self` of `crate` hides the paths it names from this check"
-                )),
-                None => unfollowed.push(format!(
-                    "{file}: `crate::{}` names no module file (an item or re-export of lib.rs?)",
-                    path.join("::")
-                )),
+                None if path.is_empty() => {
+                    unfollowed.push(format!("{file}: a glob or `self` of `crate` hides the paths it names from this check"))
+                }
+                None => {
+                    unfollowed.push(format!("{file}: `crate::{}` names no module file (an item or re-export of lib.rs?)", path.join("::")))
+                }
             }
         }
     }
@@ -355,24 +304,13 @@ fn graph(files: &Files) -> (BTreeMap<String, BTreeSet<String>>, Vec<String>) {
 
 /// `use crate as x;` and `extern crate self as x;`: names of the crate root this check cannot follow.
 fn aliases_of_crate(code: &str) -> Vec<String> {
-    let words: Vec<&str> = code
-        .split(|c: char| !is_ident(c))
-        .filter(|w| !w.is_empty())
-        .collect();
-    words
-        .windows(3)
-        .filter(|w| matches!(w, ["crate", "as", _] | ["crate", "self", "as"]))
-        .map(|w| w.join(" "))
-        .collect()
+    let words: Vec<&str> = code.split(|c: char| !is_ident(c)).filter(|w| !w.is_empty()).collect();
+    words.windows(3).filter(|w| matches!(w, ["crate", "as", _] | ["crate", "self", "as"])).map(|w| w.join(" ")).collect()
 }
 
 /// The top-level module of a file ("geometry/mesh/mod.rs" → "geometry", "cli.rs" → "cli").
 fn top(file: &str) -> String {
-    file.split('/')
-        .next()
-        .unwrap()
-        .trim_end_matches(".rs")
-        .to_string()
+    file.split('/').next().unwrap().trim_end_matches(".rs").to_string()
 }
 
 /// Everything wrong with the imports of `files` against `layers`.
@@ -380,10 +318,7 @@ fn violations(files: &Files, layers: &BTreeMap<String, usize>) -> Vec<String> {
     let (g, mut out) = graph(files);
     for (from, targets) in &g {
         let Some(&lf) = layers.get(&top(from)) else {
-            out.push(format!(
-                "{from}: module `{}` is not in the layer table",
-                top(from)
-            ));
+            out.push(format!("{from}: module `{}` is not in the layer table", top(from)));
             continue;
         };
         for to in targets {
@@ -392,37 +327,21 @@ fn violations(files: &Files, layers: &BTreeMap<String, usize>) -> Vec<String> {
             }
             match layers.get(&top(to)) {
                 Some(&lt) if lt < lf => {}
-                Some(_) => out.push(format!(
-                    "{from} -> {to}: `{}` may not import `{}` (not on a lower layer)",
-                    top(from),
-                    top(to)
-                )),
-                None => out.push(format!(
-                    "{from} -> {to}: module `{}` is not in the layer table",
-                    top(to)
-                )),
+                Some(_) => out.push(format!("{from} -> {to}: `{}` may not import `{}` (not on a lower layer)", top(from), top(to))),
+                None => out.push(format!("{from} -> {to}: module `{}` is not in the layer table", top(to))),
             }
         }
     }
     // Cycles: a depth-first search that reports every back edge.
     let mut state: BTreeMap<&str, u8> = BTreeMap::new();
-    fn visit<'a>(
-        n: &'a str,
-        g: &'a BTreeMap<String, BTreeSet<String>>,
-        state: &mut BTreeMap<&'a str, u8>,
-        stack: &mut Vec<&'a str>,
-        out: &mut Vec<String>,
-    ) {
+    fn visit<'a>(n: &'a str, g: &'a BTreeMap<String, BTreeSet<String>>, state: &mut BTreeMap<&'a str, u8>, stack: &mut Vec<&'a str>, out: &mut Vec<String>) {
         state.insert(n, 1);
         stack.push(n);
         for m in g.get(n).into_iter().flatten() {
             match state.get(m.as_str()) {
                 Some(1) => {
                     let start = stack.iter().position(|s| s == m).unwrap();
-                    out.push(format!(
-                        "import cycle: {} -> {m}",
-                        stack[start..].join(" -> ")
-                    ));
+                    out.push(format!("import cycle: {} -> {m}", stack[start..].join(" -> ")));
                 }
                 Some(_) => {}
                 None => visit(m, g, state, stack, out),
@@ -440,10 +359,7 @@ fn violations(files: &Files, layers: &BTreeMap<String, usize>) -> Vec<String> {
 }
 
 fn documented_layers() -> BTreeMap<String, usize> {
-    layers(
-        &std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md"))
-            .unwrap(),
-    )
+    layers(&std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md")).unwrap())
 }
 
 #[test]
@@ -452,17 +368,10 @@ fn imports_follow_the_documented_layers_without_cycles() {
     let layers = documented_layers();
     // Every top-level module of src/ has its row.
     for file in files.keys() {
-        assert!(
-            layers.contains_key(&top(file)),
-            "{file}: module `{}` is missing from ARCHITECTURE.md's layer table",
-            top(file)
-        );
+        assert!(layers.contains_key(&top(file)), "{file}: module `{}` is missing from ARCHITECTURE.md's layer table", top(file));
     }
     let edges: usize = graph(&files).0.values().map(BTreeSet::len).sum();
-    assert!(
-        edges > 200,
-        "only {edges} imports found: the scanner is broken"
-    );
+    assert!(edges > 200, "only {edges} imports found: the scanner is broken");
     let v = violations(&files, &layers);
     assert!(v.is_empty(), "{} violations:\n{}", v.len(), v.join("\n"));
 }
@@ -472,22 +381,11 @@ fn imports_follow_the_documented_layers_without_cycles() {
 fn the_toolkit_imports_no_method() {
     let layers = documented_layers();
     let methods = layers["st_adapted"];
-    for m in [
-        "geometry",
-        "reference",
-        "congruence",
-        "solver",
-        "remeshing",
-        "panels",
-    ] {
+    for m in ["geometry", "reference", "congruence", "solver", "remeshing", "panels"] {
         assert!(layers[m] < methods, "{m} is not below the methods");
     }
     for m in ["st_adapted", "st_support"] {
-        assert!(
-            layers[m] < layers["export"]
-                && layers[m] < layers["pipeline"]
-                && layers[m] < layers["web"]
-        );
+        assert!(layers[m] < layers["export"] && layers[m] < layers["pipeline"] && layers[m] < layers["web"]);
     }
 }
 
@@ -495,10 +393,7 @@ fn the_toolkit_imports_no_method() {
 /// `use` group and through `super::`, and it does not flag what is allowed.
 #[test]
 fn the_checker_catches_forbidden_imports() {
-    let layers: BTreeMap<String, usize> = [("geometry", 0), ("panels", 1), ("st_adapted", 2)]
-        .map(|(m, l)| (m.to_string(), l))
-        .into_iter()
-        .collect();
+    let layers: BTreeMap<String, usize> = [("geometry", 0), ("panels", 1), ("st_adapted", 2)].map(|(m, l)| (m.to_string(), l)).into_iter().collect();
     let file = |p: &str, s: &str| (p.to_string(), s.to_string());
     let clean: Files = [
         file("geometry/mod.rs", "pub mod sphere;\n"),
@@ -509,50 +404,23 @@ fn the_checker_catches_forbidden_imports() {
     ]
     .into_iter()
     .collect();
-    assert!(
-        violations(&clean, &layers).is_empty(),
-        "{:?}",
-        violations(&clean, &layers)
-    );
+    assert!(violations(&clean, &layers).is_empty(), "{:?}", violations(&clean, &layers));
     // A method import from the toolkit, inside a use group.
     let mut upward = clean.clone();
-    upward.insert(
-        "panels/arc.rs".into(),
-        "use crate::{geometry::sphere::Sphere, st_adapted::Result};\n".into(),
-    );
+    upward.insert("panels/arc.rs".into(), "use crate::{geometry::sphere::Sphere, st_adapted::Result};\n".into());
     let v = violations(&upward, &layers);
-    assert!(
-        v.iter()
-            .any(|s| s.contains("panels/arc.rs -> st_adapted/mod.rs")
-                && s.contains("may not import")),
-        "{v:?}"
-    );
+    assert!(v.iter().any(|s| s.contains("panels/arc.rs -> st_adapted/mod.rs") && s.contains("may not import")), "{v:?}");
     // Two files importing each other.
     let mut cycle = clean.clone();
-    cycle.insert(
-        "geometry/sphere.rs".into(),
-        "use super::circle::Circle;\n".into(),
-    );
-    cycle.insert(
-        "geometry/circle.rs".into(),
-        "use crate::geometry::sphere::Sphere;\n".into(),
-    );
+    cycle.insert("geometry/sphere.rs".into(), "use super::circle::Circle;\n".into());
+    cycle.insert("geometry/circle.rs".into(), "use crate::geometry::sphere::Sphere;\n".into());
     let v = violations(&cycle, &layers);
-    assert!(
-        v.iter().any(|s| s.contains("import cycle")
-            && s.contains("geometry/sphere.rs")
-            && s.contains("geometry/circle.rs")),
-        "{v:?}"
-    );
+    assert!(v.iter().any(|s| s.contains("import cycle") && s.contains("geometry/sphere.rs") && s.contains("geometry/circle.rs")), "{v:?}");
     // A module missing from the table.
     let mut unknown = clean;
     unknown.insert("web.rs".into(), "use crate::panels::arc::Arc;\n".into());
     let v = violations(&unknown, &layers);
-    assert!(
-        v.iter()
-            .any(|s| s.contains("`web` is not in the layer table")),
-        "{v:?}"
-    );
+    assert!(v.iter().any(|s| s.contains("`web` is not in the layer table")), "{v:?}");
 }
 
 /// The five ways around the checker are caught: an unresolved `crate::` path (an item or a
@@ -560,10 +428,8 @@ fn the_checker_catches_forbidden_imports() {
 /// and an import after a raw string ending in a backslash.
 #[test]
 fn the_checker_cannot_be_fooled() {
-    let layers: BTreeMap<String, usize> = [("geometry", 0), ("panels", 1), ("st_adapted", 2)]
-        .map(|(m, l)| (m.to_string(), l))
-        .into_iter()
-        .collect();
+    let layers: BTreeMap<String, usize> =
+        [("geometry", 0), ("panels", 1), ("st_adapted", 2)].map(|(m, l)| (m.to_string(), l)).into_iter().collect();
     let base: Files = [
         ("geometry/mod.rs", "pub struct Sphere;\n"),
         ("panels/mod.rs", "use crate::geometry::Sphere;\n"),
@@ -575,33 +441,19 @@ fn the_checker_cannot_be_fooled() {
     .collect();
     let mut layers_with_root = layers.clone();
     layers_with_root.insert("lib".into(), 3);
-    assert!(
-        violations(&base, &layers_with_root).is_empty(),
-        "{:?}",
-        violations(&base, &layers_with_root)
-    );
+    assert!(violations(&base, &layers_with_root).is_empty(), "{:?}", violations(&base, &layers_with_root));
     let with = |text: &str| {
         let mut files = base.clone();
         files.insert("panels/mod.rs".into(), text.into());
         violations(&files, &layers_with_root)
     };
-    let upward = |v: &[String]| {
-        v.iter()
-            .any(|s| s.contains("panels/mod.rs -> st_adapted/mod.rs"))
-    };
+    let upward = |v: &[String]| v.iter().any(|s| s.contains("panels/mod.rs -> st_adapted/mod.rs"));
     // 1. A path through a re-export of lib.rs names no module file.
     let v = with("use crate::Result;\n");
-    assert!(
-        v.iter()
-            .any(|s| s.contains("`crate::Result` names no module file")),
-        "{v:?}"
-    );
+    assert!(v.iter().any(|s| s.contains("`crate::Result` names no module file")), "{v:?}");
     // 2. A glob of the crate root.
     let v = with("use crate::*;\nfn f() -> Result { todo!() }\n");
-    assert!(
-        v.iter().any(|s| s.contains("a glob or `self` of `crate`")),
-        "{v:?}"
-    );
+    assert!(v.iter().any(|s| s.contains("a glob or `self` of `crate`")), "{v:?}");
     // 3. An alias of the crate root.
     let v = with("use crate as root;\nuse root::st_adapted::Result;\n");
     assert!(v.iter().any(|s| s.contains("`crate as root`")), "{v:?}");
@@ -610,10 +462,7 @@ fn the_checker_cannot_be_fooled() {
     // 4. An import after the test module is still read; the test module's own imports are not.
     let v = with("#[cfg(test)]\nmod tests {\n    use crate::st_adapted::Result;\n}\nuse crate::st_adapted::Result;\n");
     assert!(upward(&v), "{v:?}");
-    assert!(
-        with("#[cfg(test)]\nmod tests {\n    use crate::st_adapted::Result;\n}\nfn f() {}\n")
-            .is_empty()
-    );
+    assert!(with("#[cfg(test)]\nmod tests {\n    use crate::st_adapted::Result;\n}\nfn f() {}\n").is_empty());
     // 5. A raw string ending in a backslash does not swallow the code after it.
     let v = with("const P: &str = r\"C:\\\";\nuse crate::st_adapted::Result;\n");
     assert!(upward(&v), "{v:?}");

@@ -29,10 +29,7 @@ fn surface_from(bytes: &[u8], name: &str) -> BSplineSurface {
 }
 
 fn load(name: &str) -> BSplineSurface {
-    surface_from(
-        &common::shared_bytes(&format!("data/bsplines/{name}.json")),
-        &format!("{name}.json"),
-    )
+    surface_from(&common::shared_bytes(&format!("data/bsplines/{name}.json")), &format!("{name}.json"))
 }
 
 fn raw(name: &str) -> Value {
@@ -43,9 +40,7 @@ fn raw(name: &str) -> Value {
 fn grid(s: &BSplineSurface, n: usize) -> Vec<[f64; 2]> {
     let ((u0, u1), (v0, v1)) = s.domain();
     let at = |a: f64, b: f64, k: usize| a + (b - a) * k as f64 / (n - 1) as f64;
-    (0..n)
-        .flat_map(|i| (0..n).map(move |j| [at(u0, u1, i), at(v0, v1, j)]))
-        .collect()
+    (0..n).flat_map(|i| (0..n).map(move |j| [at(u0, u1, i), at(v0, v1, j)])).collect()
 }
 
 #[test]
@@ -53,17 +48,10 @@ fn the_reference_samples_are_reproduced() {
     let samples = raw_samples();
     for name in FILES {
         let s = load(name);
-        let rows = samples[format!("{name}.json")]["rows"]
-            .as_array()
-            .unwrap_or_else(|| panic!("{name} in reference_samples.json"));
+        let rows = samples[format!("{name}.json")]["rows"].as_array().unwrap_or_else(|| panic!("{name} in reference_samples.json"));
         let mut worst = [0.0f64; 4];
         for row in rows {
-            let r: Vec<f64> = row
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect();
+            let r: Vec<f64> = row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
             let f = s.frame(r[0], r[1]).unwrap();
             let scale = 1.0 + f.point.length();
             worst[0] = worst[0].max((f.point - DVec3::new(r[2], r[3], r[4])).length() / scale);
@@ -72,18 +60,12 @@ fn the_reference_samples_are_reproduced() {
             worst[3] = worst[3].max((f.gauss - r[9]).abs() / (1.0 + r[9].abs()));
         }
         assert_eq!(rows.len(), 25, "{name}");
-        assert!(
-            worst.iter().all(|w| *w < 1e-11),
-            "{name}: point, normal, H, K differ by {worst:?}"
-        );
+        assert!(worst.iter().all(|w| *w < 1e-11), "{name}: point, normal, H, K differ by {worst:?}");
     }
 }
 
 fn raw_samples() -> Value {
-    serde_json::from_slice(&common::shared_bytes(
-        "data/bsplines/reference_samples.json",
-    ))
-    .unwrap()
+    serde_json::from_slice(&common::shared_bytes("data/bsplines/reference_samples.json")).unwrap()
 }
 
 #[test]
@@ -100,28 +82,13 @@ fn both_paraboloids_are_the_analytic_paraboloid() {
         let k = 1.0 / (r * r * q * q);
         for s in [&a, &b] {
             let f = s.frame(x, y).unwrap();
-            assert!(
-                (f.point - point).length() < 1e-12,
-                "{uv:?}: {} vs {point}",
-                f.point
-            );
+            assert!((f.point - point).length() < 1e-12, "{uv:?}: {} vs {point}", f.point);
             assert!((f.normal - normal).length() < 1e-12);
-            assert!(
-                (f.mean - h).abs() < 1e-12 && (f.gauss - k).abs() < 1e-12,
-                "{uv:?}: H {} vs {h}, K {} vs {k}",
-                f.mean,
-                f.gauss
-            );
+            assert!((f.mean - h).abs() < 1e-12 && (f.gauss - k).abs() < 1e-12, "{uv:?}: H {} vs {h}, K {} vs {k}", f.mean, f.gauss);
         }
         // The same parametrization: every derivative agrees.
         let (da, db) = (a.derivatives(x, y), b.derivatives(x, y));
-        for (p, q) in [
-            (da.su, db.su),
-            (da.sv, db.sv),
-            (da.suu, db.suu),
-            (da.suv, db.suv),
-            (da.svv, db.svv),
-        ] {
+        for (p, q) in [(da.su, db.su), (da.sv, db.sv), (da.suu, db.suu), (da.suv, db.suv), (da.svv, db.svv)] {
             assert!((p - q).length() < 1e-12, "{uv:?}: {p} vs {q}");
         }
     }
@@ -138,26 +105,14 @@ fn the_torus_patch_has_the_torus_curvature() {
         let cos_phi = ((p.x * p.x + p.y * p.y).sqrt() - big_r) / r;
         let h = -(big_r + 2.0 * r * cos_phi) / (2.0 * r * (big_r + r * cos_phi));
         let k = cos_phi / (r * (big_r + r * cos_phi));
-        assert!(
-            (f.mean - h).abs() < 1e-10 && (f.gauss - k).abs() < 1e-10,
-            "{uv:?}: H {} vs {h}, K {} vs {k}",
-            f.mean,
-            f.gauss
-        );
+        assert!((f.mean - h).abs() < 1e-10 && (f.gauss - k).abs() < 1e-10, "{uv:?}: H {} vs {h}, K {} vs {k}", f.mean, f.gauss);
         // On the torus: distance r from the core circle.
         let core = DVec3::new(p.x, p.y, 0.0).normalize() * big_r;
         assert!(((p - core).length() - r).abs() < 1e-12);
         // Principal directions: the parallel (horizontal) and the meridian.
         let horizontal = DVec3::Z.cross(p).normalize();
-        let along = f
-            .dir1
-            .dot(horizontal)
-            .abs()
-            .max(f.dir2.dot(horizontal).abs());
-        assert!(
-            (along - 1.0).abs() < 1e-10,
-            "{uv:?}: no principal direction along the parallel"
-        );
+        let along = f.dir1.dot(horizontal).abs().max(f.dir2.dot(horizontal).abs());
+        assert!((along - 1.0).abs() < 1e-10, "{uv:?}: no principal direction along the parallel");
     }
 }
 
@@ -167,10 +122,7 @@ fn rational_patches_lie_on_their_sphere_and_cylinder() {
     for uv in grid(&sphere, 21) {
         let f = sphere.frame(uv[0], uv[1]).unwrap();
         assert!((f.point.length() - 2.0).abs() < 1e-13);
-        assert!(
-            (f.normal + f.point / 2.0).length() < 1e-12,
-            "the normal points to the centre"
-        );
+        assert!((f.normal + f.point / 2.0).length() < 1e-12, "the normal points to the centre");
         assert!((f.mean - 0.5).abs() < 1e-12 && (f.gauss - 0.25).abs() < 1e-12);
     }
     let cylinder = load("cylinder_patch");
@@ -191,29 +143,14 @@ fn derivatives_match_finite_differences() {
         let s = load(name);
         let ((u0, u1), (v0, v1)) = s.domain();
         let (hu, hv) = (1e-5 * (u1 - u0), 1e-5 * (v1 - v0));
-        let size = s
-            .control_points()
-            .iter()
-            .map(|p| p.length())
-            .fold(1.0, f64::max);
+        let size = s.control_points().iter().map(|p| p.length()).fold(1.0, f64::max);
         let mut worst = 0.0f64;
         for k in 0..37 {
             // Irrational fractions keep the samples off the knots.
-            let (a, b) = (
-                ((k as f64) * 0.618_033_988 + 0.13) % 1.0,
-                ((k as f64) * 0.414_213_562 + 0.07) % 1.0,
-            );
-            let (u, v) = (
-                u0 + (u1 - u0) * (0.02 + 0.96 * a),
-                v0 + (v1 - v0) * (0.02 + 0.96 * b),
-            );
+            let (a, b) = (((k as f64) * 0.618_033_988 + 0.13) % 1.0, ((k as f64) * 0.414_213_562 + 0.07) % 1.0);
+            let (u, v) = (u0 + (u1 - u0) * (0.02 + 0.96 * a), v0 + (v1 - v0) * (0.02 + 0.96 * b));
             let d = s.derivatives(u, v);
-            let (pu, mu, pv, mv) = (
-                s.derivatives(u + hu, v),
-                s.derivatives(u - hu, v),
-                s.derivatives(u, v + hv),
-                s.derivatives(u, v - hv),
-            );
+            let (pu, mu, pv, mv) = (s.derivatives(u + hu, v), s.derivatives(u - hu, v), s.derivatives(u, v + hv), s.derivatives(u, v - hv));
             let checks = [
                 (d.su, (pu.s - mu.s) / (2.0 * hu), hu),
                 (d.sv, (pv.s - mv.s) / (2.0 * hv), hv),
@@ -227,24 +164,12 @@ fn derivatives_match_finite_differences() {
                 worst = worst.max(err);
             }
             let f = s.frame(u, v).unwrap();
-            let (fu, fv) = (
-                s.frame(u + hu, v).unwrap().normal - s.frame(u - hu, v).unwrap().normal,
-                s.frame(u, v + hv).unwrap().normal - s.frame(u, v - hv).unwrap().normal,
-            );
-            assert!(
-                (f.nu - fu / (2.0 * hu)).length() * hu < 1e-9,
-                "{name}: ∂n/∂u"
-            );
-            assert!(
-                (f.nv - fv / (2.0 * hv)).length() * hv < 1e-9,
-                "{name}: ∂n/∂v"
-            );
+            let (fu, fv) = (s.frame(u + hu, v).unwrap().normal - s.frame(u - hu, v).unwrap().normal, s.frame(u, v + hv).unwrap().normal - s.frame(u, v - hv).unwrap().normal);
+            assert!((f.nu - fu / (2.0 * hu)).length() * hu < 1e-9, "{name}: ∂n/∂u");
+            assert!((f.nv - fv / (2.0 * hv)).length() * hv < 1e-9, "{name}: ∂n/∂v");
         }
         // Relative to the step: central differences are O(h²) accurate, rounding O(ε/h).
-        assert!(
-            worst < 1e-9,
-            "{name}: derivative vs finite difference {worst:e}"
-        );
+        assert!(worst < 1e-9, "{name}: derivative vs finite difference {worst:e}");
     }
 }
 
@@ -255,22 +180,11 @@ fn both_knot_forms_give_the_same_surface() {
         let mut j = raw(name);
         let a = load(name);
         for key in ["knotsU", "knotsV"] {
-            let k: Vec<f64> = j[key]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect();
-            let padded: Vec<f64> = std::iter::once(k[0])
-                .chain(k.iter().copied())
-                .chain(std::iter::once(k[k.len() - 1]))
-                .collect();
+            let k: Vec<f64> = j[key].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            let padded: Vec<f64> = std::iter::once(k[0]).chain(k.iter().copied()).chain(std::iter::once(k[k.len() - 1])).collect();
             j[key] = json!(padded);
         }
-        let b = surface_from(
-            serde_json::to_string(&j).unwrap().as_bytes(),
-            "textbook.json",
-        );
+        let b = surface_from(serde_json::to_string(&j).unwrap().as_bytes(), "textbook.json");
         assert_eq!(a, b, "{name}");
     }
 }
@@ -299,42 +213,20 @@ fn refusal(mutate: impl Fn(&mut Value)) -> String {
 #[test]
 fn bad_files_are_refused_with_the_field_named() {
     let m = refusal(|j| j["knotsU"][7] = json!(-100.0));
-    assert!(
-        m.starts_with("bad.json: 'knotsU'") && m.contains("smaller than knot"),
-        "{m}"
-    );
+    assert!(m.starts_with("bad.json: 'knotsU'") && m.contains("smaller than knot"), "{m}");
     let m = refusal(|j| {
         let cp = j["controlPoints"].as_array_mut().unwrap();
         cp.truncate(cp.len() - 4);
     });
-    assert!(
-        m.contains("'controlPoints' holds 155 points") && m.contains("12 × 13"),
-        "{m}"
-    );
-    let m = refusal(|j| {
-        j["controlPoints"]
-            .as_array_mut()
-            .unwrap()
-            .pop()
-            .map(|_| ())
-            .unwrap()
-    });
+    assert!(m.contains("'controlPoints' holds 155 points") && m.contains("12 × 13"), "{m}");
+    let m = refusal(|j| j["controlPoints"].as_array_mut().unwrap().pop().map(|_| ()).unwrap());
     assert!(m.contains("not a multiple of 4"), "{m}");
     let m = refusal(|j| j["degreeU"] = json!(0));
-    assert!(
-        m.contains("'degreeU' must be an integer from 1 to 15"),
-        "{m}"
-    );
+    assert!(m.contains("'degreeU' must be an integer from 1 to 15"), "{m}");
     let m = refusal(|j| j["degreeV"] = json!(16));
-    assert!(
-        m.contains("'degreeV' must be an integer from 1 to 15"),
-        "{m}"
-    );
+    assert!(m.contains("'degreeV' must be an integer from 1 to 15"), "{m}");
     let m = refusal(|j| j["controlPoints"][5] = json!("x"));
-    assert!(
-        m.contains("'controlPoints'[5] is not a finite number"),
-        "{m}"
-    );
+    assert!(m.contains("'controlPoints'[5] is not a finite number"), "{m}");
     let m = refusal(|j| j["controlPoints"][3] = json!(0.0));
     assert!(m.contains("weight of point 0 is 0"), "{m}");
     let m = refusal(|j| {
@@ -344,13 +236,8 @@ fn bad_files_are_refused_with_the_field_named() {
     // Too few control points for the degree: 2 × 2 points of degree 3.
     let tiny = json!({"degreeU": 3, "degreeV": 3, "knotsU": [0, 1, 2, 3], "knotsV": [0, 1, 2, 3],
         "controlPoints": [0, 0, 0, 1, 1, 0, 0, 1, 0, 1, 0, 1, 1, 1, 0, 1]});
-    let m = import_file(tiny.to_string().as_bytes(), "tiny.json")
-        .unwrap_err()
-        .to_string();
-    assert!(
-        m.contains("too few for degree 3") || m.contains("holds 4 points"),
-        "{m}"
-    );
+    let m = import_file(tiny.to_string().as_bytes(), "tiny.json").unwrap_err().to_string();
+    assert!(m.contains("too few for degree 3") || m.contains("holds 4 points"), "{m}");
     // NaN is not JSON; 1e999 overflows to a non-number.
     let m = import_file(b"{\"degreeU\": 2, \"degreeV\": 2, \"knotsU\": [NaN], \"knotsV\": [], \"controlPoints\": []}", "nan.json")
         .unwrap_err()
@@ -361,27 +248,15 @@ fn bad_files_are_refused_with_the_field_named() {
 #[test]
 fn a_spline_function_reproduces_its_space_and_fits_samples() {
     // g(u, v) = u² v − 3v + 1 is in the space of a degree-5 basis: the fit is exact.
-    let (bu, bv) = (
-        BSplineBasis::clamped_uniform(5, 6, (0.0, 10.0)).unwrap(),
-        BSplineBasis::clamped_uniform(5, 6, (0.0, 12.0)).unwrap(),
-    );
+    let (bu, bv) = (BSplineBasis::clamped_uniform(5, 6, (0.0, 10.0)).unwrap(), BSplineBasis::clamped_uniform(5, 6, (0.0, 12.0)).unwrap());
     let g = |u: f64, v: f64| u * u * v - 3.0 * v + 1.0;
-    let samples: Vec<([f64; 2], f64)> = (0..20)
-        .flat_map(|i| (0..20).map(move |j| (i as f64 * 10.0 / 19.0, j as f64 * 12.0 / 19.0)))
-        .map(|(u, v)| ([u, v], g(u, v)))
-        .collect();
+    let samples: Vec<([f64; 2], f64)> =
+        (0..20).flat_map(|i| (0..20).map(move |j| (i as f64 * 10.0 / 19.0, j as f64 * 12.0 / 19.0))).map(|(u, v)| ([u, v], g(u, v))).collect();
     let (f, err) = BSplineFunction::fit(bu, bv, &samples).unwrap();
     assert!(err.max < 1e-9, "{err:?}");
     let (value, du, dv) = f.evaluate(3.3, 7.1);
-    assert!(
-        (value - g(3.3, 7.1)).abs() < 1e-9
-            && (du - 2.0 * 3.3 * 7.1).abs() < 1e-8
-            && (dv - (3.3 * 3.3 - 3.0)).abs() < 1e-8
-    );
+    assert!((value - g(3.3, 7.1)).abs() < 1e-9 && (du - 2.0 * 3.3 * 7.1).abs() < 1e-8 && (dv - (3.3 * 3.3 - 3.0)).abs() < 1e-8);
     // Too few samples for 36 coefficients: no fit.
-    let (bu, bv) = (
-        BSplineBasis::clamped_uniform(5, 6, (0.0, 1.0)).unwrap(),
-        BSplineBasis::clamped_uniform(5, 6, (0.0, 1.0)).unwrap(),
-    );
+    let (bu, bv) = (BSplineBasis::clamped_uniform(5, 6, (0.0, 1.0)).unwrap(), BSplineBasis::clamped_uniform(5, 6, (0.0, 1.0)).unwrap());
     assert!(BSplineFunction::fit(bu, bv, &samples[..30]).is_none());
 }

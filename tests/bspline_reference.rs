@@ -15,10 +15,7 @@ use spherical_faces::reference::Reference;
 use spherical_faces::samples::Sample;
 
 fn spline(name: &str) -> BSplineSurface {
-    match import_file(
-        &common::shared_bytes(&format!("data/bsplines/{name}.json")),
-        name,
-    ) {
+    match import_file(&common::shared_bytes(&format!("data/bsplines/{name}.json")), name) {
         Ok(ImportedFile::BSpline(b)) => b.surface,
         other => panic!("{name}: {other:?}"),
     }
@@ -35,30 +32,15 @@ fn the_tessellation_is_a_quad_grid_on_the_surface_within_its_tolerance() {
         assert!(r.surface().faces.iter().all(|f| f.len() == 4));
         assert_eq!(r.mesh().face_count(), 2 * su * sv);
         let stats = r.topology().stats(r.mesh());
-        assert_eq!(
-            (stats.boundary_loops, stats.non_manifold_edges),
-            (1, 0),
-            "{name}"
-        );
+        assert_eq!((stats.boundary_loops, stats.non_manifold_edges), (1, 0), "{name}");
         // Vertices on the surface; faces oriented like S_u × S_v.
         for (p, uv) in r.mesh().positions.iter().zip(&sr.uv) {
             assert!((*p - s.point(uv[0], uv[1])).length() < 1e-12 * r.diagonal());
         }
         for f in 0..r.mesh().face_count() {
             let t = r.mesh().triangles[f];
-            let uv = (0..3).fold([0.0; 2], |a, k| {
-                [
-                    a[0] + sr.uv[t[k] as usize][0] / 3.0,
-                    a[1] + sr.uv[t[k] as usize][1] / 3.0,
-                ]
-            });
-            assert!(
-                r.mesh()
-                    .face_area_vector(f)
-                    .dot(s.frame(uv[0], uv[1]).unwrap().normal)
-                    > 0.0,
-                "{name}: face {f} flipped"
-            );
+            let uv = (0..3).fold([0.0; 2], |a, k| [a[0] + sr.uv[t[k] as usize][0] / 3.0, a[1] + sr.uv[t[k] as usize][1] / 3.0]);
+            assert!(r.mesh().face_area_vector(f).dot(s.frame(uv[0], uv[1]).unwrap().normal) > 0.0, "{name}: face {f} flipped");
         }
         // Chords: the surface at the midpoints of the quads' diagonals stays within the tolerance
         // (the bound is for the edges; diagonals are √2 longer: twice the sagitta).
@@ -67,17 +49,11 @@ fn the_tessellation_is_a_quad_grid_on_the_surface_within_its_tolerance() {
         for f in &r.surface().faces {
             let c = f.corners();
             let (a, b) = (c[0] as usize, c[2] as usize);
-            let mid_uv = [
-                (sr.uv[a][0] + sr.uv[b][0]) / 2.0,
-                (sr.uv[a][1] + sr.uv[b][1]) / 2.0,
-            ];
+            let mid_uv = [(sr.uv[a][0] + sr.uv[b][0]) / 2.0, (sr.uv[a][1] + sr.uv[b][1]) / 2.0];
             let chord_mid = (r.mesh().positions[a] + r.mesh().positions[b]) / 2.0;
             worst = worst.max((s.point(mid_uv[0], mid_uv[1]) - chord_mid).length());
         }
-        assert!(
-            worst < 2.5 * tol,
-            "{name}: the tessellation deviates by {worst} (tolerance {tol})"
-        );
+        assert!(worst < 2.5 * tol, "{name}: the tessellation deviates by {worst} (tolerance {tol})");
     }
 }
 
@@ -88,25 +64,15 @@ fn closest_points_are_exact_and_carry_their_parameters() {
     let ((u0, u1), (v0, v1)) = s.domain();
     let d = r.diagonal();
     for k in 0..50 {
-        let (a, b) = (
-            ((k as f64) * 0.618_033_988 + 0.1) % 1.0,
-            ((k as f64) * 0.414_213_562 + 0.3) % 1.0,
-        );
-        let uv = [
-            u0 + (u1 - u0) * (0.03 + 0.94 * a),
-            v0 + (v1 - v0) * (0.03 + 0.94 * b),
-        ];
+        let (a, b) = (((k as f64) * 0.618_033_988 + 0.1) % 1.0, ((k as f64) * 0.414_213_562 + 0.3) % 1.0);
+        let uv = [u0 + (u1 - u0) * (0.03 + 0.94 * a), v0 + (v1 - v0) * (0.03 + 0.94 * b)];
         let f = s.frame(uv[0], uv[1]).unwrap();
         // Off the surface along the normal, by up to 2 % of the diagonal (less than the radii of
         // curvature): the foot is the closest point.
         let offset = (k as f64 / 50.0 - 0.5) * 0.04 * d;
         let hit = r.closest_point(f.point + offset * f.normal).unwrap();
         let found = hit.uv.expect("a B-spline gives (u, v)");
-        assert!(
-            (found[0] - uv[0]).abs() < 1e-9 * (u1 - u0)
-                && (found[1] - uv[1]).abs() < 1e-9 * (v1 - v0),
-            "{uv:?} → {found:?}"
-        );
+        assert!((found[0] - uv[0]).abs() < 1e-9 * (u1 - u0) && (found[1] - uv[1]).abs() < 1e-9 * (v1 - v0), "{uv:?} → {found:?}");
         assert!((hit.point - f.point).length() < 1e-9 * d);
         assert!((hit.normal.unwrap() - f.normal).length() < 1e-9);
     }
@@ -145,25 +111,16 @@ fn the_vault_sample_is_a_one_signed_bspline() {
             max_h = max_h.max(f.mean);
         }
     }
-    assert!(
-        max_h * diag < -0.5,
-        "H < 0 everywhere, well away from 0: [{min_h}, {max_h}]"
-    );
+    assert!(max_h * diag < -0.5, "H < 0 everywhere, well away from 0: [{min_h}, {max_h}]");
     // As described: 18 m long, 14 m wide at the ends, standing on z = 0.
     let (lo, hi) = (s.point(0.0, 0.0), s.point(1.0, 1.0));
-    assert!(
-        (lo - DVec3::new(-7.0, 0.0, 0.0)).length() < 1e-12
-            && (hi - DVec3::new(7.0, 18.0, 0.0)).length() < 1e-12
-    );
+    assert!((lo - DVec3::new(-7.0, 0.0, 0.0)).length() < 1e-12 && (hi - DVec3::new(7.0, 18.0, 0.0)).length() < 1e-12);
     // Loaded through the session: a B-spline reference with its info.
     let loaded = Loaded::from_sample(Sample::Vault);
     assert!(loaded.surface.spline().is_some());
     let info = loaded.info.bspline.as_ref().unwrap();
     assert_eq!((info.degree, info.control), ([5, 5], [9, 8]));
-    assert_eq!(
-        Sample::Vault.mesh().positions,
-        loaded.surface.mesh().positions
-    );
+    assert_eq!(Sample::Vault.mesh().positions, loaded.surface.mesh().positions);
 }
 
 #[test]
@@ -172,48 +129,25 @@ fn a_bspline_file_loads_through_the_session() {
     let loaded = Loaded::from_file(&bytes, "tunnel_arch.json").unwrap();
     assert_eq!(loaded.info.format, Some(Format::BSplineJson));
     let b = loaded.info.bspline.as_ref().unwrap();
-    assert_eq!(
-        (b.degree, b.control, b.domain),
-        ([5, 6], [12, 13], [[0.0, 10.0], [0.0, 12.0]])
-    );
+    assert_eq!((b.degree, b.control, b.domain), ([5, 6], [12, 13], [[0.0, 10.0], [0.0, 12.0]]));
     // README: H in [−0.155426, −0.079371].
-    assert!(
-        (b.mean_curvature[0] + 0.155426).abs() < 1e-5
-            && (b.mean_curvature[1] + 0.079371).abs() < 1e-5,
-        "{b:?}"
-    );
-    let err = Loaded::from_file(b"{\"degreeU\": 2}", "broken.json")
-        .err()
-        .unwrap()
-        .to_string();
+    assert!((b.mean_curvature[0] + 0.155426).abs() < 1e-5 && (b.mean_curvature[1] + 0.079371).abs() < 1e-5, "{b:?}");
+    let err = Loaded::from_file(b"{\"degreeU\": 2}", "broken.json").err().unwrap().to_string();
     assert_eq!(err, "broken.json: missing key 'degreeV'");
 }
 
 #[test]
 fn the_cli_info_describes_a_bspline() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_spherical-faces"))
-        .args([
-            "info",
-            common::shared_path("data/bsplines/torus_patch.json")
-                .to_str()
-                .unwrap(),
-        ])
+        .args(["info", common::shared_path("data/bsplines/torus_patch.json").to_str().unwrap()])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(j["bspline"]["degree"], serde_json::json!([2, 2]));
     assert_eq!(j["bspline"]["control_points"], serde_json::json!([5, 3]));
     assert_eq!(j["bspline"]["rational"], true);
     let h = &j["bspline"]["mean_curvature"];
-    assert!(
-        (h["min"].as_f64().unwrap() + 0.625).abs() < 1e-4
-            && (h["max"].as_f64().unwrap() + 4.0 / 7.0).abs() < 1e-4,
-        "{h}"
-    );
+    assert!((h["min"].as_f64().unwrap() + 0.625).abs() < 1e-4 && (h["max"].as_f64().unwrap() + 4.0 / 7.0).abs() < 1e-4, "{h}");
     assert_eq!(j["h_changes_sign"], false);
 }

@@ -4,20 +4,13 @@
 use std::process::Command;
 
 fn run(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_spherical-faces"))
-        .args(args)
-        .output()
-        .expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(args).output().expect("runs")
 }
 
 #[test]
 fn info_on_tri_dome() {
     let out = run(&["info", "../shared/data/meshes/tri_dome.obj"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert_eq!(v["vertices"], 91);
     assert_eq!(v["faces"], 160);
@@ -64,52 +57,24 @@ fn unreadable_input_exits_2_with_one_line() {
 #[test]
 fn st_support_writes_panels_and_report() {
     let dir = std::env::temp_dir().join(format!("sf-cli-st-{}", std::process::id()));
-    let out = run(&[
-        "st-support",
-        "../shared/data/meshes/cmc1.obj",
-        "--optimize-radius",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    for f in [
-        "panels.glb",
-        "panels.obj",
-        "panels.csv",
-        "panels.json",
-        "report.json",
-    ] {
-        assert!(
-            dir.join(f).metadata().map(|m| m.len() > 0).unwrap_or(false),
-            "{f}"
-        );
+    let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--optimize-radius", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"] {
+        assert!(dir.join(f).metadata().map(|m| m.len() > 0).unwrap_or(false), "{f}");
     }
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "st-support");
     assert_eq!(r["input"]["vertices"], 272);
     assert_eq!(r["output"]["panels"], 480);
     assert_eq!(r["schema"], 2);
     let (m, s) = (&r["metrics"], &r["st-support"]);
-    for k in [
-        "max_vertex_sphere_residual",
-        "max_orthogonality_residual",
-        "max_node_axis_offset",
-    ] {
+    for k in ["max_vertex_sphere_residual", "max_orthogonality_residual", "max_node_axis_offset"] {
         assert!(s[k].as_f64().unwrap() <= 1e-9, "{k} = {}", s[k]);
     }
     for k in ["mean_axis_normal_angle_deg", "max_axis_normal_angle_deg"] {
         assert!(s[k].as_f64().unwrap().is_finite(), "{k}");
     }
-    for k in [
-        "mean_kink_angle_deg",
-        "max_kink_angle_deg",
-        "max_distance_to_reference",
-    ] {
+    for k in ["mean_kink_angle_deg", "max_kink_angle_deg", "max_distance_to_reference"] {
         assert!(m[k].as_f64().unwrap().is_finite(), "{k}");
     }
     assert!(s["absolute_sphere"]["r2"].is_number());
@@ -121,75 +86,29 @@ fn st_support_writes_panels_and_report() {
 #[test]
 fn st_support_refuses_a_minimal_surface() {
     let dir = std::env::temp_dir().join(format!("sf-cli-enneper-{}", std::process::id()));
-    let out = run(&[
-        "st-support",
-        "../shared/data/meshes/enneper2.obj",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
+    let out = run(&["st-support", "../shared/data/meshes/enneper2.obj", "--out", dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("no usable central spheres"), "{err}");
     assert!(!dir.join("report.json").exists(), "nothing written");
-    assert_eq!(
-        run(&["st-support", "../shared/data/meshes/cmc1.obj"])
-            .status
-            .code(),
-        Some(2),
-        "--out is required"
-    );
+    assert_eq!(run(&["st-support", "../shared/data/meshes/cmc1.obj"]).status.code(), Some(2), "--out is required");
 }
 
 #[test]
 fn st_writes_panels_and_report_or_refuses() {
     let dir = std::env::temp_dir().join(format!("sf-cli-stangle-{}", std::process::id()));
-    let out = run(&[
-        "st",
-        "../shared/data/meshes/cmc1.obj",
-        "--faces",
-        "120",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let out = run(&["st", "../shared/data/meshes/cmc1.obj", "--faces", "120", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "st");
     assert!(r["st"]["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8);
     assert!(r["timings_ms"]["angle_iteration_median"].is_number());
     assert!(dir.join("panels.glb").exists() && dir.join("panels.csv").exists());
-    let bad = run(&[
-        "st",
-        "../shared/data/meshes/enneper2.obj",
-        "--out",
-        dir.join("e").to_str().unwrap(),
-    ]);
+    let bad = run(&["st", "../shared/data/meshes/enneper2.obj", "--out", dir.join("e").to_str().unwrap()]);
     assert_eq!(bad.status.code(), Some(2));
-    assert_eq!(
-        String::from_utf8_lossy(&bad.stderr)
-            .trim_end()
-            .lines()
-            .count(),
-        1
-    );
-    assert_eq!(
-        run(&[
-            "st",
-            "../shared/data/meshes/cmc1.obj",
-            "--variant",
-            "c",
-            "--out",
-            "/tmp/x"
-        ])
-        .status
-        .code(),
-        Some(2)
-    );
+    assert_eq!(String::from_utf8_lossy(&bad.stderr).trim_end().lines().count(), 1);
+    assert_eq!(run(&["st", "../shared/data/meshes/cmc1.obj", "--variant", "c", "--out", "/tmp/x"]).status.code(), Some(2));
 }
 
 /// `st-support --adaptive --epsilon E` and `--faces N` remesh first (Fig. 16, bottom): the adaptive
@@ -197,9 +116,8 @@ fn st_writes_panels_and_report_or_refuses() {
 #[test]
 fn st_support_remeshes_first() {
     let base = std::env::temp_dir().join(format!("sf-cli-st-remesh-{}", std::process::id()));
-    let report = |dir: &std::path::Path| -> serde_json::Value {
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
-    };
+    let report =
+        |dir: &std::path::Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap() };
     let mesh = "../shared/data/meshes/botanic-garden-bubble-0.obj";
     let (fine, coarse, uniform) = (base.join("fine"), base.join("coarse"), base.join("uniform"));
     for (dir, args) in [
@@ -211,74 +129,38 @@ fn st_support_remeshes_first() {
         a.extend(args);
         a.extend(["--out", dir.to_str().unwrap()]);
         let out = run(&a);
-        assert!(
-            out.status.success(),
-            "{:?}: {}",
-            a,
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.status.success(), "{:?}: {}", a, String::from_utf8_lossy(&out.stderr));
     }
     let (rf, rc, ru) = (report(&fine), report(&coarse), report(&uniform));
     let faces = |r: &serde_json::Value| r["output"]["faces"].as_u64().unwrap();
     assert_eq!(rf["input"], rc["input"], "input counts are the reference's");
-    assert!(
-        faces(&rf) > faces(&rc),
-        "smaller ε gives more faces: {} vs {}",
-        faces(&rf),
-        faces(&rc)
-    );
+    assert!(faces(&rf) > faces(&rc), "smaller ε gives more faces: {} vs {}", faces(&rf), faces(&rc));
     // g never goes below the reference's mean edge length: no faces finer than its facets.
     let input_faces = rf["input"]["faces"].as_u64().unwrap();
-    assert!(
-        faces(&rf) <= 3 * input_faces / 2,
-        "{} faces from a {input_faces}-face reference",
-        faces(&rf)
-    );
-    assert!(
-        (200..450).contains(&faces(&ru)),
-        "about 300 faces: {}",
-        faces(&ru)
-    );
+    assert!(faces(&rf) <= 3 * input_faces / 2, "{} faces from a {input_faces}-face reference", faces(&rf));
+    assert!((200..450).contains(&faces(&ru)), "about 300 faces: {}", faces(&ru));
     assert_eq!(rc["st-support"]["remesh"]["Adaptive"]["epsilon"], 2e-3);
     for r in [&rf, &rc, &ru] {
         let m = &r["st-support"];
-        for k in [
-            "max_vertex_sphere_residual",
-            "max_orthogonality_residual",
-            "max_node_axis_offset",
-        ] {
+        for k in ["max_vertex_sphere_residual", "max_orthogonality_residual", "max_node_axis_offset"] {
             assert!(m[k].as_f64().unwrap() <= 1e-9, "{k} = {}", m[k]);
         }
     }
     let bad_dir = base.join("bad");
-    for bad in [
-        vec!["--faces", "300", "--adaptive"],
-        vec!["--epsilon", "1e-3"],
-        vec!["--adaptive", "--epsilon", "3"],
-    ] {
+    for bad in [vec!["--faces", "300", "--adaptive"], vec!["--epsilon", "1e-3"], vec!["--adaptive", "--epsilon", "3"]] {
         let mut a = vec!["st-support", mesh];
         a.extend(bad.iter().copied());
         a.extend(["--out", bad_dir.to_str().unwrap()]);
         let out = run(&a);
         assert_eq!(out.status.code(), Some(2), "{bad:?}");
-        assert_eq!(
-            String::from_utf8_lossy(&out.stderr)
-                .trim_end()
-                .lines()
-                .count(),
-            1
-        );
+        assert_eq!(String::from_utf8_lossy(&out.stderr).trim_end().lines().count(), 1);
     }
 }
 
 #[test]
 fn built_in_samples_are_inputs() {
     let out = run(&["info", "sample:torus"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["faces"].as_u64().unwrap() > 1000);
     let out = run(&["info", "sample:nope"]);
@@ -306,35 +188,21 @@ fn sq_writes_the_congruence_and_its_report() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("wrote the congruence"), "{stdout}");
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "sq");
     let sq = &r["sq"];
     assert_eq!(sq["grid"], 12);
     assert_eq!(sq["theta_deg"], 20.0);
     assert_eq!(sq["alpha_deg"], 75.0);
     assert_eq!(sq["stopped_after"], "congruence");
-    assert!(
-        r.get("metrics").is_none(),
-        "no panels, no shared panel metrics"
-    );
+    assert!(r.get("metrics").is_none(), "no panels, no shared panel metrics");
     let c = &sq["congruence"];
     let m = &c["figures"];
-    assert!(
-        m["max_line_normal_angle_deg"].as_f64().unwrap() <= 20.0,
-        "{m}"
-    );
-    assert!(
-        m["min_torsal_plane_angle_deg"].as_f64().unwrap() >= 75.0,
-        "{m}"
-    );
+    assert!(m["max_line_normal_angle_deg"].as_f64().unwrap() <= 20.0, "{m}");
+    assert!(m["min_torsal_plane_angle_deg"].as_f64().unwrap() >= 75.0, "{m}");
     assert_eq!(m["quads_without_real_torsal_directions"], 0);
     assert!(c["lc_residual"].as_f64().unwrap().is_finite());
     assert!(c["radius_fit_error"].as_f64().unwrap() < 0.1);
@@ -343,27 +211,18 @@ fn sq_writes_the_congruence_and_its_report() {
     }
     assert_eq!(
         sq["iterations"].as_u64().unwrap(),
-        c["line_congruence_iterations"].as_u64().unwrap()
-            + c["torsal_iterations"].as_u64().unwrap()
+        c["line_congruence_iterations"].as_u64().unwrap() + c["torsal_iterations"].as_u64().unwrap()
     );
-    let c: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("congruence.json")).unwrap()).unwrap();
+    let c: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("congruence.json")).unwrap()).unwrap();
     let points = c["points"].as_array().unwrap();
     assert_eq!(points.len(), 144);
     let quads = c["quads"].as_array().unwrap();
     assert_eq!(quads.len(), 121);
     for p in points {
         let (n, l) = (&p["n"], &p["l"]);
-        let dot: f64 = (0..3)
-            .map(|k| n[k].as_f64().unwrap() * l[k].as_f64().unwrap())
-            .sum();
-        assert!(
-            dot >= 20f64.to_radians().cos() - 1e-9,
-            "lines on the side of n, within θ: {p}"
-        );
-        assert!(
-            p["r"].as_f64().unwrap().is_finite() && p["uv"][1].is_number() && p["f"][2].is_number()
-        );
+        let dot: f64 = (0..3).map(|k| n[k].as_f64().unwrap() * l[k].as_f64().unwrap()).sum();
+        assert!(dot >= 20f64.to_radians().cos() - 1e-9, "lines on the side of n, within θ: {p}");
+        assert!(p["r"].as_f64().unwrap().is_finite() && p["uv"][1].is_number() && p["f"][2].is_number());
     }
     for q in quads {
         let t = q["torsal"].as_array().unwrap();
@@ -376,78 +235,24 @@ fn sq_writes_the_congruence_and_its_report() {
     }
     let glb = std::fs::read(dir.join("congruence.glb")).unwrap();
     let json = spherical_faces::export::glb::glb_json(&glb).expect("a GLB");
-    let names: Vec<&str> = json["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|n| n["name"].as_str().unwrap())
-        .collect();
+    let names: Vec<&str> = json["nodes"].as_array().unwrap().iter().map(|n| n["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["surface", "lines", "initial_lines", "cross_field"]);
 }
 
 #[test]
 fn sq_refuses_bad_input_with_one_line() {
     for (args, needle) in [
-        (
-            vec![
-                "sq",
-                "../shared/data/bsplines/saddle_sign_change.json",
-                "--out",
-                "/tmp/sf-sq-x",
-            ],
-            "mean curvature of one sign",
-        ),
-        (
-            vec![
-                "sq",
-                "../shared/data/meshes/tri_dome.obj",
-                "--out",
-                "/tmp/sf-sq-x",
-            ],
-            "B-spline reference",
-        ),
-        (
-            vec![
-                "sq",
-                "sample:vault",
-                "--theta",
-                "95",
-                "--out",
-                "/tmp/sf-sq-x",
-            ],
-            "'95' for '--theta <DEG>'",
-        ),
-        (
-            vec![
-                "sq",
-                "sample:vault",
-                "--until",
-                "panels",
-                "--out",
-                "/tmp/sf-sq-x",
-            ],
-            "'panels' for '--until <STAGE>'",
-        ),
+        (vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--out", "/tmp/sf-sq-x"], "mean curvature of one sign"),
+        (vec!["sq", "../shared/data/meshes/tri_dome.obj", "--out", "/tmp/sf-sq-x"], "B-spline reference"),
+        (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "'95' for '--theta <DEG>'"),
+        (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "'panels' for '--until <STAGE>'"),
         (vec!["sq", "sample:vault"], "--out"),
-        (
-            vec![
-                "sq",
-                "sample:vault",
-                "--faces",
-                "20000",
-                "--out",
-                "/tmp/sf-sq-x",
-            ],
-            "at most 3000",
-        ),
+        (vec!["sq", "sample:vault", "--faces", "20000", "--out", "/tmp/sf-sq-x"], "at most 3000"),
     ] {
         let out = run(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains(needle) && err.lines().count() == 1,
-            "{args:?}: {err}"
-        );
+        assert!(err.contains(needle) && err.lines().count() == 1, "{args:?}: {err}");
     }
 }
 
@@ -459,113 +264,43 @@ fn sq_refuses_bad_input_with_one_line() {
 fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
     let roof = "../shared/data/bsplines/saddle_roof.json";
     let dir = std::env::temp_dir().join(format!("sf-cli-sq-roof-{}", std::process::id()));
-    let out = run(&[
-        "sq",
-        roof,
-        "--theta",
-        "15",
-        "--alpha",
-        "45",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let out = run(&["sq", roof, "--theta", "15", "--alpha", "45", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["meets_guarantees"], true, "{}", r["guarantees"]);
     let m = &r["sq"]["sq_mesh"];
-    assert!(
-        m["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8
-            && m["max_centre_face_planarity"].as_f64().unwrap() <= 1e-8,
-        "{m}"
-    );
-    assert!(
-        m["max_axis_normal_angle_deg"].as_f64().unwrap() <= 15.0
-            && m["min_torsal_plane_angle_deg"].as_f64().unwrap() >= 45.0,
-        "{m}"
-    );
+    assert!(m["max_vertex_sphere_residual"].as_f64().unwrap() <= 1e-8 && m["max_centre_face_planarity"].as_f64().unwrap() <= 1e-8, "{m}");
+    assert!(m["max_axis_normal_angle_deg"].as_f64().unwrap() <= 15.0 && m["min_torsal_plane_angle_deg"].as_f64().unwrap() >= 45.0, "{m}");
 
     let missing = |args: &[&str], name: &str, limit: &str| {
-        let dir =
-            std::env::temp_dir().join(format!("sf-cli-sq-miss-{name}-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("sf-cli-sq-miss-{name}-{}", std::process::id()));
         let mut all = args.to_vec();
         all.extend(["--out", dir.to_str().unwrap()]);
         let out = run(&all);
-        assert_eq!(
-            out.status.code(),
-            Some(3),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let (stdout, stderr) = (
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr),
-        );
-        assert!(
-            stdout.contains("wrote") && !stdout.contains("exact"),
-            "{stdout}"
-        );
+        assert_eq!(out.status.code(), Some(3), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(stdout.contains("wrote") && !stdout.contains("exact"), "{stdout}");
         let error = stderr.lines().last().unwrap();
-        assert!(
-            error.contains("misses its guarantees")
-                && error.contains(name)
-                && error.contains(limit),
-            "{stderr}"
-        );
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+        assert!(error.contains("misses its guarantees") && error.contains(name) && error.contains(limit), "{stderr}");
+        let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
         assert_eq!(r["meets_guarantees"], false);
-        let missed: Vec<&serde_json::Value> = r["guarantees"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|g| g["holds"] == false)
-            .collect();
+        let missed: Vec<&serde_json::Value> = r["guarantees"].as_array().unwrap().iter().filter(|g| g["holds"] == false).collect();
         assert!(missed.iter().any(|g| g["name"] == name), "{missed:?}");
         all.push("--json");
         let out = run(&all);
-        let v: serde_json::Value =
-            serde_json::from_str(String::from_utf8_lossy(&out.stderr).lines().last().unwrap())
-                .unwrap();
+        let v: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&out.stderr).lines().last().unwrap()).unwrap();
         assert_eq!(v["exit_code"], 3);
         dir
     };
     missing(
-        &[
-            "sq",
-            roof,
-            "--theta",
-            "15",
-            "--alpha",
-            "45",
-            "--start",
-            "central",
-            "--until",
-            "congruence",
-        ],
+        &["sq", roof, "--theta", "15", "--alpha", "45", "--start", "central", "--until", "congruence"],
         "min_torsal_plane_angle_deg",
         "≥ 45",
     );
     let dir = missing(
-        &[
-            "sq",
-            "../shared/data/bsplines/tunnel_arch.json",
-            "--alpha",
-            "90",
-            "--grid",
-            "12",
-            "--faces",
-            "60",
-        ],
+        &["sq", "../shared/data/bsplines/tunnel_arch.json", "--alpha", "90", "--grid", "12", "--faces", "60"],
         "min_support_plane_angle_deg",
         "≥ 90",
     );
-    assert!(
-        dir.join("panels.glb").exists() && dir.join("panels.json").exists(),
-        "the files are written"
-    );
+    assert!(dir.join("panels.glb").exists() && dir.join("panels.json").exists(), "the files are written");
 }

@@ -5,15 +5,11 @@
 mod common;
 
 use glam::DVec3;
-use spherical_faces::congruence::central_spheres::{
-    jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE, SIGN_CHANGE_THRESHOLD,
-};
-use spherical_faces::geometry::mesh::topology::Topology;
-use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::progress::Cancelled;
-use spherical_faces::samples::{
-    cylinder_patch, plane_patch, sphere_patch, torus_closed_form, torus_patch,
-};
+use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE, SIGN_CHANGE_THRESHOLD};
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::samples::{cylinder_patch, plane_patch, sphere_patch, torus_closed_form, torus_patch};
 
 fn fit(mesh: &TriMesh) -> CurvatureField {
     fit_with(mesh, &JetParams::default())
@@ -21,17 +17,13 @@ fn fit(mesh: &TriMesh) -> CurvatureField {
 
 fn fit_with(mesh: &TriMesh, params: &JetParams) -> CurvatureField {
     let topo = Topology::new(mesh);
-    let field = jet_fit(mesh, &topo, params, &mut spherical_faces::progress::ignore)
-        .expect("not cancelled");
+    let field = jet_fit(mesh, &topo, params, &mut spherical_faces::progress::ignore).expect("not cancelled");
     assert_all_finite(&field);
     field
 }
 
 fn flipped(mesh: &TriMesh) -> TriMesh {
-    TriMesh::new(
-        mesh.positions.clone(),
-        mesh.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
-    )
+    TriMesh::new(mesh.positions.clone(), mesh.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect())
 }
 
 fn assert_all_finite(field: &CurvatureField) {
@@ -49,10 +41,7 @@ fn assert_all_finite(field: &CurvatureField) {
         assert!(ok, "vertex {i}: {c:?}");
         let s = field.central_spheres[i];
         assert!(s.is_finite(), "sphere {i}: {s:?}");
-        assert!(
-            (s.discriminant() - 1.0).abs() < 1e-6,
-            "sphere {i} not normalized: {s:?}"
-        );
+        assert!((s.discriminant() - 1.0).abs() < 1e-6, "sphere {i} not normalized: {s:?}");
     }
     let s = &field.summary;
     assert!(s.min_h.is_finite() && s.max_h.is_finite() && s.mean_h.is_finite());
@@ -80,25 +69,12 @@ fn sphere_mean_curvature_and_central_sphere_centre() {
                     // Outward normals: H = −1/R; flipped (inward): +1/R.
                     let err = (c.mean * radius - orientation).abs();
                     worst_h = worst_h.max(err);
-                    assert!(
-                        err < 0.005,
-                        "R={radius} n={n} orientation {orientation}: H·R = {}",
-                        c.mean * radius
-                    );
-                    let centre = field.central_spheres[v]
-                        .center()
-                        .expect("a sphere, not a plane");
+                    assert!(err < 0.005, "R={radius} n={n} orientation {orientation}: H·R = {}", c.mean * radius);
+                    let centre = field.central_spheres[v].center().expect("a sphere, not a plane");
                     let ce = centre.length() / radius;
                     worst_c = worst_c.max(ce);
-                    assert!(
-                        ce < 0.005,
-                        "R={radius} n={n}: centre {centre} (|c|/R = {ce})"
-                    );
-                    assert!(
-                        (field.central_spheres[v].signed_radius().unwrap().abs() / radius - 1.0)
-                            .abs()
-                            < 0.005
-                    );
+                    assert!(ce < 0.005, "R={radius} n={n}: centre {centre} (|c|/R = {ce})");
+                    assert!((field.central_spheres[v].signed_radius().unwrap().abs() / radius - 1.0).abs() < 0.005);
                 }
                 assert!(!field.summary.h_changes_sign);
             }
@@ -115,14 +91,7 @@ struct TorusErrors {
     dir_deg: f64,
 }
 
-fn torus_errors(
-    big_r: f64,
-    r: f64,
-    nu: usize,
-    nv: usize,
-    u_range: (f64, f64),
-    v_range: (f64, f64),
-) -> TorusErrors {
+fn torus_errors(big_r: f64, r: f64, nu: usize, nv: usize, u_range: (f64, f64), v_range: (f64, f64)) -> TorusErrors {
     torus_errors_with(big_r, r, nu, nv, u_range, v_range, &JetParams::default())
 }
 
@@ -138,13 +107,7 @@ fn torus_errors_with(
     let mesh = torus_patch(big_r, r, u_range, v_range, nu, nv);
     let field = fit_with(&mesh, params);
     assert_eq!(field.summary.failed_fits, 0);
-    let mut e = TorusErrors {
-        h: 0.0,
-        k1: 0.0,
-        k2: 0.0,
-        k1_abs: 0.0,
-        dir_deg: 0.0,
-    };
+    let mut e = TorusErrors { h: 0.0, k1: 0.0, k2: 0.0, k1_abs: 0.0, dir_deg: 0.0 };
     for v in interior(&field) {
         let p = mesh.positions[v];
         let rho = p.x.hypot(p.y);
@@ -208,11 +171,7 @@ fn torus_principal_curvatures_and_directions() {
     assert!(c4.h < 0.04 && c4.k2 < 0.02 && c4.dir_deg < 1.0);
     // Second-order convergence of degree 3: halving the edge length divides the error by ≈ 4.
     let f = torus_errors(3.0, 1.0, 120, 60, half, FULL);
-    println!(
-        "degree 3 error ratio 60x30 / 120x60: H {:.2}, k2 {:.2}",
-        c.h / f.h,
-        c.k2 / f.k2
-    );
+    println!("degree 3 error ratio 60x30 / 120x60: H {:.2}, k2 {:.2}", c.h / f.h, c.k2 / f.k2);
     assert!(c.h / f.h > 3.0 && c.k2 / f.k2 > 3.0);
 }
 
@@ -226,13 +185,8 @@ fn cylinder() {
         for v in interior(&field) {
             let c = field.vertices[v];
             // Outward: κ = 0 along the axis, −1/r around it; inward: +1/r and 0.
-            let (k1, k2) = if sign < 0.0 {
-                (0.0, -1.0 / r)
-            } else {
-                (1.0 / r, 0.0)
-            };
-            let e = ((c.k1 - k1).abs().max((c.k2 - k2).abs()) * r)
-                .max((c.mean - sign / (2.0 * r)).abs() * 2.0 * r);
+            let (k1, k2) = if sign < 0.0 { (0.0, -1.0 / r) } else { (1.0 / r, 0.0) };
+            let e = ((c.k1 - k1).abs().max((c.k2 - k2).abs()) * r).max((c.mean - sign / (2.0 * r)).abs() * 2.0 * r);
             worst = worst.max(e);
             assert!(e < 0.01, "vertex {v}: {c:?}");
             let axis_dir = if sign < 0.0 { c.dir1 } else { c.dir2 };
@@ -246,10 +200,7 @@ fn cylinder() {
 fn plane_is_flat() {
     // A tilted plane with in-plane jitter of the vertices.
     let mut mesh = plane_patch(10.0, 6.0, 20, 12);
-    let (e1, e2) = (
-        DVec3::new(1.0, 0.0, 0.3).normalize(),
-        DVec3::new(0.0, 1.0, -0.2).normalize(),
-    );
+    let (e1, e2) = (DVec3::new(1.0, 0.0, 0.3).normalize(), DVec3::new(0.0, 1.0, -0.2).normalize());
     for (i, p) in mesh.positions.iter_mut().enumerate() {
         let jx = 0.08 * ((i as f64 * 12.9898).sin() * 43758.5453).fract();
         let jy = 0.08 * ((i as f64 * 78.233).sin() * 12345.678).fract();
@@ -276,19 +227,13 @@ fn plane_is_flat() {
 /// on (u, v) from a few starts.
 fn distance_to_enneper(p: DVec3, s: f64) -> f64 {
     let point = |u: f64, v: f64| {
-        s * DVec3::new(
-            u - u * u * u / 3.0 + u * v * v,
-            v - v * v * v / 3.0 + u * u * v,
-            u * u - v * v,
-        )
+        s * DVec3::new(u - u * u * u / 3.0 + u * v * v, v - v * v * v / 3.0 + u * u * v, u * u - v * v)
     };
     let mut best = f64::INFINITY;
     let root = |t: f64| (t.abs() / s).sqrt();
-    for (mut u, mut v) in [
-        (p.x / s, p.y / s),
-        (0.5 * p.x / s, 0.5 * p.y / s),
-        (root(p.z).copysign(p.x), root(-p.z).copysign(p.y)),
-    ] {
+    for (mut u, mut v) in
+        [(p.x / s, p.y / s), (0.5 * p.x / s, 0.5 * p.y / s), (root(p.z).copysign(p.x), root(-p.z).copysign(p.y))]
+    {
         for _ in 0..60 {
             let r = point(u, v) - p;
             let ju = s * DVec3::new(1.0 - u * u + v * v, 2.0 * u * v, 2.0 * u);
@@ -323,8 +268,7 @@ fn enneper_minimal_surface_has_small_mean_curvature() {
             }
         }
     }
-    let (mut max_int, mut max_deep, mut max_all, mut max_k, mut sq, mut n) =
-        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0, 0);
+    let (mut max_int, mut max_deep, mut max_all, mut max_k, mut sq, mut n) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0, 0);
     for (v, c) in field.vertices.iter().enumerate() {
         let h = c.mean.abs() * diag;
         max_all = max_all.max(h);
@@ -340,18 +284,8 @@ fn enneper_minimal_surface_has_small_mean_curvature() {
     }
     // The mesh is not sampled exactly from the smooth surface: its vertices lie up to ≈ 5e-4·diag
     // off Enneper's surface (scale 3), which is what the jet reads as mean curvature.
-    let off = mesh
-        .positions
-        .iter()
-        .map(|&p| distance_to_enneper(p, 3.0))
-        .fold(0.0, f64::max);
-    let beyond = |sign: f64| {
-        field
-            .vertices
-            .iter()
-            .filter(|c| sign * c.mean * diag > SIGN_CHANGE_THRESHOLD)
-            .count()
-    };
+    let off = mesh.positions.iter().map(|&p| distance_to_enneper(p, 3.0)).fold(0.0, f64::max);
+    let beyond = |sign: f64| field.vertices.iter().filter(|c| sign * c.mean * diag > SIGN_CHANGE_THRESHOLD).count();
     println!(
         "enneper: {} vertices above +{SIGN_CHANGE_THRESHOLD}, {} below −{SIGN_CHANGE_THRESHOLD}",
         beyond(1.0),
@@ -377,10 +311,7 @@ fn enneper_minimal_surface_has_small_mean_curvature() {
 #[test]
 fn degenerate_input_stays_finite() {
     // An isolated vertex next to a single triangle.
-    let m = TriMesh::new(
-        vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(5.0, 5.0, 5.0)],
-        vec![[0, 1, 2]],
-    );
+    let m = TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(5.0, 5.0, 5.0)], vec![[0, 1, 2]]);
     let field = fit(&m);
     assert_eq!(field.summary.failed_fits, 4); // 3 points cannot carry a quadratic jet
     assert!(field.central_spheres.iter().all(|s| s.is_plane(0.0)));
@@ -397,13 +328,7 @@ fn degenerate_input_stays_finite() {
     assert!((field.vertices[0].normal - DVec3::Z).length() < 1e-12);
     // Collinear and coincident points, zero-area triangles.
     let m = TriMesh::new(
-        vec![
-            DVec3::ZERO,
-            DVec3::X,
-            2.0 * DVec3::X,
-            3.0 * DVec3::X,
-            DVec3::X,
-        ],
+        vec![DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X, DVec3::X],
         vec![[0, 1, 2], [1, 2, 3], [2, 3, 4], [0, 4, 1]],
     );
     fit(&m);
@@ -418,38 +343,15 @@ fn degenerate_input_stays_finite() {
     assert!(field.vertices.is_empty());
     // Out-of-spec parameters are clamped.
     for params in [
-        JetParams {
-            degree: 0,
-            min_points: 0,
-            max_rings: 0,
-        },
-        JetParams {
-            degree: 9,
-            min_points: 10_000,
-            max_rings: 100,
-        },
-        JetParams {
-            degree: 4,
-            ..JetParams::default()
-        },
-        JetParams {
-            degree: 2,
-            max_rings: 1,
-            ..JetParams::default()
-        },
+        JetParams { degree: 0, min_points: 0, max_rings: 0 },
+        JetParams { degree: 9, min_points: 10_000, max_rings: 100 },
+        JetParams { degree: 4, ..JetParams::default() },
+        JetParams { degree: 2, max_rings: 1, ..JetParams::default() },
     ] {
         let f = fit_with(&sphere_patch(2.0, 0.5, 8), &params);
         // One ring (max_rings clamped to 1) cannot carry a jet at boundary vertices (≤ 4 neighbours).
-        let expected = if params.max_rings <= 1 {
-            f.summary.boundary_vertices
-        } else {
-            0
-        };
-        assert!(
-            f.summary.failed_fits <= expected,
-            "{params:?}: {:?}",
-            f.summary
-        );
+        let expected = if params.max_rings <= 1 { f.summary.boundary_vertices } else { 0 };
+        assert!(f.summary.failed_fits <= expected, "{params:?}: {:?}", f.summary);
     }
 }
 
@@ -484,12 +386,7 @@ fn planar_tolerance_is_relative() {
         let mesh = sphere_patch(radius, 10.0 / radius, 10);
         let field = fit(&mesh);
         let diag = mesh.bbox_diagonal();
-        assert_eq!(
-            field.planar.iter().all(|&p| p),
-            planar,
-            "R/diag = {}",
-            radius / diag
-        );
+        assert_eq!(field.planar.iter().all(|&p| p), planar, "R/diag = {}", radius / diag);
         assert_eq!(diag / radius < PLANAR_TOLERANCE, planar);
     }
 }
@@ -498,31 +395,14 @@ fn planar_tolerance_is_relative() {
 #[test]
 #[ignore]
 fn timing_100k_vertices() {
-    let mesh = torus_patch(
-        3.0,
-        1.0,
-        (0.0, std::f64::consts::TAU),
-        (0.0, std::f64::consts::TAU),
-        500,
-        200,
-    );
+    let mesh = torus_patch(3.0, 1.0, (0.0, std::f64::consts::TAU), (0.0, std::f64::consts::TAU), 500, 200);
     let topo = Topology::new(&mesh);
     for degree in [2, 3, 4] {
         let params = JetParams::with_degree(degree);
         let t = std::time::Instant::now();
-        let field = jet_fit(
-            &mesh,
-            &topo,
-            &params,
-            &mut spherical_faces::progress::ignore,
-        )
-        .unwrap();
+        let field = jet_fit(&mesh, &topo, &params, &mut spherical_faces::progress::ignore).unwrap();
         let dt = t.elapsed();
-        println!(
-            "jet_fit degree {degree} on {} vertices: {:.1} ms",
-            mesh.vertex_count(),
-            dt.as_secs_f64() * 1e3
-        );
+        println!("jet_fit degree {degree} on {} vertices: {:.1} ms", mesh.vertex_count(), dt.as_secs_f64() * 1e3);
         assert_eq!(field.summary.failed_fits, 0);
     }
 }

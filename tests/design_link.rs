@@ -4,9 +4,9 @@
 use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::design_link::*;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
-use spherical_faces::pipeline::protocol::StageRequest;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
+use spherical_faces::pipeline::protocol::StageRequest;
 use spherical_faces::sq::params::{RadiusStart, SqParams};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
@@ -16,31 +16,16 @@ fn round_trip() {
     let d = Design {
         reference: DesignSurface::Sample(Sample::TorusPatch),
         method: Method::Curvature,
-        jet: JetParams {
-            degree: 2,
-            max_rings: 3,
-            ..JetParams::default()
-        },
+        jet: JetParams { degree: 2, max_rings: 3, ..JetParams::default() },
         color: ColorBy::K1,
         shading: Shading::Flat,
         edges: true,
-        camera: Some(CameraState {
-            yaw: 0.5,
-            pitch: -0.25,
-            distance: 6.0,
-            target: [1.0, -2.0, 0.125],
-        }),
+        camera: Some(CameraState { yaw: 0.5, pitch: -0.25, distance: 6.0, target: [1.0, -2.0, 0.125] }),
         ..Design::default()
     };
     let d = Design {
-        st_adapted: StAdaptedParams {
-            jet: d.jet.clone(),
-            ..StAdaptedParams::default()
-        },
-        st_support: StSupportParams {
-            jet: d.jet.clone(),
-            ..StSupportParams::default()
-        },
+        st_adapted: StAdaptedParams { jet: d.jet.clone(), ..StAdaptedParams::default() },
+        st_support: StSupportParams { jet: d.jet.clone(), ..StSupportParams::default() },
         ..d
     };
     let (back, notices) = Design::from_fragment(&d.to_fragment());
@@ -73,20 +58,13 @@ fn st_support_parameters_round_trip() {
 #[test]
 fn st_adapted_parameters_round_trip() {
     for (sizing, variant) in [
-        (
-            Sizing::Adaptive { epsilon: 1.25e-3 },
-            EdgeArcs::BisectingPlanes,
-        ),
+        (Sizing::Adaptive { epsilon: 1.25e-3 }, EdgeArcs::BisectingPlanes),
         (Sizing::UniformFaces(2000), EdgeArcs::Intersection),
         (Sizing::None, EdgeArcs::Intersection),
     ] {
         let d = Design {
             method: Method::StAdapted,
-            st_adapted: StAdaptedParams {
-                sizing,
-                variant,
-                ..StAdaptedParams::default()
-            },
+            st_adapted: StAdaptedParams { sizing, variant, ..StAdaptedParams::default() },
             color: ColorBy::Sizing,
             ..Design::default()
         };
@@ -101,8 +79,7 @@ fn st_adapted_parameters_round_trip() {
     assert_eq!(d.st_support.remesh, StSupportParams::default().remesh);
     let (d, _) = Design::from_fragment("#v=1&eps=0.002&faces=50&method=st&sizing=faces");
     assert_eq!(d.st_adapted.sizing, Sizing::UniformFaces(50));
-    let (bad, notices) =
-        Design::from_fragment("#v=1&method=st&eps=2&faces=3&variant=c&sizing=cubic");
+    let (bad, notices) = Design::from_fragment("#v=1&method=st&eps=2&faces=3&variant=c&sizing=cubic");
     assert_eq!(bad.st_adapted, StAdaptedParams::default());
     assert_eq!(notices.len(), 4, "{notices:?}");
 }
@@ -118,8 +95,7 @@ fn old_links_open_the_same_designs() {
     assert_eq!(d.st_adapted.sizing, Sizing::Adaptive { epsilon: 4e-4 });
     assert_eq!(d.st_adapted.variant, EdgeArcs::Intersection);
     assert_eq!(d.color, ColorBy::Sizing);
-    let (d, notices) =
-        Design::from_fragment("#v=1&sample=dome&method=st&sizing=faces&faces=2000&variant=b");
+    let (d, notices) = Design::from_fragment("#v=1&sample=dome&method=st&sizing=faces&faces=2000&variant=b");
     assert!(notices.is_empty(), "{notices:?}");
     assert_eq!(d.st_adapted.sizing, Sizing::UniformFaces(2000));
     assert_eq!(d.st_adapted.variant, EdgeArcs::BisectingPlanes);
@@ -130,12 +106,7 @@ fn old_links_open_the_same_designs() {
     assert_eq!(d.reference, DesignSurface::Sample(Sample::TorusPatch));
     assert_eq!(d.method, Method::StSupport);
     let st = &d.st_support;
-    assert!(
-        st.optimize_radius
-            && st.support_depth == 0.03
-            && st.axis_length == 0.2
-            && st.radius_tolerance == 0.002
-    );
+    assert!(st.optimize_radius && st.support_depth == 0.03 && st.axis_length == 0.2 && st.radius_tolerance == 0.002);
     assert_eq!(st.remesh, Sizing::UniformFaces(300));
     assert!(d.camera.is_some() && d.edges);
     // The README's links.
@@ -151,8 +122,7 @@ fn old_links_open_the_same_designs() {
 
 #[test]
 fn unknown_and_invalid_fields_are_reported() {
-    let (d, notices) =
-        Design::from_fragment("#v=1&sample=torus&bogus=7&color=purple&jet_degree=9&cam=1,2");
+    let (d, notices) = Design::from_fragment("#v=1&sample=torus&bogus=7&color=purple&jet_degree=9&cam=1,2");
     assert_eq!(d.reference, DesignSurface::Sample(Sample::TorusPatch));
     assert_eq!(d.color, ColorBy::MeanCurvature);
     assert_eq!(d.jet.degree, JetParams::default().degree);
@@ -174,10 +144,7 @@ fn an_unknown_sample_lists_the_samples() {
 
 #[test]
 fn file_names_are_data() {
-    let d = Design {
-        reference: DesignSurface::OwnFile("<img src=x onerror=alert(1)>.obj".into()),
-        ..Design::default()
-    };
+    let d = Design { reference: DesignSurface::OwnFile("<img src=x onerror=alert(1)>.obj".into()), ..Design::default() };
     let frag = d.to_fragment();
     assert!(!frag.contains('<') && !frag.contains(' '));
     let (back, notices) = Design::from_fragment(&frag);
@@ -199,40 +166,21 @@ fn sq_parameters_round_trip() {
     let d = Design {
         reference: DesignSurface::Sample(Sample::Vault),
         method: Method::Sq,
-        sq: SqParams {
-            theta_deg: 17.5,
-            alpha_deg: 80.0,
-            grid: 24,
-            recompute_every: 5,
-            ..SqParams::default()
-        },
+        sq: SqParams { theta_deg: 17.5, alpha_deg: 80.0, grid: 24, recompute_every: 5, ..SqParams::default() },
         ..Design::default()
     };
     let fragment = d.to_fragment();
-    assert!(
-        fragment.contains("&method=sq&") && fragment.contains("&theta=17.5&alpha=80&grid=24&rs=5"),
-        "{fragment}"
-    );
+    assert!(fragment.contains("&method=sq&") && fragment.contains("&theta=17.5&alpha=80&grid=24&rs=5"), "{fragment}");
     let (back, notices) = Design::from_fragment(&fragment);
     assert!(notices.is_empty(), "{notices:?}");
     assert_eq!(back, d);
     assert!(matches!(back.stage_requests().last(), Some(StageRequest::Sq(p)) if *p == d.sq));
-    assert!(
-        !fragment.contains("start="),
-        "the default start is left out: {fragment}"
-    );
-    let constant = Design {
-        sq: SqParams {
-            start: RadiusStart::Constant,
-            ..d.sq.clone()
-        },
-        ..d.clone()
-    };
+    assert!(!fragment.contains("start="), "the default start is left out: {fragment}");
+    let constant = Design { sq: SqParams { start: RadiusStart::Constant, ..d.sq.clone() }, ..d.clone() };
     let fragment = constant.to_fragment();
     assert!(fragment.contains("&start=constant"), "{fragment}");
     assert_eq!(Design::from_fragment(&fragment).0, constant);
-    let (bad, notices) =
-        Design::from_fragment("#v=1&sample=vault&method=sq&theta=95&alpha=0&grid=2&rs=x&start=1/H");
+    let (bad, notices) = Design::from_fragment("#v=1&sample=vault&method=sq&theta=95&alpha=0&grid=2&rs=x&start=1/H");
     assert_eq!(bad.sq, SqParams::default());
     assert_eq!(notices.len(), 5, "{notices:?}");
 }

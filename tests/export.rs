@@ -58,10 +58,7 @@ fn grid(n: usize, f: impl Fn(f64, f64) -> DVec3) -> TriMesh {
     let mut positions = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
-            positions.push(f(
-                -1.0 + 2.0 * i as f64 / n as f64,
-                -1.0 + 2.0 * j as f64 / n as f64,
-            ));
+            positions.push(f(-1.0 + 2.0 * i as f64 / n as f64, -1.0 + 2.0 * j as f64 / n as f64));
         }
     }
     let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
@@ -89,11 +86,7 @@ fn orient(s: Sphere, mesh: &TriMesh, f: usize) -> Sphere {
     let [a, b, c] = mesh.face_points(f);
     let x = (a + b + c) / 3.0;
     if (s.b - 2.0 * s.a * x).dot(face_normal(mesh, f)) < 0.0 {
-        Sphere {
-            a: -s.a,
-            b: -s.b,
-            c: -s.c,
-        }
+        Sphere { a: -s.a, b: -s.b, c: -s.c }
     } else {
         s
     }
@@ -112,8 +105,7 @@ fn det4(m: [[f64; 4]; 4]) -> f64 {
                 }
             }
         }
-        let d3 = sub[0][0] * (sub[1][1] * sub[2][2] - sub[1][2] * sub[2][1])
-            - sub[0][1] * (sub[1][0] * sub[2][2] - sub[1][2] * sub[2][0])
+        let d3 = sub[0][0] * (sub[1][1] * sub[2][2] - sub[1][2] * sub[2][1]) - sub[0][1] * (sub[1][0] * sub[2][2] - sub[1][2] * sub[2][0])
             + sub[0][2] * (sub[1][0] * sub[2][1] - sub[1][1] * sub[2][0]);
         det += if c % 2 == 0 { 1.0 } else { -1.0 } * m[0][c] * d3;
     }
@@ -146,26 +138,15 @@ fn point_row(p: DVec3) -> [f64; 5] {
 /// The face sphere through the three vertices, orthogonal to Ω (notes: "Linear conditions").
 fn sphere_orthogonal(tri: [DVec3; 3], omega: &AbsoluteSphere) -> Sphere {
     let om = match *omega {
-        AbsoluteSphere::Sphere { center: m, r2 } => {
-            [m.length_squared() - r2, -m.x, -m.y, -m.z, 1.0]
-        }
+        AbsoluteSphere::Sphere { center: m, r2 } => [m.length_squared() - r2, -m.x, -m.y, -m.z, 1.0],
         AbsoluteSphere::Plane { axis, d } => [-2.0 * d, axis.x, axis.y, axis.z, 0.0],
     };
     let s = null_vector([point_row(tri[0]), point_row(tri[1]), point_row(tri[2]), om]);
-    Sphere {
-        a: s[0],
-        b: DVec3::new(s[1], s[2], s[3]),
-        c: s[4],
-    }
-    .normalized()
+    Sphere { a: s[0], b: DVec3::new(s[1], s[2], s[3]), c: s[4] }.normalized()
 }
 
 fn bumpy(x: f64, y: f64) -> DVec3 {
-    DVec3::new(
-        x,
-        y,
-        0.35 * (x * x + 0.6 * y * y) + 0.03 * (3.0 * x + 1.0).sin() * (2.0 * y).cos(),
-    )
+    DVec3::new(x, y, 0.35 * (x * x + 0.6 * y * y) + 0.03 * (3.0 * x + 1.0).sin() * (2.0 * y).cos())
 }
 
 const M_REAL: DVec3 = DVec3::new(0.05, -0.1, -3.0);
@@ -175,55 +156,29 @@ const R2_REAL: f64 = 19.8;
 
 fn omega_mesh(omega: AbsoluteSphere, rule: BoundaryArcRule) -> SphereMesh {
     let mesh = grid(6, bumpy);
-    let face_spheres = (0..mesh.face_count())
-        .map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f))
-        .collect();
+    let face_spheres = (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
     SphereMesh::new(mesh, face_spheres, rule)
 }
 
 /// Ω real (R² > 0), centre below the surface (on its convex side): face radii about 1.5–2.5.
 fn omega_real() -> SphereMesh {
-    omega_mesh(
-        AbsoluteSphere::Sphere {
-            center: M_REAL,
-            r2: R2_REAL,
-        },
-        BoundaryArcRule::Through(M_REAL),
-    )
+    omega_mesh(AbsoluteSphere::Sphere { center: M_REAL, r2: R2_REAL }, BoundaryArcRule::Through(M_REAL))
 }
 
 /// Ω imaginary (R² < 0), centre near the centres of curvature.
 fn omega_imaginary() -> SphereMesh {
-    omega_mesh(
-        AbsoluteSphere::Sphere {
-            center: M_IMAG,
-            r2: -3.2,
-        },
-        BoundaryArcRule::Through(M_IMAG),
-    )
+    omega_mesh(AbsoluteSphere::Sphere { center: M_IMAG, r2: -3.2 }, BoundaryArcRule::Through(M_IMAG))
 }
 
 /// A poor Ω on purpose: small face spheres (r ≈ 0.3 on faces of size 0.33), arcs up to ~110°,
 /// kinks of tens of degrees.
 fn omega_stress() -> SphereMesh {
-    omega_mesh(
-        AbsoluteSphere::Sphere {
-            center: M_STRESS,
-            r2: 2.0,
-        },
-        BoundaryArcRule::Through(M_STRESS),
-    )
+    omega_mesh(AbsoluteSphere::Sphere { center: M_STRESS, r2: 2.0 }, BoundaryArcRule::Through(M_STRESS))
 }
 
 fn omega_at_infinity() -> (SphereMesh, DVec3) {
     let a = DVec3::new(0.1, -0.05, 1.0).normalize();
-    (
-        omega_mesh(
-            AbsoluteSphere::Plane { axis: a, d: 1.8 },
-            BoundaryArcRule::Parallel(a),
-        ),
-        a,
-    )
+    (omega_mesh(AbsoluteSphere::Plane { axis: a, d: 1.8 }, BoundaryArcRule::Parallel(a)), a)
 }
 
 const R_CAP: f64 = 1.3;
@@ -240,14 +195,8 @@ fn cap() -> SphereMesh {
 
 fn flat() -> SphereMesh {
     let mesh = grid(4, |x, y| DVec3::new(x, 0.5 * y, 0.0));
-    let face_spheres = (0..mesh.face_count())
-        .map(|f| Sphere::plane(mesh.face_points(f)[0], DVec3::Z))
-        .collect();
-    SphereMesh::new(
-        mesh,
-        face_spheres,
-        BoundaryArcRule::Through(DVec3::new(0.0, 0.0, 2.0)),
-    )
+    let face_spheres = (0..mesh.face_count()).map(|f| Sphere::plane(mesh.face_points(f)[0], DVec3::Z)).collect();
+    SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(DVec3::new(0.0, 0.0, 2.0)))
 }
 
 const PLANAR_FACE: usize = 0;
@@ -266,18 +215,10 @@ fn mixed() -> SphereMesh {
     };
     let (d0, d1) = (det(0.0), det(1.0));
     mesh.positions[8].z = -d0 / (d1 - d0);
-    let omega = AbsoluteSphere::Sphere {
-        center: M_IMAG,
-        r2: -3.2,
-    };
-    let mut face_spheres: Vec<Sphere> = (0..mesh.face_count())
-        .map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f))
-        .collect();
-    assert!(
-        face_spheres[PLANAR_FACE].a.abs() < 1e-9,
-        "{:?}",
-        face_spheres[PLANAR_FACE]
-    );
+    let omega = AbsoluteSphere::Sphere { center: M_IMAG, r2: -3.2 };
+    let mut face_spheres: Vec<Sphere> =
+        (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
+    assert!(face_spheres[PLANAR_FACE].a.abs() < 1e-9, "{:?}", face_spheres[PLANAR_FACE]);
     let p = mesh.face_points(PLANAR_FACE);
     face_spheres[PLANAR_FACE] = Sphere::plane(p[0], face_normal(&mesh, PLANAR_FACE));
     SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(M_IMAG))
@@ -321,26 +262,14 @@ fn edge_map(panels: &[Panel]) -> HashMap<(u32, u32), Vec<(usize, usize)>> {
 }
 
 fn arc_points(p: &Panel, k: usize) -> Vec<DVec3> {
-    p.arc_vertices[k]
-        .iter()
-        .map(|&i| p.positions[i as usize])
-        .collect()
+    p.arc_vertices[k].iter().map(|&i| p.positions[i as usize]).collect()
 }
 
 fn support_for(sm: &SphereMesh, m: DVec3, depth: f64) -> SupportStructure {
-    let axes: Vec<(DVec3, DVec3)> = sm
-        .mesh
-        .positions
-        .iter()
-        .map(|&v| (v, (m - v).normalize()))
-        .collect();
+    let axes: Vec<(DVec3, DVec3)> = sm.mesh.positions.iter().map(|&v| (v, (m - v).normalize())).collect();
     let n = axes.len();
     SupportStructure {
-        node_axes: NodeAxes {
-            axes,
-            second_points: vec![None; n],
-            from_spheres: vec![false; n],
-        },
+        node_axes: NodeAxes { axes, second_points: vec![None; n], from_spheres: vec![false; n] },
         depth,
         axis_length: 0.1,
         ..SupportStructure::default()
@@ -380,34 +309,20 @@ fn fixtures_are_what_they_claim() {
         let diag = sm.mesh.bbox_diagonal();
         for f in 0..sm.mesh.face_count() {
             let s = sm.face_spheres[f];
-            assert!(
-                (s.discriminant() - 1.0).abs() < 1e-12,
-                "{name}: face {f} not normalized"
-            );
+            assert!((s.discriminant() - 1.0).abs() < 1e-12, "{name}: face {f} not normalized");
             for v in tri(&sm, f) {
-                assert!(
-                    dist(&s, v) < 1e-12 * diag,
-                    "{name}: face {f} sphere misses a vertex"
-                );
+                assert!(dist(&s, v) < 1e-12 * diag, "{name}: face {f} sphere misses a vertex");
             }
         }
     }
     // Orthogonality to Ω: |c − m|² − r² = R².
-    for (sm, m, r2) in [
-        (omega_real(), M_REAL, R2_REAL),
-        (omega_imaginary(), M_IMAG, -3.2),
-        (omega_stress(), M_STRESS, 2.0),
-    ] {
+    for (sm, m, r2) in [(omega_real(), M_REAL, R2_REAL), (omega_imaginary(), M_IMAG, -3.2), (omega_stress(), M_STRESS, 2.0)] {
         for s in &sm.face_spheres {
             let (c, r) = (s.center().unwrap(), s.signed_radius().unwrap());
             assert!(((c - m).length_squared() - r * r - r2).abs() < 1e-9);
         }
     }
-    let radii: Vec<f64> = omega_real()
-        .face_spheres
-        .iter()
-        .map(|s| s.signed_radius().unwrap().abs())
-        .collect();
+    let radii: Vec<f64> = omega_real().face_spheres.iter().map(|s| s.signed_radius().unwrap().abs()).collect();
     assert!(radii.iter().all(|&r| r > 1.0 && r < 4.0), "{radii:?}");
 }
 
@@ -424,10 +339,7 @@ fn panel_vertices_lie_on_their_spheres() {
             assert!(!p.triangles.is_empty());
             for &x in &p.positions {
                 let d = dist(&p.sphere, x);
-                assert!(
-                    d <= 1e-9 * diag,
-                    "{name}: panel {i}: vertex {x} is {d:e} off its sphere"
-                );
+                assert!(d <= 1e-9 * diag, "{name}: panel {i}: vertex {x} is {d:e} off its sphere");
             }
             for t in &p.triangles {
                 assert!(t.iter().all(|&v| (v as usize) < p.positions.len()));
@@ -436,11 +348,7 @@ fn panel_vertices_lie_on_their_spheres() {
                 let [a, b, c] = t.map(|v| p.positions[v as usize]);
                 let n = (b - a).cross(c - a).normalize();
                 let outward = p.normal_at((a + b + c) / 3.0);
-                assert!(
-                    n.dot(outward) > 0.0,
-                    "{name}: panel {i}: folded triangle ({})",
-                    n.dot(outward)
-                );
+                assert!(n.dot(outward) > 0.0, "{name}: panel {i}: folded triangle ({})", n.dot(outward));
             }
             assert!(p.area > 0.0);
             assert_eq!(p.folded_triangles(), 0);
@@ -463,23 +371,14 @@ fn arcs_lie_on_both_neighbouring_spheres() {
                 for x in arc_points(&panels[i], k) {
                     for &(j, _) in &inc {
                         let d = dist(&panels[j].sphere, x);
-                        assert!(
-                            d <= 1e-9 * diag,
-                            "{name}: edge {edge:?}: arc point {d:e} off panel {j}'s sphere"
-                        );
+                        assert!(d <= 1e-9 * diag, "{name}: edge {edge:?}: arc point {d:e} off panel {j}'s sphere");
                     }
                     // And on the arc's own circle (or its line).
                     let c = arc.circle;
                     let rel = x - c.center;
-                    assert!(
-                        rel.dot(c.normal).abs() <= 1e-9 * diag,
-                        "{name}: arc point off the circle plane"
-                    );
+                    assert!(rel.dot(c.normal).abs() <= 1e-9 * diag, "{name}: arc point off the circle plane");
                     if !arc.is_straight() {
-                        assert!(
-                            ((rel - rel.dot(c.normal) * c.normal).length() - c.radius).abs()
-                                <= 1e-9 * diag
-                        );
+                        assert!(((rel - rel.dot(c.normal) * c.normal).length() - c.radius).abs() <= 1e-9 * diag);
                     }
                 }
             }
@@ -491,11 +390,7 @@ fn arcs_lie_on_both_neighbouring_spheres() {
 fn arc_planes_pass_through_m_or_contain_the_axis() {
     // Spheres orthogonal to Ω have their radical planes through m; the boundary rule puts m in the
     // plane too. With Ω at infinity, every arc plane contains the direction a.
-    for (sm, m) in [
-        (omega_real(), M_REAL),
-        (omega_imaginary(), M_IMAG),
-        (omega_stress(), M_STRESS),
-    ] {
+    for (sm, m) in [(omega_real(), M_REAL), (omega_imaginary(), M_IMAG), (omega_stress(), M_STRESS)] {
         let diag = sm.mesh.bbox_diagonal();
         let panels = build_panels(&sm, tol_for(&sm));
         for p in &panels {
@@ -509,10 +404,7 @@ fn arc_planes_pass_through_m_or_contain_the_axis() {
     let (sm, a) = omega_at_infinity();
     for p in build_panels(&sm, tol_for(&sm)) {
         for arc in &p.arcs {
-            assert!(
-                arc.circle.normal.dot(a).abs() < 1e-9,
-                "arc plane does not contain the axis"
-            );
+            assert!(arc.circle.normal.dot(a).abs() < 1e-9, "arc plane does not contain the axis");
         }
     }
 }
@@ -533,10 +425,7 @@ fn adjacent_panels_share_boundary_vertices() {
                 let a = arc_points(&panels[i], k);
                 let mut b = arc_points(&panels[j], l);
                 b.reverse();
-                assert_eq!(
-                    a, b,
-                    "{name}: edge {edge:?}: panels {i} and {j} disagree on their arc points"
-                );
+                assert_eq!(a, b, "{name}: edge {edge:?}: panels {i} and {j} disagree on their arc points");
                 // Same circle, opposite orientation.
                 let (ca, cb) = (panels[i].arcs[k].circle, panels[j].arcs[l].circle);
                 assert_eq!(ca.normal, -cb.normal);
@@ -552,12 +441,7 @@ fn chord_error_is_within_tolerance() {
     for (name, sm) in all_fixtures() {
         let diag = sm.mesh.bbox_diagonal();
         let mut counts = Vec::new();
-        for rel in [
-            1e-2,
-            1e-3,
-            1e-4,
-            if name == "omega_stress" { 3e-5 } else { 1e-5 },
-        ] {
+        for rel in [1e-2, 1e-3, 1e-4, if name == "omega_stress" { 3e-5 } else { 1e-5 }] {
             let tol = rel * diag;
             let panels = build_panels(&sm, tol);
             for (i, p) in panels.iter().enumerate() {
@@ -566,24 +450,11 @@ fn chord_error_is_within_tolerance() {
                 // Sampled: centroids, edge midpoints and a few more barycentric points.
                 for t in &p.triangles {
                     let [a, b, c] = t.map(|v| p.positions[v as usize]);
-                    for (u, v) in [
-                        (1.0 / 3.0, 1.0 / 3.0),
-                        (0.5, 0.0),
-                        (0.0, 0.5),
-                        (0.5, 0.5),
-                        (0.2, 0.6),
-                        (0.6, 0.2),
-                    ] {
+                    for (u, v) in [(1.0 / 3.0, 1.0 / 3.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (0.2, 0.6), (0.6, 0.2)] {
                         let x = a + u * (b - a) + v * (c - a);
                         let d = dist(&p.sphere, x);
-                        assert!(
-                            d <= tol * (1.0 + 1e-9),
-                            "{name}: panel {i}: sample {d:e} off the sphere > {tol:e}"
-                        );
-                        assert!(
-                            d <= ce * (1.0 + 1e-6) + 1e-12 * diag,
-                            "{name}: chord_error underestimates"
-                        );
+                        assert!(d <= tol * (1.0 + 1e-9), "{name}: panel {i}: sample {d:e} off the sphere > {tol:e}");
+                        assert!(d <= ce * (1.0 + 1e-6) + 1e-12 * diag, "{name}: chord_error underestimates");
                     }
                 }
                 // Boundary segments against their true arcs.
@@ -595,25 +466,16 @@ fn chord_error_is_within_tolerance() {
                         let on_arc = arc.point((s as f64 + 0.5) / n as f64);
                         let chord_mid = 0.5 * (pts[s] + pts[s + 1]);
                         let d = on_arc.distance(chord_mid);
-                        assert!(
-                            d <= tol,
-                            "{name}: panel {i} arc {k}: segment sagitta {d:e} > {tol:e}"
-                        );
+                        assert!(d <= tol, "{name}: panel {i} arc {k}: segment sagitta {d:e} > {tol:e}");
                     }
                 }
             }
             counts.push(total_triangles(&panels));
         }
         if name == "flat" {
-            assert!(
-                counts.iter().all(|&c| c == sm.mesh.face_count()),
-                "{name}: {counts:?}"
-            );
+            assert!(counts.iter().all(|&c| c == sm.mesh.face_count()), "{name}: {counts:?}");
         } else {
-            assert!(
-                counts.windows(2).all(|w| w[0] <= w[1]),
-                "{name}: {counts:?}"
-            );
+            assert!(counts.windows(2).all(|w| w[0] <= w[1]), "{name}: {counts:?}");
             assert!(counts[3] > counts[0], "{name}: {counts:?}");
         }
     }
@@ -669,10 +531,7 @@ fn plane_panels_next_to_spheres_have_circular_edges_in_their_plane() {
 
 /// Spherical excess of the geodesic triangle with unit corners a, b, c.
 fn excess(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    2.0 * a
-        .dot(b.cross(c))
-        .abs()
-        .atan2(1.0 + a.dot(b) + b.dot(c) + c.dot(a))
+    2.0 * a.dot(b.cross(c)).abs().atan2(1.0 + a.dot(b) + b.dot(c) + c.dot(a))
 }
 
 #[test]
@@ -692,11 +551,7 @@ fn cap_panels_are_geodesic_triangles_with_the_right_area() {
         let e = R_CAP * R_CAP * excess(a, b, c);
         // Flat triangles may be a little larger or smaller than their geodesic counterparts
         // (skinny ones near their circumcircle project smaller): compare at O(tol/R).
-        assert!(
-            (p.area - e).abs() <= e * 4.0 * tol / R_CAP,
-            "{} vs {e}",
-            p.area
-        );
+        assert!((p.area - e).abs() <= e * 4.0 * tol / R_CAP, "{} vs {e}", p.area);
         area += p.area;
         exact += e;
     }
@@ -710,9 +565,7 @@ fn nearly_flat_spheres_keep_precision() {
     // R² = 0: every face sphere passes through m, 5e7 above the grid.
     let m = DVec3::new(0.0, 0.0, 5e7);
     let omega = AbsoluteSphere::Sphere { center: m, r2: 0.0 };
-    let face_spheres = (0..mesh.face_count())
-        .map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f))
-        .collect();
+    let face_spheres = (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
     let sm = SphereMesh::new(mesh, face_spheres, BoundaryArcRule::Through(m));
     let diag = sm.mesh.bbox_diagonal();
     let panels = build_panels(&sm, tol_for(&sm));
@@ -743,12 +596,7 @@ fn closest_point_queries_match_brute_force() {
         let p = DVec3::new(1.5 * rnd(), 1.5 * rnd(), 0.3 + rnd());
         let h = bvh.closest_point(p).unwrap();
         let g = closest_point_brute_force(&sm.mesh.triangulated(), p).unwrap();
-        assert!(
-            (h.distance - g.distance).abs() <= 1e-15,
-            "{} vs {}",
-            h.distance,
-            g.distance
-        );
+        assert!((h.distance - g.distance).abs() <= 1e-15, "{} vs {}", h.distance, g.distance);
         assert!((h.distance - h.point.distance(p)).abs() < 1e-15);
     }
     // Points on the mesh are at distance 0.
@@ -771,13 +619,8 @@ fn elements(sm: &SphereMesh, panels: &[Panel], support: &SupportStructure) -> Ve
             let (f, k) = topo.edge_faces(e)[0];
             let arc = panels[f as usize].arcs[k as usize];
             let (p, q) = (sm.mesh.positions[a as usize], sm.mesh.positions[b as usize]);
-            let dirs = [
-                support.node_axes.axes[a as usize].1,
-                support.node_axes.axes[b as usize].1,
-            ];
-            (!arc.is_straight())
-                .then(|| support_element([a, b], arc.circle, [p, q], dirs, support.depth))
-                .flatten()
+            let dirs = [support.node_axes.axes[a as usize].1, support.node_axes.axes[b as usize].1];
+            (!arc.is_straight()).then(|| support_element([a, b], arc.circle, [p, q], dirs, support.depth)).flatten()
         })
         .collect()
 }
@@ -805,23 +648,12 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
     let support = support_for(&sm, M_REAL, depth);
     let panels = build_panels(&sm, tol_for(&sm));
     let els = elements(&sm, &panels, &support);
-    assert_eq!(
-        els.len(),
-        sm.topology().edges().len(),
-        "every edge has its element"
-    );
+    assert_eq!(els.len(), sm.topology().edges().len(), "every edge has its element");
     let geo = strips(&sm, &panels, &els);
     let edges = edge_map(&panels);
-    let expected: usize = edges
-        .values()
-        .map(|inc| 2 * (panels[inc[0].0].arc_vertices[inc[0].1].len() - 1))
-        .sum();
+    let expected: usize = edges.values().map(|inc| 2 * (panels[inc[0].0].arc_vertices[inc[0].1].len() - 1)).sum();
     assert_eq!(geo.triangles.len(), expected);
-    assert!(geo
-        .triangles
-        .iter()
-        .flatten()
-        .all(|&v| (v as usize) < geo.positions.len()));
+    assert!(geo.triangles.iter().flatten().all(|&v| (v as usize) < geo.positions.len()));
     // Every arc point of the panels appears: the strips meet the panels exactly.
     let has = |x: DVec3| geo.positions.contains(&x);
     for p in &panels {
@@ -837,16 +669,10 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
         for (k, &v) in el.edge.iter().enumerate() {
             let (pv, d) = support.node_axes.axes[v as usize];
             let inner = el.corners[3 - k];
-            assert!(
-                (inner - pv).cross(d).length() < 1e-9 * diag,
-                "inner corner off the node axis"
-            );
+            assert!((inner - pv).cross(d).length() < 1e-9 * diag, "inner corner off the node axis");
             assert!((inner - pv).dot(d) > 0.0, "inner corner on the wrong side");
             let ic = el.inner_circle;
-            assert!(
-                ((inner - ic.center).length() - ic.radius).abs() < 1e-9 * diag,
-                "inner corner off the inner circle"
-            );
+            assert!(((inner - ic.center).length() - ic.radius).abs() < 1e-9 * diag, "inner corner off the inner circle");
             assert!(has(inner));
         }
         // The inner arc is the concentric circle a depth inside the outer one.
@@ -859,22 +685,11 @@ fn support_strips_are_planar_and_bounded_by_the_node_axes() {
         let n = (b - a).cross(c - a);
         if n.length() > 1e-12 {
             let n = n.normalize();
-            assert!(
-                (M_REAL - a).dot(n).abs() < 1e-9 * diag,
-                "support strip not in a plane through m"
-            );
+            assert!((M_REAL - a).dot(n).abs() < 1e-9 * diag, "support strip not in a plane through m");
         }
     }
     // No depth, no elements.
-    assert!(elements(
-        &sm,
-        &panels,
-        &SupportStructure {
-            depth: 0.0,
-            ..support.clone()
-        }
-    )
-    .is_empty());
+    assert!(elements(&sm, &panels, &SupportStructure { depth: 0.0, ..support.clone() }).is_empty());
     let segs = support.axis_segments();
     assert_eq!(segs.len(), sm.mesh.vertex_count());
     for (s, (v, _)) in segs.iter().zip(&support.node_axes.axes) {
@@ -899,22 +714,9 @@ fn scene() -> Scene {
     let panels = build_panels(&sm, tol_for(&sm));
     let st = support_for(&sm, M_REAL, 0.03 * diag);
     let support = strips(&sm, &panels, &elements(&sm, &panels, &st));
-    let axes = SupportStructure {
-        axis_length: 0.1 * diag,
-        ..st
-    }
-    .axis_segments();
-    let extras = absolute_sphere_extras(&AbsoluteSphere::Sphere {
-        center: M_REAL,
-        r2: R2_REAL,
-    });
-    Scene {
-        sm,
-        panels,
-        support,
-        axes,
-        extras,
-    }
+    let axes = SupportStructure { axis_length: 0.1 * diag, ..st }.axis_segments();
+    let extras = absolute_sphere_extras(&AbsoluteSphere::Sphere { center: M_REAL, r2: R2_REAL });
+    Scene { sm, panels, support, axes, extras }
 }
 
 fn f32_at(bin: &[u8], at: usize) -> f32 {
@@ -928,10 +730,7 @@ fn glb_structure() {
     // Header and chunks.
     assert_eq!(&glb[0..4], b"glTF");
     assert_eq!(u32::from_le_bytes(glb[4..8].try_into().unwrap()), 2);
-    assert_eq!(
-        u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
-        glb.len()
-    );
+    assert_eq!(u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize, glb.len());
     let jlen = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
     assert_eq!(&glb[16..20], b"JSON");
     assert_eq!(jlen % 4, 0);
@@ -962,10 +761,7 @@ fn glb_structure() {
     let p7 = &ex["panels"][7];
     let s7 = s.panels[7].sphere;
     assert_eq!(p7["a"].as_f64().unwrap(), s7.a);
-    assert_eq!(
-        p7["radius"].as_f64().unwrap(),
-        s7.signed_radius().unwrap().abs()
-    );
+    assert_eq!(p7["radius"].as_f64().unwrap(), s7.signed_radius().unwrap().abs());
     assert_eq!(p7["center"][2].as_f64().unwrap(), s7.center().unwrap().z);
     assert_eq!(j["asset"]["extras"]["absolute_sphere"]["r2"], R2_REAL);
     assert_eq!(j["asset"]["version"], "2.0");
@@ -975,12 +771,9 @@ fn glb_structure() {
         let acc = &j["accessors"][prim["attributes"]["POSITION"].as_u64().unwrap() as usize];
         assert_eq!(acc["count"], s.panels[i].positions.len());
         let view = &j["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
-        let base = view["byteOffset"].as_u64().unwrap() as usize
-            + acc["byteOffset"].as_u64().unwrap() as usize;
+        let base = view["byteOffset"].as_u64().unwrap() as usize + acc["byteOffset"].as_u64().unwrap() as usize;
         for c in 0..3 {
-            let vals: Vec<f32> = (0..s.panels[i].positions.len())
-                .map(|k| f32_at(bin, base + 12 * k + 4 * c))
-                .collect();
+            let vals: Vec<f32> = (0..s.panels[i].positions.len()).map(|k| f32_at(bin, base + 12 * k + 4 * c)).collect();
             let lo = vals.iter().copied().fold(f32::INFINITY, f32::min);
             let hi = vals.iter().copied().fold(f32::NEG_INFINITY, f32::max);
             // (serde_json's default float parsing may be 1 ulp off in f64; exact in f32.)
@@ -993,10 +786,7 @@ fn glb_structure() {
     }
     let axes = &mesh_of("node_axes")["primitives"][0];
     assert_eq!(axes["mode"], 1);
-    assert_eq!(
-        j["accessors"][axes["attributes"]["POSITION"].as_u64().unwrap() as usize]["count"],
-        2 * s.axes.len()
-    );
+    assert_eq!(j["accessors"][axes["attributes"]["POSITION"].as_u64().unwrap() as usize]["count"], 2 * s.axes.len());
     for v in j["bufferViews"].as_array().unwrap() {
         assert_eq!(v["byteOffset"].as_u64().unwrap() % 4, 0);
     }
@@ -1008,10 +798,7 @@ fn glb_structure() {
     assert!(only["asset"].get("extras").is_none());
     let empty = write_glb(&[], None, None, Value::Null);
     assert_eq!(empty.len() % 4, 0);
-    assert_eq!(
-        glb_json(&empty).unwrap()["nodes"][0]["extras"]["panel_count"],
-        0
-    );
+    assert_eq!(glb_json(&empty).unwrap()["nodes"][0]["extras"]["panel_count"], 0);
 }
 
 #[test]
@@ -1023,37 +810,19 @@ fn glb_reimports_with_the_panel_triangles() {
     assert_eq!(im.mesh.face_count(), n_panel, "notes: {:?}", im.notes);
     // Shared arc points weld: the result is one connected surface with as many vertices as
     // distinct points.
-    let mut distinct: Vec<[u32; 3]> = s
-        .panels
-        .iter()
-        .flat_map(|p| {
-            p.positions
-                .iter()
-                .map(|x| [x.x as f32, x.y as f32, x.z as f32].map(f32::to_bits))
-        })
-        .collect();
+    let mut distinct: Vec<[u32; 3]> =
+        s.panels.iter().flat_map(|p| p.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32].map(f32::to_bits))).collect();
     distinct.sort_unstable();
     distinct.dedup();
     assert_eq!(im.mesh.vertex_count(), distinct.len());
 
     let full = write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone());
     let im = import_mesh(&full, "panels.glb").unwrap();
-    assert_eq!(
-        im.mesh.face_count(),
-        n_panel + s.support.triangles.len(),
-        "notes: {:?}",
-        im.notes
-    );
+    assert_eq!(im.mesh.face_count(), n_panel + s.support.triangles.len(), "notes: {:?}", im.notes);
     // Panel primitives counted from the JSON chunk.
     let j = glb_json(&full).unwrap();
     let panels_mesh = j["nodes"][0]["mesh"].as_u64().unwrap() as usize;
-    assert_eq!(
-        j["meshes"][panels_mesh]["primitives"]
-            .as_array()
-            .unwrap()
-            .len(),
-        s.sm.mesh.face_count()
-    );
+    assert_eq!(j["meshes"][panels_mesh]["primitives"].as_array().unwrap().len(), s.sm.mesh.face_count());
 }
 
 #[test]
@@ -1061,10 +830,7 @@ fn glb_passes_the_khronos_validator() {
     let s = scene();
     let dir = temp_dir("validator");
     let cases = [
-        (
-            "full.glb",
-            write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone()),
-        ),
+        ("full.glb", write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone())),
         ("panels.glb", write_glb(&s.panels, None, None, Value::Null)),
         ("flat.glb", {
             let f = flat();
@@ -1077,10 +843,7 @@ fn glb_passes_the_khronos_validator() {
         std::fs::write(&path, &bytes).unwrap();
         let (ok, summary) = khronos_validate(&path);
         eprintln!("{name}: {}", serde_json::to_string(&summary).unwrap());
-        assert!(
-            ok && summary["numErrors"] == 0,
-            "{name}: the validator reports errors: {summary:#}"
-        );
+        assert!(ok && summary["numErrors"] == 0, "{name}: the validator reports errors: {summary:#}");
         assert_eq!(summary["numWarnings"], 0, "{name}: {summary:#}");
     }
     // The validator does catch a broken file (so a pass means something).
@@ -1092,10 +855,7 @@ fn glb_passes_the_khronos_validator() {
     let path = dir.join("broken.glb");
     std::fs::write(&path, &bad).unwrap();
     let (ok, summary) = khronos_validate(&path);
-    assert!(
-        !ok && summary["numErrors"].as_u64().unwrap() > 0,
-        "{summary:#}"
-    );
+    assert!(!ok && summary["numErrors"].as_u64().unwrap() > 0, "{summary:#}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -1107,26 +867,14 @@ fn obj_has_groups_per_kind_and_reimports() {
     let s = scene();
     let text = write_obj(&s.panels, Some(&s.support), Some(&s.axes));
     let lines: Vec<&str> = text.lines().collect();
-    for o in [
-        "o panels",
-        "o support",
-        "o node_axes",
-        "g support",
-        "g node_axes",
-    ] {
+    for o in ["o panels", "o support", "o node_axes", "g support", "g node_axes"] {
         assert_eq!(lines.iter().filter(|l| **l == o).count(), 1, "{o}");
     }
     for p in &s.panels {
         assert!(lines.contains(&format!("g panel_{}", p.face).as_str()));
     }
-    assert_eq!(
-        lines.iter().filter(|l| l.starts_with("l ")).count(),
-        s.axes.len()
-    );
-    let order: Vec<usize> = ["o panels", "o support", "o node_axes"]
-        .iter()
-        .map(|o| lines.iter().position(|l| l == o).unwrap())
-        .collect();
+    assert_eq!(lines.iter().filter(|l| l.starts_with("l ")).count(), s.axes.len());
+    let order: Vec<usize> = ["o panels", "o support", "o node_axes"].iter().map(|o| lines.iter().position(|l| l == o).unwrap()).collect();
     assert!(order.windows(2).all(|w| w[0] < w[1]));
     // Re-import: panel triangles (+ support), lines skipped.
     let n_panel = total_triangles(&s.panels);
@@ -1134,18 +882,10 @@ fn obj_has_groups_per_kind_and_reimports() {
     assert_eq!(im.mesh.face_count(), n_panel);
     let im = import_mesh(text.as_bytes(), "panels.obj").unwrap();
     assert_eq!(im.mesh.face_count(), n_panel + s.support.triangles.len());
-    assert!(
-        im.notes.iter().any(|n| n.contains("line")),
-        "{:?}",
-        im.notes
-    );
+    assert!(im.notes.iter().any(|n| n.contains("line")), "{:?}", im.notes);
     // Coordinates round-trip exactly (shortest f64 formatting).
     assert_eq!(lines[1..3], ["o panels", "g panel_0"]);
-    let v: Vec<f64> = lines[3]
-        .split_whitespace()
-        .skip(1)
-        .map(|t| t.parse().unwrap())
-        .collect();
+    let v: Vec<f64> = lines[3].split_whitespace().skip(1).map(|t| t.parse().unwrap()).collect();
     assert_eq!(DVec3::new(v[0], v[1], v[2]), s.panels[0].positions[0]);
 }
 
@@ -1186,14 +926,8 @@ fn schedule_csv_and_json() {
         let cells: Vec<&str> = row.split(',').collect();
         assert_eq!(cells.len(), header.len(), "row {i}");
         assert_eq!(cells[col("id")].parse::<usize>().unwrap(), i);
-        assert_eq!(
-            cells[col("v1_id")].parse::<u32>().unwrap(),
-            panels[i].corners[1]
-        );
-        assert_eq!(
-            cells[col("v1_x")].parse::<f64>().unwrap(),
-            panels[i].positions[1].x
-        );
+        assert_eq!(cells[col("v1_id")].parse::<u32>().unwrap(), panels[i].corners[1]);
+        assert_eq!(cells[col("v1_x")].parse::<f64>().unwrap(), panels[i].positions[1].x);
         let planar = i == PLANAR_FACE;
         assert_eq!(cells[col("sphere_radius")].is_empty(), planar, "row {i}");
         assert_eq!(cells[col("plane_normal_x")].is_empty(), !planar, "row {i}");
@@ -1203,16 +937,9 @@ fn schedule_csv_and_json() {
         }
         for k in 0..3 {
             let cell = cells[col(&format!("edge{k}_radius"))];
-            assert_eq!(
-                cell.is_empty(),
-                panels[i].arcs[k].is_straight(),
-                "row {i} edge {k}"
-            );
+            assert_eq!(cell.is_empty(), panels[i].arcs[k].is_straight(), "row {i} edge {k}");
             if !cell.is_empty() {
-                assert_eq!(
-                    cell.parse::<f64>().unwrap(),
-                    panels[i].arcs[k].circle.radius
-                );
+                assert_eq!(cell.parse::<f64>().unwrap(), panels[i].arcs[k].circle.radius);
             }
         }
         assert_eq!(cells[col("area")].parse::<f64>().unwrap(), panels[i].area);
@@ -1230,29 +957,19 @@ fn schedule_csv_and_json() {
     assert_eq!(p0["edges"].as_array().unwrap().len(), 3);
     assert_eq!(p0["edges"][0]["from"], panels[0].corners[0]);
     let back: PanelSchedule = serde_json::from_str(&text).unwrap();
-    assert_close(
-        &serde_json::to_value(&back).unwrap(),
-        &serde_json::to_value(&sched).unwrap(),
-    );
+    assert_close(&serde_json::to_value(&back).unwrap(), &serde_json::to_value(&sched).unwrap());
 
     // Deviation: positive, small, and matching a brute-force evaluation.
     assert!(sched.max_deviation > 0.0 && sched.max_deviation_relative < 0.05);
     assert_eq!(sched.max_deviation_relative, sched.max_deviation / diag);
-    assert_eq!(
-        max_distance_to_reference(&panels, &TriangleBvh::new(&sm.mesh.triangulated()), diag),
-        sched.max_deviation_relative
-    );
+    assert_eq!(max_distance_to_reference(&panels, &TriangleBvh::new(&sm.mesh.triangulated()), diag), sched.max_deviation_relative);
     // Every panel's: the searches started from the last hit and the skipped samples change
     // nothing.
     let bvh = TriangleBvh::new(&sm.mesh.triangulated());
     for (k, p) in panels.iter().enumerate() {
         let brute = panel_samples(p)
             .into_iter()
-            .map(|x| {
-                closest_point_brute_force(&sm.mesh.triangulated(), x)
-                    .unwrap()
-                    .distance
-            })
+            .map(|x| closest_point_brute_force(&sm.mesh.triangulated(), x).unwrap().distance)
             .fold(0.0, f64::max);
         assert_eq!(max_deviation(p, &bvh), brute, "panel {k}");
         assert_eq!(sched.panels[k].max_deviation, brute, "panel {k}");
@@ -1264,13 +981,7 @@ fn deviation_from_the_reference() {
     // A flat panel set against its own reference: 0.
     let f = flat();
     let panels = build_panels(&f, tol_for(&f));
-    assert!(
-        max_distance_to_reference(
-            &panels,
-            &TriangleBvh::new(&f.mesh.triangulated()),
-            f.mesh.bbox_diagonal()
-        ) < 1e-15
-    );
+    assert!(max_distance_to_reference(&panels, &TriangleBvh::new(&f.mesh.triangulated()), f.mesh.bbox_diagonal()) < 1e-15);
     // The cap against its inscribed triangle mesh: the panels bulge out by about the face
     // sagitta, never more than the largest face chord error.
     let sm = cap();
@@ -1282,52 +993,28 @@ fn deviation_from_the_reference() {
         })
         .fold(0.0, f64::max);
     let bvh = TriangleBvh::new(&sm.mesh.triangulated());
-    let dev = panels
-        .iter()
-        .map(|p| max_deviation(p, &bvh))
-        .fold(0.0, f64::max);
-    assert!(
-        dev > 0.2 * bound && dev <= bound * (1.0 + 1e-9),
-        "{dev} vs {bound}"
-    );
+    let dev = panels.iter().map(|p| max_deviation(p, &bvh)).fold(0.0, f64::max);
+    assert!(dev > 0.2 * bound && dev <= bound * (1.0 + 1e-9), "{dev} vs {bound}");
 }
 
 #[test]
 fn distinct_radii_counting() {
-    assert_eq!(
-        count_distinct_radii([Some(1.0), Some(1.0004), Some(-1.0), Some(2.0)], 1e-3),
-        2
-    );
-    assert_eq!(
-        count_distinct_radii([Some(1.0), Some(1.0004), Some(2.0)], 1e-4),
-        3
-    );
-    assert_eq!(
-        count_distinct_radii([Some(1.0), None, None, Some(f64::INFINITY)], 0.1),
-        2
-    );
+    assert_eq!(count_distinct_radii([Some(1.0), Some(1.0004), Some(-1.0), Some(2.0)], 1e-3), 2);
+    assert_eq!(count_distinct_radii([Some(1.0), Some(1.0004), Some(2.0)], 1e-4), 3);
+    assert_eq!(count_distinct_radii([Some(1.0), None, None, Some(f64::INFINITY)], 0.1), 2);
     assert_eq!(count_distinct_radii([Some(1.0), Some(1.0 + 1e-15)], 0.0), 2);
     assert_eq!(count_distinct_radii(Vec::<Option<f64>>::new(), 1.0), 0);
     // The cap: one radius; Ω meshes: many, fewer with a coarser tolerance.
     let sm = cap();
     let panels = build_panels(&sm, tol_for(&sm));
-    assert_eq!(
-        build_schedule(&panels, &reference_of(&sm), 1e-6).distinct_radii,
-        1
-    );
+    assert_eq!(build_schedule(&panels, &reference_of(&sm), 1e-6).distinct_radii, 1);
     let sm = omega_real();
     let panels = build_panels(&sm, tol_for(&sm));
     let fine = build_schedule(&panels, &reference_of(&sm), 1e-9).distinct_radii;
     let coarse = build_schedule(&panels, &reference_of(&sm), 0.5).distinct_radii;
-    assert!(
-        fine > coarse && coarse >= 1 && fine <= panels.len(),
-        "{fine} {coarse}"
-    );
+    assert!(fine > coarse && coarse >= 1 && fine <= panels.len(), "{fine} {coarse}");
     let f = flat();
-    assert_eq!(
-        build_schedule(&build_panels(&f, tol_for(&f)), &reference_of(&f), 1e-3).distinct_radii,
-        1
-    );
+    assert_eq!(build_schedule(&build_panels(&f, tol_for(&f)), &reference_of(&f), 1e-3).distinct_radii, 1);
 }
 
 #[test]
@@ -1339,34 +1026,14 @@ fn panel_files_are_the_four_files_and_the_report_follows() {
     let mut files = panel_files(glb, obj, &sched);
     files.push(report_file(&Report::new("st-support")));
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "panels.glb",
-            "panels.obj",
-            "panels.csv",
-            "panels.json",
-            "report.json"
-        ]
-    );
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
     assert!(files.iter().all(|f| !f.bytes.is_empty()));
     let json: Value = serde_json::from_slice(&files[3].bytes).unwrap();
     assert_close(&json, &serde_json::to_value(&sched).unwrap());
     let csv = std::str::from_utf8(&files[2].bytes).unwrap();
     assert_eq!(csv.lines().count(), s.panels.len() + 1);
-    assert_eq!(
-        glb_json(&files[0].bytes).unwrap()["nodes"]
-            .as_array()
-            .unwrap()
-            .len(),
-        3
-    );
-    assert_eq!(
-        Report::from_json(std::str::from_utf8(&files[4].bytes).unwrap())
-            .unwrap()
-            .method,
-        "st-support"
-    );
+    assert_eq!(glb_json(&files[0].bytes).unwrap()["nodes"].as_array().unwrap().len(), 3);
+    assert_eq!(Report::from_json(std::str::from_utf8(&files[4].bytes).unwrap()).unwrap().method, "st-support");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1375,26 +1042,11 @@ fn panel_files_are_the_four_files_and_the_report_follows() {
 #[test]
 fn report_schema() {
     let mut r = Report::new("st-support");
-    r.input = InputCounts {
-        vertices: 49,
-        faces: 72,
-    };
-    r.output = OutputCounts {
-        vertices: 49,
-        faces: 72,
-        panels: 72,
-    };
-    r.metrics = Some(PanelMetrics {
-        mean_kink_angle_deg: 1.25,
-        max_kink_angle_deg: 3.5,
-        max_distance_to_reference: 2e-3,
-        distinct_radii: 15,
-    });
-    let omega: AbsoluteSphereSection = (&AbsoluteSphere::Sphere {
-        center: M_STRESS,
-        r2: 2.0,
-    })
-        .into();
+    r.input = InputCounts { vertices: 49, faces: 72 };
+    r.output = OutputCounts { vertices: 49, faces: 72, panels: 72 };
+    r.metrics =
+        Some(PanelMetrics { mean_kink_angle_deg: 1.25, max_kink_angle_deg: 3.5, max_distance_to_reference: 2e-3, distinct_radii: 15 });
+    let omega: AbsoluteSphereSection = (&AbsoluteSphere::Sphere { center: M_STRESS, r2: 2.0 }).into();
     r.set_section(&serde_json::json!({ "absolute_sphere": omega, "max_node_axis_offset": 1e-13 }));
     r.add_timing("absolute_sphere", 1.5);
     r.add_timing("panels", 2.0);
@@ -1402,15 +1054,7 @@ fn report_schema() {
     let text = r.to_json();
     let v: Value = serde_json::from_str(&text).unwrap();
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
-    for k in [
-        "schema",
-        "method",
-        "input",
-        "output",
-        "metrics",
-        "st-support",
-        "timings_ms",
-    ] {
+    for k in ["schema", "method", "input", "output", "metrics", "st-support", "timings_ms"] {
         assert!(keys.iter().any(|x| *x == k), "{k}");
     }
     assert_eq!(v["schema"], REPORT_SCHEMA);
@@ -1426,15 +1070,9 @@ fn report_schema() {
     assert_eq!(m.len(), 4, "the shared section: {m:?}");
     assert_eq!(m["max_kink_angle_deg"], 3.5);
     assert_eq!(m["distinct_radii"], 15);
-    assert!(
-        !m.contains_key("max_node_axis_offset"),
-        "a method's figure stays in its section"
-    );
+    assert!(!m.contains_key("max_node_axis_offset"), "a method's figure stays in its section");
     assert_eq!(v["timings_ms"]["panels"], 3.0);
-    assert_close(
-        &serde_json::to_value(Report::from_json(&text).unwrap()).unwrap(),
-        &serde_json::to_value(&r).unwrap(),
-    );
+    assert_close(&serde_json::to_value(Report::from_json(&text).unwrap()).unwrap(), &serde_json::to_value(&r).unwrap());
     // The section reads back as a type; a NaN written as null reads back as NaN.
     let back: Value = r.section().unwrap();
     assert_eq!(back["max_node_axis_offset"], 1e-13);
@@ -1444,11 +1082,7 @@ fn report_schema() {
     assert!(read.metrics.unwrap().max_kink_angle_deg.is_nan());
 
     // Ω at infinity; a method without panels or a section.
-    let inf: AbsoluteSphereSection = (&AbsoluteSphere::Plane {
-        axis: DVec3::Z,
-        d: 0.5,
-    })
-        .into();
+    let inf: AbsoluteSphereSection = (&AbsoluteSphere::Plane { axis: DVec3::Z, d: 0.5 }).into();
     let v = serde_json::to_value(&inf).unwrap();
     assert!(v["center"].is_null() && v["r2"].is_null() && v["at_infinity"] == true);
     assert_eq!(v["axis"], serde_json::json!([0.0, 0.0, 1.0]));
@@ -1460,9 +1094,6 @@ fn report_schema() {
     let path = r.write(&dir).unwrap();
     assert_eq!(path, dir.join("report.json"));
     let back = Report::from_json(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    assert_close(
-        &serde_json::to_value(back).unwrap(),
-        &serde_json::to_value(&r).unwrap(),
-    );
+    assert_close(&serde_json::to_value(back).unwrap(), &serde_json::to_value(&r).unwrap());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -20,9 +20,7 @@ fn inputs(target: &str) -> Vec<PathBuf> {
     let mut files = Vec::new();
     for kind in ["corpus", "artifacts"] {
         let dir = fuzz_dir().join(kind).join(target);
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            continue;
-        };
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
         let mut here: Vec<PathBuf> = entries
             .map(|e| e.expect("read_dir entry").path())
             .filter(|p| p.is_file() && !p.file_name().unwrap().to_string_lossy().starts_with('.'))
@@ -82,19 +80,14 @@ fn replay_protocol() {
 
 #[test]
 fn every_target_is_replayed() {
-    assert_eq!(
-        oracles::TARGETS,
-        ["obj", "gltf", "bspline", "design_link", "protocol"]
-    );
+    assert_eq!(oracles::TARGETS, ["obj", "gltf", "bspline", "design_link", "protocol"]);
 }
 
 // --- seeds that are encoder output ---------------------------------------------------------
 
 mod seeds {
     use super::{fuzz_dir, oracles};
-    use spherical_faces::design_link::{
-        CameraState, ColorBy, Design, DesignSurface, Method, Shading,
-    };
+    use spherical_faces::design_link::{CameraState, ColorBy, Design, Method, DesignSurface, Shading};
     use spherical_faces::pipeline::fields::{Field, FieldData};
     use spherical_faces::pipeline::protocol::*;
     use spherical_faces::pipeline::{Outbox, Session};
@@ -114,19 +107,11 @@ mod seeds {
 
     fn shrink(f: &Field) -> Field {
         let data = match &f.data {
-            FieldData::F32(v) => {
-                FieldData::F32(v.iter().copied().take(3 * f.dim as usize).collect())
-            }
-            FieldData::U32(v) => {
-                FieldData::U32(v.iter().copied().take(3 * f.dim as usize).collect())
-            }
+            FieldData::F32(v) => FieldData::F32(v.iter().copied().take(3 * f.dim as usize).collect()),
+            FieldData::U32(v) => FieldData::U32(v.iter().copied().take(3 * f.dim as usize).collect()),
             FieldData::Bytes(v) => FieldData::Bytes(v.iter().copied().take(48).collect()),
         };
-        Field {
-            name: f.name.clone(),
-            dim: f.dim,
-            data,
-        }
+        Field { name: f.name.clone(), dim: f.dim, data }
     }
 
     impl Outbox for Keep {
@@ -135,40 +120,21 @@ mod seeds {
             let (kind, stage) = match &mut msg {
                 FromWorker::Ready => ("ready", String::new()),
                 FromWorker::Loaded(_) => ("loaded", String::new()),
-                FromWorker::Progress(p) => (
-                    if p.energies.is_empty() {
-                        "progress"
-                    } else {
-                        "energies"
-                    },
-                    p.stage.clone(),
-                ),
-                FromWorker::Snapshot {
-                    stage,
-                    fields: headers,
-                    ..
-                } => {
+                FromWorker::Progress(p) => (if p.energies.is_empty() { "progress" } else { "energies" }, p.stage.to_string()),
+                FromWorker::Snapshot { stage, fields: headers, .. } => {
                     *headers = fields.iter().map(Field::header).collect();
-                    ("snapshot", stage.clone())
+                    ("snapshot", stage.to_string())
                 }
-                FromWorker::Files {
-                    stage,
-                    fields: headers,
-                    mime,
-                } => {
+                FromWorker::Files { stage, fields: headers, mime } => {
                     *headers = fields.iter().map(Field::header).collect();
                     mime.truncate(headers.len());
-                    ("files", stage.clone())
+                    ("files", stage.to_string())
                 }
-                FromWorker::Finished { stage, .. } => ("finished", stage.clone()),
-                FromWorker::Cancelled { stage } => ("cancelled", stage.clone()),
+                FromWorker::Finished { stage, .. } => ("finished", stage.to_string()),
+                FromWorker::Cancelled { stage } => ("cancelled", stage.to_string()),
                 FromWorker::Error { .. } => ("error", String::new()),
             };
-            let name = format!(
-                "from_{kind}{}{}",
-                if stage.is_empty() { "" } else { "_" },
-                stage.replace(['-', '.'], "_")
-            );
+            let name = format!("from_{kind}{}{}", if stage.is_empty() { "" } else { "_" }, stage.replace(['-', '.'], "_"));
             if self.seen.insert(name.clone()) {
                 self.out.push((name, encode_from_worker(&msg, &fields)));
             }
@@ -200,93 +166,33 @@ mod seeds {
         let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec();
         let spline = std::fs::read(fuzz_dir().join("corpus/bspline/paraboloid_dome.json")).unwrap();
         let requests: Vec<(&str, ToWorker, Option<Vec<u8>>)> = vec![
-            (
-                "to_load_sample",
-                ToWorker::LoadSample(Sample::WaveRoof),
-                None,
-            ),
-            (
-                "to_load_file",
-                ToWorker::LoadFile {
-                    name: "tri.obj".into(),
-                },
-                Some(obj.clone()),
-            ),
-            (
-                "to_run_curvature",
-                run(StageRequest::Curvature(Default::default())),
-                None,
-            ),
-            (
-                "to_run_st_adapted",
-                run(StageRequest::StAdapted(StAdaptedParams::default())),
-                None,
-            ),
-            (
-                "to_run_st_support",
-                run(StageRequest::StSupport(StSupportParams::default())),
-                None,
-            ),
-            (
-                "to_run_sq",
-                run(StageRequest::Sq(SqParams::default())),
-                None,
-            ),
+            ("to_load_sample", ToWorker::LoadSample(Sample::WaveRoof), None),
+            ("to_load_file", ToWorker::LoadFile { name: "tri.obj".into() }, Some(obj.clone())),
+            ("to_run_curvature", run(StageRequest::Curvature(Default::default())), None),
+            ("to_run_st_adapted", run(StageRequest::StAdapted(StAdaptedParams::default())), None),
+            ("to_run_st_support", run(StageRequest::StSupport(StSupportParams::default())), None),
+            ("to_run_sq", run(StageRequest::Sq(SqParams::default())), None),
             ("to_cancel", ToWorker::Cancel, None),
             ("to_crash", ToWorker::Crash, None),
         ];
         for (name, msg, bytes) in &requests {
-            write(
-                "protocol",
-                name,
-                &oracles::protocol_bytes(&encode_to_worker(msg, bytes.clone())),
-            );
+            write("protocol", name, &oracles::protocol_bytes(&encode_to_worker(msg, bytes.clone())));
         }
 
         // What the worker sends, from real runs (small ones).
         let mut keep = Keep::default();
         keep.send(FromWorker::Ready, vec![]);
         let mut s = Session::new();
-        s.handle(
-            ToWorker::LoadFile {
-                name: "bad.obj".into(),
-            },
-            Some(b"v 0 0 0\nf 1 2 9\n"),
-            &mut keep,
-        );
+        s.handle(ToWorker::LoadFile { name: "bad.obj".into() }, Some(b"v 0 0 0\nf 1 2 9\n"), &mut keep);
         s.handle(ToWorker::LoadSample(Sample::Dome), None, &mut keep);
-        s.handle(
-            run(StageRequest::Curvature(Default::default())),
-            None,
-            &mut keep,
-        );
-        let st = StAdaptedParams {
-            sizing: Sizing::UniformFaces(60),
-            ..StAdaptedParams::default()
-        };
+        s.handle(run(StageRequest::Curvature(Default::default())), None, &mut keep);
+        let st = StAdaptedParams { sizing: Sizing::UniformFaces(60), ..StAdaptedParams::default() };
         s.handle(run(StageRequest::StAdapted(st)), None, &mut keep);
-        let sts = StSupportParams {
-            remesh: Sizing::UniformFaces(60),
-            ..StSupportParams::default()
-        };
+        let sts = StSupportParams { remesh: Sizing::UniformFaces(60), ..StSupportParams::default() };
         s.handle(run(StageRequest::StSupport(sts)), None, &mut keep);
-        s.handle(
-            ToWorker::LoadFile {
-                name: "paraboloid_dome.json".into(),
-            },
-            Some(&spline),
-            &mut keep,
-        );
-        s.handle(
-            run(StageRequest::Sq(SqParams {
-                grid: 8,
-                until: Until::Congruence,
-                ..SqParams::default()
-            })),
-            None,
-            &mut keep,
-        );
-        keep.send(FromWorker::Cancelled { stage: "sq".into() }, vec![]);
+        s.handle(ToWorker::LoadFile { name: "paraboloid_dome.json".into() }, Some(&spline), &mut keep);
+        s.handle(run(StageRequest::Sq(SqParams { grid: 8, until: Until::Congruence, ..SqParams::default() })), None, &mut keep);
+        keep.send(FromWorker::Cancelled { stage: spherical_faces::pipeline::fields::StageId::Sq }, vec![]);
         for (name, env) in &keep.out {
             write("protocol", name, &oracles::protocol_bytes(env));
         }
@@ -302,37 +208,13 @@ mod seeds {
                     color: ColorBy::Sizing,
                     shading: Shading::Flat,
                     edges: true,
-                    camera: Some(CameraState {
-                        yaw: 0.25,
-                        pitch: -0.5,
-                        distance: 4.0,
-                        target: [0.5, -0.25, 1.0],
-                    }),
+                    camera: Some(CameraState { yaw: 0.25, pitch: -0.5, distance: 4.0, target: [0.5, -0.25, 1.0] }),
                     ..Design::default()
                 },
             ),
-            (
-                "app_st_support.frag",
-                Design {
-                    method: Method::StSupport,
-                    ..Design::default()
-                },
-            ),
-            (
-                "app_sq.frag",
-                Design {
-                    method: Method::Sq,
-                    reference: DesignSurface::Sample(Sample::Vault),
-                    ..Design::default()
-                },
-            ),
-            (
-                "app_file.frag",
-                Design {
-                    reference: DesignSurface::OwnFile("my roof #2.obj".into()),
-                    ..Design::default()
-                },
-            ),
+            ("app_st_support.frag", Design { method: Method::StSupport, ..Design::default() }),
+            ("app_sq.frag", Design { method: Method::Sq, reference: DesignSurface::Sample(Sample::Vault), ..Design::default() }),
+            ("app_file.frag", Design { reference: DesignSurface::OwnFile("my roof #2.obj".into()), ..Design::default() }),
         ];
         for (name, d) in &designs {
             write("design_link", name, d.to_fragment().as_bytes());

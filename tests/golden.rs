@@ -33,43 +33,26 @@ fn sphere_in_frame(s: [f64; 5], t: [f64; 3], sigma: f64) -> [f64; 5] {
     let (a, b, c) = (s[0], [s[1], s[2], s[3]], s[4]);
     let tt = t[0] * t[0] + t[1] * t[1] + t[2] * t[2];
     let psi = a * tt - (b[0] * t[0] + b[1] * t[1] + b[2] * t[2]) + c;
-    [
-        a * sigma,
-        b[0] - 2.0 * a * t[0],
-        b[1] - 2.0 * a * t[1],
-        b[2] - 2.0 * a * t[2],
-        psi / sigma,
-    ]
+    [a * sigma, b[0] - 2.0 * a * t[0], b[1] - 2.0 * a * t[1], b[2] - 2.0 * a * t[2], psi / sigma]
 }
 
 /// What one run gives: its error, or the report (without timings) and the panel geometry.
 fn record(input: &str, args: &[&str]) -> Value {
-    let dir = std::env::temp_dir().join(format!(
-        "sf-golden-{}-{}-{}",
-        std::process::id(),
-        input,
-        args.join("_")
-    ));
+    let dir = std::env::temp_dir().join(format!("sf-golden-{}-{}-{}", std::process::id(), input, args.join("_")));
     let _ = std::fs::remove_dir_all(&dir);
     let path = input_path(input);
     let mut cmd_args: Vec<&str> = vec![args[0], &path];
     cmd_args.extend_from_slice(&args[1..]);
     let dir_s = dir.to_str().unwrap().to_string();
     cmd_args.extend_from_slice(&["--out", &dir_s]);
-    let out = Command::new(env!("CARGO_BIN_EXE_spherical-faces"))
-        .args(&cmd_args)
-        .output()
-        .expect("runs");
+    let out = Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(&cmd_args).output().expect("runs");
     if !out.status.success() {
         let err = String::from_utf8_lossy(&out.stderr).trim().to_string();
         assert_eq!(out.status.code(), Some(2), "{err}");
         return json!({ "error": err });
     }
     let read = |name: &str| -> Value {
-        serde_json::from_slice(
-            &std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}")),
-        )
-        .unwrap()
+        serde_json::from_slice(&std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))).unwrap()
     };
     let mut report = read("report.json");
     report.as_object_mut().unwrap().remove("timings_ms");
@@ -80,20 +63,12 @@ fn record(input: &str, args: &[&str]) -> Value {
     let stride = panels.len().div_ceil(SAMPLED_PANELS).max(1);
     let f = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
     let geometry = |p: &Value| -> (Vec<Vec<f64>>, [f64; 5]) {
-        let vertices: Vec<Vec<f64>> = p["vertices"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_array().unwrap().iter().map(f).collect())
-            .collect();
+        let vertices: Vec<Vec<f64>> = p["vertices"].as_array().unwrap().iter().map(|v| v.as_array().unwrap().iter().map(f).collect()).collect();
         let n = vertices.len() as f64;
         let t = [0, 1, 2].map(|k| vertices.iter().map(|v| v[k]).sum::<f64>() / n);
         let s = &p["sphere"];
         let b: Vec<f64> = s["b"].as_array().unwrap().iter().map(f).collect();
-        (
-            vertices,
-            sphere_in_frame([f(&s["a"]), b[0], b[1], b[2], f(&s["c"])], t, diag),
-        )
+        (vertices, sphere_in_frame([f(&s["a"]), b[0], b[1], b[2], f(&s["c"])], t, diag))
     };
     let mut sums = vec![0.0; 8];
     let mut sampled = Vec::new();
@@ -125,9 +100,7 @@ fn compare(path: &str, want: &Value, got: &Value, scale: f64, errors: &mut Vec<S
             let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
             let tol = TOLERANCE * scale.max(a.abs()).max(1.0);
             if (a - b).abs() > tol || (a - b).is_nan() {
-                errors.push(format!(
-                    "{path}: {a:e} recorded, {b:e} now (tolerance {tol:e})"
-                ));
+                errors.push(format!("{path}: {a:e} recorded, {b:e} now (tolerance {tol:e})"));
             }
         }
         (Value::Object(a), Value::Object(b)) => {
@@ -155,27 +128,16 @@ fn check(name: &str, input: &str, args: &[&str]) {
     if std::env::var("SF_GOLDEN").as_deref() == Ok("write") {
         std::fs::create_dir_all(golden_dir()).unwrap();
         let recorded = json!({ "input": input, "args": args, "run": got });
-        std::fs::write(
-            &file,
-            serde_json::to_string_pretty(&recorded).unwrap() + "\n",
-        )
-        .unwrap();
+        std::fs::write(&file, serde_json::to_string_pretty(&recorded).unwrap() + "\n").unwrap();
         return;
     }
     let text = std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     let want: Value = serde_json::from_str(&text).unwrap();
-    assert_eq!(
-        want["args"],
-        json!(args),
-        "{name}: recorded with other arguments"
-    );
+    assert_eq!(want["args"], json!(args), "{name}: recorded with other arguments");
     let mut errors = Vec::new();
     // Panel sums add up n panels: allow n times the tolerance there.
     let n = want["run"]["panels"]["count"].as_f64().unwrap_or(1.0);
-    if let (Some(w), Some(g)) = (
-        want["run"]["panels"]["sums"].as_array(),
-        got["panels"]["sums"].as_array(),
-    ) {
+    if let (Some(w), Some(g)) = (want["run"]["panels"]["sums"].as_array(), got["panels"]["sums"].as_array()) {
         for (k, (a, b)) in w.iter().zip(g).enumerate() {
             compare(&format!("panels.sums[{k}]"), a, b, n, &mut errors);
         }
@@ -188,17 +150,7 @@ fn check(name: &str, input: &str, args: &[&str]) {
         v
     };
     compare(name, &strip(&want["run"]), &strip(&got), 1.0, &mut errors);
-    assert!(
-        errors.is_empty(),
-        "{name}: {} differences:\n{}",
-        errors.len(),
-        errors
-            .iter()
-            .take(20)
-            .cloned()
-            .collect::<Vec<_>>()
-            .join("\n")
-    );
+    assert!(errors.is_empty(), "{name}: {} differences:\n{}", errors.len(), errors.iter().take(20).cloned().collect::<Vec<_>>().join("\n"));
 }
 
 macro_rules! golden {

@@ -15,17 +15,15 @@ use spherical_faces::export::Report;
 use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::import::import_mesh;
-use spherical_faces::panels::panel::Panel;
 use spherical_faces::panels::tessellate::MAX_PANEL_TRIANGLES;
+use spherical_faces::panels::panel::Panel;
 use spherical_faces::panels::{level_cap, PANEL_TRIANGLE_BUDGET};
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{ignore, Clock};
 use spherical_faces::reference::assumptions::Warning;
 use spherical_faces::reference::Reference;
-use spherical_faces::remeshing::{
-    face_cap, pliant_remesh_with_stats, RemeshParams, Sizing, SizingField, MAX_METHOD_FACES,
-};
+use spherical_faces::remeshing::{face_cap, pliant_remesh_with_stats, RemeshParams, Sizing, SizingField, MAX_METHOD_FACES};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_adapted::StAdaptedError;
 use spherical_faces::st_support::{StSupportError, StSupportParams};
@@ -34,10 +32,7 @@ const SHARED: &str = "../shared/data/hostile";
 const OWN: &str = "tests/data/hostile";
 
 fn cli(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_spherical-faces"))
-        .args(args)
-        .output()
-        .expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(args).output().expect("runs")
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -48,20 +43,13 @@ fn scratch(name: &str) -> PathBuf {
 
 fn load(path: &Path) -> Result<Loaded, String> {
     let bytes = std::fs::read(path).unwrap();
-    Loaded::from_file(&bytes, &path.file_name().unwrap().to_string_lossy())
-        .map_err(|e| e.to_string())
+    Loaded::from_file(&bytes, &path.file_name().unwrap().to_string_lossy()).map_err(|e| e.to_string())
 }
 
 /// A message a user can read: one line, no control characters, names the file.
 fn assert_clear(message: &str, file: &str) {
-    assert!(
-        !message.is_empty() && !message.contains('\n'),
-        "{file}: {message:?}"
-    );
-    assert!(
-        !message.chars().any(char::is_control),
-        "{file}: control characters in {message:?}"
-    );
+    assert!(!message.is_empty() && !message.contains('\n'), "{file}: {message:?}");
+    assert!(!message.chars().any(char::is_control), "{file}: control characters in {message:?}");
 }
 
 /// No null and no non-finite number anywhere in a report, except Ω's documented nulls (its centre
@@ -69,24 +57,14 @@ fn assert_clear(message: &str, file: &str) {
 fn assert_numbers(v: &serde_json::Value, at: &str) {
     match v {
         serde_json::Value::Null => {
-            let allowed = [
-                "absolute_sphere.center",
-                "absolute_sphere.r2",
-                "absolute_sphere.axis",
-                "absolute_sphere.d",
-            ];
+            let allowed = ["absolute_sphere.center", "absolute_sphere.r2", "absolute_sphere.axis", "absolute_sphere.d"];
             assert!(allowed.iter().any(|a| at.ends_with(a)), "null at {at}");
         }
         serde_json::Value::Number(n) => {
             assert!(n.as_f64().is_some_and(f64::is_finite), "{at} = {n}")
         }
-        serde_json::Value::Array(a) => a
-            .iter()
-            .enumerate()
-            .for_each(|(i, x)| assert_numbers(x, &format!("{at}[{i}]"))),
-        serde_json::Value::Object(o) => o
-            .iter()
-            .for_each(|(k, x)| assert_numbers(x, &format!("{at}.{k}"))),
+        serde_json::Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| assert_numbers(x, &format!("{at}[{i}]"))),
+        serde_json::Value::Object(o) => o.iter().for_each(|(k, x)| assert_numbers(x, &format!("{at}.{k}"))),
         _ => {}
     }
 }
@@ -97,10 +75,7 @@ fn assert_report(report: &Report, file: &str) {
 
 fn assert_bounded_panels(panels: &[Panel], file: &str) {
     let most = panels.iter().map(|p| p.triangles.len()).max().unwrap_or(0);
-    assert!(
-        most <= MAX_PANEL_TRIANGLES,
-        "{file}: a panel of {most} triangles"
-    );
+    assert!(most <= MAX_PANEL_TRIANGLES, "{file}: a panel of {most} triangles");
 }
 
 fn corpus() -> Vec<PathBuf> {
@@ -134,26 +109,14 @@ fn every_hostile_file_gets_a_bounded_clear_answer() {
             }
         };
         let reference = &loaded.surface;
-        let field = reference
-            .curvature(&JetParams::default(), &mut ignore)
-            .unwrap();
-        assert!(
-            field.summary.largest_neighbourhood <= MAX_NEIGHBOURHOOD,
-            "{file}"
-        );
+        let field = reference.curvature(&JetParams::default(), &mut ignore).unwrap();
+        assert!(field.summary.largest_neighbourhood <= MAX_NEIGHBOURHOOD, "{file}");
         assert!(field.vertices.iter().all(|c| c.mean.is_finite()), "{file}");
         let clock = Clock(None);
         // The raw input when small; a remesh of a large one (the ST-support run on 5000 raw
         // faces is bounded too, but takes minutes in a test build).
-        let remesh = if reference.mesh().face_count() <= 2000 {
-            Sizing::None
-        } else {
-            Sizing::UniformFaces(300)
-        };
-        let params = StSupportParams {
-            remesh,
-            ..StSupportParams::default()
-        };
+        let remesh = if reference.mesh().face_count() <= 2000 { Sizing::None } else { Sizing::UniformFaces(300) };
+        let params = StSupportParams { remesh, ..StSupportParams::default() };
         match spherical_faces::st_support::compute(reference, &params, clock, &mut ignore) {
             Ok(result) => {
                 assert_bounded_panels(&result.panels, &file);
@@ -162,18 +125,11 @@ fn every_hostile_file_gets_a_bounded_clear_answer() {
             }
             Err(e) => assert_clear(&e.to_string(), &file),
         }
-        let params = StAdaptedParams {
-            sizing: Sizing::UniformFaces(60),
-            ..StAdaptedParams::default()
-        };
+        let params = StAdaptedParams { sizing: Sizing::UniformFaces(60), ..StAdaptedParams::default() };
         match spherical_faces::st_adapted::compute(reference, &params, clock, &mut |_| Ok(())) {
             Ok(result) => {
                 assert_bounded_panels(&result.panels, &file);
-                assert!(
-                    result.remeshed.face_count() <= 180,
-                    "{file}: {} faces for 60",
-                    result.remeshed.face_count()
-                );
+                assert!(result.remeshed.face_count() <= 180, "{file}: {} faces for 60", result.remeshed.face_count());
                 let (report, _) = stages::st_adapted::export(reference, &result, &params, clock);
                 assert_report(&report, &file);
             }
@@ -188,40 +144,20 @@ fn every_hostile_file_gets_a_bounded_clear_answer() {
 /// splits never outgrow the cap (4 × the faces the field asks for + 2 × the input's).
 #[test]
 fn remeshing_a_tiny_mesh_reaches_its_target_or_refuses() {
-    let reference = load(&Path::new(SHARED).join("remesh_runaway_4faces.obj"))
-        .unwrap()
-        .surface;
+    let reference = load(&Path::new(SHARED).join("remesh_runaway_4faces.obj")).unwrap().surface;
     let mesh = reference.mesh();
     for n in [12, 100, 1000] {
         let sizing = SizingField::uniform_for_face_count(mesh, n);
         let cap = face_cap(mesh, &sizing);
-        assert!(
-            cap <= 8 * n + 2 * mesh.face_count() + 64,
-            "cap {cap} for {n}"
-        );
-        let out =
-            pliant_remesh_with_stats(mesh, &sizing, &RemeshParams::default(), &mut ignore).unwrap();
+        assert!(cap <= 8 * n + 2 * mesh.face_count() + 64, "cap {cap} for {n}");
+        let out = pliant_remesh_with_stats(mesh, &sizing, &RemeshParams::default(), &mut ignore).unwrap();
         let splits: usize = out.rounds.iter().map(|r| r.splits).sum();
-        assert!(
-            out.mesh.face_count() <= cap,
-            "{} faces over the cap {cap}",
-            out.mesh.face_count()
-        );
+        assert!(out.mesh.face_count() <= cap, "{} faces over the cap {cap}", out.mesh.face_count());
         assert!(splits <= out.rounds.len() * cap, "{splits} splits");
-        let st = StAdaptedParams {
-            sizing: Sizing::UniformFaces(n),
-            ..StAdaptedParams::default()
-        };
+        let st = StAdaptedParams { sizing: Sizing::UniformFaces(n), ..StAdaptedParams::default() };
         match spherical_faces::st_adapted::compute(&reference, &st, Clock(None), &mut |_| Ok(())) {
-            Ok(r) => assert!(
-                (n / 3..=3 * n).contains(&r.remeshed.face_count()),
-                "{} faces for {n}",
-                r.remeshed.face_count()
-            ),
-            Err(e) => assert!(
-                matches!(e, StAdaptedError::Remesh(..)) && e.to_string().contains("remesh"),
-                "{e}"
-            ),
+            Ok(r) => assert!((n / 3..=3 * n).contains(&r.remeshed.face_count()), "{} faces for {n}", r.remeshed.face_count()),
+            Err(e) => assert!(matches!(e, StAdaptedError::Remesh(..)) && e.to_string().contains("remesh"), "{e}"),
         }
     }
 }
@@ -232,14 +168,7 @@ fn remeshing_a_tiny_mesh_reaches_its_target_or_refuses() {
 fn face_counts_are_capped_in_the_cli_and_the_link() {
     let dome = format!("{SHARED}/dome20.obj");
     for cmd in ["st", "st-support"] {
-        let out = cli(&[
-            cmd,
-            &dome,
-            "--faces",
-            "18446744073709551615",
-            "--out",
-            scratch("faces").to_str().unwrap(),
-        ]);
+        let out = cli(&[cmd, &dome, "--faces", "18446744073709551615", "--out", scratch("faces").to_str().unwrap()]);
         assert_eq!(out.status.code(), Some(2), "{cmd}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("200000") && err.lines().count() == 1, "{err}");
@@ -256,17 +185,10 @@ fn a_vertex_of_huge_valence_keeps_fits_bounded_and_big_polygons_have_no_hub() {
     let fan = load(&Path::new(OWN).join("fan_5000.obj")).unwrap().surface;
     let field = fan.curvature(&JetParams::default(), &mut ignore).unwrap();
     assert!(field.summary.largest_neighbourhood <= MAX_NEIGHBOURHOOD);
-    let ngon = import_mesh(
-        &std::fs::read(Path::new(OWN).join("ngon_1500.obj")).unwrap(),
-        "ngon_1500.obj",
-    )
-    .unwrap();
+    let ngon = import_mesh(&std::fs::read(Path::new(OWN).join("ngon_1500.obj")).unwrap(), "ngon_1500.obj").unwrap();
     let mesh = ngon.surface().triangulated();
     let topo = Topology::new(&mesh);
-    let valence = (0..topo.vertex_count())
-        .map(|v| topo.vertex_neighbors(v).len())
-        .max()
-        .unwrap();
+    let valence = (0..topo.vertex_count()).map(|v| topo.vertex_neighbors(v).len()).max().unwrap();
     assert_eq!(mesh.face_count(), 1498);
     assert!(valence <= 4, "a hub of valence {valence}");
 }
@@ -276,18 +198,10 @@ fn a_vertex_of_huge_valence_keeps_fits_bounded_and_big_polygons_have_no_hub() {
 #[test]
 fn an_unwritable_output_folder_is_refused_first() {
     // The input does not exist either: the folder is what the user hears about.
-    let out = cli(&[
-        "st",
-        "/nonexistent/in.obj",
-        "--out",
-        "/proc/sf-no-such-dir/out",
-    ]);
+    let out = cli(&["st", "/nonexistent/in.obj", "--out", "/proc/sf-no-such-dir/out"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("/proc/sf-no-such-dir/out") && err.contains("cannot write"),
-        "{err}"
-    );
+    assert!(err.contains("/proc/sf-no-such-dir/out") && err.contains("cannot write"), "{err}");
 }
 
 // --- 4. Messages never carry control characters -------------------------------------------------------
@@ -300,19 +214,10 @@ fn messages_escape_control_characters() {
         assert_clear(&err, name);
         let out = cli(&["info", &path]);
         assert_eq!(out.status.code(), Some(2));
-        assert!(
-            !out.stderr.iter().any(|&b| b == 0x1b || b == 0x07),
-            "{:?}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(!out.stderr.iter().any(|&b| b == 0x1b || b == 0x07), "{:?}", String::from_utf8_lossy(&out.stderr));
     }
-    let err = load(Path::new(&format!("{OWN}/control_chars.obj")))
-        .err()
-        .unwrap();
-    assert!(
-        err.contains("\\x1B[2J"),
-        "the escape is shown, escaped: {err}"
-    );
+    let err = load(Path::new(&format!("{OWN}/control_chars.obj"))).err().unwrap();
+    assert!(err.contains("\\x1B[2J"), "the escape is shown, escaped: {err}");
 }
 
 // --- 5. Out-of-range scales are named as such -----------------------------------------------------------
@@ -321,10 +226,7 @@ fn messages_escape_control_characters() {
 fn out_of_range_scales_are_refused_as_such() {
     for name in ["huge_scale.obj", "tiny_scale.obj"] {
         let err = load(&Path::new(OWN).join(name)).err().expect("refused");
-        assert!(
-            err.contains("rescale") && !err.contains("degenerate"),
-            "{name}: {err}"
-        );
+        assert!(err.contains("rescale") && !err.contains("degenerate"), "{name}: {err}");
     }
 }
 
@@ -336,17 +238,12 @@ fn oversized_files_and_lying_accessors_are_refused_before_reading() {
     let dir = scratch("big");
     std::fs::create_dir_all(&dir).unwrap();
     let big = dir.join("huge.obj");
-    std::fs::File::create(&big)
-        .unwrap()
-        .set_len(20 << 30)
-        .unwrap();
+    std::fs::File::create(&big).unwrap().set_len(20 << 30).unwrap();
     let out = cli(&["info", big.to_str().unwrap()]);
     let _ = std::fs::remove_file(&big);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("exceed the limit"));
-    let err = load(&Path::new(OWN).join("lying_accessor.gltf"))
-        .err()
-        .unwrap();
+    let err = load(&Path::new(OWN).join("lying_accessor.gltf")).err().unwrap();
     assert!(err.contains("no bufferView"), "{err}");
 }
 
@@ -354,10 +251,7 @@ fn oversized_files_and_lying_accessors_are_refused_before_reading() {
 
 #[test]
 fn design_links_round_trip_without_notices() {
-    for name in [
-        "design_link_roundtrip_rtol.frag",
-        "design_link_roundtrip_cam.frag",
-    ] {
+    for name in ["design_link_roundtrip_rtol.frag", "design_link_roundtrip_cam.frag"] {
         let text = std::fs::read_to_string(Path::new(SHARED).join(name)).unwrap();
         let (first, notices) = Design::from_fragment(text.trim());
         assert!(notices.is_empty(), "{name}: {notices:?}");
@@ -378,34 +272,14 @@ fn design_links_round_trip_without_notices() {
 #[test]
 fn st_support_warns_where_h_changes_sign() {
     let dir = scratch("saddle");
-    let out = cli(&[
-        "st-support",
-        &format!("{SHARED}/tessellation_blowup_saddle18.obj"),
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = cli(&["st-support", &format!("{SHARED}/tessellation_blowup_saddle18.obj"), "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("warning: H changes sign"), "{err}");
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     let warnings = report["warnings"].as_array().unwrap();
-    assert!(
-        warnings
-            .iter()
-            .any(|w| w.as_str().unwrap().contains("H changes sign")),
-        "{warnings:?}"
-    );
-    assert!(
-        warnings
-            .iter()
-            .any(|w| w.as_str().unwrap().contains("kinks")),
-        "{warnings:?}"
-    );
+    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("H changes sign")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("kinks")), "{warnings:?}");
     assert_numbers(&report, "saddle18 report");
 }
 
@@ -413,55 +287,20 @@ fn st_support_warns_where_h_changes_sign() {
 
 #[test]
 fn slivers_are_counted_and_tessellation_is_bounded() {
-    let reference = load(&Path::new(OWN).join("sliver_dome.obj"))
-        .unwrap()
-        .surface;
-    let result = spherical_faces::st_support::compute(
-        &reference,
-        &StSupportParams::default(),
-        Clock(None),
-        &mut ignore,
-    )
-    .unwrap();
+    let reference = load(&Path::new(OWN).join("sliver_dome.obj")).unwrap().surface;
+    let result = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
     assert!(result.metrics.degenerate_faces >= 1);
-    assert!(
-        result
-            .warnings
-            .iter()
-            .any(|w| matches!(w, Warning::Slivers { faces } if *faces >= 1)),
-        "{:?}",
-        result.warnings
-    );
+    assert!(result.warnings.iter().any(|w| matches!(w, Warning::Slivers { faces } if *faces >= 1)), "{:?}", result.warnings);
     assert_bounded_panels(&result.panels, "sliver_dome");
 
-    let saddle = load(&Path::new(SHARED).join("tessellation_blowup_saddle18.obj"))
-        .unwrap()
-        .surface;
-    let result = spherical_faces::st_support::compute(
-        &saddle,
-        &StSupportParams::default(),
-        Clock(None),
-        &mut ignore,
-    )
-    .unwrap();
+    let saddle = load(&Path::new(SHARED).join("tessellation_blowup_saddle18.obj")).unwrap().surface;
+    let result = spherical_faces::st_support::compute(&saddle, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
     assert_bounded_panels(&result.panels, "saddle18");
     let ngon = load(&Path::new(OWN).join("ngon_1500.obj")).unwrap().surface;
-    let result = spherical_faces::st_support::compute(
-        &ngon,
-        &StSupportParams::default(),
-        Clock(None),
-        &mut ignore,
-    )
-    .unwrap();
+    let result = spherical_faces::st_support::compute(&ngon, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
     let triangles: usize = result.panels.iter().map(|p| p.triangles.len()).sum();
-    let zippers = result.panels.len()
-        * 4
-        * (4 * level_cap(result.panels.len(), PANEL_TRIANGLE_BUDGET, 32) + 2);
-    assert!(
-        triangles <= PANEL_TRIANGLE_BUDGET + zippers,
-        "{triangles} triangles for {} panels",
-        result.panels.len()
-    );
+    let zippers = result.panels.len() * 4 * (4 * level_cap(result.panels.len(), PANEL_TRIANGLE_BUDGET, 32) + 2);
+    assert!(triangles <= PANEL_TRIANGLE_BUDGET + zippers, "{triangles} triangles for {} panels", result.panels.len());
 }
 
 // --- 10. A fold-over flap: bounded remeshing and a warning -------------------------------------------------
@@ -472,33 +311,15 @@ fn a_folded_flap_is_warned_about_and_remeshes_within_bounds() {
     let mesh = reference.mesh();
     let sizing = SizingField::uniform_for_face_count(mesh, 200);
     let cap = face_cap(mesh, &sizing);
-    let out =
-        pliant_remesh_with_stats(mesh, &sizing, &RemeshParams::default(), &mut ignore).unwrap();
-    let operations: usize = out
-        .rounds
-        .iter()
-        .map(|r| r.splits + r.collapses + r.flips)
-        .sum();
+    let out = pliant_remesh_with_stats(mesh, &sizing, &RemeshParams::default(), &mut ignore).unwrap();
+    let operations: usize = out.rounds.iter().map(|r| r.splits + r.collapses + r.flips).sum();
     assert!(out.mesh.face_count() <= cap);
     assert!(operations <= 40 * cap, "{operations} operations, cap {cap}");
     // The flap cannot be cut into 200 even faces: refused, and the refusal names the fold.
-    let params = StAdaptedParams {
-        sizing: Sizing::UniformFaces(200),
-        ..StAdaptedParams::default()
-    };
-    let err =
-        spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(()))
-            .unwrap_err();
-    let StAdaptedError::Remesh(refused) = &err else {
-        panic!("{err}")
-    };
-    assert!(
-        refused
-            .warnings
-            .iter()
-            .any(|w| matches!(w, Warning::Folds { .. })),
-        "{err}"
-    );
+    let params = StAdaptedParams { sizing: Sizing::UniformFaces(200), ..StAdaptedParams::default() };
+    let err = spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_err();
+    let StAdaptedError::Remesh(refused) = &err else { panic!("{err}") };
+    assert!(refused.warnings.iter().any(|w| matches!(w, Warning::Folds { .. })), "{err}");
     assert!(err.to_string().contains("folds back"), "{err}");
 }
 
@@ -509,11 +330,7 @@ fn grid(n: usize) -> TriMesh {
     for j in 0..=n {
         for i in 0..=n {
             let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
-            positions.push(DVec3::new(
-                x,
-                y,
-                0.5 - (x - 0.5).powi(2) - (y - 0.5).powi(2),
-            ));
+            positions.push(DVec3::new(x, y, 0.5 - (x - 0.5).powi(2) - (y - 0.5).powi(2)));
         }
     }
     let mut triangles = Vec::new();
@@ -531,32 +348,13 @@ fn grid(n: usize) -> TriMesh {
 fn methods_refuse_more_faces_than_they_handle_and_name_the_remesh() {
     let reference = Reference::from_triangles(grid(145)); // 42,050 faces
     assert!(reference.mesh().face_count() > MAX_METHOD_FACES);
-    let err = spherical_faces::st_support::compute(
-        &reference,
-        &StSupportParams::default(),
-        Clock(None),
-        &mut ignore,
-    )
-    .unwrap_err();
-    let StSupportError::TooManyFaces(e) = &err else {
-        panic!("{err}")
-    };
+    let err = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock(None), &mut ignore).unwrap_err();
+    let StSupportError::TooManyFaces(e) = &err else { panic!("{err}") };
     assert_eq!(e.suggested(), MAX_METHOD_FACES / 2);
-    assert!(
-        err.to_string().contains(&format!(
-            "remesh to about {} faces first",
-            MAX_METHOD_FACES / 2
-        )),
-        "{err}"
-    );
+    assert!(err.to_string().contains(&format!("remesh to about {} faces first", MAX_METHOD_FACES / 2)), "{err}");
     let stage = stages::StageError::StSupport(err);
     assert_eq!(stage.remesh_to(), Some(MAX_METHOD_FACES / 2));
-    let params = StAdaptedParams {
-        sizing: Sizing::UniformFaces(MAX_METHOD_FACES + 1),
-        ..StAdaptedParams::default()
-    };
-    let err =
-        spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(()))
-            .unwrap_err();
+    let params = StAdaptedParams { sizing: Sizing::UniformFaces(MAX_METHOD_FACES + 1), ..StAdaptedParams::default() };
+    let err = spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_err();
     assert!(matches!(err, StAdaptedError::TooManyFaces(_)), "{err}");
 }

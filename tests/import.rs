@@ -5,9 +5,9 @@
 mod common;
 
 use glam::DVec3;
+use spherical_faces::import::*;
 use spherical_faces::geometry::mesh::weld::{weld, WeldReport};
 use spherical_faces::geometry::mesh::TriMesh;
-use spherical_faces::import::*;
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
@@ -21,10 +21,7 @@ fn import_ok(text: &str, name: &str) -> Imported {
 
 fn import_err(bytes: &[u8], name: &str) -> ImportError {
     match import_mesh(bytes, name) {
-        Ok(m) => panic!(
-            "{name}: expected an error, got {} faces",
-            m.mesh.face_count()
-        ),
+        Ok(m) => panic!("{name}: expected an error, got {} faces", m.mesh.face_count()),
         Err(e) => e,
     }
 }
@@ -34,9 +31,7 @@ fn area_vector(m: &TriMesh) -> DVec3 {
 }
 
 fn total_area(m: &TriMesh) -> f64 {
-    (0..m.face_count())
-        .map(|f| m.face_area_vector(f).length())
-        .sum()
+    (0..m.face_count()).map(|f| m.face_area_vector(f).length()).sum()
 }
 
 /// Half the Newell vector: the area vector of a planar polygon.
@@ -77,20 +72,11 @@ fn check_polygon(name: &str, points2: &[(f64, f64)]) -> Imported {
     assert_eq!(m.mesh.face_count(), pts.len() - 2, "{name}: triangle count");
     assert_eq!(m.source_polygons, 1);
     let got = area_vector(&m.mesh);
-    assert!(
-        (got - expected).length() < 1e-12 * expected.length(),
-        "{name}: area vector {got} vs {expected}"
-    );
+    assert!((got - expected).length() < 1e-12 * expected.length(), "{name}: area vector {got} vs {expected}");
     // No flipped or overlapping triangles: unsigned areas add up to the polygon area.
-    assert!(
-        (total_area(&m.mesh) - expected.length()).abs() < 1e-12 * expected.length(),
-        "{name}: overlap"
-    );
+    assert!((total_area(&m.mesh) - expected.length()).abs() < 1e-12 * expected.length(), "{name}: overlap");
     for f in 0..m.mesh.face_count() {
-        assert!(
-            m.mesh.face_area_vector(f).dot(n) > 0.0,
-            "{name}: face {f} is flipped"
-        );
+        assert!(m.mesh.face_area_vector(f).dot(n) > 0.0, "{name}: face {f} is flipped");
     }
     m
 }
@@ -99,9 +85,8 @@ fn b64(data: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::new();
     for c in data.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
+        let n =
+            (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
         for k in 0..4 {
             if k <= c.len() {
                 s.push(A[(n >> (18 - 6 * k)) as usize & 63] as char);
@@ -150,10 +135,7 @@ fn u16_bytes(v: &[u16]) -> Vec<u8> {
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> u32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 33) as u32
     }
 }
@@ -178,10 +160,7 @@ fn obj_triangle_passes_through() {
 
 #[test]
 fn obj_convex_polygons_keep_area_and_orientation() {
-    check_polygon(
-        "square.obj",
-        &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],
-    );
+    check_polygon("square.obj", &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]);
     let hexagon: Vec<(f64, f64)> = (0..6)
         .map(|k| {
             let a = k as f64 * std::f64::consts::TAU / 6.0;
@@ -204,17 +183,7 @@ fn obj_convex_polygons_keep_area_and_orientation() {
 #[test]
 fn obj_non_convex_polygons_are_ear_clipped() {
     // L shape (one reflex corner).
-    check_polygon(
-        "l.obj",
-        &[
-            (0.0, 0.0),
-            (2.0, 0.0),
-            (2.0, 1.0),
-            (1.0, 1.0),
-            (1.0, 2.0),
-            (0.0, 2.0),
-        ],
-    );
+    check_polygon("l.obj", &[(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0)]);
     // Five-pointed star starting at a reflex corner: a fan from vertex 0 would flip triangles.
     let star: Vec<(f64, f64)> = (0..10)
         .map(|k| {
@@ -227,48 +196,23 @@ fn obj_non_convex_polygons_are_ear_clipped() {
     // Comb with collinear corners along the bottom edge.
     check_polygon(
         "comb.obj",
-        &[
-            (0.0, 0.0),
-            (1.0, 0.0),
-            (2.0, 0.0),
-            (3.0, 0.0),
-            (3.0, 2.0),
-            (2.5, 0.5),
-            (2.0, 2.0),
-            (1.0, 0.5),
-            (0.0, 2.0),
-        ],
+        &[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0), (3.0, 2.0), (2.5, 0.5), (2.0, 2.0), (1.0, 0.5), (0.0, 2.0)],
     );
 }
 
 #[test]
 fn obj_quads_split_along_shorter_valid_diagonal() {
     // Rhombus: diagonal 1-3 (length 2) is shorter than 0-2 (length 4).
-    let m = check_polygon(
-        "rhombus.obj",
-        &[(0.0, 0.0), (2.0, -1.0), (4.0, 0.0), (2.0, 1.0)],
-    );
+    let m = check_polygon("rhombus.obj", &[(0.0, 0.0), (2.0, -1.0), (4.0, 0.0), (2.0, 1.0)]);
     for t in &m.mesh.triangles {
-        assert!(
-            t.contains(&1) && t.contains(&3),
-            "{t:?} does not use diagonal 1-3"
-        );
+        assert!(t.contains(&1) && t.contains(&3), "{t:?} does not use diagonal 1-3");
     }
-    let m = check_polygon(
-        "rhombus2.obj",
-        &[(0.0, 0.0), (1.0, -2.0), (2.0, 0.0), (1.0, 2.0)],
-    );
+    let m = check_polygon("rhombus2.obj", &[(0.0, 0.0), (1.0, -2.0), (2.0, 0.0), (1.0, 2.0)]);
     for t in &m.mesh.triangles {
-        assert!(
-            t.contains(&0) && t.contains(&2),
-            "{t:?} does not use diagonal 0-2"
-        );
+        assert!(t.contains(&0) && t.contains(&2), "{t:?} does not use diagonal 0-2");
     }
     // Dart: the shorter diagonal 0-2 lies outside; the split must go through reflex corner 3.
-    let m = check_polygon(
-        "dart.obj",
-        &[(0.0, 0.0), (10.0, 1.0), (0.0, 2.0), (1.0, 1.0)],
-    );
+    let m = check_polygon("dart.obj", &[(0.0, 0.0), (10.0, 1.0), (0.0, 2.0), (1.0, 1.0)]);
     for t in &m.mesh.triangles {
         assert!(t.contains(&1) && t.contains(&3), "{t:?}");
     }
@@ -286,33 +230,15 @@ fn obj_mixed_grid_counts_and_topology() {
     let id = |i: usize, j: usize| j * 4 + i + 1;
     for j in 0..3 {
         for i in 0..3 {
-            s += &format!(
-                "f {} {} {} {}\n",
-                id(i, j),
-                id(i + 1, j),
-                id(i + 1, j + 1),
-                id(i, j + 1)
-            );
+            s += &format!("f {} {} {} {}\n", id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
         }
     }
     // Pentagon on the right edge x = 3, from (3,0) to (3,3).
     s += "v 4 0 0\nv 4.5 1.5 0\nv 4 3 0\n"; // 17 18 19
-    s += &format!(
-        "f {} 17 18 19 {} {} {}\n",
-        id(3, 0),
-        id(3, 3),
-        id(3, 2),
-        id(3, 1)
-    );
+    s += &format!("f {} 17 18 19 {} {} {}\n", id(3, 0), id(3, 3), id(3, 2), id(3, 1));
     // Hexagon on top: (0,3) (1,3) (2,3) (3,3) (2,4) (1,4), three corners collinear.
     s += "v 2 4 0\nv 1 4 0\n"; // 20 21
-    s += &format!(
-        "f {} {} {} {} 20 21\n",
-        id(0, 3),
-        id(1, 3),
-        id(2, 3),
-        id(3, 3)
-    );
+    s += &format!("f {} {} {} {} 20 21\n", id(0, 3), id(1, 3), id(2, 3), id(3, 3));
     let m = import_ok(&s, "grid.obj");
     assert_eq!(m.source_polygons, 11);
     // 9 quads -> 18, "pentagon" with 7 corners (three collinear) -> 5, hexagon -> 4.
@@ -322,11 +248,7 @@ fn obj_mixed_grid_counts_and_topology() {
     assert_eq!(m.stats.non_manifold_edges, 0);
     assert!(area_vector(&m.mesh).z > 0.0);
     let expected_area = 9.0 + (3.0 + 0.5 * 3.0 * 0.5) + 0.5 * (3.0 + 1.0) * 1.0;
-    assert!(
-        (total_area(&m.mesh) - expected_area).abs() < 1e-12,
-        "{}",
-        total_area(&m.mesh)
-    );
+    assert!((total_area(&m.mesh) - expected_area).abs() < 1e-12, "{}", total_area(&m.mesh));
     for f in 0..m.mesh.face_count() {
         assert!(m.mesh.face_area_vector(f).z > 0.0);
     }
@@ -351,10 +273,7 @@ fn obj_negative_and_slash_index_forms() {
         assert_eq!(m.mesh, base.mesh, "form {k}");
     }
     // Relative indices count back from the face's own position in the file.
-    let m = import_ok(
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf -3 -2 -1\n",
-        "rel.obj",
-    );
+    let m = import_ok("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf -3 -2 -1\n", "rel.obj");
     assert_eq!(m.mesh.triangles, vec![[0, 1, 2], [1, 2, 3]]);
     // Forward references (vertex defined after the face) are accepted.
     let m = import_ok("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", "fwd.obj");
@@ -374,67 +293,34 @@ fn obj_crlf_tabs_comments_continuation_and_binary_junk() {
     let m = import_mesh(&bytes, "crlf.obj").unwrap();
     assert_eq!(m.mesh.face_count(), 2);
     assert_eq!(m.mesh.positions[1], DVec3::X);
-    assert!(
-        m.notes.iter().any(|n| n.contains("line/point")),
-        "{:?}",
-        m.notes
-    );
+    assert!(m.notes.iter().any(|n| n.contains("line/point")), "{:?}", m.notes);
     assert!(m.notes.iter().any(|n| n.contains("curv")), "{:?}", m.notes);
 }
 
 #[test]
 fn obj_errors_name_file_and_line() {
-    let e = import_err(
-        b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 99\n",
-        "dir/tri_dome.obj",
-    );
-    assert_eq!(
-        e.to_string(),
-        "tri_dome.obj: line 5: face refers to vertex 99, but only 3 vertices are defined"
-    );
+    let e = import_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 99\n", "dir/tri_dome.obj");
+    assert_eq!(e.to_string(), "tri_dome.obj: line 5: face refers to vertex 99, but only 3 vertices are defined");
     assert!(matches!(e, ImportError::Malformed { line: Some(5), .. }));
     assert_eq!(e.line(), Some(5));
     assert_eq!(e.file(), "tri_dome.obj");
 
     let e = import_err(b"v 0 0 0\nv 1 0 0\nf -3 -2 -1\n", "x.obj");
-    assert!(
-        e.to_string()
-            .starts_with("x.obj: line 3: face refers to vertex -3"),
-        "{e}"
-    );
+    assert!(e.to_string().starts_with("x.obj: line 3: face refers to vertex -3"), "{e}");
     let e = import_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "x.obj");
-    assert!(
-        e.to_string().contains("line 4") && e.to_string().contains("start at 1"),
-        "{e}"
-    );
+    assert!(e.to_string().contains("line 4") && e.to_string().contains("start at 1"), "{e}");
     let e = import_err(b"v 0 0 0\nv 1 zero 0\n", "x.obj");
-    assert_eq!(
-        e.to_string(),
-        "x.obj: line 2: invalid number 'zero' in vertex"
-    );
+    assert_eq!(e.to_string(), "x.obj: line 2: invalid number 'zero' in vertex");
     let e = import_err(b"v 0 0 0\nv 1 nan 0\n", "x.obj");
-    assert!(
-        e.to_string().contains("line 2") && e.to_string().contains("not a finite"),
-        "{e}"
-    );
+    assert!(e.to_string().contains("line 2") && e.to_string().contains("not a finite"), "{e}");
     let e = import_err(b"v 0 0 0\nv 1 1e999 0\n", "x.obj");
     assert!(e.to_string().contains("line 2"), "{e}");
     let e = import_err(b"v 0 0\n", "x.obj");
-    assert!(
-        e.to_string().contains("line 1: vertex needs 3 coordinates"),
-        "{e}"
-    );
+    assert!(e.to_string().contains("line 1: vertex needs 3 coordinates"), "{e}");
     let e = import_err(b"v 0 0 0\nv 1 \xff 0\n", "x.obj");
-    assert!(
-        matches!(e, ImportError::Malformed { line: Some(2), .. }),
-        "{e}"
-    );
+    assert!(matches!(e, ImportError::Malformed { line: Some(2), .. }), "{e}");
     let e = import_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x3\n", "x.obj");
-    assert!(
-        e.to_string()
-            .starts_with("x.obj: line 4: invalid vertex index 'x3'"),
-        "{e}"
-    );
+    assert!(e.to_string().starts_with("x.obj: line 4: invalid vertex index 'x3'"), "{e}");
 
     let e = import_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n", "x.obj");
     assert_eq!(e.to_string(), "x.obj: no faces found");
@@ -455,33 +341,16 @@ fn obj_over_limit_is_rejected_before_parsing() {
     s += "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
     s += &"f 1 2 3\n".repeat(MAX_TRIANGLES + 1);
     let e = import_err(s.as_bytes(), "big.obj");
-    assert_eq!(
-        e.to_string(),
-        "big.obj: 2000001 triangles exceed the limit of 2000000"
-    );
+    assert_eq!(e.to_string(), "big.obj: 2000001 triangles exceed the limit of 2000000");
     assert_eq!(
         e,
-        ImportError::TooLarge {
-            file: "big.obj".into(),
-            what: "triangles".into(),
-            count: 2_000_001,
-            limit: 2_000_000
-        }
+        ImportError::TooLarge { file: "big.obj".into(), what: "triangles".into(), count: 2_000_001, limit: 2_000_000 }
     );
     // One huge polygon counts as its triangulation.
     let mut s = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nf");
     s += &" -1".repeat(MAX_TRIANGLES + 3);
     let e = import_err(s.as_bytes(), "poly.obj");
-    assert!(
-        matches!(
-            e,
-            ImportError::TooLarge {
-                count: 2_000_001,
-                ..
-            }
-        ),
-        "{e}"
-    );
+    assert!(matches!(e, ImportError::TooLarge { count: 2_000_001, .. }), "{e}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -508,15 +377,9 @@ fn square_json(buffer: &str, extra_nodes: &str) -> String {
 #[test]
 fn gltf_with_embedded_data_uri() {
     let bin = square_buffer();
-    let buffer = format!(
-        r#"{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}"#,
-        bin.len(),
-        b64(&bin)
-    );
-    let json = square_json(
-        &buffer,
-        r#","nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0"#,
-    );
+    let buffer =
+        format!(r#"{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}"#, bin.len(), b64(&bin));
+    let json = square_json(&buffer, r#","nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0"#);
     let m = import_ok(&json, "model.gltf");
     assert_eq!(m.format, Format::Gltf);
     assert_eq!(m.mesh.face_count(), 2);
@@ -547,9 +410,7 @@ fn gltf_with_embedded_data_uri() {
 #[test]
 fn gltf_strip_fan_and_skipped_primitives() {
     // Six points of a 2x3 grid; strip 0,3,1,4,2,5 and a fan 0,1,4,3.
-    let pos = f32_bytes(&[
-        0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 2.0, 1.0, 0.0,
-    ]);
+    let pos = f32_bytes(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 2.0, 1.0, 0.0]);
     let mut bin = pos.clone();
     bin.extend(u16_bytes(&[0, 3, 1, 4, 2, 5])); // strip, offset 72
     bin.extend(u16_bytes(&[0, 1, 4, 3])); // fan, offset 84
@@ -578,16 +439,8 @@ fn gltf_strip_fan_and_skipped_primitives() {
     // Strip orientation is consistent: all strip triangles face the same way.
     let strip_z: Vec<f64> = (0..4).map(|f| m.mesh.face_area_vector(f).z).collect();
     assert!(strip_z.iter().all(|z| *z < 0.0), "{strip_z:?}");
-    assert!(
-        m.notes.iter().any(|n| n == "skipped 1 line primitive"),
-        "{:?}",
-        m.notes
-    );
-    assert!(
-        m.notes.iter().any(|n| n == "skipped 1 point primitive"),
-        "{:?}",
-        m.notes
-    );
+    assert!(m.notes.iter().any(|n| n == "skipped 1 line primitive"), "{:?}", m.notes);
+    assert!(m.notes.iter().any(|n| n == "skipped 1 point primitive"), "{:?}", m.notes);
 }
 
 /// Rotates `v` by the (normalized) quaternion (x, y, z, w), written out by hand.
@@ -596,21 +449,9 @@ fn rotate(q: [f32; 4], v: DVec3) -> DVec3 {
     let len = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     let (x, y, z, w) = (q[0] / len, q[1] / len, q[2] / len, q[3] / len);
     let r = [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
     ];
     DVec3::new(
         r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z,
@@ -627,9 +468,7 @@ fn glb_node_transforms_accumulate_in_f64() {
     let r0 = [0.0f32, 0.38268343, 0.0, 0.9238795]; // 45 degrees about y (f32-rounded)
     let s0 = [2.0f32, 3.0, 0.5];
     // Column-major: rotate 90 degrees about z, then translate (1, 2, 3).
-    let m1 = [
-        0.0f32, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 2.0, 3.0, 1.0,
-    ];
+    let m1 = [0.0f32, 1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 2.0, 3.0, 1.0];
     let t2 = [0.25f32, 0.125, -4.0];
     let r2 = [0.1f32, 0.2, 0.3, 0.9]; // not unit: normalized by the importer
     let s2 = [1.5f32, 1.5, 1.5];
@@ -656,16 +495,9 @@ fn glb_node_transforms_accumulate_in_f64() {
     let square = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
     let mut expected: Vec<DVec3> = square.iter().map(|&p| node0(node1(node2(p)))).collect();
     expected.extend(square.iter().map(|&p| node0(node3(p))));
-    assert_eq!(
-        m.mesh.positions.len(),
-        8,
-        "scene 1 only: node 4 (scene 0) must not be imported"
-    );
+    assert_eq!(m.mesh.positions.len(), 8, "scene 1 only: node 4 (scene 0) must not be imported");
     for (got, want) in m.mesh.positions.iter().zip(&expected) {
-        assert!(
-            (*got - *want).length() <= 1e-12 * want.length().max(1.0),
-            "{got} vs {want}"
-        );
+        assert!((*got - *want).length() <= 1e-12 * want.length().max(1.0), "{got} vs {want}");
     }
     // The mirrored instance keeps its outward orientation: the winding is flipped so that the
     // face normal is the transformed normal (node 0 applied to +z as a normal).
@@ -673,10 +505,7 @@ fn glb_node_transforms_accumulate_in_f64() {
     let expected_normal = n_world(DVec3::Z).normalize();
     for f in 2..4 {
         let n = m.mesh.face_area_vector(f).normalize();
-        assert!(
-            n.dot(expected_normal) > 0.999,
-            "face {f}: {n} vs {expected_normal}"
-        );
+        assert!(n.dot(expected_normal) > 0.999, "face {f}: {n} vs {expected_normal}");
     }
     for f in 0..2 {
         let n = m.mesh.face_area_vector(f);
@@ -694,11 +523,7 @@ fn glb_and_gltf_errors() {
     let e = import_err(&good[..1200.min(good.len() - 1)], "x.glb");
     assert_eq!(
         e.to_string(),
-        format!(
-            "x.glb: truncated GLB (header says {} bytes, file has {})",
-            good.len(),
-            good.len() - 1
-        )
+        format!("x.glb: truncated GLB (header says {} bytes, file has {})", good.len(), good.len() - 1)
     );
     let e = import_err(&good[..7], "x.glb");
     assert!(e.to_string().contains("truncated GLB"), "{e}");
@@ -706,30 +531,15 @@ fn glb_and_gltf_errors() {
     assert!(e.to_string().starts_with("x.glb: not a GLB file"), "{e}");
     let mut v1 = good.clone();
     v1[4] = 1;
-    assert!(matches!(
-        import_err(&v1, "x.glb"),
-        ImportError::Unsupported { .. }
-    ));
+    assert!(matches!(import_err(&v1, "x.glb"), ImportError::Unsupported { .. }));
 
-    let e = import_err(
-        br#"{"asset":{"version":"1.0"},"meshes":{"m":{}}}"#,
-        "old.gltf",
-    );
+    let e = import_err(br#"{"asset":{"version":"1.0"},"meshes":{"m":{}}}"#, "old.gltf");
     assert!(matches!(e, ImportError::Unsupported { .. }), "{e}");
-    let e = import_err(
-        b"{\n  \"asset\": {\"version\": \"2.0\"},\n  \"meshes\": [1,]\n}",
-        "x.gltf",
-    );
-    assert!(
-        matches!(e, ImportError::Malformed { line: Some(3), .. }),
-        "{e}"
-    );
+    let e = import_err(b"{\n  \"asset\": {\"version\": \"2.0\"},\n  \"meshes\": [1,]\n}", "x.gltf");
+    assert!(matches!(e, ImportError::Malformed { line: Some(3), .. }), "{e}");
     let e = import_err(br#"{"asset":{"version":"2.0"}}"#, "x.gltf");
     assert_eq!(e.to_string(), "x.gltf: no faces found");
-    let e = import_err(
-        br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_draco_mesh_compression"]}"#,
-        "x.gltf",
-    );
+    let e = import_err(br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_draco_mesh_compression"]}"#, "x.gltf");
     assert!(e.to_string().contains("KHR_draco_mesh_compression"), "{e}");
 
     // Index out of range, accessor outside its view, view outside the buffer.
@@ -741,30 +551,16 @@ fn glb_and_gltf_errors() {
     let e = import_err(&glb(&json, &bad_index), "x.glb");
     assert!(e.to_string().contains("index 9 is out of range"), "{e}");
     let j = json.replace(r#""count":4"#, r#""count":5"#);
-    assert!(import_err(&glb(&j, &bin), "x.glb")
-        .to_string()
-        .contains("does not fit"));
+    assert!(import_err(&glb(&j, &bin), "x.glb").to_string().contains("does not fit"));
     let j = json.replace(r#""byteLength":48}"#, r#""byteLength":480}"#);
-    assert!(import_err(&glb(&j, &bin), "x.glb")
-        .to_string()
-        .contains("outside buffer"));
+    assert!(import_err(&glb(&j, &bin), "x.glb").to_string().contains("outside buffer"));
     // Dangling references.
     let j = json.replace(r#""POSITION":0"#, r#""POSITION":7"#);
-    assert!(import_err(&glb(&j, &bin), "x.glb")
-        .to_string()
-        .contains("accessor 7 does not exist"));
-    let j = json.replace(
-        r#""buffer":0,"byteOffset":48"#,
-        r#""buffer":3,"byteOffset":48"#,
-    );
+    assert!(import_err(&glb(&j, &bin), "x.glb").to_string().contains("accessor 7 does not exist"));
+    let j = json.replace(r#""buffer":0,"byteOffset":48"#, r#""buffer":3,"byteOffset":48"#);
     assert!(import_mesh(&glb(&j, &bin), "x.glb").is_err());
-    let j = square_json(
-        r#"{"byteLength":60}"#,
-        r#","nodes":[{"mesh":0,"children":[0]}],"scenes":[{"nodes":[0,5]}]"#,
-    );
-    assert!(import_err(&glb(&j, &bin), "x.glb")
-        .to_string()
-        .contains("node 5 does not exist"));
+    let j = square_json(r#"{"byteLength":60}"#, r#","nodes":[{"mesh":0,"children":[0]}],"scenes":[{"nodes":[0,5]}]"#);
+    assert!(import_err(&glb(&j, &bin), "x.glb").to_string().contains("node 5 does not exist"));
     // A cycle in the node graph is not followed forever.
     let j = square_json(
         r#"{"byteLength":60}"#,
@@ -772,11 +568,7 @@ fn glb_and_gltf_errors() {
     );
     let m = import_mesh(&glb(&j, &bin), "x.glb").unwrap();
     assert_eq!(m.mesh.face_count(), 2);
-    assert!(
-        m.notes.iter().any(|n| n.contains("repeated node")),
-        "{:?}",
-        m.notes
-    );
+    assert!(m.notes.iter().any(|n| n.contains("repeated node")), "{:?}", m.notes);
 }
 
 #[test]
@@ -786,73 +578,36 @@ fn gltf_huge_declared_counts_are_rejected_cheaply() {
     // 6,000,003 indices -> 2,000,001 triangles: rejected before any buffer is read.
     let j = json.replace(r#""count":6"#, r#""count":6000003"#);
     let e = import_err(&glb(&j, &bin), "big.glb");
-    assert_eq!(
-        e.to_string(),
-        "big.glb: 2000001 triangles exceed the limit of 2000000"
-    );
+    assert_eq!(e.to_string(), "big.glb: 2000001 triangles exceed the limit of 2000000");
     let j = json.replace(r#""count":4"#, r#""count":18446744073709551615"#);
-    assert!(matches!(
-        import_err(&glb(&j, &bin), "big.glb"),
-        ImportError::TooLarge { .. }
-    ));
+    assert!(matches!(import_err(&glb(&j, &bin), "big.glb"), ImportError::TooLarge { .. }));
     let j = json.replace(r#""count":4"#, r#""count":3000000"#);
-    assert!(matches!(
-        import_err(&glb(&j, &bin), "big.glb"),
-        ImportError::Malformed { .. }
-    ));
+    assert!(matches!(import_err(&glb(&j, &bin), "big.glb"), ImportError::Malformed { .. }));
     // Many instances of one mesh through the node hierarchy also count (declared counts only:
     // 1000 triangles per instance, 2001 instances).
     let nodes: Vec<String> = (0..2001).map(|_| r#"{"mesh":0}"#.to_string()).collect();
     let roots: Vec<String> = (0..2001).map(|i| i.to_string()).collect();
     let j = square_json(
         r#"{"byteLength":60}"#,
-        &format!(
-            r#","nodes":[{}],"scenes":[{{"nodes":[{}]}}]"#,
-            nodes.join(","),
-            roots.join(",")
-        ),
+        &format!(r#","nodes":[{}],"scenes":[{{"nodes":[{}]}}]"#, nodes.join(","), roots.join(",")),
     )
     .replace(r#""count":6"#, r#""count":3000"#);
     let e = import_err(&glb(&j, &bin), "inst.glb");
-    assert!(
-        matches!(
-            e,
-            ImportError::TooLarge {
-                count: 2_001_000,
-                ..
-            }
-        ),
-        "{e}"
-    );
+    assert!(matches!(e, ImportError::TooLarge { count: 2_001_000, .. }), "{e}");
     // Zero-count accessors with absurd offsets, and absurd strides, are handled without overflow.
-    let j = json.replace(
-        r#""count":6,"type":"SCALAR""#,
-        r#""count":0,"byteOffset":18446744073709551615,"type":"SCALAR""#,
-    );
-    assert!(matches!(
-        import_err(&glb(&j, &bin), "x.glb"),
-        ImportError::Empty { .. }
-    ));
-    let j = json.replace(
-        r#""byteLength":48}"#,
-        r#""byteLength":48,"byteStride":4000000000}"#,
-    );
-    assert!(matches!(
-        import_err(&glb(&j, &bin), "x.glb"),
-        ImportError::Malformed { .. }
-    ));
+    let j =
+        json.replace(r#""count":6,"type":"SCALAR""#, r#""count":0,"byteOffset":18446744073709551615,"type":"SCALAR""#);
+    assert!(matches!(import_err(&glb(&j, &bin), "x.glb"), ImportError::Empty { .. }));
+    let j = json.replace(r#""byteLength":48}"#, r#""byteLength":48,"byteStride":4000000000}"#);
+    assert!(matches!(import_err(&glb(&j, &bin), "x.glb"), ImportError::Malformed { .. }));
     // GLB header declaring a huge length.
     let mut g = glb(&json, &bin);
     g[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
-    assert!(import_err(&g, "x.glb")
-        .to_string()
-        .contains("truncated GLB"));
+    assert!(import_err(&g, "x.glb").to_string().contains("truncated GLB"));
     // Chunk declaring a huge length.
     let mut g = glb(&json, &bin);
     g[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
-    assert!(import_err(&g, "x.glb")
-        .to_string()
-        .contains("truncated GLB"));
+    assert!(import_err(&g, "x.glb").to_string().contains("truncated GLB"));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -863,22 +618,13 @@ fn truncated_inputs_fail_cleanly() {
     let bin = square_buffer();
     let glb_bytes = glb(&square_json(r#"{"byteLength":60}"#, ""), &bin);
     for cut in 0..glb_bytes.len() {
-        assert!(
-            import_mesh(&glb_bytes[..cut], "t.glb").is_err(),
-            "GLB cut at {cut}"
-        );
+        assert!(import_mesh(&glb_bytes[..cut], "t.glb").is_err(), "GLB cut at {cut}");
     }
-    let buffer = format!(
-        r#"{{"byteLength":60,"uri":"data:application/gltf-buffer;base64,{}"}}"#,
-        b64(&bin)
-    );
+    let buffer = format!(r#"{{"byteLength":60,"uri":"data:application/gltf-buffer;base64,{}"}}"#, b64(&bin));
     let gltf_text = square_json(&buffer, r#","nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}]"#);
     assert!(import_mesh(gltf_text.as_bytes(), "t.gltf").is_ok());
     for cut in 0..gltf_text.len() {
-        assert!(
-            import_mesh(&gltf_text.as_bytes()[..cut], "t.gltf").is_err(),
-            "glTF cut at {cut}"
-        );
+        assert!(import_mesh(&gltf_text.as_bytes()[..cut], "t.gltf").is_err(), "glTF cut at {cut}");
     }
     // OBJ prefixes may be valid smaller meshes; they must never panic, and cuts inside the
     // last face's index list must not invent faces.
@@ -908,14 +654,8 @@ fn corrupt_inputs_never_panic() {
     }
     // Random bytes behind plausible prefixes.
     let mut rng = Lcg(0x5eed);
-    let prefixes: [&[u8]; 6] = [
-        b"",
-        b"glTF\x02\x00\x00\x00",
-        b"{",
-        b"v 1 2 3\nf ",
-        b"f 1 2 3\nv ",
-        b"{\"asset\":{\"version\":\"2.0\"},",
-    ];
+    let prefixes: [&[u8]; 6] =
+        [b"", b"glTF\x02\x00\x00\x00", b"{", b"v 1 2 3\nf ", b"f 1 2 3\nv ", b"{\"asset\":{\"version\":\"2.0\"},"];
     for round in 0..600 {
         let len = (rng.next() % 200) as usize;
         let mut data = prefixes[round % prefixes.len()].to_vec();
@@ -929,16 +669,10 @@ fn corrupt_inputs_never_panic() {
         }
     }
     // Random text made of OBJ tokens.
-    let words = [
-        "v", "f", "-1", "1", "2", "3", "0", "1/2/3", "//", "\n", " ", "1e308", "-0", "\\", "#",
-        "vt", "1.5",
-    ];
+    let words = ["v", "f", "-1", "1", "2", "3", "0", "1/2/3", "//", "\n", " ", "1e308", "-0", "\\", "#", "vt", "1.5"];
     for _ in 0..300 {
         let n = rng.next() % 60;
-        let s: String = (0..n)
-            .map(|_| words[(rng.next() as usize) % words.len()])
-            .collect::<Vec<_>>()
-            .join(" ");
+        let s: String = (0..n).map(|_| words[(rng.next() as usize) % words.len()]).collect::<Vec<_>>().join(" ");
         let _ = import_mesh(s.as_bytes(), "w.obj");
     }
     // Random JSON-ish glTF fragments.
@@ -990,35 +724,16 @@ fn weld_merges_within_tolerance_and_cleans_faces() {
     ];
     let mesh = TriMesh::new(positions, triangles);
     let (out, report) = weld(&mesh, 1e-7);
-    assert_eq!(
-        report,
-        WeldReport {
-            merged_vertices: 1,
-            dropped_faces: 5,
-            removed_unreferenced: 2
-        }
-    );
+    assert_eq!(report, WeldReport { merged_vertices: 1, dropped_faces: 5, removed_unreferenced: 2 });
     assert_eq!(
         out.positions,
-        vec![
-            DVec3::ZERO,
-            DVec3::X,
-            DVec3::Y,
-            DVec3::new(1.0, 1.0, 0.0),
-            DVec3::new(0.0, 1.0, 1e-6)
-        ]
+        vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 1e-6)]
     );
     assert_eq!(out.triangles, vec![[0, 1, 2], [0, 3, 1], [1, 3, 4]]);
 
     // Zero tolerance: only exact duplicates merge (-0.0 == 0.0).
     let m = TriMesh::new(
-        vec![
-            DVec3::ZERO,
-            DVec3::X,
-            DVec3::Y,
-            DVec3::new(-0.0, 0.0, 0.0),
-            DVec3::new(1e-300, 0.0, 0.0),
-        ],
+        vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(-0.0, 0.0, 0.0), DVec3::new(1e-300, 0.0, 0.0)],
         vec![[0, 1, 2], [3, 1, 2], [4, 1, 2]],
     );
     let (out, report) = weld(&m, 0.0);
@@ -1041,12 +756,7 @@ fn weld_handles_cell_boundaries_and_chains() {
         );
         let d = DVec3::new(0.6, -0.5, 0.55).normalize() * tol * 0.999;
         let base = positions.len() as u32;
-        positions.extend([
-            p,
-            p + DVec3::new(0.3, 0.0, 0.0),
-            p + DVec3::new(0.0, 0.3, 0.0),
-            p + d,
-        ]);
+        positions.extend([p, p + DVec3::new(0.3, 0.0, 0.0), p + DVec3::new(0.0, 0.3, 0.0), p + d]);
         triangles.push([base, base + 1, base + 2]);
         triangles.push([base + 3, base + 2, base + 1]); // duplicate after merging
     }
@@ -1058,13 +768,7 @@ fn weld_handles_cell_boundaries_and_chains() {
     // Greedy representatives do not chain: a, a+0.9t, a+1.8t -> the third stays separate.
     let a = DVec3::new(0.1, 0.2, 0.3);
     let m = TriMesh::new(
-        vec![
-            a,
-            a + DVec3::X * 0.9 * tol,
-            a + DVec3::X * 1.8 * tol,
-            DVec3::ONE,
-            DVec3::Y,
-        ],
+        vec![a, a + DVec3::X * 0.9 * tol, a + DVec3::X * 1.8 * tol, DVec3::ONE, DVec3::Y],
         vec![[0, 3, 4], [1, 3, 4], [2, 4, 3]],
     );
     let (out, report) = weld(&m, tol);
@@ -1082,11 +786,7 @@ fn import_welds_relative_to_diagonal() {
     assert_eq!(m.mesh.vertex_count(), 5);
     assert_eq!(m.stats.boundary_loops, 1);
     assert_eq!(m.dropped_faces, 0);
-    assert!(
-        m.notes.iter().any(|n| n.contains("merged 1 coincident")),
-        "{:?}",
-        m.notes
-    );
+    assert!(m.notes.iter().any(|n| n.contains("merged 1 coincident")), "{:?}", m.notes);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1138,25 +838,14 @@ fn shared_meshes_import() {
             m.notes
         );
         assert_eq!(m.source_polygons, polys, "{name}");
-        assert_eq!(
-            (s.vertices, s.faces, s.boundary_loops, s.non_manifold_edges),
-            (verts, tris, loops, nm),
-            "{name}"
-        );
+        assert_eq!((s.vertices, s.faces, s.boundary_loops, s.non_manifold_edges), (verts, tris, loops, nm), "{name}");
         assert_eq!((m.merged_vertices, m.dropped_faces), (0, 0), "{name}");
         // The sources are consistently oriented; triangulation must keep that: no directed
         // edge occurs twice.
-        let mut directed: Vec<(u32, u32)> = m
-            .mesh
-            .triangles
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-            .collect();
+        let mut directed: Vec<(u32, u32)> =
+            m.mesh.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
         directed.sort_unstable();
-        assert!(
-            directed.windows(2).all(|w| w[0] != w[1]),
-            "{name}: inconsistent orientation"
-        );
+        assert!(directed.windows(2).all(|w| w[0] != w[1]), "{name}: inconsistent orientation");
     }
 }
 
@@ -1210,10 +899,7 @@ fn gltf_interleaved_quantized_and_sparse_accessors() {
     let mut bad = bin.clone();
     bad[72..76].copy_from_slice(&3u32.to_le_bytes());
     let e = import_err(&glb(&json, &bad), "q.glb");
-    assert!(
-        e.to_string().contains("sparse index 3 is out of range"),
-        "{e}"
-    );
+    assert!(e.to_string().contains("sparse index 3 is out of range"), "{e}");
 }
 
 #[test]
@@ -1227,11 +913,7 @@ fn format_detection() {
     assert_eq!(detect_format(b"solid x", "a.gltf"), Some(Format::Gltf));
     let e = import_err(b"solid cube\nfacet normal 0 0 1\n", "cube.stl");
     assert!(matches!(e, ImportError::Unsupported { .. }), "{e}");
-    assert!(
-        e.to_string()
-            .starts_with("cube.stl: cannot import '.stl' files"),
-        "{e}"
-    );
+    assert!(e.to_string().starts_with("cube.stl: cannot import '.stl' files"), "{e}");
 }
 
 /// Large-input timing (run with `cargo test --release --test import -- --ignored --nocapture`).
@@ -1249,13 +931,7 @@ fn large_mesh_timing() {
     let id = |i: usize, j: usize| j * (n + 1) + i + 1;
     for j in 0..n {
         for i in 0..n {
-            s += &format!(
-                "f {} {} {} {}\n",
-                id(i, j),
-                id(i + 1, j),
-                id(i + 1, j + 1),
-                id(i, j + 1)
-            );
+            s += &format!("f {} {} {} {}\n", id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
         }
     }
     let t = std::time::Instant::now();
@@ -1284,13 +960,7 @@ fn large_mesh_timing() {
     let g = glb(&json, &bin);
     let t = std::time::Instant::now();
     let m2 = import_mesh(&g, "big.glb").unwrap();
-    println!(
-        "GLB {} MB: {:?}, {:?}, merged {}",
-        g.len() >> 20,
-        t.elapsed(),
-        m2.stats,
-        m2.merged_vertices
-    );
+    println!("GLB {} MB: {:?}, {:?}, merged {}", g.len() >> 20, t.elapsed(), m2.stats, m2.merged_vertices);
     assert_eq!(m2.stats.faces, 2 * n * n);
     assert_eq!(m2.stats.vertices, (n + 1) * (n + 1));
 }
@@ -1300,10 +970,7 @@ fn large_mesh_timing() {
 #[ignore]
 fn fuzz_mutations_long() {
     let bin = square_buffer();
-    let buffer = format!(
-        r#"{{"byteLength":60,"uri":"data:application/gltf-buffer;base64,{}"}}"#,
-        b64(&bin)
-    );
+    let buffer = format!(r#"{{"byteLength":60,"uri":"data:application/gltf-buffer;base64,{}"}}"#, b64(&bin));
     let seeds: Vec<(Vec<u8>, &str)> = vec![
         (
             glb(
@@ -1388,30 +1055,19 @@ fn fuzz_mutations_long() {
 #[test]
 fn quads_stay_quads() {
     use spherical_faces::geometry::mesh::topology::Topology;
-    let q = import_mesh(
-        b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n",
-        "q.obj",
-    )
-    .unwrap();
+    let q = import_mesh(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n", "q.obj").unwrap();
     assert_eq!(q.faces.iter().map(|f| f.len()).collect::<Vec<_>>(), [4, 3]);
     assert_eq!(q.mesh.face_count(), 3);
     assert_eq!(q.surface().triangulated(), q.mesh);
     // The quad's drawn edges: 4 of its own and the triangle's 2 others, no diagonal.
     assert_eq!(Topology::new(&q.surface()).edges().len(), 6);
     // A quad whose other diagonal is the valid one is stored from that diagonal's corner.
-    let concave = import_mesh(
-        b"v 0 0 0\nv 2 0 0\nv 0.5 0.5 0\nv 0 2 0\nf 1 2 3 4\n",
-        "c.obj",
-    )
-    .unwrap();
+    let concave = import_mesh(b"v 0 0 0\nv 2 0 0\nv 0.5 0.5 0\nv 0 2 0\nf 1 2 3 4\n", "c.obj").unwrap();
     assert_eq!(concave.faces.len(), 1);
     assert_eq!(concave.surface().triangulated(), concave.mesh);
     // A quad that welds into a triangle is a triangle.
     let welded = import_mesh(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 1 1 0\nf 1 2 3 4\n", "w.obj").unwrap();
-    assert_eq!(
-        welded.faces.iter().map(|f| f.len()).collect::<Vec<_>>(),
-        [3]
-    );
+    assert_eq!(welded.faces.iter().map(|f| f.len()).collect::<Vec<_>>(), [3]);
     // The bubble is made of quads.
     let bubble = import_mesh(&shared_mesh("botanic-garden-bubble-0.obj"), "bubble.obj").unwrap();
     assert_eq!(bubble.faces.len(), 1076);

@@ -18,8 +18,8 @@ use std::collections::HashMap;
 use glam::DVec3;
 use serde_json::Value;
 use spherical_faces::export::{build_schedule, write_glb, write_obj};
-use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::import::import_mesh;
 use spherical_faces::panels::arc::Arc;
@@ -64,18 +64,14 @@ fn gap_along_bisecting_lines(sm: &SphereMesh) -> f64 {
     for ((a, b), [(f, _), (g, _)]) in interior_edges(&mesh) {
         let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
         let e = (q - p).normalize_or_zero();
-        let nsum = mesh.face_area_vector(f).normalize_or_zero()
-            + mesh.face_area_vector(g).normalize_or_zero();
+        let nsum = mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero();
         let w = (nsum - nsum.dot(e) * e).normalize_or_zero();
         if w == DVec3::ZERO {
             continue;
         }
         for k in 1..GAP_SAMPLES - 1 {
             let x0 = p + (k as f64 / (GAP_SAMPLES - 1) as f64) * (q - p);
-            if let (Some(hf), Some(hg)) = (
-                hit(&sm.face_spheres[f], x0, w),
-                hit(&sm.face_spheres[g], x0, w),
-            ) {
+            if let (Some(hf), Some(hg)) = (hit(&sm.face_spheres[f], x0, w), hit(&sm.face_spheres[g], x0, w)) {
                 worst = worst.max((hf - hg).abs());
             }
         }
@@ -92,10 +88,7 @@ fn cap() -> (TriMesh, Sphere) {
     let mesh = samples::sphere_cap(CAP_RADIUS, 1.6, 5);
     let theta_max = (1.6f64 / CAP_RADIUS).asin();
     let center = DVec3::new(0.0, 0.0, -CAP_RADIUS * theta_max.cos());
-    (
-        mesh,
-        Sphere::from_center_radius(center, CAP_RADIUS).normalized(),
-    )
+    (mesh, Sphere::from_center_radius(center, CAP_RADIUS).normalized())
 }
 
 /// Per face: the member of its vertices' pencil closest to `target` (max ⟨s, target⟩ over
@@ -104,9 +97,7 @@ fn spheres_toward(mesh: &TriMesh, target: &Sphere) -> Vec<Sphere> {
     (0..mesh.face_count())
         .map(|f| {
             let [s0, s1] = Sphere::through_points_family(mesh.face_points(f));
-            let th = s1
-                .inversive_product(target)
-                .atan2(s0.inversive_product(target));
+            let th = s1.inversive_product(target).atan2(s0.inversive_product(target));
             let s = Sphere::combine(&s0, th.cos(), &s1, th.sin()).normalized();
             if th.cos() < 0.0 {
                 s.flipped()
@@ -152,19 +143,12 @@ fn mixed() -> SphereMesh {
 
 fn flat() -> SphereMesh {
     let mesh = samples::plane_patch(2.0, 1.0, 6, 3);
-    let spheres = (0..mesh.face_count())
-        .map(|f| Sphere::plane(mesh.face_points(f)[0], DVec3::Z))
-        .collect();
+    let spheres = (0..mesh.face_count()).map(|f| Sphere::plane(mesh.face_points(f)[0], DVec3::Z)).collect();
     sphere_mesh(mesh, spheres)
 }
 
 fn fixtures() -> Vec<(&'static str, SphereMesh)> {
-    vec![
-        ("common", common()),
-        ("perturbed", perturbed()),
-        ("mixed", mixed()),
-        ("flat", flat()),
-    ]
+    vec![("common", common()), ("perturbed", perturbed()), ("mixed", mixed()), ("flat", flat())]
 }
 
 fn diag(sm: &SphereMesh) -> f64 {
@@ -187,11 +171,7 @@ fn interior_edges(mesh: &TriMesh) -> Vec<InteriorEdge> {
             m.entry((a.min(b), a.max(b))).or_default().push((f, k));
         }
     }
-    let mut v: Vec<_> = m
-        .into_iter()
-        .filter(|(_, s)| s.len() == 2)
-        .map(|(e, s)| (e, [s[0], s[1]]))
-        .collect();
+    let mut v: Vec<_> = m.into_iter().filter(|(_, s)| s.len() == 2).map(|(e, s)| (e, [s[0], s[1]])).collect();
     v.sort_unstable_by_key(|(e, _)| *e);
     v
 }
@@ -221,23 +201,13 @@ fn tessellation_lies_on_the_face_spheres() {
         for p in &panels {
             // The panel sphere is the given face sphere (normalized), not a substitute.
             let given = sm.face_spheres[p.face].normalized();
-            assert!(
-                (p.sphere.a - given.a).abs() <= 1e-12 * given.a.abs().max(1.0 / d),
-                "{name}: sphere {}",
-                p.face
-            );
+            assert!((p.sphere.a - given.a).abs() <= 1e-12 * given.a.abs().max(1.0 / d), "{name}: sphere {}", p.face);
             worst = worst.max(max_residual(&p.sphere, p.positions.iter().copied()));
             for arc in &p.arcs {
-                worst = worst.max(max_residual(
-                    &p.sphere,
-                    (0..=16).map(|j| arc.point(j as f64 / 16.0)),
-                ));
+                worst = worst.max(max_residual(&p.sphere, (0..=16).map(|j| arc.point(j as f64 / 16.0))));
             }
         }
-        println!(
-            "{name}: max tessellation/arc distance to the face sphere = {:.3e} · diag",
-            worst / d
-        );
+        println!("{name}: max tessellation/arc distance to the face sphere = {:.3e} · diag", worst / d);
         assert!(worst <= 1e-9 * d, "{name}: {worst:e}");
     }
 }
@@ -260,33 +230,18 @@ fn interior_arcs_lie_in_the_bisecting_planes_and_end_at_the_vertices() {
                 assert_eq!(arc.from, mesh.positions[c0 as usize], "{name}");
                 assert_eq!(arc.to, mesh.positions[c1 as usize], "{name}");
                 let ids = &panel.arc_vertices[k];
-                assert_eq!(
-                    panel.positions[ids[0] as usize],
-                    mesh.positions[c0 as usize]
-                );
-                assert_eq!(
-                    panel.positions[*ids.last().unwrap() as usize],
-                    mesh.positions[c1 as usize]
-                );
+                assert_eq!(panel.positions[ids[0] as usize], mesh.positions[c0 as usize]);
+                assert_eq!(panel.positions[*ids.last().unwrap() as usize], mesh.positions[c1 as usize]);
                 // Every arc point (tessellated and analytic) in the bisecting plane.
-                let pts = ids
-                    .iter()
-                    .map(|&i| panel.positions[i as usize])
-                    .chain((0..=16).map(|j| arc.point(j as f64 / 16.0)));
+                let pts = ids.iter().map(|&i| panel.positions[i as usize]).chain((0..=16).map(|j| arc.point(j as f64 / 16.0)));
                 for x in pts {
                     worst = worst.max((x - p).dot(n).abs());
                 }
                 // The circle's plane is that plane.
-                assert!(
-                    arc.circle.normal.cross(n).length() < 1e-9,
-                    "{name}: edge {e:?}"
-                );
+                assert!(arc.circle.normal.cross(n).length() < 1e-9, "{name}: edge {e:?}");
             }
         }
-        println!(
-            "{name}: max distance of an interior arc point to its bisecting plane = {:.3e} · diag",
-            worst / d
-        );
+        println!("{name}: max distance of an interior arc point to its bisecting plane = {:.3e} · diag", worst / d);
         assert!(worst <= 1e-9 * d, "{name}: {worst:e}");
     }
 }
@@ -299,10 +254,7 @@ fn no_folded_triangles_and_chord_error_within_tolerance() {
         let folded: usize = panels.iter().map(Panel::folded_triangles).sum();
         let err = panels.iter().map(Panel::chord_error).fold(0.0, f64::max);
         let tris: usize = panels.iter().map(|p| p.triangles.len()).sum();
-        println!(
-            "{name}: {tris} triangles, folded {folded}, chord error {:.3} tol",
-            err / tol
-        );
+        println!("{name}: {tris} triangles, folded {folded}, chord error {:.3} tol", err / tol);
         assert_eq!(folded, 0, "{name}");
         assert!(err <= tol, "{name}: {err:e} > {tol:e}");
         for p in &panels {
@@ -310,18 +262,10 @@ fn no_folded_triangles_and_chord_error_within_tolerance() {
             let mut used = vec![false; p.positions.len()];
             for t in &p.triangles {
                 let [a, b, c] = t.map(|i| p.positions[i as usize]);
-                assert!(
-                    (b - a).cross(c - a).length() > 0.0,
-                    "{name}: degenerate triangle in panel {}",
-                    p.face
-                );
+                assert!((b - a).cross(c - a).length() > 0.0, "{name}: degenerate triangle in panel {}", p.face);
                 t.iter().for_each(|&i| used[i as usize] = true);
             }
-            assert!(
-                used.iter().all(|&u| u),
-                "{name}: unused position in panel {}",
-                p.face
-            );
+            assert!(used.iter().all(|&u| u), "{name}: unused position in panel {}", p.face);
         }
     }
 }
@@ -338,24 +282,16 @@ fn plane_faces_give_straight_edges() {
     }
     // A spherical panel next to a plane one keeps its curved arc: the edge has a gap.
     let gaps = gaps_of(&sm, &panels, GAP_SAMPLES);
-    let plane_sphere: Vec<f64> = gaps
-        .iter()
-        .filter(|g| panels[g.faces[0]].is_planar() != panels[g.faces[1]].is_planar())
-        .map(|g| g.gap)
-        .collect();
+    let plane_sphere: Vec<f64> =
+        gaps.iter().filter(|g| panels[g.faces[0]].is_planar() != panels[g.faces[1]].is_planar()).map(|g| g.gap).collect();
     assert!(plane_sphere.len() >= 10, "{}", plane_sphere.len());
     let plane_sphere = plane_sphere.into_iter().fold(f64::INFINITY, f64::min);
-    println!(
-        "mixed: smallest plane/sphere edge gap = {:.3e} · diag",
-        plane_sphere / diag(&sm)
-    );
+    println!("mixed: smallest plane/sphere edge gap = {:.3e} · diag", plane_sphere / diag(&sm));
     assert!(plane_sphere > 1e-6 * diag(&sm));
 
     let flat = flat();
     let panels = panels_b(&flat);
-    assert!(panels
-        .iter()
-        .all(|p| p.arcs.iter().all(Arc::is_straight) && p.triangles.len() == 1));
+    assert!(panels.iter().all(|p| p.arcs.iter().all(Arc::is_straight) && p.triangles.len() == 1));
     assert_eq!(max_gap_of(&flat, &panels, GAP_SAMPLES), 0.0);
     let area: f64 = panels.iter().map(|p| p.area).sum();
     assert!((area - 2.0).abs() < 1e-12, "{area}");
@@ -371,19 +307,12 @@ fn gap_is_zero_when_the_faces_share_one_sphere() {
     let panels = panels_b(&sm);
     let ours = max_gap_of(&sm, &panels, GAP_SAMPLES);
     let theirs = gap_along_bisecting_lines(&sm);
-    println!(
-        "common sphere: max arc gap = {:.3e} · diag, line measure = {:.3e} · diag",
-        ours / d,
-        theirs / d
-    );
+    println!("common sphere: max arc gap = {:.3e} · diag, line measure = {:.3e} · diag", ours / d, theirs / d);
     assert!(ours <= 1e-9 * d, "{ours:e}");
     assert!(theirs <= 1e-9 * d, "{theirs:e}");
     // Variant (b) arcs are genuinely per panel (the bisecting plane, not the intersection
     // circle, which does not exist for identical spheres).
-    assert_eq!(
-        gaps_of(&sm, &panels, GAP_SAMPLES).len(),
-        interior_edges(&sm.mesh.triangulated()).len()
-    );
+    assert_eq!(gaps_of(&sm, &panels, GAP_SAMPLES).len(), interior_edges(&sm.mesh.triangulated()).len());
 }
 
 #[test]
@@ -401,11 +330,7 @@ fn gap_is_positive_where_the_spheres_differ_and_agrees_with_the_line_measure() {
             let planes = sm.face_spheres[f].a == 0.0 && sm.face_spheres[h].a == 0.0;
             if kink > 1e-4 && !planes {
                 smallest = smallest.min(g.gap);
-                assert!(
-                    g.gap > 0.0,
-                    "{name}: edge {:?} kink {kink} but no gap",
-                    g.edge
-                );
+                assert!(g.gap > 0.0, "{name}: edge {:?} kink {kink} but no gap", g.edge);
             }
         }
         let ours = max_gap_of(&sm, &panels, GAP_SAMPLES);
@@ -420,15 +345,9 @@ fn gap_is_positive_where_the_spheres_differ_and_agrees_with_the_line_measure() {
             smallest / d
         );
         assert!(ours > 1e-4 * d, "{name}: {ours:e}");
-        assert!(
-            (ours - theirs).abs() <= 1e-9 * d,
-            "{name}: {ours:e} vs {theirs:e}"
-        );
+        assert!((ours - theirs).abs() <= 1e-9 * d, "{name}: {ours:e} vs {theirs:e}");
         // Finer sampling can only find a larger gap, and not much larger (smooth in t).
-        assert!(
-            fine >= ours && fine <= 1.05 * ours,
-            "{name}: {fine:e} vs {ours:e}"
-        );
+        assert!(fine >= ours && fine <= 1.05 * ours, "{name}: {fine:e} vs {ours:e}");
 
         // The same spheres with variant (a) arcs: one shared arc per edge, no gap at all.
         let a = build_panels(&sm, 1e-4 * d);
@@ -443,10 +362,7 @@ fn gap_per_edge_matches_a_direct_sphere_computation() {
     let sm = perturbed();
     let mesh = &sm.mesh.triangulated();
     let panels = panels_b(&sm);
-    let gaps: HashMap<[u32; 2], f64> = gaps_of(&sm, &panels, 9)
-        .into_iter()
-        .map(|g| (g.edge, g.gap))
-        .collect();
+    let gaps: HashMap<[u32; 2], f64> = gaps_of(&sm, &panels, 9).into_iter().map(|g| (g.edge, g.gap)).collect();
     let root = |s: &Sphere, x0: DVec3, w: DVec3| -> f64 {
         // a s² + β s + ψ(x₀) = 0, β = ⟨2a x₀ − b, w⟩.
         let (a, beta, c) = (s.a, (2.0 * s.a * x0 - s.b).dot(w), s.eval(x0));
@@ -474,10 +390,7 @@ fn gap_per_edge_matches_a_direct_sphere_computation() {
             .fold(0.0, f64::max);
         worst = worst.max((direct - gaps[&[e.0, e.1]]).abs());
     }
-    println!(
-        "per-edge gap vs direct root computation: max |diff| = {:.3e} · diag",
-        worst / diag(&sm)
-    );
+    println!("per-edge gap vs direct root computation: max |diff| = {:.3e} · diag", worst / diag(&sm));
     assert!(worst <= 1e-10 * diag(&sm), "{worst:e}");
 }
 
@@ -485,23 +398,9 @@ fn gap_per_edge_matches_a_direct_sphere_computation() {
 fn point_over_chord_on_known_arcs() {
     use spherical_faces::geometry::circle::Circle;
     // Circle of radius 2 about the origin in the xy-plane; chord from (2,0,0) to (0,2,0).
-    let c = Circle {
-        center: DVec3::ZERO,
-        normal: DVec3::Z,
-        radius: 2.0,
-    };
-    let minor = Arc {
-        circle: c,
-        from: DVec3::new(2.0, 0.0, 0.0),
-        to: DVec3::new(0.0, 2.0, 0.0),
-    };
-    let major = Arc {
-        circle: Circle {
-            normal: -DVec3::Z,
-            ..c
-        },
-        ..minor
-    };
+    let c = Circle { center: DVec3::ZERO, normal: DVec3::Z, radius: 2.0 };
+    let minor = Arc { circle: c, from: DVec3::new(2.0, 0.0, 0.0), to: DVec3::new(0.0, 2.0, 0.0) };
+    let major = Arc { circle: Circle { normal: -DVec3::Z, ..c }, ..minor };
     for t in [0.0, 0.1, 0.5, 0.77, 1.0] {
         let x0 = minor.from + t * (minor.to - minor.from);
         // Points on the circle on the line x₀ + s(1,1,0)/√2.
@@ -509,27 +408,14 @@ fn point_over_chord_on_known_arcs() {
         let b = x0.dot(dir);
         let disc = (b * b - x0.length_squared() + 4.0).sqrt();
         let (s_out, s_in) = (-b + disc, -b - disc);
-        assert!(
-            (minor.point_over_chord(t) - (x0 + s_out * dir)).length() < 1e-14,
-            "t = {t}"
-        );
-        assert!(
-            (major.point_over_chord(t) - (x0 + s_in * dir)).length() < 1e-14,
-            "t = {t}"
-        );
-        assert!(
-            (minor.reversed().point_over_chord(1.0 - t) - minor.point_over_chord(t)).length()
-                < 1e-14
-        );
+        assert!((minor.point_over_chord(t) - (x0 + s_out * dir)).length() < 1e-14, "t = {t}");
+        assert!((major.point_over_chord(t) - (x0 + s_in * dir)).length() < 1e-14, "t = {t}");
+        assert!((minor.reversed().point_over_chord(1.0 - t) - minor.point_over_chord(t)).length() < 1e-14);
     }
     // A huge, nearly flat arc keeps precision: sagitta l²/(8r).
     let r = 1e9;
     let flat = Arc {
-        circle: Circle {
-            center: DVec3::new(0.0, -r * (1.0 - 0.25e-18f64).sqrt(), 0.0),
-            normal: DVec3::Z,
-            radius: r,
-        },
+        circle: Circle { center: DVec3::new(0.0, -r * (1.0 - 0.25e-18f64).sqrt(), 0.0), normal: DVec3::Z, radius: r },
         from: DVec3::new(0.5, 0.0, 0.0),
         to: DVec3::new(-0.5, 0.0, 0.0),
     };
@@ -546,11 +432,7 @@ fn point_over_chord_on_known_arcs() {
 fn variant_a_is_build_panels() {
     for (name, sm) in fixtures() {
         let tol = 1e-4 * diag(&sm);
-        assert_eq!(
-            build_panels(&sm, tol),
-            build_panels_with(&sm, tol, EdgeArcs::Intersection),
-            "{name}"
-        );
+        assert_eq!(build_panels(&sm, tol), build_panels_with(&sm, tol, EdgeArcs::Intersection), "{name}");
         assert_eq!(EdgeArcs::default(), EdgeArcs::Intersection);
     }
     // Variant (b) really differs where the spheres differ.
@@ -573,11 +455,7 @@ fn exports_accept_variant_b_panels() {
         // panels apart, so every interior edge is a seam of two boundary curves.
         let mut distinct: Vec<[u32; 3]> = panels
             .iter()
-            .flat_map(|p| {
-                p.positions
-                    .iter()
-                    .map(|x| [x.x as f32, x.y as f32, x.z as f32].map(f32::to_bits))
-            })
+            .flat_map(|p| p.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32].map(f32::to_bits)))
             .collect();
         distinct.sort_unstable();
         distinct.dedup();
@@ -595,14 +473,9 @@ fn exports_accept_variant_b_panels() {
         );
         let interior_arc_points: usize = interior_edges(&sm.mesh.triangulated())
             .iter()
-            .map(|(_, [(f, k), (g, l)])| {
-                panels[*f].arc_vertices[*k].len() + panels[*g].arc_vertices[*l].len() - 4
-            })
+            .map(|(_, [(f, k), (g, l)])| panels[*f].arc_vertices[*k].len() + panels[*g].arc_vertices[*l].len() - 4)
             .sum();
-        assert!(
-            im.stats.boundary_vertices >= interior_arc_points + im_a.stats.boundary_vertices.min(1),
-            "{name}"
-        );
+        assert!(im.stats.boundary_vertices >= interior_arc_points + im_a.stats.boundary_vertices.min(1), "{name}");
 
         let obj = write_obj(&panels, None, None);
         let faces = obj.lines().filter(|l| l.starts_with("f ")).count();
@@ -610,16 +483,9 @@ fn exports_accept_variant_b_panels() {
         let im = import_mesh(obj.as_bytes(), "variant-b.obj").unwrap();
         assert_eq!(im.mesh.face_count(), total, "{name}");
 
-        let schedule = build_schedule(
-            &panels,
-            &Reference::from_triangles(sm.mesh.triangulated()),
-            1e-3,
-        );
+        let schedule = build_schedule(&panels, &Reference::from_triangles(sm.mesh.triangulated()), 1e-3);
         assert_eq!(schedule.panel_count, sm.mesh.face_count());
-        assert!(schedule
-            .panels
-            .iter()
-            .all(|r| r.triangles > 0 && r.area > 0.0));
+        assert!(schedule.panels.iter().all(|r| r.triangles > 0 && r.area > 0.0));
     }
 }
 
@@ -634,11 +500,7 @@ fn tri_dome_panels() {
     let mut opposite: Vec<Vec<DVec3>> = vec![Vec::new(); mesh.face_count()];
     for (e, [(f, _), (g, _)]) in &edges {
         for (x, y) in [(*f, *g), (*g, *f)] {
-            let v = mesh.triangles[y]
-                .iter()
-                .copied()
-                .find(|&v| v != e.0 && v != e.1)
-                .unwrap();
+            let v = mesh.triangles[y].iter().copied().find(|&v| v != e.0 && v != e.1).unwrap();
             opposite[x].push(mesh.positions[v as usize]);
         }
     }
@@ -660,10 +522,7 @@ fn tri_dome_panels() {
     let folded: usize = panels.iter().map(Panel::folded_triangles).sum();
     let ours = max_gap_of(&sm, &panels, GAP_SAMPLES);
     let theirs = gap_along_bisecting_lines(&sm);
-    let res = panels
-        .iter()
-        .map(|p| max_residual(&p.sphere, p.positions.iter().copied()))
-        .fold(0.0, f64::max);
+    let res = panels.iter().map(|p| max_residual(&p.sphere, p.positions.iter().copied())).fold(0.0, f64::max);
     println!(
         "tri_dome: {} faces, folded {folded}, residual {:.3e} · diag, max arc gap {:.6e} · diag, max_gap {:.6e} · diag",
         sm.mesh.face_count(),

@@ -2,7 +2,7 @@
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use spherical_faces::congruence::central_spheres::JetParams;
-use spherical_faces::pipeline::fields::{field, find, Field, StageProgress};
+use spherical_faces::pipeline::fields::{field, find, Field, StageId, StageProgress};
 use spherical_faces::pipeline::protocol::*;
 use spherical_faces::pipeline::stages::st_adapted;
 use spherical_faces::pipeline::{Outbox, Session};
@@ -27,14 +27,7 @@ impl Outbox for Recorder {
         let env = encode_from_worker(&msg, &fields);
         let decoded = decode_from_worker(&env).expect("decodes");
         assert_eq!(decoded.0, msg);
-        assert!(
-            decoded.1
-                == if matches!(msg, FromWorker::Snapshot { .. } | FromWorker::Files { .. }) {
-                    fields
-                } else {
-                    vec![]
-                }
-        );
+        assert!(decoded.1 == if matches!(msg, FromWorker::Snapshot { .. } | FromWorker::Files { .. }) { fields } else { vec![] });
         self.messages.push(decoded);
     }
     fn cancel_requested(&mut self) -> bool {
@@ -62,13 +55,9 @@ fn load_sample_then_curvature_streams_snapshots() {
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
-    let FromWorker::Loaded(info) = r.messages[0].0.clone() else {
-        panic!("{:?}", r.messages[0].0)
-    };
+    let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!("{:?}", r.messages[0].0) };
     assert_eq!(info.source, Source::Sample(Sample::Dome));
-    let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[1] else {
-        panic!()
-    };
+    let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[1] else { panic!() };
     assert_eq!(stage, "reference");
     let pos = find(fields, field::POSITIONS).unwrap().as_f32().unwrap();
     let tri = find(fields, field::TRIANGLES).unwrap().as_u32().unwrap();
@@ -77,82 +66,33 @@ fn load_sample_then_curvature_streams_snapshots() {
     assert!(tri.iter().all(|&i| (i as usize) < info.stats.vertices));
 
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Curvature(JetParams::default())),
-        None,
-    );
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(matches!(r.messages[0].0, FromWorker::Progress(_)));
-    let snap = r
-        .messages
-        .iter()
-        .find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "curvature"))
-        .unwrap();
-    let h = find(&snap.1, field::MEAN_CURVATURE)
-        .unwrap()
-        .as_f32()
-        .unwrap();
+    let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "curvature")).unwrap();
+    let h = find(&snap.1, field::MEAN_CURVATURE).unwrap().as_f32().unwrap();
     assert_eq!(h.len(), info.stats.vertices);
     assert!(h.iter().all(|x| x.is_finite()));
     let spheres = find(&snap.1, field::CENTRAL_SPHERES).unwrap();
     assert_eq!(spheres.dim, 5);
-    let Some((
-        FromWorker::Finished {
-            result: StageResult::Curvature(summary),
-            ..
-        },
-        _,
-    )) = r.messages.last()
-    else {
-        panic!()
-    };
-    assert!(
-        !summary.h_changes_sign,
-        "the default dome keeps one sign of H"
-    );
+    let Some((FromWorker::Finished { result: StageResult::Curvature(summary), .. }, _)) = r.messages.last() else { panic!() };
+    assert!(!summary.h_changes_sign, "the default dome keeps one sign of H");
 }
 
 #[test]
 fn a_bad_file_reports_an_error_and_keeps_the_design() {
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(
-        &mut s,
-        &mut r,
-        ToWorker::LoadSample(Sample::TorusPatch),
-        None,
-    );
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::TorusPatch), None);
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        ToWorker::LoadFile {
-            name: "broken.obj".into(),
-        },
-        Some(b"v 1 2\nf 1 2 9\n".to_vec()),
-    );
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "broken.obj".into() }, Some(b"v 1 2\nf 1 2 9\n".to_vec()));
     assert_eq!(r.messages.len(), 1);
-    let FromWorker::Error { message, .. } = &r.messages[0].0 else {
-        panic!()
-    };
+    let FromWorker::Error { message, .. } = &r.messages[0].0 else { panic!() };
     assert!(message.starts_with("broken.obj"), "{message}");
-    assert_eq!(
-        s.reference.as_ref().unwrap().info.source,
-        Source::Sample(Sample::TorusPatch)
-    );
+    assert_eq!(s.reference.as_ref().unwrap().info.source, Source::Sample(Sample::TorusPatch));
     // The previous reference still computes.
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Curvature(JetParams::default())),
-        None,
-    );
-    assert!(matches!(
-        r.messages.last().unwrap().0,
-        FromWorker::Finished { .. }
-    ));
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(matches!(r.messages.last().unwrap().0, FromWorker::Finished { .. }));
 }
 
 #[test]
@@ -160,17 +100,8 @@ fn a_file_loads_through_the_session() {
     let bytes = std::fs::read("../shared/data/meshes/tri_dome.obj").unwrap();
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(
-        &mut s,
-        &mut r,
-        ToWorker::LoadFile {
-            name: "tri_dome.obj".into(),
-        },
-        Some(bytes),
-    );
-    let FromWorker::Loaded(info) = &r.messages[0].0 else {
-        panic!("{:?}", r.messages[0].0)
-    };
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "tri_dome.obj".into() }, Some(bytes));
+    let FromWorker::Loaded(info) = &r.messages[0].0 else { panic!("{:?}", r.messages[0].0) };
     assert_eq!(info.stats.vertices, 91);
     assert_eq!(info.source, Source::File("tri_dome.obj".into()));
 }
@@ -179,12 +110,7 @@ fn a_file_loads_through_the_session() {
 fn running_without_a_reference_is_an_error() {
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Curvature(JetParams::default())),
-        None,
-    );
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(matches!(&r.messages[0].0, FromWorker::Error { .. }));
 }
 
@@ -196,29 +122,11 @@ fn cancel_takes_effect_within_one_iteration() {
     r.messages.clear();
     r.cancel_after = Some(1);
     r.progress_seen = 0;
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Curvature(JetParams::default())),
-        None,
-    );
-    let kinds: Vec<_> = r
-        .messages
-        .iter()
-        .map(|m| std::mem::discriminant(&m.0))
-        .collect();
-    assert_eq!(
-        r.progress_seen, 1,
-        "stopped at the first iteration boundary"
-    );
-    assert!(
-        matches!(r.messages.last().unwrap().0, FromWorker::Cancelled { .. }),
-        "{kinds:?}"
-    );
-    assert!(!r
-        .messages
-        .iter()
-        .any(|m| matches!(m.0, FromWorker::Finished { .. })));
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
+    let kinds: Vec<_> = r.messages.iter().map(|m| std::mem::discriminant(&m.0)).collect();
+    assert_eq!(r.progress_seen, 1, "stopped at the first iteration boundary");
+    assert!(matches!(r.messages.last().unwrap().0, FromWorker::Cancelled { .. }), "{kinds:?}");
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Finished { .. })));
 }
 
 #[test]
@@ -227,63 +135,21 @@ fn st_support_streams_panels_files_and_a_report() {
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::StSupport(StSupportParams::default())),
-        None,
-    );
-    let snap = r
-        .messages
-        .iter()
-        .find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "st-support"))
-        .unwrap();
-    let tri = find(&snap.1, field::PANEL_TRIANGLES)
-        .unwrap()
-        .as_u32()
-        .unwrap();
-    let pos = find(&snap.1, field::PANEL_POSITIONS)
-        .unwrap()
-        .as_f32()
-        .unwrap();
+    send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
+    let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "st-support")).unwrap();
+    let tri = find(&snap.1, field::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
+    let pos = find(&snap.1, field::PANEL_POSITIONS).unwrap().as_f32().unwrap();
     assert!(!tri.is_empty() && tri.iter().all(|&i| (i as usize) < pos.len() / 3));
-    assert!(!find(&snap.1, field::AXES_LINES)
-        .unwrap()
-        .as_u32()
-        .unwrap()
-        .is_empty());
-    let (FromWorker::Files { fields, mime, .. }, bodies) = r
-        .messages
-        .iter()
-        .find(|m| matches!(m.0, FromWorker::Files { .. }))
-        .unwrap()
+    assert!(!find(&snap.1, field::AXES_LINES).unwrap().as_u32().unwrap().is_empty());
+    let (FromWorker::Files { fields, mime, .. }, bodies) = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap()
     else {
         panic!()
     };
     let names: Vec<_> = fields.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "panels.glb",
-            "panels.obj",
-            "panels.csv",
-            "panels.json",
-            "support.csv",
-            "report.json"
-        ]
-    );
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "support.csv", "report.json"]);
     assert_eq!(mime.len(), 6);
     assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
-    let Some((
-        FromWorker::Finished {
-            result: StageResult::StSupport(summary),
-            ..
-        },
-        _,
-    )) = r.messages.last()
-    else {
-        panic!()
-    };
+    let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
     let m = &summary.section;
     assert!(m.max_vertex_sphere_residual <= 1e-9);
     assert!(m.max_orthogonality_residual <= 1e-9);
@@ -298,29 +164,12 @@ fn st_support_on_a_minimal_surface_is_refused() {
     let bytes = std::fs::read("../shared/data/meshes/enneper2.obj").unwrap();
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(
-        &mut s,
-        &mut r,
-        ToWorker::LoadFile {
-            name: "enneper2.obj".into(),
-        },
-        Some(bytes),
-    );
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "enneper2.obj".into() }, Some(bytes));
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::StSupport(StSupportParams::default())),
-        None,
-    );
-    let Some((FromWorker::Error { message, .. }, _)) = r.messages.last() else {
-        panic!("{:?}", r.messages.last())
-    };
+    send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
+    let Some((FromWorker::Error { message, .. }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
     assert!(message.contains("no usable central spheres"), "{message}");
-    assert!(!r
-        .messages
-        .iter()
-        .any(|m| matches!(m.0, FromWorker::Files { .. })));
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. })));
 }
 
 /// The "ST, adapted face size" stage streams the sizing field, the remeshed triangulation,
@@ -332,41 +181,19 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
-    let FromWorker::Loaded(info) = r.messages[0].0.clone() else {
-        panic!()
-    };
+    let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!() };
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::StAdapted(StAdaptedParams::default())),
-        None,
-    );
-    let pos = |stage: &str| {
-        r.messages
-            .iter()
-            .position(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if s == stage))
-    };
-    let (i_sizing, i_remesh, i_panels) = (
-        pos(SIZING_STAGE).unwrap(),
-        pos(REMESHED_STAGE).unwrap(),
-        pos(STAGE).unwrap(),
-    );
+    send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
+    let pos = |stage: StageId| r.messages.iter().position(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if *s == stage));
+    let (i_sizing, i_remesh, i_panels) = (pos(SIZING_STAGE).unwrap(), pos(REMESHED_STAGE).unwrap(), pos(STAGE).unwrap());
     assert!(i_sizing < i_remesh && i_remesh < i_panels);
-    let g = find(&r.messages[i_sizing].1, stf)
-        .unwrap()
-        .as_f32()
-        .unwrap();
+    let g = find(&r.messages[i_sizing].1, stf).unwrap().as_f32().unwrap();
     assert_eq!(g.len(), info.stats.vertices);
     assert!(g.iter().all(|x| x.is_finite() && *x > 0.0));
     let remeshed = &r.messages[i_remesh].1;
     let rt = find(remeshed, field::TRIANGLES).unwrap().as_u32().unwrap();
     let rp = find(remeshed, field::POSITIONS).unwrap().as_f32().unwrap();
-    assert!(
-        rt.len() / 3 > 100 && rt.len() / 3 < 1000,
-        "{} faces",
-        rt.len() / 3
-    );
+    assert!(rt.len() / 3 > 100 && rt.len() / 3 < 1000, "{} faces", rt.len() / 3);
     assert!(rt.iter().all(|&i| (i as usize) < rp.len() / 3));
     // Every iteration reports its energies; the total is the sum of the term energies.
     let energies: Vec<&StageProgress> = r
@@ -383,58 +210,26 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
         assert_eq!(p.total, 45);
         let total = p.energies[0].value;
         let sum: f64 = p.energies[1..].iter().map(|e| e.value).sum();
-        assert!(
-            (total - sum).abs() <= 1e-9 * total.abs().max(1e-30),
-            "{total} vs {sum}"
-        );
+        assert!((total - sum).abs() <= 1e-9 * total.abs().max(1e-30), "{total} vs {sum}");
     }
     // Panels: the first (iteration 0) and the last (all iterations) snapshot.
     let panel_snaps: Vec<u32> = r
         .messages
         .iter()
         .filter_map(|m| match &m.0 {
-            FromWorker::Snapshot {
-                stage, iteration, ..
-            } if stage == STAGE => Some(*iteration),
+            FromWorker::Snapshot { stage, iteration, .. } if *stage == STAGE => Some(*iteration),
             _ => None,
         })
         .collect();
     assert_eq!(panel_snaps.first(), Some(&0));
     assert_eq!(panel_snaps.last(), Some(&45));
-    let last = r
-        .messages
-        .iter()
-        .rev()
-        .find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == STAGE))
-        .unwrap();
+    let last = r.messages.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if *stage == STAGE)).unwrap();
     let tri = find(&last.1, pf).unwrap().as_u32().unwrap();
     assert!(tri.len() / 3 >= rt.len() / 3);
-    let files = r
-        .messages
-        .iter()
-        .find(|m| matches!(m.0, FromWorker::Files { .. }))
-        .unwrap();
+    let files = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap();
     let names: Vec<&str> = files.1.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "panels.glb",
-            "panels.obj",
-            "panels.csv",
-            "panels.json",
-            "report.json"
-        ]
-    );
-    let Some((
-        FromWorker::Finished {
-            result: StageResult::StAdapted(summary),
-            ..
-        },
-        _,
-    )) = r.messages.last()
-    else {
-        panic!()
-    };
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
+    let Some((FromWorker::Finished { result: StageResult::StAdapted(summary), .. }, _)) = r.messages.last() else { panic!() };
     assert_eq!(summary.report.method, "st");
     assert_eq!(summary.iterations, 45);
     assert_eq!(summary.remeshed_faces, rt.len() / 3);
@@ -442,12 +237,7 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     // Variant (a) trades a little kink for edge circles that stay over their edges (Sec. 6.1; the
     // panel distances are tested in tests/st_adapted.rs).
     let (i, f) = (&summary.initial, &summary.metrics);
-    assert!(
-        f.mean_kink_angle_deg < 1.05 * i.mean_kink_angle_deg,
-        "mean kink {} → {}",
-        i.mean_kink_angle_deg,
-        f.mean_kink_angle_deg
-    );
+    assert!(f.mean_kink_angle_deg < 1.05 * i.mean_kink_angle_deg, "mean kink {} → {}", i.mean_kink_angle_deg, f.mean_kink_angle_deg);
     let (lo, hi) = summary.sizing_range.unwrap();
     assert!(lo > 0.0 && lo <= hi);
 }
@@ -459,59 +249,31 @@ fn st_stage_cancels_within_one_iteration() {
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
-    let FromWorker::Loaded(info) = r.messages[0].0.clone() else {
-        panic!()
-    };
+    let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!() };
     r.messages.clear();
     r.cancel_after = Some(25);
     r.progress_seen = 0;
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::StAdapted(StAdaptedParams::default())),
-        None,
-    );
+    send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
     assert!(
         matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "st"),
         "{:?}",
         r.messages.last().unwrap().0
     );
     // The cancel was requested once 25 progress messages had been sent: the 25th is the last.
-    let progress: Vec<usize> = r
-        .messages
-        .iter()
-        .enumerate()
-        .filter(|(_, m)| matches!(m.0, FromWorker::Progress(_)))
-        .map(|(i, _)| i)
-        .collect();
+    let progress: Vec<usize> =
+        r.messages.iter().enumerate().filter(|(_, m)| matches!(m.0, FromWorker::Progress(_))).map(|(i, _)| i).collect();
     assert_eq!(progress.len(), 25, "progress after the cancel request");
     let after = &r.messages[progress[24] + 1..];
-    assert_eq!(
-        after.len(),
-        1,
-        "only Cancelled follows: {:?}",
-        after.iter().map(|m| &m.0).collect::<Vec<_>>()
-    );
-    assert!(!r
-        .messages
-        .iter()
-        .any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
+    assert_eq!(after.len(), 1, "only Cancelled follows: {:?}", after.iter().map(|m| &m.0).collect::<Vec<_>>());
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
     // The design is what was loaded, and runs again to the end.
     let loaded = s.reference.as_ref().expect("the reference is kept");
     assert_eq!(loaded.info, info);
     assert_eq!(loaded.surface.mesh().face_count(), info.stats.faces);
     r.messages.clear();
     r.cancel_after = None;
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Curvature(JetParams::default())),
-        None,
-    );
-    assert!(matches!(
-        r.messages.last().unwrap().0,
-        FromWorker::Finished { .. }
-    ));
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(matches!(r.messages.last().unwrap().0, FromWorker::Finished { .. }));
 }
 
 /// One jet fit per reference: the curvature stage fits the reference's jets, and the methods
@@ -533,51 +295,21 @@ fn a_reference_fits_its_jets_once() {
     };
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(
-        &mut s,
-        &mut r,
-        ToWorker::LoadSample(Sample::SphereCap),
-        None,
-    );
+    send(&mut s, &mut r, ToWorker::LoadSample(Sample::SphereCap), None);
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Curvature(JetParams::default())),
-        None,
-    );
-    assert!(
-        reference_fits(&r) > 0,
-        "the curvature stage reports its jet fit"
-    );
+    send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
+    assert!(reference_fits(&r) > 0, "the curvature stage reports its jet fit");
     for stage in [
         StageRequest::StSupport(StSupportParams::default()),
-        StageRequest::StAdapted(StAdaptedParams {
-            stages: StAdaptedParams::default().stages[..1].to_vec(),
-            ..Default::default()
-        }),
+        StageRequest::StAdapted(StAdaptedParams { stages: StAdaptedParams::default().stages[..1].to_vec(), ..Default::default() }),
     ] {
         r.messages.clear();
         send(&mut s, &mut r, run(stage.clone()), None);
-        assert!(
-            r.messages
-                .iter()
-                .any(|m| matches!(m.0, FromWorker::Finished { .. })),
-            "{:?}",
-            r.messages.last().map(|m| &m.0)
-        );
-        assert_eq!(
-            reference_fits(&r),
-            0,
-            "{} fitted the reference's jets again",
-            stage.name()
-        );
+        assert!(r.messages.iter().any(|m| matches!(m.0, FromWorker::Finished { .. })), "{:?}", r.messages.last().map(|m| &m.0));
+        assert_eq!(reference_fits(&r), 0, "{} fitted the reference's jets again", stage.name());
     }
     r.messages.clear();
-    let other = JetParams {
-        degree: 2,
-        ..JetParams::default()
-    };
+    let other = JetParams { degree: 2, ..JetParams::default() };
     send(&mut s, &mut r, run(StageRequest::Curvature(other)), None);
     assert!(reference_fits(&r) > 0, "other jet parameters fit again");
 }
@@ -593,107 +325,40 @@ fn sq_streams_lines_and_energies_then_files() {
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Vault), None);
     r.messages.clear();
-    let params = SqParams {
-        grid: 12,
-        ..SqParams::default()
-    };
+    let params = SqParams { grid: 12, ..SqParams::default() };
     send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
-    let energies = r
-        .messages
-        .iter()
-        .filter(|(m, _)| matches!(m, FromWorker::Progress(p) if !p.energies.is_empty()))
-        .count();
-    let Some((
-        FromWorker::Finished {
-            result: StageResult::Sq(summary),
-            ..
-        },
-        _,
-    )) = r.messages.last()
-    else {
+    let energies = r.messages.iter().filter(|(m, _)| matches!(m, FromWorker::Progress(p) if !p.energies.is_empty())).count();
+    let Some((FromWorker::Finished { result: StageResult::Sq(summary), .. }, _)) = r.messages.last() else {
         panic!("{:?}", r.messages.last())
     };
-    assert_eq!(
-        energies, summary.section.iterations,
-        "one energy report per iteration"
-    );
+    assert_eq!(energies, summary.section.iterations, "one energy report per iteration");
     let figures = &summary.section.congruence.figures;
-    assert!(
-        figures.max_line_normal_angle_deg <= 20.0 && figures.min_torsal_plane_angle_deg >= 75.0,
-        "{figures:?}"
-    );
+    assert!(figures.max_line_normal_angle_deg <= 20.0 && figures.min_torsal_plane_angle_deg >= 75.0, "{figures:?}");
     let snapshots: Vec<&Vec<Field>> = r
         .messages
         .iter()
-        .filter_map(|(m, f)| {
-            matches!(m, FromWorker::Snapshot { stage, .. } if stage == sq::STAGE).then_some(f)
-        })
+        .filter_map(|(m, f)| matches!(m, FromWorker::Snapshot { stage, .. } if *stage == sq::STAGE).then_some(f))
         .collect();
     let first = snapshots.first().unwrap();
-    assert_eq!(
-        find(first, field::SQ_INITIAL_LINES)
-            .and_then(Field::as_f32)
-            .unwrap()
-            .len(),
-        144 * 6,
-        "two points per line"
-    );
+    assert_eq!(find(first, field::SQ_INITIAL_LINES).and_then(Field::as_f32).unwrap().len(), 144 * 6, "two points per line");
     let last = snapshots.last().unwrap();
-    assert_eq!(
-        find(last, field::SQ_CROSS_FIELD)
-            .and_then(Field::as_f32)
-            .unwrap()
-            .len(),
-        121 * 2 * 6,
-        "two arms per quad"
-    );
-    assert_eq!(
-        find(last, field::SQ_CROSS_FIELD_ANGLE)
-            .and_then(Field::as_f32)
-            .unwrap()
-            .len(),
-        121 * 2
-    );
-    assert!(find(last, field::SQ_NO_REAL_QUADS)
-        .and_then(Field::as_f32)
-        .unwrap()
-        .is_empty());
-    for name in [
-        field::SQ_QUAD_MESH,
-        field::PANEL_TRIANGLES,
-        field::SUPPORT_TRIANGLES,
-        field::AXES_LINES,
-    ] {
-        let len = find(last, name).map_or(0, |f| {
-            f.as_f32().map_or(0, <[f32]>::len) + f.as_u32().map_or(0, <[u32]>::len)
-        });
+    assert_eq!(find(last, field::SQ_CROSS_FIELD).and_then(Field::as_f32).unwrap().len(), 121 * 2 * 6, "two arms per quad");
+    assert_eq!(find(last, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32).unwrap().len(), 121 * 2);
+    assert!(find(last, field::SQ_NO_REAL_QUADS).and_then(Field::as_f32).unwrap().is_empty());
+    for name in [field::SQ_QUAD_MESH, field::PANEL_TRIANGLES, field::SUPPORT_TRIANGLES, field::AXES_LINES] {
+        let len = find(last, name).map_or(0, |f| f.as_f32().map_or(0, <[f32]>::len) + f.as_u32().map_or(0, <[u32]>::len));
         assert!(len > 0, "{name} in the last snapshot");
     }
     // Live panels while the spheres optimize.
-    assert!(
-        snapshots[..snapshots.len() - 1]
-            .iter()
-            .any(|f| find(f, field::PANEL_TRIANGLES).is_some()),
-        "live panels"
-    );
-    let mesh = summary
-        .section
-        .sq_mesh
-        .as_ref()
-        .expect("the SQ mesh's figures")
-        .figures;
-    assert!(
-        mesh.max_vertex_sphere_residual <= 1e-8 && mesh.max_centre_face_planarity <= 1e-8,
-        "{mesh:?}"
-    );
+    assert!(snapshots[..snapshots.len() - 1].iter().any(|f| find(f, field::PANEL_TRIANGLES).is_some()), "live panels");
+    let mesh = summary.section.sq_mesh.as_ref().expect("the SQ mesh's figures").figures;
+    assert!(mesh.max_vertex_sphere_residual <= 1e-8 && mesh.max_centre_face_planarity <= 1e-8, "{mesh:?}");
     assert_eq!(summary.section.stopped_after, "final");
     let files: Vec<&str> = r
         .messages
         .iter()
         .find_map(|(m, _)| match m {
-            FromWorker::Files { fields, .. } => {
-                Some(fields.iter().map(|h| h.name.as_str()).collect())
-            }
+            FromWorker::Files { fields, .. } => Some(fields.iter().map(|h| h.name.as_str()).collect()),
             _ => None,
         })
         .unwrap();
@@ -722,53 +387,23 @@ fn sq_refusals_reach_the_app() {
     let bytes = std::fs::read("../shared/data/bsplines/saddle_sign_change.json").unwrap();
     let mut s = Session::new();
     let mut r = Recorder::default();
-    send(
-        &mut s,
-        &mut r,
-        ToWorker::LoadFile {
-            name: "saddle_sign_change.json".into(),
-        },
-        Some(bytes),
-    );
-    let FromWorker::Loaded(info) = &r.messages[0].0 else {
-        panic!()
-    };
+    send(&mut s, &mut r, ToWorker::LoadFile { name: "saddle_sign_change.json".into() }, Some(bytes));
+    let FromWorker::Loaded(info) = &r.messages[0].0 else { panic!() };
     let vertices = info.stats.vertices;
     r.messages.clear();
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Sq(SqParams::default())),
-        None,
-    );
+    send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
     let n = r.messages.len();
-    let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[n - 2] else {
-        panic!("{:?}", r.messages[n - 2].0)
-    };
-    assert_eq!(stage, sq::REFUSED_STAGE);
-    let h = find(fields, field::MEAN_CURVATURE)
-        .and_then(Field::as_f32)
-        .unwrap();
+    let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[n - 2] else { panic!("{:?}", r.messages[n - 2].0) };
+    assert_eq!(*stage, sq::REFUSED_STAGE);
+    let h = find(fields, field::MEAN_CURVATURE).and_then(Field::as_f32).unwrap();
     assert_eq!(h.len(), vertices);
     assert!(h.iter().any(|&x| x > 0.0) && h.iter().any(|&x| x < 0.0));
-    let FromWorker::Error { message, .. } = &r.messages[n - 1].0 else {
-        panic!()
-    };
-    assert!(
-        message.contains("mean curvature of one sign") && message.contains("ST method"),
-        "{message}"
-    );
+    let FromWorker::Error { message, .. } = &r.messages[n - 1].0 else { panic!() };
+    assert!(message.contains("mean curvature of one sign") && message.contains("ST method"), "{message}");
 
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
-    send(
-        &mut s,
-        &mut r,
-        run(StageRequest::Sq(SqParams::default())),
-        None,
-    );
-    let FromWorker::Error { message, .. } = &r.messages.last().unwrap().0 else {
-        panic!()
-    };
+    send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
+    let FromWorker::Error { message, .. } = &r.messages.last().unwrap().0 else { panic!() };
     assert!(message.contains("B-spline reference"), "{message}");
 }
 
@@ -781,10 +416,7 @@ fn sq_stage_cancels_within_one_iteration() {
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Vault), None);
     r.messages.clear();
-    let params = SqParams {
-        grid: 10,
-        ..SqParams::default()
-    };
+    let params = SqParams { grid: 10, ..SqParams::default() };
     r.cancel_after = Some(60);
     r.progress_seen = 0;
     send(&mut s, &mut r, run(StageRequest::Sq(params.clone())), None);
@@ -793,24 +425,11 @@ fn sq_stage_cancels_within_one_iteration() {
         "{:?}",
         r.messages.last().unwrap().0
     );
-    let progress = r
-        .messages
-        .iter()
-        .filter(|m| matches!(m.0, FromWorker::Progress(_)))
-        .count();
+    let progress = r.messages.iter().filter(|m| matches!(m.0, FromWorker::Progress(_))).count();
     assert_eq!(progress, 60, "no progress after the cancel request");
-    assert!(!r
-        .messages
-        .iter()
-        .any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
+    assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
     r.messages.clear();
     r.cancel_after = None;
     send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
-    assert!(matches!(
-        &r.messages.last().unwrap().0,
-        FromWorker::Finished {
-            result: StageResult::Sq(_),
-            ..
-        }
-    ));
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Finished { result: StageResult::Sq(_), .. }));
 }

@@ -14,8 +14,8 @@ use std::f64::consts::TAU;
 use glam::DVec3;
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::{build_schedule, write_glb, write_obj};
-use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::{Face, PolyMesh};
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::panels::build_panels;
 use spherical_faces::panels::panel::Panel;
@@ -40,10 +40,7 @@ fn axial_sphere((r0, z0): (f64, f64), (r1, z1): (f64, f64)) -> (Sphere, f64) {
     // |(r0, z0) − (0, zc)| = |(r1, z1) − (0, zc)|.
     let zc = (r1 * r1 - r0 * r0 + z1 * z1 - z0 * z0) / (2.0 * (z1 - z0));
     let radius = (r0 * r0 + (z0 - zc) * (z0 - zc)).sqrt();
-    (
-        Sphere::from_center_radius(DVec3::new(0.0, 0.0, zc), -radius),
-        radius,
-    )
+    (Sphere::from_center_radius(DVec3::new(0.0, 0.0, zc), -radius), radius)
 }
 
 /// The vase: parallels i = 0..=RINGS, meridians j = 0..MERIDIANS (closed around the z axis), its
@@ -64,12 +61,7 @@ fn vase() -> SphereMesh {
     for i in 0..RINGS {
         let (sphere, _) = axial_sphere(parallel(i), parallel(i + 1));
         for j in 0..MERIDIANS {
-            faces.push(Face::quad([
-                id(i, j),
-                id(i, j + 1),
-                id(i + 1, j + 1),
-                id(i + 1, j),
-            ]));
+            faces.push(Face::quad([id(i, j), id(i, j + 1), id(i + 1, j + 1), id(i + 1, j)]));
             spheres.push(sphere);
         }
     }
@@ -85,11 +77,7 @@ fn vase() -> SphereMesh {
         faces.push(Face::triangle([id(RINGS, j), id(RINGS, j + 1), top]));
         spheres.push(top_sphere);
     }
-    SphereMesh::new(
-        PolyMesh::new(positions, faces),
-        spheres,
-        BoundaryArcRule::Parallel(DVec3::Z),
-    )
+    SphereMesh::new(PolyMesh::new(positions, faces), spheres, BoundaryArcRule::Parallel(DVec3::Z))
 }
 
 const QUADS: usize = RINGS * MERIDIANS;
@@ -112,17 +100,11 @@ fn the_fixture_is_a_quad_sphere_mesh() {
         let s = sm.face_spheres[f];
         assert!((s.discriminant() - 1.0).abs() < 1e-12);
         for p in sm.mesh.face_points(f) {
-            assert!(
-                s.distance(p) < 1e-12 * d,
-                "face {f}: a corner is off its sphere"
-            );
+            assert!(s.distance(p) < 1e-12 * d, "face {f}: a corner is off its sphere");
         }
         // Oriented like the face: the sphere's normal at a corner agrees with the face normal.
         let p = sm.mesh.face_points(f);
-        assert!(
-            s.normal_at(p[0]).dot(sm.mesh.face_area_vector(f)) > 0.0,
-            "face {f} misoriented"
-        );
+        assert!(s.normal_at(p[0]).dot(sm.mesh.face_area_vector(f)) > 0.0, "face {f} misoriented");
     }
     assert!(sm.max_vertex_sphere_residual() < 1e-12 * d);
     // Closed: every edge has two faces (parallels, meridians, spokes).
@@ -136,14 +118,8 @@ fn the_fixture_is_a_quad_sphere_mesh() {
     assert_eq!(tri.triangles[0], [0, 1, MERIDIANS as u32 + 1]);
     // Kinks: zero within a ring or a fan (one sphere), positive across the parallels.
     let kinks = sm.kink_angles_deg();
-    assert_eq!(
-        kinks.iter().filter(|&&k| k < 1e-9).count(),
-        (RINGS + 2) * MERIDIANS
-    );
-    assert_eq!(
-        kinks.iter().filter(|&&k| k > 1e-3).count(),
-        (RINGS + 1) * MERIDIANS
-    );
+    assert_eq!(kinks.iter().filter(|&&k| k < 1e-9).count(), (RINGS + 2) * MERIDIANS);
+    assert_eq!(kinks.iter().filter(|&&k| k > 1e-3).count(), (RINGS + 1) * MERIDIANS);
 }
 
 #[test]
@@ -159,37 +135,21 @@ fn quad_panels_lie_on_their_spheres_and_share_their_arcs() {
         assert_eq!(p.arc_vertices.len(), n);
         assert_eq!(p.positions[..n].to_vec(), sm.mesh.face_points(f));
         for x in &p.positions {
-            assert!(
-                p.sphere.distance(*x) < 1e-9 * d,
-                "panel {f}: a point is off its sphere"
-            );
+            assert!(p.sphere.distance(*x) < 1e-9 * d, "panel {f}: a point is off its sphere");
         }
-        assert!(
-            p.chord_error() <= 1e-4 * d * (1.0 + 1e-9),
-            "panel {f}: chord error {}",
-            p.chord_error()
-        );
+        assert!(p.chord_error() <= 1e-4 * d * (1.0 + 1e-9), "panel {f}: chord error {}", p.chord_error());
         assert_eq!(p.folded_triangles(), 0, "panel {f}");
         for k in 0..n {
             // Arc k runs from corner k to corner k + 1, on the sphere.
             let pts = p.arc_points(k);
             assert_eq!(pts[0], sm.mesh.positions[p.corners[k] as usize]);
-            assert_eq!(
-                *pts.last().unwrap(),
-                sm.mesh.positions[p.corners[(k + 1) % n] as usize]
-            );
+            assert_eq!(*pts.last().unwrap(), sm.mesh.positions[p.corners[(k + 1) % n] as usize]);
         }
     }
     // Every interior edge: the two panels carry the same arc points, in opposite directions.
     let topo = sm.topology();
     for (e, f, g) in topo.interior_edges() {
-        let side = |face: u32| {
-            topo.edge_faces(e)
-                .iter()
-                .find(|&&(h, _)| h == face)
-                .unwrap()
-                .1 as usize
-        };
+        let side = |face: u32| topo.edge_faces(e).iter().find(|&&(h, _)| h == face).unwrap().1 as usize;
         let a = panels[f as usize].arc_points(side(f));
         let mut b = panels[g as usize].arc_points(side(g));
         b.reverse();
@@ -205,16 +165,9 @@ fn quad_panels_lie_on_their_spheres_and_share_their_arcs() {
                 assert!(arc.circle.normal.cross(DVec3::Z).length() < 1e-9);
                 assert!(arc.circle.center.truncate().length() < 1e-9 * d);
             } else {
-                let off_axis = if a.truncate().length() > b.truncate().length() {
-                    a
-                } else {
-                    b
-                };
+                let off_axis = if a.truncate().length() > b.truncate().length() { a } else { b };
                 let n = DVec3::Z.cross(off_axis).normalize();
-                assert!(
-                    arc.circle.normal.cross(n).length() < 1e-9,
-                    "meridian arc off its plane"
-                );
+                assert!(arc.circle.normal.cross(n).length() < 1e-9, "meridian arc off its plane");
             }
         }
     }
@@ -225,19 +178,11 @@ fn quad_panels_tile_the_spherical_zones() {
     let sm = vase();
     let panels = panels(&sm);
     // Archimedes: the zone of a sphere of radius R between two planes h apart has area 2πRh.
-    let heights = std::iter::once(POLES[0])
-        .chain((0..=RINGS).map(|i| parallel(i).1))
-        .chain([POLES[1]]);
+    let heights = std::iter::once(POLES[0]).chain((0..=RINGS).map(|i| parallel(i).1)).chain([POLES[1]]);
     let heights: Vec<f64> = heights.collect();
     let exact: f64 = (0..RINGS + 2)
         .map(|k| {
-            let face = if k == 0 {
-                QUADS
-            } else if k == RINGS + 1 {
-                QUADS + MERIDIANS
-            } else {
-                (k - 1) * MERIDIANS
-            };
+            let face = if k == 0 { QUADS } else if k == RINGS + 1 { QUADS + MERIDIANS } else { (k - 1) * MERIDIANS };
             let s = sm.face_spheres[face];
             TAU * s.signed_radius().unwrap().abs() * (heights[k + 1] - heights[k])
         })
@@ -246,15 +191,8 @@ fn quad_panels_tile_the_spherical_zones() {
     // The tessellation is inscribed (convex spherical pieces), its chords within the tolerance
     // t of the sphere: it falls short of the exact area, by at most about 2t/R of it.
     let t = 1e-4 * diag(&sm);
-    let r_min = sm
-        .face_spheres
-        .iter()
-        .map(|s| s.signed_radius().unwrap().abs())
-        .fold(f64::INFINITY, f64::min);
-    assert!(
-        area <= exact && exact - area < 2.0 * t / r_min * exact,
-        "panels {area} vs zones {exact}"
-    );
+    let r_min = sm.face_spheres.iter().map(|s| s.signed_radius().unwrap().abs()).fold(f64::INFINITY, f64::min);
+    assert!(area <= exact && exact - area < 2.0 * t / r_min * exact, "panels {area} vs zones {exact}");
 }
 
 #[test]
@@ -266,10 +204,7 @@ fn quad_panels_export() {
     assert_eq!(reference.surface().faces, sm.mesh.faces);
     assert_eq!(reference.mesh().face_count(), 2 * QUADS + 2 * MERIDIANS);
     // The two widest rings' radii differ by 1e-4: one radius at 1e-3, two at 1e-6.
-    assert_eq!(
-        build_schedule(&panels, &reference, 1e-3).distinct_radii,
-        RINGS + 1
-    );
+    assert_eq!(build_schedule(&panels, &reference, 1e-3).distinct_radii, RINGS + 1);
     let schedule = build_schedule(&panels, &reference, 1e-6);
     assert_eq!(schedule.panel_count, panels.len());
     assert_eq!(schedule.distinct_radii, RINGS + 2);
@@ -285,33 +220,14 @@ fn quad_panels_export() {
     }
     let csv = schedule.to_csv();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    assert!(
-        header.contains(&"v3_id") && header.contains(&"v3_z") && header.contains(&"edge3_radius")
-    );
-    assert!(csv
-        .lines()
-        .skip(1)
-        .all(|row| row.split(',').count() == header.len()));
+    assert!(header.contains(&"v3_id") && header.contains(&"v3_z") && header.contains(&"edge3_radius"));
+    assert!(csv.lines().skip(1).all(|row| row.split(',').count() == header.len()));
 
     let obj = write_obj(&panels, None, None);
-    assert_eq!(
-        obj.lines().filter(|l| l.starts_with("g panel_")).count(),
-        panels.len()
-    );
-    let glb = write_glb(
-        &panels,
-        None,
-        None,
-        serde_json::json!({ "method": "quad test" }),
-    );
+    assert_eq!(obj.lines().filter(|l| l.starts_with("g panel_")).count(), panels.len());
+    let glb = write_glb(&panels, None, None, serde_json::json!({ "method": "quad test" }));
     let j = glb_json(&glb).unwrap();
-    assert_eq!(
-        j["nodes"][0]["extras"]["panels"][5]["corners"]
-            .as_array()
-            .unwrap()
-            .len(),
-        4
-    );
+    assert_eq!(j["nodes"][0]["extras"]["panels"][5]["corners"].as_array().unwrap().len(), 4);
     let dir = common::temp_dir("quad-glb");
     let path = dir.join("quads.glb");
     std::fs::write(&path, &glb).unwrap();
@@ -324,29 +240,14 @@ fn quad_panels_export() {
 #[test]
 fn topology_of_mixed_faces() {
     // A quad and a triangle sharing an edge.
-    let positions = vec![
-        DVec3::ZERO,
-        DVec3::X,
-        DVec3::new(1.0, 1.0, 0.0),
-        DVec3::Y,
-        DVec3::new(2.0, 0.5, 0.0),
-    ];
-    let mesh = PolyMesh::new(
-        positions,
-        vec![Face::quad([0, 1, 2, 3]), Face::triangle([1, 4, 2])],
-    );
+    let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y, DVec3::new(2.0, 0.5, 0.0)];
+    let mesh = PolyMesh::new(positions, vec![Face::quad([0, 1, 2, 3]), Face::triangle([1, 4, 2])]);
     let topo = Topology::new(&mesh);
     assert_eq!(topo.edges().len(), 6);
     let shared = topo.edge_index(1, 2).unwrap();
     assert_eq!(topo.edge_faces(shared), &[(0, 1), (1, 2)]);
-    assert_eq!(
-        topo.interior_edges().collect::<Vec<_>>(),
-        vec![(shared, 0, 1)]
-    );
+    assert_eq!(topo.interior_edges().collect::<Vec<_>>(), vec![(shared, 0, 1)]);
     assert_eq!(topo.vertex_faces(2), &[0, 1]);
     assert!((mesh.face_area_vector(0) - DVec3::Z).length() < 1e-15);
-    assert_eq!(
-        mesh.triangulated().triangles,
-        vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]]
-    );
+    assert_eq!(mesh.triangulated().triangles, vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]]);
 }

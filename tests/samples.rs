@@ -3,23 +3,15 @@
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
-use spherical_faces::congruence::central_spheres::{
-    jet_fit, CurvatureField, JetParams, SIGN_CHANGE_THRESHOLD,
-};
-use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams, SIGN_CHANGE_THRESHOLD};
 use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::samples::{dome_height, torus_closed_form, Sample};
 use std::collections::HashMap;
 
 fn fit(mesh: &TriMesh) -> CurvatureField {
     let topo = Topology::new(mesh);
-    jet_fit(
-        mesh,
-        &topo,
-        &JetParams::default(),
-        &mut spherical_faces::progress::ignore,
-    )
-    .unwrap()
+    jet_fit(mesh, &topo, &JetParams::default(), &mut spherical_faces::progress::ignore).unwrap()
 }
 
 #[test]
@@ -51,25 +43,13 @@ fn meshes_are_clean_and_oriented() {
             mesh.bbox_diagonal()
         );
         assert!((1000..=5000).contains(&nv), "{}: {nv} vertices", s.key());
-        assert!(
-            s.description().contains(&format!("{nv} vertices")),
-            "{}: description out of date",
-            s.key()
-        );
-        assert!(
-            s.description().contains(&format!("{nf} triangles")),
-            "{}: description out of date",
-            s.key()
-        );
+        assert!(s.description().contains(&format!("{nv} vertices")), "{}: description out of date", s.key());
+        assert!(s.description().contains(&format!("{nf} triangles")), "{}: description out of date", s.key());
         assert!(mesh.positions.iter().all(|p| p.is_finite()));
         // No degenerate triangles: area above 1% of the mean.
         let areas: Vec<f64> = (0..nf).map(|f| mesh.face_area_vector(f).length()).collect();
         let mean = areas.iter().sum::<f64>() / nf as f64;
-        assert!(
-            areas.iter().all(|&a| a > 0.01 * mean),
-            "{}: sliver",
-            s.key()
-        );
+        assert!(areas.iter().all(|&a| a > 0.01 * mean), "{}: sliver", s.key());
         // Consistent orientation: every directed edge once, interior edges used both ways.
         let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
         for t in &mesh.triangles {
@@ -77,28 +57,19 @@ fn meshes_are_clean_and_oriented() {
                 *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
             }
         }
-        assert!(
-            directed.values().all(|&c| c == 1),
-            "{}: repeated directed edge",
-            s.key()
-        );
+        assert!(directed.values().all(|&c| c == 1), "{}: repeated directed edge", s.key());
         let topo = Topology::new(&mesh);
         let stats = topo.stats(&mesh);
         assert_eq!(stats.non_manifold_edges, 0);
         assert_eq!(stats.boundary_loops, 1, "{}", s.key());
         for (e, &c) in topo.edges().iter().zip(topo.edge_face_counts()) {
             if c == 2 {
-                assert!(
-                    directed.contains_key(&(e[0], e[1])) && directed.contains_key(&(e[1], e[0]))
-                );
+                assert!(directed.contains_key(&(e[0], e[1])) && directed.contains_key(&(e[1], e[0])));
             }
         }
         // Every vertex is used.
         let mut used = vec![false; nv];
-        mesh.triangles
-            .iter()
-            .flatten()
-            .for_each(|&v| used[v as usize] = true);
+        mesh.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
         assert!(used.iter().all(|&u| u));
         // Normals up or outward.
         let normals = mesh.vertex_normals();
@@ -127,8 +98,7 @@ fn dome_exact_h(x: f64, y: f64) -> f64 {
     let gy = (g(x, y + e) - g(x, y - e)) / (2.0 * e);
     let gxx = (g(x + e, y) - 2.0 * g(x, y) + g(x - e, y)) / (e * e);
     let gyy = (g(x, y + e) - 2.0 * g(x, y) + g(x, y - e)) / (e * e);
-    let gxy =
-        (g(x + e, y + e) - g(x + e, y - e) - g(x - e, y + e) + g(x - e, y - e)) / (4.0 * e * e);
+    let gxy = (g(x + e, y + e) - g(x + e, y - e) - g(x - e, y + e) + g(x - e, y - e)) / (4.0 * e * e);
     let w2 = 1.0 + gx * gx + gy * gy;
     ((1.0 + gy * gy) * gxx - 2.0 * gx * gy * gxy + (1.0 + gx * gx) * gyy) / (2.0 * w2.powf(1.5))
 }
@@ -138,16 +108,8 @@ fn dome_keeps_one_sign_of_mean_curvature() {
     let mesh = Sample::Dome.mesh();
     let diag = mesh.bbox_diagonal();
     // The surface itself, at every vertex (boundary included).
-    let exact_max = mesh
-        .positions
-        .iter()
-        .map(|p| dome_exact_h(p.x, p.y) * diag)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let exact_min = mesh
-        .positions
-        .iter()
-        .map(|p| dome_exact_h(p.x, p.y) * diag)
-        .fold(f64::INFINITY, f64::min);
+    let exact_max = mesh.positions.iter().map(|p| dome_exact_h(p.x, p.y) * diag).fold(f64::NEG_INFINITY, f64::max);
+    let exact_min = mesh.positions.iter().map(|p| dome_exact_h(p.x, p.y) * diag).fold(f64::INFINITY, f64::min);
     // The jet fit, every vertex.
     let field = fit(&mesh);
     let (lo, hi) = (field.summary.min_h * diag, field.summary.max_h * diag);
@@ -166,10 +128,7 @@ fn dome_keeps_one_sign_of_mean_curvature() {
     );
     // Margin: the flattest spot still has a central sphere of radius < 1.5 diagonals (H·diag
     // −0.84 measured), far from both zero and the sign-change threshold.
-    assert!(
-        exact_max < -0.6,
-        "the dome surface has H·diag up to {exact_max}"
-    );
+    assert!(exact_max < -0.6, "the dome surface has H·diag up to {exact_max}");
     assert!(hi < -0.6, "jet H·diag up to {hi}");
     assert!(hi < -3.0 * SIGN_CHANGE_THRESHOLD);
     assert!(!field.summary.h_changes_sign);

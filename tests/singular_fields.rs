@@ -5,12 +5,8 @@ use std::f64::consts::FRAC_PI_2;
 
 use glam::{DVec2, DVec3};
 use spherical_faces::geometry::bspline::{BSplineBasis, BSplineSurface};
-use spherical_faces::remeshing::cross_field::{
-    singular_points, split_singularities, Cross, CrossField, FineGrid,
-};
-use spherical_faces::remeshing::quad_remeshing::{
-    integrate, quad_remesh, FieldGrid, QuadRemeshParams,
-};
+use spherical_faces::remeshing::cross_field::{singular_points, split_singularities, Cross, CrossField, FineGrid};
+use spherical_faces::remeshing::quad_remeshing::{integrate, quad_remesh, FieldGrid, QuadRemeshParams};
 use spherical_faces::remeshing::seamless::turn;
 use spherical_faces::rng::Rng;
 use spherical_faces::sq::sphere_terms::support_plane_bound_deg;
@@ -18,22 +14,12 @@ use spherical_faces::sq::sphere_terms::support_plane_bound_deg;
 /// The plane z = 0 over [−2, 2]², parametrized by (x, y).
 fn plane() -> BSplineSurface {
     let basis = || BSplineBasis::clamped_uniform(1, 2, (-2.0, 2.0)).unwrap();
-    let control = vec![
-        DVec3::new(-2.0, -2.0, 0.0),
-        DVec3::new(2.0, -2.0, 0.0),
-        DVec3::new(-2.0, 2.0, 0.0),
-        DVec3::new(2.0, 2.0, 0.0),
-    ];
+    let control = vec![DVec3::new(-2.0, -2.0, 0.0), DVec3::new(2.0, -2.0, 0.0), DVec3::new(-2.0, 2.0, 0.0), DVec3::new(2.0, 2.0, 0.0)];
     BSplineSurface::new(basis(), basis(), control, vec![1.0; 4]).unwrap()
 }
 
 fn grid() -> FineGrid {
-    FineGrid {
-        nu: 41,
-        nv: 41,
-        origin: [-2.0, -2.0],
-        step: [0.1, 0.1],
-    }
+    FineGrid { nu: 41, nv: 41, origin: [-2.0, -2.0], step: [0.1, 0.1] }
 }
 
 /// One cross per triangle: angle `quarters`/4 · arg(x − centre).
@@ -41,10 +27,7 @@ fn turning(grid: &FineGrid, centre: DVec2, quarters: f64) -> Vec<Cross> {
     (0..grid.triangle_count())
         .map(|t| {
             let d = grid.centroid(t) - centre;
-            Cross {
-                angle: 0.25 * quarters * d.y.atan2(d.x),
-                skew: 0.0,
-            }
+            Cross { angle: 0.25 * quarters * d.y.atan2(d.x), skew: 0.0 }
         })
         .collect()
 }
@@ -56,22 +39,11 @@ fn turning_field(surface: &BSplineSurface, centre: DVec2, quarters: f64) -> Cros
     let crosses = (0..cells * cells)
         .map(|k| {
             let (i, j) = (k % cells, k / cells);
-            let p = DVec2::new(
-                -2.0 + 4.0 * (i as f64 + 0.5) / cells as f64,
-                -2.0 + 4.0 * (j as f64 + 0.5) / cells as f64,
-            ) - centre;
-            Cross {
-                angle: 0.25 * quarters * p.y.atan2(p.x),
-                skew: 0.0,
-            }
+            let p = DVec2::new(-2.0 + 4.0 * (i as f64 + 0.5) / cells as f64, -2.0 + 4.0 * (j as f64 + 0.5) / cells as f64) - centre;
+            Cross { angle: 0.25 * quarters * p.y.atan2(p.x), skew: 0.0 }
         })
         .collect();
-    CrossField {
-        n,
-        domain: surface.domain(),
-        crosses,
-        filled: 0,
-    }
+    CrossField { n, domain: surface.domain(), crosses, filled: 0 }
 }
 
 #[test]
@@ -82,10 +54,7 @@ fn a_cross_keeps_its_lines_through_labels_and_skew() {
         let [a, b] = c.turned(q).directions();
         // The same two lines, whatever the labels.
         let on = |x: DVec2, d: DVec2| x.perp_dot(d.normalize()).abs() < 1e-12;
-        assert!(
-            (on(a, d0) && on(b, d1)) || (on(a, d1) && on(b, d0)),
-            "labels turned by {q}"
-        );
+        assert!((on(a, d0) && on(b, d1)) || (on(a, d1) && on(b, d0)), "labels turned by {q}");
         assert!((c.turned(q).z() - c.z()).length() < 1e-12);
     }
 }
@@ -95,16 +64,9 @@ fn a_radial_field_turns_once_about_its_centre_and_a_quarter_field_a_quarter() {
     let g = grid();
     let centre = DVec2::new(0.03, 0.07);
     let radial = singular_points(&g, &turning(&g, centre, 4.0));
-    assert_eq!(
-        radial.iter().map(|s| s.quarters).sum::<i32>(),
-        4,
-        "{radial:?}"
-    );
+    assert_eq!(radial.iter().map(|s| s.quarters).sum::<i32>(), 4, "{radial:?}");
     for s in &radial {
-        assert!(
-            g.uv(s.node).distance(centre) < 0.3,
-            "{s:?} far from the centre"
-        );
+        assert!(g.uv(s.node).distance(centre) < 0.3, "{s:?} far from the centre");
     }
     for q in [1, -1] {
         let found = singular_points(&g, &turning(&g, centre, q as f64));
@@ -114,12 +76,7 @@ fn a_radial_field_turns_once_about_its_centre_and_a_quarter_field_a_quarter() {
         assert!(g.uv(found[0].node).distance(centre) < 0.15);
     }
     // A field without singular points has none.
-    let parallel: Vec<Cross> = (0..g.triangle_count())
-        .map(|_| Cross {
-            angle: 0.3,
-            skew: 0.1,
-        })
-        .collect();
+    let parallel: Vec<Cross> = (0..g.triangle_count()).map(|_| Cross { angle: 0.3, skew: 0.1 }).collect();
     assert!(singular_points(&g, &parallel).is_empty());
 }
 
@@ -135,11 +92,7 @@ fn a_full_turn_splits_into_four_quarter_turns_and_a_dipole_vanishes() {
     for t in 0..g.triangle_count() {
         if g.centroid(t).length() > 1.8 {
             let d = (radial[t].angle - reference[t].angle).rem_euclid(FRAC_PI_2);
-            assert!(
-                d.min(FRAC_PI_2 - d) < 3f64.to_radians(),
-                "triangle {t}: {}°",
-                d.to_degrees()
-            );
+            assert!(d.min(FRAC_PI_2 - d) < 3f64.to_radians(), "triangle {t}: {}°", d.to_degrees());
         }
     }
     // +1 and −1 a little apart: nothing is left.
@@ -147,10 +100,7 @@ fn a_full_turn_splits_into_four_quarter_turns_and_a_dipole_vanishes() {
         .map(|t| {
             let x = g.centroid(t);
             let (a, b) = (x - DVec2::new(-0.21, 0.04), x - DVec2::new(0.19, 0.04));
-            Cross {
-                angle: 0.25 * (a.y.atan2(a.x) - b.y.atan2(b.x)),
-                skew: 0.0,
-            }
+            Cross { angle: 0.25 * (a.y.atan2(a.x) - b.y.atan2(b.x)), skew: 0.0 }
         })
         .collect();
     assert_eq!(singular_points(&g, &dipole).len(), 2);
@@ -163,20 +113,11 @@ fn the_parametrization_jumps_by_lattice_translations_across_its_cuts() {
     for q in [1.0, -1.0] {
         let field = turning_field(&surface, DVec2::new(0.23, 0.11), q);
         let h = 0.27;
-        let g = integrate(
-            &FieldGrid::new(&surface, &field, 60, 12, h, 4.0 * h),
-            10.0,
-            h,
-        )
-        .unwrap();
+        let g = integrate(&FieldGrid::new(&surface, &field, 60, 12, h, 4.0 * h), 10.0, h).unwrap();
         assert_eq!(g.singular.len(), 1);
         assert_eq!(g.cuts.cuts.len(), 1);
         let cut = &g.cuts.cuts[0];
-        assert_eq!(
-            cut.quarters.rem_euclid(4),
-            (q as i32).rem_euclid(4),
-            "period jump of a {q} quarter point"
-        );
+        assert_eq!(cut.quarters.rem_euclid(4), (q as i32).rem_euclid(4), "period jump of a {q} quarter point");
         // The singular point sits on the lattice.
         let s = cut.path[0];
         let phi = |node: usize| DVec2::new(g.phi[0][node], g.phi[1][node]);
@@ -193,10 +134,7 @@ fn the_parametrization_jumps_by_lattice_translations_across_its_cuts() {
                     let expected = turn(g.cuts.cuts[c].quarters, phi(node) - phi(s)) + phi(s);
                     assert!((right - expected).length() < 1e-12);
                     let jump = (right - turn(g.cuts.cuts[c].quarters, phi(node))) / h;
-                    assert!(
-                        (jump - jump.round()).length() < 1e-9,
-                        "jump {jump} not on the lattice"
-                    );
+                    assert!((jump - jump.round()).length() < 1e-9, "jump {jump} not on the lattice");
                     checked += 1;
                 }
             }
@@ -249,21 +187,14 @@ fn support_planes_about_one_axis_meet_at_most_at_the_bound() {
     for m in 3..=5usize {
         let bound = support_plane_bound_deg(m);
         let even: Vec<f64> = (0..m).map(|k| 360.0 * k as f64 / m as f64).collect();
-        let widest = (0..m)
-            .map(|k| plane_angle(even[k], even[(k + 1) % m]))
-            .fold(f64::INFINITY, f64::min);
+        let widest = (0..m).map(|k| plane_angle(even[k], even[(k + 1) % m])).fold(f64::INFINITY, f64::min);
         assert!((widest - bound).abs() < 1e-9, "{m} evenly spread: {widest}");
         for _ in 0..2000 {
             // Half-planes in cyclic order about the axis.
             let mut at: Vec<f64> = (0..m).map(|_| 360.0 * rng.uniform()).collect();
             at.sort_by(f64::total_cmp);
-            let worst = (0..m)
-                .map(|k| plane_angle(at[k], at[(k + 1) % m]))
-                .fold(f64::INFINITY, f64::min);
-            assert!(
-                worst <= bound + 1e-9,
-                "{m} planes at {at:?} all meet at ≥ {worst}°"
-            );
+            let worst = (0..m).map(|k| plane_angle(at[k], at[(k + 1) % m])).fold(f64::INFINITY, f64::min);
+            assert!(worst <= bound + 1e-9, "{m} planes at {at:?} all meet at ≥ {worst}°");
         }
     }
 }

@@ -41,13 +41,7 @@ fn random_x(n: usize, seed: u64) -> Vec<f64> {
 
 fn normalized_sphere(center: DVec3, r: f64) -> [f64; 5] {
     // a = 1/(2r), b = centre/r, c = (|centre|² − r²)/(2r): bᵀb − 4ac = 1.
-    [
-        1.0 / (2.0 * r),
-        center.x / r,
-        center.y / r,
-        center.z / r,
-        (center.length_squared() - r * r) / (2.0 * r),
-    ]
+    [1.0 / (2.0 * r), center.x / r, center.y / r, center.z / r, (center.length_squared() - r * r) / (2.0 * r)]
 }
 
 const FD_H: f64 = 1e-6;
@@ -114,10 +108,7 @@ fn fd_jacobian_hinge() {
     assert_fd(&Hinge::new(UnitLength::spheres(vec![0, 5])), &xs);
     let stats = {
         let mut p = Problem::new(4);
-        p.add_term(
-            Hinge::new(Linear::new().row(&[(0, -1.0)], 1.0).row(&[(1, -1.0)], 1.0)),
-            1.0,
-        );
+        p.add_term(Hinge::new(Linear::new().row(&[(0, -1.0)], 1.0).row(&[(1, -1.0)], 1.0)), 1.0);
         p.term_stats(&x)
     };
     assert_eq!(stats[0].active, 1);
@@ -145,27 +136,15 @@ fn fd_jacobian_band() {
     assert_eq!(stats[0].active, 3);
     assert!((stats[0].max_abs - wall(1.5)).abs() < 1e-15);
     let energy = wall(0.8).powi(2) + wall(1.0).powi(2) + wall(1.5).powi(2);
-    assert!(
-        (stats[0].energy - energy).abs() < 1e-12,
-        "{} vs {energy}",
-        stats[0].energy
-    );
+    assert!((stats[0].energy - energy).abs() < 1e-12, "{} vs {energy}", stats[0].energy);
     // Near the band the wall is g − τ; far out it grows like τ ln(g/τ): 0.5 ln 100 at g = 50.
     let single = |g: f64| {
         let mut p = Problem::new(1);
         p.add_term(Band::new(Linear::new().row(&[(0, 1.0)], 0.0), 0.5), 1.0);
         p.term_stats(&[g])[0].max_abs
     };
-    assert!(
-        (single(0.5 + 1e-6) - 1e-6).abs() < 1e-11,
-        "{}",
-        single(0.5 + 1e-6)
-    );
-    assert!(
-        (single(-50.0) - 0.5 * 100f64.ln()).abs() < 1e-12,
-        "{}",
-        single(-50.0)
-    );
+    assert!((single(0.5 + 1e-6) - 1e-6).abs() < 1e-11, "{}", single(0.5 + 1e-6));
+    assert!((single(-50.0) - 0.5 * 100f64.ln()).abs() < 1e-12, "{}", single(-50.0));
 }
 
 #[test]
@@ -178,65 +157,44 @@ fn fd_jacobian_point_on_sphere() {
 #[test]
 fn fd_jacobian_sphere_fit() {
     let x = random_x(7, 7);
-    let pts = vec![
-        DVec3::new(1.0, 2.0, 3.0),
-        DVec3::new(-0.5, 0.1, 0.3),
-        DVec3::ZERO,
-    ];
+    let pts = vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(-0.5, 0.1, 0.3), DVec3::ZERO];
     assert_fd(&SphereFit::new(2, pts), &x);
 }
 
 #[test]
 fn fd_jacobian_inversive_product() {
     let x = random_x(15, 8);
-    assert_fd(
-        &InversiveProduct::new(vec![(0, 5), (5, 10), (10, 10)], 1.0),
-        &x,
-    );
-    assert_fd(
-        &InversiveProductFixed::new(vec![0, 10], [0.3, 1.0, -0.5, 0.25, 2.0], 0.0),
-        &x,
-    );
+    assert_fd(&InversiveProduct::new(vec![(0, 5), (5, 10), (10, 10)], 1.0), &x);
+    assert_fd(&InversiveProductFixed::new(vec![0, 10], [0.3, 1.0, -0.5, 0.25, 2.0], 0.0), &x);
 }
 
 #[test]
 fn fd_jacobian_point_on_plane() {
     let x = random_x(11, 9);
-    assert_fd(
-        &PointOnPlane::new(vec![(0, 3, 6), (7, 3, 10), (3, 0, 6)]),
-        &x,
-    );
+    assert_fd(&PointOnPlane::new(vec![(0, 3, 6), (7, 3, 10), (3, 0, 6)]), &x);
 }
 
 #[test]
 fn fd_jacobian_fn_term() {
     let x = random_x(3, 10);
-    let t = FnTerm::new(
-        "product",
-        2,
-        |x: &[f64], r: &mut [f64], jac: &mut JacobianSink| {
-            r[0] = x[0] * x[1] - x[2];
-            jac.add(0, 0, x[1]);
-            jac.add(0, 1, x[0]);
-            jac.add(0, 2, -1.0);
-            r[1] = x[2].sin();
-            jac.add(1, 2, x[2].cos());
-        },
-    );
+    let t = FnTerm::new("product", 2, |x: &[f64], r: &mut [f64], jac: &mut JacobianSink| {
+        r[0] = x[0] * x[1] - x[2];
+        jac.add(0, 0, x[1]);
+        jac.add(0, 1, x[0]);
+        jac.add(0, 2, -1.0);
+        r[1] = x[2].sin();
+        jac.add(1, 2, x[2].cos());
+    });
     assert_fd(&t, &x);
 }
 
 #[test]
 fn fd_check_catches_wrong_jacobians() {
     let x = random_x(3, 11);
-    let wrong = FnTerm::new(
-        "wrong",
-        1,
-        |x: &[f64], r: &mut [f64], jac: &mut JacobianSink| {
-            r[0] = x[0] * x[0] + x[1];
-            jac.add(0, 0, x[0]); // should be 2 x0; and ∂/∂x1 is missing
-        },
-    );
+    let wrong = FnTerm::new("wrong", 1, |x: &[f64], r: &mut [f64], jac: &mut JacobianSink| {
+        r[0] = x[0] * x[0] + x[1];
+        jac.add(0, 0, x[0]); // should be 2 x0; and ∂/∂x1 is missing
+    });
     assert!(check_jacobian(&wrong, &x, FD_H) > 0.1);
 }
 
@@ -327,9 +285,7 @@ fn planarization(n: usize) -> Planarization<'static> {
     let offset = |f: usize| 3 * nv + 3 * nf + f;
     let mut items = Vec::new();
     for (f, q) in faces.iter().enumerate() {
-        let n = (verts[q[2]] - verts[q[0]])
-            .cross(verts[q[3]] - verts[q[1]])
-            .normalize();
+        let n = (verts[q[2]] - verts[q[0]]).cross(verts[q[3]] - verts[q[1]]).normalize();
         let d = q.iter().map(|&k| n.dot(verts[k])).sum::<f64>() / 4.0;
         x[normal(f)..normal(f) + 3].copy_from_slice(&n.to_array());
         x[offset(f)] = d;
@@ -340,17 +296,9 @@ fn planarization(n: usize) -> Planarization<'static> {
     let mut problem = Problem::new(n_vars);
     problem.add_term(PointOnPlane::new(items).with_name("planarity"), 1.0);
     problem.add_term(UnitLength::vectors((0..nf).map(normal).collect()), 1.0);
-    let closeness = problem.add_term(
-        Anchor::at_current((0..3 * nv).collect(), &x).with_name("closeness"),
-        1e-2,
-    );
-    Planarization {
-        problem,
-        x,
-        closeness,
-        n_verts: nv,
-        faces,
-    }
+    let closeness = problem
+        .add_term(Anchor::at_current((0..3 * nv).collect(), &x).with_name("closeness"), 1e-2);
+    Planarization { problem, x, closeness, n_verts: nv, faces }
 }
 
 fn max_planarity(p: &Planarization) -> f64 {
@@ -397,9 +345,7 @@ fn planarize_quad_mesh() {
         assert!(energies.windows(2).all(|w| w[1] <= w[0]));
     }
     let fin = max_planarity(&p);
-    let moved = (0..3 * p.n_verts)
-        .map(|i| (p.x[i] - x0[i]).abs())
-        .fold(0.0, f64::max);
+    let moved = (0..3 * p.n_verts).map(|i| (p.x[i] - x0[i]).abs()).fold(0.0, f64::max);
     println!("planarity {initial:.3e} → {fin:.3e} (diag {diag:.3}); max vertex move {moved:.3e}");
     assert!(initial > 1e-3);
     assert!(fin < 1e-8 * diag, "max planarity residual {fin:e}");
@@ -421,10 +367,7 @@ fn hinge_one_sided() {
     let mut x = vec![3.0, 5.0];
     let mut solver = Solver::default();
     let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
-    println!(
-        "hinge: x = {:?}, {:?}, {} iterations",
-        x, rep.termination, rep.iterations
-    );
+    println!("hinge: x = {:?}, {:?}, {} iterations", x, rep.termination, rep.iterations);
     assert!(rep.termination.converged(), "{:?}", rep.termination);
     // Penalty optimum of x² + 1e6 (1 − x)²: x = 1e6 / (1e6 + 1).
     assert!((x[0] - 1e6 / (1e6 + 1.0)).abs() < 1e-9, "x = {}", x[0]);
@@ -454,10 +397,7 @@ fn fixed_variables_stay_bit_identical() {
     assert_eq!(rep.free_variables, p.x.len() - fixed.len());
     let after: Vec<u64> = fixed.iter().map(|&i| p.x[i].to_bits()).collect();
     assert_eq!(before, after);
-    assert!(
-        (0..p.x.len()).any(|i| p.x[i] != x0[i]),
-        "free variables must move"
-    );
+    assert!((0..p.x.len()).any(|i| p.x[i] != x0[i]), "free variables must move");
     assert!(rep.energy < 1e-3 * rep.initial_energy);
 }
 
@@ -474,11 +414,7 @@ fn symbolic_factorization_is_reused() {
         p.problem.set_weight(p.closeness, w);
         solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
     }
-    assert!(
-        solver.numeric_factorizations() >= 20,
-        "{}",
-        solver.numeric_factorizations()
-    );
+    assert!(solver.numeric_factorizations() >= 20, "{}", solver.numeric_factorizations());
     assert_eq!(solver.symbolic_analyses(), 1);
 
     // A new term changes the pattern: one more analysis, then reuse again.
@@ -498,21 +434,17 @@ fn symbolic_factorization_is_reused() {
 #[test]
 fn structure_change_during_a_run_is_detected() {
     // A term that emits an extra Jacobian entry once x0 < 0.5: the pattern changes mid-run.
-    let t = FnTerm::new(
-        "switching",
-        2,
-        |x: &[f64], r: &mut [f64], jac: &mut JacobianSink| {
-            r[0] = x[0] - 0.25;
-            jac.add(0, 0, 1.0);
-            if x[0] < 0.5 {
-                r[1] = x[1] - x[0];
-                jac.add(1, 0, -1.0);
-            } else {
-                r[1] = x[1] - 0.5;
-            }
-            jac.add(1, 1, 1.0);
-        },
-    );
+    let t = FnTerm::new("switching", 2, |x: &[f64], r: &mut [f64], jac: &mut JacobianSink| {
+        r[0] = x[0] - 0.25;
+        jac.add(0, 0, 1.0);
+        if x[0] < 0.5 {
+            r[1] = x[1] - x[0];
+            jac.add(1, 0, -1.0);
+        } else {
+            r[1] = x[1] - 0.5;
+        }
+        jac.add(1, 1, 1.0);
+    });
     let mut problem = Problem::new(2);
     problem.add_term(t, 1.0);
     let mut x = vec![1.0, 3.0];
@@ -520,10 +452,7 @@ fn structure_change_during_a_run_is_detected() {
     let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
     assert!(rep.termination.converged(), "{:?}", rep.termination);
     assert_eq!(rep.symbolic_analyses, 2);
-    assert!(
-        (x[0] - 0.25).abs() < 1e-10 && (x[1] - 0.25).abs() < 1e-10,
-        "{x:?}"
-    );
+    assert!((x[0] - 0.25).abs() < 1e-10 && (x[1] - 0.25).abs() < 1e-10, "{x:?}");
 }
 
 #[test]
@@ -630,11 +559,7 @@ fn st_like(n: usize, fairness: bool) -> (Problem<'static>, Vec<f64>) {
         for i in 0..n {
             let u = i as f64 / (n - 1) as f64 * 2.0 - 1.0;
             let v = j as f64 / (n - 1) as f64 * 2.0 - 1.0;
-            verts.push(DVec3::new(
-                u,
-                v,
-                0.3 * (1.5 * u).sin() * (1.2 * v).cos() + rng.uniform(-0.01, 0.01),
-            ));
+            verts.push(DVec3::new(u, v, 0.3 * (1.5 * u).sin() * (1.2 * v).cos() + rng.uniform(-0.01, 0.01)));
         }
     }
     let mut faces = Vec::new();
@@ -680,14 +605,7 @@ fn st_like(n: usize, fairness: bool) -> (Problem<'static>, Vec<f64>) {
     let mut fair = Linear::new().with_name("fairness");
     for j in 1..n - 1 {
         for i in 1..n - 1 {
-            let nb = [
-                vid(i - 1, j),
-                vid(i + 1, j),
-                vid(i, j - 1),
-                vid(i, j + 1),
-                vid(i + 1, j + 1),
-                vid(i - 1, j - 1),
-            ];
+            let nb = [vid(i - 1, j), vid(i + 1, j), vid(i, j - 1), vid(i, j + 1), vid(i + 1, j + 1), vid(i - 1, j - 1)];
             for k in 0..3 {
                 let mut row = vec![(3 * vid(i, j) + k, 1.0)];
                 row.extend(nb.iter().map(|&q| (3 * q + k, -1.0 / 6.0)));
@@ -699,15 +617,13 @@ fn st_like(n: usize, fairness: bool) -> (Problem<'static>, Vec<f64>) {
     problem.add_term(PointOnSphere::new(on_sphere).with_name("E_sphere"), 1.0);
     problem.add_term(UnitLength::spheres((0..nf).map(sph).collect()), 1.0);
     problem.add_term(InversiveProduct::new(pairs, 1.0).with_name("angle"), 0.1);
-    problem.add_term(
-        Anchor::at_current((0..3 * nv).collect(), &x).with_name("closeness"),
-        0.01,
-    );
+    problem.add_term(Anchor::at_current((0..3 * nv).collect(), &x).with_name("closeness"), 0.01);
     if fairness {
         problem.add_term(fair, 0.001);
     }
     (problem, x)
 }
+
 
 #[test]
 fn st_like_problem_converges_small() {
@@ -728,12 +644,7 @@ fn st_like_problem_converges_small() {
 fn orderings_agree() {
     use spherical_faces::solver::Ordering;
     let mut results = Vec::new();
-    for ordering in [
-        Ordering::Amd,
-        Ordering::BlockAmd,
-        Ordering::NestedDissection,
-        Ordering::Auto,
-    ] {
+    for ordering in [Ordering::Amd, Ordering::BlockAmd, Ordering::NestedDissection, Ordering::Auto] {
         let (mut problem, mut x) = st_like(9, true);
         let nv = 81;
         for v in 0..nv {
@@ -742,36 +653,20 @@ fn orderings_agree() {
         for f in 0..2 * 8 * 8 {
             problem.group_variables(3 * nv + 5 * f..3 * nv + 5 * f + 5);
         }
-        let mut solver = Solver::new(SolverOptions {
-            max_iterations: 8,
-            ordering,
-            ..Default::default()
-        });
+        let mut solver = Solver::new(SolverOptions { max_iterations: 8, ordering, ..Default::default() });
         let rep = solver.solve(&mut problem, &mut x, |_| Ok(()));
         assert_eq!(rep.symbolic_analyses, 1);
         match ordering {
-            Ordering::Auto => assert!(matches!(
-                rep.ordering,
-                Ordering::BlockAmd | Ordering::NestedDissection
-            )),
+            Ordering::Auto => assert!(matches!(rep.ordering, Ordering::BlockAmd | Ordering::NestedDissection)),
             o => assert_eq!(rep.ordering, o),
         }
-        assert!(
-            rep.energy < rep.initial_energy,
-            "{ordering:?}: {} → {}",
-            rep.initial_energy,
-            rep.energy
-        );
+        assert!(rep.energy < rep.initial_energy, "{ordering:?}: {} → {}", rep.initial_energy, rep.energy);
         results.push((rep.energy, x));
     }
     let (e0, x0) = &results[0];
     for (e, x) in &results[1..] {
         assert!((e - e0).abs() <= 1e-9 * e0.abs(), "energies {e} vs {e0}");
-        let dx = x
-            .iter()
-            .zip(x0)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let dx = x.iter().zip(x0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         assert!(dx < 1e-8, "iterates differ by {dx}");
     }
 }

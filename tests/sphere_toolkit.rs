@@ -4,21 +4,15 @@
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
-use spherical_faces::congruence::support_structure::{
-    second_common_point, star_axis, STAR_AXIS_MIN_CONDITION,
-};
+use spherical_faces::rng::Rng;
+use spherical_faces::geometry::linalg::Svd;
+use spherical_faces::congruence::support_structure::{second_common_point, star_axis, STAR_AXIS_MIN_CONDITION};
+use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
 use spherical_faces::geometry::circle::Circle;
-use spherical_faces::geometry::linalg::Svd;
-use spherical_faces::geometry::sphere::Sphere;
-use spherical_faces::rng::Rng;
 
 fn assert_normalized(s: &Sphere) {
-    assert!(
-        (s.discriminant() - 1.0).abs() < 1e-12,
-        "not normalized: {s:?} ({})",
-        s.discriminant()
-    );
+    assert!((s.discriminant() - 1.0).abs() < 1e-12, "not normalized: {s:?} ({})", s.discriminant());
 }
 
 /// Residual of "x on s" as a Euclidean distance, relative to `scale`.
@@ -57,11 +51,8 @@ fn svd_gives_orthonormal_right_vectors_and_null_space() {
                 assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
             }
             // ‖A v_i‖ = σ_i.
-            let n: f64 = rows
-                .iter()
-                .map(|r| (0..5).map(|k| r[k] * svd.v[i][k]).sum::<f64>().powi(2))
-                .sum::<f64>()
-                .sqrt();
+            let n: f64 =
+                rows.iter().map(|r| (0..5).map(|k| r[k] * svd.v[i][k]).sum::<f64>().powi(2)).sum::<f64>().sqrt();
             assert!((n - svd.sigma[i]).abs() < 1e-14, "{n} vs {}", svd.sigma[i]);
         }
         assert!(svd.sigma.windows(2).all(|w| w[0] >= w[1]));
@@ -75,19 +66,15 @@ fn svd_gives_orthonormal_right_vectors_and_null_space() {
 fn frame_round_trip_and_distance() {
     let mut rng = Rng(11);
     for _ in 0..50 {
-        let s = Sphere::from_center_radius(
-            rng.vec(5.0),
-            rng.range(0.3, 4.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 },
-        );
+        let s =
+            Sphere::from_center_radius(rng.vec(5.0), rng.range(0.3, 4.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 });
         let (t, sigma) = (rng.vec(3.0), rng.range(0.1, 10.0));
         let local = s.in_frame(t, sigma);
         // Same set, same orientation.
         let y = rng.vec(2.0);
         let x = t + sigma * y;
         assert!((local.eval(y) - s.eval(x)).abs() < 1e-10 * (1.0 + s.eval(x).abs()));
-        assert!(
-            (local.discriminant() - sigma * sigma * s.discriminant()).abs() < 1e-10 * sigma * sigma
-        );
+        assert!((local.discriminant() - sigma * sigma * s.discriminant()).abs() < 1e-10 * sigma * sigma);
         let back = local.from_frame(t, sigma);
         for (p, q) in back.to_array().iter().zip(s.to_array()) {
             assert!((p - q).abs() < 1e-11 * (1.0 + q.abs()), "{back:?} vs {s:?}");
@@ -96,9 +83,7 @@ fn frame_round_trip_and_distance() {
         let c = s.center().unwrap();
         let r = s.signed_radius().unwrap();
         let p = rng.vec(6.0);
-        assert!(
-            (s.distance(p) - ((p - c).length() - r.abs()).abs()).abs() < 1e-12 * (1.0 + p.length())
-        );
+        assert!((s.distance(p) - ((p - c).length() - r.abs()).abs()).abs() < 1e-12 * (1.0 + p.length()));
     }
     // Huge radius: the distance stays exact where | |x − c| − r | would cancel.
     let f = DVec3::new(1.0, 2.0, 3.0);
@@ -119,31 +104,18 @@ fn pencil_through_three_points() {
         assert_normalized(&plane);
         assert_normalized(&sph);
         assert_eq!(plane.a, 0.0);
-        assert!(
-            (plane.b - tri_normal(&p)).length() < 1e-11,
-            "{:?} vs {:?}",
-            plane.b,
-            tri_normal(&p)
-        );
+        assert!((plane.b - tri_normal(&p)).length() < 1e-11, "{:?} vs {:?}", plane.b, tri_normal(&p));
         assert!(plane.inversive_product(&sph).abs() < 1e-12);
         assert!(sph.signed_radius().unwrap() > 0.0);
         let c = sph.center().unwrap();
         let diam = (p[1] - p[0]).length().max((p[2] - p[0]).length());
         // Centre in the plane of the points: the circumcentre.
-        assert!(
-            plane.distance(c) < 1e-11 * (diam + c.length()),
-            "{}",
-            plane.distance(c) / diam
-        );
+        assert!(plane.distance(c) < 1e-11 * (diam + c.length()), "{}", plane.distance(c) / diam);
         for theta in [0.0, 0.3, 1.2, 2.0, 3.0, -0.7] {
             let s = Sphere::combine(&plane, f64::cos(theta), &sph, f64::sin(theta));
             assert!((s.discriminant() - 1.0).abs() < 1e-11);
             for q in p {
-                assert!(
-                    on(&s, q, diam) < 1e-11,
-                    "theta {theta}: {}",
-                    on(&s, q, diam)
-                );
+                assert!(on(&s, q, diam) < 1e-11, "theta {theta}: {}", on(&s, q, diam));
                 // Oriented like the triangle for cos θ > 0: the normal on the points is
                 // cos θ n + sin θ (in-plane).
                 assert!((s.normal_at(q).dot(tri_normal(&p)) - theta.cos()).abs() < 1e-10);
@@ -151,11 +123,7 @@ fn pencil_through_three_points() {
         }
     }
     // Collinear points: two planes through the line.
-    let p = [
-        DVec3::new(0.0, 0.0, 0.0),
-        DVec3::new(1.0, 1.0, 1.0),
-        DVec3::new(3.0, 3.0, 3.0),
-    ];
+    let p = [DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0), DVec3::new(3.0, 3.0, 3.0)];
     for s in Sphere::through_points_family(p) {
         assert!(s.a.abs() < 1e-14);
         for q in p {
@@ -167,20 +135,14 @@ fn pencil_through_three_points() {
 fn check_orthogonal(s: &Sphere, omega: &AbsoluteSphere, scale: f64) {
     let defect = omega.orthogonality_defect(s);
     match omega {
-        AbsoluteSphere::Sphere { .. } => assert!(
-            defect <= 1e-11 * scale * scale,
-            "defect {defect} scale {scale}"
-        ),
+        AbsoluteSphere::Sphere { .. } => assert!(defect <= 1e-11 * scale * scale, "defect {defect} scale {scale}"),
         AbsoluteSphere::Plane { .. } => assert!(defect <= 1e-11 * scale, "defect {defect}"),
     }
     // The coefficient row of the notes vanishes too.
     let row = omega.row();
     let dot: f64 = row.iter().zip(s.to_array()).map(|(r, x)| r * x).sum();
     let norm: f64 = row.iter().map(|r| r * r).sum::<f64>().sqrt();
-    assert!(
-        dot.abs() <= 1e-12 * norm,
-        "row residual {dot} (norm {norm})"
-    );
+    assert!(dot.abs() <= 1e-12 * norm, "row residual {dot} (norm {norm})");
 }
 
 #[test]
@@ -202,25 +164,13 @@ fn member_orthogonal_to_omega_recovers_a_known_sphere() {
             let m0 = c + rng.unit() * r.abs();
             r2 = 0.0;
             let omega = AbsoluteSphere::Sphere { center: m0, r2 };
-            let p = [
-                c + rng.unit() * r.abs(),
-                c + rng.unit() * r.abs(),
-                c + rng.unit() * r.abs(),
-            ];
+            let p = [c + rng.unit() * r.abs(), c + rng.unit() * r.abs(), c + rng.unit() * r.abs()];
             let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
-            assert!(
-                s.distance(m0) < 1e-11 * r.abs(),
-                "passes through m: {}",
-                s.distance(m0)
-            );
+            assert!(s.distance(m0) < 1e-11 * r.abs(), "passes through m: {}", s.distance(m0));
             continue;
         }
         let omega = AbsoluteSphere::Sphere { center: m, r2 };
-        let p = [
-            c + rng.unit() * r.abs(),
-            c + rng.unit() * r.abs(),
-            c + rng.unit() * r.abs(),
-        ];
+        let p = [c + rng.unit() * r.abs(), c + rng.unit() * r.abs(), c + rng.unit() * r.abs()];
         let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
         assert_normalized(&s);
         check_orthogonal(&s, &omega, r.abs() + (c - m).length());
@@ -228,10 +178,7 @@ fn member_orthogonal_to_omega_recovers_a_known_sphere() {
             assert!(on(&s, q, r.abs()) < 1e-12);
         }
         let got_c = s.center().unwrap();
-        assert!(
-            (got_c - c).length() < 1e-10 * (r.abs() + c.length()),
-            "k={k}: {got_c} vs {c}"
-        );
+        assert!((got_c - c).length() < 1e-10 * (r.abs() + c.length()), "k={k}: {got_c} vs {c}");
         assert!((s.signed_radius().unwrap().abs() - r.abs()).abs() < 1e-10 * r.abs());
         // Oriented like the triangle.
         assert!(s.normal_at(p[0]).dot(tri_normal(&p)) > 0.0);
@@ -256,11 +203,7 @@ fn member_orthogonal_to_plane_omega_and_plane_members() {
         let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
         assert_normalized(&s);
         let c = s.center().unwrap();
-        assert!(
-            (c.dot(axis) - d).abs() < 1e-10 * (1.0 + c.length()),
-            "centre off the plane: {}",
-            c.dot(axis) - d
-        );
+        assert!((c.dot(axis) - d).abs() < 1e-10 * (1.0 + c.length()), "centre off the plane: {}", c.dot(axis) - d);
         check_orthogonal(&s, &omega, 1.0);
         for q in p {
             assert!(s.distance(q) < 1e-12 * (1.0 + q.length()));
@@ -271,11 +214,7 @@ fn member_orthogonal_to_plane_omega_and_plane_members() {
     for r2 in [4.0, -4.0, 0.0] {
         let m = DVec3::new(0.3, -0.2, 0.0);
         let omega = AbsoluteSphere::Sphere { center: m, r2 };
-        let p = [
-            DVec3::new(1.0, 0.0, 0.0),
-            DVec3::new(0.0, 2.0, 0.0),
-            DVec3::new(-1.0, -1.0, 0.0),
-        ];
+        let p = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 2.0, 0.0), DVec3::new(-1.0, -1.0, 0.0)];
         let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
         assert!(s.a.abs() < 1e-14, "{s:?}");
         assert!((s.b - DVec3::Z).length() < 1e-14);
@@ -288,10 +227,7 @@ fn member_orthogonal_to_plane_omega_and_plane_members() {
     }
     // Degenerate: R² = 0 with m on the points' circle: every member passes through m.
     let p = [DVec3::X, DVec3::Y, -DVec3::X];
-    let omega = AbsoluteSphere::Sphere {
-        center: -DVec3::Y,
-        r2: 0.0,
-    };
+    let omega = AbsoluteSphere::Sphere { center: -DVec3::Y, r2: 0.0 };
     assert!(Sphere::through_points_orthogonal(p, &omega.coefficients()).is_none());
 }
 
@@ -343,17 +279,9 @@ fn kink_angle_matches_explicit_normals() {
             let s1 = Sphere::from_center_radius(c1, sa * r1);
             let s2 = Sphere::from_center_radius(c2, sb * r2);
             let k = s1.kink_angle(&s2);
-            assert!(
-                (k - explicit_kink(&s1, &s2)).abs() < 1e-9,
-                "{k} vs {}",
-                explicit_kink(&s1, &s2)
-            );
+            assert!((k - explicit_kink(&s1, &s2)).abs() < 1e-9, "{k} vs {}", explicit_kink(&s1, &s2));
             assert!((k.cos() - s1.inversive_product(&s2)).abs() < 1e-12);
-            let expected = if sa * sb > 0.0 {
-                phi
-            } else {
-                std::f64::consts::PI - phi
-            };
+            let expected = if sa * sb > 0.0 { phi } else { std::f64::consts::PI - phi };
             assert!((k - expected).abs() < 1e-11, "{k} vs {expected}");
         }
         // A sphere and a plane through the common circle.
@@ -374,10 +302,7 @@ fn kink_angle_matches_explicit_normals() {
         assert!((k - phi).abs() < 1e-6 * phi + 1e-15, "phi {phi}: {k}");
         let naive = s1.inversive_product(&s2).clamp(-1.0, 1.0).acos();
         if phi < 1e-7 {
-            assert!(
-                (naive - phi).abs() > 1e-3 * phi,
-                "arccos happened to be accurate"
-            );
+            assert!((naive - phi).abs() > 1e-3 * phi, "arccos happened to be accurate");
         }
         assert_eq!(s1.kink_angle(&s1), 0.0);
     }
@@ -414,11 +339,7 @@ fn inversion_and_power() {
             let s = Sphere::through_points_orthogonal(p, &omega.coefficients()).unwrap();
             for q in p {
                 let y = omega.invert(q).unwrap();
-                assert!(
-                    s.distance(y) < 1e-11 * (1.0 + y.length()),
-                    "{}",
-                    s.distance(y)
-                );
+                assert!(s.distance(y) < 1e-11 * (1.0 + y.length()), "{}", s.distance(y));
             }
         }
     }
@@ -431,22 +352,12 @@ fn inversion_and_power() {
     assert!((omega.power(y) + omega.power(x)).abs() < 1e-14);
     assert!((y - x).cross(axis).length() < 1e-14);
     // Coefficients: eval = power; the row is proportional to the inversive row.
-    for omega in [
-        AbsoluteSphere::Sphere { center: m, r2: 3.0 },
-        AbsoluteSphere::Sphere {
-            center: m,
-            r2: -3.0,
-        },
-        omega,
-    ] {
+    for omega in [AbsoluteSphere::Sphere { center: m, r2: 3.0 }, AbsoluteSphere::Sphere { center: m, r2: -3.0 }, omega]
+    {
         let k = omega.coefficients();
         assert!((k.eval(x) - omega.power(x)).abs() < 1e-12);
         let (a, b) = (omega.row(), k.inversive_row());
-        let ratio = if b[0].abs() > 1e-9 {
-            a[0] / b[0]
-        } else {
-            a[1] / b[1]
-        };
+        let ratio = if b[0].abs() > 1e-9 { a[0] / b[0] } else { a[1] / b[1] };
         for (p, q) in a.iter().zip(b) {
             assert!((p - ratio * q).abs() < 1e-12 * (1.0 + p.abs()));
         }
@@ -476,10 +387,7 @@ fn second_common_point_of_a_star() {
             let expected = omega.invert(v).unwrap();
             let got = second_common_point(&spheres, v).expect("determined");
             let scale = (expected - m).length().max((v - m).length());
-            assert!(
-                (got - expected).length() < 1e-11 * scale,
-                "R² {r2}: {got} vs {expected}"
-            );
+            assert!((got - expected).length() < 1e-11 * scale, "R² {r2}: {got} vs {expected}");
             // The axis passes through m.
             let axis = star_axis(&spheres, v).unwrap();
             assert!((m - v).cross(axis.direction).length() < 1e-11 * (m - v).length());
@@ -487,10 +395,7 @@ fn second_common_point_of_a_star() {
         }
     }
     // Plane Ω: the reflection of v.
-    let omega = AbsoluteSphere::Plane {
-        axis: DVec3::new(0.0, 0.0, 1.0),
-        d: -2.0,
-    };
+    let omega = AbsoluteSphere::Plane { axis: DVec3::new(0.0, 0.0, 1.0), d: -2.0 };
     for _ in 0..20 {
         let v = rng.vec(2.0);
         let spheres = star(&mut rng, v, &omega, 5);
@@ -504,9 +409,7 @@ fn second_common_point_of_a_star() {
     assert!(second_common_point(&[s, s, s, s], v).is_none());
     // All planes through a common line: the line, v̄ at infinity.
     let dir = DVec3::new(1.0, 2.0, 2.0) / 3.0;
-    let planes: Vec<Sphere> = (0..4)
-        .map(|_| Sphere::plane(v, dir.cross(rng.unit()).normalize()))
-        .collect();
+    let planes: Vec<Sphere> = (0..4).map(|_| Sphere::plane(v, dir.cross(rng.unit()).normalize())).collect();
     let axis = star_axis(&planes, v).unwrap();
     assert!(axis.second_point.is_none());
     assert!(axis.direction.cross(dir).length() < 1e-12);

@@ -31,11 +31,7 @@ fn roof(kind: Kind, seed: u64) -> BSplineSurface {
     let basis = || BSplineBasis::clamped_uniform(p, n, (0.0, 1.0)).unwrap();
     let (bu, bv) = (basis(), basis());
     let (gu, gv) = (bu.greville(), bv.greville());
-    let (a, b, c) = (
-        rng.range(0.8, 1.2),
-        rng.range(0.8, 1.2),
-        rng.range(-0.3, 0.3),
-    );
+    let (a, b, c) = (rng.range(0.8, 1.2), rng.range(0.8, 1.2), rng.range(-0.3, 0.3));
     let z = |x: f64, y: f64| match kind {
         Kind::Dome => 3.0 * a - 0.06 * a * x * x - 0.06 * b * y * y + 0.01 * c * x * y,
         Kind::Vault => 4.0 * a - 0.12 * a * x * x - 0.01 * b * y * y + 0.02 * c * x,
@@ -53,13 +49,7 @@ fn roof(kind: Kind, seed: u64) -> BSplineSurface {
 }
 
 /// Independently of the method's figures: whether the delivered SQ mesh meets every guarantee.
-fn recheck(
-    mesh: &spherical_faces::sq::sq_mesh::SqMesh,
-    normals: &[DVec3],
-    diag: f64,
-    theta: f64,
-    alpha: f64,
-) -> Vec<String> {
+fn recheck(mesh: &spherical_faces::sq::sq_mesh::SqMesh, normals: &[DVec3], diag: f64, theta: f64, alpha: f64) -> Vec<String> {
     let sm = &mesh.sphere_mesh;
     let m = &sm.mesh;
     let mut misses = Vec::new();
@@ -70,39 +60,20 @@ fn recheck(
         for &v in face.corners() {
             let d = sm.face_spheres[f].distance(m.positions[v as usize]);
             if !(d <= 1e-8 * diag) {
-                misses.push(format!(
-                    "vertex {v} off the sphere of face {f} by {:.1e}",
-                    d / diag
-                ));
+                misses.push(format!("vertex {v} off the sphere of face {f} by {:.1e}", d / diag));
             }
         }
     }
     for (_, faces) in &QuadStars::new(m).stars {
-        let c: Vec<DVec3> = faces
-            .iter()
-            .map(|&f| {
-                sm.face_spheres[f as usize]
-                    .center()
-                    .unwrap_or(DVec3::splat(f64::NAN))
-            })
-            .collect();
+        let c: Vec<DVec3> = faces.iter().map(|&f| sm.face_spheres[f as usize].center().unwrap_or(DVec3::splat(f64::NAN))).collect();
         // Every further centre against the plane of the first three (three centres always lie
         // in a plane: a singular vertex of valence 3): |volume| / |area vector| away.
         for k in 3..c.len() {
             let volume = (c[1] - c[0]).cross(c[2] - c[0]).dot(c[k] - c[0]).abs();
-            let edge = (c[1] - c[0])
-                .length()
-                .max((c[2] - c[0]).length())
-                .max((c[k] - c[0]).length());
-            let area = (c[1] - c[0])
-                .cross(c[2] - c[0])
-                .length()
-                .max((c[2] - c[0]).cross(c[k] - c[0]).length());
+            let edge = (c[1] - c[0]).length().max((c[2] - c[0]).length()).max((c[k] - c[0]).length());
+            let area = (c[1] - c[0]).cross(c[2] - c[0]).length().max((c[2] - c[0]).cross(c[k] - c[0]).length());
             if !(volume <= 1e-8 * diag * area.max(1e-300)) && edge > 0.0 {
-                misses.push(format!(
-                    "centres not coplanar: {:.1e}",
-                    volume / area / diag
-                ));
+                misses.push(format!("centres not coplanar: {:.1e}", volume / area / diag));
             }
         }
     }
@@ -113,39 +84,25 @@ fn recheck(
         }
     }
     if !(mesh.figures.min_torsal_plane_angle_deg >= alpha) {
-        misses.push(format!(
-            "support planes at {:.2}°",
-            mesh.figures.min_torsal_plane_angle_deg
-        ));
+        misses.push(format!("support planes at {:.2}°", mesh.figures.min_torsal_plane_angle_deg));
     }
     misses
 }
 
 #[test]
 fn no_generated_roof_misses_a_guarantee_silently() {
-    let params = SqParams {
-        grid: 14,
-        faces: 120,
-        ..SqParams::default()
-    };
+    let params = SqParams { grid: 14, faces: 120, ..SqParams::default() };
     let (theta, alpha) = (params.theta_deg, params.alpha_deg);
     let mut rows = Vec::new();
     let mut met = 0;
     let mut seed = 0u64;
-    for (k, kind) in [Kind::Dome, Kind::Vault, Kind::Saddle]
-        .into_iter()
-        .cycle()
-        .take(21)
-        .enumerate()
-    {
+    for (k, kind) in [Kind::Dome, Kind::Vault, Kind::Saddle].into_iter().cycle().take(21).enumerate() {
         // The next seed whose roof has H of one sign (the noise can flip a flat saddle's H).
         let surface = loop {
             seed += 1;
             let s = roof(kind, seed);
             let grid = SamplingGrid::new(&s, params.grid).unwrap();
-            if check_mean_curvature(&s, &grid, 1.0, params.faces)
-                .is_ok_and(|signs| signs.warnings.is_empty())
-            {
+            if check_mean_curvature(&s, &grid, 1.0, params.faces).is_ok_and(|signs| signs.warnings.is_empty()) {
                 break s;
             }
             assert!(seed < 1000, "no {kind:?} of one-signed H");
@@ -157,55 +114,24 @@ fn no_generated_roof_misses_a_guarantee_silently() {
             Err(e) => panic!("{kind:?} {k}: {e}"),
         };
         let f = result.sq_mesh.as_ref().expect("the SQ mesh");
-        let normals: Vec<DVec3> =
-            f.uv.iter()
-                .map(|uv| {
-                    reference
-                        .spline()
-                        .unwrap()
-                        .derivatives(uv[0], uv[1])
-                        .normal()
-                        .unwrap()
-                })
-                .collect();
+        let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
         let misses = recheck(&f.mesh, &normals, reference.diagonal(), theta, alpha);
-        assert_eq!(
-            result.verdict.holds(),
-            misses.is_empty(),
-            "{kind:?} {k}: verdict {} against {misses:?}",
-            result.verdict.failure_text()
-        );
+        assert_eq!(result.verdict.holds(), misses.is_empty(), "{kind:?} {k}: verdict {} against {misses:?}", result.verdict.failure_text());
         if !result.verdict.holds() {
             assert!(!result.verdict.failure_text().is_empty());
         }
         met += usize::from(result.verdict.holds());
-        let singular = result
-            .quad_mesh
-            .as_ref()
-            .filter(|q| q.parameter_lines())
-            .map_or(0, |q| q.singular_points.len());
+        let singular = result.quad_mesh.as_ref().filter(|q| q.parameter_lines()).map_or(0, |q| q.singular_points.len());
         rows.push(format!(
             "{kind:?} {k}: start {:?}, {}{}",
             result.congruence.start,
-            if singular > 0 {
-                format!("parameter lines ({singular} singular points), ")
-            } else {
-                String::new()
-            },
-            if misses.is_empty() {
-                "meets".into()
-            } else {
-                result.verdict.failure_text()
-            }
+            if singular > 0 { format!("parameter lines ({singular} singular points), ") } else { String::new() },
+            if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }
         ));
     }
     println!("{}", rows.join("\n"));
     // The method is meant to hold on such roofs: most runs meet every guarantee.
-    assert!(
-        met >= 15,
-        "{met} of 21 meet every guarantee:\n{}",
-        rows.join("\n")
-    );
+    assert!(met >= 15, "{met} of 21 meet every guarantee:\n{}", rows.join("\n"));
 }
 
 /// The shared surfaces at their settings: the verdict equals the guarantees recomputed from the
@@ -216,8 +142,7 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
     use spherical_faces::import::{import_file, ImportedFile};
     use spherical_faces::samples::Sample;
     let shared = |name: &str| {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join(format!("../shared/data/bsplines/{name}.json"));
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../shared/data/bsplines/{name}.json"));
         match import_file(&std::fs::read(&path).unwrap(), name) {
             Ok(ImportedFile::BSpline(b)) => b.surface,
             other => panic!("{name}: {other:?}"),
@@ -229,46 +154,17 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
         ("saddle_roof", shared("saddle_roof"), 15.0, 45.0, true),
         ("cylinder_patch", shared("cylinder_patch"), 20.0, 75.0, true),
         ("sphere_patch", shared("sphere_patch"), 20.0, 75.0, true),
-        (
-            "paraboloid_dome",
-            shared("paraboloid_dome"),
-            20.0,
-            75.0,
-            false,
-        ),
+        ("paraboloid_dome", shared("paraboloid_dome"), 20.0, 75.0, false),
     ];
     for (name, surface, theta, alpha, must_meet) in cases {
         let reference = Reference::from_bspline(surface).unwrap();
-        let params = SqParams {
-            theta_deg: theta,
-            alpha_deg: alpha,
-            ..SqParams::default()
-        };
+        let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
         let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
         let f = result.sq_mesh.as_ref().expect("the SQ mesh");
-        let normals: Vec<DVec3> =
-            f.uv.iter()
-                .map(|uv| {
-                    reference
-                        .spline()
-                        .unwrap()
-                        .derivatives(uv[0], uv[1])
-                        .normal()
-                        .unwrap()
-                })
-                .collect();
+        let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
         let misses = recheck(&f.mesh, &normals, reference.diagonal(), theta, alpha);
-        assert_eq!(
-            result.verdict.holds(),
-            misses.is_empty(),
-            "{name}: verdict {} against {misses:?}",
-            result.verdict.failure_text()
-        );
-        assert!(
-            !must_meet || result.verdict.holds(),
-            "{name}: {}",
-            result.verdict.failure_text()
-        );
+        assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
+        assert!(!must_meet || result.verdict.holds(), "{name}: {}", result.verdict.failure_text());
     }
 }
 
@@ -287,57 +183,23 @@ fn a_broken_sq_mesh_fails_its_final_check() {
     assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
     let f = result.sq_mesh.as_ref().unwrap();
     let (diag, sm) = (reference.diagonal(), &f.mesh.sphere_mesh);
-    let normals: Vec<DVec3> =
-        f.uv.iter()
-            .map(|uv| {
-                reference
-                    .spline()
-                    .unwrap()
-                    .derivatives(uv[0], uv[1])
-                    .normal()
-                    .unwrap()
-            })
-            .collect();
+    let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
     let mut positions = sm.mesh.positions.clone();
     let v = positions.len() / 2;
     positions[v] += 1e-4 * diag * normals[v];
     let broken = PolyMesh::new(positions, sm.mesh.faces.clone());
     let stars = QuadStars::new(&broken);
-    let out = sq_mesh(
-        broken,
-        sm.face_spheres.clone(),
-        &normals,
-        &stars,
-        diag,
-        params.support_depth * diag,
-        params.axis_length * diag,
-    );
-    let check = verdict(
-        &result.congruence.figures,
-        Delivered::SqMesh(&out.sphere_mesh.mesh, &out.figures),
-        params.theta_deg,
-        params.alpha_deg,
-    );
+    let out = sq_mesh(broken, sm.face_spheres.clone(), &normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
+    let check = verdict(&result.congruence.figures, Delivered::SqMesh(&out.sphere_mesh.mesh, &out.figures), params.theta_deg, params.alpha_deg);
     assert!(!check.holds());
     let missed: Vec<&str> = check.failures().map(|g| g.name.as_str()).collect();
     assert!(missed.contains(&"max_vertex_sphere_residual"), "{missed:?}");
-    let g = check
-        .failures()
-        .find(|g| g.name == "max_vertex_sphere_residual")
-        .unwrap();
-    assert!(
-        (g.measured - 1e-4).abs() < 2e-5,
-        "the figure measures the move: {}",
-        g.measured
-    );
+    let g = check.failures().find(|g| g.name == "max_vertex_sphere_residual").unwrap();
+    assert!((g.measured - 1e-4).abs() < 2e-5, "the figure measures the move: {}", g.measured);
     let mut report = spherical_faces::export::Report::new("sq");
     report.set_verdict(&check);
     let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
     assert_eq!(json["meets_guarantees"], false);
     let text = report.failure_text();
-    assert!(
-        text.contains(&format!("max_vertex_sphere_residual {:.2e}", g.measured))
-            && text.contains("must be ≤ 1.00e-8"),
-        "{text}"
-    );
+    assert!(text.contains(&format!("max_vertex_sphere_residual {:.2e}", g.measured)) && text.contains("must be ≤ 1.00e-8"), "{text}");
 }

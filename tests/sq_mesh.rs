@@ -11,9 +11,7 @@ mod common;
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::assumptions::Warning;
-use spherical_faces::remeshing::quad_remeshing::{
-    coverage, edge_field_angles, quad_remesh, CrossField, QuadRemeshParams,
-};
+use spherical_faces::remeshing::quad_remeshing::{coverage, edge_field_angles, quad_remesh, CrossField, QuadRemeshParams};
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::params::{SqParams, Until};
 use spherical_faces::sq::{compute, compute_congruence, SqResult};
@@ -21,23 +19,14 @@ use spherical_faces::sq::{compute, compute_congruence, SqResult};
 fn load(name: &str) -> Loaded {
     match name.strip_prefix("sample:") {
         Some(k) => Loaded::from_sample(Sample::from_key(k).unwrap()),
-        None => Loaded::from_file(
-            &common::shared_bytes(&format!("data/bsplines/{name}")),
-            name,
-        )
-        .unwrap(),
+        None => Loaded::from_file(&common::shared_bytes(&format!("data/bsplines/{name}")), name).unwrap(),
     }
 }
 
 fn run(name: &str) -> (Loaded, SqResult) {
     let loaded = load(name);
-    let params = SqParams {
-        theta_deg: 20.0,
-        alpha_deg: 75.0,
-        ..SqParams::default()
-    };
-    let result = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(()))
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let params = SqParams { theta_deg: 20.0, alpha_deg: 75.0, ..SqParams::default() };
+    let result = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
     (loaded, result)
 }
 
@@ -49,57 +38,17 @@ fn check(name: &str) {
     let g = &f.mesh.figures;
     let sm = &f.mesh.sphere_mesh;
     let diag = loaded.surface.diagonal();
-    eprintln!(
-        "{name}: {} quads, coverage {:.3}, {g:?}",
-        sm.mesh.face_count(),
-        q.coverage
-    );
-    assert!(
-        sm.mesh.faces.iter().all(|f| f.len() == 4),
-        "{name}: all faces are quads"
-    );
+    eprintln!("{name}: {} quads, coverage {:.3}, {g:?}", sm.mesh.face_count(), q.coverage);
+    assert!(sm.mesh.faces.iter().all(|f| f.len() == 4), "{name}: all faces are quads");
     assert!(q.coverage >= 0.9, "{name}: coverage {}", q.coverage);
-    assert!(
-        g.max_vertex_sphere_residual <= 1e-8,
-        "{name}: vertex–sphere residual {}",
-        g.max_vertex_sphere_residual
-    );
-    assert!(
-        g.max_centre_face_planarity <= 1e-8,
-        "{name}: centre-face planarity {}",
-        g.max_centre_face_planarity
-    );
-    assert!(
-        g.max_torsal_plane_residual <= 1e-8,
-        "{name}: torsal-plane residual {}",
-        g.max_torsal_plane_residual
-    );
-    assert!(
-        g.max_axis_normal_angle_deg <= 20.0,
-        "{name}: node axis at {}° from the normal",
-        g.max_axis_normal_angle_deg
-    );
-    assert!(
-        g.min_torsal_plane_angle_deg >= 75.0,
-        "{name}: support planes at {}°",
-        g.min_torsal_plane_angle_deg
-    );
-    assert!(
-        g.max_vertex_distance_to_reference < 0.01,
-        "{name}: vertices {} of the diagonal off the reference",
-        g.max_vertex_distance_to_reference
-    );
-    let deviation = f
-        .mesh
-        .panels
-        .iter()
-        .map(|p| spherical_faces::panels::deviation::max_deviation(p, loaded.surface.bvh()))
-        .fold(0.0, f64::max);
-    assert!(
-        deviation / diag < 0.01,
-        "{name}: panels {} of the diagonal off the reference",
-        deviation / diag
-    );
+    assert!(g.max_vertex_sphere_residual <= 1e-8, "{name}: vertex–sphere residual {}", g.max_vertex_sphere_residual);
+    assert!(g.max_centre_face_planarity <= 1e-8, "{name}: centre-face planarity {}", g.max_centre_face_planarity);
+    assert!(g.max_torsal_plane_residual <= 1e-8, "{name}: torsal-plane residual {}", g.max_torsal_plane_residual);
+    assert!(g.max_axis_normal_angle_deg <= 20.0, "{name}: node axis at {}° from the normal", g.max_axis_normal_angle_deg);
+    assert!(g.min_torsal_plane_angle_deg >= 75.0, "{name}: support planes at {}°", g.min_torsal_plane_angle_deg);
+    assert!(g.max_vertex_distance_to_reference < 0.01, "{name}: vertices {} of the diagonal off the reference", g.max_vertex_distance_to_reference);
+    let deviation = f.mesh.panels.iter().map(|p| spherical_faces::panels::deviation::max_deviation(p, loaded.surface.bvh())).fold(0.0, f64::max);
+    assert!(deviation / diag < 0.01, "{name}: panels {} of the diagonal off the reference", deviation / diag);
 
     // Panels: every arc runs between its panel's corners and lies on both spheres of its edge.
     let topo = sm.topology();
@@ -107,30 +56,14 @@ fn check(name: &str) {
     for p in &f.mesh.panels {
         assert_eq!(p.arcs.len(), 4);
         for (k, arc) in p.arcs.iter().enumerate() {
-            let (a, b) = (
-                sm.mesh.positions[p.corners[k] as usize],
-                sm.mesh.positions[p.corners[(k + 1) % 4] as usize],
-            );
-            assert!(
-                arc.from.distance(a) <= 1e-12 * diag && arc.to.distance(b) <= 1e-12 * diag,
-                "{name}: arc ends at its corners"
-            );
-            let e = topo
-                .edge_index(p.corners[k], p.corners[(k + 1) % 4])
-                .unwrap();
-            let spheres: Vec<_> = topo
-                .edge_faces(e)
-                .iter()
-                .map(|&(g, _)| sm.face_spheres[g as usize])
-                .collect();
+            let (a, b) = (sm.mesh.positions[p.corners[k] as usize], sm.mesh.positions[p.corners[(k + 1) % 4] as usize]);
+            assert!(arc.from.distance(a) <= 1e-12 * diag && arc.to.distance(b) <= 1e-12 * diag, "{name}: arc ends at its corners");
+            let e = topo.edge_index(p.corners[k], p.corners[(k + 1) % 4]).unwrap();
+            let spheres: Vec<_> = topo.edge_faces(e).iter().map(|&(g, _)| sm.face_spheres[g as usize]).collect();
             for t in [0.0, 0.25, 0.5, 0.75, 1.0] {
                 let x = arc.point(t);
                 for s in &spheres {
-                    assert!(
-                        s.distance(x) <= 1e-9 * diag,
-                        "{name}: arc point {} off a sphere of its edge",
-                        s.distance(x) / diag
-                    );
+                    assert!(s.distance(x) <= 1e-9 * diag, "{name}: arc point {} off a sphere of its edge", s.distance(x) / diag);
                 }
             }
             interior_arcs += usize::from(spheres.len() == 2);
@@ -143,19 +76,13 @@ fn check(name: &str) {
     for el in &f.mesh.support.elements {
         let n = el.circle.normal;
         for c in el.corners {
-            assert!(
-                (c - el.circle.center).dot(n).abs() <= 1e-9 * diag,
-                "{name}: support corner off its plane"
-            );
+            assert!((c - el.circle.center).dot(n).abs() <= 1e-9 * diag, "{name}: support corner off its plane");
         }
     }
     let geometry = &f.mesh.support.geometry;
     assert!(!geometry.triangles.is_empty());
     for el in &f.mesh.support.elements {
-        assert!(
-            el.inner_circle.normal.cross(el.circle.normal).length() <= 1e-9,
-            "{name}: inner and outer arc in one plane"
-        );
+        assert!(el.inner_circle.normal.cross(el.circle.normal).length() <= 1e-9, "{name}: inner and outer arc in one plane");
     }
     // Node axes: unit, through their vertex, toward the sphere centres.
     for (v, &(p, d)) in f.mesh.support.node_axes.axes.iter().enumerate() {
@@ -191,28 +118,14 @@ fn the_vault_sample_gives_an_exact_sq_mesh() {
 #[test]
 fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
     let loaded = load("sample:vault");
-    let params = SqParams {
-        until: Until::Congruence,
-        ..SqParams::default()
-    };
+    let params = SqParams { until: Until::Congruence, ..SqParams::default() };
     let c = compute_congruence(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
     let surface = loaded.surface.spline().unwrap();
     let field = CrossField::new(surface, c.grid, &c.torsal_uv).unwrap();
     for n in [100, 237, 500] {
-        let m = quad_remesh(
-            surface,
-            &field,
-            &QuadRemeshParams {
-                target_faces: n,
-                ..QuadRemeshParams::default()
-            },
-        )
-        .unwrap();
+        let m = quad_remesh(surface, &field, &QuadRemeshParams { target_faces: n, ..QuadRemeshParams::default() }).unwrap();
         let faces = m.mesh.face_count();
-        assert!(
-            (faces as f64) > 0.75 * n as f64 && (faces as f64) < 1.3 * n as f64,
-            "{n} asked, {faces} made"
-        );
+        assert!((faces as f64) > 0.75 * n as f64 && (faces as f64) < 1.3 * n as f64, "{n} asked, {faces} made");
         assert_eq!(m.folded_triangles, 0);
         assert!(coverage(surface, &m.mesh) >= 0.9);
         // No flipped or degenerate face: every quad turns like f_u × f_v, with area.
@@ -221,10 +134,7 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
             let uv = m.uv[c[0] as usize];
             let d = surface.derivatives(uv[0], uv[1]);
             let a = m.mesh.face_area_vector(k);
-            assert!(
-                a.dot(d.su.cross(d.sv).normalize()) > 0.1 * m.spacing * m.spacing,
-                "face {k} flipped or degenerate"
-            );
+            assert!(a.dot(d.su.cross(d.sv).normalize()) > 0.1 * m.spacing * m.spacing, "face {k} flipped or degenerate");
         }
         let angles = edge_field_angles(surface, &field, &m.mesh, &m.uv, &m.on_boundary);
         let mean = angles.iter().sum::<f64>() / angles.len() as f64;
@@ -233,18 +143,8 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
         let ((u0, u1), (v0, v1)) = surface.domain();
         for (uv, &b) in m.uv.iter().zip(&m.on_boundary) {
             if b {
-                let on = [
-                    (uv[0] - u0).abs(),
-                    (uv[0] - u1).abs(),
-                    (uv[1] - v0).abs(),
-                    (uv[1] - v1).abs(),
-                ]
-                .into_iter()
-                .fold(f64::INFINITY, f64::min);
-                assert!(
-                    on <= 1e-12 * (u1 - u0).max(v1 - v0),
-                    "boundary vertex at {uv:?}"
-                );
+                let on = [(uv[0] - u0).abs(), (uv[0] - u1).abs(), (uv[1] - v0).abs(), (uv[1] - v1).abs()].into_iter().fold(f64::INFINITY, f64::min);
+                assert!(on <= 1e-12 * (u1 - u0).max(v1 - v0), "boundary vertex at {uv:?}");
             }
         }
     }
@@ -257,25 +157,17 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
 #[test]
 fn a_singular_torsal_field_falls_back_to_the_parameter_lines_and_says_so() {
     let loaded = load("paraboloid_dome.json");
-    let params = SqParams {
-        until: Until::Remesh,
-        ..SqParams::default()
-    };
+    let params = SqParams { until: Until::Remesh, ..SqParams::default() };
     let r = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
     let q = r.quad_mesh.unwrap();
     assert!(q.parameter_lines());
     assert!(!q.singular_points.is_empty());
-    assert!(
-        q.singular_points.iter().all(|s| s.quarters.abs() == 1),
-        "{:?}",
-        q.singular_points
-    );
+    assert!(q.singular_points.iter().all(|s| s.quarters.abs() == 1), "{:?}", q.singular_points);
     assert!(q.singular.is_empty());
     assert!(
-        r.warnings.iter().any(
-            |w| matches!(w, Warning::SingularTorsalField { valence_5, .. } if *valence_5 > 0)
-                && w.to_string().contains("umbilic")
-        ),
+        r.warnings
+            .iter()
+            .any(|w| matches!(w, Warning::SingularTorsalField { valence_5, .. } if *valence_5 > 0) && w.to_string().contains("umbilic")),
         "{:?}",
         r.warnings
     );

@@ -12,29 +12,21 @@ use spherical_faces::solver::{check_jacobian_report, residuals, Hinge, Proximal,
 use spherical_faces::sq::optimization::CongruenceProblem;
 use spherical_faces::sq::params::Inequality;
 use spherical_faces::sq::radius::SamplingGrid;
-use spherical_faces::sq::terms::{
-    line_fairness, LineCongruence, LineNormalAngle, TorsalAngle, TorsalDirection,
-};
+use spherical_faces::sq::terms::{line_fairness, LineCongruence, LineNormalAngle, TorsalAngle, TorsalDirection};
 
 const FD_H: f64 = 1e-6;
 const FD_TOL: f64 = 1e-6;
 
 fn assert_fd(term: &dyn Term, x: &[f64]) {
     let rep = check_jacobian_report(term, x, FD_H);
-    assert!(
-        rep.max_error < FD_TOL,
-        "term '{}': Jacobian mismatch {rep:?}",
-        term.name()
-    );
+    assert!(rep.max_error < FD_TOL, "term '{}': Jacobian mismatch {rep:?}", term.name());
 }
 
 /// A 5 × 5 grid on the tunnel (in the unit frame), a degree-3 radius basis, and a point: the
 /// central-ish radius, jittered lines, and random torsal unknowns.
 fn setup(inequality: Inequality) -> (CongruenceProblem, Vec<f64>) {
     let bytes = common::shared_bytes("data/bsplines/tunnel_arch.json");
-    let Ok(ImportedFile::BSpline(b)) = import_file(&bytes, "tunnel_arch.json") else {
-        panic!()
-    };
+    let Ok(ImportedFile::BSpline(b)) = import_file(&bytes, "tunnel_arch.json") else { panic!() };
     let s = b.surface.in_frame(glam::DVec3::new(0.0, 6.0, 2.0), 16.75);
     let ((u0, u1), (v0, v1)) = s.domain();
     let radius = BSplineFunction {
@@ -45,22 +37,13 @@ fn setup(inequality: Inequality) -> (CongruenceProblem, Vec<f64>) {
     let grid = SamplingGrid::new(&s, 5).unwrap();
     let problem = CongruenceProblem::new(grid, &radius, inequality);
     let mut rng = Rng(7);
-    let mut x: Vec<f64> = (0..problem.layout.all_variables())
-        .map(|_| rng.uniform() - 0.5)
-        .collect();
+    let mut x: Vec<f64> = (0..problem.layout.all_variables()).map(|_| rng.uniform() - 0.5).collect();
     for (k, c) in problem.layout.radius.clone().enumerate() {
         x[c] = -0.5 + 0.05 * (k as f64).sin();
     }
     for (p, f) in problem.grid.frames.iter().enumerate() {
         let o = problem.layout.line(p);
-        let l = (f.normal
-            + 0.6
-                * glam::DVec3::new(
-                    rng.uniform() - 0.5,
-                    rng.uniform() - 0.5,
-                    rng.uniform() - 0.5,
-                ))
-        .to_array();
+        let l = (f.normal + 0.6 * glam::DVec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5)).to_array();
         x[o..o + 3].copy_from_slice(&l);
     }
     (problem, x)
@@ -70,29 +53,14 @@ fn setup(inequality: Inequality) -> (CongruenceProblem, Vec<f64>) {
 fn line_congruence_terms_match_finite_differences() {
     for inequality in [Inequality::Hinge, Inequality::Slack] {
         let (p, x) = setup(inequality);
-        assert_fd(
-            &LineCongruence {
-                frames: &p.grid.frames,
-                rows: &p.rows,
-                layout: &p.layout,
-            },
-            &x,
-        );
+        assert_fd(&LineCongruence { frames: &p.grid.frames, rows: &p.rows, layout: &p.layout }, &x);
         let normals: Vec<_> = p.grid.frames.iter().map(|f| f.normal).collect();
-        let angle = LineNormalAngle {
-            normals,
-            cos2: 20f64.to_radians().cos().powi(2),
-            layout: &p.layout,
-        };
+        let angle = LineNormalAngle { normals, cos2: 20f64.to_radians().cos().powi(2), layout: &p.layout };
         match inequality {
             Inequality::Hinge => {
                 let r = residuals(&Hinge::new(angle.clone()), &x);
                 let active = r.iter().filter(|v| **v > 0.0).count();
-                assert!(
-                    active > 0 && active < r.len(),
-                    "some hinges active, some not: {active} of {}",
-                    r.len()
-                );
+                assert!(active > 0 && active < r.len(), "some hinges active, some not: {active} of {}", r.len());
                 assert_fd(&Hinge::new(angle.clone()), &x);
             }
             Inequality::Slack => assert_fd(&angle, &x),
@@ -105,16 +73,9 @@ fn line_congruence_terms_match_finite_differences() {
 fn torsal_terms_match_finite_differences() {
     for inequality in [Inequality::Hinge, Inequality::Slack] {
         let (p, x) = setup(inequality);
-        let plane = TorsalDirection {
-            quads: p.quads.clone(),
-            diagonals: p.diagonals.clone(),
-            layout: &p.layout,
-        };
+        let plane = TorsalDirection { quads: p.quads.clone(), diagonals: p.diagonals.clone(), layout: &p.layout };
         assert_fd(&plane, &x);
-        let angle = TorsalAngle {
-            cos2: 75f64.to_radians().cos().powi(2),
-            layout: &p.layout,
-        };
+        let angle = TorsalAngle { cos2: 75f64.to_radians().cos().powi(2), layout: &p.layout };
         match inequality {
             Inequality::Hinge => {
                 let r = residuals(&Hinge::new(angle.clone()), &x);
@@ -144,8 +105,8 @@ fn the_regularizer_damps_without_energy() {
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::sphere_terms::{
-    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation,
-    FanAxisAngle, NodeAxis, TorsalPlane, VertexNormals,
+    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane,
+    VertexNormals,
 };
 
 /// Six spheres (5 blocks with a in ±[0.2, 0.5]), four vertices and four unit-ish normals.
@@ -154,20 +115,10 @@ fn sphere_point(seed: u64) -> Vec<f64> {
     let mut x = Vec::new();
     for k in 0..6 {
         let a = (0.2 + 0.3 * rng.uniform()) * if k % 2 == 0 { 1.0 } else { -1.0 };
-        x.extend([
-            a,
-            rng.uniform() - 0.5,
-            rng.uniform() - 0.5,
-            rng.uniform() - 0.5,
-            rng.uniform() - 0.5,
-        ]);
+        x.extend([a, rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5]);
     }
     for _ in 0..8 {
-        x.extend([
-            rng.uniform() - 0.5,
-            rng.uniform() - 0.5,
-            rng.uniform() + 0.2,
-        ]);
+        x.extend([rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() + 0.2]);
     }
     x
 }
@@ -180,83 +131,25 @@ fn final_optimization_terms_match_finite_differences() {
         let s = |k: usize| 5 * k;
         let v = |k: usize| 30 + 3 * k;
         // Stars of four faces, and of three and five at singular vertices (Sec. 5.2).
-        let stars = vec![
-            (vec![s(0), s(1), s(2), s(3)], v(4)),
-            (vec![s(2), s(3), s(4), s(5)], v(5)),
-            (vec![s(0), s(2), s(4)], v(6)),
-            (vec![s(1), s(2), s(3), s(4), s(5)], v(7)),
-        ];
+        let stars = vec![(vec![s(0), s(1), s(2), s(3)], v(4)), (vec![s(2), s(3), s(4), s(5)], v(5)), (vec![s(0), s(2), s(4)], v(6)), (vec![s(1), s(2), s(3), s(4), s(5)], v(7))];
         assert_fd(&CentrePlanarity { stars }, &x);
         let edges = vec![
-            (
-                v(0),
-                v(1),
-                NodeAxis::Variable(v(4)),
-                NodeAxis::Variable(v(5)),
-                v(6),
-            ),
-            (
-                v(1),
-                v(2),
-                NodeAxis::Fixed(glam::DVec3::new(0.1, 0.2, 0.97)),
-                NodeAxis::Variable(v(5)),
-                v(7),
-            ),
+            (v(0), v(1), NodeAxis::Variable(v(4)), NodeAxis::Variable(v(5)), v(6)),
+            (v(1), v(2), NodeAxis::Fixed(glam::DVec3::new(0.1, 0.2, 0.97)), NodeAxis::Variable(v(5)), v(7)),
         ];
         assert_fd(&TorsalPlane { edges }, &x);
         let n = glam::DVec3::new(0.3, -0.2, 0.9).normalize();
-        assert_fd(
-            &CentreProximity {
-                faces: vec![
-                    (s(0), glam::DVec3::new(0.5, 0.1, -0.3), n),
-                    (s(5), glam::DVec3::ZERO, n),
-                ],
-                epsilon: 0.01,
-            },
-            &x,
-        );
+        assert_fd(&CentreProximity { faces: vec![(s(0), glam::DVec3::new(0.5, 0.1, -0.3), n), (s(5), glam::DVec3::ZERO, n)], epsilon: 0.01 }, &x);
         // Hinges active and inactive: wide and narrow angles.
         for cos2 in [0.0, 0.3, 0.95] {
-            let stars = vec![
-                (vec![s(0), s(1), s(2), s(3)], cos2),
-                (vec![s(5), s(4), s(3), s(2)], cos2),
-                (vec![s(0), s(3), s(5)], 0.5 * cos2),
-                (vec![s(0), s(1), s(2), s(4), s(5)], cos2),
-            ];
-            assert_fd(
-                &CentreQuadAngle {
-                    stars: stars.clone(),
-                },
-                &x,
-            );
+            let stars = vec![(vec![s(0), s(1), s(2), s(3)], cos2), (vec![s(5), s(4), s(3), s(2)], cos2), (vec![s(0), s(3), s(5)], 0.5 * cos2), (vec![s(0), s(1), s(2), s(4), s(5)], cos2)];
+            assert_fd(&CentreQuadAngle { stars: stars.clone() }, &x);
             assert_fd(&Hinge::new(CentreQuadAngle { stars }), &x);
-            let normals = VertexNormals::new(
-                &loaded.surface,
-                vec![v(0), v(1)],
-                vec![n, glam::DVec3::Z],
-                &x,
-            );
-            assert_fd(
-                &AxisNormalAngle {
-                    axes: vec![(v(4), 0), (v(5), 1)],
-                    normals: normals.clone(),
-                    cos2,
-                },
-                &x,
-            );
-            assert_fd(
-                &FanAxisAngle {
-                    fans: vec![([s(0), s(1), s(2)], 0), ([s(3), s(4), s(5)], 1)],
-                    normals,
-                    cos2,
-                },
-                &x,
-            );
+            let normals = VertexNormals::new(&loaded.surface, vec![v(0), v(1)], vec![n, glam::DVec3::Z], &x);
+            assert_fd(&AxisNormalAngle { axes: vec![(v(4), 0), (v(5), 1)], normals: normals.clone(), cos2 }, &x);
+            assert_fd(&FanAxisAngle { fans: vec![([s(0), s(1), s(2)], 0), ([s(3), s(4), s(5)], 1)], normals, cos2 }, &x);
         }
-        let sep = CentreSeparation {
-            pairs: vec![(s(0), s(1), 0.3), (s(2), s(5), 2.0)],
-            share: 0.25,
-        };
+        let sep = CentreSeparation { pairs: vec![(s(0), s(1), 0.3), (s(2), s(5), 2.0)], share: 0.25 };
         assert_fd(&sep, &x);
         assert!(residuals(&sep, &x).iter().all(|r| r.is_finite()));
     }

@@ -27,10 +27,7 @@ fn params(sizing: Sizing, variant: EdgeArcs, iterations: [usize; 3]) -> StAdapte
     StAdaptedParams {
         sizing,
         variant,
-        remesh: RemeshParams {
-            rounds: 6,
-            ..Default::default()
-        },
+        remesh: RemeshParams { rounds: 6, ..Default::default() },
         stages: StAdaptedParams::stages_with(iterations),
         ..Default::default()
     }
@@ -40,21 +37,9 @@ fn run(name: &str, p: &StAdaptedParams) -> StAdaptedResult {
     let reference = load_reference(name);
     let mut log = Vec::new();
     let r = compute(&reference, p, Clock::native(), &mut |e| {
-        if let StAdaptedEvent::Iteration {
-            progress,
-            energy,
-            terms,
-            ..
-        } = e
-        {
-            let angle = terms
-                .iter()
-                .find(|t| t.name == "angle")
-                .map_or(0.0, |t| t.max_abs);
-            log.push(format!(
-                "  {:>9} it {:3} E {energy:.3e} max(1-cos) {angle:.2e}",
-                progress.step, progress.done
-            ));
+        if let StAdaptedEvent::Iteration { progress, energy, terms, .. } = e {
+            let angle = terms.iter().find(|t| t.name == "angle").map_or(0.0, |t| t.max_abs);
+            log.push(format!("  {:>9} it {:3} E {energy:.3e} max(1-cos) {angle:.2e}", progress.step, progress.done));
         }
         Ok(())
     })
@@ -64,53 +49,23 @@ fn run(name: &str, p: &StAdaptedParams) -> StAdaptedResult {
     }
     println!(
         "{name} {:?} {:?}: {} faces, {} iterations, median {:?} ms/iteration, timings {:?}\n  initial {:?}\n  final   {:?}",
-        p.sizing,
-        p.variant,
-        r.metrics.faces,
-        r.iterations,
-        r.angle_iteration_median_ms,
-        r.timings_ms,
-        r.initial_shape,
-        r.metrics
+        p.sizing, p.variant, r.metrics.faces, r.iterations, r.angle_iteration_median_ms, r.timings_ms, r.initial_shape, r.metrics
     );
     for t in &r.terms {
-        println!(
-            "    term {:>20} w {:.1e} mean {:.2e} max {:.2e} E {:.2e}",
-            t.name, t.weight, t.mean_abs, t.max_abs, t.energy
-        );
+        println!("    term {:>20} w {:.1e} mean {:.2e} max {:.2e} E {:.2e}", t.name, t.weight, t.mean_abs, t.max_abs, t.energy);
     }
     r
 }
 
 fn check_result(name: &str, r: &StAdaptedResult) {
     let (i, f) = (&r.initial_shape, &r.metrics);
-    assert!(
-        f.max_vertex_sphere_residual <= 1e-8,
-        "{name}: residual {}",
-        f.max_vertex_sphere_residual
-    );
-    assert!(
-        f.mean_kink_angle_deg < i.mean_kink_angle_deg,
-        "{name}: mean kink {} → {}",
-        i.mean_kink_angle_deg,
-        f.mean_kink_angle_deg
-    );
-    assert!(
-        f.max_kink_angle_deg < i.max_kink_angle_deg,
-        "{name}: max kink {} → {}",
-        i.max_kink_angle_deg,
-        f.max_kink_angle_deg
-    );
+    assert!(f.max_vertex_sphere_residual <= 1e-8, "{name}: residual {}", f.max_vertex_sphere_residual);
+    assert!(f.mean_kink_angle_deg < i.mean_kink_angle_deg, "{name}: mean kink {} → {}", i.mean_kink_angle_deg, f.mean_kink_angle_deg);
+    assert!(f.max_kink_angle_deg < i.max_kink_angle_deg, "{name}: max kink {} → {}", i.max_kink_angle_deg, f.max_kink_angle_deg);
     assert!(f.max_distance_to_reference.is_finite());
-    assert_eq!(
-        r.sphere_mesh.face_spheres.len(),
-        r.sphere_mesh.mesh.face_count()
-    );
+    assert_eq!(r.sphere_mesh.face_spheres.len(), r.sphere_mesh.mesh.face_count());
     // The orientation barrier keeps every face the way the remesher made it.
-    assert_eq!(
-        i.flipped_faces, 0,
-        "{name}: flipped faces before optimizing"
-    );
+    assert_eq!(i.flipped_faces, 0, "{name}: flipped faces before optimizing");
     assert_eq!(f.flipped_faces, 0, "{name}: flipped faces after optimizing");
 }
 
@@ -126,19 +81,13 @@ fn face_orientation_jacobian_and_values() {
     assert!(err < 1e-7, "FD error {err}");
     let stats = |x: &[f64]| {
         let mut p = spherical_faces::solver::Problem::new(x.len());
-        p.add_term(
-            FaceOrientation::new(vec![[0, 3, 6], [3, 9, 6]], &x0(), 2.0),
-            1.0,
-        );
+        p.add_term(FaceOrientation::new(vec![[0, 3, 6], [3, 9, 6]], &x0(), 2.0), 1.0);
         p.prepare(x);
         let s = &p.term_stats(x)[0];
         (s.mean_abs, s.max_abs)
     };
     let (mean, max) = stats(&x);
-    assert!(
-        (mean - 1.0).abs() < 1e-12 && (max - 1.0).abs() < 1e-12,
-        "{mean} {max}"
-    );
+    assert!((mean - 1.0).abs() < 1e-12 && (max - 1.0).abs() < 1e-12, "{mean} {max}");
     // Swap two corners of face 0 in x: the same triangle, turned over.
     let mut y = x.clone();
     for i in 0..3 {
@@ -167,22 +116,14 @@ fn orientation_barrier_has_active_and_inactive_rows() {
     let row_active = |i: usize| (0..x.len()).any(|j| analytic[j * m + i] != 0.0);
     assert!(!row_active(0), "face 0 keeps its area: its row is off");
     assert!(row_active(1), "face 1 is squashed: its row is on");
-    let worst = analytic
-        .iter()
-        .zip(&numeric)
-        .map(|(a, n)| (a - n).abs())
-        .fold(0.0, f64::max);
+    let worst = analytic.iter().zip(&numeric).map(|(a, n)| (a - n).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-6, "FD error {worst}");
     assert!(check_jacobian(&term, &x, 1e-7) < 1e-6);
 }
 
 #[test]
 fn family_member_passes_through_points_and_is_closest() {
-    let p = [
-        DVec3::new(0.0, 0.0, 0.1),
-        DVec3::new(1.0, 0.1, 0.0),
-        DVec3::new(0.2, 1.0, 0.05),
-    ];
+    let p = [DVec3::new(0.0, 0.0, 0.1), DVec3::new(1.0, 0.1, 0.0), DVec3::new(0.2, 1.0, 0.05)];
     let target = Sphere::from_center_radius(DVec3::new(0.3, 0.3, 2.0), 2.0).normalized();
     let s = closest_family_member(p, &target);
     for q in p {
@@ -207,14 +148,7 @@ fn patch() -> (Reference, TriMesh, Vec<f64>) {
     let diag = reference.bbox_diagonal();
     let (lo, hi) = reference.bbox();
     let t = 0.5 * (lo + hi);
-    let nref = TriMesh::new(
-        reference
-            .positions
-            .iter()
-            .map(|&p| (p - t) / diag)
-            .collect(),
-        reference.triangles.clone(),
-    );
+    let nref = TriMesh::new(reference.positions.iter().map(|&p| (p - t) / diag).collect(), reference.triangles.clone());
     // A small patch of the reference as the mesh: its first faces.
     let c0 = nref.face_points(0).iter().sum::<DVec3>() / 3.0;
     let mut order: Vec<usize> = (0..nref.face_count()).collect();
@@ -226,17 +160,11 @@ fn patch() -> (Reference, TriMesh, Vec<f64>) {
     used.dedup();
     let remap = |v: u32| used.binary_search(&v).unwrap() as u32;
     let mut rng = spherical_faces::rng::Rng(12345);
-    let positions: Vec<DVec3> = used
-        .iter()
-        .map(|&v| nref.positions[v as usize] + 1e-3 * rng.vec(0.5))
-        .collect();
+    let positions: Vec<DVec3> = used.iter().map(|&v| nref.positions[v as usize] + 1e-3 * rng.vec(0.5)).collect();
     let mesh = TriMesh::new(positions, faces.iter().map(|t| t.map(remap)).collect());
     let topo = Topology::new(&nref);
     let field = jet_fit(&nref, &topo, &JetParams::default(), &mut ignore).unwrap();
-    let vs: Vec<Sphere> = used
-        .iter()
-        .map(|&v| field.central_spheres[v as usize])
-        .collect();
+    let vs: Vec<Sphere> = used.iter().map(|&v| field.central_spheres[v as usize]).collect();
     let spheres = initial_spheres(&mesh, &vs);
     let mut x = pack(&mesh, &spheres);
     for xi in x.iter_mut() {
@@ -252,43 +180,21 @@ fn every_term_has_a_correct_jacobian() {
     let (reference, mesh, x) = patch();
     let topo = Topology::new(&mesh);
     assert!(topo.interior_edges().count() > 0);
-    let weights = StAdaptedWeights {
-        edge_circle: 1.0,
-        ..Default::default()
-    };
+    let weights = StAdaptedWeights { edge_circle: 1.0, ..Default::default() };
     // A band narrower than the patch's jitter (1e-3): most of its rows are active.
     let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &weights, Some(1e-4), &x);
     problem.prepare(&x);
     let stats = problem.term_stats(&x);
-    for id in ids
-        .tolerance
-        .expect("a tolerance band")
-        .into_iter()
-        .chain(ids.sagitta_match)
-    {
-        assert!(
-            stats[id.0].active > 0,
-            "{}: no row outside the band",
-            stats[id.0].name
-        );
+    for id in ids.tolerance.expect("a tolerance band").into_iter().chain(ids.sagitta_match) {
+        assert!(stats[id.0].active > 0, "{}: no row outside the band", stats[id.0].name);
     }
-    assert!(
-        ids.sagitta_match.is_some(),
-        "variant (a) with a tolerance matches the sagittas"
-    );
+    assert!(ids.sagitta_match.is_some(), "variant (a) with a tolerance matches the sagittas");
     for i in 0..problem.num_terms() {
         let term = problem.term(TermId(i));
         // The edge circle's curvature varies fast between nearly tangent spheres, and the
         // tolerance band's wall bends on the scale of τ: their central differences need a smaller
         // step (the error falls as h²: edge circle 6.5e-6 at 1e-6, 1.8e-7 at 1e-7).
-        let h = if matches!(
-            term.name(),
-            "edge_circle" | "vertex_tolerance" | "face_tolerance" | "sagitta_match"
-        ) {
-            1e-7
-        } else {
-            1e-6
-        };
+        let h = if matches!(term.name(), "edge_circle" | "vertex_tolerance" | "face_tolerance" | "sagitta_match") { 1e-7 } else { 1e-6 };
         let err = check_jacobian(term, &x, h);
         println!("{:>20}: FD error {err:.2e}", term.name());
         assert!(err < 1e-6, "{}: {err}", term.name());
@@ -306,64 +212,31 @@ fn glide_terms_follow_their_moving_targets() {
     let rotation = glam::DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.7);
     let plane = spherical_faces::samples::plane_patch(1.0, 0.8, 12, 10);
     let normal = rotation * DVec3::Z;
-    let tilted = TriMesh::new(
-        plane.positions.iter().map(|&p| rotation * p).collect(),
-        plane.triangles.clone(),
-    );
+    let tilted = TriMesh::new(plane.positions.iter().map(|&p| rotation * p).collect(), plane.triangles.clone());
     let reference = Reference::from_triangles(tilted.clone());
     // The mesh: the faces of the plane away from its boundary (so that the closest points stay
     // inside), lifted off it a little and jittered.
-    let boundary: Vec<bool> = (0..tilted.vertex_count())
-        .map(|v| reference.topology().is_boundary_vertex(v))
-        .collect();
-    let inner: Vec<[u32; 3]> = tilted
-        .triangles
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&v| !boundary[v as usize]))
-        .collect();
+    let boundary: Vec<bool> = (0..tilted.vertex_count()).map(|v| reference.topology().is_boundary_vertex(v)).collect();
+    let inner: Vec<[u32; 3]> = tilted.triangles.iter().copied().filter(|t| t.iter().all(|&v| !boundary[v as usize])).collect();
     let mut used: Vec<u32> = inner.iter().flatten().copied().collect();
     used.sort_unstable();
     used.dedup();
     let mut rng = spherical_faces::rng::Rng(99);
-    let positions: Vec<DVec3> = used
-        .iter()
-        .map(|&v| tilted.positions[v as usize] + rng.range(-1e-3, 1e-3) * normal + rng.vec(5e-3))
-        .collect();
+    let positions: Vec<DVec3> =
+        used.iter().map(|&v| tilted.positions[v as usize] + rng.range(-1e-3, 1e-3) * normal + rng.vec(5e-3)).collect();
     let remap = |v: u32| used.binary_search(&v).unwrap() as u32;
     let mesh = TriMesh::new(positions, inner.iter().map(|t| t.map(remap)).collect());
     let spheres: Vec<Sphere> = (0..mesh.face_count())
-        .map(|f| {
-            closest_family_member(
-                mesh.face_points(f),
-                &Sphere::from_center_radius(-3.0 * normal, 3.0),
-            )
-        })
+        .map(|f| closest_family_member(mesh.face_points(f), &Sphere::from_center_radius(-3.0 * normal, 3.0)))
         .collect();
     let x = pack(&mesh, &spheres);
     let topo = Topology::new(&mesh);
-    let (mut problem, ids) = build_problem(
-        &mesh,
-        &topo,
-        &reference,
-        &StAdaptedWeights::default(),
-        None,
-        &x,
-    );
+    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), None, &x);
     let (nv, nf) = (mesh.vertex_count(), mesh.face_count());
     let h = 1e-6;
-    let worst = |a: &[f64], b: &[f64]| {
-        a.iter()
-            .zip(b)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max)
-    };
+    let worst = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     let (analytic, numeric) = jacobians(problem.term_mut(ids.tangent_distance), &x, h, true);
-    assert!(
-        worst(&analytic, &numeric) < 1e-8,
-        "tangent distance: {}",
-        worst(&analytic, &numeric)
-    );
+    assert!(worst(&analytic, &numeric) < 1e-8, "tangent distance: {}", worst(&analytic, &numeric));
     let (analytic, numeric) = jacobians(problem.term_mut(ids.point_distance), &x, h, true);
     let m = 3 * nv;
     let mut expected = vec![0.0; analytic.len()];
@@ -376,21 +249,11 @@ fn glide_terms_follow_their_moving_targets() {
             }
         }
     }
-    assert!(
-        worst(&expected, &numeric) < 1e-7,
-        "point distance: {}",
-        worst(&expected, &numeric)
-    );
-    assert!(
-        worst(&analytic, &numeric) > 0.1,
-        "the fixed-target Jacobian is not the moving one"
-    );
+    assert!(worst(&expected, &numeric) < 1e-7, "point distance: {}", worst(&expected, &numeric));
+    assert!(worst(&analytic, &numeric) > 0.1, "the fixed-target Jacobian is not the moving one");
     let (analytic, numeric) = jacobians(problem.term_mut(ids.face_distance), &x, h, true);
     let spheres_only = |v: &[f64]| v[..nf * nf].to_vec();
-    assert!(
-        worst(&spheres_only(&analytic), &spheres_only(&numeric)) < 1e-8,
-        "face distance"
-    );
+    assert!(worst(&spheres_only(&analytic), &spheres_only(&numeric)) < 1e-8, "face distance");
 }
 
 /// On a curved reference (tri_mesh) a vertex moved along the reference normal moves its tangent
@@ -399,27 +262,14 @@ fn glide_terms_follow_their_moving_targets() {
 fn tangent_distance_grows_along_the_normal_on_a_curved_reference() {
     let (reference, mesh, x) = patch();
     let topo = Topology::new(&mesh);
-    let (mut problem, ids) = build_problem(
-        &mesh,
-        &topo,
-        &reference,
-        &StAdaptedWeights::default(),
-        None,
-        &x,
-    );
+    let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), None, &x);
     let (nv, nf) = (mesh.vertex_count(), mesh.face_count());
     let (analytic, numeric) = jacobians(problem.term_mut(ids.tangent_distance), &x, 1e-7, true);
     let mut worst: f64 = 0.0;
     for k in 0..nv {
         let o = nf + 3 * k;
-        let n = DVec3::new(
-            analytic[o * nv + k],
-            analytic[(o + 1) * nv + k],
-            analytic[(o + 2) * nv + k],
-        );
-        let along = n.x * numeric[o * nv + k]
-            + n.y * numeric[(o + 1) * nv + k]
-            + n.z * numeric[(o + 2) * nv + k];
+        let n = DVec3::new(analytic[o * nv + k], analytic[(o + 1) * nv + k], analytic[(o + 2) * nv + k]);
+        let along = n.x * numeric[o * nv + k] + n.y * numeric[(o + 1) * nv + k] + n.z * numeric[(o + 2) * nv + k];
         worst = worst.max((along - 1.0).abs());
     }
     assert!(worst < 1e-2, "d(n·(v − q))/dn = 1 ± {worst}");
@@ -427,11 +277,7 @@ fn tangent_distance_grows_along_the_normal_on_a_curved_reference() {
 
 #[test]
 fn tri_mesh_optimization_lowers_kinks() {
-    let p = params(
-        Sizing::UniformFaces(250),
-        EdgeArcs::Intersection,
-        [3, 10, 18],
-    );
+    let p = params(Sizing::UniformFaces(250), EdgeArcs::Intersection, [3, 10, 18]);
     let r = run("tri_mesh", &p);
     check_result("tri_mesh", &r);
     assert_eq!(r.metrics.flipped_faces, 0);
@@ -439,11 +285,7 @@ fn tri_mesh_optimization_lowers_kinks() {
 
 #[test]
 fn bubble_optimization_lowers_kinks_variant_b() {
-    let p = params(
-        Sizing::UniformFaces(250),
-        EdgeArcs::BisectingPlanes,
-        [3, 10, 18],
-    );
+    let p = params(Sizing::UniformFaces(250), EdgeArcs::BisectingPlanes, [3, 10, 18]);
     let r = run("botanic-garden-bubble-0", &p);
     check_result("bubble", &r);
     assert_eq!(r.metrics.flipped_faces, 0);
@@ -457,22 +299,10 @@ fn bubble_optimization_lowers_kinks_variant_b() {
 #[test]
 fn enneper_is_refused() {
     let reference = load_reference("enneper2");
-    let err = compute(
-        &reference,
-        &StAdaptedParams::default(),
-        Clock::default(),
-        &mut |_| Ok(()),
-    )
-    .expect_err("minimal surface refused");
+    let err = compute(&reference, &StAdaptedParams::default(), Clock::default(), &mut |_| Ok(())).expect_err("minimal surface refused");
     println!("enneper2: {err}");
-    assert!(
-        matches!(err, StAdaptedError::NoCentralSpheres(_)),
-        "{err:?}"
-    );
-    assert!(
-        err.to_string().contains("no usable central spheres"),
-        "{err}"
-    );
+    assert!(matches!(err, StAdaptedError::NoCentralSpheres(_)), "{err:?}");
+    assert!(err.to_string().contains("no usable central spheres"), "{err}");
 }
 
 #[test]
@@ -502,57 +332,31 @@ fn cancel_from_hook() {
 #[test]
 fn adaptive_vs_uniform_distance_at_equal_face_count() {
     let name = "tri_mesh";
-    let eps = std::env::var("ST_ADAPTED_EPS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(2e-3);
-    let pa = params(
-        Sizing::Adaptive { epsilon: eps },
-        EdgeArcs::Intersection,
-        [3, 10, 18],
-    );
+    let eps = std::env::var("ST_ADAPTED_EPS").ok().and_then(|s| s.parse().ok()).unwrap_or(2e-3);
+    let pa = params(Sizing::Adaptive { epsilon: eps }, EdgeArcs::Intersection, [3, 10, 18]);
     let ra = run(name, &pa);
-    let pu = params(
-        Sizing::UniformFaces(ra.metrics.faces),
-        EdgeArcs::Intersection,
-        [3, 10, 18],
-    );
+    let pu = params(Sizing::UniformFaces(ra.metrics.faces), EdgeArcs::Intersection, [3, 10, 18]);
     let ru = run(name, &pu);
     // The initial meshes get no panels in the method; measure theirs here.
     let reference = load_reference(name);
-    let initial_distance = |r: &StAdaptedResult| {
-        metrics(&r.initial_sphere_mesh, &reference, EdgeArcs::Intersection)
-            .0
-            .max_distance_to_reference
-    };
+    let initial_distance =
+        |r: &StAdaptedResult| metrics(&r.initial_sphere_mesh, &reference, EdgeArcs::Intersection).0.max_distance_to_reference;
     let (ia, iu) = (initial_distance(&ra), initial_distance(&ru));
     println!(
         "adaptive ε={eps}: {} faces, dist {:.3e} (init {:.3e}); uniform: {} faces, dist {:.3e} (init {:.3e})",
-        ra.metrics.faces,
-        ra.metrics.max_distance_to_reference,
-        ia,
-        ru.metrics.faces,
-        ru.metrics.max_distance_to_reference,
-        iu
+        ra.metrics.faces, ra.metrics.max_distance_to_reference, ia, ru.metrics.faces, ru.metrics.max_distance_to_reference, iu
     );
     check_result("adaptive", &ra);
     check_result("uniform", &ru);
     assert_eq!(ra.metrics.flipped_faces + ru.metrics.flipped_faces, 0);
     let ratio = ru.metrics.faces as f64 / ra.metrics.faces as f64;
-    assert!(
-        (0.8..1.25).contains(&ratio),
-        "face counts differ too much: {ratio}"
-    );
+    assert!((0.8..1.25).contains(&ratio), "face counts differ too much: {ratio}");
     // The sizing field's claim (Sec. 3): at equal face counts, faces sized by the influence
     // zones start closer to the reference. The optimization then brings both within 2ε; the
     // largest distance left is the arcs' and the boundary's, not the sizing's.
     assert!(ia < iu, "adaptive {ia} ≥ uniform {iu} at the start");
     for r in [&ra, &ru] {
-        assert!(
-            r.metrics.max_distance_to_reference <= 2.0 * eps,
-            "{} > 2ε",
-            r.metrics.max_distance_to_reference
-        );
+        assert!(r.metrics.max_distance_to_reference <= 2.0 * eps, "{} > 2ε", r.metrics.max_distance_to_reference);
     }
 }
 
@@ -562,18 +366,10 @@ fn adaptive_vs_uniform_distance_at_equal_face_count() {
 #[ignore]
 fn timing_about_600_faces() {
     // ST_ADAPTED_FACES=6000 for the larger size; ST_ADAPTED_MESHES=tri_mesh for one mesh.
-    let faces = std::env::var("ST_ADAPTED_FACES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(600);
-    let meshes = std::env::var("ST_ADAPTED_MESHES")
-        .unwrap_or_else(|_| "tri_mesh,botanic-garden-bubble-0".into());
+    let faces = std::env::var("ST_ADAPTED_FACES").ok().and_then(|s| s.parse().ok()).unwrap_or(600);
+    let meshes = std::env::var("ST_ADAPTED_MESHES").unwrap_or_else(|_| "tri_mesh,botanic-garden-bubble-0".into());
     for name in meshes.split(',') {
-        let p = params(
-            Sizing::UniformFaces(faces),
-            EdgeArcs::Intersection,
-            [3, 10, 18],
-        );
+        let p = params(Sizing::UniformFaces(faces), EdgeArcs::Intersection, [3, 10, 18]);
         let r = run(name, &p);
         check_result(name, &r);
         // Flipped faces are asserted to be 0 in check_result-based tests; reported here.
@@ -589,21 +385,12 @@ fn timing_about_600_faces() {
 #[test]
 fn report_has_the_st_schema() {
     let reference = load_reference("tri_mesh");
-    let p = params(
-        Sizing::UniformFaces(120),
-        EdgeArcs::BisectingPlanes,
-        [2, 3, 6],
-    );
+    let p = params(Sizing::UniformFaces(120), EdgeArcs::BisectingPlanes, [2, 3, 6]);
     let r = compute(&reference, &p, Clock::native(), &mut |_| Ok(())).unwrap();
-    let (report, files) =
-        spherical_faces::pipeline::stages::st_adapted::export(&reference, &r, &p, Clock::native());
+    let (report, files) = spherical_faces::pipeline::stages::st_adapted::export(&reference, &r, &p, Clock::native());
     let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
     assert_eq!(json["method"], "st");
-    for k in [
-        "mean_kink_angle_deg",
-        "max_kink_angle_deg",
-        "max_distance_to_reference",
-    ] {
+    for k in ["mean_kink_angle_deg", "max_kink_angle_deg", "max_distance_to_reference"] {
         assert!(json["metrics"][k].is_number(), "{k} in {json}");
     }
     for k in ["max_vertex_sphere_residual", "max_gap", "angle_iterations"] {
@@ -611,16 +398,7 @@ fn report_has_the_st_schema() {
     }
     assert!(json["timings_ms"]["angle_iteration_median"].is_number());
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(
-        names,
-        [
-            "panels.glb",
-            "panels.obj",
-            "panels.csv",
-            "panels.json",
-            "report.json"
-        ]
-    );
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"]);
     println!("{}", report.to_json());
 }
 
@@ -634,34 +412,16 @@ fn profile_optimization() {
     use spherical_faces::solver::{Ordering, Solver, SolverOptions};
     use spherical_faces::st_adapted::optimization::{run_stages, OptimizationFrame};
     use spherical_faces::st_adapted::terms::unpack;
-    let cases = std::env::var("ST_ADAPTED_CASES")
-        .unwrap_or_else(|_| "tri_mesh:600,dome:600,dome:6000".into());
-    let repeats: usize = std::env::var("ST_ADAPTED_REPEATS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(5);
+    let cases = std::env::var("ST_ADAPTED_CASES").unwrap_or_else(|_| "tri_mesh:600,dome:600,dome:6000".into());
+    let repeats: usize = std::env::var("ST_ADAPTED_REPEATS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
     for case in cases.split(',') {
         let (name, faces) = case.split_once(':').unwrap();
         let faces: usize = faces.parse().unwrap();
-        let reference = Reference::from_triangles(if name == "dome" {
-            spherical_faces::samples::Sample::Dome.mesh()
-        } else {
-            load(name)
-        });
-        let params = StAdaptedParams {
-            stages: StAdaptedParams::stages_with([3, 10, 18]),
-            ..Default::default()
-        };
+        let reference = Reference::from_triangles(if name == "dome" { spherical_faces::samples::Sample::Dome.mesh() } else { load(name) });
+        let params = StAdaptedParams { stages: StAdaptedParams::stages_with([3, 10, 18]), ..Default::default() };
         let sizing = SizingField::uniform_for_face_count(reference.mesh(), faces);
-        let remeshed =
-            pliant_remesh(reference.mesh(), &sizing, &params.remesh, &mut ignore).unwrap();
-        let rfield = jet_fit(
-            &remeshed,
-            &Topology::new(&remeshed),
-            &params.jet,
-            &mut ignore,
-        )
-        .unwrap();
+        let remeshed = pliant_remesh(reference.mesh(), &sizing, &params.remesh, &mut ignore).unwrap();
+        let rfield = jet_fit(&remeshed, &Topology::new(&remeshed), &params.jet, &mut ignore).unwrap();
         let init = initial_spheres(&remeshed, &rfield.central_spheres);
         let frame = OptimizationFrame::new(&reference, &remeshed, &init, &params);
         let (mesh, topology, x0) = (&frame.mesh, &frame.topology, &frame.x0);
@@ -673,26 +433,14 @@ fn profile_optimization() {
             Ok("nd") => Ordering::NestedDissection,
             _ => Ordering::Auto,
         };
-        let mut solver = Solver::new(SolverOptions {
-            clock: Clock::native(),
-            ordering,
-            ..SolverOptions::default()
-        });
+        let mut solver = Solver::new(SolverOptions { clock: Clock::native(), ordering, ..SolverOptions::default() });
         let mut all_ms = Vec::new();
         let mut x = x0.clone();
         let mut run = None;
         let mut symbolic = 0.0;
         for rep in 0..repeats {
             x.copy_from_slice(x0);
-            let r = run_stages(
-                &mut problem,
-                &ids,
-                &mut x,
-                &params,
-                &mut solver,
-                &mut |_, _| Ok(()),
-            )
-            .unwrap();
+            let r = run_stages(&mut problem, &ids, &mut x, &params, &mut solver, &mut |_, _| Ok(())).unwrap();
             if rep == 0 {
                 symbolic = r.phase_ms.symbolic;
             } else {
@@ -705,10 +453,8 @@ fn profile_optimization() {
         all_ms.sort_by(|a, b| a.total_cmp(b));
         let it = run.iterations as f64;
         let (_, proj) = unpack(&x, &mesh.triangles, nv);
-        let kinks: Vec<f64> = topology
-            .interior_edges()
-            .map(|(_, f, g)| proj[f as usize].kink_angle(&proj[g as usize]).to_degrees())
-            .collect();
+        let kinks: Vec<f64> =
+            topology.interior_edges().map(|(_, f, g)| proj[f as usize].kink_angle(&proj[g as usize]).to_degrees()).collect();
         let mean_kink = kinks.iter().sum::<f64>() / kinks.len() as f64;
         let max_kink = kinks.iter().copied().fold(0.0, f64::max);
         println!(
@@ -729,10 +475,7 @@ fn profile_optimization() {
             run.phase_ms.factorize_solve / it,
             symbolic,
         );
-        println!(
-            "QUALITY {name}:{faces}: energy {:.6e}, mean kink {:.4}°, max kink {:.4}°",
-            last.energy, mean_kink, max_kink
-        );
+        println!("QUALITY {name}:{faces}: energy {:.6e}, mean kink {:.4}°, max kink {:.4}°", last.energy, mean_kink, max_kink);
     }
 }
 
@@ -752,9 +495,7 @@ fn shared_closest_points_match_brute_force() {
     point.share_closest_with(&tangent);
     let mut rng = spherical_faces::rng::Rng(777);
     let step = mesh.vertex_count() / n;
-    let mut x: Vec<f64> = (0..n)
-        .flat_map(|k| (mesh.positions[k * step] + 0.02 * diag * rng.vec(0.5)).to_array())
-        .collect();
+    let mut x: Vec<f64> = (0..n).flat_map(|k| (mesh.positions[k * step] + 0.02 * diag * rng.vec(0.5)).to_array()).collect();
     for round in 0..3 {
         tangent.prepare(&x);
         point.prepare(&x);
@@ -762,10 +503,7 @@ fn shared_closest_points_match_brute_force() {
             let v = DVec3::new(x[3 * k], x[3 * k + 1], x[3 * k + 2]);
             let exact = closest_point_brute_force(&mesh, v).unwrap();
             for c in [tangent.closest()[k], point.closest()[k]] {
-                assert!(
-                    (c.0.distance(v) - exact.distance).abs() <= 1e-12 * diag,
-                    "round {round} vertex {k}"
-                );
+                assert!((c.0.distance(v) - exact.distance).abs() <= 1e-12 * diag, "round {round} vertex {k}");
                 assert!((c.1.length() - 1.0).abs() < 1e-12);
             }
         }
@@ -794,19 +532,9 @@ fn panels_stay_within_two_epsilon_boundary_included() {
         for variant in [EdgeArcs::Intersection, EdgeArcs::BisectingPlanes] {
             // Where H changes sign (the bubble's saddles, warned about) one interior panel of
             // variant (b) rises over a saddle to 2.03ε.
-            let bound = if name == "botanic-garden-bubble-0" && variant == EdgeArcs::BisectingPlanes
-            {
-                2.1
-            } else {
-                2.0
-            };
-            let p = StAdaptedParams {
-                sizing: Sizing::Adaptive { epsilon },
-                variant,
-                ..Default::default()
-            };
-            let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(()))
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            let bound = if name == "botanic-garden-bubble-0" && variant == EdgeArcs::BisectingPlanes { 2.1 } else { 2.0 };
+            let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon }, variant, ..Default::default() };
+            let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
             let boundary = boundary_vertices(&Topology::new(&r.sphere_mesh.mesh));
             let mut worst = (0.0f64, 0.0f64);
             for (face, panel) in r.sphere_mesh.mesh.faces.iter().zip(&r.panels) {
@@ -820,10 +548,7 @@ fn panels_stay_within_two_epsilon_boundary_included() {
             }
             println!("{name} {variant:?}: max panel distance {:.4} inside, {:.4} at the boundary (ε {epsilon})", worst.0, worst.1);
             assert!(worst.1 > 0.0, "{name}: boundary panels were measured");
-            assert!(
-                worst.0.max(worst.1) <= bound * epsilon,
-                "{name} {variant:?}: {worst:?} > {bound}ε"
-            );
+            assert!(worst.0.max(worst.1) <= bound * epsilon, "{name} {variant:?}: {worst:?} > {bound}ε");
             assert!((worst.0.max(worst.1) - r.metrics.max_distance_to_reference).abs() < 1e-12);
         }
     }
@@ -840,10 +565,7 @@ fn boundary_arcs_follow_the_reference_boundary() {
     use spherical_faces::panels::{build_panels_with, edge_arc_points};
     use spherical_faces::samples::sphere_cap;
     let reference = Reference::from_triangles(sphere_cap(20.0, 12.0, 48));
-    let p = StAdaptedParams {
-        sizing: Sizing::Adaptive { epsilon: 2e-3 },
-        ..Default::default()
-    };
+    let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
     let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).expect("the cap runs");
     let off_circle = |x: DVec3| (x.truncate().length() - 12.0).hypot(x.z);
     let worst = |sm: &SphereMesh| -> f64 {
@@ -862,17 +584,11 @@ fn boundary_arcs_follow_the_reference_boundary() {
         worst / r.diag
     };
     let followed = worst(&r.sphere_mesh);
-    let great_circles = worst(&SphereMesh::new(
-        r.sphere_mesh.mesh.clone(),
-        r.sphere_mesh.face_spheres.clone(),
-        r.sphere_mesh.boundary_arcs,
-    ));
+    let great_circles =
+        worst(&SphereMesh::new(r.sphere_mesh.mesh.clone(), r.sphere_mesh.face_spheres.clone(), r.sphere_mesh.boundary_arcs));
     println!("boundary arcs off the boundary circle: {followed:.2e} (great circles {great_circles:.2e}) of the diagonal");
     assert!(followed <= 2e-4, "{followed}");
-    assert!(
-        great_circles > 10.0 * followed,
-        "{great_circles} vs {followed}"
-    );
+    assert!(great_circles > 10.0 * followed, "{great_circles} vs {followed}");
 }
 
 /// The facet sagitta is the height of the smooth surface over the facets: on a triangulated
@@ -887,27 +603,17 @@ fn a_reference_coarser_than_epsilon_is_named() {
     for rings in [6, 12, 36] {
         let mesh = sphere_cap(20.0, 12.0, rings);
         let center = DVec3::new(0.0, 0.0, -16.0);
-        let heights: Vec<f64> = (0..mesh.face_count())
-            .map(|f| 20.0 - (mesh.face_points(f).iter().sum::<DVec3>() / 3.0 - center).length())
-            .collect();
+        let heights: Vec<f64> =
+            (0..mesh.face_count()).map(|f| 20.0 - (mesh.face_points(f).iter().sum::<DVec3>() / 3.0 - center).length()).collect();
         let exact = median(&heights).unwrap() / mesh.bbox_diagonal();
         let estimate = Reference::from_triangles(mesh.clone()).facet_sagitta();
         println!("{rings} rings: sagitta {estimate:.3e}, centroids {exact:.3e}");
-        assert!(
-            (estimate / exact - 1.0).abs() < 0.1,
-            "{rings} rings: {estimate} vs {exact}"
-        );
+        assert!((estimate / exact - 1.0).abs() < 0.1, "{rings} rings: {estimate} vs {exact}");
     }
     let dome = load_reference("tri_dome");
     let warning = coarseness_warning(&dome, 2e-3).expect("the dome is coarser than 2e-3");
-    assert!(
-        matches!(warning, Warning::CoarserThanTolerance { sagitta, .. } if sagitta > 4e-3 && sagitta < 6e-3),
-        "{warning:?}"
-    );
-    assert!(
-        warning.to_string().contains("coarser than the tolerance"),
-        "{warning}"
-    );
+    assert!(matches!(warning, Warning::CoarserThanTolerance { sagitta, .. } if sagitta > 4e-3 && sagitta < 6e-3), "{warning:?}");
+    assert!(warning.to_string().contains("coarser than the tolerance"), "{warning}");
     assert_eq!(coarseness_warning(&dome, 1e-2), None);
     assert_eq!(coarseness_warning(&load_reference("tri_mesh"), 2e-3), None);
 }
@@ -918,31 +624,18 @@ fn a_reference_coarser_than_epsilon_is_named() {
 fn central_spheres_at_points_of_a_sphere_are_the_sphere() {
     use spherical_faces::samples::sphere_cap;
     let reference = Reference::from_triangles(sphere_cap(20.0, 12.0, 24));
-    let field = reference
-        .curvature(&StAdaptedParams::default().jet, &mut |_| Ok(()))
-        .unwrap();
+    let field = reference.curvature(&StAdaptedParams::default().jet, &mut |_| Ok(())).unwrap();
     let center = DVec3::new(0.0, 0.0, -16.0);
     let points: Vec<DVec3> = [(0.0, 0.0), (3.1, -2.2), (-7.5, 4.0), (9.0, 5.0)]
         .iter()
         .map(|&(x, y): &(f64, f64)| {
-            center
-                + 20.0 * DVec3::new(x, y, (400.0 - x * x - y * y).sqrt()).normalize()
-                + DVec3::new(0.01, -0.02, 0.03)
+            center + 20.0 * DVec3::new(x, y, (400.0 - x * x - y * y).sqrt()).normalize() + DVec3::new(0.01, -0.02, 0.03)
         })
         .collect();
-    for (p, s) in points
-        .iter()
-        .zip(reference.central_spheres_at(&field, &points))
-    {
-        assert!(
-            (s.discriminant() - 1.0).abs() < 1e-12,
-            "{p}: not normalized"
-        );
+    for (p, s) in points.iter().zip(reference.central_spheres_at(&field, &points)) {
+        assert!((s.discriminant() - 1.0).abs() < 1e-12, "{p}: not normalized");
         let (c, r) = (s.center().unwrap(), s.signed_radius().unwrap().abs());
-        assert!(
-            c.distance(center) < 0.2 && (r - 20.0).abs() < 0.2,
-            "{p}: centre {c}, radius {r}"
-        );
+        assert!(c.distance(center) < 0.2 && (r - 20.0).abs() < 0.2, "{p}: centre {c}, radius {r}");
     }
 }
 
@@ -955,13 +648,7 @@ fn central_spheres_at_points_of_a_sphere_are_the_sphere() {
 fn a_sphere_stays_trivial_at_the_default_tolerance() {
     let reference = load_reference("chebyshev_sphere");
     for variant in [EdgeArcs::Intersection, EdgeArcs::BisectingPlanes] {
-        let p = StAdaptedParams {
-            sizing: Sizing::Adaptive {
-                epsilon: DEFAULT_EPSILON,
-            },
-            variant,
-            ..Default::default()
-        };
+        let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: DEFAULT_EPSILON }, variant, ..Default::default() };
         let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).unwrap();
         let m = &r.metrics;
         println!(
@@ -971,16 +658,8 @@ fn a_sphere_stays_trivial_at_the_default_tolerance() {
             m.max_kink_angle_deg,
             m.max_distance_to_reference / DEFAULT_EPSILON
         );
-        assert!(
-            m.max_kink_angle_deg < 8.0,
-            "{variant:?}: max kink {}",
-            m.max_kink_angle_deg
-        );
-        assert!(
-            m.max_distance_to_reference < 3.0 * DEFAULT_EPSILON,
-            "{variant:?}: {}",
-            m.max_distance_to_reference
-        );
+        assert!(m.max_kink_angle_deg < 8.0, "{variant:?}: max kink {}", m.max_kink_angle_deg);
+        assert!(m.max_distance_to_reference < 3.0 * DEFAULT_EPSILON, "{variant:?}: {}", m.max_distance_to_reference);
         assert_eq!(m.flipped_faces, 0);
     }
 }
@@ -1006,38 +685,20 @@ fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
             .collect()
     };
     let smooth = PolyMesh::from(&tri);
-    let sm = SphereMesh::new(
-        smooth.clone(),
-        spheres_of(&smooth),
-        BoundaryArcRule::Parallel(DVec3::ZERO),
-    );
+    let sm = SphereMesh::new(smooth.clone(), spheres_of(&smooth), BoundaryArcRule::Parallel(DVec3::ZERO));
     let (m, _, _) = metrics(&sm, &reference, EdgeArcs::Intersection);
     assert_eq!(m.flipped_faces, 0);
     assert!(verdict(&m).holds(), "{}", verdict(&m).failure_text());
 
-    let boundary_face = (0..tri.triangles.len())
-        .find(|&f| {
-            tri.triangles[f]
-                .iter()
-                .any(|&v| topo.is_boundary_vertex(v as usize))
-        })
-        .unwrap();
+    let boundary_face = (0..tri.triangles.len()).find(|&f| tri.triangles[f].iter().any(|&v| topo.is_boundary_vertex(v as usize))).unwrap();
     let mut folded = tri.clone();
     folded.triangles[boundary_face].swap(1, 2);
     let folded = PolyMesh::from(&folded);
-    let sm = SphereMesh::new(
-        folded.clone(),
-        spheres_of(&folded),
-        BoundaryArcRule::Parallel(DVec3::ZERO),
-    );
+    let sm = SphereMesh::new(folded.clone(), spheres_of(&folded), BoundaryArcRule::Parallel(DVec3::ZERO));
     let (m, _, _) = metrics(&sm, &reference, EdgeArcs::Intersection);
     assert_eq!(m.flipped_faces, 1);
     let v = verdict(&m);
-    assert!(
-        !v.holds() && v.failure_text().contains("folded_faces 1"),
-        "{}",
-        v.failure_text()
-    );
+    assert!(!v.holds() && v.failure_text().contains("folded_faces 1"), "{}", v.failure_text());
 }
 
 /// Uniform remeshing of cmc1 to about 120 faces leaves a boundary sliver whose vertices are nearly
@@ -1046,10 +707,7 @@ fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
 #[test]
 fn the_optimization_folds_no_face_on_a_coarse_uniform_remesh() {
     let reference = load_reference("cmc1");
-    let params = StAdaptedParams {
-        sizing: Sizing::UniformFaces(120),
-        ..StAdaptedParams::default()
-    };
+    let params = StAdaptedParams { sizing: Sizing::UniformFaces(120), ..StAdaptedParams::default() };
     let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
     assert_eq!(r.initial_shape.flipped_faces, 0);
     assert_eq!(r.metrics.flipped_faces, 0, "{:?}", r.metrics);

@@ -10,40 +10,28 @@ use common::load;
 use glam::DVec3;
 use spherical_faces::congruence::central_spheres::{jet_fit, JetParams};
 use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
-use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::{PolyMesh, TriMesh};
+use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::panels::sphere_mesh::BoundaryArcRule;
 use spherical_faces::progress::{ignore, Cancelled, Clock, OnProgress};
 use spherical_faces::reference::Reference;
 use spherical_faces::rng::Rng;
 use spherical_faces::samples::{sphere_cap, Sample};
 use spherical_faces::st_support::absolute_sphere::{
-    center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere,
-    m0_from_normal_lines, spherical_barycenter, AbsoluteSphereParams,
+    center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines,
+    spherical_barycenter, AbsoluteSphereParams,
 };
 use spherical_faces::st_support::{compute, StSupportError, StSupportParams, StSupportResult};
 use spherical_faces::stats::{summary_stats, Histogram};
 
 const MESHES: [&str; 3] = ["tri_mesh", "botanic-garden-bubble-0", "cmc1"];
 
-fn st_support(
-    mesh: &TriMesh,
-    params: &StSupportParams,
-    progress: &mut OnProgress,
-) -> Result<StSupportResult, StSupportError> {
-    compute(
-        &Reference::from_triangles(mesh.clone()),
-        params,
-        Clock::native(),
-        progress,
-    )
+fn st_support(mesh: &TriMesh, params: &StSupportParams, progress: &mut OnProgress) -> Result<StSupportResult, StSupportError> {
+    compute(&Reference::from_triangles(mesh.clone()), params, Clock::native(), progress)
 }
 
 fn run(mesh: &TriMesh, optimize_radius: bool) -> StSupportResult {
-    let params = StSupportParams {
-        optimize_radius,
-        ..Default::default()
-    };
+    let params = StSupportParams { optimize_radius, ..Default::default() };
     st_support(mesh, &params, &mut ignore).expect("st-support succeeds")
 }
 
@@ -66,21 +54,13 @@ fn synthetic(m: DVec3, rng: &mut Rng, noise: f64) -> (Vec<DVec3>, Vec<DVec3>) {
 fn center_is_recovered_when_normals_point_away_from_it() {
     let mut rng = Rng(1);
     let params = AbsoluteSphereParams::default();
-    for m in [
-        DVec3::new(0.5, -1.0, -8.0),
-        DVec3::new(3.0, 2.0, -2.0),
-        DVec3::new(-1.0, 0.0, -30.0),
-    ] {
+    for m in [DVec3::new(0.5, -1.0, -8.0), DVec3::new(3.0, 2.0, -2.0), DVec3::new(-1.0, 0.0, -30.0)] {
         let (pts, nrm) = synthetic(m, &mut rng, 0.0);
         let m0 = m0_from_normal_lines(&pts, &nrm).unwrap();
         assert!((m0 - m).length() < 1e-9 * m.length(), "m0 {m0} vs {m}");
         let (est, normals) = center_from_normals(&pts, &nrm, &params).unwrap();
         assert!(!est.flipped);
-        assert!(
-            (est.m - m).length() < 1e-9 * m.length(),
-            "m {} vs {m}",
-            est.m
-        );
+        assert!((est.m - m).length() < 1e-9 * m.length(), "m {} vs {m}", est.m);
         assert!(est.e_m < 1e-20);
         assert_eq!(normals, nrm);
         // Normals pointing toward m: m0 is on the positive side, the orientation is flipped and
@@ -97,10 +77,7 @@ fn center_is_recovered_when_normals_point_away_from_it() {
     let (est, normals) = center_from_normals(&pts, &nrm, &params).unwrap();
     assert!(est.e_m <= est.e_m0);
     let (r, g) = e_center_residuals(&pts, &normals, est.m);
-    let grad = r
-        .iter()
-        .zip(&g)
-        .fold(DVec3::ZERO, |s, (ri, gi)| s + *gi * *ri);
+    let grad = r.iter().zip(&g).fold(DVec3::ZERO, |s, (ri, gi)| s + *gi * *ri);
     assert!(grad.length() < 1e-10, "gradient {grad}");
     for _ in 0..20 {
         let d = rng.vec(0.05);
@@ -124,11 +101,7 @@ fn e_center_jacobian_matches_finite_differences() {
             let (rm, _) = e_center_residuals(&pts, &nrm, m - e);
             for i in 0..pts.len() {
                 let fd = (rp[i] - rm[i]) / (2.0 * h);
-                assert!(
-                    (fd - g[i][k]).abs() < 1e-7 * (1.0 + g[i][k].abs()),
-                    "i {i} k {k}: fd {fd} vs {}",
-                    g[i][k]
-                );
+                assert!((fd - g[i][k]).abs() < 1e-7 * (1.0 + g[i][k].abs()), "i {i} k {k}: fd {fd} vs {}", g[i][k]);
             }
         }
         assert!((r.iter().map(|x| x * x).sum::<f64>() - e_center(&pts, &nrm, m)).abs() < 1e-12);
@@ -138,10 +111,7 @@ fn e_center_jacobian_matches_finite_differences() {
 #[test]
 fn spherical_barycenter_and_histogram() {
     let a = DVec3::new(1.0, 2.0, 2.0) / 3.0;
-    let (u, v) = (
-        a.any_orthonormal_vector(),
-        a.cross(a.any_orthonormal_vector()),
-    );
+    let (u, v) = (a.any_orthonormal_vector(), a.cross(a.any_orthonormal_vector()));
     // Symmetric about a: the Karcher mean is a.
     let normals: Vec<DVec3> = (0..12)
         .map(|k| {
@@ -154,10 +124,7 @@ fn spherical_barycenter_and_histogram() {
     let n2 = vec![DVec3::Z, DVec3::Z, DVec3::X];
     let b = spherical_barycenter(&n2).unwrap();
     let angle = b.dot(DVec3::Z).acos();
-    assert!(
-        (angle - std::f64::consts::FRAC_PI_2 / 3.0).abs() < 1e-12,
-        "{angle}"
-    );
+    assert!((angle - std::f64::consts::FRAC_PI_2 / 3.0).abs() < 1e-12, "{angle}");
     let h = Histogram::new(&[0.0, 1.0, 2.0, 3.0, 4.0], 4);
     assert_eq!(h.counts, vec![1, 1, 1, 2]);
     assert_eq!(summary_stats(&[3.0, 1.0, 2.0]), (2.0, 2.0, 3.0));
@@ -170,21 +137,14 @@ fn sphere_cap_stays_trivial() {
     let centre = DVec3::new(0.0, 0.0, -20.0 * (12.0f64 / 20.0).asin().cos());
     let est = &r.absolute;
     assert!(!est.flipped && !est.at_infinity);
-    assert!(
-        (est.m - centre).length() < 1e-3 * r.diag,
-        "m {} vs {centre}",
-        est.m
-    );
+    assert!((est.m - centre).length() < 1e-3 * r.diag, "m {} vs {centre}", est.m);
     // Ω is (about) the imaginary sphere R² = −r²: every face sphere is the cap's own sphere.
     match r.omega {
         AbsoluteSphere::Sphere { r2, .. } => assert!((r2 + 400.0).abs() < 0.05 * 400.0, "R² {r2}"),
         _ => panic!("plane"),
     }
     let m = &r.metrics;
-    assert!(
-        m.mean_kink_angle_deg < 0.05 && m.max_kink_angle_deg < 0.5,
-        "{m:?}"
-    );
+    assert!(m.mean_kink_angle_deg < 0.05 && m.max_kink_angle_deg < 0.5, "{m:?}");
     assert!(m.mean_axis_normal_angle_deg < 0.1, "{m:?}");
     assert!(m.max_vertex_sphere_residual < 1e-12 && m.max_orthogonality_residual < 1e-12);
     assert!(m.max_node_axis_offset < 1e-9);
@@ -194,12 +154,7 @@ fn sphere_cap_stays_trivial() {
         // centre, so r < 0.
         assert!(s.signed_radius().unwrap() < 0.0);
     }
-    assert!(r
-        .support
-        .node_axes
-        .axes
-        .iter()
-        .all(|(p, d)| d.is_finite() && p.is_finite()));
+    assert!(r.support.node_axes.axes.iter().all(|(p, d)| d.is_finite() && p.is_finite()));
 }
 
 #[test]
@@ -235,31 +190,16 @@ fn distant_centre_makes_omega_a_plane() {
 #[test]
 fn minimal_surface_is_refused_with_a_clear_message() {
     let mesh = load("enneper2");
-    let err = st_support(&mesh, &StSupportParams::default(), &mut ignore)
-        .unwrap_err()
-        .to_string();
+    let err = st_support(&mesh, &StSupportParams::default(), &mut ignore).unwrap_err().to_string();
     assert!(
-        err.contains("no usable central spheres")
-            && err.contains("H ≈ 0 on")
-            && err.contains("minimal surface"),
+        err.contains("no usable central spheres") && err.contains("H ≈ 0 on") && err.contains("minimal surface"),
         "{err}"
     );
     // The same from the estimate itself, with the counts.
     let topo = Topology::new(&mesh);
-    let field = jet_fit(
-        &mesh,
-        &topo,
-        &JetParams::default(),
-        &mut spherical_faces::progress::ignore,
-    )
-    .unwrap();
-    let err = estimate_absolute_sphere(&mesh, &field, &AbsoluteSphereParams::default())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains(&format!("of {} vertices", mesh.vertex_count())),
-        "{err}"
-    );
+    let field = jet_fit(&mesh, &topo, &JetParams::default(), &mut spherical_faces::progress::ignore).unwrap();
+    let err = estimate_absolute_sphere(&mesh, &field, &AbsoluteSphereParams::default()).unwrap_err().to_string();
+    assert!(err.contains(&format!("of {} vertices", mesh.vertex_count())), "{err}");
 }
 
 #[test]
@@ -311,9 +251,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
     assert_eq!(m.edges_without_support, 0, "{name}");
     // Every vertex with at least 3 faces gets its axis from its star.
     let topo = Topology::new(mesh);
-    let with_star = (0..mesh.vertex_count())
-        .filter(|&v| topo.vertex_faces(v).len() >= 3)
-        .count();
+    let with_star = (0..mesh.vertex_count()).filter(|&v| topo.vertex_faces(v).len() >= 3).count();
     assert_eq!(m.axes_from_spheres, with_star, "{name}");
     let sm = &r.sphere_mesh;
     assert_eq!(sm.face_spheres.len(), mesh.face_count());
@@ -339,10 +277,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
                     let p = sm.mesh.positions[v];
                     let inv = r.omega.invert(p).unwrap();
                     let scale = (inv - center).length().max(r.diag);
-                    assert!(
-                        (*q - inv).length() <= 1e-9 * scale,
-                        "{name} v{v}: {q} vs {inv} (R² {r2})"
-                    );
+                    assert!((*q - inv).length() <= 1e-9 * scale, "{name} v{v}: {q} vs {inv} (R² {r2})");
                     checked += 1;
                 }
             }
@@ -351,10 +286,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
             let env = r.second_envelope.as_ref().unwrap();
             for (f, s) in sm.face_spheres.iter().enumerate() {
                 for p in env.face_points(f) {
-                    assert!(
-                        s.distance(p) <= 1e-9 * (p - center).length().max(r.diag),
-                        "{name}: envelope off face {f}"
-                    );
+                    assert!(s.distance(p) <= 1e-9 * (p - center).length().max(r.diag), "{name}: envelope off face {f}");
                 }
             }
             // Support elements: planar, through m, bounded by the node axes.
@@ -362,11 +294,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
             for el in &r.support.elements {
                 let c = el.circle;
                 let off = m_dist(center, c.center, c.normal) / r.diag;
-                assert!(
-                    off < 1e-9,
-                    "{name}: m not in the element plane of {:?}: {off:e}",
-                    el.edge
-                );
+                assert!(off < 1e-9, "{name}: m not in the element plane of {:?}: {off:e}", el.edge);
                 for (k, v) in el.edge.iter().enumerate() {
                     let p = el.corners[k];
                     assert_eq!(p, sm.mesh.positions[*v as usize]);
@@ -375,10 +303,7 @@ fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {
                     // The inner corner is on the node axis, in the plane, on the inner circle.
                     let q = el.corners[3 - k];
                     let (_, dir) = r.support.node_axes.axes[*v as usize];
-                    assert!(
-                        (q - p).cross(dir).length() < 1e-9 * r.diag,
-                        "{name}: inner corner off the axis"
-                    );
+                    assert!((q - p).cross(dir).length() < 1e-9 * r.diag, "{name}: inner corner off the axis");
                     assert!((q - p).dot(dir) > 0.0);
                     assert!(m_dist(q, c.center, c.normal) < 1e-9 * r.diag);
                     let ic = el.inner_circle;
@@ -431,36 +356,15 @@ fn remeshed_runs_measure_distances_to_the_original_reference() {
     use spherical_faces::pipeline::stages::st_support::export;
     use spherical_faces::remeshing::Sizing;
     let reference = common::load_reference("tri_mesh");
-    let params = StSupportParams {
-        remesh: Sizing::UniformFaces(300),
-        ..Default::default()
-    };
+    let params = StSupportParams { remesh: Sizing::UniformFaces(300), ..Default::default() };
     let result = compute(&reference, &params, Clock::default(), &mut ignore).unwrap();
-    assert_ne!(
-        result.sphere_mesh.mesh.face_count(),
-        reference.mesh().face_count(),
-        "remeshed"
-    );
+    assert_ne!(result.sphere_mesh.mesh.face_count(), reference.mesh().face_count(), "remeshed");
     let (report, files) = export(&reference, &result, &params, Clock::default());
-    let to_original = result
-        .panels
-        .iter()
-        .map(|p| max_deviation(p, reference.bvh()))
-        .fold(0.0, f64::max);
+    let to_original = result.panels.iter().map(|p| max_deviation(p, reference.bvh())).fold(0.0, f64::max);
     let remesh = Reference::from_triangles(result.sphere_mesh.mesh.triangulated());
-    let to_remesh = result
-        .panels
-        .iter()
-        .map(|p| max_deviation(p, remesh.bvh()))
-        .fold(0.0, f64::max);
-    assert_eq!(
-        report.metrics.map(|m| m.max_distance_to_reference),
-        Some(to_original / result.diag)
-    );
-    assert!(
-        (to_original - to_remesh).abs() > 1e-3 * to_original,
-        "{to_original} vs {to_remesh}: the two measures should differ"
-    );
+    let to_remesh = result.panels.iter().map(|p| max_deviation(p, remesh.bvh())).fold(0.0, f64::max);
+    assert_eq!(report.metrics.map(|m| m.max_distance_to_reference), Some(to_original / result.diag));
+    assert!((to_original - to_remesh).abs() > 1e-3 * to_original, "{to_original} vs {to_remesh}: the two measures should differ");
     let schedule: serde_json::Value = serde_json::from_slice(&files[3].bytes).unwrap();
     assert_eq!(schedule["reference_diagonal"], reference.diagonal());
     assert_eq!(report.input.faces, reference.mesh().face_count());

@@ -26,26 +26,14 @@ fn now_ms() -> f64 {
 /// Resolves on the next macrotask (`setTimeout(0)`): lets the page and the runner's polling run.
 async fn yield_to_event_loop() {
     let promise = js_sys::Promise::new(&mut |resolve, _| {
-        let set_timeout =
-            js_sys::Reflect::get(&js_sys::global(), &"setTimeout".into()).expect("setTimeout");
-        set_timeout
-            .unchecked_into::<js_sys::Function>()
-            .call2(&JsValue::NULL, &resolve, &0.into())
-            .expect("setTimeout");
+        let set_timeout = js_sys::Reflect::get(&js_sys::global(), &"setTimeout".into()).expect("setTimeout");
+        set_timeout.unchecked_into::<js_sys::Function>().call2(&JsValue::NULL, &resolve, &0.into()).expect("setTimeout");
     });
-    wasm_bindgen_futures::JsFuture::from(promise)
-        .await
-        .expect("setTimeout promise");
+    wasm_bindgen_futures::JsFuture::from(promise).await.expect("setTimeout promise");
 }
 
 #[wasm_bindgen_test]
 async fn bench_pipeline() {
     console_log!("wasm bench: release build, performance.now() timing");
-    run_suite(
-        Clock(Some(now_ms)),
-        Scale::Full,
-        &mut |line| console_log!("{line}"),
-        yield_to_event_loop,
-    )
-    .await;
+    run_suite(Clock(Some(now_ms)), Scale::Full, &mut |line| console_log!("{line}"), yield_to_event_loop).await;
 }

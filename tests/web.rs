@@ -27,10 +27,7 @@ async fn through_channel(value: &JsValue, transfer: &JsValue) -> JsValue {
         });
         port2.set_onmessage(Some(cb.unchecked_ref()));
     });
-    channel
-        .port1()
-        .post_message_with_transferable(value, transfer)
-        .unwrap();
+    channel.port1().post_message_with_transferable(value, transfer).unwrap();
     JsFuture::from(promise).await.unwrap()
 }
 
@@ -41,11 +38,7 @@ async fn protocol_round_trip_across_a_message_channel() {
         Field::u32(field::TRIANGLES, 3, vec![0, 1, 1]),
         Field::f32(field::MEAN_CURVATURE, 1, vec![0.5, -0.25]),
     ];
-    let msg = FromWorker::Snapshot {
-        stage: "curvature".into(),
-        iteration: 7,
-        fields: fields.iter().map(Field::header).collect(),
-    };
+    let msg = FromWorker::Snapshot { stage: "curvature".into(), iteration: 7, fields: fields.iter().map(Field::header).collect() };
     let (obj, transfer) = transport::to_js(&encode_from_worker(&msg, &fields));
     let first_body = Reflect::get(&obj, &"bodies".into()).unwrap();
     let first_body: js_sys::ArrayBuffer = js_sys::Array::from(&first_body).get(0).unchecked_into();
@@ -57,9 +50,7 @@ async fn protocol_round_trip_across_a_message_channel() {
     assert_eq!(back, msg);
     assert_eq!(back_fields, fields);
 
-    let to = ToWorker::LoadFile {
-        name: "roof.obj".into(),
-    };
+    let to = ToWorker::LoadFile { name: "roof.obj".into() };
     let (obj, transfer) = transport::to_js(&encode_to_worker(&to, Some(b"v 0 0 0".to_vec())));
     let received = through_channel(&obj, &transfer).await;
     let env = transport::from_js(&received).unwrap();
@@ -74,10 +65,7 @@ async fn protocol_round_trip_across_a_message_channel() {
 /// `wasm-simd128-enable` feature (Cargo.toml) must reach it, or the Cholesky runs scalar kernels.
 #[wasm_bindgen_test]
 fn dense_products_run_wasm_simd_kernels() {
-    assert!(
-        gemm::get_wasm_simd128(),
-        "gemm's wasm simd128 kernels are off"
-    );
+    assert!(gemm::get_wasm_simd128(), "gemm's wasm simd128 kernels are off");
 }
 
 /// Small dense products (at most 16³ multiply-adds) go to nano-gemm, whose wasm fallback kernel is
@@ -88,38 +76,19 @@ fn small_dense_products_match_a_triple_loop() {
     use faer::linalg::matmul::matmul;
     use faer::{Accum, Mat, Par};
     let value = |i: usize, j: usize, s: f64| ((i * 7 + j * 3) as f64 * 0.37 + s).sin();
-    for (m, n, k) in [
-        (1, 1, 1),
-        (3, 4, 5),
-        (7, 5, 6),
-        (16, 16, 16),
-        (9, 2, 13),
-        (2, 11, 3),
-    ] {
+    for (m, n, k) in [(1, 1, 1), (3, 4, 5), (7, 5, 6), (16, 16, 16), (9, 2, 13), (2, 11, 3)] {
         let lhs = Mat::from_fn(m, k, |i, j| value(i, j, 0.1));
         let lhs_t = Mat::from_fn(k, m, |i, j| value(j, i, 0.1));
         let rhs = Mat::from_fn(k, n, |i, j| value(i, j, 0.7));
         let start = Mat::from_fn(m, n, |i, j| value(i, j, 1.3));
-        for (accum, transposed) in [
-            (Accum::Replace, false),
-            (Accum::Add, false),
-            (Accum::Add, true),
-        ] {
+        for (accum, transposed) in [(Accum::Replace, false), (Accum::Add, false), (Accum::Add, true)] {
             let mut dst = start.clone();
-            let left = if transposed {
-                lhs_t.transpose()
-            } else {
-                lhs.as_ref()
-            };
+            let left = if transposed { lhs_t.transpose() } else { lhs.as_ref() };
             matmul(dst.as_mut(), accum, left, rhs.as_ref(), -0.5, Par::Seq);
             for i in 0..m {
                 for j in 0..n {
                     let dot: f64 = (0..k).map(|p| lhs[(i, p)] * rhs[(p, j)]).sum();
-                    let base = if accum == Accum::Add {
-                        start[(i, j)]
-                    } else {
-                        0.0
-                    };
+                    let base = if accum == Accum::Add { start[(i, j)] } else { 0.0 };
                     let want = base - 0.5 * dot;
                     assert!((dst[(i, j)] - want).abs() <= 1e-12, "{m}×{k}·{k}×{n} ({accum:?}, transposed {transposed}) at ({i}, {j}): {} vs {want}", dst[(i, j)]);
                 }
@@ -153,9 +122,7 @@ fn gltf_importers_in_the_browser() {
     const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut b64 = String::new();
     for c in bin.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
+        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
         for k in 0..4 {
             if k <= c.len() {
                 b64.push(B64[(n >> (18 - 6 * k) & 63) as usize] as char);
@@ -199,18 +166,8 @@ fn session_runs_curvature_in_wasm() {
     let mut s = Session::new();
     let mut r = Recorder(Vec::new());
     s.handle(ToWorker::LoadSample(Sample::SphereCap), None, &mut r);
-    s.handle(
-        ToWorker::Run(Box::new(StageRequest::Curvature(JetParams::default()))),
-        None,
-        &mut r,
-    );
-    let Some(FromWorker::Finished {
-        result: StageResult::Curvature(summary),
-        ..
-    }) = r.0.last()
-    else {
-        panic!("{:?}", r.0.last())
-    };
+    s.handle(ToWorker::Run(Box::new(StageRequest::Curvature(JetParams::default()))), None, &mut r);
+    let Some(FromWorker::Finished { result: StageResult::Curvature(summary), .. }) = r.0.last() else { panic!("{:?}", r.0.last()) };
     assert!(summary.min_h.is_finite() && summary.max_h.is_finite());
     assert!(!summary.h_changes_sign);
 }
@@ -220,12 +177,7 @@ fn session_runs_curvature_in_wasm() {
 #[wasm_bindgen_test]
 fn field_lengths_do_not_wrap_on_wasm32() {
     use spherical_faces::pipeline::fields::{FieldHeader, FieldKind};
-    let header = FieldHeader {
-        name: "positions".into(),
-        kind: FieldKind::F32,
-        dim: 3,
-        len: (1 << 30) + 1,
-    };
+    let header = FieldHeader { name: "positions".into(), kind: FieldKind::F32, dim: 3, len: (1 << 30) + 1 };
     assert!(Field::from_bytes(&header, &[0, 0, 0, 0]).is_err());
 }
 
@@ -241,70 +193,34 @@ fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
     use spherical_faces::reference::Reference;
     use spherical_faces::sq::params::SqParams;
     let roofs: [(&str, &[u8], f64, f64); 2] = [
-        (
-            "tunnel_arch.json",
-            include_bytes!("../../shared/data/bsplines/tunnel_arch.json"),
-            20.0,
-            75.0,
-        ),
-        (
-            "saddle_roof.json",
-            include_bytes!("../../shared/data/bsplines/saddle_roof.json"),
-            15.0,
-            45.0,
-        ),
+        ("tunnel_arch.json", include_bytes!("../../shared/data/bsplines/tunnel_arch.json"), 20.0, 75.0),
+        ("saddle_roof.json", include_bytes!("../../shared/data/bsplines/saddle_roof.json"), 15.0, 45.0),
     ];
     let surfaces = roofs
         .into_iter()
-        .map(
-            |(name, bytes, theta, alpha)| match import_file(bytes, name) {
-                Ok(ImportedFile::BSpline(b)) => (name, b.surface, theta, alpha),
-                _ => panic!("{name}: a B-spline"),
-            },
-        )
+        .map(|(name, bytes, theta, alpha)| match import_file(bytes, name) {
+            Ok(ImportedFile::BSpline(b)) => (name, b.surface, theta, alpha),
+            _ => panic!("{name}: a B-spline"),
+        })
         .chain([("sample:vault", Sample::Vault.bspline().unwrap(), 20.0, 75.0)]);
     for (name, surface, theta, alpha) in surfaces {
         let reference = Reference::from_bspline(surface).unwrap();
-        let params = SqParams {
-            theta_deg: theta,
-            alpha_deg: alpha,
-            ..SqParams::default()
-        };
-        let result =
-            spherical_faces::sq::compute(&reference, &params, Clock(None), &mut |_| Ok(()))
-                .unwrap();
+        let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
+        let result = spherical_faces::sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap();
         let c = &result.congruence;
         let n = c.grid;
         for (p, (l, normal)) in c.lines.iter().zip(&c.normals).enumerate() {
             let angle = l.dot(*normal).clamp(-1.0, 1.0).acos().to_degrees();
-            assert!(
-                angle <= theta,
-                "{name}: line {p} at {angle:.2}° from the normal"
-            );
+            assert!(angle <= theta, "{name}: line {p} at {angle:.2}° from the normal");
         }
         for j in 0..n - 1 {
             for i in 0..n - 1 {
-                let corners = [
-                    i + n * j,
-                    i + 1 + n * j,
-                    i + 1 + n * (j + 1),
-                    i + n * (j + 1),
-                ];
+                let corners = [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)];
                 let pair = torsal_pair(corners.map(|k| c.points[k]), corners.map(|k| c.lines[k]));
-                let pair = pair.unwrap_or_else(|| {
-                    panic!("{name}: quad ({i}, {j}) without real torsal directions")
-                });
-                assert!(
-                    pair.angle_deg >= alpha,
-                    "{name}: quad ({i}, {j}) torsal planes at {:.2}°",
-                    pair.angle_deg
-                );
+                let pair = pair.unwrap_or_else(|| panic!("{name}: quad ({i}, {j}) without real torsal directions"));
+                assert!(pair.angle_deg >= alpha, "{name}: quad ({i}, {j}) torsal planes at {:.2}°", pair.angle_deg);
             }
         }
-        assert!(
-            result.verdict.holds(),
-            "{name}: {}",
-            result.verdict.failure_text()
-        );
+        assert!(result.verdict.holds(), "{name}: {}", result.verdict.failure_text());
     }
 }

@@ -37,8 +37,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::jet::{coefficient_count, tangent_basis, JetFitter};
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, OnProgress, Progress};
 
@@ -87,11 +87,7 @@ pub struct JetParams {
 
 impl Default for JetParams {
     fn default() -> Self {
-        Self {
-            degree: 3,
-            min_points: min_points_for_degree(3),
-            max_rings: 4,
-        }
+        Self { degree: 3, min_points: min_points_for_degree(3), max_rings: 4 }
     }
 }
 
@@ -99,11 +95,7 @@ impl JetParams {
     /// Defaults for degree `degree` (clamped to 2..=4).
     pub fn with_degree(degree: u8) -> Self {
         let degree = degree.clamp(2, 4);
-        Self {
-            degree,
-            min_points: min_points_for_degree(degree),
-            ..Self::default()
-        }
+        Self { degree, min_points: min_points_for_degree(degree), ..Self::default() }
     }
 }
 
@@ -186,8 +178,7 @@ impl CurvatureField {
     /// curvatures do not nearly cancel), H finite and non-zero.
     pub fn is_usable(&self, i: usize, diag: f64, min_curvature_ratio: f64) -> bool {
         let c = &self.vertices[i];
-        let planar =
-            self.planar.get(i).copied().unwrap_or(false) || c.mean.abs() * diag < PLANAR_TOLERANCE;
+        let planar = self.planar.get(i).copied().unwrap_or(false) || c.mean.abs() * diag < PLANAR_TOLERANCE;
         let ratio_ok = c.mean.abs() >= min_curvature_ratio * 0.5 * (c.k1.abs() + c.k2.abs());
         !planar && ratio_ok && c.mean.is_finite() && c.mean != 0.0
     }
@@ -202,15 +193,10 @@ impl CurvatureField {
         min_fraction: f64,
     ) -> Result<Vec<bool>, UnusableCentralSpheres> {
         let nv = vertices.min(self.vertices.len());
-        let usable: Vec<bool> = (0..nv)
-            .map(|i| self.is_usable(i, diag, min_curvature_ratio))
-            .collect();
+        let usable: Vec<bool> = (0..nv).map(|i| self.is_usable(i, diag, min_curvature_ratio)).collect();
         let count = usable.iter().filter(|&&u| u).count();
         if count == 0 || (count as f64) < min_fraction * nv as f64 {
-            return Err(UnusableCentralSpheres {
-                unusable: nv - count,
-                vertices: nv,
-            });
+            return Err(UnusableCentralSpheres { unusable: nv - count, vertices: nv });
         }
         Ok(usable)
     }
@@ -251,117 +237,52 @@ pub fn jet_fit(
         largest_neighbourhood = largest_neighbourhood.max(ring.points.len());
         let f = pos[v];
         let pts = ring.points.iter().map(|&i| pos[i as usize]);
-        let n0 = normals[v]
-            .or_else(|| JetFitter::pca_normal(pts.clone(), DVec3::Z))
-            .unwrap_or(DVec3::Z);
-        let geo = if f.is_finite() {
-            fitter.fit(f, n0, pts, degree)
-        } else {
-            None
-        };
+        let n0 = normals[v].or_else(|| JetFitter::pca_normal(pts.clone(), DVec3::Z)).unwrap_or(DVec3::Z);
+        let geo = if f.is_finite() { fitter.fit(f, n0, pts, degree) } else { None };
         let (vc, sphere) = match geo {
             Some(g) => {
                 if g.degree < degree {
                     low_degree_fits += 1;
                 }
                 let mean = 0.5 * (g.k1 + g.k2);
-                let vc = VertexCurvature {
-                    k1: g.k1,
-                    k2: g.k2,
-                    mean,
-                    normal: g.normal,
-                    dir1: g.dir1,
-                    dir2: g.dir2,
-                };
+                let vc = VertexCurvature { k1: g.k1, k2: g.k2, mean, normal: g.normal, dir1: g.dir1, dir2: g.dir2 };
                 (vc, Sphere::from_point_normal_curvature(f, g.normal, mean))
             }
             None => {
                 failed[v] = true;
                 let (t1, t2) = tangent_basis(n0);
-                let vc = VertexCurvature {
-                    k1: 0.0,
-                    k2: 0.0,
-                    mean: 0.0,
-                    normal: n0,
-                    dir1: t1,
-                    dir2: t2,
-                };
+                let vc = VertexCurvature { k1: 0.0, k2: 0.0, mean: 0.0, normal: n0, dir1: t1, dir2: t2 };
                 let fp = if f.is_finite() { f } else { DVec3::ZERO };
                 (vc, Sphere::plane(fp, n0))
             }
         };
-        let sphere = if sphere.is_finite() {
-            sphere
-        } else {
-            Sphere::plane(DVec3::ZERO, vc.normal)
-        };
+        let sphere = if sphere.is_finite() { sphere } else { Sphere::plane(DVec3::ZERO, vc.normal) };
         vertices.push(vc);
         central_spheres.push(sphere);
     }
     progress(Progress::new("jet_fit", nv, nv))?;
 
-    let planar: Vec<bool> = vertices
-        .iter()
-        .map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE)
-        .collect();
-    let mut summary = summarize(
-        &vertices,
-        &failed,
-        &boundary,
-        &planar,
-        diag,
-        low_degree_fits,
-    );
+    let planar: Vec<bool> = vertices.iter().map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE).collect();
+    let mut summary = summarize(&vertices, &failed, &boundary, &planar, diag, low_degree_fits);
     summary.largest_neighbourhood = largest_neighbourhood;
-    Ok(CurvatureField {
-        vertices,
-        central_spheres,
-        boundary,
-        planar,
-        summary,
-    })
+    Ok(CurvatureField { vertices, central_spheres, boundary, planar, summary })
 }
 
 impl CurvatureField {
     /// The field of curvatures known exactly at the vertices `positions` (a parametric reference
     /// surface): central spheres, planar flags and summary as [`jet_fit`] makes them.
-    pub fn from_vertex_curvatures(
-        positions: &[DVec3],
-        vertices: Vec<VertexCurvature>,
-        boundary: Vec<bool>,
-        diag: f64,
-    ) -> Self {
+    pub fn from_vertex_curvatures(positions: &[DVec3], vertices: Vec<VertexCurvature>, boundary: Vec<bool>, diag: f64) -> Self {
         let central_spheres = positions
             .iter()
             .zip(&vertices)
             .map(|(&f, c)| {
                 let s = Sphere::from_point_normal_curvature(f, c.normal, c.mean);
-                if s.is_finite() {
-                    s
-                } else {
-                    Sphere::plane(DVec3::ZERO, c.normal)
-                }
+                if s.is_finite() { s } else { Sphere::plane(DVec3::ZERO, c.normal) }
             })
             .collect();
-        let planar: Vec<bool> = vertices
-            .iter()
-            .map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE)
-            .collect();
-        let summary = summarize(
-            &vertices,
-            &vec![false; vertices.len()],
-            &boundary,
-            &planar,
-            diag,
-            0,
-        );
-        Self {
-            vertices,
-            central_spheres,
-            boundary,
-            planar,
-            summary,
-        }
+        let planar: Vec<bool> = vertices.iter().map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE).collect();
+        let summary = summarize(&vertices, &vec![false; vertices.len()], &boundary, &planar, diag, 0);
+        Self { vertices, central_spheres, boundary, planar, summary }
     }
 }
 
@@ -440,11 +361,7 @@ struct RingCollector {
 
 impl RingCollector {
     fn new(n: usize) -> Self {
-        Self {
-            stamp: vec![0; n],
-            generation: 0,
-            points: Vec::with_capacity(64),
-        }
+        Self { stamp: vec![0; n], generation: 0, points: Vec::with_capacity(64) }
     }
 
     /// Fills `points` with v and its rings: at least one ring, then more until `min_points` points

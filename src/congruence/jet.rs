@@ -246,14 +246,7 @@ pub fn shape_operator(
     let dir1 = (vx * rx + vy * ry).try_normalize()?;
     let dir1 = (dir1 - normal * normal.dot(dir1)).try_normalize()?;
     let dir2 = normal.cross(dir1);
-    let geo = JetGeometry {
-        k1,
-        k2,
-        normal,
-        dir1,
-        dir2,
-        degree,
-    };
+    let geo = JetGeometry { k1, k2, normal, dir1, dir2, degree };
     (k1.is_finite() && k2.is_finite() && dir2.is_finite()).then_some(geo)
 }
 
@@ -283,30 +276,19 @@ mod tests {
         let (hx, hy, hxx, hxy, hyy) = (0.2, -0.1, 3.0, 0.4, -1.0);
         let exact = shape_operator(DVec3::X, DVec3::Y, DVec3::Z, hx, hy, hxx, hxy, hyy, 2).unwrap();
         for d in 2..=4 {
-            let g = fitter
-                .fit(DVec3::ZERO, DVec3::Z, pts.iter().copied(), d)
-                .unwrap();
+            let g = fitter.fit(DVec3::ZERO, DVec3::Z, pts.iter().copied(), d).unwrap();
             assert_eq!(g.degree, d);
-            assert!(
-                (g.k1 - exact.k1).abs() < 1e-9 && (g.k2 - exact.k2).abs() < 1e-9,
-                "{g:?} {exact:?}"
-            );
+            assert!((g.k1 - exact.k1).abs() < 1e-9 && (g.k2 - exact.k2).abs() < 1e-9, "{g:?} {exact:?}");
             assert!((g.normal - exact.normal).length() < 1e-9);
         }
         // Check the exact shape operator against the textbook H and K of a graph.
         let w2 = 1.0 + hx * hx + hy * hy;
-        let h = ((1.0 + hy * hy) * hxx - 2.0 * hx * hy * hxy + (1.0 + hx * hx) * hyy)
-            / (2.0 * w2.powf(1.5));
+        let h = ((1.0 + hy * hy) * hxx - 2.0 * hx * hy * hxy + (1.0 + hx * hx) * hyy) / (2.0 * w2.powf(1.5));
         let k = (hxx * hyy - hxy * hxy) / (w2 * w2);
-        assert!(
-            (0.5 * (exact.k1 + exact.k2) - h).abs() < 1e-12
-                && (exact.k1 * exact.k2 - k).abs() < 1e-12
-        );
+        assert!((0.5 * (exact.k1 + exact.k2) - h).abs() < 1e-12 && (exact.k1 * exact.k2 - k).abs() < 1e-12);
         // Principal directions are tangent, orthonormal, and satisfy II(d1, d2) = 0 (checked via
         // the normal curvature: κ_n(d1) = k1).
-        assert!(
-            exact.dir1.dot(exact.normal).abs() < 1e-12 && exact.dir1.dot(exact.dir2).abs() < 1e-12
-        );
+        assert!(exact.dir1.dot(exact.normal).abs() < 1e-12 && exact.dir1.dot(exact.dir2).abs() < 1e-12);
         assert!((exact.dir1.cross(exact.dir2) - exact.normal).length() < 1e-12);
     }
 
@@ -314,12 +296,8 @@ mod tests {
     fn sign_follows_the_normal() {
         let pts = grid(|x, y| 0.5 * (x * x + y * y));
         let mut fitter = JetFitter::new();
-        let up = fitter
-            .fit(DVec3::ZERO, DVec3::Z, pts.iter().copied(), 3)
-            .unwrap();
-        let down = fitter
-            .fit(DVec3::ZERO, -DVec3::Z, pts.iter().copied(), 3)
-            .unwrap();
+        let up = fitter.fit(DVec3::ZERO, DVec3::Z, pts.iter().copied(), 3).unwrap();
+        let down = fitter.fit(DVec3::ZERO, -DVec3::Z, pts.iter().copied(), 3).unwrap();
         assert!((up.k1 - 1.0).abs() < 1e-9 && (up.k2 - 1.0).abs() < 1e-9);
         assert!((down.k1 + 1.0).abs() < 1e-9 && (down.k2 + 1.0).abs() < 1e-9);
         assert!(up.normal.z > 0.99 && down.normal.z < -0.99);
@@ -329,34 +307,17 @@ mod tests {
     fn degenerate_inputs() {
         let mut fitter = JetFitter::new();
         let line: Vec<DVec3> = (0..10).map(|i| DVec3::new(i as f64, 0.0, 0.0)).collect();
-        assert!(fitter
-            .fit(DVec3::ZERO, DVec3::Z, line.iter().copied(), 3)
-            .is_none());
-        assert!(fitter
-            .fit(DVec3::ZERO, DVec3::Z, [DVec3::ZERO; 8].iter().copied(), 3)
-            .is_none());
-        assert!(fitter
-            .fit(DVec3::ZERO, DVec3::ZERO, line.iter().copied(), 3)
-            .is_none());
+        assert!(fitter.fit(DVec3::ZERO, DVec3::Z, line.iter().copied(), 3).is_none());
+        assert!(fitter.fit(DVec3::ZERO, DVec3::Z, [DVec3::ZERO; 8].iter().copied(), 3).is_none());
+        assert!(fitter.fit(DVec3::ZERO, DVec3::ZERO, line.iter().copied(), 3).is_none());
         // Too few for a cubic: falls back to degree 2.
-        let pts = [
-            (0.0, 0.0),
-            (1.0, 0.0),
-            (0.0, 1.0),
-            (-1.0, 0.0),
-            (0.0, -1.0),
-            (1.0, 1.0),
-            (-1.0, -1.0),
-        ];
+        let pts = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (1.0, 1.0), (-1.0, -1.0)];
         let pts: Vec<DVec3> = pts.iter().map(|&(x, y)| DVec3::new(x, y, x * x)).collect();
-        let g = fitter
-            .fit(DVec3::ZERO, DVec3::Z, pts.iter().copied(), 3)
-            .unwrap();
+        let g = fitter.fit(DVec3::ZERO, DVec3::Z, pts.iter().copied(), 3).unwrap();
         assert_eq!(g.degree, 2);
         assert!((g.k1 - 2.0).abs() < 1e-9 && g.k2.abs() < 1e-9);
         assert!(JetFitter::pca_normal(line.iter().copied(), DVec3::Z).is_none());
-        let n = JetFitter::pca_normal(pts.iter().map(|p| DVec3::new(p.x, p.y, 0.0)), -DVec3::Z)
-            .unwrap();
+        let n = JetFitter::pca_normal(pts.iter().map(|p| DVec3::new(p.x, p.y, 0.0)), -DVec3::Z).unwrap();
         assert!((n + DVec3::Z).length() < 1e-12);
     }
 }

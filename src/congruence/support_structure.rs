@@ -66,17 +66,9 @@ pub fn star_axis(spheres: &[Sphere], v: DVec3) -> Option<StarAxis> {
     if amax == 0.0 {
         let rows: Vec<[f64; 3]> = spheres.iter().map(|s| s.normal_at(v).to_array()).collect();
         let svd = Svd::new(&rows);
-        let condition = if svd.sigma[0] > 0.0 {
-            svd.sigma[1] / svd.sigma[0]
-        } else {
-            0.0
-        };
+        let condition = if svd.sigma[0] > 0.0 { svd.sigma[1] / svd.sigma[0] } else { 0.0 };
         let direction = DVec3::from_array(svd.v[2]).try_normalize()?;
-        return Some(StarAxis {
-            direction,
-            second_point: None,
-            condition,
-        });
+        return Some(StarAxis { direction, second_point: None, condition });
     }
     let scale = 0.5 / amax;
     let rows: Vec<[f64; 4]> = spheres
@@ -87,11 +79,7 @@ pub fn star_axis(spheres: &[Sphere], v: DVec3) -> Option<StarAxis> {
         })
         .collect();
     let svd = Svd::new(&rows);
-    let condition = if svd.sigma[0] > 0.0 {
-        svd.sigma[2] / svd.sigma[0]
-    } else {
-        0.0
-    };
+    let condition = if svd.sigma[0] > 0.0 { svd.sigma[2] / svd.sigma[0] } else { 0.0 };
     let [lx, ly, lz, tau] = svd.v[3];
     let l = DVec3::new(lx, ly, lz);
     let l2 = l.length_squared();
@@ -100,20 +88,14 @@ pub fn star_axis(spheres: &[Sphere], v: DVec3) -> Option<StarAxis> {
     }
     let direction = l / l2.sqrt();
     let second = v + (scale * tau / l2) * l;
-    Some(StarAxis {
-        direction,
-        second_point: second.is_finite().then_some(second),
-        condition,
-    })
+    Some(StarAxis { direction, second_point: second.is_finite().then_some(second), condition })
 }
 
 /// The second common point v̄ of the spheres around a vertex v (all passing through v): see
 /// [`star_axis`]. None when it is not determined (fewer than 3 spheres, condition below
 /// [`STAR_AXIS_MIN_CONDITION`]) or at infinity.
 pub fn second_common_point(spheres: &[Sphere], v: DVec3) -> Option<DVec3> {
-    star_axis(spheres, v)
-        .filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION)
-        .and_then(|a| a.second_point)
+    star_axis(spheres, v).filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION).and_then(|a| a.second_point)
 }
 
 /// The node axes of a sphere mesh (Sec. 2.2), from [`node_axes`].
@@ -393,16 +375,7 @@ impl SupportElement {
             let d = x - c.center;
             (d - d.dot(normal) * normal).try_normalize()
         };
-        let (outer_circle, inner_circle) = (
-            Circle {
-                normal,
-                ..self.circle
-            },
-            Circle {
-                normal,
-                ..self.inner_circle
-            },
-        );
+        let (outer_circle, inner_circle) = (Circle { normal, ..self.circle }, Circle { normal, ..self.inner_circle });
         let u = in_plane(&outer_circle, outer[0])?;
         let end = outer_circle.angle_of(u, outer[n]);
         // The way the outer arc turns: through its middle point (one segment: the minor arc).
@@ -451,19 +424,13 @@ impl SupportElement {
 /// The strips of `elements` ([`SupportElement::strip`]), each along the arc points
 /// `outer(element)` gives (from the element's `edge[0]` to `edge[1]`); elements without arc
 /// points or with a degenerate strip are left out.
-pub fn support_strips(
-    elements: &[SupportElement],
-    outer: impl Fn(&SupportElement) -> Option<Vec<DVec3>>,
-) -> SupportGeometry {
+pub fn support_strips(elements: &[SupportElement], outer: impl Fn(&SupportElement) -> Option<Vec<DVec3>>) -> SupportGeometry {
     let mut out = SupportGeometry::default();
     for el in elements {
-        let Some((positions, triangles)) = outer(el).and_then(|pts| el.strip(&pts)) else {
-            continue;
-        };
+        let Some((positions, triangles)) = outer(el).and_then(|pts| el.strip(&pts)) else { continue };
         let base = out.positions.len() as u32;
         out.positions.extend(positions);
-        out.triangles
-            .extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
+        out.triangles.extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
     }
     out
 }
@@ -483,11 +450,7 @@ pub fn support_element(
         return None;
     }
     let n = circle.normal;
-    let d: [DVec3; 2] = [0, 1].map(|k| {
-        (dirs[k] - dirs[k].dot(n) * n)
-            .try_normalize()
-            .unwrap_or(dirs[k])
-    });
+    let d: [DVec3; 2] = [0, 1].map(|k| (dirs[k] - dirs[k].dot(n) * n).try_normalize().unwrap_or(dirs[k]));
     let proj: [f64; 2] = [0, 1].map(|k| (p[k] - circle.center).dot(d[k]));
     let shrink = proj[0] + proj[1] < 0.0;
     let rho = circle.radius;
@@ -501,21 +464,11 @@ pub fn support_element(
             return None;
         }
         let s = disc.sqrt();
-        let t = [-q - s, -q + s]
-            .into_iter()
-            .filter(|t| *t > 0.0)
-            .fold(f64::INFINITY, f64::min);
+        let t = [-q - s, -q + s].into_iter().filter(|t| *t > 0.0).fold(f64::INFINITY, f64::min);
         t.is_finite().then(|| p[k] + t * d[k])
     };
     let (inner, corners) = match (hit(0), hit(1)) {
-        (Some(a), Some(b)) => (
-            Circle {
-                center: circle.center,
-                normal: n,
-                radius: inner_r,
-            },
-            [p[0], p[1], b, a],
-        ),
+        (Some(a), Some(b)) => (Circle { center: circle.center, normal: n, radius: inner_r }, [p[0], p[1], b, a]),
         _ => {
             let (a, b) = (p[0] + depth * d[0], p[1] + depth * d[1]);
             let mid_dir = (0.5 * (p[0] + p[1]) - circle.center).try_normalize()?;
@@ -523,13 +476,5 @@ pub fn support_element(
             (Circle::through(a, b, mid)?, [p[0], p[1], b, a])
         }
     };
-    corners
-        .iter()
-        .all(|c| c.is_finite())
-        .then_some(SupportElement {
-            edge,
-            circle,
-            inner_circle: inner,
-            corners,
-        })
+    corners.iter().all(|c| c.is_finite()).then_some(SupportElement { edge, circle, inner_circle: inner, corners })
 }

@@ -22,11 +22,7 @@ pub fn torsal_quadratic(f: [DVec3; 4], l: [DVec3; 4]) -> [f64; 3] {
     let (lp, lm) = (l[2] - l[0], l[1] - l[3]);
     let lc = 0.25 * (l[0] + l[1] + l[2] + l[3]);
     let det = |a: DVec3, b: DVec3, c: DVec3| a.dot(b.cross(c));
-    [
-        det(lc, lp, dp),
-        det(lc, lp, dm) + det(lc, lm, dp),
-        det(lc, lm, dm),
-    ]
+    [det(lc, lp, dp), det(lc, lp, dm) + det(lc, lm, dp), det(lc, lm, dm)]
 }
 
 /// The real roots (μ0 : μ1) of a μ0² + b μ0 μ1 + c μ1², each scaled to |(μ0, μ1)| = 1; None
@@ -90,18 +86,8 @@ fn pair_of(f: [DVec3; 4], l: [DVec3; 4], roots: [[f64; 2]; 2]) -> Option<TorsalP
         t[k] = v / len;
         plane_normals[k] = lc.cross(t[k]).try_normalize()?;
     }
-    let angle_deg = plane_normals[0]
-        .dot(plane_normals[1])
-        .abs()
-        .min(1.0)
-        .acos()
-        .to_degrees();
-    Some(TorsalPair {
-        mu,
-        t,
-        plane_normals,
-        angle_deg,
-    })
+    let angle_deg = plane_normals[0].dot(plane_normals[1]).abs().min(1.0).acos().to_degrees();
+    Some(TorsalPair { mu, t, plane_normals, angle_deg })
 }
 
 /// The pair of parameter directions of a quad (f1 − f0 along u, f3 − f0 along v): the torsal

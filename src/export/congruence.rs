@@ -23,11 +23,9 @@ use serde::{Deserialize, Serialize};
 use super::glb::{write_lines_glb, LineSet};
 use crate::geometry::mesh::TriMesh;
 use crate::sq::params::RadiusBasis;
-use crate::sq::radius::grid_quad;
-use crate::sq::segments::{
-    cross_field, grid_spacing, line_segments, quad_outlines, CROSS_LENGTH, LINE_LENGTH,
-};
+use crate::sq::segments::{cross_field, grid_spacing, line_segments, quad_outlines, CROSS_LENGTH, LINE_LENGTH};
 use crate::sq::SqCongruence;
+use crate::sq::radius::grid_quad;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CongruenceJson {
@@ -92,11 +90,7 @@ impl CongruenceJson {
                 corners: grid_quad(c.grid, q),
                 torsal_plane_angle_deg: pair.map(|p| p.angle_deg),
                 torsal: pair.zip(*uv).map(|(p, uv)| {
-                    [0, 1].map(|k| TorsalJson {
-                        direction: p.t[k].to_array(),
-                        uv: uv[k],
-                        plane_normal: p.plane_normals[k].to_array(),
-                    })
+                    [0, 1].map(|k| TorsalJson { direction: p.t[k].to_array(), uv: uv[k], plane_normal: p.plane_normals[k].to_array() })
                 }),
             })
             .collect();
@@ -105,10 +99,7 @@ impl CongruenceJson {
             domain,
             theta_deg,
             alpha_deg,
-            radius: RadiusJson {
-                basis: c.radius_basis,
-                coefficients: c.radius.coefficients.clone(),
-            },
+            radius: RadiusJson { basis: c.radius_basis, coefficients: c.radius.coefficients.clone() },
             points,
             quads,
         }
@@ -147,32 +138,12 @@ impl CongruenceSegments {
 }
 
 /// `congruence.glb` (see the module docs).
-pub fn congruence_glb(
-    surface: &TriMesh,
-    segments: &CongruenceSegments,
-    extras: serde_json::Value,
-) -> Vec<u8> {
+pub fn congruence_glb(surface: &TriMesh, segments: &CongruenceSegments, extras: serde_json::Value) -> Vec<u8> {
     let sets = [
-        LineSet {
-            name: "lines",
-            color: [0.10, 0.35, 0.85, 1.0],
-            segments: &segments.lines,
-        },
-        LineSet {
-            name: "initial_lines",
-            color: [0.55, 0.55, 0.55, 1.0],
-            segments: &segments.initial_lines,
-        },
-        LineSet {
-            name: "cross_field",
-            color: [0.90, 0.45, 0.10, 1.0],
-            segments: &segments.cross_field,
-        },
-        LineSet {
-            name: "quads_without_real_torsal_directions",
-            color: [0.90, 0.10, 0.10, 1.0],
-            segments: &segments.no_real_quads,
-        },
+        LineSet { name: "lines", color: [0.10, 0.35, 0.85, 1.0], segments: &segments.lines },
+        LineSet { name: "initial_lines", color: [0.55, 0.55, 0.55, 1.0], segments: &segments.initial_lines },
+        LineSet { name: "cross_field", color: [0.90, 0.45, 0.10, 1.0], segments: &segments.cross_field },
+        LineSet { name: "quads_without_real_torsal_directions", color: [0.90, 0.10, 0.10, 1.0], segments: &segments.no_real_quads },
     ];
     write_lines_glb(surface, &sets, extras)
 }

@@ -20,9 +20,9 @@ use glam::DVec3;
 use serde_json::{json, Map, Value};
 
 use crate::congruence::support_structure::SupportGeometry;
+use crate::panels::panel::Panel;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::TriMesh;
-use crate::panels::panel::Panel;
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -62,11 +62,7 @@ struct Builder {
 
 impl Builder {
     fn view(&mut self, stride: Option<u32>, target: u32) -> usize {
-        self.views.push(View {
-            bytes: Vec::new(),
-            stride,
-            target,
-        });
+        self.views.push(View { bytes: Vec::new(), stride, target });
         self.views.len() - 1
     }
 
@@ -111,14 +107,7 @@ impl Builder {
 
     /// A node of one indexed triangle primitive (with vertex normals when given) with its own
     /// mesh and double-sided material of `pbr` (pbrMetallicRoughness).
-    fn triangles_node(
-        &mut self,
-        name: &str,
-        pbr: Value,
-        positions: &[DVec3],
-        normals: Option<&[DVec3]>,
-        triangles: &[[u32; 3]],
-    ) -> Value {
+    fn triangles_node(&mut self, name: &str, pbr: Value, positions: &[DVec3], normals: Option<&[DVec3]>, triangles: &[[u32; 3]]) -> Value {
         let vp = self.view(Some(12), ARRAY_BUFFER);
         let vn = normals.map(|_| self.view(Some(12), ARRAY_BUFFER));
         let vi = self.view(None, ELEMENT_ARRAY_BUFFER);
@@ -128,8 +117,7 @@ impl Builder {
             attributes["NORMAL"] = json!(self.vec3(v, n.iter().copied(), false));
         }
         let idx = self.indices(vi, triangles);
-        self.materials
-            .push(json!({ "name": name, "pbrMetallicRoughness": pbr, "doubleSided": true }));
+        self.materials.push(json!({ "name": name, "pbrMetallicRoughness": pbr, "doubleSided": true }));
         self.meshes.push(json!({ "name": name, "primitives": [{
             "attributes": attributes, "indices": idx, "mode": MODE_TRIANGLES, "material": self.materials.len() - 1
         }]}));
@@ -178,10 +166,7 @@ impl Builder {
         let mut root = Map::new();
         root.insert("asset".into(), asset);
         root.insert("scene".into(), json!(0));
-        root.insert(
-            "scenes".into(),
-            json!([{ "name": "spherical-faces", "nodes": (0..nodes.len()).collect::<Vec<_>>() }]),
-        );
+        root.insert("scenes".into(), json!([{ "name": "spherical-faces", "nodes": (0..nodes.len()).collect::<Vec<_>>() }]));
         root.insert("nodes".into(), Value::Array(nodes));
         if !meshes.is_empty() {
             root.insert("meshes".into(), Value::Array(meshes));
@@ -190,8 +175,7 @@ impl Builder {
             root.insert("bufferViews".into(), Value::Array(buffer_views));
             root.insert("buffers".into(), json!([{ "byteLength": bin.len() }]));
         }
-        let mut json_bytes =
-            serde_json::to_vec(&Value::Object(root)).expect("JSON values serialize");
+        let mut json_bytes = serde_json::to_vec(&Value::Object(root)).expect("JSON values serialize");
         while !json_bytes.len().is_multiple_of(4) {
             json_bytes.push(b' ');
         }
@@ -255,13 +239,7 @@ pub fn write_lines_glb(surface: &TriMesh, line_sets: &[LineSet], extras: Value) 
     if !surface.triangles.is_empty() {
         let material = json!({ "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6 });
         let normals = surface.vertex_normals();
-        nodes.push(b.triangles_node(
-            "surface",
-            material,
-            &surface.positions,
-            Some(&normals),
-            &surface.triangles,
-        ));
+        nodes.push(b.triangles_node("surface", material, &surface.positions, Some(&normals), &surface.triangles));
     }
     for set in line_sets.iter().filter(|s| !s.segments.is_empty()) {
         nodes.push(b.lines_node(set));
@@ -289,11 +267,7 @@ pub fn write_glb(
         "panels": panels.iter().map(panel_extras).collect::<Vec<_>>(),
     });
     if !panels.is_empty() {
-        let (vp, vn, vi) = (
-            b.view(Some(12), ARRAY_BUFFER),
-            b.view(Some(12), ARRAY_BUFFER),
-            b.view(None, ELEMENT_ARRAY_BUFFER),
-        );
+        let (vp, vn, vi) = (b.view(Some(12), ARRAY_BUFFER), b.view(Some(12), ARRAY_BUFFER), b.view(None, ELEMENT_ARRAY_BUFFER));
         b.materials.push(json!({
             "name": "panels",
             "pbrMetallicRoughness": { "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.9, "roughnessFactor": 0.25 },
@@ -313,8 +287,7 @@ pub fn write_glb(
                 })
             })
             .collect();
-        b.meshes
-            .push(json!({ "name": "panels", "primitives": primitives }));
+        b.meshes.push(json!({ "name": "panels", "primitives": primitives }));
         panels_node["mesh"] = json!(b.meshes.len() - 1);
     }
     nodes.push(panels_node);
@@ -327,16 +300,13 @@ pub fn write_glb(
 
     // Node axes.
     if let Some(axes) = node_axes.filter(|a| !a.is_empty()) {
-        let set = LineSet {
-            name: "node_axes",
-            color: [0.85, 0.15, 0.1, 1.0],
-            segments: axes,
-        };
+        let set = LineSet { name: "node_axes", color: [0.85, 0.15, 0.1, 1.0], segments: axes };
         nodes.push(b.lines_node(&set));
     }
 
     b.finish(nodes, extras)
 }
+
 
 /// The JSON chunk of a GLB (for tests and tools); None if `glb` is not a GLB.
 pub fn glb_json(glb: &[u8]) -> Option<Value> {

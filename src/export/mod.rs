@@ -26,21 +26,13 @@ pub struct ExportFile {
 
 impl ExportFile {
     pub fn new(name: &str, mime: &str, bytes: Vec<u8>) -> Self {
-        Self {
-            name: name.into(),
-            mime: mime.into(),
-            bytes,
-        }
+        Self { name: name.into(), mime: mime.into(), bytes }
     }
 }
 
 /// `report.json`, the last file of every run.
 pub fn report_file(report: &Report) -> ExportFile {
-    ExportFile::new(
-        "report.json",
-        "application/json",
-        report.to_json().into_bytes(),
-    )
+    ExportFile::new("report.json", "application/json", report.to_json().into_bytes())
 }
 
 /// The panel files every panel method writes, in this order: `panels.glb`, `panels.obj`, the
@@ -51,10 +43,6 @@ pub fn panel_files(glb: Vec<u8>, obj: String, schedule: &PanelSchedule) -> Vec<E
         file("panels.glb", "model/gltf-binary", glb),
         file("panels.obj", "text/plain", obj.into_bytes()),
         file("panels.csv", "text/csv", schedule.to_csv().into_bytes()),
-        file(
-            "panels.json",
-            "application/json",
-            schedule.to_json().into_bytes(),
-        ),
+        file("panels.json", "application/json", schedule.to_json().into_bytes()),
     ]
 }

@@ -28,18 +28,9 @@ fn vertex(out: &mut String, p: DVec3) {
 }
 
 /// OBJ text of the panels, optional support triangles and optional node-axis segments.
-pub fn write_obj(
-    panels: &[Panel],
-    support: Option<&SupportGeometry>,
-    node_axes: Option<&[(DVec3, DVec3)]>,
-) -> String {
+pub fn write_obj(panels: &[Panel], support: Option<&SupportGeometry>, node_axes: Option<&[(DVec3, DVec3)]>) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "# spherical-faces {}: {} panels",
-        env!("CARGO_PKG_VERSION"),
-        panels.len()
-    );
+    let _ = writeln!(out, "# spherical-faces {}: {} panels", env!("CARGO_PKG_VERSION"), panels.len());
     let mut next = 1usize; // next vertex number
     let _ = writeln!(out, "o panels");
     for p in panels {
@@ -48,13 +39,7 @@ pub fn write_obj(
             vertex(&mut out, x);
         }
         for t in &p.triangles {
-            let _ = writeln!(
-                out,
-                "f {} {} {}",
-                next + t[0] as usize,
-                next + t[1] as usize,
-                next + t[2] as usize
-            );
+            let _ = writeln!(out, "f {} {} {}", next + t[0] as usize, next + t[1] as usize, next + t[2] as usize);
         }
         next += p.positions.len();
     }
@@ -65,13 +50,7 @@ pub fn write_obj(
             vertex(&mut out, x);
         }
         for t in &s.triangles {
-            let _ = writeln!(
-                out,
-                "f {} {} {}",
-                next + t[0] as usize,
-                next + t[1] as usize,
-                next + t[2] as usize
-            );
+            let _ = writeln!(out, "f {} {} {}", next + t[0] as usize, next + t[1] as usize, next + t[2] as usize);
         }
         next += s.positions.len();
     }
@@ -92,13 +71,7 @@ pub fn write_obj(
 /// OBJ text of a mesh of polygons itself (vertices and faces), for a designer's CAD tool.
 pub fn write_mesh_obj(mesh: &crate::geometry::mesh::PolyMesh, name: &str) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "# spherical-faces {}: {} vertices, {} faces",
-        env!("CARGO_PKG_VERSION"),
-        mesh.vertex_count(),
-        mesh.face_count()
-    );
+    let _ = writeln!(out, "# spherical-faces {}: {} vertices, {} faces", env!("CARGO_PKG_VERSION"), mesh.vertex_count(), mesh.face_count());
     let _ = writeln!(out, "o {name}");
     for &p in &mesh.positions {
         vertex(&mut out, p);

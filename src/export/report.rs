@@ -92,11 +92,7 @@ pub struct Report {
 
 impl Report {
     pub fn new(method: impl Into<String>) -> Self {
-        Self {
-            schema: REPORT_SCHEMA,
-            method: method.into(),
-            ..Self::default()
-        }
+        Self { schema: REPORT_SCHEMA, method: method.into(), ..Self::default() }
     }
 
     /// Writes the method's own section, under its name.

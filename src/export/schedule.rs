@@ -141,19 +141,14 @@ impl SupportRecord {
 
     /// CSV of the records: a header and one row each.
     pub fn to_csv(records: &[SupportRecord]) -> String {
-        let mut out =
-            String::from("id,v0_id,v1_id,plane_x,plane_y,plane_z,normal_x,normal_y,normal_z");
+        let mut out = String::from("id,v0_id,v1_id,plane_x,plane_y,plane_z,normal_x,normal_y,normal_z");
         for k in 0..4 {
             let _ = write!(out, ",c{k}_x,c{k}_y,c{k}_z");
         }
         out.push_str(",outer_radius,inner_radius\n");
         for r in records {
             let [p, n] = [r.plane_point, r.plane_normal];
-            let _ = write!(
-                out,
-                "{},{},{},{},{},{},{},{},{}",
-                r.id, r.edge[0], r.edge[1], p[0], p[1], p[2], n[0], n[1], n[2]
-            );
+            let _ = write!(out, "{},{},{},{},{},{},{},{},{}", r.id, r.edge[0], r.edge[1], p[0], p[1], p[2], n[0], n[1], n[2]);
             for c in &r.corners {
                 let _ = write!(out, ",{},{},{}", c[0], c[1], c[2]);
             }
@@ -174,11 +169,7 @@ pub fn count_distinct_radii(radii: impl IntoIterator<Item = Option<f64>>, tolera
             None => plane = true,
             Some(r) => {
                 let r = r.abs();
-                let key = if tolerance > 0.0 && tolerance.is_finite() {
-                    (r / tolerance).round()
-                } else {
-                    r
-                };
+                let key = if tolerance > 0.0 && tolerance.is_finite() { (r / tolerance).round() } else { r };
                 if key.is_finite() {
                     keys.insert(key.to_bits());
                 } else {
@@ -196,11 +187,7 @@ pub fn distinct_radii(radii: impl IntoIterator<Item = Option<f64>>, tolerance: f
     let round = tolerance > 0.0 && tolerance.is_finite();
     for r in radii.into_iter().flatten().filter(|r| r.is_finite()) {
         let r = r.abs();
-        let v = if round {
-            (r / tolerance).round() * tolerance
-        } else {
-            r
-        };
+        let v = if round { (r / tolerance).round() * tolerance } else { r };
         keys.insert(v.to_bits());
     }
     keys.into_iter().map(f64::from_bits).collect()
@@ -229,11 +216,7 @@ fn sphere_record(p: &Panel) -> SphereRecord {
         b: s.b.to_array(),
         c: s.c,
         plane,
-        center: if plane {
-            None
-        } else {
-            s.center().map(|c| c.to_array())
-        },
+        center: if plane { None } else { s.center().map(|c| c.to_array()) },
         radius: signed.map(f64::abs),
         signed_radius: signed,
         normal: plane.then(|| s.b.normalize_or_zero().to_array()),
@@ -241,22 +224,13 @@ fn sphere_record(p: &Panel) -> SphereRecord {
 }
 
 /// Builds the schedule of `panels` against the `reference` surface.
-pub fn build_schedule(
-    panels: &[Panel],
-    reference: &Reference,
-    radius_tolerance: f64,
-) -> PanelSchedule {
+pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance: f64) -> PanelSchedule {
     build_schedule_with(panels, reference, radius_tolerance, None)
 }
 
 /// [`build_schedule`] with each panel's [`max_deviation`] from `reference` given (when the
 /// method measured them already; one per panel).
-pub fn build_schedule_with(
-    panels: &[Panel],
-    reference: &Reference,
-    radius_tolerance: f64,
-    deviations: Option<&[f64]>,
-) -> PanelSchedule {
+pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_tolerance: f64, deviations: Option<&[f64]>) -> PanelSchedule {
     let deviations = deviations.filter(|d| d.len() == panels.len());
     let bvh = reference.bvh();
     let diag = reference.diagonal();
@@ -271,9 +245,7 @@ pub fn build_schedule_with(
                 vertex_ids: c.clone(),
                 vertices: p.positions[..n].iter().map(|x| x.to_array()).collect(),
                 sphere: sphere_record(p),
-                edges: (0..n)
-                    .map(|k| arc_record(&p.arcs[k], c[k], c[(k + 1) % n]))
-                    .collect(),
+                edges: (0..n).map(|k| arc_record(&p.arcs[k], c[k], c[(k + 1) % n])).collect(),
                 area: p.area,
                 max_deviation: match deviations {
                     Some(d) => d[i],
@@ -291,10 +263,7 @@ pub fn build_schedule_with(
         support_elements: Vec::new(),
         panel_count: records.len(),
         radius_tolerance,
-        distinct_radii: count_distinct_radii(
-            records.iter().map(|r| r.sphere.radius),
-            radius_tolerance,
-        ),
+        distinct_radii: count_distinct_radii(records.iter().map(|r| r.sphere.radius), radius_tolerance),
         planar_panels: records.iter().filter(|r| r.sphere.plane).count(),
         total_area: records.iter().map(|r| r.area).sum(),
         reference_diagonal: diag,
@@ -322,19 +291,13 @@ fn opt3(out: &mut String, v: Option<[f64; 3]>) {
 impl PanelSchedule {
     /// Corners of the largest panel (3 when there are none).
     pub fn max_corners(&self) -> usize {
-        self.panels
-            .iter()
-            .map(|r| r.vertex_ids.len())
-            .max()
-            .unwrap_or(3)
+        self.panels.iter().map(|r| r.vertex_ids.len()).max().unwrap_or(3)
     }
 
     /// CSV header for panels of up to `corners` corners (one line, no trailing newline).
     pub fn csv_header(corners: usize) -> String {
         let mut h: Vec<String> = vec!["id".into()];
-        let xyz = |h: &mut Vec<String>, name: &str| {
-            h.extend(["x", "y", "z"].map(|c| format!("{name}_{c}")))
-        };
+        let xyz = |h: &mut Vec<String>, name: &str| h.extend(["x", "y", "z"].map(|c| format!("{name}_{c}")));
         h.extend((0..corners).map(|k| format!("v{k}_id")));
         for k in 0..corners {
             xyz(&mut h, &format!("v{k}"));
@@ -390,12 +353,7 @@ impl PanelSchedule {
                         let _ = write!(
                             out,
                             ",{},{},{},{},{},{},",
-                            e.center[0],
-                            e.center[1],
-                            e.center[2],
-                            e.normal[0],
-                            e.normal[1],
-                            e.normal[2]
+                            e.center[0], e.center[1], e.center[2], e.normal[0], e.normal[1], e.normal[2]
                         );
                         opt(&mut out, e.radius);
                     }

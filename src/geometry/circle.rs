@@ -31,13 +31,7 @@ impl Circle {
             return None;
         }
         // Orient as c₁ − c₂ = (b₁/a₁ − b₂/a₂)/2, i.e. N times sign(a₁a₂); with a plane, along its b.
-        let orient = if s1.a != 0.0 && s2.a != 0.0 {
-            (s1.a * s2.a).signum()
-        } else if s2.a == 0.0 {
-            -s1.a.signum()
-        } else {
-            s2.a.signum()
-        };
+        let orient = if s1.a != 0.0 && s2.a != 0.0 { (s1.a * s2.a).signum() } else if s2.a == 0.0 { -s1.a.signum() } else { s2.a.signum() };
         let normal = n / len * orient;
         Self::cut(sphere, n / len, k / len).map(|c| Circle { normal, ..c })
     }
@@ -57,13 +51,8 @@ impl Circle {
         if !(n2 > 1e-30 * ab.length_squared() * ac.length_squared()) {
             return None;
         }
-        let center = a
-            + (ab.length_squared() * ac.cross(n) + ac.length_squared() * n.cross(ab)) / (2.0 * n2);
-        Some(Circle {
-            center,
-            normal: n / n2.sqrt(),
-            radius: (a - center).length(),
-        })
+        let center = a + (ab.length_squared() * ac.cross(n) + ac.length_squared() * n.cross(ab)) / (2.0 * n2);
+        Some(Circle { center, normal: n / n2.sqrt(), radius: (a - center).length() })
     }
 
     /// The point at angle `phi` from the direction `u` (unit, in the plane), counter-clockwise
@@ -85,11 +74,7 @@ impl Circle {
         let r = sphere.signed_radius()?.abs();
         let t = k - n.dot(c);
         let r2 = r * r - t * t;
-        (r2 > 0.0).then(|| Circle {
-            center: c + t * n,
-            normal: n,
-            radius: r2.sqrt(),
-        })
+        (r2 > 0.0).then(|| Circle { center: c + t * n, normal: n, radius: r2.sqrt() })
     }
 }
 

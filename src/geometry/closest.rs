@@ -59,21 +59,13 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVe
         let seg = |s: DVec3, t: DVec3| {
             let d = t - s;
             let l2 = d.length_squared();
-            let u = if l2 > 0.0 {
-                ((p - s).dot(d) / l2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
+            let u = if l2 > 0.0 { ((p - s).dot(d) / l2).clamp(0.0, 1.0) } else { 0.0 };
             (s + u * d, u)
         };
         let (q0, u0) = seg(a, b);
         let (q1, u1) = seg(b, c);
         let (q2, u2) = seg(c, a);
-        let cands = [
-            (q0, [1.0 - u0, u0, 0.0]),
-            (q1, [0.0, 1.0 - u1, u1]),
-            (q2, [u2, 0.0, 1.0 - u2]),
-        ];
+        let cands = [(q0, [1.0 - u0, u0, 0.0]), (q1, [0.0, 1.0 - u1, u1]), (q2, [u2, 0.0, 1.0 - u2])];
         return cands
             .into_iter()
             .min_by(|x, y| x.0.distance_squared(p).total_cmp(&y.0.distance_squared(p)))
@@ -139,18 +131,12 @@ impl TriangleBvh {
 
     /// The BVH of explicit triangles. Triangles with non-finite corners are never hit.
     pub fn from_triangles(tris: Vec<[DVec3; 3]>) -> Self {
-        let mut order: Vec<u32> = (0..tris.len() as u32)
-            .filter(|&i| tris[i as usize].iter().all(|p| p.is_finite()))
-            .collect();
+        let mut order: Vec<u32> =
+            (0..tris.len() as u32).filter(|&i| tris[i as usize].iter().all(|p| p.is_finite())).collect();
         let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
         let mut nodes = Vec::with_capacity(2 * order.len() / LEAF_SIZE + 1);
         if !order.is_empty() {
-            nodes.push(Node {
-                lo: DVec3::ZERO,
-                hi: DVec3::ZERO,
-                first: 0,
-                count: 0,
-            });
+            nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });
             // Explicit stack: (node index, range start, range end).
             let mut stack = vec![(0usize, 0usize, order.len())];
             while let Some((ni, start, end)) = stack.pop() {
@@ -166,10 +152,9 @@ impl TriangleBvh {
                 let (clo, chi) = order[start..end]
                     .iter()
                     .map(|&i| centroids[i as usize])
-                    .fold(
-                        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-                        |(l, h), c| (l.min(c), h.max(c)),
-                    );
+                    .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(l, h), c| {
+                        (l.min(c), h.max(c))
+                    });
                 let ext = chi - clo;
                 let axis = if ext.x >= ext.y && ext.x >= ext.z {
                     0
@@ -183,18 +168,8 @@ impl TriangleBvh {
                     centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
                 });
                 let left = nodes.len();
-                nodes.push(Node {
-                    lo: DVec3::ZERO,
-                    hi: DVec3::ZERO,
-                    first: 0,
-                    count: 0,
-                });
-                nodes.push(Node {
-                    lo: DVec3::ZERO,
-                    hi: DVec3::ZERO,
-                    first: 0,
-                    count: 0,
-                });
+                nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });
+                nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });
                 nodes[ni].first = left as u32;
                 nodes[ni].count = 0;
                 stack.push((left, start, mid));
@@ -225,11 +200,7 @@ impl TriangleBvh {
 
     /// The closest point at distance at most `max_distance`; None if there is none.
     pub fn closest_point_within(&self, p: DVec3, max_distance: f64) -> Option<ClosestHit> {
-        let d2 = if max_distance.is_finite() {
-            max_distance * max_distance
-        } else {
-            f64::INFINITY
-        };
+        let d2 = if max_distance.is_finite() { max_distance * max_distance } else { f64::INFINITY };
         self.search(p, d2, None)
     }
 
@@ -237,31 +208,19 @@ impl TriangleBvh {
     /// point): its closest point bounds the search, so a coherent query visits only the part of
     /// the hierarchy that could hold a nearer one. The same point as an unstarted search.
     pub fn closest_point_from(&self, p: DVec3, hint: usize) -> Option<ClosestHit> {
-        let Some(&[a, b, c]) = self.tris.get(hint) else {
-            return self.closest_point(p);
-        };
+        let Some(&[a, b, c]) = self.tris.get(hint) else { return self.closest_point(p) };
         if !(a.is_finite() && b.is_finite() && c.is_finite()) {
             return self.closest_point(p);
         }
         let (q, barycentric) = closest_point_on_triangle(p, a, b, c);
         let d2 = q.distance_squared(p);
-        let start = ClosestHit {
-            point: q,
-            triangle: hint,
-            barycentric,
-            distance: d2.sqrt(),
-        };
+        let start = ClosestHit { point: q, triangle: hint, barycentric, distance: d2.sqrt() };
         self.search(p, d2, Some(start))
     }
 
     /// Depth-first search, nearer child first, for a point nearer than `best` (or within
     /// `best_d2`).
-    fn search(
-        &self,
-        p: DVec3,
-        mut best_d2: f64,
-        mut best: Option<ClosestHit>,
-    ) -> Option<ClosestHit> {
+    fn search(&self, p: DVec3, mut best_d2: f64, mut best: Option<ClosestHit>) -> Option<ClosestHit> {
         if self.nodes.is_empty() || !p.is_finite() {
             return None;
         }
@@ -283,12 +242,7 @@ impl TriangleBvh {
                     let dq = q.distance_squared(p);
                     if dq < best_d2 || (dq == best_d2 && best.is_none()) {
                         best_d2 = dq;
-                        best = Some(ClosestHit {
-                            point: q,
-                            triangle: ti as usize,
-                            barycentric: bary,
-                            distance: dq.sqrt(),
-                        });
+                        best = Some(ClosestHit { point: q, triangle: ti as usize, barycentric: bary, distance: dq.sqrt() });
                     }
                 }
             } else {
@@ -296,11 +250,7 @@ impl TriangleBvh {
                 let dl = box_distance2(p, self.nodes[l as usize].lo, self.nodes[l as usize].hi);
                 let dr = box_distance2(p, self.nodes[r as usize].lo, self.nodes[r as usize].hi);
                 // Push the farther child first so the nearer one is visited first.
-                let (near, far) = if dl <= dr {
-                    ((l, dl), (r, dr))
-                } else {
-                    ((r, dr), (l, dl))
-                };
+                let (near, far) = if dl <= dr { ((l, dl), (r, dr)) } else { ((r, dr), (l, dl)) };
                 stack[top] = far;
                 stack[top + 1] = near;
                 top += 2;
@@ -316,11 +266,7 @@ impl TriangleBvh {
 }
 
 fn mesh_face(mesh: &TriMesh, t: &[u32; 3]) -> [DVec3; 3] {
-    [
-        mesh.positions[t[0] as usize],
-        mesh.positions[t[1] as usize],
-        mesh.positions[t[2] as usize],
-    ]
+    [mesh.positions[t[0] as usize], mesh.positions[t[1] as usize], mesh.positions[t[2] as usize]]
 }
 
 fn bounds(tris: &[[DVec3; 3]], ids: &[u32]) -> (DVec3, DVec3) {
@@ -352,12 +298,7 @@ pub fn closest_point_brute_force(mesh: &TriMesh, p: DVec3) -> Option<ClosestHit>
         let (q, bary) = closest_point_on_triangle(p, a, b, c);
         let d = q.distance(p);
         if best.is_none_or(|h| d < h.distance) {
-            best = Some(ClosestHit {
-                point: q,
-                triangle: i,
-                barycentric: bary,
-                distance: d,
-            });
+            best = Some(ClosestHit { point: q, triangle: i, barycentric: bary, distance: d });
         }
     }
     best
@@ -440,34 +381,19 @@ mod tests {
             let p = rng.vec(1.0) * 1.5 + DVec3::new(0.5, 0.5, 0.0);
             let h = bvh.closest_point(p).unwrap();
             let g = closest_point_brute_force(&mesh, p).unwrap();
-            assert!(
-                (h.distance - g.distance).abs() < 1e-14,
-                "{} vs {}",
-                h.distance,
-                g.distance
-            );
+            assert!((h.distance - g.distance).abs() < 1e-14, "{} vs {}", h.distance, g.distance);
             let [a, b, c] = mesh.face_points(h.triangle);
             let (q, _) = closest_point_on_triangle(p, a, b, c);
             assert!(q.distance(h.point) < 1e-14);
             // Started from any triangle: the same distance.
-            let hint =
-                ((rng.uniform() * mesh.face_count() as f64) as usize).min(mesh.face_count() - 1);
+            let hint = ((rng.uniform() * mesh.face_count() as f64) as usize).min(mesh.face_count() - 1);
             let s = bvh.closest_point_from(p, hint).unwrap();
-            assert!(
-                (s.distance - g.distance).abs() < 1e-14,
-                "from {hint}: {} vs {}",
-                s.distance,
-                g.distance
-            );
+            assert!((s.distance - g.distance).abs() < 1e-14, "from {hint}: {} vs {}", s.distance, g.distance);
             // Bounded queries.
             assert!(bvh.closest_point_within(p, g.distance * 0.5).is_none() || g.distance == 0.0);
-            assert!(bvh
-                .closest_point_within(p, g.distance * 1.01 + 1e-12)
-                .is_some());
+            assert!(bvh.closest_point_within(p, g.distance * 1.01 + 1e-12).is_some());
         }
-        assert!(TriangleBvh::new(&TriMesh::default())
-            .closest_point(DVec3::ZERO)
-            .is_none());
+        assert!(TriangleBvh::new(&TriMesh::default()).closest_point(DVec3::ZERO).is_none());
         assert!(bvh.closest_point(DVec3::NAN).is_none());
     }
 }

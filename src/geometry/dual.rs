@@ -30,10 +30,7 @@ impl<const N: usize> Dual<N> {
 
     /// f(self) with f(v) = `v` and f′(v) = `slope`.
     fn chain(self, v: f64, slope: f64) -> Self {
-        Self {
-            v,
-            d: self.d.map(|x| x * slope),
-        }
+        Self { v, d: self.d.map(|x| x * slope) }
     }
 
     pub fn sqrt(self) -> Self {
@@ -50,20 +47,14 @@ impl<const N: usize> Dual<N> {
 impl<const N: usize> Add for Dual<N> {
     type Output = Self;
     fn add(self, o: Self) -> Self {
-        Self {
-            v: self.v + o.v,
-            d: std::array::from_fn(|k| self.d[k] + o.d[k]),
-        }
+        Self { v: self.v + o.v, d: std::array::from_fn(|k| self.d[k] + o.d[k]) }
     }
 }
 
 impl<const N: usize> Sub for Dual<N> {
     type Output = Self;
     fn sub(self, o: Self) -> Self {
-        Self {
-            v: self.v - o.v,
-            d: std::array::from_fn(|k| self.d[k] - o.d[k]),
-        }
+        Self { v: self.v - o.v, d: std::array::from_fn(|k| self.d[k] - o.d[k]) }
     }
 }
 
@@ -77,10 +68,7 @@ impl<const N: usize> Neg for Dual<N> {
 impl<const N: usize> Mul for Dual<N> {
     type Output = Self;
     fn mul(self, o: Self) -> Self {
-        Self {
-            v: self.v * o.v,
-            d: std::array::from_fn(|k| self.d[k] * o.v + self.v * o.d[k]),
-        }
+        Self { v: self.v * o.v, d: std::array::from_fn(|k| self.d[k] * o.v + self.v * o.d[k]) }
     }
 }
 
@@ -109,20 +97,12 @@ pub struct D3<const N: usize> {
 impl<const N: usize> D3<N> {
     /// `p` whose coordinates are the variables k, k + 1, k + 2.
     pub fn variable(p: DVec3, k: usize) -> Self {
-        Self {
-            x: Dual::variable(p.x, k),
-            y: Dual::variable(p.y, k + 1),
-            z: Dual::variable(p.z, k + 2),
-        }
+        Self { x: Dual::variable(p.x, k), y: Dual::variable(p.y, k + 1), z: Dual::variable(p.z, k + 2) }
     }
 
     /// `p` with zero derivatives.
     pub fn constant(p: DVec3) -> Self {
-        Self {
-            x: Dual::constant(p.x),
-            y: Dual::constant(p.y),
-            z: Dual::constant(p.z),
-        }
+        Self { x: Dual::constant(p.x), y: Dual::constant(p.y), z: Dual::constant(p.z) }
     }
 
     pub fn dot(self, o: Self) -> Dual<N> {
@@ -130,43 +110,27 @@ impl<const N: usize> D3<N> {
     }
 
     pub fn cross(self, o: Self) -> Self {
-        Self {
-            x: self.y * o.z - self.z * o.y,
-            y: self.z * o.x - self.x * o.z,
-            z: self.x * o.y - self.y * o.x,
-        }
+        Self { x: self.y * o.z - self.z * o.y, y: self.z * o.x - self.x * o.z, z: self.x * o.y - self.y * o.x }
     }
 }
 
 impl<const N: usize> Add for D3<N> {
     type Output = Self;
     fn add(self, o: Self) -> Self {
-        Self {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
+        Self { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
     }
 }
 
 impl<const N: usize> Sub for D3<N> {
     type Output = Self;
     fn sub(self, o: Self) -> Self {
-        Self {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
+        Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
     }
 }
 
 impl<const N: usize> Mul<Dual<N>> for D3<N> {
     type Output = Self;
     fn mul(self, s: Dual<N>) -> Self {
-        Self {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
+        Self { x: self.x * s, y: self.y * s, z: self.z * s }
     }
 }

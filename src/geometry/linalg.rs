@@ -19,14 +19,7 @@ pub const MAX_COLS: usize = 15;
 /// numerically rank deficient: a diagonal entry of R below `rank_tol` times the norm of its original
 /// column (so the test is invariant to column scaling). Never produces NaN from finite input: on
 /// false the caller must not use `x`.
-pub fn lstsq_householder(
-    a: &mut [f64],
-    m: usize,
-    n: usize,
-    b: &mut [f64],
-    x: &mut [f64],
-    rank_tol: f64,
-) -> bool {
+pub fn lstsq_householder(a: &mut [f64], m: usize, n: usize, b: &mut [f64], x: &mut [f64], rank_tol: f64) -> bool {
     if n == 0 || m < n || n > MAX_COLS || a.len() < m * n || b.len() < m || x.len() < n {
         return false;
     }
@@ -224,15 +217,8 @@ impl<const N: usize> Svd<N> {
         for (i, o) in order.iter_mut().enumerate() {
             *o = i;
         }
-        order.sort_by(|&i, &j| {
-            sigma[j]
-                .partial_cmp(&sigma[i])
-                .unwrap_or(std::cmp::Ordering::Equal)
-        });
-        Svd {
-            sigma: order.map(|i| sigma[i]),
-            v: order.map(|i| v[i]),
-        }
+        order.sort_by(|&i, &j| sigma[j].partial_cmp(&sigma[i]).unwrap_or(std::cmp::Ordering::Equal));
+        Svd { sigma: order.map(|i| sigma[i]), v: order.map(|i| v[i]) }
     }
 }
 
@@ -255,11 +241,7 @@ mod tests {
         }
         let mut sol = [0.0; 3];
         assert!(lstsq_householder(&mut a, m, 3, &mut b, &mut sol, 1e-12));
-        assert!(
-            (sol[0] - 1.0).abs() < 1e-12
-                && (sol[1] * 1e6 - 2.0).abs() < 1e-12
-                && (sol[2] + 3.0).abs() < 1e-12
-        );
+        assert!((sol[0] - 1.0).abs() < 1e-12 && (sol[1] * 1e6 - 2.0).abs() < 1e-12 && (sol[2] + 3.0).abs() < 1e-12);
     }
 
     #[test]
@@ -293,22 +275,8 @@ mod tests {
         let mut sol = [0.0; 3];
         assert!(!lstsq_householder(&mut a, m, 3, &mut b, &mut sol, 1e-10));
         let mut a = vec![0.0; 6];
-        assert!(!lstsq_householder(
-            &mut a,
-            3,
-            2,
-            &mut [0.0; 3],
-            &mut sol,
-            1e-10
-        ));
-        assert!(!lstsq_householder(
-            &mut [1.0; 2],
-            1,
-            2,
-            &mut [0.0; 1],
-            &mut sol,
-            1e-10
-        ));
+        assert!(!lstsq_householder(&mut a, 3, 2, &mut [0.0; 3], &mut sol, 1e-10));
+        assert!(!lstsq_householder(&mut [1.0; 2], 1, 2, &mut [0.0; 1], &mut sol, 1e-10));
     }
 
     #[test]

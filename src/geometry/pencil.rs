@@ -55,11 +55,7 @@ impl PencilMember {
 pub fn pencil_member(p: [DVec3; 3], theta: f64) -> PencilMember {
     let [s0, s1] = pencil_basis_dual(p);
     let (sn, cs) = theta.sin_cos();
-    let mut m = PencilMember {
-        sphere: [0.0; 5],
-        d_theta: [0.0; 5],
-        d_points: [[0.0; 9]; 5],
-    };
+    let mut m = PencilMember { sphere: [0.0; 5], d_theta: [0.0; 5], d_points: [[0.0; 9]; 5] };
     for i in 0..5 {
         m.sphere[i] = cs * s0[i].v + sn * s1[i].v;
         m.d_theta[i] = -sn * s0[i].v + cs * s1[i].v;
@@ -78,8 +74,7 @@ pub fn pencil_basis(p: [DVec3; 3]) -> [Sphere; 2] {
 /// The angle θ of the pencil member closest to `target` (max ⟨s(θ), target⟩).
 pub fn pencil_angle(p: [DVec3; 3], target: &Sphere) -> f64 {
     let [s0, s1] = pencil_basis(p);
-    s1.inversive_product(target)
-        .atan2(s0.inversive_product(target))
+    s1.inversive_product(target).atan2(s0.inversive_product(target))
 }
 
 fn pencil_basis_dual(p: [DVec3; 3]) -> [[Dual<9>; 5]; 2] {
@@ -95,13 +90,7 @@ fn pencil_basis_dual(p: [DVec3; 3]) -> [[Dual<9>; 5]; 2] {
     let e = m - q[0];
     let rho = e.dot(e).sqrt();
     let inv_rho = rho.recip();
-    let s0 = [
-        Dual::constant(0.0),
-        n_hat.x,
-        n_hat.y,
-        n_hat.z,
-        n_hat.dot(q[0]),
-    ];
+    let s0 = [Dual::constant(0.0), n_hat.x, n_hat.y, n_hat.z, n_hat.dot(q[0])];
     let s1 = [
         inv_rho * 0.5,
         m.x * inv_rho,
@@ -117,11 +106,7 @@ mod tests {
     use super::*;
 
     fn points() -> [DVec3; 3] {
-        [
-            DVec3::new(0.1, -0.2, 0.3),
-            DVec3::new(0.6, 0.1, 0.25),
-            DVec3::new(0.2, 0.5, 0.4),
-        ]
+        [DVec3::new(0.1, -0.2, 0.3), DVec3::new(0.6, 0.1, 0.25), DVec3::new(0.2, 0.5, 0.4)]
     }
 
     #[test]
@@ -141,12 +126,7 @@ mod tests {
         let p = points();
         let [a0, a1] = pencil_basis(p);
         let [b0, b1] = Sphere::through_points_family(p);
-        for (x, y) in a0
-            .to_array()
-            .iter()
-            .zip(b0.to_array())
-            .chain(a1.to_array().iter().zip(b1.to_array()))
-        {
+        for (x, y) in a0.to_array().iter().zip(b0.to_array()).chain(a1.to_array().iter().zip(b1.to_array())) {
             assert!((x - y).abs() < 1e-12, "{x} vs {y}");
         }
         assert!(a0.inversive_product(&a1).abs() < 1e-14);
@@ -170,11 +150,7 @@ mod tests {
             let (sp, sm) = (at(pp, theta), at(pm, theta));
             for i in 0..5 {
                 let fd = (sp[i] - sm[i]) / (2.0 * h);
-                assert!(
-                    (fd - m.d_points[i][j]).abs() < 1e-6 * (1.0 + fd.abs()),
-                    "∂s{i}/∂x{j}: {fd} vs {}",
-                    m.d_points[i][j]
-                );
+                assert!((fd - m.d_points[i][j]).abs() < 1e-6 * (1.0 + fd.abs()), "∂s{i}/∂x{j}: {fd} vs {}", m.d_points[i][j]);
             }
         }
     }

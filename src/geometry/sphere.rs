@@ -31,11 +31,7 @@ impl Sphere {
     /// a = 1/(2r), b = centre/r, c = (|centre|² − r²)/(2r).
     pub fn from_center_radius(center: DVec3, signed_r: f64) -> Self {
         let r = signed_r;
-        Self {
-            a: 0.5 / r,
-            b: center / r,
-            c: (center.length_squared() - r * r) / (2.0 * r),
-        }
+        Self { a: 0.5 / r, b: center / r, c: (center.length_squared() - r * r) / (2.0 * r) }
     }
 
     /// The normalized sphere through `f`, tangent there to the plane with unit normal `n`, with
@@ -45,11 +41,7 @@ impl Sphere {
     /// bᵀb − 4ac = |n|² = 1 for every h, so the result is normalized and finite for any finite h;
     /// h = 0 gives the tangent plane ⟨n, x − f⟩ = 0 with b = n.
     pub fn from_point_normal_curvature(f: DVec3, n: DVec3, h: f64) -> Self {
-        Self {
-            a: 0.5 * h,
-            b: h * f + n,
-            c: 0.5 * h * f.length_squared() + f.dot(n),
-        }
+        Self { a: 0.5 * h, b: h * f + n, c: 0.5 * h * f.length_squared() + f.dot(n) }
     }
 
     /// The plane through `p` with unit normal `n` (normalized: b = n).
@@ -68,11 +60,7 @@ impl Sphere {
         let d = self.discriminant();
         if d > 0.0 && d.is_finite() {
             let s = 1.0 / d.sqrt();
-            Self {
-                a: self.a * s,
-                b: self.b * s,
-                c: self.c * s,
-            }
+            Self { a: self.a * s, b: self.b * s, c: self.c * s }
         } else {
             *self
         }
@@ -145,30 +133,18 @@ impl Sphere {
 
     /// From (a, b₁, b₂, b₃, c).
     pub fn from_array(v: [f64; 5]) -> Self {
-        Self {
-            a: v[0],
-            b: DVec3::new(v[1], v[2], v[3]),
-            c: v[4],
-        }
+        Self { a: v[0], b: DVec3::new(v[1], v[2], v[3]), c: v[4] }
     }
 
     /// The same point set with the opposite orientation: (−a, −b, −c). The signed radius changes
     /// sign, the centre is kept.
     pub fn flipped(&self) -> Self {
-        Self {
-            a: -self.a,
-            b: -self.b,
-            c: -self.c,
-        }
+        Self { a: -self.a, b: -self.b, c: -self.c }
     }
 
     /// Linear combination w₀ s₀ + w₁ s₁ of coefficient vectors (not normalized).
     pub fn combine(s0: &Sphere, w0: f64, s1: &Sphere, w1: f64) -> Self {
-        Self {
-            a: w0 * s0.a + w1 * s1.a,
-            b: w0 * s0.b + w1 * s1.b,
-            c: w0 * s0.c + w1 * s1.c,
-        }
+        Self { a: w0 * s0.a + w1 * s1.a, b: w0 * s0.b + w1 * s1.b, c: w0 * s0.c + w1 * s1.c }
     }
 
     /// The sum of coefficient vectors (a, b, c) (each already weighted by the caller), normalized
@@ -182,11 +158,7 @@ impl Sphere {
             }
         }
         let sum = Sphere::from_array(sum);
-        if sum.discriminant() > 0.0 {
-            sum.normalized()
-        } else {
-            sum
-        }
+        if sum.discriminant() > 0.0 { sum.normalized() } else { sum }
     }
 
     /// The oriented normal b − 2a x. Unit at points of a normalized sphere; for r > 0 it points to
@@ -242,11 +214,7 @@ impl Sphere {
     /// Coefficients in the frame y = (x − t)/σ (σ > 0): (a σ², σ(b − 2a t), ψ(t)), the same set
     /// with the same orientation; bᵀb − 4ac is multiplied by σ².
     pub fn in_frame(&self, t: DVec3, sigma: f64) -> Self {
-        Self {
-            a: self.a * sigma * sigma,
-            b: sigma * (self.b - 2.0 * self.a * t),
-            c: self.eval(t),
-        }
+        Self { a: self.a * sigma * sigma, b: sigma * (self.b - 2.0 * self.a * t), c: self.eval(t) }
     }
 
     /// Inverse of [`Self::in_frame`]: coefficients given in the frame y = (x − t)/σ, back in x.
@@ -274,10 +242,7 @@ impl Sphere {
     pub fn through_points_family(p: [DVec3; 3]) -> [Sphere; 2] {
         let (t, sigma) = point_frame(&p);
         let [s0, s1] = family_in_frame(&p, t, sigma);
-        [
-            s0.from_frame(t, sigma).normalized(),
-            s1.from_frame(t, sigma).normalized(),
-        ]
+        [s0.from_frame(t, sigma).normalized(), s1.from_frame(t, sigma).normalized()]
     }
 
     /// The sphere through three points orthogonal to Ω: the null vector of the 4 × 5 matrix of
@@ -300,11 +265,7 @@ impl Sphere {
         if !(scale > 0.0) || !scale.is_finite() {
             return None;
         }
-        let o = Sphere {
-            a: o.a / scale,
-            b: o.b / scale,
-            c: o.c / scale,
-        };
+        let o = Sphere { a: o.a / scale, b: o.b / scale, c: o.c / scale };
         combine_orthogonal(&s0, &s1, &o).map(|s| s.from_frame(t, sigma).normalized())
     }
 
@@ -314,14 +275,8 @@ impl Sphere {
     /// norm |s|² = bᵀb − 4ac (|s₁ ∓ s₂|² = 2 ∓ 2 cos φ), accurate for small angles too. For
     /// spheres that do not meet (|⟨s₁, s₂⟩| > 1) the result is 0 or π.
     pub fn kink_angle(&self, other: &Sphere) -> f64 {
-        let d = Sphere::combine(self, 1.0, other, -1.0)
-            .discriminant()
-            .max(0.0)
-            .sqrt();
-        let s = Sphere::combine(self, 1.0, other, 1.0)
-            .discriminant()
-            .max(0.0)
-            .sqrt();
+        let d = Sphere::combine(self, 1.0, other, -1.0).discriminant().max(0.0).sqrt();
+        let s = Sphere::combine(self, 1.0, other, 1.0).discriminant().max(0.0).sqrt();
         2.0 * d.atan2(s)
     }
 }
@@ -335,45 +290,25 @@ fn point_frame(p: &[DVec3; 3]) -> (DVec3, f64) {
 
 /// The inversive-orthonormal family basis [plane, centred sphere] in the frame (t, σ).
 fn family_in_frame(p: &[DVec3; 3], t: DVec3, sigma: f64) -> [Sphere; 2] {
-    let inv = if sigma > 0.0 && sigma.is_finite() {
-        1.0 / sigma
-    } else {
-        1.0
-    };
+    let inv = if sigma > 0.0 && sigma.is_finite() { 1.0 / sigma } else { 1.0 };
     let y = p.map(|q| (q - t) * inv);
-    let rows = [
-        Sphere::point_row(y[0]),
-        Sphere::point_row(y[1]),
-        Sphere::point_row(y[2]),
-    ];
+    let rows = [Sphere::point_row(y[0]), Sphere::point_row(y[1]), Sphere::point_row(y[2])];
     let svd = Svd::new(&rows);
     let n1 = Sphere::from_array(svd.v[3]);
     let n2 = Sphere::from_array(svd.v[4]);
     let normal = (y[1] - y[0]).cross(y[2] - y[0]);
     // The plane member: a = 0 exactly (a₂a₁ − a₁a₂ rounds to 0).
-    let mut plane = if n1.a == 0.0 && n2.a == 0.0 {
-        n1
-    } else {
-        Sphere::combine(&n1, n2.a, &n2, -n1.a)
-    };
+    let mut plane = if n1.a == 0.0 && n2.a == 0.0 { n1 } else { Sphere::combine(&n1, n2.a, &n2, -n1.a) };
     if plane.discriminant() <= 0.0 {
         plane = n1;
     }
     let plane = plane.normalized();
-    let plane = if plane.b.dot(normal) < 0.0 {
-        plane.flipped()
-    } else {
-        plane
-    };
+    let plane = if plane.b.dot(normal) < 0.0 { plane.flipped() } else { plane };
     // The member orthogonal to it, by Gram–Schmidt in the inversive product (positive definite on
     // a pencil of real spheres): start from the basis vector farther from the plane.
     let other = if n1.a.abs() >= n2.a.abs() { n1 } else { n2 };
     let other = Sphere::combine(&other, 1.0, &plane, -other.inversive_product(&plane)).normalized();
-    let other = if other.a < 0.0 {
-        other.flipped()
-    } else {
-        other
-    };
+    let other = if other.a < 0.0 { other.flipped() } else { other };
     [plane, other]
 }
 
@@ -402,52 +337,29 @@ mod tests {
 
     #[test]
     fn center_radius_round_trip() {
-        for (c, r) in [
-            (DVec3::new(1.0, -2.0, 0.5), 3.0),
-            (DVec3::new(-4.0, 0.25, 7.0), -0.75),
-            (DVec3::ZERO, 1.0),
-        ] {
+        for (c, r) in [(DVec3::new(1.0, -2.0, 0.5), 3.0), (DVec3::new(-4.0, 0.25, 7.0), -0.75), (DVec3::ZERO, 1.0)] {
             let s = Sphere::from_center_radius(c, r);
             assert!(close(s.discriminant(), 1.0, EPS));
             assert!((s.center().unwrap() - c).length() <= EPS * (1.0 + c.length()));
             assert!(close(s.signed_radius().unwrap(), r, EPS));
             // Points on the sphere.
-            for d in [
-                DVec3::X,
-                DVec3::new(0.6, 0.0, -0.8),
-                DVec3::new(1.0, 2.0, 2.0) / 3.0,
-            ] {
-                assert!(
-                    s.eval(c + r.abs() * d).abs() <= EPS * 10.0,
-                    "{}",
-                    s.eval(c + r * d)
-                );
+            for d in [DVec3::X, DVec3::new(0.6, 0.0, -0.8), DVec3::new(1.0, 2.0, 2.0) / 3.0] {
+                assert!(s.eval(c + r.abs() * d).abs() <= EPS * 10.0, "{}", s.eval(c + r * d));
             }
             // ψ(x) = (|x − c|² − r²)/(2r).
             let x = DVec3::new(0.3, 0.1, -2.0);
-            assert!(close(
-                s.eval(x),
-                ((x - c).length_squared() - r * r) / (2.0 * r),
-                EPS
-            ));
+            assert!(close(s.eval(x), ((x - c).length_squared() - r * r) / (2.0 * r), EPS));
         }
     }
 
     #[test]
     fn closest_point_is_the_radial_foot() {
         let x = DVec3::new(0.3, 0.1, -2.0);
-        for (c, r) in [
-            (DVec3::new(1.0, -2.0, 0.5), 3.0),
-            (DVec3::new(-4.0, 0.25, 7.0), -0.75),
-            (DVec3::new(0.0, 0.0, 1e7), -1e7),
-        ] {
+        for (c, r) in [(DVec3::new(1.0, -2.0, 0.5), 3.0), (DVec3::new(-4.0, 0.25, 7.0), -0.75), (DVec3::new(0.0, 0.0, 1e7), -1e7)] {
             let s = Sphere::from_center_radius(c, r);
             let foot = s.closest_point(x);
             let exact = c + r.abs() * (x - c).normalize();
-            assert!(
-                (foot - exact).length() <= 1e-9 * (1.0 + r.abs()),
-                "{foot} vs {exact}"
-            );
+            assert!((foot - exact).length() <= 1e-9 * (1.0 + r.abs()), "{foot} vs {exact}");
             assert!(s.eval(foot).abs() <= 1e-9, "{}", s.eval(foot));
         }
         let plane = Sphere::plane(DVec3::new(0.0, 0.0, 1.0), DVec3::Z);
@@ -461,11 +373,7 @@ mod tests {
         for h in [0.5, -2.0, 1e-9, 0.0, 1e-300] {
             let s = Sphere::from_point_normal_curvature(f, n, h);
             assert!(s.is_finite());
-            assert!(
-                close(s.discriminant(), 1.0, EPS),
-                "h={h}: {}",
-                s.discriminant()
-            );
+            assert!(close(s.discriminant(), 1.0, EPS), "h={h}: {}", s.discriminant());
             assert!(s.eval(f).abs() <= EPS * 10.0);
             // Tangent plane at f: the gradient 2a f − b is parallel to −n.
             let grad = 2.0 * s.a * f - s.b;
@@ -493,31 +401,16 @@ mod tests {
     #[test]
     fn normalization() {
         let s = Sphere::from_center_radius(DVec3::new(1.0, 2.0, 3.0), -2.5);
-        let scaled = Sphere {
-            a: s.a * 7.0,
-            b: s.b * 7.0,
-            c: s.c * 7.0,
-        };
+        let scaled = Sphere { a: s.a * 7.0, b: s.b * 7.0, c: s.c * 7.0 };
         let back = scaled.normalized();
-        assert!(
-            close(back.a, s.a, EPS) && (back.b - s.b).length() <= EPS && close(back.c, s.c, EPS)
-        );
+        assert!(close(back.a, s.a, EPS) && (back.b - s.b).length() <= EPS && close(back.c, s.c, EPS));
         assert!(close(scaled.signed_radius().unwrap(), -2.5, EPS));
         assert!(close(scaled.center().unwrap().z, 3.0, EPS));
         // A plane given with an unnormalized normal.
-        let p = Sphere {
-            a: 0.0,
-            b: DVec3::new(0.0, 0.0, 2.0),
-            c: 4.0,
-        }
-        .normalized();
+        let p = Sphere { a: 0.0, b: DVec3::new(0.0, 0.0, 2.0), c: 4.0 }.normalized();
         assert!(close(p.b.z, 1.0, EPS) && close(p.c, 2.0, EPS));
         // Imaginary: unchanged.
-        let im = Sphere {
-            a: 1.0,
-            b: DVec3::ZERO,
-            c: 1.0,
-        };
+        let im = Sphere { a: 1.0, b: DVec3::ZERO, c: 1.0 };
         assert_eq!(im.normalized(), im);
         assert!(im.signed_radius().is_none());
     }
@@ -529,18 +422,11 @@ mod tests {
         let (c1, r1, c2, r2) = (DVec3::ZERO, 1.5, DVec3::new(2.0, 0.0, 0.0), 1.0);
         let t: f64 = 1.3125;
         let x = DVec3::new(t, (r1 * r1 - t * t).sqrt(), 0.0);
-        let (s1, s2) = (
-            Sphere::from_center_radius(c1, r1),
-            Sphere::from_center_radius(c2, r2),
-        );
+        let (s1, s2) = (Sphere::from_center_radius(c1, r1), Sphere::from_center_radius(c2, r2));
         assert!(s1.eval(x).abs() < EPS && s2.eval(x).abs() < EPS);
         let cos = ((x - c1) / r1).dot((x - c2) / r2);
         assert!(close(s1.inversive_product(&s2), cos, EPS));
-        assert!(close(
-            s1.inversive_product(&s2),
-            (r1 * r1 + r2 * r2 - 4.0) / (2.0 * r1 * r2),
-            EPS
-        ));
+        assert!(close(s1.inversive_product(&s2), (r1 * r1 + r2 * r2 - 4.0) / (2.0 * r1 * r2), EPS));
         // Flipping one orientation flips the cosine.
         let s3 = Sphere::from_center_radius(c2, -r2);
         assert!(close(s1.inversive_product(&s3), -cos, EPS));

@@ -16,10 +16,7 @@ impl std::fmt::Display for Base64Error {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Base64Error::InvalidByte { offset, byte } => {
-                write!(
-                    f,
-                    "invalid base64 character 0x{byte:02x} at offset {offset}"
-                )
+                write!(f, "invalid base64 character 0x{byte:02x} at offset {offset}")
             }
             Base64Error::BadPadding => write!(f, "invalid base64 padding"),
         }

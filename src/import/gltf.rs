@@ -26,40 +26,26 @@ fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
 /// Parses a binary glTF (GLB) container.
 pub(super) fn parse_glb(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
     if !bytes.starts_with(b"glTF") {
-        return Err(ctx.malformed(
-            None,
-            "not a GLB file (it does not start with 'glTF'); export as binary glTF 2.0 (.glb)",
-        ));
+        return Err(
+            ctx.malformed(None, "not a GLB file (it does not start with 'glTF'); export as binary glTF 2.0 (.glb)")
+        );
     }
     let (Some(version), Some(length)) = (u32_at(bytes, 4), u32_at(bytes, 8)) else {
-        return Err(ctx.malformed(
-            None,
-            format!(
-                "truncated GLB (file has {} bytes, the header alone needs 12)",
-                bytes.len()
-            ),
-        ));
+        return Err(
+            ctx.malformed(None, format!("truncated GLB (file has {} bytes, the header alone needs 12)", bytes.len()))
+        );
     };
     if version != 2 {
-        return Err(ctx.unsupported(format!(
-            "GLB version {version} is not supported; re-export as glTF 2.0"
-        )));
+        return Err(ctx.unsupported(format!("GLB version {version} is not supported; re-export as glTF 2.0")));
     }
     let length = length as usize;
     if length > bytes.len() {
-        return Err(ctx.malformed(
-            None,
-            format!(
-                "truncated GLB (header says {length} bytes, file has {})",
-                bytes.len()
-            ),
-        ));
+        return Err(
+            ctx.malformed(None, format!("truncated GLB (header says {length} bytes, file has {})", bytes.len()))
+        );
     }
     if length < 12 {
-        return Err(ctx.malformed(
-            None,
-            format!("invalid GLB header: total length {length} is below 12"),
-        ));
+        return Err(ctx.malformed(None, format!("invalid GLB header: total length {length} is below 12")));
     }
     let data = &bytes[12..length];
     let (mut json_chunk, mut bin_chunk): (Option<&[u8]>, Option<&[u8]>) = (None, None);
@@ -67,36 +53,20 @@ pub(super) fn parse_glb(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError>
     let mut index = 0usize;
     while pos < data.len() {
         let (Some(len), Some(ty)) = (u32_at(data, pos), u32_at(data, pos + 4)) else {
-            return Err(ctx.malformed(
-                None,
-                format!(
-                    "truncated GLB: chunk header at byte {} is cut off",
-                    12 + pos
-                ),
-            ));
+            return Err(ctx.malformed(None, format!("truncated GLB: chunk header at byte {} is cut off", 12 + pos)));
         };
         let start = pos + 8;
-        let end = start
-            .checked_add(len as usize)
-            .filter(|&e| e <= data.len())
-            .ok_or_else(|| {
-                ctx.malformed(
-                    None,
-                    format!(
-                        "truncated GLB: chunk {index} declares {len} bytes but only {} remain",
-                        data.len() - start
-                    ),
-                )
-            })?;
+        let end = start.checked_add(len as usize).filter(|&e| e <= data.len()).ok_or_else(|| {
+            ctx.malformed(
+                None,
+                format!("truncated GLB: chunk {index} declares {len} bytes but only {} remain", data.len() - start),
+            )
+        })?;
         let chunk = &data[start..end];
         match ty {
             CHUNK_JSON if index == 0 => json_chunk = Some(chunk),
             CHUNK_BIN if index > 0 && bin_chunk.is_none() => bin_chunk = Some(chunk),
-            _ if index == 0 => {
-                return Err(
-                    ctx.malformed(None, "invalid GLB: the first chunk must be the JSON chunk")
-                )
-            }
+            _ if index == 0 => return Err(ctx.malformed(None, "invalid GLB: the first chunk must be the JSON chunk")),
             _ => {}
         }
         pos = end;
@@ -115,24 +85,16 @@ pub(super) fn parse_gltf(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError
 }
 
 fn trim_end_padding(b: &[u8]) -> &[u8] {
-    let end = b
-        .iter()
-        .rposition(|&c| !(c == 0 || c.is_ascii_whitespace()))
-        .map_or(0, |i| i + 1);
+    let end = b.iter().rposition(|&c| !(c == 0 || c.is_ascii_whitespace())).map_or(0, |i| i + 1);
     &b[..end]
 }
 
 fn json_error(e: serde_json::Error, text: &[u8], is_glb: bool, ctx: &Ctx) -> ImportError {
     // glTF 1.0 has a different schema: say so instead of reporting a schema mismatch.
     if let Ok(v) = serde_json::from_slice::<serde_json::Value>(text) {
-        let version = v
-            .get("asset")
-            .and_then(|a| a.get("version"))
-            .and_then(|v| v.as_str());
+        let version = v.get("asset").and_then(|a| a.get("version")).and_then(|v| v.as_str());
         if let Some(ver) = version.filter(|s| !s.starts_with('2')) {
-            return ctx.unsupported(format!(
-                "glTF version {ver} is not supported; re-export as glTF 2.0"
-            ));
+            return ctx.unsupported(format!("glTF version {ver} is not supported; re-export as glTF 2.0"));
         }
     }
     let full = e.to_string();
@@ -148,10 +110,7 @@ fn json_error(e: serde_json::Error, text: &[u8], is_glb: bool, ctx: &Ctx) -> Imp
         };
         ctx.malformed(None, format!("invalid glTF JSON{loc}: {msg}"))
     } else {
-        ctx.malformed(
-            Some(e.line()),
-            format!("invalid glTF JSON (column {}): {msg}", e.column()),
-        )
+        ctx.malformed(Some(e.line()), format!("invalid glTF JSON (column {}): {msg}", e.column()))
     }
 }
 
@@ -167,41 +126,29 @@ impl<'a> Buffers<'a> {
             return Ok(());
         }
         let b = root.buffers.get(i).ok_or_else(|| {
-            ctx.malformed(
-                None,
-                format!("buffer {i} does not exist ({} buffers)", root.buffers.len()),
-            )
+            ctx.malformed(None, format!("buffer {i} does not exist ({} buffers)", root.buffers.len()))
         })?;
         let bytes: Cow<'a, [u8]> = match &b.uri {
             None => match self.bin {
                 Some(bin) if i == 0 => Cow::Borrowed(bin),
                 _ => {
-                    return Err(ctx.malformed(
-                        None,
-                        format!("buffer {i} has no uri and there is no GLB binary chunk for it"),
-                    ))
+                    return Err(
+                        ctx.malformed(None, format!("buffer {i} has no uri and there is no GLB binary chunk for it"))
+                    )
                 }
             },
-            Some(uri)
-                if uri
-                    .get(..5)
-                    .is_some_and(|p| p.eq_ignore_ascii_case("data:")) =>
-            {
-                let comma = uri.find(',').ok_or_else(|| {
-                    ctx.malformed(
-                        None,
-                        format!("buffer {i} has a malformed data: URI (no comma)"),
-                    )
-                })?;
+            Some(uri) if uri.get(..5).is_some_and(|p| p.eq_ignore_ascii_case("data:")) => {
+                let comma = uri
+                    .find(',')
+                    .ok_or_else(|| ctx.malformed(None, format!("buffer {i} has a malformed data: URI (no comma)")))?;
                 let header = &uri[5..comma];
                 if !header.to_ascii_lowercase().ends_with(";base64") {
                     return Err(ctx.unsupported(format!(
                         "buffer {i} uses a data: URI that is not base64-encoded; re-export with embedded base64 buffers or as .glb"
                     )));
                 }
-                let decoded = base64::decode(&uri.as_bytes()[comma + 1..]).map_err(|e| {
-                    ctx.malformed(None, format!("buffer {i}: {e} in its data: URI"))
-                })?;
+                let decoded = base64::decode(&uri.as_bytes()[comma + 1..])
+                    .map_err(|e| ctx.malformed(None, format!("buffer {i}: {e} in its data: URI")))?;
                 Cow::Owned(decoded)
             }
             Some(uri) => {
@@ -213,13 +160,9 @@ impl<'a> Buffers<'a> {
         };
         let declared = b.byte_length.0;
         if (bytes.len() as u64) < declared {
-            return Err(ctx.malformed(
-                None,
-                format!(
-                    "buffer {i} declares {declared} bytes but contains only {}",
-                    bytes.len()
-                ),
-            ));
+            return Err(
+                ctx.malformed(None, format!("buffer {i} declares {declared} bytes but contains only {}", bytes.len()))
+            );
         }
         if self.data.len() <= i {
             self.data.resize(i + 1, None);
@@ -233,12 +176,7 @@ impl<'a> Buffers<'a> {
     }
 
     /// Loads every buffer accessor `ai` reads from.
-    fn ensure_for_accessor(
-        &mut self,
-        root: &json::Root,
-        ai: usize,
-        ctx: &Ctx,
-    ) -> Result<(), ImportError> {
+    fn ensure_for_accessor(&mut self, root: &json::Root, ai: usize, ctx: &Ctx) -> Result<(), ImportError> {
         let acc = accessor(root, ai, ctx)?;
         let mut views = Vec::with_capacity(3);
         views.extend(acc.buffer_view.map(|v| v.value()));
@@ -254,35 +192,15 @@ impl<'a> Buffers<'a> {
     }
 }
 
-fn accessor<'r>(
-    root: &'r json::Root,
-    ai: usize,
-    ctx: &Ctx,
-) -> Result<&'r json::Accessor, ImportError> {
+fn accessor<'r>(root: &'r json::Root, ai: usize, ctx: &Ctx) -> Result<&'r json::Accessor, ImportError> {
     root.accessors.get(ai).ok_or_else(|| {
-        ctx.malformed(
-            None,
-            format!(
-                "accessor {ai} does not exist ({} accessors)",
-                root.accessors.len()
-            ),
-        )
+        ctx.malformed(None, format!("accessor {ai} does not exist ({} accessors)", root.accessors.len()))
     })
 }
 
-fn view<'r>(
-    root: &'r json::Root,
-    vi: usize,
-    ctx: &Ctx,
-) -> Result<&'r json::buffer::View, ImportError> {
+fn view<'r>(root: &'r json::Root, vi: usize, ctx: &Ctx) -> Result<&'r json::buffer::View, ImportError> {
     root.buffer_views.get(vi).ok_or_else(|| {
-        ctx.malformed(
-            None,
-            format!(
-                "bufferView {vi} does not exist ({} bufferViews)",
-                root.buffer_views.len()
-            ),
-        )
+        ctx.malformed(None, format!("bufferView {vi} does not exist ({} bufferViews)", root.buffer_views.len()))
     })
 }
 
@@ -303,22 +221,14 @@ fn read_component(data: &[u8], at: u64, ct: ComponentType, normalized: bool) -> 
         ComponentType::U8 => (f64::from(b[0]), 255.0),
         ComponentType::I16 => (f64::from(i16::from_le_bytes([b[0], b[1]])), 32767.0),
         ComponentType::U16 => (f64::from(u16::from_le_bytes([b[0], b[1]])), 65535.0),
-        ComponentType::U32 => (
-            f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            4294967295.0,
-        ),
+        ComponentType::U32 => (f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])), 4294967295.0),
         ComponentType::F32 => return Some(f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]]))),
     };
     Some(if normalized { (v / scale).max(-1.0) } else { v })
 }
 
 /// Byte range `[start, end)` of a buffer view inside its (loaded) buffer.
-fn view_range(
-    root: &json::Root,
-    bufs: &Buffers,
-    vi: usize,
-    ctx: &Ctx,
-) -> Result<(u64, u64, usize), ImportError> {
+fn view_range(root: &json::Root, bufs: &Buffers, vi: usize, ctx: &Ctx) -> Result<(u64, u64, usize), ImportError> {
     let v = view(root, vi, ctx)?;
     let b = v.buffer.value();
     let start = v.byte_offset.map_or(0, |o| o.0);
@@ -354,9 +264,7 @@ fn read_accessor(
     let acc = accessor(root, ai, ctx)?;
     let ct = match acc.component_type {
         Checked::Valid(g) => g.0,
-        Checked::Invalid => {
-            return Err(ctx.malformed(None, format!("accessor {ai} has an invalid componentType")))
-        }
+        Checked::Invalid => return Err(ctx.malformed(None, format!("accessor {ai} has an invalid componentType"))),
     };
     let dims: usize = match acc.type_ {
         Checked::Valid(Type::Scalar) => 1,
@@ -364,14 +272,9 @@ fn read_accessor(
         Checked::Valid(Type::Vec3) => 3,
         Checked::Valid(Type::Vec4) => 4,
         Checked::Valid(_) => {
-            return Err(ctx.malformed(
-                None,
-                format!("accessor {ai} is a matrix; expected positions or indices"),
-            ))
+            return Err(ctx.malformed(None, format!("accessor {ai} is a matrix; expected positions or indices")))
         }
-        Checked::Invalid => {
-            return Err(ctx.malformed(None, format!("accessor {ai} has an invalid type")))
-        }
+        Checked::Invalid => return Err(ctx.malformed(None, format!("accessor {ai} has an invalid type"))),
     };
     let count = acc.count.0;
     if count > max_count {
@@ -397,10 +300,8 @@ fn read_accessor(
         }
         let offset = acc.byte_offset.map_or(0, |o| o.0);
         if count > 0 {
-            let need = stride
-                .checked_mul(count - 1)
-                .and_then(|x| x.checked_add(elem))
-                .and_then(|x| x.checked_add(offset));
+            let need =
+                stride.checked_mul(count - 1).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(offset));
             match need {
                 Some(need) if need <= vend - vstart => {}
                 _ => {
@@ -417,10 +318,8 @@ fn read_accessor(
         for i in 0..count {
             let at = base + i * stride;
             for c in 0..dims as u64 {
-                let v =
-                    read_component(data, at + c * csize, ct, acc.normalized).ok_or_else(|| {
-                        out_of_range(format!("accessor {ai}: read past the end of buffer {b}"))
-                    })?;
+                let v = read_component(data, at + c * csize, ct, acc.normalized)
+                    .ok_or_else(|| out_of_range(format!("accessor {ai}: read past the end of buffer {b}")))?;
                 values.push(v);
             }
         }
@@ -441,33 +340,21 @@ fn read_accessor(
     if let Some(sparse) = &acc.sparse {
         let sc = sparse.count.0;
         if sc > count {
-            return Err(out_of_range(format!(
-                "accessor {ai}: sparse count {sc} exceeds the accessor count {count}"
-            )));
+            return Err(out_of_range(format!("accessor {ai}: sparse count {sc} exceeds the accessor count {count}")));
         }
         let ict = match sparse.indices.component_type {
             Checked::Valid(t) => t.0,
-            Checked::Invalid => {
-                return Err(out_of_range(format!(
-                    "accessor {ai}: invalid sparse index componentType"
-                )))
-            }
+            Checked::Invalid => return Err(out_of_range(format!("accessor {ai}: invalid sparse index componentType"))),
         };
         let isize = component_size(ict);
         let (istart, iend, ib) = view_range(root, bufs, sparse.indices.buffer_view.value(), ctx)?;
         let (vstart, vend, vb) = view_range(root, bufs, sparse.values.buffer_view.value(), ctx)?;
         let ioff = istart.checked_add(sparse.indices.byte_offset.0);
         let voff = vstart.checked_add(sparse.values.byte_offset.0);
-        let ifits = ioff
-            .and_then(|o| o.checked_add(sc.checked_mul(isize)?))
-            .is_some_and(|e| e <= iend);
-        let vfits = voff
-            .and_then(|o| o.checked_add(sc.checked_mul(elem)?))
-            .is_some_and(|e| e <= vend);
+        let ifits = ioff.and_then(|o| o.checked_add(sc.checked_mul(isize)?)).is_some_and(|e| e <= iend);
+        let vfits = voff.and_then(|o| o.checked_add(sc.checked_mul(elem)?)).is_some_and(|e| e <= vend);
         let (Some(ioff), Some(voff), true, true) = (ioff, voff, ifits, vfits) else {
-            return Err(out_of_range(format!(
-                "accessor {ai}: sparse data does not fit in its bufferViews"
-            )));
+            return Err(out_of_range(format!("accessor {ai}: sparse data does not fit in its bufferViews")));
         };
         let (idata, vdata) = (bufs.get(ib), bufs.get(vb));
         for k in 0..sc {
@@ -480,13 +367,8 @@ fn read_accessor(
             }
             let row = target as usize * dims;
             for c in 0..dims {
-                let v = read_component(
-                    vdata,
-                    voff + k * elem + c as u64 * csize,
-                    ct,
-                    acc.normalized,
-                )
-                .ok_or_else(bad)?;
+                let v =
+                    read_component(vdata, voff + k * elem + c as u64 * csize, ct, acc.normalized).ok_or_else(bad)?;
                 if let Some(slot) = values.get_mut(row + c) {
                     *slot = v;
                 }
@@ -501,21 +383,14 @@ fn node_matrix(node: &json::Node, ni: usize, ctx: &Ctx) -> Result<DMat4, ImportE
     let m = if let Some(m) = node.matrix {
         DMat4::from_cols_array(&m.map(f64::from))
     } else {
-        let t = node
-            .translation
-            .map_or(DVec3::ZERO, |t| DVec3::from_array(t.map(f64::from)));
-        let s = node
-            .scale
-            .map_or(DVec3::ONE, |s| DVec3::from_array(s.map(f64::from)));
+        let t = node.translation.map_or(DVec3::ZERO, |t| DVec3::from_array(t.map(f64::from)));
+        let s = node.scale.map_or(DVec3::ONE, |s| DVec3::from_array(s.map(f64::from)));
         let r = match node.rotation {
             Some(q) => {
                 let q = DQuat::from_array(q.0.map(f64::from));
                 let len = q.length();
                 if !(len.is_finite() && len > 0.0) {
-                    return Err(ctx.malformed(
-                        None,
-                        format!("node {ni} has an invalid rotation quaternion"),
-                    ));
+                    return Err(ctx.malformed(None, format!("node {ni} has an invalid rotation quaternion")));
                 }
                 q / len
             }
@@ -530,45 +405,26 @@ fn node_matrix(node: &json::Node, ni: usize, ctx: &Ctx) -> Result<DMat4, ImportE
 }
 
 /// (mesh index, world transform) for every mesh instance to import.
-fn instances(
-    root: &json::Root,
-    notes: &mut Vec<String>,
-    ctx: &Ctx,
-) -> Result<Vec<(usize, DMat4)>, ImportError> {
+fn instances(root: &json::Root, notes: &mut Vec<String>, ctx: &Ctx) -> Result<Vec<(usize, DMat4)>, ImportError> {
     if root.scenes.is_empty() {
         if !root.meshes.is_empty() {
             notes.push("the file has no scene; imported every mesh once, untransformed".into());
         }
-        return Ok((0..root.meshes.len())
-            .map(|m| (m, DMat4::IDENTITY))
-            .collect());
+        return Ok((0..root.meshes.len()).map(|m| (m, DMat4::IDENTITY)).collect());
     }
     let si = root.scene.map_or(0, |s| s.value());
     let scene = root.scenes.get(si).ok_or_else(|| {
-        ctx.malformed(
-            None,
-            format!(
-                "default scene {si} does not exist ({} scenes)",
-                root.scenes.len()
-            ),
-        )
+        ctx.malformed(None, format!("default scene {si} does not exist ({} scenes)", root.scenes.len()))
     })?;
     let mut visited = vec![false; root.nodes.len()];
     let mut repeated = 0usize;
     let mut out = Vec::new();
-    let mut stack: Vec<(usize, DMat4)> = scene
-        .nodes
-        .iter()
-        .rev()
-        .map(|n| (n.value(), DMat4::IDENTITY))
-        .collect();
+    let mut stack: Vec<(usize, DMat4)> = scene.nodes.iter().rev().map(|n| (n.value(), DMat4::IDENTITY)).collect();
     while let Some((ni, parent)) = stack.pop() {
-        let node = root.nodes.get(ni).ok_or_else(|| {
-            ctx.malformed(
-                None,
-                format!("node {ni} does not exist ({} nodes)", root.nodes.len()),
-            )
-        })?;
+        let node = root
+            .nodes
+            .get(ni)
+            .ok_or_else(|| ctx.malformed(None, format!("node {ni} does not exist ({} nodes)", root.nodes.len())))?;
         if std::mem::replace(&mut visited[ni], true) {
             repeated += 1;
             continue;
@@ -579,10 +435,7 @@ fn instances(
             if m >= root.meshes.len() {
                 return Err(ctx.malformed(
                     None,
-                    format!(
-                        "node {ni} refers to mesh {m}, which does not exist ({} meshes)",
-                        root.meshes.len()
-                    ),
+                    format!("node {ni} refers to mesh {m}, which does not exist ({} meshes)", root.meshes.len()),
                 ));
             }
             out.push((m, world));
@@ -592,18 +445,13 @@ fn instances(
         }
     }
     if repeated > 0 {
-        notes.push(format!(
-            "ignored {repeated} repeated node references (the node hierarchy must be a tree)"
-        ));
+        notes.push(format!("ignored {repeated} repeated node references (the node hierarchy must be a tree)"));
     }
     Ok(out)
 }
 
 fn is_triangle_mode(mode: Mode) -> bool {
-    matches!(
-        mode,
-        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-    )
+    matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan)
 }
 
 fn triangles_for(mode: Mode, n: u64) -> u64 {
@@ -614,19 +462,12 @@ fn triangles_for(mode: Mode, n: u64) -> u64 {
     }
 }
 
-fn parse_document(
-    text: &[u8],
-    bin: Option<&[u8]>,
-    is_glb: bool,
-    ctx: &Ctx,
-) -> Result<RawMesh, ImportError> {
-    let root: json::Root =
-        serde_json::from_slice(text).map_err(|e| json_error(e, text, is_glb, ctx))?;
+fn parse_document(text: &[u8], bin: Option<&[u8]>, is_glb: bool, ctx: &Ctx) -> Result<RawMesh, ImportError> {
+    let root: json::Root = serde_json::from_slice(text).map_err(|e| json_error(e, text, is_glb, ctx))?;
     if !root.asset.version.starts_with('2') {
-        return Err(ctx.unsupported(format!(
-            "glTF version {} is not supported; re-export as glTF 2.0",
-            root.asset.version
-        )));
+        return Err(
+            ctx.unsupported(format!("glTF version {} is not supported; re-export as glTF 2.0", root.asset.version))
+        );
     }
     let mut raw = RawMesh::default();
     for ext in &root.extensions_required {
@@ -664,10 +505,7 @@ fn parse_document(
     }
     ctx.check_limits(total_tris, total_verts)?;
 
-    let mut bufs = Buffers {
-        data: Vec::new(),
-        bin,
-    };
+    let mut bufs = Buffers { data: Vec::new(), bin };
     let (mut points, mut lines, mut unknown_mode, mut no_position, mut leftover) = (0, 0, 0, 0, 0);
     for &(m, world) in &instances {
         let flip = world.determinant() < 0.0;
@@ -695,10 +533,9 @@ fn parse_document(
             bufs.ensure_for_accessor(&root, pa, ctx)?;
             let pos = read_accessor(&root, &bufs, pa, MAX_VERTICES as u64, ctx)?;
             if pos.dims != 3 {
-                return Err(ctx.malformed(
-                    None,
-                    format!("mesh {m} primitive {pi}: POSITION accessor {pa} must be VEC3"),
-                ));
+                return Err(
+                    ctx.malformed(None, format!("mesh {m} primitive {pi}: POSITION accessor {pa} must be VEC3"))
+                );
             }
             let nv = pos.values.len() / 3;
             let base = raw.positions.len();
@@ -707,9 +544,7 @@ fn parse_document(
                 if !q.is_finite() {
                     return Err(ctx.malformed(
                         None,
-                        format!(
-                            "mesh {m} primitive {pi}: a vertex position is not a finite number"
-                        ),
+                        format!("mesh {m} primitive {pi}: a vertex position is not a finite number"),
                     ));
                 }
                 raw.positions.push(q);
@@ -733,10 +568,9 @@ fn parse_document(
                     }
                     let idx = read_accessor(&root, &bufs, ia, 3 * MAX_TRIANGLES as u64 + 2, ctx)?;
                     if idx.dims != 1 {
-                        return Err(ctx.malformed(
-                            None,
-                            format!("mesh {m} primitive {pi}: index accessor {ia} must be SCALAR"),
-                        ));
+                        return Err(
+                            ctx.malformed(None, format!("mesh {m} primitive {pi}: index accessor {ia} must be SCALAR"))
+                        );
                     }
                     let mut out = Vec::with_capacity(idx.values.len());
                     for &v in &idx.values {
@@ -758,26 +592,23 @@ fn parse_document(
             let before = raw.triangles.len();
             match mode {
                 Mode::Triangles => {
-                    raw.triangles
-                        .extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
+                    raw.triangles.extend(indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]));
                     if !indices.len().is_multiple_of(3) {
                         leftover += 1;
                     }
                 }
                 Mode::TriangleStrip => {
-                    raw.triangles
-                        .extend(indices.windows(3).enumerate().map(|(i, w)| {
-                            if i % 2 == 0 {
-                                [w[0], w[1], w[2]]
-                            } else {
-                                [w[1], w[0], w[2]]
-                            }
-                        }));
+                    raw.triangles.extend(indices.windows(3).enumerate().map(|(i, w)| {
+                        if i % 2 == 0 {
+                            [w[0], w[1], w[2]]
+                        } else {
+                            [w[1], w[0], w[2]]
+                        }
+                    }));
                 }
                 Mode::TriangleFan => {
                     if let Some((&first, rest)) = indices.split_first() {
-                        raw.triangles
-                            .extend(rest.windows(2).map(|w| [w[0], w[1], first]));
+                        raw.triangles.extend(rest.windows(2).map(|w| [w[0], w[1], first]));
                     }
                 }
                 _ => {}
@@ -790,12 +621,7 @@ fn parse_document(
             raw.source_polygons += raw.triangles.len() - before;
         }
     }
-    let plural = |n: usize, what: &str| {
-        format!(
-            "skipped {n} {what} primitive{}",
-            if n == 1 { "" } else { "s" }
-        )
-    };
+    let plural = |n: usize, what: &str| format!("skipped {n} {what} primitive{}", if n == 1 { "" } else { "s" });
     if points > 0 {
         raw.notes.push(plural(points, "point"));
     }

@@ -13,14 +13,15 @@ mod gltf;
 mod obj;
 mod raw;
 
+
 use crate::geometry::bspline::BSplineSurface;
-use crate::geometry::mesh::topology::{MeshStats, Topology};
 use crate::geometry::mesh::weld::weld_with_face_map;
 use crate::geometry::mesh::{Face, PolyMesh, TriMesh};
+use crate::geometry::mesh::topology::{MeshStats, Topology};
 use serde::{Deserialize, Serialize};
 
-use raw::{check_scale, Ctx, RawMesh};
 pub use raw::{ImportError, MAX_BYTES, MAX_COORDINATE, MAX_TRIANGLES, MAX_VERTICES, MIN_DIAGONAL};
+use raw::{check_scale, Ctx, RawMesh};
 
 /// Vertices closer than this fraction of the bounding-box diagonal are merged.
 pub const WELD_TOLERANCE: f64 = 1e-7;
@@ -101,11 +102,7 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Option<Format> {
     }
     let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     if text.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
-        return Some(if bspline::looks_like_bspline(text) {
-            Format::BSplineJson
-        } else {
-            Format::Gltf
-        });
+        return Some(if bspline::looks_like_bspline(text) { Format::BSplineJson } else { Format::Gltf });
     }
     match extension(file_name).as_str() {
         "obj" => Some(Format::Obj),
@@ -121,17 +118,14 @@ fn looks_like_obj(bytes: &[u8]) -> bool {
     let head = &bytes[..bytes.len().min(1 << 16)];
     head.split(|&b| b == b'\n').any(|l| {
         let l = l.trim_ascii_start();
-        (l.starts_with(b"v") || l.starts_with(b"f"))
-            && l.get(1).is_some_and(|b| *b == b' ' || *b == b'\t')
+        (l.starts_with(b"v") || l.starts_with(b"f")) && l.get(1).is_some_and(|b| *b == b' ' || *b == b'\t')
     })
 }
 
 /// Imports a mesh (OBJ, glTF, GLB) or a B-spline surface (JSON) from memory. `file_name` is used
 /// for format detection (after the content) and error messages.
 pub fn import_file(bytes: &[u8], file_name: &str) -> Result<ImportedFile, ImportError> {
-    let ctx = Ctx {
-        file: display_name(file_name),
-    };
+    let ctx = Ctx { file: display_name(file_name) };
     let format = file_format(bytes, file_name, &ctx)?;
     if format == Format::BSplineJson {
         let (surface, notes) = bspline::parse(bytes, &ctx)?;
@@ -143,9 +137,7 @@ pub fn import_file(bytes: &[u8], file_name: &str) -> Result<ImportedFile, Import
 /// Imports an OBJ, glTF or GLB file from memory. `file_name` is used for format detection
 /// (after the content) and error messages.
 pub fn import_mesh(bytes: &[u8], file_name: &str) -> Result<Imported, ImportError> {
-    let ctx = Ctx {
-        file: display_name(file_name),
-    };
+    let ctx = Ctx { file: display_name(file_name) };
     let format = file_format(bytes, file_name, &ctx)?;
     mesh_of_format(bytes, format, &ctx)
 }
@@ -163,11 +155,7 @@ fn file_format(bytes: &[u8], file_name: &str, ctx: &Ctx) -> Result<Format, Impor
         None if looks_like_obj(bytes) => Ok(Format::Obj),
         None => {
             let ext = extension(file_name);
-            let what = if ext.is_empty() {
-                "this file".to_string()
-            } else {
-                format!("'.{ext}' files")
-            };
+            let what = if ext.is_empty() { "this file".to_string() } else { format!("'.{ext}' files") };
             Err(ctx.unsupported(format!(
                 "cannot import {what}; expected a Wavefront .obj, a glTF 2.0 .gltf, a .glb or a B-spline surface .json file"
             )))
@@ -180,23 +168,14 @@ fn mesh_of_format(bytes: &[u8], format: Format, ctx: &Ctx) -> Result<Imported, I
         Format::Obj => obj::parse(bytes, ctx)?,
         Format::Gltf => self::gltf::parse_gltf(bytes, ctx)?,
         Format::Glb => self::gltf::parse_glb(bytes, ctx)?,
-        Format::BSplineJson => {
-            return Err(ctx.unsupported("this is a B-spline surface, not a mesh"))
-        }
+        Format::BSplineJson => return Err(ctx.unsupported("this is a B-spline surface, not a mesh")),
     };
     finish(raw, format, ctx)
 }
 
 /// Welds, validates and measures a parsed mesh.
 fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportError> {
-    let RawMesh {
-        positions,
-        triangles,
-        source_polygons,
-        dropped_faces,
-        mut notes,
-        quads,
-    } = raw;
+    let RawMesh { positions, triangles, source_polygons, dropped_faces, mut notes, quads } = raw;
     if triangles.is_empty() {
         let mut reason = "no faces found".to_string();
         if !notes.is_empty() {
@@ -205,15 +184,9 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
         return Err(ctx.empty(reason));
     }
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(ctx.malformed(
-            None,
-            format!("vertex {} has a non-finite coordinate", i + 1),
-        ));
+        return Err(ctx.malformed(None, format!("vertex {} has a non-finite coordinate", i + 1)));
     }
-    if let Some(t) = triangles
-        .iter()
-        .find(|t| t.iter().any(|&v| v as usize >= positions.len()))
-    {
+    if let Some(t) = triangles.iter().find(|t| t.iter().any(|&v| v as usize >= positions.len())) {
         // Parsers check indices; this guards the invariant.
         return Err(ctx.malformed(None, format!("face {t:?} refers to a missing vertex")));
     }
@@ -224,27 +197,16 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
     let total_faces = raw_mesh.triangles.len();
     drop(raw_mesh);
     if mesh.triangles.is_empty() {
-        return Err(ctx.empty(format!(
-            "all {total_faces} faces are degenerate (zero area or repeated vertices)"
-        )));
+        return Err(ctx.empty(format!("all {total_faces} faces are degenerate (zero area or repeated vertices)")));
     }
     if report.merged_vertices > 0 {
-        notes.push(format!(
-            "merged {} coincident vertices",
-            report.merged_vertices
-        ));
+        notes.push(format!("merged {} coincident vertices", report.merged_vertices));
     }
     if report.dropped_faces > 0 {
-        notes.push(format!(
-            "dropped {} degenerate or duplicate faces",
-            report.dropped_faces
-        ));
+        notes.push(format!("dropped {} degenerate or duplicate faces", report.dropped_faces));
     }
     if report.removed_unreferenced > 0 {
-        notes.push(format!(
-            "removed {} unused vertices",
-            report.removed_unreferenced
-        ));
+        notes.push(format!("removed {} unused vertices", report.removed_unreferenced));
     }
     let stats = Topology::new(&mesh).stats(&mesh);
     let faces = polygon_faces(&mesh, &quads, &face_map);
@@ -259,6 +221,7 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
         notes,
     })
 }
+
 
 /// The faces of the welded `mesh`: a quad where both triangles of an input quad survived
 /// next to each other and still form a quad (4 distinct corners, split from corner 0), else

@@ -25,11 +25,7 @@ struct Lines<'a> {
 
 impl<'a> Lines<'a> {
     fn new(data: &'a [u8]) -> Self {
-        Self {
-            data,
-            pos: 0,
-            line: 0,
-        }
+        Self { data, pos: 0, line: 0 }
     }
 }
 
@@ -50,11 +46,7 @@ impl<'a> Iterator for Lines<'a> {
             self.line += 1;
             let trimmed = phys.trim_ascii_end();
             let continued = trimmed.last() == Some(&b'\\') && self.pos < self.data.len();
-            let part = if continued {
-                &trimmed[..trimmed.len() - 1]
-            } else {
-                phys
-            };
+            let part = if continued { &trimmed[..trimmed.len() - 1] } else { phys };
             match (&mut joined, continued) {
                 (None, false) => return Some((first_line, Cow::Borrowed(part))),
                 (None, true) => {
@@ -82,8 +74,7 @@ fn strip_comment(line: &[u8]) -> &[u8] {
 }
 
 fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
-    line.split(|b| b.is_ascii_whitespace() || *b == 0x0b)
-        .filter(|t| !t.is_empty())
+    line.split(|b| b.is_ascii_whitespace() || *b == 0x0b).filter(|t| !t.is_empty())
 }
 
 fn parse_f64(tok: &[u8]) -> Option<f64> {
@@ -128,24 +119,15 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
                 let mut c = [0.0f64; 3];
                 for (k, slot) in c.iter_mut().enumerate() {
                     let tok = it.next().ok_or_else(|| {
-                        ctx.malformed(
-                            Some(ln),
-                            format!("vertex needs 3 coordinates (x y z), found {k}"),
-                        )
+                        ctx.malformed(Some(ln), format!("vertex needs 3 coordinates (x y z), found {k}"))
                     })?;
                     let x = parse_f64(tok).ok_or_else(|| {
-                        ctx.malformed(
-                            Some(ln),
-                            format!("invalid number '{}' in vertex", excerpt(tok)),
-                        )
+                        ctx.malformed(Some(ln), format!("invalid number '{}' in vertex", excerpt(tok)))
                     })?;
                     if !x.is_finite() {
                         return Err(ctx.malformed(
                             Some(ln),
-                            format!(
-                                "vertex coordinate '{}' is not a finite number",
-                                excerpt(tok)
-                            ),
+                            format!("vertex coordinate '{}' is not a finite number", excerpt(tok)),
                         ));
                     }
                     *slot = x;
@@ -157,17 +139,13 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
                 for tok in it {
                     let v = tok.split(|&b| b == b'/').next().unwrap_or(tok);
                     let i = parse_i64(v).ok_or_else(|| {
-                        ctx.malformed(
-                            Some(ln),
-                            format!("invalid vertex index '{}' in face", excerpt(tok)),
-                        )
+                        ctx.malformed(Some(ln), format!("invalid vertex index '{}' in face", excerpt(tok)))
                     })?;
                     let idx = match i {
                         0 => {
-                            return Err(ctx.malformed(
-                                Some(ln),
-                                "face refers to vertex 0, but OBJ vertex numbers start at 1",
-                            ))
+                            return Err(
+                                ctx.malformed(Some(ln), "face refers to vertex 0, but OBJ vertex numbers start at 1")
+                            )
                         }
                         i if i > 0 => {
                             if i as u64 > n_vertices as u64 {
@@ -203,9 +181,8 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
                 }
             }
             b"l" | b"p" => lines_points += 1,
-            b"vt" | b"vn" | b"vp" | b"g" | b"o" | b"s" | b"usemtl" | b"mtllib" | b"usemap"
-            | b"maplib" | b"lod" | b"shadow_obj" | b"trace_obj" | b"bevel" | b"c_interp"
-            | b"d_interp" => {}
+            b"vt" | b"vn" | b"vp" | b"g" | b"o" | b"s" | b"usemtl" | b"mtllib" | b"usemap" | b"maplib" | b"lod"
+            | b"shadow_obj" | b"trace_obj" | b"bevel" | b"c_interp" | b"d_interp" => {}
             other => {
                 let key = excerpt(other);
                 if ignored.len() < 8 || ignored.contains_key(&key) {
@@ -216,10 +193,7 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
     }
 
     // Triangulation.
-    let mut raw = RawMesh {
-        source_polygons: poly_ends.len() + short,
-        ..RawMesh::default()
-    };
+    let mut raw = RawMesh { source_polygons: poly_ends.len() + short, ..RawMesh::default() };
     raw.triangles.reserve(n_triangles as usize);
     let mut tri = Triangulator::default();
     let (mut fans, mut big) = (0usize, 0usize);
@@ -254,9 +228,7 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
     }
     raw.dropped_faces = short;
     if short > 0 {
-        raw.notes.push(format!(
-            "skipped {short} faces with fewer than 3 distinct vertices"
-        ));
+        raw.notes.push(format!("skipped {short} faces with fewer than 3 distinct vertices"));
     }
     if fans > 0 {
         raw.notes.push(format!(
@@ -269,16 +241,12 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
         ));
     }
     if lines_points > 0 {
-        raw.notes
-            .push(format!("skipped {lines_points} line/point elements (l, p)"));
+        raw.notes.push(format!("skipped {lines_points} line/point elements (l, p)"));
     }
     if !ignored.is_empty() {
         let total: usize = ignored.values().sum();
         let names: Vec<&str> = ignored.keys().map(|s| s.as_str()).collect();
-        raw.notes.push(format!(
-            "ignored {total} unsupported statements ({})",
-            names.join(", ")
-        ));
+        raw.notes.push(format!("ignored {total} unsupported statements ({})", names.join(", ")));
     }
     raw.positions = positions;
     Ok(raw)
@@ -335,12 +303,7 @@ impl Triangulator {
     /// Appends triangles for polygon `poly` (indices into `positions`, at least 3, no repeated
     /// consecutive indices) keeping its orientation. Returns false if it fell back to a fan.
     fn triangulate(&mut self, positions: &[DVec3], poly: &[u32], out: &mut Vec<[u32; 3]>) -> bool {
-        let p = |i: usize| {
-            positions
-                .get(poly[i] as usize)
-                .copied()
-                .unwrap_or(DVec3::ZERO)
-        };
+        let p = |i: usize| positions.get(poly[i] as usize).copied().unwrap_or(DVec3::ZERO);
         match poly.len() {
             3 => {
                 out.push([poly[0], poly[1], poly[2]]);
@@ -349,8 +312,7 @@ impl Triangulator {
             4 => {
                 let q = [p(0), p(1), p(2), p(3)];
                 let n = newell_normal(&q);
-                let up =
-                    |a: usize, b: usize, c: usize| (q[b] - q[a]).cross(q[c] - q[a]).dot(n) > 0.0;
+                let up = |a: usize, b: usize, c: usize| (q[b] - q[a]).cross(q[c] - q[a]).dot(n) > 0.0;
                 let valid_a = up(0, 1, 2) && up(0, 2, 3);
                 let valid_b = up(1, 2, 3) && up(1, 3, 0);
                 let shorter_a = q[0].distance_squared(q[2]) <= q[1].distance_squared(q[3]);
@@ -384,10 +346,8 @@ impl Triangulator {
     /// Ear clipping in the plane orthogonal to the Newell normal.
     fn ear_clip(&mut self, positions: &[DVec3], poly: &[u32], out: &mut Vec<[u32; 3]>) -> bool {
         let n = poly.len();
-        let pts3: Vec<DVec3> = poly
-            .iter()
-            .map(|&v| positions.get(v as usize).copied().unwrap_or(DVec3::ZERO))
-            .collect();
+        let pts3: Vec<DVec3> =
+            poly.iter().map(|&v| positions.get(v as usize).copied().unwrap_or(DVec3::ZERO)).collect();
         let Some(normal) = newell_normal(&pts3).try_normalize() else {
             return false;
         };
@@ -395,12 +355,11 @@ impl Triangulator {
         let w = normal.cross(u);
         // (u, w, normal) is right-handed, so the polygon is counter-clockwise in (u, w).
         self.pts.clear();
-        self.pts
-            .extend(pts3.iter().map(|q| DVec2::new(q.dot(u), q.dot(w))));
-        let (lo, hi) = self.pts.iter().fold(
-            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-            |(l, h), q| (l.min(*q), h.max(*q)),
-        );
+        self.pts.extend(pts3.iter().map(|q| DVec2::new(q.dot(u), q.dot(w))));
+        let (lo, hi) = self
+            .pts
+            .iter()
+            .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(l, h), q| (l.min(*q), h.max(*q)));
         let scale = (hi - lo).max_element();
         if !(scale.is_finite() && scale > 0.0) {
             return false;

@@ -20,18 +20,9 @@ pub enum ImportError {
     /// Nothing to import: empty file, no faces, or only degenerate faces.
     Empty { file: String, reason: String },
     /// Over a limit: `count` `what` (e.g. "triangles", "bytes") exceed `limit`.
-    TooLarge {
-        file: String,
-        what: String,
-        count: u64,
-        limit: u64,
-    },
+    TooLarge { file: String, what: String, count: u64, limit: u64 },
     /// Broken syntax or structure; `line` is 1-based for text formats.
-    Malformed {
-        file: String,
-        line: Option<usize>,
-        message: String,
-    },
+    Malformed { file: String, line: Option<usize>, message: String },
     /// Valid input using something this importer does not handle.
     Unsupported { file: String, message: String },
 }
@@ -60,30 +51,17 @@ impl fmt::Display for ImportError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ImportError::Empty { file, reason } => write!(f, "{file}: {reason}"),
-            ImportError::TooLarge {
-                file,
-                what,
-                count,
-                limit,
-            } => {
+            ImportError::TooLarge { file, what, count, limit } => {
                 write!(f, "{file}: {count} {what} exceed the limit of {limit}")?;
                 if what == "bytes" {
                     write!(f, " ({} MiB)", limit >> 20)?;
                 }
                 Ok(())
             }
-            ImportError::Malformed {
-                file,
-                line: Some(line),
-                message,
-            } => {
+            ImportError::Malformed { file, line: Some(line), message } => {
                 write!(f, "{file}: line {line}: {message}")
             }
-            ImportError::Malformed {
-                file,
-                line: None,
-                message,
-            } => write!(f, "{file}: {message}"),
+            ImportError::Malformed { file, line: None, message } => write!(f, "{file}: {message}"),
             ImportError::Unsupported { file, message } => write!(f, "{file}: {message}"),
         }
     }
@@ -98,34 +76,19 @@ pub(crate) struct Ctx {
 
 impl Ctx {
     pub fn malformed(&self, line: Option<usize>, message: impl Into<String>) -> ImportError {
-        ImportError::Malformed {
-            file: self.file.clone(),
-            line,
-            message: printable(&message.into()),
-        }
+        ImportError::Malformed { file: self.file.clone(), line, message: printable(&message.into()) }
     }
 
     pub fn unsupported(&self, message: impl Into<String>) -> ImportError {
-        ImportError::Unsupported {
-            file: self.file.clone(),
-            message: printable(&message.into()),
-        }
+        ImportError::Unsupported { file: self.file.clone(), message: printable(&message.into()) }
     }
 
     pub fn empty(&self, reason: impl Into<String>) -> ImportError {
-        ImportError::Empty {
-            file: self.file.clone(),
-            reason: printable(&reason.into()),
-        }
+        ImportError::Empty { file: self.file.clone(), reason: printable(&reason.into()) }
     }
 
     pub fn too_large(&self, what: &str, count: u64, limit: usize) -> ImportError {
-        ImportError::TooLarge {
-            file: self.file.clone(),
-            what: what.into(),
-            count,
-            limit: limit as u64,
-        }
+        ImportError::TooLarge { file: self.file.clone(), what: what.into(), count, limit: limit as u64 }
     }
 
     /// Rejects counts over [`MAX_TRIANGLES`] / [`MAX_VERTICES`].
@@ -149,20 +112,9 @@ pub const MIN_DIAGONAL: f64 = 1e-100;
 /// Refuses a model whose scale the geometry cannot compute with: its largest coordinate and
 /// its extent (the largest side of its bounding box, computed without squaring).
 pub(crate) fn check_scale(positions: &[DVec3], ctx: &Ctx) -> Result<(), ImportError> {
-    let largest = positions
-        .iter()
-        .map(|p| p.abs().max_element())
-        .fold(0.0, f64::max);
-    let (lo, hi) = positions
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(*p), hi.max(*p))
-        });
-    let diag = if positions.is_empty() {
-        0.0
-    } else {
-        (hi - lo).max_element()
-    };
+    let largest = positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let diag = if positions.is_empty() { 0.0 } else { (hi - lo).max_element() };
     if largest > MAX_COORDINATE {
         return Err(ctx.unsupported(format!(
             "coordinates reach {largest:.3e}, beyond the range this program computes in (up to {MAX_COORDINATE:e}): rescale the model"

@@ -22,18 +22,8 @@ impl Arc {
     /// (made orthogonal to the edge).
     pub fn straight(from: DVec3, to: DVec3, plane_normal: DVec3) -> Arc {
         let e = (to - from).normalize_or_zero();
-        let n = (plane_normal - plane_normal.dot(e) * e)
-            .try_normalize()
-            .unwrap_or_else(|| e.any_orthonormal_vector());
-        Arc {
-            circle: Circle {
-                center: 0.5 * (from + to),
-                normal: n,
-                radius: f64::INFINITY,
-            },
-            from,
-            to,
-        }
+        let n = (plane_normal - plane_normal.dot(e) * e).try_normalize().unwrap_or_else(|| e.any_orthonormal_vector());
+        Arc { circle: Circle { center: 0.5 * (from + to), normal: n, radius: f64::INFINITY }, from, to }
     }
 
     pub fn is_straight(&self) -> bool {
@@ -42,14 +32,7 @@ impl Arc {
 
     /// The same edge traversed from `to` to `from` (normal flipped, so still counter-clockwise).
     pub fn reversed(&self) -> Arc {
-        Arc {
-            circle: Circle {
-                normal: -self.circle.normal,
-                ..self.circle
-            },
-            from: self.to,
-            to: self.from,
-        }
+        Arc { circle: Circle { normal: -self.circle.normal, ..self.circle }, from: self.to, to: self.from }
     }
 
     pub fn chord_length(&self) -> f64 {
@@ -61,9 +44,7 @@ impl Arc {
     fn basis(&self) -> (DVec3, DVec3) {
         let n = self.circle.normal;
         let d = self.from - self.circle.center;
-        let u = (d - d.dot(n) * n)
-            .try_normalize()
-            .unwrap_or_else(|| n.any_orthonormal_vector());
+        let u = (d - d.dot(n) * n).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
         (u, n.cross(u))
     }
 
@@ -132,11 +113,7 @@ impl Arc {
         }
         // Sagitta of a segment of angle Δ: 2r sin²(Δ/4) ≤ tol.
         let x = tol / (2.0 * r);
-        let dmax = if x >= 1.0 || !x.is_finite() {
-            std::f64::consts::PI
-        } else {
-            4.0 * x.sqrt().asin()
-        };
+        let dmax = if x >= 1.0 || !x.is_finite() { std::f64::consts::PI } else { 4.0 * x.sqrt().asin() };
         let dmax = dmax.clamp(1e-12, 0.5 * std::f64::consts::PI);
         let n = (theta / dmax).ceil();
         if n.is_finite() {
@@ -172,11 +149,7 @@ impl Arc {
         let u = (t - 0.5) * l;
         let rest = ((0.5 * l - u.abs()) * (0.5 * l + u.abs())).max(0.0); // l²/4 − u²
         let root = (h * h + rest).sqrt();
-        let s = if h >= 0.0 {
-            -rest / (root + h)
-        } else {
-            h - root
-        };
+        let s = if h >= 0.0 { -rest / (root + h) } else { h - root };
         x0 + s * w
     }
 

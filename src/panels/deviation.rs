@@ -14,16 +14,11 @@ pub const MAX_SAMPLES: usize = 16384;
 /// Points sampled on a panel: its tessellation vertices and its triangle centroids projected
 /// onto the panel's sphere (evenly thinned to at most about [`MAX_SAMPLES`]).
 pub fn panel_samples(panel: &Panel) -> Vec<DVec3> {
-    let stride = (panel.positions.len() + panel.triangles.len())
-        .div_ceil(MAX_SAMPLES)
-        .max(1);
+    let stride = (panel.positions.len() + panel.triangles.len()).div_ceil(MAX_SAMPLES).max(1);
     let mut pts: Vec<DVec3> = panel.positions.iter().step_by(stride).copied().collect();
     let base = panel.positions[0];
     for t in panel.triangles.iter().step_by(stride) {
-        let c = (panel.positions[t[0] as usize]
-            + panel.positions[t[1] as usize]
-            + panel.positions[t[2] as usize])
-            / 3.0;
+        let c = (panel.positions[t[0] as usize] + panel.positions[t[1] as usize] + panel.positions[t[2] as usize]) / 3.0;
         pts.push(project_to_sphere(&panel.sphere, base, c));
     }
     pts
@@ -62,9 +57,7 @@ fn max_deviation_above(panel: &Panel, reference: &TriangleBvh, floor: f64) -> f6
 /// Largest deviation over all panels, relative to `diag` (the reference's bounding-box
 /// diagonal; absolute when it is 0).
 pub fn max_distance_to_reference(panels: &[Panel], reference: &TriangleBvh, diag: f64) -> f64 {
-    let d = panels
-        .iter()
-        .fold(0.0, |d, p| max_deviation_above(p, reference, d));
+    let d = panels.iter().fold(0.0, |d, p| max_deviation_above(p, reference, d));
     if diag > 0.0 {
         d / diag
     } else {

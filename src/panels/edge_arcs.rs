@@ -37,9 +37,7 @@ impl EdgeArcs {
     }
 
     pub fn from_key(key: &str) -> Option<Self> {
-        [EdgeArcs::Intersection, EdgeArcs::BisectingPlanes]
-            .into_iter()
-            .find(|v| v.key() == key)
+        [EdgeArcs::Intersection, EdgeArcs::BisectingPlanes].into_iter().find(|v| v.key() == key)
     }
 }
 
@@ -47,13 +45,7 @@ impl EdgeArcs {
 /// (variant (b), Fig. 12): the plane through the edge containing n_f + n_g (n_f − n_g when the
 /// faces are not `consistent`ly oriented along the edge). If that direction is (nearly) along
 /// the edge, the plane containing n_f, else n_g; `None` when all are degenerate.
-pub fn bisecting_plane_normal(
-    p: DVec3,
-    q: DVec3,
-    af: DVec3,
-    ag: DVec3,
-    consistent: bool,
-) -> Option<DVec3> {
+pub fn bisecting_plane_normal(p: DVec3, q: DVec3, af: DVec3, ag: DVec3, consistent: bool) -> Option<DVec3> {
     let eh = (q - p).try_normalize()?;
     let (nf, ng) = (af.normalize_or_zero(), ag.normalize_or_zero());
     let sum = if consistent { nf + ng } else { nf - ng };
@@ -65,10 +57,7 @@ pub fn bisecting_plane_normal(
 
 /// The triangles of face `f` (one for a triangle, two for a quad), for the side tests below.
 pub fn face_triangles(mesh: &PolyMesh, f: usize) -> Vec<[DVec3; 3]> {
-    mesh.faces[f]
-        .triangles()
-        .map(|t| t.map(|v| mesh.positions[v as usize]))
-        .collect()
+    mesh.faces[f].triangles().map(|t| t.map(|v| mesh.positions[v as usize])).collect()
 }
 
 /// The arc of edge p→q shared by `faces` (one or two faces).
@@ -85,13 +74,7 @@ pub fn edge_arc(
     let l = e.length();
     let tris: Vec<Vec<[DVec3; 3]>> = faces.iter().map(|&f| face_triangles(mesh, f)).collect();
     // The more curved sphere (ties: lower face index) carries the cut.
-    let cut_face = faces.iter().copied().fold(faces[0], |best, f| {
-        if spheres[f].a.abs() > spheres[best].a.abs() {
-            f
-        } else {
-            best
-        }
-    });
+    let cut_face = faces.iter().copied().fold(faces[0], |best, f| if spheres[f].a.abs() > spheres[best].a.abs() { f } else { best });
     let s_cut = spheres[cut_face];
     if l == 0.0 {
         return Arc::straight(p, q, DVec3::Z);
@@ -118,11 +101,7 @@ pub fn edge_arc(
         BoundaryArcRule::Through(m) => (m - p).length(),
         BoundaryArcRule::Parallel(a) => a.length(),
     };
-    let n = if rule_normal.length() > 1e-9 * ref_len && rule_normal.is_finite() {
-        rule_normal
-    } else {
-        eh.cross(g)
-    };
+    let n = if rule_normal.length() > 1e-9 * ref_len && rule_normal.is_finite() { rule_normal } else { eh.cross(g) };
     if !n.is_finite() || n.length() == 0.0 {
         let t = tris[0][0];
         return Arc::straight(p, q, (t[2] - t[0]).cross(t[1] - t[0]).cross(e));
@@ -138,14 +117,7 @@ pub fn cuts_straight(s: &Sphere, diag: f64) -> bool {
 
 /// The arc p→q of the circle where the plane through p with normal `n` (made orthogonal to the
 /// edge) cuts the sphere `s`; the arc nearer the faces (given by their triangles).
-pub fn cut_arc(
-    p: DVec3,
-    q: DVec3,
-    n: DVec3,
-    s: &Sphere,
-    faces: &[Vec<[DVec3; 3]>],
-    diag: f64,
-) -> Arc {
+pub fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DVec3; 3]>], diag: f64) -> Arc {
     let e = q - p;
     let l = e.length();
     let eh = e / l;
@@ -175,29 +147,15 @@ pub fn cut_arc(
         faces
             .iter()
             .map(|tris| {
-                tris.iter()
-                    .map(|t| closest_point_on_triangle(x, t[0], t[1], t[2]).0.distance(x))
-                    .fold(f64::INFINITY, f64::min)
+                tris.iter().map(|t| closest_point_on_triangle(x, t[0], t[1], t[2]).0.distance(x)).fold(f64::INFINITY, f64::min)
             })
             .sum()
     };
-    let chosen = if score(m_far) < score(m_near) {
-        m_far
-    } else {
-        m_near
-    };
+    let chosen = if score(m_far) < score(m_near) { m_far } else { m_near };
     // p → chosen → q is counter-clockwise about ±n.
     let orient = (chosen - p).cross(q - p).dot(n);
     let normal = if orient >= 0.0 { n } else { -n };
-    Arc {
-        circle: Circle {
-            center: mid + h * w,
-            normal,
-            radius: r,
-        },
-        from: p,
-        to: q,
-    }
+    Arc { circle: Circle { center: mid + h * w, normal, radius: r }, from: p, to: q }
 }
 
 /// Normalized face sphere, or the plane of the face's first triangle (corners 0, 1, 2) when the
@@ -208,9 +166,6 @@ pub fn usable_sphere(s: &Sphere, face: &[DVec3]) -> Sphere {
     if n.is_finite() && (n.discriminant() - 1.0).abs() < 1e-6 {
         return n;
     }
-    let normal = (tri[1] - tri[0])
-        .cross(tri[2] - tri[0])
-        .try_normalize()
-        .unwrap_or(DVec3::Z);
+    let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]).try_normalize().unwrap_or(DVec3::Z);
     Sphere::plane(tri[0], normal)
 }

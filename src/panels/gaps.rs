@@ -51,12 +51,7 @@ pub fn arc_gaps(panels: &[Panel], topology: &Topology, samples: usize) -> Vec<Ed
                     a.point_over_chord(t).distance(b.point_over_chord(t))
                 })
                 .fold(0.0, f64::max);
-            EdgeGap {
-                edge: [lo, hi],
-                faces: [f as usize, g as usize],
-                gap,
-                edge_length: a.chord_length(),
-            }
+            EdgeGap { edge: [lo, hi], faces: [f as usize, g as usize], gap, edge_length: a.chord_length() }
         })
         .collect()
 }
@@ -64,9 +59,5 @@ pub fn arc_gaps(panels: &[Panel], topology: &Topology, samples: usize) -> Vec<Ed
 /// The largest of [`arc_gaps`] (0 without interior edges), absolute, and the largest gap divided
 /// by its edge's length.
 pub fn max_arc_gap(panels: &[Panel], topology: &Topology, samples: usize) -> (f64, f64) {
-    arc_gaps(panels, topology, samples)
-        .iter()
-        .fold((0.0, 0.0), |(g, r), e| {
-            (g.max(e.gap), r.max(e.gap / e.edge_length))
-        })
+    arc_gaps(panels, topology, samples).iter().fold((0.0, 0.0), |(g, r), e| (g.max(e.gap), r.max(e.gap / e.edge_length)))
 }

@@ -75,9 +75,7 @@ use glam::DVec3;
 
 use crate::geometry::sphere::Sphere;
 use arc::Arc;
-use edge_arcs::{
-    bisecting_plane_normal, cut_arc, edge_arc, face_triangles, usable_sphere, EdgeArcs,
-};
+use edge_arcs::{bisecting_plane_normal, cut_arc, edge_arc, face_triangles, usable_sphere, EdgeArcs};
 use panel::Panel;
 use sphere_mesh::SphereMesh;
 use tessellate::{tessellate, ARC_TOL_FACTOR};
@@ -112,47 +110,24 @@ pub fn level_cap(faces: usize, budget: usize, min_level: usize) -> usize {
 }
 
 pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
-    build_panels_within(
-        sm,
-        chord_tolerance,
-        edge_arcs,
-        level_cap(sm.mesh.face_count(), PANEL_TRIANGLE_BUDGET, 32),
-    )
+    build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), PANEL_TRIANGLE_BUDGET, 32))
 }
 
 /// The panels of a live view: [`build_panels_with`] under [`LIVE_PANEL_TRIANGLE_BUDGET`].
 pub fn build_live_panels(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
-    build_panels_within(
-        sm,
-        chord_tolerance,
-        edge_arcs,
-        level_cap(sm.mesh.face_count(), LIVE_PANEL_TRIANGLE_BUDGET, 4),
-    )
+    build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), LIVE_PANEL_TRIANGLE_BUDGET, 4))
 }
 
 /// [`build_panels_with`] with each panel's subdivision level at most `max_level`.
-fn build_panels_within(
-    sm: &SphereMesh,
-    chord_tolerance: f64,
-    edge_arcs: EdgeArcs,
-    max_level: usize,
-) -> Vec<Panel> {
+fn build_panels_within(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs, max_level: usize) -> Vec<Panel> {
     let mesh = &sm.mesh;
     let topo = sm.topology();
     let diag = mesh.bbox_diagonal().max(f64::MIN_POSITIVE);
-    let tol = if chord_tolerance > 0.0 && chord_tolerance.is_finite() {
-        chord_tolerance
-    } else {
-        1e-4 * diag
-    };
+    let tol = if chord_tolerance > 0.0 && chord_tolerance.is_finite() { chord_tolerance } else { 1e-4 * diag };
     let faces = mesh.face_count();
     let spheres: Vec<Sphere> = (0..faces)
         .map(|f| {
-            let s = sm.face_spheres.get(f).copied().unwrap_or(Sphere {
-                a: f64::NAN,
-                b: DVec3::NAN,
-                c: f64::NAN,
-            });
+            let s = sm.face_spheres.get(f).copied().unwrap_or(Sphere { a: f64::NAN, b: DVec3::NAN, c: f64::NAN });
             usable_sphere(&s, &mesh.face_points(f))
         })
         .collect();
@@ -162,23 +137,13 @@ fn build_panels_within(
     type Side = Option<(Arc, Vec<DVec3>)>;
     let mut side_arcs: Vec<Vec<Side>> = mesh.faces.iter().map(|f| vec![None; f.len()]).collect();
     for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
-        let inc: Vec<(usize, usize)> = topo
-            .edge_faces(e)
-            .iter()
-            .map(|&(f, k)| (f as usize, k as usize))
-            .collect();
+        let inc: Vec<(usize, usize)> = topo.edge_faces(e).iter().map(|&(f, k)| (f as usize, k as usize)).collect();
         let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
         if edge_arcs == EdgeArcs::BisectingPlanes && inc.len() == 2 {
             // Variant (b), Fig. 12 bottom: every panel cuts its own sphere with the bisecting plane.
             let [(f, kf), (g, kg)] = [inc[0], inc[1]];
             let consistent = (corner(f, kf) == lo) != (corner(g, kg) == lo);
-            let plane = bisecting_plane_normal(
-                p,
-                q,
-                mesh.face_area_vector(f),
-                mesh.face_area_vector(g),
-                consistent,
-            );
+            let plane = bisecting_plane_normal(p, q, mesh.face_area_vector(f), mesh.face_area_vector(g), consistent);
             let tris = [face_triangles(mesh, f), face_triangles(mesh, g)];
             for &(h, k) in &inc {
                 let arc = match plane {
@@ -197,11 +162,7 @@ fn build_panels_within(
         if let (&[(f, k)], Some(&n)) = (inc.as_slice(), sm.boundary_planes.get(&[lo, hi])) {
             let arc = cut_arc(p, q, n, &spheres[f], &[face_triangles(mesh, f)], diag);
             let pts = arc.sample(arc.segments_for(ARC_TOL_FACTOR * tol));
-            side_arcs[f][k] = Some(if corner(f, k) == lo {
-                (arc, pts)
-            } else {
-                (arc.reversed(), pts.into_iter().rev().collect())
-            });
+            side_arcs[f][k] = Some(if corner(f, k) == lo { (arc, pts) } else { (arc.reversed(), pts.into_iter().rev().collect()) });
             continue;
         }
         let groups: Vec<Vec<usize>> = if inc.len() <= 2 {
@@ -226,10 +187,8 @@ fn build_panels_within(
 
     (0..faces)
         .map(|f| {
-            let sides: Vec<(Arc, Vec<DVec3>)> = std::mem::take(&mut side_arcs[f])
-                .into_iter()
-                .map(|s| s.expect("every face side has an arc"))
-                .collect();
+            let sides: Vec<(Arc, Vec<DVec3>)> =
+                std::mem::take(&mut side_arcs[f]).into_iter().map(|s| s.expect("every face side has an arc")).collect();
             let arcs = sides.iter().map(|s| s.0).collect();
             let t = tessellate(&spheres[f], sides, &mesh.face_points(f), tol, max_level);
             Panel {
@@ -270,16 +229,8 @@ mod tests {
     #[test]
     fn arc_point_sweep_and_sagitta() {
         // Quarter circle of radius 2 in the xy-plane, from (2,0,0) to (0,2,0), ccw about +z.
-        let c = Circle {
-            center: DVec3::ZERO,
-            normal: DVec3::Z,
-            radius: 2.0,
-        };
-        let arc = Arc {
-            circle: c,
-            from: DVec3::new(2.0, 0.0, 0.0),
-            to: DVec3::new(0.0, 2.0, 0.0),
-        };
+        let c = Circle { center: DVec3::ZERO, normal: DVec3::Z, radius: 2.0 };
+        let arc = Arc { circle: c, from: DVec3::new(2.0, 0.0, 0.0), to: DVec3::new(0.0, 2.0, 0.0) };
         assert!((arc.sweep() - std::f64::consts::FRAC_PI_2).abs() < 1e-14);
         let m = arc.point(0.5);
         assert!((m - DVec3::new(2f64.sqrt(), 2f64.sqrt(), 0.0)).length() < 1e-14);
@@ -289,13 +240,7 @@ mod tests {
         assert!((rev.sweep() - arc.sweep()).abs() < 1e-14);
         assert!((rev.point(0.25) - arc.point(0.75)).length() < 1e-14);
         // The major arc (ccw about −z from (2,0,0) to (0,2,0)).
-        let major = Arc {
-            circle: Circle {
-                normal: -DVec3::Z,
-                ..c
-            },
-            ..arc
-        };
+        let major = Arc { circle: Circle { normal: -DVec3::Z, ..c }, ..arc };
         assert!((major.sweep() - 1.5 * std::f64::consts::PI).abs() < 1e-14);
         assert!((major.point(0.5) + m).length() < 1e-14);
         // Segment counts honour the tolerance.
@@ -324,11 +269,7 @@ mod tests {
     fn chord_error_formula_matches_sphere_distance() {
         let s = Sphere::from_center_radius(DVec3::ZERO, 1.0);
         let on = |v: DVec3| v.normalize();
-        let t = [
-            on(DVec3::new(1.0, 0.1, 0.2)),
-            on(DVec3::new(0.9, 0.4, 0.1)),
-            on(DVec3::new(0.95, 0.1, 0.5)),
-        ];
+        let t = [on(DVec3::new(1.0, 0.1, 0.2)), on(DVec3::new(0.9, 0.4, 0.1)), on(DVec3::new(0.95, 0.1, 0.5))];
         let e = triangle_chord_error(&s, t[0], t[1], t[2]);
         // Brute force over the triangle.
         let mut best: f64 = 0.0;

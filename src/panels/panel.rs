@@ -73,9 +73,6 @@ impl Panel {
 
     /// The points of arc k, from corner k to corner k + 1.
     pub fn arc_points(&self, k: usize) -> Vec<DVec3> {
-        self.arc_vertices[k]
-            .iter()
-            .map(|&i| self.positions[i as usize])
-            .collect()
+        self.arc_vertices[k].iter().map(|&i| self.positions[i as usize]).collect()
     }
 }

@@ -39,26 +39,13 @@ pub struct SphereMesh {
 }
 
 impl SphereMesh {
-    pub fn new(
-        mesh: impl Into<PolyMesh>,
-        face_spheres: Vec<Sphere>,
-        boundary_arcs: BoundaryArcRule,
-    ) -> Self {
-        Self {
-            mesh: mesh.into(),
-            face_spheres,
-            boundary_arcs,
-            boundary_planes: HashMap::new(),
-            topology: OnceCell::new(),
-        }
+    pub fn new(mesh: impl Into<PolyMesh>, face_spheres: Vec<Sphere>, boundary_arcs: BoundaryArcRule) -> Self {
+        Self { mesh: mesh.into(), face_spheres, boundary_arcs, boundary_planes: HashMap::new(), topology: OnceCell::new() }
     }
 
     /// The same mesh with its boundary edges cut by the planes with these normals.
     pub fn with_boundary_planes(self, boundary_planes: HashMap<[u32; 2], DVec3>) -> Self {
-        Self {
-            boundary_planes,
-            ..self
-        }
+        Self { boundary_planes, ..self }
     }
 
     /// The connectivity of the mesh (edges and their faces), computed once. The mesh's faces
@@ -72,11 +59,7 @@ impl SphereMesh {
     pub fn kink_angles_deg(&self) -> Vec<f64> {
         self.topology()
             .interior_edges()
-            .map(|(_, f, g)| {
-                self.face_spheres[f as usize]
-                    .kink_angle(&self.face_spheres[g as usize])
-                    .to_degrees()
-            })
+            .map(|(_, f, g)| self.face_spheres[f as usize].kink_angle(&self.face_spheres[g as usize]).to_degrees())
             .collect()
     }
 
@@ -94,9 +77,6 @@ impl SphereMesh {
 
 impl PartialEq for SphereMesh {
     fn eq(&self, other: &Self) -> bool {
-        self.mesh == other.mesh
-            && self.face_spheres == other.face_spheres
-            && self.boundary_arcs == other.boundary_arcs
-            && self.boundary_planes == other.boundary_planes
+        self.mesh == other.mesh && self.face_spheres == other.face_spheres && self.boundary_arcs == other.boundary_arcs && self.boundary_planes == other.boundary_planes
     }
 }

@@ -13,8 +13,7 @@ use crate::geometry::sphere::Sphere;
 pub const MAX_LEVEL: usize = 256;
 /// The most triangles one panel's tessellation can have: a quad's M × N grid at [`MAX_LEVEL`]
 /// and the zippers to four sides of at most [`super::arc::MAX_ARC_SEGMENTS`] points each.
-pub const MAX_PANEL_TRIANGLES: usize =
-    2 * MAX_LEVEL * MAX_LEVEL + 4 * (super::arc::MAX_ARC_SEGMENTS + MAX_LEVEL + 2);
+pub const MAX_PANEL_TRIANGLES: usize = 2 * MAX_LEVEL * MAX_LEVEL + 4 * (super::arc::MAX_ARC_SEGMENTS + MAX_LEVEL + 2);
 /// Fraction of the chord tolerance allowed for the sagitta of an arc segment. The flat triangles
 /// on a boundary segment deviate from the sphere by a bit more than its sagitta (their longest
 /// edge is a little longer than the segment), so leave them room.
@@ -36,13 +35,7 @@ pub struct Tessellation {
 /// Tessellates a panel on `sphere` with corners `corners` (3 or 4) from its sides (arc k and its
 /// points, from corner k to corner k + 1), with chord error ≤ `tol`, at levels up to `max_level`
 /// (at most [`MAX_LEVEL`]).
-pub fn tessellate(
-    sphere: &Sphere,
-    sides: Vec<(Arc, Vec<DVec3>)>,
-    corners: &[DVec3],
-    tol: f64,
-    max_level: usize,
-) -> Tessellation {
+pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVec3], tol: f64, max_level: usize) -> Tessellation {
     let max_level = max_level.clamp(1, MAX_LEVEL);
     let nc = corners.len();
     let n_side: Vec<usize> = sides.iter().map(|s| s.1.len() - 1).collect();
@@ -62,26 +55,13 @@ pub fn tessellate(
 
     let q = match corners {
         [a, b, c] => triangle_q_max(*a, *b, *c),
-        _ => triangle_q_max(corners[0], corners[1], corners[2])
-            .max(triangle_q_max(corners[0], corners[2], corners[3])),
+        _ => triangle_q_max(corners[0], corners[1], corners[2]).max(triangle_q_max(corners[0], corners[2], corners[3])),
     };
     let estimate = (sphere.a.abs() * q / tol).sqrt().ceil();
-    let estimate = if estimate.is_finite() {
-        (estimate as usize).min(max_level)
-    } else {
-        max_level
-    };
+    let estimate = if estimate.is_finite() { (estimate as usize).min(max_level) } else { max_level };
     // Grid levels: one for a triangle; along sides 0/2 and 1/3 for a quad.
     let mut levels = match nc {
-        3 => {
-            [n_side
-                .iter()
-                .copied()
-                .max()
-                .unwrap_or(1)
-                .max(estimate)
-                .clamp(1, max_level); 2]
-        }
+        3 => [n_side.iter().copied().max().unwrap_or(1).max(estimate).clamp(1, max_level); 2],
         _ => [
             n_side[0].max(n_side[2]).max(estimate).clamp(1, max_level),
             n_side[1].max(n_side[3]).max(estimate).clamp(1, max_level),
@@ -93,25 +73,9 @@ pub fn tessellate(
             3 => {
                 let arcs3 = [arcs[0], arcs[1], arcs[2]];
                 let tri = [corners[0], corners[1], corners[2]];
-                grid(
-                    sphere,
-                    &arcs3,
-                    &tri,
-                    &base,
-                    &arc_vertices,
-                    &n_side,
-                    levels[0],
-                )
+                grid(sphere, &arcs3, &tri, &base, &arc_vertices, &n_side, levels[0])
             }
-            _ => quad_grid(
-                sphere,
-                &arcs,
-                corners,
-                &base,
-                &arc_vertices,
-                &n_side,
-                levels,
-            ),
+            _ => quad_grid(sphere, &arcs, corners, &base, &arc_vertices, &n_side, levels),
         };
         let err = triangles
             .iter()
@@ -140,12 +104,7 @@ pub fn tessellate(
                     0.5 * (b - a).cross(c - a).length()
                 })
                 .sum();
-            return Tessellation {
-                positions,
-                triangles,
-                area,
-                arc_vertices,
-            };
+            return Tessellation { positions, triangles, area, arc_vertices };
         }
         for level in &mut levels {
             let grow = (*level as f64 * (err / tol).sqrt() * 1.05).ceil() as usize;
@@ -187,11 +146,7 @@ fn grid(
         for a in 0..=(m - b) {
             let (ga, gb) = (a + 1, b + 1);
             let gi = nn - ga - gb;
-            let lam = [
-                gi as f64 / nn as f64,
-                ga as f64 / nn as f64,
-                gb as f64 / nn as f64,
-            ];
+            let lam = [gi as f64 / nn as f64, ga as f64 / nn as f64, gb as f64 / nn as f64];
             let x = blend(arcs, tri, lam);
             positions.push(project_to_sphere(sphere, tri[0], x));
             ids[row_start(b) + a] = (positions.len() - 1) as u32;
@@ -241,8 +196,7 @@ fn zipper(bnd: &[u32], row: &[(u32, f64)], triangles: &mut Vec<[u32; 3]>) {
     let n = bnd.len() - 1;
     let (mut j, mut l) = (0usize, 0usize);
     while j < n || l < row.len() - 1 {
-        let advance_boundary =
-            l == row.len() - 1 || (j < n && (j + 1) as f64 / n as f64 <= row[l + 1].1);
+        let advance_boundary = l == row.len() - 1 || (j < n && (j + 1) as f64 / n as f64 <= row[l + 1].1);
         if advance_boundary {
             triangles.push([bnd[j], bnd[j + 1], row[l].0]);
             j += 1;
@@ -296,14 +250,8 @@ fn quad_grid(
         let row: Vec<(u32, f64)> = match k {
             0 => (1..m).map(|i| (g(i, 1), i as f64 / mf)).collect(),
             1 => (1..n).map(|j| (g(m - 1, j), j as f64 / nf)).collect(),
-            2 => (1..m)
-                .rev()
-                .map(|i| (g(i, n - 1), (m - i) as f64 / mf))
-                .collect(),
-            _ => (1..n)
-                .rev()
-                .map(|j| (g(1, j), (n - j) as f64 / nf))
-                .collect(),
+            2 => (1..m).rev().map(|i| (g(i, n - 1), (m - i) as f64 / mf)).collect(),
+            _ => (1..n).rev().map(|j| (g(1, j), (n - j) as f64 / nf)).collect(),
         };
         zipper(bnd, &row, &mut triangles);
     }
@@ -319,8 +267,7 @@ fn coons(arcs: &[Arc], q: &[DVec3], s: f64, t: f64) -> DVec3 {
     let right = arcs[1].point(t);
     let top = arcs[2].point(1.0 - s);
     let left = arcs[3].point(1.0 - t);
-    let bilinear =
-        (1.0 - s) * (1.0 - t) * q[0] + s * (1.0 - t) * q[1] + s * t * q[2] + (1.0 - s) * t * q[3];
+    let bilinear = (1.0 - s) * (1.0 - t) * q[0] + s * (1.0 - t) * q[1] + s * t * q[2] + (1.0 - s) * t * q[3];
     (1.0 - t) * bottom + t * top + (1.0 - s) * left + s * right - bilinear
 }
 
@@ -348,21 +295,14 @@ pub fn triangle_chord_error(s: &Sphere, x0: DVec3, x1: DVec3, x2: DVec3) -> f64 
     let q = triangle_q_max(x0, x1, x2);
     let psi = s.a.abs() * q;
     let curved = 2.0 * psi / (1.0 + (1.0 - 4.0 * s.a * s.a * q).max(0.0).sqrt());
-    let residual = [x0, x1, x2]
-        .iter()
-        .map(|&x| s.distance(x))
-        .fold(0.0, f64::max);
+    let residual = [x0, x1, x2].iter().map(|&x| s.distance(x)).fold(0.0, f64::max);
     curved + residual
 }
 
 /// max over the triangle of Σ_{i<j} βᵢβⱼ|xᵢ − xⱼ|² (the negated power of the point w.r.t. the
 /// circumcircle): R² when acute, (ℓ_max/2)² otherwise.
 pub fn triangle_q_max(x0: DVec3, x1: DVec3, x2: DVec3) -> f64 {
-    let l = [
-        x1.distance_squared(x2),
-        x2.distance_squared(x0),
-        x0.distance_squared(x1),
-    ];
+    let l = [x1.distance_squared(x2), x2.distance_squared(x0), x0.distance_squared(x1)];
     let lmax = l[0].max(l[1]).max(l[2]);
     let acute = l[0] < l[1] + l[2] && l[1] < l[2] + l[0] && l[2] < l[0] + l[1];
     if acute {

@@ -10,10 +10,67 @@ pub struct Energy {
     pub value: f64,
 }
 
+/// What a message of the worker is about: the import, the reference's geometry, a stage, or a
+/// part of a stage's stream. Written as its key ("st-support", "st.sizing").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum StageId {
+    #[serde(rename = "import")]
+    Import,
+    /// The reference's display geometry.
+    #[serde(rename = "reference")]
+    Reference,
+    #[serde(rename = "curvature")]
+    Curvature,
+    /// Sec. 3; its sizing field and its remeshed triangulation as they come.
+    #[serde(rename = "st")]
+    StAdapted,
+    #[serde(rename = "st.sizing")]
+    StAdaptedSizing,
+    #[serde(rename = "st.remeshed")]
+    StAdaptedRemeshed,
+    /// Sec. 4.
+    #[serde(rename = "st-support")]
+    StSupport,
+    /// Sec. 5; H at the vertices when it refuses for the sign of H.
+    #[serde(rename = "sq")]
+    Sq,
+    #[serde(rename = "sq.refused")]
+    SqRefused,
+}
+
+impl StageId {
+    /// The key on the wire and in reports ("st-support").
+    pub fn key(self) -> &'static str {
+        match self {
+            StageId::Import => "import",
+            StageId::Reference => "reference",
+            StageId::Curvature => "curvature",
+            StageId::StAdapted => "st",
+            StageId::StAdaptedSizing => "st.sizing",
+            StageId::StAdaptedRemeshed => "st.remeshed",
+            StageId::StSupport => "st-support",
+            StageId::Sq => "sq",
+            StageId::SqRefused => "sq.refused",
+        }
+    }
+}
+
+impl std::fmt::Display for StageId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+impl PartialEq<str> for StageId {
+    fn eq(&self, other: &str) -> bool {
+        self.key() == other
+    }
+}
+
 /// A stage's progress as the worker reports it (from a [`crate::progress::Progress`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StageProgress {
-    pub stage: String,
+    pub stage: StageId,
     /// The step within the stage, e.g. "absolute_sphere".
     #[serde(default)]
     pub detail: String,
@@ -106,27 +163,15 @@ pub struct FieldHeader {
 
 impl Field {
     pub fn f32(name: &str, dim: u32, values: Vec<f32>) -> Self {
-        Self {
-            name: name.into(),
-            dim,
-            data: FieldData::F32(values),
-        }
+        Self { name: name.into(), dim, data: FieldData::F32(values) }
     }
 
     pub fn u32(name: &str, dim: u32, values: Vec<u32>) -> Self {
-        Self {
-            name: name.into(),
-            dim,
-            data: FieldData::U32(values),
-        }
+        Self { name: name.into(), dim, data: FieldData::U32(values) }
     }
 
     pub fn bytes(name: &str, bytes: Vec<u8>) -> Self {
-        Self {
-            name: name.into(),
-            dim: 1,
-            data: FieldData::Bytes(bytes),
-        }
+        Self { name: name.into(), dim: 1, data: FieldData::Bytes(bytes) }
     }
 
     pub fn header(&self) -> FieldHeader {
@@ -135,12 +180,7 @@ impl Field {
             FieldData::U32(v) => (FieldKind::U32, v.len()),
             FieldData::Bytes(v) => (FieldKind::U8, v.len()),
         };
-        FieldHeader {
-            name: self.name.clone(),
-            kind,
-            dim: self.dim,
-            len: len as u32,
-        }
+        FieldHeader { name: self.name.clone(), kind, dim: self.dim, len: len as u32 }
     }
 
     pub fn as_f32(&self) -> Option<&[f32]> {
@@ -179,13 +219,8 @@ impl Field {
         // In u64: on wasm32 a crafted `len` would wrap a 32-bit usize product.
         let expected = (header.len as u64).checked_mul(width);
         if expected != Some(bytes.len() as u64) {
-            let expected =
-                expected.map_or(usize::MAX, |e| usize::try_from(e).unwrap_or(usize::MAX));
-            return Err(FieldLengthError {
-                name: header.name.clone(),
-                expected,
-                got: bytes.len(),
-            });
+            let expected = expected.map_or(usize::MAX, |e| usize::try_from(e).unwrap_or(usize::MAX));
+            return Err(FieldLengthError { name: header.name.clone(), expected, got: bytes.len() });
         }
         let words = bytes.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]);
         let data = match header.kind {
@@ -193,11 +228,7 @@ impl Field {
             FieldKind::U32 => FieldData::U32(words.map(u32::from_le_bytes).collect()),
             FieldKind::U8 => FieldData::Bytes(bytes.to_vec()),
         };
-        Ok(Self {
-            name: header.name.clone(),
-            dim: header.dim,
-            data,
-        })
+        Ok(Self { name: header.name.clone(), dim: header.dim, data })
     }
 }
 
@@ -211,11 +242,7 @@ pub struct FieldLengthError {
 
 impl std::fmt::Display for FieldLengthError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "field '{}': expected {} bytes, got {}",
-            self.name, self.expected, self.got
-        )
+        write!(f, "field '{}': expected {} bytes, got {}", self.name, self.expected, self.got)
     }
 }
 

@@ -9,9 +9,7 @@ use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{SupportGeometry, SupportStructure};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::schedule::SupportRecord;
-use crate::export::{
-    build_schedule_with, panel_files, write_glb, write_obj, ExportFile, PanelMetrics, Report,
-};
+use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, PanelMetrics, Report};
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::panels::panel::Panel;
@@ -21,9 +19,7 @@ use crate::reference::Reference;
 
 /// Points as f32 triples.
 pub fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
-    points
-        .flat_map(|p| [p.x as f32, p.y as f32, p.z as f32])
-        .collect()
+    points.flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()
 }
 
 /// Positions, normals, triangles and the edges to draw (of the faces as loaded: a quad's
@@ -32,11 +28,7 @@ pub fn mesh_fields(mesh: &TriMesh, edges: &[[u32; 2]]) -> Vec<Field> {
     vec![
         Field::f32(field::POSITIONS, 3, f32s(mesh.positions.iter().copied())),
         Field::f32(field::NORMALS, 3, f32s(mesh.vertex_normals().into_iter())),
-        Field::u32(
-            field::TRIANGLES,
-            3,
-            mesh.triangles.iter().flatten().copied().collect(),
-        ),
+        Field::u32(field::TRIANGLES, 3, mesh.triangles.iter().flatten().copied().collect()),
         Field::u32(field::EDGES, 2, edges.iter().flatten().copied().collect()),
     ]
 }
@@ -50,32 +42,16 @@ pub fn triangle_mesh_fields(mesh: &TriMesh) -> Vec<Field> {
 pub fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
     let v = &c.vertices;
     vec![
-        Field::f32(
-            field::MEAN_CURVATURE,
-            1,
-            v.iter().map(|x| x.mean as f32).collect(),
-        ),
+        Field::f32(field::MEAN_CURVATURE, 1, v.iter().map(|x| x.mean as f32).collect()),
         Field::f32(field::K1, 1, v.iter().map(|x| x.k1 as f32).collect()),
         Field::f32(field::K2, 1, v.iter().map(|x| x.k2 as f32).collect()),
-        Field::f32(
-            field::K1_MINUS_K2,
-            1,
-            v.iter().map(|x| (x.k1 - x.k2).abs() as f32).collect(),
-        ),
+        Field::f32(field::K1_MINUS_K2, 1, v.iter().map(|x| (x.k1 - x.k2).abs() as f32).collect()),
         Field::f32(
             field::CENTRAL_SPHERES,
             5,
-            c.central_spheres
-                .iter()
-                .flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c])
-                .map(|x| x as f32)
-                .collect(),
+            c.central_spheres.iter().flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c]).map(|x| x as f32).collect(),
         ),
-        Field::u32(
-            field::BOUNDARY,
-            1,
-            c.boundary.iter().map(|&b| b as u32).collect(),
-        ),
+        Field::u32(field::BOUNDARY, 1, c.boundary.iter().map(|&b| b as u32).collect()),
     ]
 }
 
@@ -105,21 +81,9 @@ pub fn panel_fields(panels: &[Panel]) -> Vec<Field> {
 /// The support strips and the node axes (segments) as display fields.
 pub fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec<Field> {
     vec![
-        Field::f32(
-            field::SUPPORT_POSITIONS,
-            3,
-            f32s(support.positions.iter().copied()),
-        ),
-        Field::u32(
-            field::SUPPORT_TRIANGLES,
-            3,
-            support.triangles.iter().flatten().copied().collect(),
-        ),
-        Field::f32(
-            field::AXES_POSITIONS,
-            3,
-            f32s(axes.iter().flat_map(|&(a, b)| [a, b])),
-        ),
+        Field::f32(field::SUPPORT_POSITIONS, 3, f32s(support.positions.iter().copied())),
+        Field::u32(field::SUPPORT_TRIANGLES, 3, support.triangles.iter().flatten().copied().collect()),
+        Field::f32(field::AXES_POSITIONS, 3, f32s(axes.iter().flat_map(|&(a, b)| [a, b]))),
         Field::u32(field::AXES_LINES, 2, (0..2 * axes.len() as u32).collect()),
     ]
 }
@@ -180,18 +144,12 @@ impl<'a> PanelExport<'a> {
 
     /// The verdict the report carries ([`crate::guarantees`]).
     pub fn with_verdict(self, verdict: &'a Verdict) -> Self {
-        Self {
-            verdict: Some(verdict),
-            ..self
-        }
+        Self { verdict: Some(verdict), ..self }
     }
 
     /// The warnings the report carries (the failed assumptions of the reference).
     pub fn with_warnings(self, warnings: &[impl ToString]) -> Self {
-        Self {
-            warnings: warnings.iter().map(ToString::to_string).collect(),
-            ..self
-        }
+        Self { warnings: warnings.iter().map(ToString::to_string).collect(), ..self }
     }
 
     pub fn with_extras(self, extras: serde_json::Value) -> Self {
@@ -200,41 +158,23 @@ impl<'a> PanelExport<'a> {
 
     /// The support structure (its strips and elements) and the node axes.
     pub fn with_support(self, support: &'a SupportStructure) -> Self {
-        Self {
-            support: Some(support),
-            ..self
-        }
+        Self { support: Some(support), ..self }
     }
 
     /// Each panel's [`crate::panels::deviation::max_deviation`] from the reference, measured by
     /// the method: the schedule takes them instead of measuring again.
     pub fn with_deviations(self, deviations: &'a [f64]) -> Self {
-        Self {
-            deviations: Some(deviations),
-            ..self
-        }
+        Self { deviations: Some(deviations), ..self }
     }
 }
 
 /// The report and the panel files of a panel method: `panels.glb`, `panels.obj`, the schedule
 /// as `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `support.csv`;
 /// the caller adds `report.json` ([`crate::export::report_file`]) once the report is complete.
-pub fn export_panels(
-    reference: &Reference,
-    e: PanelExport,
-    clock: Clock,
-) -> (Report, Vec<ExportFile>) {
+pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
     let t0 = clock.now();
-    let mut schedule = build_schedule_with(
-        e.panels,
-        reference,
-        e.radius_tolerance * e.diag,
-        e.deviations,
-    );
-    schedule.support_elements = e
-        .support
-        .map(|s| SupportRecord::of(&s.elements))
-        .unwrap_or_default();
+    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations);
+    schedule.support_elements = e.support.map(|s| SupportRecord::of(&s.elements)).unwrap_or_default();
     let mut extras = e.extras;
     extras["method"] = e.method.into();
     let axes = e.support.map(SupportStructure::axis_segments);
@@ -245,15 +185,8 @@ pub fn export_panels(
     let mesh = reference.mesh();
     let output = &e.sphere_mesh.mesh;
     let mut report = Report::new(e.method);
-    report.input = InputCounts {
-        vertices: mesh.vertex_count(),
-        faces: mesh.face_count(),
-    };
-    report.output = OutputCounts {
-        vertices: output.vertex_count(),
-        faces: output.face_count(),
-        panels: e.panels.len(),
-    };
+    report.input = InputCounts { vertices: mesh.vertex_count(), faces: mesh.face_count() };
+    report.output = OutputCounts { vertices: output.vertex_count(), faces: output.face_count(), panels: e.panels.len() };
     report.metrics = Some(PanelMetrics {
         mean_kink_angle_deg: crate::stats::mean(&kinks),
         max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),

@@ -9,7 +9,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::fields::{Field, FieldHeader, FieldLengthError, StageProgress};
+use super::fields::{Field, FieldHeader, FieldLengthError, StageId, StageProgress};
 use super::stages::{curvature, sq, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::geometry::mesh::topology::MeshStats;
@@ -55,7 +55,7 @@ pub enum StageRequest {
 
 impl StageRequest {
     /// The stage's name on the wire.
-    pub fn name(&self) -> &'static str {
+    pub fn name(&self) -> StageId {
         match self {
             StageRequest::Curvature(_) => curvature::STAGE,
             StageRequest::StAdapted(_) => st_adapted::STAGE,
@@ -127,23 +127,23 @@ pub enum FromWorker {
     Progress(StageProgress),
     /// A snapshot: the stage's geometry and per-vertex data as fields.
     Snapshot {
-        stage: String,
+        stage: StageId,
         iteration: u32,
         fields: Vec<FieldHeader>,
     },
     /// Files for download (fields of raw bytes named by file name), with their MIME types.
     Files {
-        stage: String,
+        stage: StageId,
         fields: Vec<FieldHeader>,
         mime: Vec<String>,
     },
     Finished {
-        stage: String,
+        stage: StageId,
         result: StageResult,
         elapsed_ms: f64,
     },
     Cancelled {
-        stage: String,
+        stage: StageId,
     },
     /// An error a user can act on. The previous design stays loaded. `remesh_to`: the method
     /// refused its input's size and asks for a remesh to about this many faces first.
@@ -187,10 +187,7 @@ impl fmt::Display for ProtocolError {
         match self {
             ProtocolError::Json(e) => write!(f, "bad message: {e}"),
             ProtocolError::FieldCount { listed, carried } => {
-                write!(
-                    f,
-                    "snapshot lists {listed} fields but carries {carried} buffers"
-                )
+                write!(f, "snapshot lists {listed} fields but carries {carried} buffers")
             }
             ProtocolError::Field(e) => e.fmt(f),
         }
@@ -201,21 +198,11 @@ impl std::error::Error for ProtocolError {}
 
 /// Decodes a message from the worker; snapshot fields are rebuilt from the bodies.
 pub fn decode_from_worker(env: &Envelope) -> Result<(FromWorker, Vec<Field>), ProtocolError> {
-    let msg: FromWorker =
-        serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
+    let msg: FromWorker = serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
     let mut fields = Vec::new();
-    if let FromWorker::Snapshot {
-        fields: headers, ..
-    }
-    | FromWorker::Files {
-        fields: headers, ..
-    } = &msg
-    {
+    if let FromWorker::Snapshot { fields: headers, .. } | FromWorker::Files { fields: headers, .. } = &msg {
         if headers.len() != env.bodies.len() {
-            return Err(ProtocolError::FieldCount {
-                listed: headers.len(),
-                carried: env.bodies.len(),
-            });
+            return Err(ProtocolError::FieldCount { listed: headers.len(), carried: env.bodies.len() });
         }
         for (h, b) in headers.iter().zip(&env.bodies) {
             fields.push(Field::from_bytes(h, b).map_err(ProtocolError::Field)?);
@@ -226,15 +213,11 @@ pub fn decode_from_worker(env: &Envelope) -> Result<(FromWorker, Vec<Field>), Pr
 
 /// Encodes a message to the worker; a file load carries its bytes as the one body.
 pub fn encode_to_worker(msg: &ToWorker, file_bytes: Option<Vec<u8>>) -> Envelope {
-    Envelope {
-        json: serde_json::to_string(msg).expect("protocol types always serialize"),
-        bodies: file_bytes.into_iter().collect(),
-    }
+    Envelope { json: serde_json::to_string(msg).expect("protocol types always serialize"), bodies: file_bytes.into_iter().collect() }
 }
 
 pub fn decode_to_worker(env: &Envelope) -> Result<(ToWorker, Option<&[u8]>), ProtocolError> {
-    let msg: ToWorker =
-        serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
+    let msg: ToWorker = serde_json::from_str(&env.json).map_err(|e| ProtocolError::Json(e.to_string()))?;
     Ok((msg, env.bodies.first().map(|b| b.as_slice())))
 }
 
@@ -245,15 +228,9 @@ mod tests {
 
     #[test]
     fn snapshot_round_trip() {
-        let fields = vec![
-            Field::f32(field::POSITIONS, 3, vec![0.0, 1.5, -2.0, 3.0, 4.0, 5.0]),
-            Field::u32(field::TRIANGLES, 3, vec![0, 1, 0]),
-        ];
-        let msg = FromWorker::Snapshot {
-            stage: "curvature".into(),
-            iteration: 3,
-            fields: fields.iter().map(Field::header).collect(),
-        };
+        let fields =
+            vec![Field::f32(field::POSITIONS, 3, vec![0.0, 1.5, -2.0, 3.0, 4.0, 5.0]), Field::u32(field::TRIANGLES, 3, vec![0, 1, 0])];
+        let msg = FromWorker::Snapshot { stage: StageId::Curvature, iteration: 3, fields: fields.iter().map(Field::header).collect() };
         let env = encode_from_worker(&msg, &fields);
         let (back, back_fields) = decode_from_worker(&env).unwrap();
         assert_eq!(back, msg);
@@ -262,12 +239,9 @@ mod tests {
 
     #[test]
     fn files_round_trip() {
-        let fields = vec![
-            Field::bytes("panels.glb", b"glTF\x02\x00\x00\x00abc".to_vec()),
-            Field::bytes("panels.csv", b"id\n".to_vec()),
-        ];
+        let fields = vec![Field::bytes("panels.glb", b"glTF\x02\x00\x00\x00abc".to_vec()), Field::bytes("panels.csv", b"id\n".to_vec())];
         let msg = FromWorker::Files {
-            stage: "st-support".into(),
+            stage: StageId::StSupport,
             fields: fields.iter().map(Field::header).collect(),
             mime: vec!["model/gltf-binary".into(), "text/csv".into()],
         };
@@ -279,11 +253,7 @@ mod tests {
     #[test]
     fn truncated_body_is_rejected() {
         let fields = vec![Field::f32("x", 1, vec![1.0, 2.0])];
-        let msg = FromWorker::Snapshot {
-            stage: "s".into(),
-            iteration: 0,
-            fields: fields.iter().map(Field::header).collect(),
-        };
+        let msg = FromWorker::Snapshot { stage: StageId::Sq, iteration: 0, fields: fields.iter().map(Field::header).collect() };
         let mut env = encode_from_worker(&msg, &fields);
         env.bodies[0].pop();
         assert!(decode_from_worker(&env).is_err());

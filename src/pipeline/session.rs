@@ -1,19 +1,17 @@
 //! The worker's state: at most one loaded reference, which survives failed loads and stages.
 //! The worker (wasm), the tests and the CLI drive the same [`Session`] through an [`Outbox`].
 
-use super::fields::{Field, StageProgress};
+use super::fields::{Field, StageId, StageProgress};
 use super::panel_output::mesh_fields;
-use super::protocol::{
-    FileObject, FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker,
-};
+use super::protocol::{FileObject, FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
 use super::sink::Sink;
 use super::stages::{curvature, sq, st_adapted, st_support, StageError};
 use crate::export::ExportFile;
-use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::bspline::BSplineSurface;
 use crate::import::{import_file, Format, ImportError, ImportedFile};
-use crate::progress::Clock;
 use crate::reference::bspline::SplineReferenceError;
+use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::samples::Sample;
 
@@ -38,10 +36,7 @@ pub struct Loaded {
 pub enum LoadError {
     Import(ImportError),
     /// A B-spline surface that cannot be a reference (in file `file`).
-    Spline {
-        file: String,
-        error: SplineReferenceError,
-    },
+    Spline { file: String, error: SplineReferenceError },
 }
 
 impl std::fmt::Display for LoadError {
@@ -59,14 +54,8 @@ impl Loaded {
     pub fn from_sample(sample: Sample) -> Self {
         let source = Source::Sample(sample);
         match sample.bspline() {
-            Some(s) => Self::of_bspline(source, None, s, Vec::new())
-                .expect("the built-in B-spline samples are regular"),
-            None => Self::of_mesh(
-                source,
-                None,
-                Reference::from_triangles(sample.mesh()),
-                Vec::new(),
-            ),
+            Some(s) => Self::of_bspline(source, None, s, Vec::new()).expect("the built-in B-spline samples are regular"),
+            None => Self::of_mesh(source, None, Reference::from_triangles(sample.mesh()), Vec::new()),
         }
     }
 
@@ -75,30 +64,14 @@ impl Loaded {
         match import_file(bytes, name).map_err(LoadError::Import)? {
             ImportedFile::Mesh(imported) => {
                 let surface = Reference::new(imported.surface());
-                Ok(Self::of_mesh(
-                    source,
-                    Some(imported.format),
-                    surface,
-                    imported.notes,
-                ))
+                Ok(Self::of_mesh(source, Some(imported.format), surface, imported.notes))
             }
-            ImportedFile::BSpline(b) => {
-                Self::of_bspline(source, Some(Format::BSplineJson), b.surface, b.notes).map_err(
-                    |error| LoadError::Spline {
-                        file: name.rsplit(['/', '\\']).next().unwrap_or(name).to_string(),
-                        error,
-                    },
-                )
-            }
+            ImportedFile::BSpline(b) => Self::of_bspline(source, Some(Format::BSplineJson), b.surface, b.notes)
+                .map_err(|error| LoadError::Spline { file: name.rsplit(['/', '\\']).next().unwrap_or(name).to_string(), error }),
         }
     }
 
-    fn of_mesh(
-        source: Source,
-        format: Option<Format>,
-        surface: Reference,
-        notes: Vec<String>,
-    ) -> Self {
+    fn of_mesh(source: Source, format: Option<Format>, surface: Reference, notes: Vec<String>) -> Self {
         let mesh = surface.mesh();
         let info = ReferenceInfo {
             source,
@@ -113,12 +86,7 @@ impl Loaded {
         Self { surface, info }
     }
 
-    fn of_bspline(
-        source: Source,
-        format: Option<Format>,
-        spline: BSplineSurface,
-        notes: Vec<String>,
-    ) -> Result<Self, SplineReferenceError> {
+    fn of_bspline(source: Source, format: Option<Format>, spline: BSplineSurface, notes: Vec<String>) -> Result<Self, SplineReferenceError> {
         let surface = Reference::from_bspline(spline)?;
         let mut loaded = Self::of_mesh(source, format, surface, notes);
         loaded.info.bspline = loaded.surface.spline_reference().map(|s| s.info());
@@ -158,25 +126,15 @@ impl Sink for Messages<'_> {
         self.0.send(FromWorker::Progress(progress), Vec::new());
     }
 
-    fn snapshot(&mut self, stage: &str, iteration: u32, fields: Vec<Field>) {
+    fn snapshot(&mut self, stage: StageId, iteration: u32, fields: Vec<Field>) {
         self.0.send(snapshot(stage, iteration, &fields), fields);
     }
 
-    fn files(&mut self, stage: &str, files: Vec<ExportFile>) {
+    fn files(&mut self, stage: StageId, files: Vec<ExportFile>) {
         let mime = files.iter().map(|f| f.mime.clone()).collect();
-        let fields: Vec<Field> = files
-            .into_iter()
-            .map(|f| Field::bytes(&f.name, f.bytes))
-            .collect();
+        let fields: Vec<Field> = files.into_iter().map(|f| Field::bytes(&f.name, f.bytes)).collect();
         let headers = fields.iter().map(Field::header).collect();
-        self.0.send(
-            FromWorker::Files {
-                stage: stage.into(),
-                fields: headers,
-                mime,
-            },
-            fields,
-        );
+        self.0.send(FromWorker::Files { stage, fields: headers, mime }, fields);
     }
 
     fn cancel_requested(&mut self) -> bool {
@@ -202,25 +160,13 @@ impl Session {
             }
             ToWorker::PickObject(k) => self.load_object(k, out),
             ToWorker::LoadFile { name } => match bytes {
-                None => out.send(
-                    FromWorker::Error {
-                        message: format!("{name}: no file data arrived"),
-                        remesh_to: None,
-                    },
-                    vec![],
-                ),
+                None => out.send(FromWorker::Error { message: format!("{name}: no file data arrived"), remesh_to: None }, vec![]),
                 Some(b) => match Loaded::from_file(b, &name) {
                     Ok(r) => {
                         self.objects = None;
                         self.install(r, out)
                     }
-                    Err(e) => out.send(
-                        FromWorker::Error {
-                            message: e.to_string(),
-                            remesh_to: None,
-                        },
-                        vec![],
-                    ),
+                    Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: None }, vec![]),
                 },
             },
             ToWorker::Run(stage) => self.run(*stage, out),
@@ -233,57 +179,24 @@ impl Session {
     /// Loads a file of several objects, converted outside (a Rhino .3dm, by rhino3dm.js in the
     /// worker): `texts[k]` is object k as B-spline JSON or OBJ. The first surface is loaded (else
     /// the first object); [`ToWorker::PickObject`] loads another.
-    pub fn load_objects(
-        &mut self,
-        file: &str,
-        objects: Vec<FileObject>,
-        texts: Vec<String>,
-        notes: Vec<String>,
-        out: &mut dyn Outbox,
-    ) {
+    pub fn load_objects(&mut self, file: &str, objects: Vec<FileObject>, texts: Vec<String>, notes: Vec<String>, out: &mut dyn Outbox) {
         let file = crate::text::clip(file, 120);
         if objects.is_empty() || objects.len() != texts.len() {
-            out.send(
-                FromWorker::Error {
-                    message: format!("{file}: no NURBS surface or mesh in it"),
-                    remesh_to: None,
-                },
-                vec![],
-            );
+            out.send(FromWorker::Error { message: format!("{file}: no NURBS surface or mesh in it"), remesh_to: None }, vec![]);
             return;
         }
-        let first = objects
-            .iter()
-            .position(|o| o.kind == "surface")
-            .unwrap_or(0);
-        self.objects = Some(FileObjects {
-            file,
-            objects,
-            texts,
-            notes,
-        });
+        let first = objects.iter().position(|o| o.kind == "surface").unwrap_or(0);
+        self.objects = Some(FileObjects { file, objects, texts, notes });
         self.load_object(first, out);
     }
 
     fn load_object(&mut self, k: usize, out: &mut dyn Outbox) {
         let Some(f) = self.objects.as_ref() else {
-            out.send(
-                FromWorker::Error {
-                    message: "no file with several objects is loaded".into(),
-                    remesh_to: None,
-                },
-                vec![],
-            );
+            out.send(FromWorker::Error { message: "no file with several objects is loaded".into(), remesh_to: None }, vec![]);
             return;
         };
         let Some(object) = f.objects.get(k) else {
-            out.send(
-                FromWorker::Error {
-                    message: format!("{}: no object {k}", f.file),
-                    remesh_to: None,
-                },
-                vec![],
-            );
+            out.send(FromWorker::Error { message: format!("{}: no object {k}", f.file), remesh_to: None }, vec![]);
             return;
         };
         let name = format!("{} › {}", f.file, crate::text::clip(&object.name, 80));
@@ -291,38 +204,24 @@ impl Session {
             Ok(mut r) => {
                 r.info.objects = f.objects.clone();
                 r.info.object = Some(k);
-                r.info
-                    .notes
-                    .extend(f.notes.iter().map(|n| crate::text::printable(n)));
+                r.info.notes.extend(f.notes.iter().map(|n| crate::text::printable(n)));
                 self.install(r, out)
             }
-            Err(e) => out.send(
-                FromWorker::Error {
-                    message: e.to_string(),
-                    remesh_to: None,
-                },
-                vec![],
-            ),
+            Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: None }, vec![]),
         }
     }
 
     fn install(&mut self, r: Loaded, out: &mut dyn Outbox) {
         out.send(FromWorker::Loaded(r.info.clone()), vec![]);
         let fields = r.geometry_fields();
-        out.send(snapshot("reference", 0, &fields), fields);
+        out.send(snapshot(StageId::Reference, 0, &fields), fields);
         self.reference = Some(r);
     }
 
     fn run(&mut self, stage: StageRequest, out: &mut dyn Outbox) {
-        let name = stage.name().to_string();
+        let name = stage.name();
         let Some(loaded) = self.reference.as_ref() else {
-            out.send(
-                FromWorker::Error {
-                    message: "Load a reference surface first.".into(),
-                    remesh_to: None,
-                },
-                vec![],
-            );
+            out.send(FromWorker::Error { message: "Load a reference surface first.".into(), remesh_to: None }, vec![]);
             return;
         };
         let reference = &loaded.surface;
@@ -330,46 +229,28 @@ impl Session {
         let clock = self.clock;
         let mut sink = Messages(&mut *out);
         let result = match &stage {
-            StageRequest::Curvature(p) => {
-                curvature::run(reference, p, &mut sink).map(StageResult::Curvature)
+            StageRequest::Curvature(p) => curvature::run(reference, p, &mut sink).map(StageResult::Curvature),
+            StageRequest::StAdapted(p) => {
+                st_adapted::run(reference, p, clock, &mut sink).map(|s| StageResult::StAdapted(Box::new(s)))
             }
-            StageRequest::StAdapted(p) => st_adapted::run(reference, p, clock, &mut sink)
-                .map(|s| StageResult::StAdapted(Box::new(s))),
-            StageRequest::StSupport(p) => st_support::run(reference, p, clock, &mut sink)
-                .map(|s| StageResult::StSupport(Box::new(s))),
-            StageRequest::Sq(p) => {
-                sq::run(reference, p, clock, &mut sink).map(|s| StageResult::Sq(Box::new(s)))
+            StageRequest::StSupport(p) => {
+                st_support::run(reference, p, clock, &mut sink).map(|s| StageResult::StSupport(Box::new(s)))
             }
+            StageRequest::Sq(p) => sq::run(reference, p, clock, &mut sink).map(|s| StageResult::Sq(Box::new(s))),
         };
         match result {
             Ok(result) => {
                 let elapsed_ms = out.now_ms() - start;
-                out.send(
-                    FromWorker::Finished {
-                        stage: name,
-                        result,
-                        elapsed_ms,
-                    },
-                    vec![],
-                );
+                out.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
             }
             Err(StageError::Cancelled) => out.send(FromWorker::Cancelled { stage: name }, vec![]),
-            Err(e) => out.send(
-                FromWorker::Error {
-                    message: e.to_string(),
-                    remesh_to: e.remesh_to(),
-                },
-                vec![],
-            ),
+            Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: e.remesh_to() }, vec![]),
         }
     }
 }
 
 /// The snapshot header for `fields`.
-pub fn snapshot(stage: &str, iteration: u32, fields: &[Field]) -> FromWorker {
-    FromWorker::Snapshot {
-        stage: stage.into(),
-        iteration,
-        fields: fields.iter().map(Field::header).collect(),
-    }
+pub fn snapshot(stage: StageId, iteration: u32, fields: &[Field]) -> FromWorker {
+    FromWorker::Snapshot { stage, iteration, fields: fields.iter().map(Field::header).collect() }
 }
+

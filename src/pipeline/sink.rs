@@ -1,7 +1,7 @@
 //! Where a stage streams what it makes: progress, snapshots of fields and files. The session
 //! turns these into worker messages; tests and the CLI can record them directly.
 
-use super::fields::{Energy, Field, StageProgress};
+use super::fields::{Energy, Field, StageId, StageProgress};
 use crate::export::ExportFile;
 use crate::progress::{Cancelled, Progress};
 
@@ -10,9 +10,9 @@ pub trait Sink {
     /// Reports progress.
     fn progress(&mut self, progress: StageProgress);
     /// A snapshot of the stage's geometry and per-element data.
-    fn snapshot(&mut self, stage: &str, iteration: u32, fields: Vec<Field>);
+    fn snapshot(&mut self, stage: StageId, iteration: u32, fields: Vec<Field>);
     /// Files for download.
-    fn files(&mut self, stage: &str, files: Vec<ExportFile>);
+    fn files(&mut self, stage: StageId, files: Vec<ExportFile>);
     /// Polled at every step boundary; true stops the stage there.
     fn cancel_requested(&mut self) -> bool;
     /// Milliseconds from an arbitrary origin.
@@ -21,22 +21,9 @@ pub trait Sink {
 
 /// Reports `p` as progress of `stage` (started at `start` ms, with `energies` of an iteration),
 /// then answers whether the stage goes on.
-pub fn report(
-    sink: &mut dyn Sink,
-    stage: &str,
-    p: Progress,
-    energies: Vec<Energy>,
-    start: f64,
-) -> Result<(), Cancelled> {
+pub fn report(sink: &mut dyn Sink, stage: StageId, p: Progress, energies: Vec<Energy>, start: f64) -> Result<(), Cancelled> {
     let elapsed_ms = sink.now_ms() - start;
-    sink.progress(StageProgress {
-        stage: stage.into(),
-        detail: p.step.into(),
-        iteration: p.done as u32,
-        total: p.total as u32,
-        energies,
-        elapsed_ms,
-    });
+    sink.progress(StageProgress { stage, detail: p.step.into(), iteration: p.done as u32, total: p.total as u32, energies, elapsed_ms });
     if sink.cancel_requested() {
         Err(Cancelled)
     } else {

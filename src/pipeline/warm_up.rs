@@ -40,11 +40,7 @@ pub fn warm_up() -> Result<WarmUp, StAdaptedError> {
         ..Default::default()
     };
     let result = compute(&reference, &params, Clock(None), &mut |_| Ok(()))?;
-    Ok(WarmUp {
-        faces: result.panels.len(),
-        iterations: result.iterations,
-        supernodal: result.supernodal,
-    })
+    Ok(WarmUp { faces: result.panels.len(), iterations: result.iterations, supernodal: result.supernodal })
 }
 
 #[cfg(test)]
@@ -55,13 +51,7 @@ mod tests {
     fn the_warm_up_runs_every_stage_on_a_few_hundred_faces_supernodally() {
         let w = warm_up().unwrap();
         assert_eq!(w.iterations, 3 * WARM_UP_STAGE_ITERATIONS);
-        assert!(
-            (WARM_UP_FACES * 4 / 5..=WARM_UP_FACES * 6 / 5).contains(&w.faces),
-            "{w:?}"
-        );
-        assert!(
-            w.supernodal,
-            "the warm-up must take a real run's factorization path: {w:?}"
-        );
+        assert!((WARM_UP_FACES * 4 / 5..=WARM_UP_FACES * 6 / 5).contains(&w.faces), "{w:?}");
+        assert!(w.supernodal, "the warm-up must take a real run's factorization path: {w:?}");
     }
 }

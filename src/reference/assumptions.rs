@@ -44,11 +44,7 @@ pub enum Warning {
     Slivers { faces: usize },
     /// The result's panels meet at more than [`KINK_WARNING_DEG`] at `edges` edges, where the
     /// reference's own facets meet at up to `reference_max_deg`.
-    Kinks {
-        edges: usize,
-        max_deg: f64,
-        reference_max_deg: f64,
-    },
+    Kinks { edges: usize, max_deg: f64, reference_max_deg: f64 },
     /// The reference's median facet lies farther than the tolerance `epsilon` from the smooth
     /// surface through its vertices (its
     /// [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta), `sagitta`; both
@@ -56,12 +52,7 @@ pub enum Warning {
     CoarserThanTolerance { sagitta: f64, epsilon: f64 },
     /// SQ (Sec. 5.1): H turns within one grid row of the boundary, on `share_percent` of the
     /// area; `left_out` of the `grid_points` of G are left out of the radius fit.
-    MeanCurvatureTurnsNearBoundary {
-        other_positive: bool,
-        share_percent: f64,
-        left_out: usize,
-        grid_points: usize,
-    },
+    MeanCurvatureTurnsNearBoundary { other_positive: bool, share_percent: f64, left_out: usize, grid_points: usize },
     /// SQ (Sec. 5.1): a speck of the other sign of H inside the patch, around `uv`, run through.
     MeanCurvatureSpeck {
         other_positive: bool,
@@ -87,11 +78,7 @@ pub enum Warning {
     /// SQ (Sec. 5.2): the torsal field turns about an umbilic; a quad mesh along it needs
     /// singular vertices, whose support planes cannot meet at more than `bound_deg` (valence 3,
     /// valence 5), so the quad mesh follows the parameter lines.
-    SingularTorsalField {
-        valence_3: usize,
-        valence_5: usize,
-        bound_deg: [f64; 2],
-    },
+    SingularTorsalField { valence_3: usize, valence_5: usize, bound_deg: [f64; 2] },
     /// SQ (Sec. 5.2): the integration of the torsal field folded fine triangles.
     FoldedFieldTriangles { triangles: usize },
     /// SQ (Sec. 5.2): the quad mesh covers only this share of the patch.
@@ -195,13 +182,7 @@ pub fn surface_warnings(mesh: &TriMesh, topo: &Topology, field: &CurvatureField)
 /// [`SIGN_RELATIVE`] of max |H| on [`SIGN_FRACTION`] of the vertices each (a curved surface only:
 /// max |H| · diag ≥ 10 × [`PLANAR_TOLERANCE`]).
 fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<Warning> {
-    let h = || {
-        field
-            .vertices
-            .iter()
-            .map(|c| c.mean)
-            .filter(|h| h.is_finite())
-    };
+    let h = || field.vertices.iter().map(|c| c.mean).filter(|h| h.is_finite());
     let max_abs = h().fold(0.0, |m: f64, x| m.max(x.abs()));
     let diag = mesh.bbox_diagonal();
     let threshold = if field.summary.h_changes_sign {
@@ -221,44 +202,28 @@ fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<Warning> {
 /// The kink warning of a result whose interior edges meet at `kinks_deg`, beside the reference's
 /// own largest dihedral angle.
 pub fn kink_warning(kinks_deg: &[f64], reference: &crate::reference::Reference) -> Option<Warning> {
-    let edges = kinks_deg
-        .iter()
-        .filter(|&&k| !(k <= KINK_WARNING_DEG))
-        .count();
+    let edges = kinks_deg.iter().filter(|&&k| !(k <= KINK_WARNING_DEG)).count();
     let max_deg = kinks_deg.iter().copied().fold(0.0, f64::max);
-    (edges > 0).then(|| Warning::Kinks {
-        edges,
-        max_deg,
-        reference_max_deg: reference.max_dihedral_angle_deg(),
-    })
+    (edges > 0).then(|| Warning::Kinks { edges, max_deg, reference_max_deg: reference.max_dihedral_angle_deg() })
 }
 
 /// The coarseness warning of a reference for the tolerance `epsilon` (relative to the
 /// diagonal): its [`Reference::facet_sagitta`](crate::reference::Reference::facet_sagitta)
 /// exceeds ε (never for a B-spline reference).
-pub fn coarseness_warning(
-    reference: &crate::reference::Reference,
-    epsilon: f64,
-) -> Option<Warning> {
+pub fn coarseness_warning(reference: &crate::reference::Reference, epsilon: f64) -> Option<Warning> {
     let sagitta = reference.facet_sagitta();
     (sagitta > epsilon).then_some(Warning::CoarserThanTolerance { sagitta, epsilon })
 }
 
 /// The sliver warning of `mesh`, if it has slivers.
 pub fn sliver_warning(mesh: &TriMesh) -> Option<Warning> {
-    let faces = (0..mesh.face_count())
-        .filter(|&f| is_sliver(mesh.face_points(f)))
-        .count();
+    let faces = (0..mesh.face_count()).filter(|&f| is_sliver(mesh.face_points(f))).count();
     (faces > 0).then_some(Warning::Slivers { faces })
 }
 
 /// The warnings of a method that ran on `work`, a remesh of the reference when given: H and
 /// folds are the reference's, slivers those of the mesh the method used.
-pub fn method_warnings(
-    reference: &crate::reference::Reference,
-    field: &CurvatureField,
-    work: Option<&TriMesh>,
-) -> Vec<Warning> {
+pub fn method_warnings(reference: &crate::reference::Reference, field: &CurvatureField, work: Option<&TriMesh>) -> Vec<Warning> {
     let mut warnings = surface_warnings(reference.mesh(), reference.topology(), field);
     if let Some(work) = work {
         warnings.retain(|w| !matches!(w, Warning::Slivers { .. }));
@@ -270,10 +235,7 @@ pub fn method_warnings(
 /// Whether the triangle's height over its longest edge is below [`SLIVER_ASPECT`] (a repeated
 /// corner counts: degenerate faces are slivers too).
 pub fn is_sliver(p: [DVec3; 3]) -> bool {
-    let l2 = (p[1] - p[0])
-        .length_squared()
-        .max((p[2] - p[1]).length_squared())
-        .max((p[0] - p[2]).length_squared());
+    let l2 = (p[1] - p[0]).length_squared().max((p[2] - p[1]).length_squared()).max((p[0] - p[2]).length_squared());
     let twice_area = (p[1] - p[0]).cross(p[2] - p[0]).length();
     !(twice_area > SLIVER_ASPECT * l2)
 }
@@ -295,17 +257,12 @@ pub fn fold_edges(mesh: &TriMesh, topo: &Topology) -> usize {
         let away: Vec<DVec3> = faces
             .iter()
             .filter_map(|&(f, _)| {
-                let c = mesh.triangles[f as usize]
-                    .into_iter()
-                    .find(|&v| v != *a && v != *b)?;
+                let c = mesh.triangles[f as usize].into_iter().find(|&v| v != *a && v != *b)?;
                 let w = mesh.positions[c as usize] - pa;
                 (w - w.dot(axis) * axis).try_normalize()
             })
             .collect();
-        let folded = away
-            .iter()
-            .enumerate()
-            .any(|(i, u)| away[i + 1..].iter().any(|w| u.dot(*w) > cos_fold));
+        let folded = away.iter().enumerate().any(|(i, u)| away[i + 1..].iter().any(|w| u.dot(*w) > cos_fold));
         if folded {
             folds += 1;
         }

@@ -15,6 +15,7 @@ use crate::geometry::bspline::surface::TESSELLATION_TOLERANCE;
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::PolyMesh;
 
+
 /// Why a B-spline surface cannot be a reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SplineReferenceError {
@@ -68,20 +69,10 @@ impl SplineReference {
     pub fn new(surface: BSplineSurface) -> Result<(Self, PolyMesh), SplineReferenceError> {
         let segments = surface.tessellation_segments(TESSELLATION_TOLERANCE);
         let (mesh, uv) = surface.tessellate(segments);
-        if let Some(p) = uv
-            .iter()
-            .find(|p| surface.derivatives(p[0], p[1]).normal().is_none())
-        {
+        if let Some(p) = uv.iter().find(|p| surface.derivatives(p[0], p[1]).normal().is_none()) {
             return Err(SplineReferenceError::Singular { uv: *p });
         }
-        Ok((
-            Self {
-                surface,
-                uv,
-                segments,
-            },
-            mesh,
-        ))
+        Ok((Self { surface, uv, segments }, mesh))
     }
 
     /// The closest point of the surface to `p`, from the parameters `start` (Newton on
@@ -98,16 +89,10 @@ impl SplineReference {
             let (e, f, gg) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
             // Newton's Hessian when positive definite, else Gauss–Newton's [[E, F], [F, G]].
             let (a, b, c) = (e + d.suu.dot(r), f + d.suv.dot(r), gg + d.svv.dot(r));
-            let (a, b, c) = if a > 0.0 && a * c - b * b > 1e-12 * (e * gg).max(1e-300) {
-                (a, b, c)
-            } else {
-                (e, f, gg)
-            };
+            let (a, b, c) = if a > 0.0 && a * c - b * b > 1e-12 * (e * gg).max(1e-300) { (a, b, c) } else { (e, f, gg) };
             // Active bounds: a coordinate at its bound whose descent direction leaves the domain
             // stays there.
-            let at_bound = |x: f64, lo: f64, hi: f64, grad: f64| {
-                (x <= lo && grad > 0.0) || (x >= hi && grad < 0.0)
-            };
+            let at_bound = |x: f64, lo: f64, hi: f64, grad: f64| (x <= lo && grad > 0.0) || (x >= hi && grad < 0.0);
             let (fix_u, fix_v) = (at_bound(uv[0], u0, u1, g[0]), at_bound(uv[1], v0, v1, g[1]));
             let step = match (fix_u, fix_v) {
                 (true, true) => break,
@@ -134,9 +119,7 @@ impl SplineReference {
                 }
                 t *= 0.5;
             }
-            let Some((trial, dt, d2)) = accepted else {
-                break;
-            };
+            let Some((trial, dt, d2)) = accepted else { break };
             let moved = (dt.s - d.s).length();
             uv = trial;
             d = dt;
@@ -154,22 +137,8 @@ impl SplineReference {
             .uv
             .iter()
             .map(|uv| match self.surface.frame(uv[0], uv[1]) {
-                Some(f) => VertexCurvature {
-                    k1: f.k1,
-                    k2: f.k2,
-                    mean: f.mean,
-                    normal: f.normal,
-                    dir1: f.dir1,
-                    dir2: f.dir2,
-                },
-                None => VertexCurvature {
-                    k1: 0.0,
-                    k2: 0.0,
-                    mean: 0.0,
-                    normal: DVec3::Z,
-                    dir1: DVec3::X,
-                    dir2: DVec3::Y,
-                },
+                Some(f) => VertexCurvature { k1: f.k1, k2: f.k2, mean: f.mean, normal: f.normal, dir1: f.dir1, dir2: f.dir2 },
+                None => VertexCurvature { k1: 0.0, k2: 0.0, mean: 0.0, normal: DVec3::Z, dir1: DVec3::X, dir2: DVec3::Y },
             })
             .collect();
         CurvatureField::from_vertex_curvatures(positions, vertices, boundary, diag)
@@ -178,17 +147,11 @@ impl SplineReference {
     pub fn info(&self) -> BSplineInfo {
         let s = &self.surface;
         let ((u0, u1), (v0, v1)) = s.domain();
-        let (mut h, mut k) = (
-            [f64::INFINITY, f64::NEG_INFINITY],
-            [f64::INFINITY, f64::NEG_INFINITY],
-        );
+        let (mut h, mut k) = ([f64::INFINITY, f64::NEG_INFINITY], [f64::INFINITY, f64::NEG_INFINITY]);
         const N: usize = 100;
         for i in 0..=N {
             for j in 0..=N {
-                let (u, v) = (
-                    u0 + (u1 - u0) * i as f64 / N as f64,
-                    v0 + (v1 - v0) * j as f64 / N as f64,
-                );
+                let (u, v) = (u0 + (u1 - u0) * i as f64 / N as f64, v0 + (v1 - v0) * j as f64 / N as f64);
                 if let Some(f) = s.frame(u, v) {
                     h = [h[0].min(f.mean), h[1].max(f.mean)];
                     k = [k[0].min(f.gauss), k[1].max(f.gauss)];

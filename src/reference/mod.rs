@@ -22,9 +22,9 @@ use self::bspline::{SplineReference, SplineReferenceError};
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
-use crate::geometry::mesh::topology::Topology;
-use crate::geometry::mesh::{PolyMesh, TriMesh};
 use crate::geometry::sphere::Sphere;
+use crate::geometry::mesh::{PolyMesh, TriMesh};
+use crate::geometry::mesh::topology::Topology;
 use crate::progress::{Cancelled, OnProgress};
 
 /// A point of the reference surface.
@@ -54,9 +54,7 @@ impl fmt::Display for ReferenceError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             ReferenceError::NoFaces => "the reference has no faces",
-            ReferenceError::InvalidVertices => {
-                "the reference has invalid vertex indices or coordinates"
-            }
+            ReferenceError::InvalidVertices => "the reference has invalid vertex indices or coordinates",
             ReferenceError::DegenerateBoundingBox => "the reference has a degenerate bounding box",
         })
     }
@@ -96,10 +94,7 @@ impl Reference {
     pub fn from_bspline(surface: BSplineSurface) -> Result<Self, SplineReferenceError> {
         let (spline, tessellation) = SplineReference::new(surface)?;
         let mesh = tessellation.triangulated();
-        Ok(Self {
-            spline: Some(spline),
-            ..Self::with_triangulation(tessellation, mesh)
-        })
+        Ok(Self { spline: Some(spline), ..Self::with_triangulation(tessellation, mesh) })
     }
 
     fn with_triangulation(surface: PolyMesh, mesh: TriMesh) -> Self {
@@ -150,8 +145,7 @@ impl Reference {
 
     /// Area-weighted unit vertex normals of [`Self::mesh`].
     pub fn vertex_normals(&self) -> &[DVec3] {
-        self.vertex_normals
-            .get_or_init(|| self.mesh.vertex_normals())
+        self.vertex_normals.get_or_init(|| self.mesh.vertex_normals())
     }
 
     /// The closest-point hierarchy of [`Self::mesh`].
@@ -198,13 +192,7 @@ impl Reference {
             let topo = self.topology();
             (0..topo.edges().len())
                 .filter_map(|e| match topo.edge_faces(e) {
-                    [(f, _), (g, _)] => Some(
-                        normal(*f)
-                            .dot(normal(*g))
-                            .clamp(-1.0, 1.0)
-                            .acos()
-                            .to_degrees(),
-                    ),
+                    [(f, _), (g, _)] => Some(normal(*f).dot(normal(*g)).clamp(-1.0, 1.0).acos().to_degrees()),
                     _ => None,
                 })
                 .fold(0.0, f64::max)
@@ -213,20 +201,14 @@ impl Reference {
 
     /// The jet-fitted curvature with `params`: computed once per parameter set (the last one
     /// is kept).
-    pub fn curvature(
-        &self,
-        params: &JetParams,
-        progress: &mut OnProgress,
-    ) -> Result<Rc<CurvatureField>, Cancelled> {
+    pub fn curvature(&self, params: &JetParams, progress: &mut OnProgress) -> Result<Rc<CurvatureField>, Cancelled> {
         if let Some(field) = self.cached_curvature(params) {
             return Ok(field);
         }
         let field = Rc::new(match &self.spline {
             Some(spline) => {
                 let topology = self.topology();
-                let boundary = (0..self.mesh.vertex_count())
-                    .map(|v| topology.is_boundary_vertex(v))
-                    .collect();
+                let boundary = (0..self.mesh.vertex_count()).map(|v| topology.is_boundary_vertex(v)).collect();
                 spline.curvature(&self.mesh.positions, boundary, self.diagonal)
             }
             None => jet_fit(&self.mesh, self.topology(), params, progress)?,
@@ -237,11 +219,7 @@ impl Reference {
 
     /// The curvature computed with `params`, if it is.
     pub fn cached_curvature(&self, params: &JetParams) -> Option<Rc<CurvatureField>> {
-        self.curvature
-            .borrow()
-            .as_ref()
-            .filter(|(p, _)| p == params)
-            .map(|(_, f)| f.clone())
+        self.curvature.borrow().as_ref().filter(|(p, _)| p == params).map(|(_, f)| f.clone())
     }
 
     /// Faces, finite coordinates, valid indices and a bounding box with extent.
@@ -250,12 +228,7 @@ impl Reference {
         if m.face_count() == 0 || m.vertex_count() == 0 {
             return Err(ReferenceError::NoFaces);
         }
-        if m.triangles
-            .iter()
-            .flatten()
-            .any(|&v| v as usize >= m.vertex_count())
-            || m.positions.iter().any(|p| !p.is_finite())
-        {
+        if m.triangles.iter().flatten().any(|&v| v as usize >= m.vertex_count()) || m.positions.iter().any(|p| !p.is_finite()) {
             return Err(ReferenceError::InvalidVertices);
         }
         if !(self.diagonal > 0.0 && self.diagonal.is_finite()) {
@@ -273,26 +246,17 @@ impl Reference {
         points
             .iter()
             .map(|&p| {
-                let hit = self
-                    .closest_point_near(p, previous)
-                    .expect("a validated reference has faces");
+                let hit = self.closest_point_near(p, previous).expect("a validated reference has faces");
                 previous = Some(hit.triangle);
                 let corners = self.mesh.triangles[hit.triangle];
-                Sphere::blend(
-                    corners
-                        .iter()
-                        .zip(hit.barycentric)
-                        .map(|(&v, w)| field.central_spheres[v as usize].to_array().map(|a| w * a)),
-                )
+                Sphere::blend(corners.iter().zip(hit.barycentric).map(|(&v, w)| field.central_spheres[v as usize].to_array().map(|a| w * a)))
             })
             .collect()
     }
 
     /// The closest point of the surface to `p` (None for an empty surface).
     pub fn closest_point(&self, p: DVec3) -> Option<SurfacePoint> {
-        self.bvh()
-            .closest_point(p)
-            .map(|hit| self.surface_point_of(p, hit))
+        self.bvh().closest_point(p).map(|hit| self.surface_point_of(p, hit))
     }
 
     /// [`Self::closest_point`], started from triangle `previous` of [`Self::mesh`] (e.g. the
@@ -310,58 +274,30 @@ impl Reference {
     /// [`Self::closest_point`] on the B-spline, started from a hit on the tessellation (the
     /// point `p` it was the closest to).
     fn surface_point_of(&self, p: DVec3, hit: ClosestHit) -> SurfacePoint {
-        let Some(spline) = &self.spline else {
-            return self.surface_point(hit);
-        };
+        let Some(spline) = &self.spline else { return self.surface_point(hit) };
         let t = self.mesh.triangles[hit.triangle];
         let w = hit.barycentric;
-        let start = [0, 1].map(|k| {
-            (0..3)
-                .map(|c| w[c] * spline.uv[t[c] as usize][k])
-                .sum::<f64>()
-        });
+        let start = [0, 1].map(|k| (0..3).map(|c| w[c] * spline.uv[t[c] as usize][k]).sum::<f64>());
         let (uv, point, normal) = spline.closest_point(p, start);
-        SurfacePoint {
-            point,
-            normal,
-            triangle: hit.triangle,
-            barycentric: w,
-            uv: Some(uv),
-        }
+        SurfacePoint { point, normal, triangle: hit.triangle, barycentric: w, uv: Some(uv) }
     }
 
     fn surface_point(&self, hit: ClosestHit) -> SurfacePoint {
         let t = self.mesh.triangles[hit.triangle];
         let w = hit.barycentric;
         let n = self.vertex_normals();
-        let normal = (w[0] * n[t[0] as usize] + w[1] * n[t[1] as usize] + w[2] * n[t[2] as usize])
-            .try_normalize();
-        SurfacePoint {
-            point: hit.point,
-            normal,
-            triangle: hit.triangle,
-            barycentric: w,
-            uv: None,
-        }
+        let normal = (w[0] * n[t[0] as usize] + w[1] * n[t[1] as usize] + w[2] * n[t[2] as usize]).try_normalize();
+        SurfacePoint { point: hit.point, normal, triangle: hit.triangle, barycentric: w, uv: None }
     }
 
     /// The same surface moved by −`t` and scaled by 1/`s` (the frame y = (x − t)/s in which an
     /// optimization's weights are dimensionless).
     pub fn in_frame(&self, t: DVec3, s: f64) -> Reference {
         let inv = 1.0 / s;
-        let mesh = TriMesh::new(
-            self.mesh.positions.iter().map(|&p| (p - t) * inv).collect(),
-            self.mesh.triangles.clone(),
-        );
+        let mesh = TriMesh::new(self.mesh.positions.iter().map(|&p| (p - t) * inv).collect(), self.mesh.triangles.clone());
         let surface = PolyMesh::new(mesh.positions.clone(), self.surface.faces.clone());
-        let spline = self.spline.as_ref().map(|sp| SplineReference {
-            surface: sp.surface.in_frame(t, s),
-            ..sp.clone()
-        });
-        Self {
-            spline,
-            ..Self::with_triangulation(surface, mesh)
-        }
+        let spline = self.spline.as_ref().map(|sp| SplineReference { surface: sp.surface.in_frame(t, s), ..sp.clone() });
+        Self { spline, ..Self::with_triangulation(surface, mesh) }
     }
 }
 
@@ -379,11 +315,7 @@ fn facet_sagitta(mesh: &TriMesh, vertex_normals: &[DVec3]) -> f64 {
         .iter()
         .map(|t| {
             let t = t.map(|v| v as usize);
-            let edge = |a: usize, b: usize| {
-                (vertex_normals[b] - vertex_normals[a])
-                    .dot(p[b] - p[a])
-                    .abs()
-            };
+            let edge = |a: usize, b: usize| (vertex_normals[b] - vertex_normals[a]).dot(p[b] - p[a]).abs();
             (edge(t[0], t[1]) + edge(t[1], t[2]) + edge(t[2], t[0])) / 18.0
         })
         .collect();

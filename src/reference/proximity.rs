@@ -8,8 +8,8 @@ use std::rc::Rc;
 use glam::DVec3;
 
 use super::Reference;
-use crate::solver::terms::v3;
 use crate::solver::{JacobianSink, Term};
+use crate::solver::terms::v3;
 
 /// Closest reference points of the vertices, shared by the proximity terms so that each moved
 /// vertex is looked up once per evaluation point (see [`ReferenceProximity::share_closest_with`]).
@@ -64,19 +64,9 @@ impl<'a> ReferenceProximity<'a> {
         Self::new("point_distance", reference, offsets, Some(scales), true)
     }
 
-    fn new(
-        name: &str,
-        reference: &'a Reference,
-        offsets: Vec<usize>,
-        scales: Option<Vec<f64>>,
-        point: bool,
-    ) -> Self {
+    fn new(name: &str, reference: &'a Reference, offsets: Vec<usize>, scales: Option<Vec<f64>>, point: bool) -> Self {
         let n = offsets.len();
-        let cache = ClosestCache {
-            pos: vec![DVec3::NAN; n],
-            hits: vec![(DVec3::ZERO, DVec3::Z); n],
-            triangles: vec![0; n],
-        };
+        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n], triangles: vec![0; n] };
         Self {
             name: name.into(),
             reference,
@@ -97,10 +87,7 @@ impl<'a> ReferenceProximity<'a> {
     /// Shares the closest-point lookups with `other` (same reference and vertex offsets): the
     /// first of the two to prepare at a point looks the moved vertices up, the other reuses them.
     pub fn share_closest_with(&mut self, other: &Self) {
-        assert!(
-            self.offsets == other.offsets && std::ptr::eq(self.reference, other.reference),
-            "different vertices or reference"
-        );
+        assert!(self.offsets == other.offsets && std::ptr::eq(self.reference, other.reference), "different vertices or reference");
         self.cache = other.cache.clone();
     }
 

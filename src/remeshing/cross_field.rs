@@ -34,19 +34,13 @@ impl Cross {
         let a = d0.y.atan2(d0.x);
         let opening = (d1.y.atan2(d1.x) - a).rem_euclid(PI);
         let skew = 0.5 * (opening - FRAC_PI_2);
-        Self {
-            angle: a + skew,
-            skew,
-        }
+        Self { angle: a + skew, skew }
     }
 
     /// Unit directions of family 0 and family 1.
     pub fn directions(self) -> [DVec2; 2] {
         let dir = |t: f64| DVec2::new(t.cos(), t.sin());
-        [
-            dir(self.angle - self.skew),
-            dir(self.angle + FRAC_PI_2 + self.skew),
-        ]
+        [dir(self.angle - self.skew), dir(self.angle + FRAC_PI_2 + self.skew)]
     }
 
     /// The 4-direction representative e^{4ic}.
@@ -56,14 +50,7 @@ impl Cross {
 
     /// The same cross with its labels turned by `quarters` quarter turns.
     pub fn turned(self, quarters: i32) -> Self {
-        Self {
-            angle: self.angle + quarters as f64 * FRAC_PI_2,
-            skew: if quarters.rem_euclid(2) == 0 {
-                self.skew
-            } else {
-                -self.skew
-            },
-        }
+        Self { angle: self.angle + quarters as f64 * FRAC_PI_2, skew: if quarters.rem_euclid(2) == 0 { self.skew } else { -self.skew } }
     }
 
     /// The quarter turns that bring this cross's labels nearest to angle `reference`.
@@ -87,22 +74,14 @@ pub fn mean_cross(crosses: impl IntoIterator<Item = (f64, Cross)>) -> Option<Cro
         return None;
     }
     let angle = 0.25 * z.y.atan2(z.x);
-    let skew = items
-        .iter()
-        .map(|(w, c)| w * c.aligned_to(angle).skew)
-        .sum::<f64>()
-        / total;
+    let skew = items.iter().map(|(w, c)| w * c.aligned_to(angle).skew).sum::<f64>() / total;
     Some(Cross { angle, skew })
 }
 
 /// The difference b − a of two cross angles, modulo a quarter turn, in (−π/4, π/4].
 pub fn angle_step(a: f64, b: f64) -> f64 {
     let d = (b - a).rem_euclid(FRAC_PI_2);
-    if d > 0.5 * FRAC_PI_2 {
-        d - FRAC_PI_2
-    } else {
-        d
-    }
+    if d > 0.5 * FRAC_PI_2 { d - FRAC_PI_2 } else { d }
 }
 
 /// A cross field on an n × n grid of a rectangle: per cell (i + (n − 1) j) its cross.
@@ -124,10 +103,7 @@ impl CrossField {
     pub fn new(surface: &BSplineSurface, n: usize, raw: &[Option<[[f64; 2]; 2]>]) -> Option<Self> {
         let cells = n - 1;
         assert_eq!(raw.len(), cells * cells, "one entry per grid cell");
-        let mut out: Vec<Option<Cross>> = raw
-            .iter()
-            .map(|d| d.map(|[a, b]| Cross::from_lines(DVec2::from(a), DVec2::from(b))))
-            .collect();
+        let mut out: Vec<Option<Cross>> = raw.iter().map(|d| d.map(|[a, b]| Cross::from_lines(DVec2::from(a), DVec2::from(b)))).collect();
         if out.iter().all(Option::is_none) {
             return None;
         }
@@ -156,10 +132,7 @@ impl CrossField {
             }
             let mut progress = false;
             for q in missing {
-                let known = neighbours(q)
-                    .into_iter()
-                    .filter_map(|r| out[r])
-                    .map(|c| (1.0, c));
+                let known = neighbours(q).into_iter().filter_map(|r| out[r]).map(|c| (1.0, c));
                 if let Some(c) = mean_cross(known) {
                     out[q] = Some(c);
                     filled += 1;
@@ -170,21 +143,8 @@ impl CrossField {
                 break;
             }
         }
-        let crosses = out
-            .into_iter()
-            .map(|c| {
-                c.unwrap_or(Cross {
-                    angle: 0.0,
-                    skew: 0.0,
-                })
-            })
-            .collect();
-        Some(Self {
-            n,
-            domain: surface.domain(),
-            crosses,
-            filled,
-        })
+        let crosses = out.into_iter().map(|c| c.unwrap_or(Cross { angle: 0.0, skew: 0.0 })).collect();
+        Some(Self { n, domain: surface.domain(), crosses, filled })
     }
 
     /// The cross at (u, v), bilinear (on z) between cell centres, clamped to the domain.
@@ -196,21 +156,12 @@ impl CrossField {
         let ((u0, u1), (v0, v1)) = self.domain;
         let s = ((u - u0) / (u1 - u0) * cells as f64 - 0.5).clamp(0.0, (cells - 1) as f64);
         let t = ((v - v0) / (v1 - v0) * cells as f64 - 0.5).clamp(0.0, (cells - 1) as f64);
-        let (i, j) = (
-            (s.floor() as usize).min(cells - 2),
-            (t.floor() as usize).min(cells - 2),
-        );
+        let (i, j) = ((s.floor() as usize).min(cells - 2), (t.floor() as usize).min(cells - 2));
         let (fs, ft) = (s - i as f64, t - j as f64);
         let c = |a: usize, b: usize| self.crosses[(i + a) + cells * (j + b)];
-        let weights = [
-            ((1.0 - fs) * (1.0 - ft), c(0, 0)),
-            (fs * (1.0 - ft), c(1, 0)),
-            ((1.0 - fs) * ft, c(0, 1)),
-            (fs * ft, c(1, 1)),
-        ];
+        let weights = [((1.0 - fs) * (1.0 - ft), c(0, 0)), (fs * (1.0 - ft), c(1, 0)), ((1.0 - fs) * ft, c(0, 1)), (fs * ft, c(1, 1))];
         // Where z cancels (a singular point), the nearest cell's cross.
-        mean_cross(weights)
-            .unwrap_or_else(|| weights.iter().max_by(|a, b| a.0.total_cmp(&b.0)).unwrap().1)
+        mean_cross(weights).unwrap_or_else(|| weights.iter().max_by(|a, b| a.0.total_cmp(&b.0)).unwrap().1)
     }
 
     /// The two directions at (u, v).
@@ -221,8 +172,7 @@ impl CrossField {
     /// The two directions at (u, v) as unit 3D tangent vectors of `surface`.
     pub fn at_3d(&self, surface: &BSplineSurface, u: f64, v: f64) -> [DVec3; 2] {
         let d = surface.derivatives(u, v);
-        self.at(u, v)
-            .map(|t| (d.su * t.x + d.sv * t.y).normalize_or_zero())
+        self.at(u, v).map(|t| (d.su * t.x + d.sv * t.y).normalize_or_zero())
     }
 }
 
@@ -250,10 +200,7 @@ impl FineGrid {
     }
     pub fn uv(&self, node: usize) -> DVec2 {
         let (i, j) = (node % self.nu, node / self.nu);
-        DVec2::new(
-            self.origin[0] + i as f64 * self.step[0],
-            self.origin[1] + j as f64 * self.step[1],
-        )
+        DVec2::new(self.origin[0] + i as f64 * self.step[0], self.origin[1] + j as f64 * self.step[1])
     }
     /// The corners of triangle t (counter-clockwise).
     pub fn triangle(&self, t: usize) -> [usize; 3] {
@@ -262,11 +209,7 @@ impl FineGrid {
         if t % 2 == 0 {
             [self.node(i, j), self.node(i + 1, j), self.node(i, j + 1)]
         } else {
-            [
-                self.node(i + 1, j + 1),
-                self.node(i, j + 1),
-                self.node(i + 1, j),
-            ]
+            [self.node(i + 1, j + 1), self.node(i, j + 1), self.node(i + 1, j)]
         }
     }
     pub fn centroid(&self, t: usize) -> DVec2 {
@@ -276,16 +219,9 @@ impl FineGrid {
     pub fn triangle_at(&self, p: DVec2) -> usize {
         let s = ((p.x - self.origin[0]) / self.step[0]).clamp(0.0, (self.nu - 1) as f64);
         let t = ((p.y - self.origin[1]) / self.step[1]).clamp(0.0, (self.nv - 1) as f64);
-        let (i, j) = (
-            (s.floor() as usize).min(self.nu - 2),
-            (t.floor() as usize).min(self.nv - 2),
-        );
+        let (i, j) = ((s.floor() as usize).min(self.nu - 2), (t.floor() as usize).min(self.nv - 2));
         let cell = 2 * (i + (self.nu - 1) * j);
-        if (s - i as f64) + (t - j as f64) <= 1.0 {
-            cell
-        } else {
-            cell + 1
-        }
+        if (s - i as f64) + (t - j as f64) <= 1.0 { cell } else { cell + 1 }
     }
     /// Whether `node` is on the grid's outer boundary.
     pub fn on_border(&self, node: usize) -> bool {
@@ -297,14 +233,7 @@ impl FineGrid {
         let (i, j) = (node % self.nu, node / self.nu);
         let cell = |a: usize, b: usize| 2 * (a + (self.nu - 1) * b);
         // Counter-clockwise from the cell to the upper right.
-        vec![
-            cell(i, j),
-            cell(i - 1, j) + 1,
-            cell(i - 1, j),
-            cell(i - 1, j - 1) + 1,
-            cell(i, j - 1),
-            cell(i, j - 1) + 1,
-        ]
+        vec![cell(i, j), cell(i - 1, j) + 1, cell(i - 1, j), cell(i - 1, j - 1) + 1, cell(i, j - 1), cell(i, j - 1) + 1]
     }
     /// The grid's edges at a node: the neighbours it shares a triangle edge with.
     pub fn neighbours(&self, node: usize) -> Vec<usize> {
@@ -333,14 +262,7 @@ pub fn singular_points(grid: &FineGrid, crosses: &[Cross]) -> Vec<SingularPoint>
         for i in 1..grid.nu - 1 {
             let node = grid.node(i, j);
             let ring = grid.ring(node);
-            let turn: f64 = (0..ring.len())
-                .map(|k| {
-                    angle_step(
-                        crosses[ring[k]].angle,
-                        crosses[ring[(k + 1) % ring.len()]].angle,
-                    )
-                })
-                .sum();
+            let turn: f64 = (0..ring.len()).map(|k| angle_step(crosses[ring[k]].angle, crosses[ring[(k + 1) % ring.len()]].angle)).sum();
             let quarters = (turn / FRAC_PI_2).round() as i32;
             if quarters != 0 {
                 out.push(SingularPoint { node, quarters });
@@ -361,13 +283,7 @@ pub fn singular_points(grid: &FineGrid, crosses: &[Cross]) -> Vec<SingularPoint>
 /// umbilic, the field is the one of the disk's rim with the cluster's turning taken out, carried
 /// in along the rays, times the placed points' turning. The skew fades out within 2.5 spacings of
 /// the disk (a quarter-turn point needs orthogonal lines). Returns the singular points found after.
-pub fn split_singularities(
-    grid: &FineGrid,
-    crosses: &mut [Cross],
-    reach: f64,
-    spacing: f64,
-    scale: DVec2,
-) -> Vec<SingularPoint> {
+pub fn split_singularities(grid: &FineGrid, crosses: &mut [Cross], reach: f64, spacing: f64, scale: DVec2) -> Vec<SingularPoint> {
     let found = singular_points(grid, crosses);
     let metric = |p: DVec2| p * scale;
     // First the dipoles: a point and a nearest one of opposite index within a spacing cancel
@@ -423,22 +339,12 @@ pub fn split_singularities(
         }
         let total: i32 = members.iter().map(|s| s.quarters).sum();
         let weight: f64 = members.iter().map(|s| s.quarters.abs() as f64).sum();
-        let centre = members
-            .iter()
-            .map(|s| metric(grid.uv(s.node)) * s.quarters.abs() as f64)
-            .sum::<DVec2>()
-            / weight;
+        let centre = members.iter().map(|s| metric(grid.uv(s.node)) * s.quarters.abs() as f64).sum::<DVec2>() / weight;
         for s in members {
             removed.push((metric(grid.uv(s.node)), s.quarters));
         }
         centres.push(centre);
-        radii.push(
-            members
-                .iter()
-                .map(|s| metric(grid.uv(s.node)).distance(centre))
-                .fold(0.0, f64::max)
-                + 1.5 * spacing,
-        );
+        radii.push(members.iter().map(|s| metric(grid.uv(s.node)).distance(centre)).fold(0.0, f64::max) + 1.5 * spacing);
         let count = total.unsigned_abs() as usize;
         let sign = total.signum();
         // Laid out along the field's mean direction near the cluster (after the removal below).
@@ -446,9 +352,7 @@ pub fn split_singularities(
         let dir = |t: f64| DVec2::new(t.cos(), t.sin());
         for k in 0..count {
             let p = if count >= 3 {
-                centre
-                    + spacing / (2.0 * (PI / count as f64).sin())
-                        * dir(along + PI / 4.0 + 2.0 * PI * k as f64 / count as f64)
+                centre + spacing / (2.0 * (PI / count as f64).sin()) * dir(along + PI / 4.0 + 2.0 * PI * k as f64 / count as f64)
             } else {
                 centre + spacing * (k as f64 - 0.5 * (count as f64 - 1.0)) * dir(along)
             };
@@ -463,17 +367,11 @@ pub fn split_singularities(
     let mut taken = std::collections::HashSet::new();
     for (p, sign) in placed {
         let uv = p / scale;
-        let i = (((uv.x - grid.origin[0]) / grid.step[0]).round() as i64)
-            .clamp(1, grid.nu as i64 - 2) as usize;
-        let j = (((uv.y - grid.origin[1]) / grid.step[1]).round() as i64)
-            .clamp(1, grid.nv as i64 - 2) as usize;
+        let i = (((uv.x - grid.origin[0]) / grid.step[0]).round() as i64).clamp(1, grid.nu as i64 - 2) as usize;
+        let j = (((uv.y - grid.origin[1]) / grid.step[1]).round() as i64).clamp(1, grid.nv as i64 - 2) as usize;
         let mut node = grid.node(i, j);
         while !taken.insert(node) {
-            node = grid
-                .neighbours(node)
-                .into_iter()
-                .find(|n| !taken.contains(n) && !grid.on_border(*n))
-                .unwrap_or(node);
+            node = grid.neighbours(node).into_iter().find(|n| !taken.contains(n) && !grid.on_border(*n)).unwrap_or(node);
         }
         snapped.push((metric(grid.uv(node)), sign));
     }
@@ -503,10 +401,7 @@ pub fn split_singularities(
         let x = metric(grid.centroid(t));
         // Inside a cluster's disk the unwound field of its rim, carried in along the rays: the
         // field there is noise about an umbilic.
-        let inside = centres
-            .iter()
-            .zip(&radii)
-            .find(|(c, r)| x.distance(**c) < **r);
+        let inside = centres.iter().zip(&radii).find(|(c, r)| x.distance(**c) < **r);
         let base = match inside {
             Some((c, r)) => {
                 let ray = (x - *c).normalize_or(DVec2::X);
@@ -515,12 +410,7 @@ pub fn split_singularities(
             None => cross.angle + 0.25 * arg(removed_turn(x)),
         };
         cross.angle = base + 0.25 * arg(placed_turn(x));
-        let near = centres
-            .iter()
-            .zip(&radii)
-            .map(|(c, r)| (x.distance(*c) - r).max(0.0))
-            .fold(f64::INFINITY, f64::min)
-            / spacing;
+        let near = centres.iter().zip(&radii).map(|(c, r)| (x.distance(*c) - r).max(0.0)).fold(f64::INFINITY, f64::min) / spacing;
         cross.skew *= (near / 2.5).clamp(0.0, 1.0);
     }
     singular_points(grid, crosses)
@@ -528,14 +418,7 @@ pub fn split_singularities(
 
 /// The field's mean cross angle on a ring about `centre` (lengths), with the turning of the
 /// `removed` points taken out, so it does not depend on where on the ring one looks.
-fn nearby_angle(
-    grid: &FineGrid,
-    crosses: &[Cross],
-    centre: DVec2,
-    metric: impl Fn(DVec2) -> DVec2,
-    removed: &[(DVec2, i32)],
-    radius: f64,
-) -> f64 {
+fn nearby_angle(grid: &FineGrid, crosses: &[Cross], centre: DVec2, metric: impl Fn(DVec2) -> DVec2, removed: &[(DVec2, i32)], radius: f64) -> f64 {
     let mut z = DVec2::ZERO;
     for (t, cross) in crosses.iter().enumerate() {
         let x = metric(grid.centroid(t));
@@ -543,10 +426,7 @@ fn nearby_angle(
         if d > radius || d < 0.5 * radius {
             continue;
         }
-        let turn: f64 = removed
-            .iter()
-            .map(|(s, k)| *k as f64 * (x - *s).y.atan2((x - *s).x))
-            .sum();
+        let turn: f64 = removed.iter().map(|(s, k)| *k as f64 * (x - *s).y.atan2((x - *s).x)).sum();
         let a = cross.angle - 0.25 * turn;
         z += DVec2::new((4.0 * a).cos(), (4.0 * a).sin());
     }

@@ -62,8 +62,8 @@ use crate::congruence::central_spheres::CurvatureField;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
 use crate::geometry::linalg::Svd;
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{ignore, Cancelled, OnProgress, Progress};
 
@@ -106,10 +106,7 @@ pub fn mean_edge_length(mesh: &TriMesh, topo: &Topology) -> f64 {
     if edges.is_empty() {
         return 0.0;
     }
-    let sum: f64 = edges
-        .iter()
-        .map(|e| mesh.positions[e[0] as usize].distance(mesh.positions[e[1] as usize]))
-        .sum();
+    let sum: f64 = edges.iter().map(|e| mesh.positions[e[0] as usize].distance(mesh.positions[e[1] as usize])).sum();
     sum / edges.len() as f64
 }
 
@@ -142,12 +139,8 @@ impl SizingField {
     /// cut into far more than N faces.
     pub fn uniform_for_face_count(mesh: &TriMesh, faces: usize) -> Self {
         let n = faces.max(1) as f64;
-        let area: f64 = (0..mesh.face_count())
-            .map(|f| mesh.face_area_vector(f).length())
-            .sum();
-        let g = (4.0 * area / (3f64.sqrt() * n))
-            .sqrt()
-            .max(boundary_length(mesh) / n);
+        let area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
+        let g = (4.0 * area / (3f64.sqrt() * n)).sqrt().max(boundary_length(mesh) / n);
         Self::uniform(mesh, g)
     }
 
@@ -155,13 +148,7 @@ impl SizingField {
     /// Σ over triangles of A_t / (√3/4 · g_t²), g_t the mean of its corners' values, plus the
     /// boundary's length in units of g (Sec. 3).
     pub fn expected_faces(&self, mesh: &TriMesh) -> f64 {
-        let g_of = |v: u32| {
-            self.values
-                .get(v as usize)
-                .copied()
-                .unwrap_or(self.bounds.g_min)
-                .max(f64::MIN_POSITIVE)
-        };
+        let g_of = |v: u32| self.values.get(v as usize).copied().unwrap_or(self.bounds.g_min).max(f64::MIN_POSITIVE);
         let per_area = 4.0 / 3f64.sqrt();
         let interior: f64 = mesh
             .triangles
@@ -172,12 +159,7 @@ impl SizingField {
                 per_area * mesh.face_area_vector(f).length() / (g * g)
             })
             .sum();
-        let boundary: f64 = boundary_edges(mesh)
-            .map(|(a, b)| {
-                mesh.positions[a as usize].distance(mesh.positions[b as usize])
-                    / g_of(a).min(g_of(b))
-            })
-            .sum();
+        let boundary: f64 = boundary_edges(mesh).map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]) / g_of(a).min(g_of(b))).sum();
         interior + boundary
     }
 
@@ -186,24 +168,13 @@ impl SizingField {
         let bounds = SizingBounds::for_mesh(mesh, topo);
         let plane = |i: usize| Sphere::plane(mesh.positions[i], DVec3::Z);
         let sphere_of = |i: usize| spheres.get(i).copied().unwrap_or_else(|| plane(i));
-        Self::from_sphere_fn(mesh, topo, &sphere_of, eps_abs, bounds, &mut ignore)
-            .expect("progress never cancels")
+        Self::from_sphere_fn(mesh, topo, &sphere_of, eps_abs, bounds, &mut ignore).expect("progress never cancels")
     }
 
     /// Influence zones of the central spheres of `field`, ε relative to the bbox diagonal,
     /// default bounds.
-    pub fn from_curvature(
-        mesh: &TriMesh,
-        topo: &Topology,
-        field: &CurvatureField,
-        eps_rel: f64,
-    ) -> Self {
-        Self::from_spheres(
-            mesh,
-            topo,
-            &field.central_spheres,
-            eps_rel * mesh.bbox_diagonal(),
-        )
+    pub fn from_curvature(mesh: &TriMesh, topo: &Topology, field: &CurvatureField, eps_rel: f64) -> Self {
+        Self::from_spheres(mesh, topo, &field.central_spheres, eps_rel * mesh.bbox_diagonal())
     }
 
     /// Influence zones of arbitrary per-vertex spheres `sphere_of(i)` (normalized generalized
@@ -238,21 +209,9 @@ impl SizingField {
     pub fn from_values(mesh: &TriMesh, values: Vec<f64>, bounds: SizingBounds) -> Self {
         let values = values
             .into_iter()
-            .map(|v| {
-                if v.is_finite() {
-                    v.clamp(bounds.g_min, bounds.g_max)
-                } else {
-                    bounds.g_max
-                }
-            })
+            .map(|v| if v.is_finite() { v.clamp(bounds.g_min, bounds.g_max) } else { bounds.g_max })
             .collect();
-        Self {
-            values,
-            triangles: mesh.triangles.clone(),
-            bvh: TriangleBvh::new(mesh),
-            uniform: None,
-            bounds,
-        }
+        Self { values, triangles: mesh.triangles.clone(), bvh: TriangleBvh::new(mesh), uniform: None, bounds }
     }
 
     /// g at the reference vertices.
@@ -314,9 +273,7 @@ impl SizingField {
         }
         let t = self.triangles[hit.triangle];
         let w = hit.barycentric;
-        w[0] * self.values[t[0] as usize]
-            + w[1] * self.values[t[1] as usize]
-            + w[2] * self.values[t[2] as usize]
+        w[0] * self.values[t[0] as usize] + w[1] * self.values[t[1] as usize] + w[2] * self.values[t[2] as usize]
     }
 
     /// Min, mean and max of the per-vertex values.
@@ -342,10 +299,7 @@ pub fn limit_gradation(mesh: &TriMesh, topo: &Topology, values: &mut [f64], grad
     use std::collections::BinaryHeap;
     let n = values.len().min(topo.vertex_count());
     let key = |g: f64| Reverse(g.to_bits());
-    let mut heap: BinaryHeap<(Reverse<u64>, u32)> = (0..n)
-        .filter(|&v| values[v] >= 0.0)
-        .map(|v| (key(values[v]), v as u32))
-        .collect();
+    let mut heap: BinaryHeap<(Reverse<u64>, u32)> = (0..n).filter(|&v| values[v] >= 0.0).map(|v| (key(values[v]), v as u32)).collect();
     while let Some((Reverse(bits), u)) = heap.pop() {
         let g = f64::from_bits(bits);
         if g > values[u as usize] {
@@ -385,10 +339,7 @@ pub fn cap_at_boundary(mesh: &TriMesh, topo: &Topology, values: &mut [f64], eps_
     for (v, ends) in ends.iter().enumerate() {
         let &[u, w] = ends.as_slice() else { continue };
         let p = mesh.positions[v];
-        let (e1, e2) = (
-            p - mesh.positions[u as usize],
-            mesh.positions[w as usize] - p,
-        );
+        let (e1, e2) = (p - mesh.positions[u as usize], mesh.positions[w as usize] - p);
         let (l1, l2) = (e1.length(), e2.length());
         if !(l1 > 0.0 && l2 > 0.0) {
             continue;
@@ -398,12 +349,7 @@ pub fn cap_at_boundary(mesh: &TriMesh, topo: &Topology, values: &mut [f64], eps_
             continue;
         }
         let k = (e2 / l2 - e1 / l1) / (0.5 * (l1 + l2));
-        let n = topo
-            .vertex_faces(v)
-            .iter()
-            .map(|&f| mesh.face_area_vector(f as usize))
-            .sum::<DVec3>()
-            .normalize_or_zero();
+        let n = topo.vertex_faces(v).iter().map(|&f| mesh.face_area_vector(f as usize)).sum::<DVec3>().normalize_or_zero();
         let kg = (k - k.dot(n) * n).length();
         if kg > 0.0 && v < values.len() {
             values[v] = values[v].min((8.0 * eps_abs / kg).sqrt());
@@ -414,13 +360,7 @@ pub fn cap_at_boundary(mesh: &TriMesh, topo: &Topology, values: &mut [f64], eps_
 /// The influence zone U_i of vertex `i` for `sphere` and ε = `eps_abs`, as in the paper: the
 /// vertices reached breadth-first over mesh edges from v_i through vertices within ε of the sphere
 /// (complete, no cut-off). Vertex indices, `i` first; empty if v_i itself is not within ε.
-pub fn influence_zone(
-    mesh: &TriMesh,
-    topo: &Topology,
-    i: usize,
-    sphere: &Sphere,
-    eps_abs: f64,
-) -> Vec<u32> {
+pub fn influence_zone(mesh: &TriMesh, topo: &Topology, i: usize, sphere: &Sphere, eps_abs: f64) -> Vec<u32> {
     let n = mesh.vertex_count().min(topo.vertex_count());
     if i >= n {
         return Vec::new();
@@ -430,14 +370,7 @@ pub fn influence_zone(
 
 /// g(v_i) before clamping: the diameter of the largest disc around v_i inside its influence zone
 /// (see the module documentation); `cap` stops the growth early (g_max).
-pub fn zone_diameter(
-    mesh: &TriMesh,
-    topo: &Topology,
-    i: usize,
-    sphere: &Sphere,
-    eps_abs: f64,
-    cap: f64,
-) -> f64 {
+pub fn zone_diameter(mesh: &TriMesh, topo: &Topology, i: usize, sphere: &Sphere, eps_abs: f64, cap: f64) -> f64 {
     let n = mesh.vertex_count().min(topo.vertex_count());
     if i >= n {
         return 0.0;
@@ -472,21 +405,13 @@ impl PartialOrd for Entry {
 
 impl Ord for Entry {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        other
-            .d2
-            .total_cmp(&self.d2)
-            .then_with(|| other.vertex.cmp(&self.vertex))
+        other.d2.total_cmp(&self.d2).then_with(|| other.vertex.cmp(&self.vertex))
     }
 }
 
 impl ZoneGrower {
     fn new(n: usize) -> Self {
-        Self {
-            stamp: vec![0; n],
-            generation: 0,
-            region: Vec::with_capacity(256),
-            heap: Default::default(),
-        }
+        Self { stamp: vec![0; n], generation: 0, region: Vec::with_capacity(256), heap: Default::default() }
     }
 
     fn next_generation(&mut self) -> u32 {
@@ -503,15 +428,7 @@ impl ZoneGrower {
     /// it first meets a vertex off the ε-band (the crossing interpolated linearly on the edge from
     /// the zone), or the distance of the last zone vertex when the connected component is
     /// exhausted. Stops at r ≥ cap/2 (returns `cap`).
-    fn diameter(
-        &mut self,
-        mesh: &TriMesh,
-        topo: &Topology,
-        i: usize,
-        sphere: &Sphere,
-        eps: f64,
-        cap: f64,
-    ) -> f64 {
+    fn diameter(&mut self, mesh: &TriMesh, topo: &Topology, i: usize, sphere: &Sphere, eps: f64, cap: f64) -> f64 {
         let g = self.next_generation();
         let pos = &mesh.positions;
         let p0 = pos[i];
@@ -523,20 +440,15 @@ impl ZoneGrower {
         self.stamp[i] = g;
         let mut r_max = 0.0f64;
         let half_cap = 0.5 * cap;
-        let push_neighbors =
-            |stamp: &mut Vec<u32>, heap: &mut std::collections::BinaryHeap<Entry>, v: usize| {
-                for &w in topo.vertex_neighbors(v) {
-                    let wu = w as usize;
-                    if wu < stamp.len() && stamp[wu] != g {
-                        stamp[wu] = g;
-                        heap.push(Entry {
-                            d2: pos[wu].distance_squared(p0),
-                            vertex: w,
-                            from: v as u32,
-                        });
-                    }
+        let push_neighbors = |stamp: &mut Vec<u32>, heap: &mut std::collections::BinaryHeap<Entry>, v: usize| {
+            for &w in topo.vertex_neighbors(v) {
+                let wu = w as usize;
+                if wu < stamp.len() && stamp[wu] != g {
+                    stamp[wu] = g;
+                    heap.push(Entry { d2: pos[wu].distance_squared(p0), vertex: w, from: v as u32 });
                 }
-            };
+            }
+        };
         push_neighbors(&mut self.stamp, &mut self.heap, i);
         while let Some(e) = self.heap.pop() {
             let w = e.vertex as usize;
@@ -552,11 +464,7 @@ impl ZoneGrower {
                 // Leaves the band between `from` (inside) and w: interpolate the crossing.
                 let pf = pos[e.from as usize];
                 let df = dist(pf);
-                let t = if dw > df {
-                    ((eps - df) / (dw - df)).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
+                let t = if dw > df { ((eps - df) / (dw - df)).clamp(0.0, 1.0) } else { 0.0 };
                 let x = pf + t * (pos[w] - pf);
                 let r_exit = x.distance(p0).min(r);
                 return (2.0 * r_exit).min(cap);
@@ -567,14 +475,7 @@ impl ZoneGrower {
 
     /// The zone U_i of the paper: breadth-first over mesh edges through vertices within ε of the
     /// sphere (the whole connected part of the ε-band containing v_i).
-    fn full_zone(
-        &mut self,
-        topo: &Topology,
-        pos: &[DVec3],
-        i: usize,
-        sphere: &Sphere,
-        eps: f64,
-    ) -> Vec<u32> {
+    fn full_zone(&mut self, topo: &Topology, pos: &[DVec3], i: usize, sphere: &Sphere, eps: f64) -> Vec<u32> {
         let g = self.next_generation();
         self.region.clear();
         if !sphere.is_finite() || !(sphere.distance(pos[i]) < eps) {
@@ -651,11 +552,8 @@ pub fn local_spheres_orthogonal(
             out.push(fallback);
             continue;
         }
-        let sigma = ring
-            .iter()
-            .map(|&w| mesh.positions[w as usize].distance(p0))
-            .sum::<f64>()
-            / (ring.len() - 1) as f64;
+        let sigma =
+            ring.iter().map(|&w| mesh.positions[w as usize].distance(p0)).sum::<f64>() / (ring.len() - 1) as f64;
         if !(sigma > 0.0) || !sigma.is_finite() {
             out.push(fallback);
             continue;
@@ -717,14 +615,9 @@ pub fn local_spheres_orthogonal(
         }
         let se = Svd::<3>::new(&s);
         let wv = se.v[0];
-        let yv: [f64; 3] =
-            std::array::from_fn(|k| (0..3).map(|i| u[i][k] * wv[i] / lam[i].sqrt()).sum());
+        let yv: [f64; 3] = std::array::from_fn(|k| (0..3).map(|i| u[i][k] * wv[i] / lam[i].sqrt()).sum());
         let coef: [f64; 4] = std::array::from_fn(|l| (0..3).map(|k| yv[k] * z[k][l]).sum());
-        let sf = Sphere {
-            a: coef[0],
-            b: DVec3::new(coef[1], coef[2], coef[3]),
-            c: 0.0,
-        };
+        let sf = Sphere { a: coef[0], b: DVec3::new(coef[1], coef[2], coef[3]), c: 0.0 };
         let sw = sf.from_frame(p0, sigma).normalized();
         if sw.is_finite() && (sw.discriminant() - 1.0).abs() < 1e-6 {
             out.push(sw.orient_toward(p0, normals[v]));
@@ -745,18 +638,12 @@ fn boundary_edges(mesh: &TriMesh) -> impl Iterator<Item = (u32, u32)> {
             *count.entry((a.min(b), a.max(b))).or_default() += 1;
         }
     }
-    let mut edges: Vec<(u32, u32)> = count
-        .into_iter()
-        .filter(|&(_, c)| c != 2)
-        .map(|(e, _)| e)
-        .collect();
+    let mut edges: Vec<(u32, u32)> = count.into_iter().filter(|&(_, c)| c != 2).map(|(e, _)| e).collect();
     edges.sort_unstable();
     edges.into_iter()
 }
 
 /// Total length of the boundary (and non-manifold) edges of `mesh`.
 fn boundary_length(mesh: &TriMesh) -> f64 {
-    boundary_edges(mesh)
-        .map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]))
-        .sum()
+    boundary_edges(mesh).map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize])).sum()
 }

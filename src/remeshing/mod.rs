@@ -14,9 +14,9 @@
 //! let remeshed = pliant_remesh(&reference, &sizing, &RemeshParams::default(), &mut ignore).unwrap();
 //! ```
 
-pub mod cross_field;
 pub mod influence_zones;
 pub mod pliant;
+pub mod cross_field;
 pub mod quad_remeshing;
 pub mod seamless;
 
@@ -30,12 +30,12 @@ use crate::progress::{Cancelled, OnProgress};
 use crate::reference::assumptions::Warning;
 
 pub use influence_zones::{
-    influence_zone, local_spheres_orthogonal, mean_edge_length, zone_diameter, SizingBounds,
-    SizingField, DEFAULT_EPSILON,
+    influence_zone, local_spheres_orthogonal, mean_edge_length, zone_diameter, SizingBounds, SizingField,
+    DEFAULT_EPSILON,
 };
 pub use pliant::{
-    face_cap, pliant_remesh, pliant_remesh_with_stats, RemeshError, RemeshOutput, RemeshParams,
-    RoundStats, COLLAPSE_BELOW, SPLIT_ABOVE, TARGET_FACTOR,
+    face_cap, pliant_remesh, pliant_remesh_with_stats, RemeshError, RemeshOutput, RemeshParams, RoundStats,
+    COLLAPSE_BELOW, SPLIT_ABOVE, TARGET_FACTOR,
 };
 
 /// The most faces any remesh may ask for, in the CLI, the design link and the app alike.
@@ -131,9 +131,7 @@ impl Sizing {
         Ok(match *self {
             Sizing::Adaptive { epsilon } => {
                 let eps = epsilon * mesh.bbox_diagonal();
-                Some(SizingField::from_sphere_fn(
-                    mesh, topo, sphere_of, eps, bounds, progress,
-                )?)
+                Some(SizingField::from_sphere_fn(mesh, topo, sphere_of, eps, bounds, progress)?)
             }
             Sizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(mesh, n)),
             Sizing::None => None,
@@ -142,24 +140,13 @@ impl Sizing {
 
     /// The size guard: the faces the method will work on (the mesh's own, N, or what the
     /// adaptive `field` asks for) must not exceed `limit`.
-    pub fn check_size(
-        &self,
-        mesh: &TriMesh,
-        field: Option<&SizingField>,
-        limit: usize,
-    ) -> Result<(), TooManyFaces> {
+    pub fn check_size(&self, mesh: &TriMesh, field: Option<&SizingField>, limit: usize) -> Result<(), TooManyFaces> {
         let faces = match (*self, field) {
             (Sizing::UniformFaces(n), _) => n,
-            (Sizing::Adaptive { .. }, Some(field)) => {
-                field.expected_faces(mesh).min(usize::MAX as f64) as usize
-            }
+            (Sizing::Adaptive { .. }, Some(field)) => field.expected_faces(mesh).min(usize::MAX as f64) as usize,
             _ => mesh.face_count(),
         };
-        if faces > limit {
-            Err(TooManyFaces { faces, limit })
-        } else {
-            Ok(())
-        }
+        if faces > limit { Err(TooManyFaces { faces, limit }) } else { Ok(()) }
     }
 
     /// The sizing field a method asks for ([`Self::field`]) behind the size guard
@@ -209,9 +196,7 @@ impl Sizing {
     /// Refuses a uniform remesh whose `faces` miss the target N by more than [`TARGET_FACTOR`].
     pub fn check_reached(&self, faces: usize) -> Result<(), pliant::RemeshError> {
         match *self {
-            Sizing::UniformFaces(target)
-                if faces * TARGET_FACTOR < target || faces > TARGET_FACTOR * target =>
-            {
+            Sizing::UniformFaces(target) if faces * TARGET_FACTOR < target || faces > TARGET_FACTOR * target => {
                 Err(pliant::RemeshError::TargetMissed { target, faces })
             }
             _ => Ok(()),

@@ -46,9 +46,7 @@ use serde::{Deserialize, Serialize};
 
 use super::influence_zones::SizingField;
 use crate::geometry::closest::TriangleBvh;
-use crate::geometry::mesh::halfedge::{
-    face, prev, HalfedgeMesh, Stamp, VertexKind, EDGE_FROZEN, NONE,
-};
+use crate::geometry::mesh::halfedge::{face, prev, HalfedgeMesh, Stamp, VertexKind, EDGE_FROZEN, NONE};
 use crate::geometry::mesh::TriMesh;
 use crate::progress::{Cancelled, OnProgress, Progress};
 
@@ -131,11 +129,7 @@ pub struct RemeshOutput {
 pub fn face_cap(reference: &TriMesh, sizing: &SizingField) -> usize {
     let expected = sizing.expected_faces(reference);
     let cap = 4.0 * expected + 2.0 * reference.face_count() as f64 + 64.0;
-    if cap.is_finite() && cap < 1e9 {
-        cap as usize
-    } else {
-        1_000_000_000
-    }
+    if cap.is_finite() && cap < 1e9 { cap as usize } else { 1_000_000_000 }
 }
 
 /// Why [`pliant_remesh`] gave no mesh.
@@ -146,10 +140,7 @@ pub enum RemeshError {
     NoFaces,
     /// A uniform remesh to about `target` faces made `faces`, off by more than a factor
     /// [`TARGET_FACTOR`]: the reference is too small, thin or folded to be cut that finely.
-    TargetMissed {
-        target: usize,
-        faces: usize,
-    },
+    TargetMissed { target: usize, faces: usize },
 }
 
 /// How far a uniform remesh may miss its face count before it is refused.
@@ -249,11 +240,7 @@ pub struct Remesher<'a> {
 /// normal.
 fn quality(a: DVec3, b: DVec3, c: DVec3) -> (f64, DVec3) {
     let n = (b - a).cross(c - a);
-    let mut l = [
-        (b - a).length_squared(),
-        (c - b).length_squared(),
-        (a - c).length_squared(),
-    ];
+    let mut l = [(b - a).length_squared(), (c - b).length_squared(), (a - c).length_squared()];
     l.sort_by(f64::total_cmp);
     let den = (l[1] * l[2]).sqrt();
     let q = if den > 0.0 { n.length() / den } else { 0.0 };
@@ -268,17 +255,11 @@ impl<'a> Remesher<'a> {
             params.corner_angle_deg.to_radians(),
         );
         let shared = sizing.is_defined_on(reference);
-        let own_surface = if shared {
-            None
-        } else {
-            Some(TriangleBvh::new(reference))
-        };
-        let face_normals: Vec<DVec3> = (0..reference.face_count())
-            .map(|f| reference.face_area_vector(f).normalize_or_zero())
-            .collect();
+        let own_surface = if shared { None } else { Some(TriangleBvh::new(reference)) };
+        let face_normals: Vec<DVec3> =
+            (0..reference.face_count()).map(|f| reference.face_area_vector(f).normalize_or_zero()).collect();
         let he_normal = |h: u32| m.face_normal(face(h)).unwrap_or(DVec3::ZERO);
-        let (mut bseg, mut bnrm, mut fseg, mut fnrm) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut bseg, mut bnrm, mut fseg, mut fnrm) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for h in 0..m.twin.len() as u32 {
             let t = m.twin[h as usize];
             if t != NONE && t < h {
@@ -317,9 +298,7 @@ impl<'a> Remesher<'a> {
     }
 
     fn surface(&self) -> &TriangleBvh {
-        self.own_surface
-            .as_ref()
-            .unwrap_or_else(|| self.sizing.bvh())
+        self.own_surface.as_ref().unwrap_or_else(|| self.sizing.bvh())
     }
 
     /// g at the point of the reference closest to `p`.
@@ -335,10 +314,7 @@ impl<'a> Remesher<'a> {
     }
 
     fn edge_length(&self, h: u32) -> f64 {
-        self.normalized_length(
-            self.m.pos[self.m.from(h) as usize],
-            self.m.pos[self.m.to(h) as usize],
-        )
+        self.normalized_length(self.m.pos[self.m.from(h) as usize], self.m.pos[self.m.to(h) as usize])
     }
 
     /// Closest point on the surface (or on the constraint curves for `kind` Slide / `boundary`)
@@ -358,10 +334,7 @@ impl<'a> Remesher<'a> {
 
     /// One round; returns its statistics.
     pub fn round(&mut self) -> RoundStats {
-        let mut st = RoundStats {
-            splits: self.split_long_edges(),
-            ..Default::default()
-        };
+        let mut st = RoundStats { splits: self.split_long_edges(), ..Default::default() };
         st.collapses = self.collapse_short_edges();
         st.flips = self.flip_edges();
         for _ in 0..self.params.smoothing_iterations.max(1) {
@@ -433,9 +406,7 @@ impl<'a> Remesher<'a> {
             .into_iter()
             .filter(|&h| {
                 let m = &self.m;
-                !m.is_boundary_edge(h)
-                    && m.is_boundary_vertex(m.from(h))
-                    && m.is_boundary_vertex(m.to(h))
+                !m.is_boundary_edge(h) && m.is_boundary_vertex(m.from(h)) && m.is_boundary_vertex(m.to(h))
             })
             .collect();
         // A split adds two faces; the face cap holds here too.
@@ -453,18 +424,10 @@ impl<'a> Remesher<'a> {
         let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
         let mid = 0.5 * (pa + pb);
         let constrained = m.is_constrained(h);
-        let kind = if constrained {
-            VertexKind::Slide
-        } else {
-            VertexKind::Free
-        };
+        let kind = if constrained { VertexKind::Slide } else { VertexKind::Free };
         let n0 = (m.normal[a as usize] + m.normal[b as usize]).normalize_or_zero();
         let (p, n) = self.project(mid, kind, m.is_boundary_edge(h), n0);
-        let (p, n) = if p != mid && !self.split_ok(h, p, n) {
-            (mid, n0)
-        } else {
-            (p, n)
-        };
+        let (p, n) = if p != mid && !self.split_ok(h, p, n) { (mid, n0) } else { (p, n) };
         let (v, second) = self.m.split(h, p);
         self.m.normal[v as usize] = n;
         (v, second)
@@ -480,8 +443,7 @@ impl<'a> Remesher<'a> {
             let (q_old, n_old) = quality(pa, pb, pc);
             let floor = self.sin_min_angle.min(q_old);
             let n_old = n_old.try_normalize();
-            self.face_ok([pa, p, pc], [na, n, nc], n_old, floor)
-                && self.face_ok([p, pb, pc], [n, nb, nc], n_old, floor)
+            self.face_ok([pa, p, pc], [na, n, nc], n_old, floor) && self.face_ok([p, pb, pc], [n, nb, nc], n_old, floor)
         };
         if !check_face(h) {
             return false;
@@ -514,11 +476,8 @@ impl<'a> Remesher<'a> {
         let mut touched: Vec<u32> = Vec::new();
         let mut ring = Vec::new();
         for _pass in 0..self.params.max_collapse_passes.max(1) {
-            let mut cand: Vec<(f64, u32)> = edges
-                .iter()
-                .map(|&h| (self.edge_length(h), h))
-                .filter(|&(l, _)| l < COLLAPSE_BELOW)
-                .collect();
+            let mut cand: Vec<(f64, u32)> =
+                edges.iter().map(|&h| (self.edge_length(h), h)).filter(|&(l, _)| l < COLLAPSE_BELOW).collect();
             if cand.is_empty() {
                 break;
             }
@@ -622,10 +581,7 @@ impl<'a> Remesher<'a> {
             return None;
         }
         self.stamp.ensure(self.m.pos.len());
-        if !self
-            .m
-            .collapse_is_topologically_ok(h, &mut self.stamp, &mut self.ring_a)
-        {
+        if !self.m.collapse_is_topologically_ok(h, &mut self.stamp, &mut self.ring_a) {
             return None;
         }
         for &(x, y, pn) in &options[..n] {
@@ -686,11 +642,7 @@ impl<'a> Remesher<'a> {
         let mut worst_old = f64::INFINITY;
         for &e in faces.iter() {
             let t = m.tri[face(e)];
-            let (q, _) = quality(
-                m.pos[t[0] as usize],
-                m.pos[t[1] as usize],
-                m.pos[t[2] as usize],
-            );
+            let (q, _) = quality(m.pos[t[0] as usize], m.pos[t[1] as usize], m.pos[t[2] as usize]);
             worst_old = worst_old.min(q);
         }
         let floor = self.sin_min_angle.min(worst_old);
@@ -704,20 +656,8 @@ impl<'a> Remesher<'a> {
             }
             let old = t.map(|v| m.pos[v as usize]);
             let n_old = (old[1] - old[0]).cross(old[2] - old[0]).try_normalize();
-            let new = t.map(|v| {
-                if v == x || v == y {
-                    p
-                } else {
-                    m.pos[v as usize]
-                }
-            });
-            let nref = t.map(|v| {
-                if v == x || v == y {
-                    pn
-                } else {
-                    m.normal[v as usize]
-                }
-            });
+            let new = t.map(|v| if v == x || v == y { p } else { m.pos[v as usize] });
+            let nref = t.map(|v| if v == x || v == y { pn } else { m.normal[v as usize] });
             if !self.face_ok(new, nref, n_old, floor) {
                 return false;
             }
@@ -762,17 +702,10 @@ impl<'a> Remesher<'a> {
         let (c, d) = (m.from(prev(h)), m.from(prev(t)));
         let val = |v: u32| m.valence(v) as i64;
         let (va, vb, vc, vd) = (val(a), val(b), val(c), val(d));
-        let (ta, tb, tc, td) = (
-            self.target_valence(a),
-            self.target_valence(b),
-            self.target_valence(c),
-            self.target_valence(d),
-        );
+        let (ta, tb, tc, td) =
+            (self.target_valence(a), self.target_valence(b), self.target_valence(c), self.target_valence(d));
         let before = (va - ta).pow(2) + (vb - tb).pow(2) + (vc - tc).pow(2) + (vd - td).pow(2);
-        let after = (va - 1 - ta).pow(2)
-            + (vb - 1 - tb).pow(2)
-            + (vc + 1 - tc).pow(2)
-            + (vd + 1 - td).pow(2);
+        let after = (va - 1 - ta).pow(2) + (vb - 1 - tb).pow(2) + (vc + 1 - tc).pow(2) + (vd + 1 - td).pow(2);
         if after >= before {
             return false;
         }
@@ -812,9 +745,7 @@ impl<'a> Remesher<'a> {
             return false;
         }
         // Do not fold the pair more than before (or 45°).
-        let (Some(w0), Some(w1)) = (m0.try_normalize(), m1.try_normalize()) else {
-            return false;
-        };
+        let (Some(w0), Some(w1)) = (m0.try_normalize(), m1.try_normalize()) else { return false };
         match (n0.try_normalize(), n1.try_normalize()) {
             (Some(u0), Some(u1)) => w0.dot(w1) >= u0.dot(u1).min(std::f64::consts::FRAC_1_SQRT_2),
             _ => true,
@@ -828,18 +759,7 @@ impl<'a> Remesher<'a> {
         if let Some(g) = self.sizing.uniform_value() {
             return vec![g; self.m.pos.len()];
         }
-        self.m
-            .pos
-            .iter()
-            .enumerate()
-            .map(|(v, &p)| {
-                if self.m.vertex_dead[v] {
-                    1.0
-                } else {
-                    self.g_at(p)
-                }
-            })
-            .collect()
+        self.m.pos.iter().enumerate().map(|(v, &p)| if self.m.vertex_dead[v] { 1.0 } else { self.g_at(p) }).collect()
     }
 
     pub fn smooth_and_project(&mut self) -> (usize, usize) {
@@ -873,9 +793,7 @@ impl<'a> Remesher<'a> {
                         wsum += w;
                         nrm += an;
                     }
-                    let Some(n) = nrm.try_normalize() else {
-                        continue;
-                    };
+                    let Some(n) = nrm.try_normalize() else { continue };
                     if !(wsum > 0.0) {
                         continue;
                     }
@@ -904,9 +822,7 @@ impl<'a> Remesher<'a> {
                     let (pu, pw) = (m.pos[u as usize], m.pos[w as usize]);
                     let (gu, gw) = (gv[u as usize], gv[w as usize]);
                     let target = (gw * pu + gu * pw) / (gu + gw);
-                    let Some(dir) = (pw - pu).try_normalize() else {
-                        continue;
-                    };
+                    let Some(dir) = (pw - pu).try_normalize() else { continue };
                     let d = target - p;
                     d.dot(dir) * dir
                 }
@@ -915,8 +831,7 @@ impl<'a> Remesher<'a> {
             let step = self.params.smoothing_step;
             let mut tried = false;
             for s in [step, 0.5 * step, 0.25 * step, 0.0] {
-                let (cand, cn) =
-                    self.project(p + s * delta, kind, boundary, self.m.normal[v as usize]);
+                let (cand, cn) = self.project(p + s * delta, kind, boundary, self.m.normal[v as usize]);
                 if cand.distance(p) <= self.tiny {
                     continue;
                 }
@@ -945,12 +860,7 @@ impl<'a> Remesher<'a> {
             let (pv, pb, pc) = (m.pos[v as usize], m.pos[b as usize], m.pos[c as usize]);
             let (q_old, n_old) = quality(pv, pb, pc);
             let nref = [pn, m.normal[b as usize], m.normal[c as usize]];
-            if !self.face_ok(
-                [p, pb, pc],
-                nref,
-                n_old.try_normalize(),
-                self.sin_min_angle.min(q_old),
-            ) {
+            if !self.face_ok([p, pb, pc], nref, n_old.try_normalize(), self.sin_min_angle.min(q_old)) {
                 return false;
             }
         }
@@ -969,12 +879,7 @@ impl<'a> Remesher<'a> {
             }
             let p = self.m.pos[v as usize];
             let kind = self.m.kind[v as usize];
-            let (q, qn) = self.project(
-                p,
-                kind,
-                self.m.is_boundary_vertex(v),
-                self.m.normal[v as usize],
-            );
+            let (q, qn) = self.project(p, kind, self.m.is_boundary_vertex(v), self.m.normal[v as usize]);
             if q != p {
                 self.m.outgoing_into(v, &mut out);
                 if self.m.locked[v as usize] || !self.move_ok(v, q, qn, &out) {

@@ -47,6 +47,7 @@ use crate::solver::{Linear, Problem, Solver, SolverOptions};
 pub use super::cross_field::{split_singularities, Cross, CrossField, FineGrid, SingularPoint};
 use super::seamless::{turn, Cuts};
 
+
 /// Settings of the remesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QuadRemeshParams {
@@ -60,11 +61,7 @@ pub struct QuadRemeshParams {
 
 impl Default for QuadRemeshParams {
     fn default() -> Self {
-        Self {
-            target_faces: 237,
-            resolution: 4,
-            direction_weight: 10.0,
-        }
+        Self { target_faces: 237, resolution: 4, direction_weight: 10.0 }
     }
 }
 
@@ -115,10 +112,7 @@ impl Integration {
         let g = &self.grid;
         let s = ((p.x - g.origin[0]) / g.step[0]).clamp(0.0, (g.nu - 1) as f64);
         let t = ((p.y - g.origin[1]) / g.step[1]).clamp(0.0, (g.nv - 1) as f64);
-        let (i, j) = (
-            (s.floor() as usize).min(g.nu - 2),
-            (t.floor() as usize).min(g.nv - 2),
-        );
+        let (i, j) = ((s.floor() as usize).min(g.nu - 2), (t.floor() as usize).min(g.nv - 2));
         let (fs, ft) = (s - i as f64, t - j as f64);
         let cell = 2 * (i + (g.nu - 1) * j);
         if fs + ft <= 1.0 {
@@ -147,48 +141,23 @@ pub struct FieldGrid {
 }
 
 impl FieldGrid {
-    pub fn new(
-        surface: &BSplineSurface,
-        field: &CrossField,
-        cells: usize,
-        margin: usize,
-        spacing: f64,
-        reach: f64,
-    ) -> Self {
+    pub fn new(surface: &BSplineSurface, field: &CrossField, cells: usize, margin: usize, spacing: f64, reach: f64) -> Self {
         let ((u0, u1), (v0, v1)) = surface.domain();
         let step = [(u1 - u0) / cells as f64, (v1 - v0) / cells as f64];
         let (nu, nv) = (cells + 2 * margin + 1, cells + 2 * margin + 1);
-        let grid = FineGrid {
-            nu,
-            nv,
-            origin: [u0 - margin as f64 * step[0], v0 - margin as f64 * step[1]],
-            step,
-        };
+        let grid = FineGrid { nu, nv, origin: [u0 - margin as f64 * step[0], v0 - margin as f64 * step[1]], step };
         let centres: Vec<[f64; 2]> = (0..grid.triangle_count())
             .map(|t| {
                 let c = grid.centroid(t);
                 surface.clamp([c.x, c.y])
             })
             .collect();
-        let frames: Vec<SurfaceDerivatives> = centres
-            .iter()
-            .map(|c| surface.derivatives(c[0], c[1]))
-            .collect();
+        let frames: Vec<SurfaceDerivatives> = centres.iter().map(|c| surface.derivatives(c[0], c[1])).collect();
         let mut crosses: Vec<Cross> = centres.iter().map(|c| field.cross_at(c[0], c[1])).collect();
         let k = frames.len() as f64;
-        let scale = DVec2::new(
-            frames.iter().map(|d| d.su.length()).sum::<f64>() / k,
-            frames.iter().map(|d| d.sv.length()).sum::<f64>() / k,
-        );
+        let scale = DVec2::new(frames.iter().map(|d| d.su.length()).sum::<f64>() / k, frames.iter().map(|d| d.sv.length()).sum::<f64>() / k);
         let singular = split_singularities(&grid, &mut crosses, reach, spacing, scale);
-        Self {
-            grid,
-            cells,
-            margin,
-            frames,
-            crosses,
-            singular,
-        }
+        Self { grid, cells, margin, frames, crosses, singular }
     }
 }
 
@@ -205,47 +174,25 @@ pub struct Prepared {
 }
 
 /// The sizes of a remesh with `params` and the field on its fine grid (no solve).
-pub fn prepare(
-    surface: &BSplineSurface,
-    field: &CrossField,
-    params: &QuadRemeshParams,
-) -> Result<Prepared, QuadRemeshError> {
+pub fn prepare(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Result<Prepared, QuadRemeshError> {
     let target = params.target_faces;
     if !(4..=100_000).contains(&target) {
         return Err(QuadRemeshError::TargetFaces(target));
     }
     let (mesh, _) = surface.tessellate([32, 32]);
-    let patch_area: f64 = (0..mesh.face_count())
-        .map(|f| mesh.face_area_vector(f).length())
-        .sum();
+    let patch_area: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
     let per_side = (target as f64).sqrt();
     let cells = ((params.resolution.max(2) as f64) * per_side).ceil() as usize;
     let margin = (cells as f64 * 2.5 / per_side).ceil() as usize + 2;
     let spacing = (patch_area / target as f64).sqrt();
     let reach = 4.0 * spacing;
-    Ok(Prepared {
-        patch_area,
-        spacing,
-        reach,
-        field: FieldGrid::new(surface, field, cells, margin, spacing, reach),
-    })
+    Ok(Prepared { patch_area, spacing, reach, field: FieldGrid::new(surface, field, cells, margin, spacing, reach) })
 }
 
 /// Integrates the field on its fine grid (step 2 of the module docs), with lattice spacing
 /// `spacing` for the singular points.
-pub fn integrate(
-    fg: &FieldGrid,
-    direction_weight: f64,
-    spacing: f64,
-) -> Result<Integration, QuadRemeshError> {
-    let FieldGrid {
-        grid,
-        cells,
-        margin,
-        frames,
-        crosses,
-        singular,
-    } = fg;
+pub fn integrate(fg: &FieldGrid, direction_weight: f64, spacing: f64) -> Result<Integration, QuadRemeshError> {
+    let FieldGrid { grid, cells, margin, frames, crosses, singular } = fg;
     let (grid, cells, margin, singular) = (*grid, *cells, *margin, singular.clone());
     let (nu, nv) = (grid.nu, grid.nv);
     let n = grid.node_count();
@@ -257,11 +204,7 @@ pub fn integrate(
     for (t, d) in frames.iter().enumerate() {
         let dirs = cuts.combed[t].directions().map(|t| {
             let len = (d.su * t.x + d.sv * t.y).length();
-            if len > 0.0 {
-                t / len
-            } else {
-                DVec2::ZERO
-            }
+            if len > 0.0 { t / len } else { DVec2::ZERO }
         });
         // ∇φ on the triangle from its corners: φ = φ_a + (x − x_a)·∇φ.
         let c = grid.triangle(t);
@@ -279,11 +222,7 @@ pub fn integrate(
                 let row: Vec<(usize, f64)> = c
                     .iter()
                     .enumerate()
-                    .flat_map(|(corner, &node)| {
-                        cuts.corner_terms(t, node, k)
-                            .into_iter()
-                            .map(move |(nd, j, a)| (var(nd, j), w * coeff[corner] * a))
-                    })
+                    .flat_map(|(corner, &node)| cuts.corner_terms(t, node, k).into_iter().map(move |(nd, j, a)| (var(nd, j), w * coeff[corner] * a)))
                     .collect();
                 rows.push_row(&row, -w * target);
             }
@@ -295,12 +234,7 @@ pub fn integrate(
     problem.fix(var(mid, 0));
     problem.fix(var(mid, 1));
     let mut x = vec![0.0; 2 * n];
-    let mut solver = Solver::new(SolverOptions {
-        max_iterations: 4,
-        initial_epsilon: 1e-6,
-        min_epsilon: 1e-9,
-        ..SolverOptions::default()
-    });
+    let mut solver = Solver::new(SolverOptions { max_iterations: 4, initial_epsilon: 1e-6, min_epsilon: 1e-9, ..SolverOptions::default() });
     solver.solve(&mut problem, &mut x, |_| Ok(()));
     // The integer step (greedy, as MIQ): the singular point nearest to a free lattice point is
     // fixed there and the rest solved again, until all are fixed.
@@ -318,11 +252,7 @@ pub fn integrate(
                 .min_by(|a, b| a.0.total_cmp(&b.0))
                 .unwrap_or((f64::INFINITY, [base.x as i32, base.y as i32]))
         };
-        let (c, (_, key)) = (0..keys.len())
-            .filter(|&c| keys[c].is_none())
-            .map(|c| (c, nearest(c)))
-            .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
-            .unwrap();
+        let (c, (_, key)) = (0..keys.len()).filter(|&c| keys[c].is_none()).map(|c| (c, nearest(c))).min_by(|a, b| a.1 .0.total_cmp(&b.1 .0)).unwrap();
         taken.insert(key);
         keys[c] = Some(key);
         let s = cuts.cuts[c].path[0];
@@ -340,18 +270,8 @@ pub fn integrate(
     }
     let phi = [x[..n].to_vec(), x[n..].to_vec()];
     let at = |node: usize| DVec2::new(phi[0][node], phi[1][node]);
-    let corners = (0..nt)
-        .map(|t| grid.triangle(t).map(|node| cuts.corner_value(t, node, at)))
-        .collect();
-    Ok(Integration {
-        grid,
-        inside: [[margin, margin + cells], [margin, margin + cells]],
-        phi,
-        corners,
-        singular,
-        cuts,
-        cone_keys,
-    })
+    let corners = (0..nt).map(|t| grid.triangle(t).map(|node| cuts.corner_value(t, node, at))).collect();
+    Ok(Integration { grid, inside: [[margin, margin + cells], [margin, margin + cells]], phi, corners, singular, cuts, cone_keys })
 }
 
 /// The quad mesh of a remesh.
@@ -384,10 +304,7 @@ struct Rect {
 
 impl Rect {
     fn contains(&self, p: DVec2, eps: DVec2) -> bool {
-        p.x >= self.lo.x - eps.x
-            && p.x <= self.hi.x + eps.x
-            && p.y >= self.lo.y - eps.y
-            && p.y <= self.hi.y + eps.y
+        p.x >= self.lo.x - eps.x && p.x <= self.hi.x + eps.x && p.y >= self.lo.y - eps.y && p.y <= self.hi.y + eps.y
     }
 
     /// Where the segment a (inside) → b (outside) leaves the rectangle, and which side
@@ -395,15 +312,7 @@ impl Rect {
     fn exit(&self, a: DVec2, b: DVec2) -> (DVec2, usize) {
         let d = b - a;
         let mut best = (1.0, 0);
-        for (side, (val, comp)) in [
-            (self.lo.x, 0),
-            (self.hi.x, 0),
-            (self.lo.y, 1),
-            (self.hi.y, 1),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+        for (side, (val, comp)) in [(self.lo.x, 0), (self.hi.x, 0), (self.lo.y, 1), (self.hi.y, 1)].into_iter().enumerate() {
             let dc = if comp == 0 { d.x } else { d.y };
             let ac = if comp == 0 { a.x } else { a.y };
             if dc.abs() > 0.0 {
@@ -475,10 +384,7 @@ fn lattice_points(g: &Integration, h: f64, offset: [f64; 2]) -> Lattice {
                     continue;
                 }
                 let x = uv[0] + b1 * (uv[1] - uv[0]) + b2 * (uv[2] - uv[0]);
-                let cell = (
-                    (x.x / quantum).round() as i64,
-                    (x.y / quantum).round() as i64,
-                );
+                let cell = ((x.x / quantum).round() as i64, (x.y / quantum).round() as i64);
                 by_position.entry(cell).or_insert_with(|| {
                     points.push((x, [k, l], t));
                     in_triangle[t].push(points.len() - 1);
@@ -490,29 +396,18 @@ fn lattice_points(g: &Integration, h: f64, offset: [f64; 2]) -> Lattice {
     let mut next = vec![[None; 4]; points.len()];
     // Without cuts the chart is one and a lattice index names one point.
     if g.cuts.cuts.is_empty() {
-        let index: HashMap<[i32; 2], usize> =
-            points.iter().enumerate().map(|(id, p)| (p.1, id)).collect();
+        let index: HashMap<[i32; 2], usize> = points.iter().enumerate().map(|(id, p)| (p.1, id)).collect();
         for (id, p) in points.iter().enumerate() {
             for d in 0..4 {
                 let e = step(d as i32);
-                next[id][d] = index
-                    .get(&[p.1[0] + e.x as i32, p.1[1] + e.y as i32])
-                    .map(|&q| (q, 0));
+                next[id][d] = index.get(&[p.1[0] + e.x as i32, p.1[1] + e.y as i32]).map(|&q| (q, 0));
             }
         }
-        return Lattice {
-            points,
-            next,
-            folded,
-        };
+        return Lattice { points, next, folded };
     }
     // Neighbours: a walk over the triangles near the segment to the neighbour's lattice point, in
     // this point's chart (across a cut, the transition x_from = M^σ (x_to − s) + s).
-    let cones: Vec<DVec2> = g
-        .cone_keys
-        .iter()
-        .map(|k| DVec2::new(k[0] as f64, k[1] as f64))
-        .collect();
+    let cones: Vec<DVec2> = g.cone_keys.iter().map(|k| DVec2::new(k[0] as f64, k[1] as f64)).collect();
     // Per triangle: the walk that last reached it and its chart there (ρ, shift).
     let mut stamp: Vec<u32> = vec![u32::MAX; corners.len()];
     let mut chart: Vec<(i32, DVec2)> = vec![(0, DVec2::ZERO); corners.len()];
@@ -546,14 +441,9 @@ fn lattice_points(g: &Integration, h: f64, offset: [f64; 2]) -> Lattice {
                     }
                     let (rho_s, shift_s) = match g.cuts.crossings.get(&(t, s)) {
                         None => (rho, shift),
-                        Some(&(c, sigma)) => (
-                            rho + sigma,
-                            shift + turn(rho, cones[c] - turn(sigma, cones[c])),
-                        ),
+                        Some(&(c, sigma)) => (rho + sigma, shift + turn(rho, cones[c] - turn(sigma, cones[c]))),
                     };
-                    let near = corners[s]
-                        .iter()
-                        .any(|p| (turn(rho_s, *p) + shift_s).distance(target) <= 1.3);
+                    let near = corners[s].iter().any(|p| (turn(rho_s, *p) + shift_s).distance(target) <= 1.3);
                     if near {
                         stamp[s] = walk;
                         chart[s] = (rho_s, shift_s);
@@ -563,30 +453,14 @@ fn lattice_points(g: &Integration, h: f64, offset: [f64; 2]) -> Lattice {
             }
         }
     }
-    Lattice {
-        points,
-        next,
-        folded,
-    }
+    Lattice { points, next, folded }
 }
 
 /// The point on side `side` of the rectangle near `x` where φ_k = value (linear search over the
 /// fine grid nodes of that side, nearest root to `x`), or `x` when there is none within `reach`.
-fn boundary_root(
-    g: &Integration,
-    rect: Rect,
-    side: usize,
-    k: usize,
-    value: f64,
-    x: DVec2,
-    reach: f64,
-) -> DVec2 {
+fn boundary_root(g: &Integration, rect: Rect, side: usize, k: usize, value: f64, x: DVec2, reach: f64) -> DVec2 {
     let along_u = side >= 2;
-    let (count, step) = if along_u {
-        (g.inside[0][1] - g.inside[0][0], g.grid.step[0])
-    } else {
-        (g.inside[1][1] - g.inside[1][0], g.grid.step[1])
-    };
+    let (count, step) = if along_u { (g.inside[0][1] - g.inside[0][0], g.grid.step[0]) } else { (g.inside[1][1] - g.inside[1][0], g.grid.step[1]) };
     let point = |m: usize| -> DVec2 {
         let t = m as f64 * step;
         match side {
@@ -602,11 +476,7 @@ fn boundary_root(
         let p = point(m);
         let f = g.value(k, p) - value;
         if prev.1 == 0.0 || prev.1 * f < 0.0 {
-            let t = if prev.1 == f {
-                0.0
-            } else {
-                prev.1 / (prev.1 - f)
-            };
+            let t = if prev.1 == f { 0.0 } else { prev.1 / (prev.1 - f) };
             let root = prev.0 + t * (p - prev.0);
             let d = root.distance(x);
             if best.is_none_or(|(bd, _)| d < bd) {
@@ -645,26 +515,16 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], repeat: bool
                 incident.entry(v).or_default().push(f);
             }
         }
-        let mut keys: Vec<u32> = incident
-            .iter()
-            .filter(|(_, fs)| fs.len() == 3)
-            .map(|(v, _)| *v)
-            .collect();
+        let mut keys: Vec<u32> = incident.iter().filter(|(_, fs)| fs.len() == 3).map(|(v, _)| *v).collect();
         keys.sort_unstable();
-        let shares =
-            |a: usize, b: usize| faces[a].iter().filter(|x| faces[b].contains(x)).count() >= 2;
+        let shares = |a: usize, b: usize| faces[a].iter().filter(|x| faces[b].contains(x)).count() >= 2;
         // The outer two of the three share an edge with one other quad only.
         let mut drop: Vec<usize> = keys
             .iter()
             .filter_map(|v| {
                 let fs = &incident[v];
-                let outer = fs
-                    .iter()
-                    .copied()
-                    .filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1);
-                outer.min_by(|&a, &b| {
-                    quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b]))
-                })
+                let outer = fs.iter().copied().filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1);
+                outer.min_by(|&a, &b| quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b])))
             })
             .collect();
         if drop.is_empty() {
@@ -687,18 +547,9 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], repeat: bool
 }
 
 /// A candidate mesh at spacing h and offsets.
-fn extract(
-    surface: &BSplineSurface,
-    g: &Integration,
-    h: f64,
-    offset: [f64; 2],
-    final_pass: bool,
-) -> Option<(QuadRemesh, f64)> {
+fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], final_pass: bool) -> Option<(QuadRemesh, f64)> {
     let ((u0, u1), (v0, v1)) = surface.domain();
-    let rect = Rect {
-        lo: DVec2::new(u0, v0),
-        hi: DVec2::new(u1, v1),
-    };
+    let rect = Rect { lo: DVec2::new(u0, v0), hi: DVec2::new(u1, v1) };
     let eps = DVec2::new(1e-12 * (u1 - u0), 1e-12 * (v1 - v0));
     let lattice = lattice_points(g, h, offset);
     let inside = |p: DVec2| rect.contains(p, eps);
@@ -712,20 +563,14 @@ fn extract(
         }
         let mut crossings = Vec::new();
         for d in 0..4 {
-            let Some((q, _)) = lattice.next[id][d] else {
-                continue;
-            };
+            let Some((q, _)) = lattice.next[id][d] else { continue };
             let q = lattice.points[q].0;
             if !inside(q) {
                 continue;
             }
             let (x, side) = rect.exit(q, p);
             // Along a k-edge φ1 is constant (= its lattice value), along an l-edge φ0.
-            let (fk, value) = if d % 2 == 0 {
-                (1, offset[1] + l as f64 * h)
-            } else {
-                (0, offset[0] + k as f64 * h)
-            };
+            let (fk, value) = if d % 2 == 0 { (1, offset[1] + l as f64 * h) } else { (0, offset[0] + k as f64 * h) };
             let root = boundary_root(g, rect, side, fk, value, x, reach);
             crossings.push((root, side));
         }
@@ -736,18 +581,10 @@ fn extract(
                 let mean = many.iter().fold(DVec2::ZERO, |s, (x, _)| s + *x) / many.len() as f64;
                 // The nearest boundary point of the mean.
                 let to_side = [mean.x - u0, u1 - mean.x, mean.y - v0, v1 - mean.y];
-                let (side, _) =
-                    to_side
-                        .iter()
-                        .enumerate()
-                        .fold((0, f64::INFINITY), |b, (s, &d)| {
-                            let scaled = d / if s < 2 { u1 - u0 } else { v1 - v0 };
-                            if scaled < b.1 {
-                                (s, scaled)
-                            } else {
-                                b
-                            }
-                        });
+                let (side, _) = to_side.iter().enumerate().fold((0, f64::INFINITY), |b, (s, &d)| {
+                    let scaled = d / if s < 2 { u1 - u0 } else { v1 - v0 };
+                    if scaled < b.1 { (s, scaled) } else { b }
+                });
                 let snapped = match side {
                     0 => DVec2::new(u0, mean.y),
                     1 => DVec2::new(u1, mean.y),
@@ -758,25 +595,9 @@ fn extract(
             }
         }
     }
-    let uv: Vec<[f64; 2]> = positions
-        .iter()
-        .map(|p| p.map_or([0.0; 2], |(p, _)| [p.x, p.y]))
-        .collect();
-    let pts: Vec<DVec3> = uv
-        .iter()
-        .zip(&positions)
-        .map(|(w, p)| {
-            if p.is_some() {
-                surface.point(w[0], w[1])
-            } else {
-                DVec3::ZERO
-            }
-        })
-        .collect();
-    let boundary: Vec<bool> = positions
-        .iter()
-        .map(|p| p.is_some_and(|(_, b)| b))
-        .collect();
+    let uv: Vec<[f64; 2]> = positions.iter().map(|p| p.map_or([0.0; 2], |(p, _)| [p.x, p.y])).collect();
+    let pts: Vec<DVec3> = uv.iter().zip(&positions).map(|(w, p)| if p.is_some() { surface.point(w[0], w[1]) } else { DVec3::ZERO }).collect();
+    let boundary: Vec<bool> = positions.iter().map(|p| p.is_some_and(|(_, b)| b)).collect();
     // The singular points' vertices: each cut's cone, where its node is.
     let cones: HashMap<usize, i32> = g
         .cuts
@@ -784,17 +605,8 @@ fn extract(
         .iter()
         .filter_map(|cut| {
             let at = g.grid.uv(cut.path[0]);
-            let id = lattice
-                .points
-                .iter()
-                .position(|p| p.0.distance(at) < 1e-9 * (g.grid.step[0] + g.grid.step[1]))?;
-            Some((
-                id,
-                g.singular
-                    .iter()
-                    .find(|s| s.node == cut.path[0])
-                    .map_or(0, |s| s.quarters),
-            ))
+            let id = lattice.points.iter().position(|p| p.0.distance(at) < 1e-9 * (g.grid.step[0] + g.grid.step[1]))?;
+            Some((id, g.singular.iter().find(|s| s.node == cut.path[0]).map_or(0, |s| s.quarters)))
         })
         .collect();
     // Faces: from every point in every direction, four steps turning left each time (in the
@@ -817,12 +629,8 @@ fn extract(
             let mut ids = vec![start as u32];
             let (mut at, mut d) = (start, d0);
             for corner in 0..3 {
-                let Some((n, rho)) = lattice.next[at][d.rem_euclid(4) as usize] else {
-                    continue 'cell;
-                };
-                if positions[n].is_none()
-                    || (close_at_start && corner < 2 && cones.contains_key(&n))
-                {
+                let Some((n, rho)) = lattice.next[at][d.rem_euclid(4) as usize] else { continue 'cell };
+                if positions[n].is_none() || (close_at_start && corner < 2 && cones.contains_key(&n)) {
                     continue 'cell;
                 }
                 (at, d) = (n, d + rho + 1);
@@ -854,8 +662,7 @@ fn extract(
             let bad_corner = (0..4).any(|c| {
                 let (prev, next) = (p[(c + 3) % 4] - p[c], p[(c + 1) % 4] - p[c]);
                 let turn = next.cross(prev).dot(normal);
-                prev.normalize_or_zero().dot(next.normalize_or_zero()) < (170f64).to_radians().cos()
-                    || turn.abs() < 1e-12 * h * h
+                prev.normalize_or_zero().dot(next.normalize_or_zero()) < (170f64).to_radians().cos() || turn.abs() < 1e-12 * h * h
             });
             let signed = a.dot(normal);
             if short || bad_corner || signed.abs() < 0.15 * h * h {
@@ -887,11 +694,7 @@ fn extract(
     let mut out_faces = Vec::new();
     let mut singular = Vec::new();
     for f in faces {
-        let f: Vec<u32> = if positive {
-            f
-        } else {
-            f.into_iter().rev().collect()
-        };
+        let f: Vec<u32> = if positive { f } else { f.into_iter().rev().collect() };
         let ids: Vec<u32> = f
             .iter()
             .map(|&i| {
@@ -937,42 +740,25 @@ fn extract(
 }
 
 /// Remeshes the patch along `field` (see the module docs) for about `params.target_faces` quads.
-pub fn quad_remesh(
-    surface: &BSplineSurface,
-    field: &CrossField,
-    params: &QuadRemeshParams,
-) -> Result<QuadRemesh, QuadRemeshError> {
+pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
     quad_remesh_prepared(surface, field, prepare(surface, field, params)?, params)
 }
 
 /// [`quad_remesh`] from its [`prepare`]d field.
-pub fn quad_remesh_prepared(
-    surface: &BSplineSurface,
-    field: &CrossField,
-    prepared: Prepared,
-    params: &QuadRemeshParams,
-) -> Result<QuadRemesh, QuadRemeshError> {
+pub fn quad_remesh_prepared(surface: &BSplineSurface, field: &CrossField, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
     let target = params.target_faces;
-    let Prepared {
-        patch_area,
-        spacing: mut h,
-        reach,
-        field: fg,
-    } = prepared;
+    let Prepared { patch_area, spacing: mut h, reach, field: fg } = prepared;
     let mut g = integrate(&fg, params.direction_weight, h)?;
     if !g.singular.is_empty() {
         // The singular points sit on the lattice of spacing h, offset 0: one correction of h
         // for the face count, then the mesh.
-        let count =
-            extract(surface, &g, h, [0.0; 2], false).map_or(0, |(m, _)| m.mesh.face_count());
+        let count = extract(surface, &g, h, [0.0; 2], false).map_or(0, |(m, _)| m.mesh.face_count());
         if count > 0 && (count as f64 - target as f64).abs() > 0.1 * target as f64 {
             h *= (count as f64 / target as f64).sqrt();
             let fg = FieldGrid::new(surface, field, fg.cells, fg.margin, h, reach);
             g = integrate(&fg, params.direction_weight, h)?;
         }
-        return extract(surface, &g, h, [0.0; 2], true)
-            .map(|(m, _)| m)
-            .ok_or(QuadRemeshError::Empty);
+        return extract(surface, &g, h, [0.0; 2], true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty);
     }
     let [i0, i1] = g.inside[0];
     let [j0, j1] = g.inside[1];
@@ -990,12 +776,9 @@ pub fn quad_remesh_prepared(
     };
     let ranges = [range(0), range(1)];
     // h for the target count: faces ≈ covered area / h²; a few corrections, then the offsets.
-    let centred =
-        |h: f64, shift: [f64; 2]| [0, 1].map(|k| 0.5 * (ranges[k].0 + ranges[k].1) + shift[k] * h);
+    let centred = |h: f64, shift: [f64; 2]| [0, 1].map(|k| 0.5 * (ranges[k].0 + ranges[k].1) + shift[k] * h);
     for _ in 0..4 {
-        let Some((m, _)) = extract(surface, &g, h, centred(h, [0.0, 0.0]), false) else {
-            break;
-        };
+        let Some((m, _)) = extract(surface, &g, h, centred(h, [0.0, 0.0]), false) else { break };
         let faces = m.mesh.face_count() as f64;
         h *= (faces / target as f64).sqrt();
     }
@@ -1003,46 +786,30 @@ pub fn quad_remesh_prepared(
     let mut best: Option<([f64; 2], f64)> = None;
     for s0 in [0.0, 0.25, 0.5, 0.75] {
         for s1 in [0.0, 0.25, 0.5, 0.75] {
-            let Some((m, area)) = extract(surface, &g, h, centred(h, [s0, s1]), true) else {
-                continue;
-            };
-            let score = area
-                - 0.02 * patch_area * (m.mesh.face_count() as f64 - target as f64).abs()
-                    / target as f64;
+            let Some((m, area)) = extract(surface, &g, h, centred(h, [s0, s1]), true) else { continue };
+            let score = area - 0.02 * patch_area * (m.mesh.face_count() as f64 - target as f64).abs() / target as f64;
             if best.is_none_or(|(_, b)| score > b) {
                 best = Some(([s0, s1], score));
             }
         }
     }
     let (shift, _) = best.ok_or(QuadRemeshError::Empty)?;
-    extract(surface, &g, h, centred(h, shift), true)
-        .map(|(m, _)| m)
-        .ok_or(QuadRemeshError::Empty)
+    extract(surface, &g, h, centred(h, shift), true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty)
 }
 
 /// The area of the patch covered by the mesh (sum of the quads' triangle areas) over the patch's
 /// area (a 64 × 64 tessellation).
 pub fn coverage(surface: &BSplineSurface, mesh: &PolyMesh) -> f64 {
     let (reference, _) = surface.tessellate([64, 64]);
-    let total: f64 = (0..reference.face_count())
-        .map(|f| reference.face_area_vector(f).length())
-        .sum();
-    let covered: f64 = (0..mesh.face_count())
-        .map(|f| mesh.face_area_vector(f).length())
-        .sum();
+    let total: f64 = (0..reference.face_count()).map(|f| reference.face_area_vector(f).length()).sum();
+    let covered: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
     covered / total
 }
 
 /// Per edge of `mesh` (vertex parameters `uv`) that does not run along the patch boundary (not
 /// both ends `on_boundary`): the angle (degrees) at its midpoint between the edge and the nearer
 /// of the field's two directions, both in the tangent plane there.
-pub fn edge_field_angles(
-    surface: &BSplineSurface,
-    field: &CrossField,
-    mesh: &PolyMesh,
-    uv: &[[f64; 2]],
-    on_boundary: &[bool],
-) -> Vec<f64> {
+pub fn edge_field_angles(surface: &BSplineSurface, field: &CrossField, mesh: &PolyMesh, uv: &[[f64; 2]], on_boundary: &[bool]) -> Vec<f64> {
     let topo = crate::geometry::mesh::topology::Topology::new(mesh);
     topo.edges()
         .iter()

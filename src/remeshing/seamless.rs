@@ -69,14 +69,8 @@ impl Cuts {
     pub fn new(grid: &FineGrid, crosses: &[Cross], singular: &[SingularPoint]) -> Self {
         let paths = cut_paths(grid, singular);
         let nt = grid.triangle_count();
-        let cut_edge: HashMap<(usize, usize), usize> = paths
-            .iter()
-            .enumerate()
-            .flat_map(|(c, p)| {
-                p.windows(2)
-                    .map(move |w| ((w[0].min(w[1]), w[0].max(w[1])), c))
-            })
-            .collect();
+        let cut_edge: HashMap<(usize, usize), usize> =
+            paths.iter().enumerate().flat_map(|(c, p)| p.windows(2).map(move |w| ((w[0].min(w[1]), w[0].max(w[1])), c))).collect();
         let adjacency = triangle_adjacency(grid);
         // Combing: breadth first from the middle, never across a cut.
         let mut combed: Vec<Option<Cross>> = vec![None; nt];
@@ -93,11 +87,7 @@ impl Cuts {
                 queue.push_back(s);
             }
         }
-        let combed: Vec<Cross> = combed
-            .into_iter()
-            .enumerate()
-            .map(|(t, c)| c.unwrap_or(crosses[t]))
-            .collect();
+        let combed: Vec<Cross> = combed.into_iter().enumerate().map(|(t, c)| c.unwrap_or(crosses[t])).collect();
         // Sides: at every node of a cut, the triangles around it on the left of the path.
         let mut right = HashMap::new();
         let mut cuts = Vec::new();
@@ -109,11 +99,7 @@ impl Cuts {
                 // The left triangle of the edge into this node, and the components of the fan
                 // with the cut edges removed.
                 let (a, b) = (path[k - 1], node);
-                let left = around
-                    .iter()
-                    .copied()
-                    .find(|&t| directed(grid, t, a, b))
-                    .expect("an inner cut edge has a left triangle");
+                let left = around.iter().copied().find(|&t| directed(grid, t, a, b)).expect("an inner cut edge has a left triangle");
                 let side = fan_sides(&around, &adjacency, &cut_edge, left);
                 for (&t, &is_right) in around.iter().zip(&side) {
                     if is_right {
@@ -122,18 +108,12 @@ impl Cuts {
                 }
                 // The period jump across the edge (a, b): left and right triangle.
                 if let Some(r) = around.iter().copied().find(|&t| directed(grid, t, b, a)) {
-                    jumps.push(
-                        ((combed[r].angle - combed[left].angle) / std::f64::consts::FRAC_PI_2)
-                            .round() as i32,
-                    );
+                    jumps.push(((combed[r].angle - combed[left].angle) / std::f64::consts::FRAC_PI_2).round() as i32);
                     edges.push((c, left, r));
                 }
             }
             let quarters = majority(&jumps);
-            cuts.push(Cut {
-                path: path.clone(),
-                quarters,
-            });
+            cuts.push(Cut { path: path.clone(), quarters });
         }
         let mut crossings = HashMap::new();
         for (c, left, r) in edges {
@@ -141,13 +121,7 @@ impl Cuts {
             crossings.insert((left, r), (c, -q));
             crossings.insert((r, left), (c, q));
         }
-        Self {
-            cuts,
-            combed,
-            right,
-            adjacency,
-            crossings,
-        }
+        Self { cuts, combed, right, adjacency, crossings }
     }
 
     /// The corner value of node `node` in triangle `t`: φ there, with the right copy's transition
@@ -236,12 +210,7 @@ fn triangle_adjacency(grid: &FineGrid) -> Vec<Vec<(usize, (usize, usize))>> {
 }
 
 /// Which of the triangles `around` a node lie on the other side of the cut edges from `left`.
-fn fan_sides(
-    around: &[usize],
-    adjacency: &[Vec<(usize, (usize, usize))>],
-    cut_edge: &HashMap<(usize, usize), usize>,
-    left: usize,
-) -> Vec<bool> {
+fn fan_sides(around: &[usize], adjacency: &[Vec<(usize, (usize, usize))>], cut_edge: &HashMap<(usize, usize), usize>, left: usize) -> Vec<bool> {
     let mut reached = vec![false; around.len()];
     let index = |t: usize| around.iter().position(|&a| a == t);
     let mut stack = vec![left];

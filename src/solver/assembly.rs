@@ -12,14 +12,14 @@
 //! a copy with ε² added on the diagonal, faer's numeric LLᵀ and a solve. No hashing, no
 //! allocation.
 
-use super::ordering::{BlockGraph, Ordering};
 use super::problem::{JacobianSink, Problem};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
 };
+use super::ordering::{BlockGraph, Ordering};
+use faer::perm::PermRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -51,10 +51,7 @@ fn same_indices(a: &[u32], b: &[u32]) -> bool {
 
 /// Counting sort: the values of `items` (bucket, value) grouped by bucket, in input order within
 /// a bucket; returns the bucket starts (`n_buckets + 1` of them) and the grouped values.
-fn group_by_bucket<T: Copy + Default>(
-    n_buckets: usize,
-    items: impl Iterator<Item = (usize, T)> + Clone,
-) -> (Vec<u32>, Vec<T>) {
+fn group_by_bucket<T: Copy + Default>(n_buckets: usize, items: impl Iterator<Item = (usize, T)> + Clone) -> (Vec<u32>, Vec<T>) {
     let mut start = vec![0u32; n_buckets + 1];
     for (k, _) in items.clone() {
         start[k + 1] += 1;
@@ -96,11 +93,7 @@ pub(crate) fn eval_term(
 
 /// Evaluates every term at `x` (no `prepare`). Reuses the buffers' capacity.
 pub(crate) fn evaluate(problem: &Problem, x: &[f64], buf: &mut EvalBuffers) {
-    assert_eq!(
-        x.len(),
-        problem.num_variables(),
-        "variable vector has the wrong length"
-    );
+    assert_eq!(x.len(), problem.num_variables(), "variable vector has the wrong length");
     let nt = problem.terms.len();
     buf.term_rows.clear();
     buf.term_rows.push(0);
@@ -138,10 +131,7 @@ pub(crate) fn evaluate(problem: &Problem, x: &[f64], buf: &mut EvalBuffers) {
 pub(crate) fn weighted_energy(problem: &Problem, buf: &EvalBuffers) -> f64 {
     let mut e = 0.0;
     for (ti, t) in problem.terms.iter().enumerate() {
-        let s: f64 = buf.r[buf.term_rows[ti]..buf.term_rows[ti + 1]]
-            .iter()
-            .map(|r| r * r)
-            .sum();
+        let s: f64 = buf.r[buf.term_rows[ti]..buf.term_rows[ti + 1]].iter().map(|r| r * r).sum();
         e += t.weight * s;
     }
     e
@@ -227,12 +217,7 @@ impl System {
     }
 
     /// Builds the pattern, the maps and the symbolic factorization from an evaluation.
-    pub fn build(
-        problem: &Problem,
-        buf: &EvalBuffers,
-        ordering: Ordering,
-        supernodal: bool,
-    ) -> Self {
+    pub fn build(problem: &Problem, buf: &EvalBuffers, ordering: Ordering, supernodal: bool) -> Self {
         let n_vars = problem.num_variables();
         let fixed = problem.fixed_mask().to_vec();
         let m = buf.r.len();
@@ -268,9 +253,7 @@ impl System {
         // Group triplets with free columns by row.
         let (row_start, mut order) = group_by_bucket(
             m,
-            (0..n_trip)
-                .filter(|&t| free_index[buf.cols[t] as usize] != NONE)
-                .map(|t| (buf.rows[t] as usize, t as u32)),
+            (0..n_trip).filter(|&t| free_index[buf.cols[t] as usize] != NONE).map(|t| (buf.rows[t] as usize, t as u32)),
         );
 
         // Unique (row, free col) entries, sorted by column within each row.
@@ -309,10 +292,7 @@ impl System {
             nf,
             (0..m).flat_map(|r| {
                 let (e0, e1) = (entry_row_ptr[r] as usize, entry_row_ptr[r + 1] as usize);
-                entry_col[e0..e1]
-                    .iter()
-                    .enumerate()
-                    .map(move |(b, &c)| (c as usize, (r as u32, b as u32)))
+                entry_col[e0..e1].iter().enumerate().map(move |(b, &c)| (c as usize, (r as u32, b as u32)))
             }),
         );
         let mut col_ptr = Vec::with_capacity(nf + 1);
@@ -342,15 +322,10 @@ impl System {
             diag_pos.push(pos[j]);
             // Entry (a, b) of a row with k entries sits at a k − a(a − 1)/2 + (b − a) in its block.
             for &(r, b) in rows {
-                let (e0, e1) = (
-                    entry_row_ptr[r as usize] as usize,
-                    entry_row_ptr[r as usize + 1] as usize,
-                );
+                let (e0, e1) = (entry_row_ptr[r as usize] as usize, entry_row_ptr[r as usize + 1] as usize);
                 let (k, b) = (e1 - e0, b as usize);
                 for (a, &i) in entry_col[e0..e0 + b + 1].iter().enumerate() {
-                    pair_dest
-                        [pair_base[r as usize] + a * k - a * a.saturating_sub(1) / 2 + (b - a)] =
-                        pos[i as usize];
+                    pair_dest[pair_base[r as usize] + a * k - a * a.saturating_sub(1) / 2 + (b - a)] = pos[i as usize];
                 }
             }
             for &i in &row_idx[start..] {
@@ -366,8 +341,7 @@ impl System {
         let group: Vec<u32> = free_to_var.iter().map(|&v| groups[v as usize]).collect();
         let a_sym = SymbolicSparseColMat::<u32>::new_checked(nf, nf, col_ptr, None, row_idx);
         let (chol, l_len, mem, chosen) = if nf > 0 {
-            let (chol, chosen) =
-                symbolic_with_ordering(a_sym.as_ref(), &group, ordering, supernodal);
+            let (chol, chosen) = symbolic_with_ordering(a_sym.as_ref(), &group, ordering, supernodal);
             let req = StackReq::or(
                 chol.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
                 chol.solve_in_place_scratch::<f64>(1, Par::Seq),
@@ -408,8 +382,7 @@ impl System {
     /// Fills JᵀWJ and JᵀWr from an evaluation with this pattern's structure.
     pub fn assemble(&mut self, problem: &Problem, buf: &EvalBuffers) {
         self.sqrt_w.clear();
-        self.sqrt_w
-            .extend(problem.terms.iter().map(|t| t.weight.sqrt()));
+        self.sqrt_w.extend(problem.terms.iter().map(|t| t.weight.sqrt()));
         for ti in 0..problem.terms.len() {
             let s = self.sqrt_w[ti];
             let (r0, r1) = (buf.term_rows[ti], buf.term_rows[ti + 1]);
@@ -512,22 +485,10 @@ fn symbolic_with_ordering(
     ordering: Ordering,
     supernodal: bool,
 ) -> (SymbolicCholesky<u32>, Ordering) {
-    let threshold = if supernodal {
-        SupernodalThreshold::FORCE_SUPERNODAL
-    } else {
-        SupernodalThreshold::AUTO
-    };
+    let threshold = if supernodal { SupernodalThreshold::FORCE_SUPERNODAL } else { SupernodalThreshold::AUTO };
     let analyze = |ord: SymmetricOrdering<'_, u32>| {
-        factorize_symbolic_cholesky(
-            a,
-            Side::Upper,
-            ord,
-            CholeskySymbolicParams {
-                supernodal_flop_ratio_threshold: threshold,
-                ..Default::default()
-            },
-        )
-        .expect("symbolic Cholesky analysis")
+        factorize_symbolic_cholesky(a, Side::Upper, ord, CholeskySymbolicParams { supernodal_flop_ratio_threshold: threshold, ..Default::default() })
+            .expect("symbolic Cholesky analysis")
     };
     if ordering == Ordering::Amd {
         return (analyze(SymmetricOrdering::Amd), Ordering::Amd);
@@ -535,18 +496,11 @@ fn symbolic_with_ordering(
     let graph = BlockGraph::new(group, a.col_ptr(), a.row_idx());
     let with_nodes = |nodes: Vec<u32>| {
         let (fwd, inv) = graph.expand(&nodes);
-        analyze(SymmetricOrdering::Custom(PermRef::new_checked(
-            &fwd,
-            &inv,
-            fwd.len(),
-        )))
+        analyze(SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, fwd.len())))
     };
     match ordering {
         Ordering::BlockAmd => (with_nodes(graph.amd_order()), Ordering::BlockAmd),
-        Ordering::NestedDissection => (
-            with_nodes(graph.nested_dissection_order()),
-            Ordering::NestedDissection,
-        ),
+        Ordering::NestedDissection => (with_nodes(graph.nested_dissection_order()), Ordering::NestedDissection),
         _ => {
             let amd = with_nodes(graph.amd_order());
             let nd = with_nodes(graph.nested_dissection_order());
@@ -563,17 +517,11 @@ fn symbolic_with_ordering(
 pub(crate) fn factor_flops(chol: &SymbolicCholesky<u32>) -> f64 {
     use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
     match chol.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => s
-            .col_ptr()
-            .windows(2)
-            .map(|w| ((w[1] - w[0]) as f64).powi(2))
-            .sum(),
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            s.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum()
+        }
         SymbolicCholeskyRaw::Supernodal(s) => {
-            let (b, e, rp) = (
-                s.supernode_begin(),
-                s.supernode_end(),
-                s.col_ptr_for_row_idx(),
-            );
+            let (b, e, rp) = (s.supernode_begin(), s.supernode_end(), s.col_ptr_for_row_idx());
             let mut f = 0.0;
             for k in 0..s.n_supernodes() {
                 let w = (e[k] - b[k]) as usize;
@@ -607,14 +555,8 @@ mod tests {
             let mut term = Linear::new();
             for _ in 0..rows {
                 let k = 1 + (rng.uniform() * 7.0) as usize;
-                let coeffs: Vec<(usize, f64)> = (0..k)
-                    .map(|_| {
-                        (
-                            ((rng.uniform() * (n - 1) as f64) as usize).min(n - 2),
-                            rng.range(-1.0, 1.0),
-                        )
-                    })
-                    .collect();
+                let coeffs: Vec<(usize, f64)> =
+                    (0..k).map(|_| (((rng.uniform() * (n - 1) as f64) as usize).min(n - 2), rng.range(-1.0, 1.0))).collect();
                 let constant = rng.range(-1.0, 1.0);
                 term.push_row(&coeffs, constant);
                 let mut row = vec![0.0; n];
@@ -638,15 +580,9 @@ mod tests {
         let (col_ptr, row_idx) = (sys.a_sym.col_ptr(), sys.a_sym.row_idx());
         for (j, &vj) in free.iter().enumerate() {
             let rows = &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize];
-            assert!(
-                rows.windows(2).all(|w| w[0] < w[1]),
-                "column {j}: rows sorted and unique"
-            );
+            assert!(rows.windows(2).all(|w| w[0] < w[1]), "column {j}: rows sorted and unique");
             for (i, &vi) in free.iter().enumerate().take(j + 1) {
-                let coupled = i == j
-                    || dense_rows
-                        .iter()
-                        .any(|(_, row, _)| row[vi] != 0.0 && row[vj] != 0.0);
+                let coupled = i == j || dense_rows.iter().any(|(_, row, _)| row[vi] != 0.0 && row[vj] != 0.0);
                 let at = rows.iter().position(|&r| r as usize == i);
                 assert_eq!(at.is_some(), coupled, "pattern entry ({i}, {j})");
                 let (mut h, mut g) = (0.0, 0.0);
@@ -659,17 +595,10 @@ mod tests {
                 }
                 if let Some(p) = at {
                     let got = sys.h[col_ptr[j] as usize + p];
-                    assert!(
-                        (got - h).abs() <= 1e-12 * (1.0 + h.abs()),
-                        "JᵀWJ ({i}, {j}): {got} vs {h}"
-                    );
+                    assert!((got - h).abs() <= 1e-12 * (1.0 + h.abs()), "JᵀWJ ({i}, {j}): {got} vs {h}");
                 }
                 if i == j {
-                    assert!(
-                        (sys.g[j] - g).abs() <= 1e-12 * (1.0 + g.abs()),
-                        "JᵀWr {j}: {} vs {g}",
-                        sys.g[j]
-                    );
+                    assert!((sys.g[j] - g).abs() <= 1e-12 * (1.0 + g.abs()), "JᵀWr {j}: {} vs {g}", sys.g[j]);
                 }
             }
         }

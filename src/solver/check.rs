@@ -32,16 +32,7 @@ pub fn check_jacobian_report(term: &dyn Term, x: &[f64], h: f64) -> JacobianChec
     let mut r = vec![0.0; m];
     let mut active = vec![true; m];
     let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-    eval_term(
-        term,
-        x,
-        &mut r,
-        &mut active,
-        &mut rows,
-        &mut cols,
-        &mut vals,
-        0,
-    );
+    eval_term(term, x, &mut r, &mut active, &mut rows, &mut cols, &mut vals, 0);
     let mut dense = vec![0.0; m * n];
     for ((&i, &j), &v) in rows.iter().zip(&cols).zip(&vals) {
         let (i, j) = (i as usize, j as usize);
@@ -58,30 +49,12 @@ pub fn check_jacobian_report(term: &dyn Term, x: &[f64], h: f64) -> JacobianChec
         rows.clear();
         cols.clear();
         vals.clear();
-        eval_term(
-            term,
-            &xp,
-            &mut rp,
-            &mut active,
-            &mut rows,
-            &mut cols,
-            &mut vals,
-            0,
-        );
+        eval_term(term, &xp, &mut rp, &mut active, &mut rows, &mut cols, &mut vals, 0);
         xp[j] = x[j] - h;
         rows.clear();
         cols.clear();
         vals.clear();
-        eval_term(
-            term,
-            &xp,
-            &mut rm,
-            &mut active,
-            &mut rows,
-            &mut cols,
-            &mut vals,
-            0,
-        );
+        eval_term(term, &xp, &mut rm, &mut active, &mut rows, &mut cols, &mut vals, 0);
         xp[j] = x[j];
         let dh = (x[j] + h) - (x[j] - h);
         for i in 0..m {
@@ -89,13 +62,7 @@ pub fn check_jacobian_report(term: &dyn Term, x: &[f64], h: f64) -> JacobianChec
             let an = dense[j * m + i];
             let err = (an - fd).abs() / fd.abs().max(1.0);
             if err > best.max_error || !err.is_finite() {
-                best = JacobianCheck {
-                    max_error: err,
-                    row: i,
-                    col: j,
-                    analytic: an,
-                    numeric: fd,
-                };
+                best = JacobianCheck { max_error: err, row: i, col: j, analytic: an, numeric: fd };
                 if !err.is_finite() {
                     best.max_error = f64::INFINITY;
                     return best;
@@ -112,16 +79,7 @@ pub fn residuals(term: &dyn Term, x: &[f64]) -> Vec<f64> {
     let mut r = vec![0.0; m];
     let mut active = vec![true; m];
     let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-    eval_term(
-        term,
-        x,
-        &mut r,
-        &mut active,
-        &mut rows,
-        &mut cols,
-        &mut vals,
-        0,
-    );
+    eval_term(term, x, &mut r, &mut active, &mut rows, &mut cols, &mut vals, 0);
     r
 }
 
@@ -137,16 +95,7 @@ pub fn jacobians(term: &mut dyn Term, x: &[f64], h: f64, moving: bool) -> (Vec<f
     let mut active = vec![true; m];
     let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
     term.prepare(x);
-    eval_term(
-        &*term,
-        x,
-        &mut r,
-        &mut active,
-        &mut rows,
-        &mut cols,
-        &mut vals,
-        0,
-    );
+    eval_term(&*term, x, &mut r, &mut active, &mut rows, &mut cols, &mut vals, 0);
     let mut analytic = vec![0.0; m * n];
     for ((&i, &j), &v) in rows.iter().zip(&cols).zip(&vals) {
         if active[i as usize] {
@@ -165,16 +114,7 @@ pub fn jacobians(term: &mut dyn Term, x: &[f64], h: f64, moving: bool) -> (Vec<f
             rows.clear();
             cols.clear();
             vals.clear();
-            eval_term(
-                &*term,
-                &xp,
-                out,
-                &mut active,
-                &mut rows,
-                &mut cols,
-                &mut vals,
-                0,
-            );
+            eval_term(&*term, &xp, out, &mut active, &mut rows, &mut cols, &mut vals, 0);
         }
         xp[j] = x[j];
         let dh = (x[j] + h) - (x[j] - h);

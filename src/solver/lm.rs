@@ -290,11 +290,7 @@ impl Solver {
             supernodal: false,
             ordering: opts.ordering,
             factor_flops: 0.0,
-            iteration_ms: Vec::with_capacity(if clock.is_some() {
-                opts.max_iterations
-            } else {
-                0
-            }),
+            iteration_ms: Vec::with_capacity(if clock.is_some() { opts.max_iterations } else { 0 }),
             phase_ms: PhaseTimes::default(),
         };
         if !energy.is_finite() {
@@ -302,19 +298,10 @@ impl Solver {
             report.terms = self.stats.clone();
             return report;
         }
-        if !self
-            .system
-            .as_ref()
-            .is_some_and(|s| s.matches(problem, &self.cur))
-        {
+        if !self.system.as_ref().is_some_and(|s| s.matches(problem, &self.cur)) {
             let t = tick();
             self.system = None; // free the old pattern first
-            self.system = Some(System::build(
-                problem,
-                &self.cur,
-                opts.ordering,
-                opts.supernodal,
-            ));
+            self.system = Some(System::build(problem, &self.cur, opts.ordering, opts.supernodal));
             self.symbolic_analyses += 1;
             phase.symbolic += tick() - t;
         }
@@ -356,34 +343,13 @@ impl Solver {
         let mut mu = (opts.initial_epsilon * opts.initial_epsilon).clamp(mu_min, mu_max);
         let mut nu = 2.0;
         if nf == 0 {
-            return finish(
-                report,
-                self,
-                energy,
-                mu,
-                phase,
-                Termination::NoFreeVariables,
-            );
+            return finish(report, self, energy, mu, phase, Termination::NoFreeVariables);
         }
         if energy <= opts.energy_tolerance {
-            return finish(
-                report,
-                self,
-                energy,
-                mu,
-                phase,
-                Termination::EnergyTolerance,
-            );
+            return finish(report, self, energy, mu, phase, Termination::EnergyTolerance);
         }
         if sys.gradient_inf_norm() <= opts.gradient_tolerance {
-            return finish(
-                report,
-                self,
-                energy,
-                mu,
-                phase,
-                Termination::GradientTolerance,
-            );
+            return finish(report, self, energy, mu, phase, Termination::GradientTolerance);
         }
 
         for it in 1..=opts.max_iterations {
@@ -414,11 +380,7 @@ impl Solver {
                 let e_trial = weighted_energy(problem, &self.trial);
                 if e_trial.is_finite() && e_trial < energy && problem.is_admissible(&self.x_trial) {
                     accepted = true;
-                    let rho = if pred > 0.0 {
-                        (energy - e_trial) / pred
-                    } else {
-                        1.0
-                    };
+                    let rho = if pred > 0.0 { (energy - e_trial) / pred } else { 1.0 };
                     small_decrease = energy - e_trial <= opts.relative_decrease_tolerance * energy;
                     energy = e_trial;
                     x.copy_from_slice(&self.x_trial);
@@ -427,12 +389,7 @@ impl Solver {
                         // A term changed its structure: new pattern, new symbolic analysis.
                         let t = tick();
                         self.system = None;
-                        self.system = Some(System::build(
-                            problem,
-                            &self.cur,
-                            opts.ordering,
-                            opts.supernodal,
-                        ));
+                        self.system = Some(System::build(problem, &self.cur, opts.ordering, opts.supernodal));
                         self.symbolic_analyses += 1;
                         phase.symbolic += tick() - t;
                     }
@@ -487,7 +444,9 @@ impl Solver {
                 Some(Termination::EnergyTolerance)
             } else if accepted && gnorm <= opts.gradient_tolerance {
                 Some(Termination::GradientTolerance)
-            } else if solved && step_norm <= opts.step_tolerance * (x_norm + opts.step_tolerance) {
+            } else if solved
+                && step_norm <= opts.step_tolerance * (x_norm + opts.step_tolerance)
+            {
                 Some(Termination::StepTolerance)
             } else if small_decrease {
                 Some(Termination::RelativeDecrease)

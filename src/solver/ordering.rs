@@ -109,12 +109,7 @@ impl BlockGraph {
         for k in 0..n {
             xadj[k + 1] += xadj[k];
         }
-        Self {
-            var_ptr,
-            vars,
-            xadj,
-            adj,
-        }
+        Self { var_ptr, vars, xadj, adj }
     }
 
     pub fn n(&self) -> usize {
@@ -130,10 +125,7 @@ impl BlockGraph {
         let nf = self.vars.len();
         let mut fwd = Vec::with_capacity(nf);
         for &k in node_order {
-            fwd.extend_from_slice(
-                &self.vars
-                    [self.var_ptr[k as usize] as usize..self.var_ptr[k as usize + 1] as usize],
-            );
+            fwd.extend_from_slice(&self.vars[self.var_ptr[k as usize] as usize..self.var_ptr[k as usize + 1] as usize]);
         }
         debug_assert_eq!(fwd.len(), nf);
         let mut inv = vec![0u32; nf];
@@ -184,13 +176,7 @@ impl BlockGraph {
         let mut perm = vec![0u32; m];
         let mut perm_inv = vec![0u32; m];
         let mut mem = MemBuffer::new(amd::order_scratch::<u32>(m, nnz));
-        match amd::order(
-            &mut perm,
-            &mut perm_inv,
-            a,
-            amd::Control::default(),
-            MemStack::new(&mut mem),
-        ) {
+        match amd::order(&mut perm, &mut perm_inv, a, amd::Control::default(), MemStack::new(&mut mem)) {
             Ok(_) => out.extend(perm.iter().map(|&p| nodes[p as usize])),
             Err(_) => out.extend_from_slice(nodes),
         }
@@ -314,11 +300,7 @@ impl BlockGraph {
         let mut adj_next = vec![0usize; nl];
         for &k in &order {
             let l = st.level[k as usize];
-            if self
-                .neighbors(k)
-                .iter()
-                .any(|&j| st.stamp[j as usize] == tag && st.level[j as usize] == l + 1)
-            {
+            if self.neighbors(k).iter().any(|&j| st.stamp[j as usize] == tag && st.level[j as usize] == l + 1) {
                 adj_next[l as usize] += 1;
             }
         }
@@ -364,11 +346,7 @@ impl BlockGraph {
                 part_a.push(k);
             } else if l > lsep {
                 part_b.push(k);
-            } else if self
-                .neighbors(k)
-                .iter()
-                .any(|&j| st.stamp[j as usize] == tag && st.level[j as usize] == l + 1)
-            {
+            } else if self.neighbors(k).iter().any(|&j| st.stamp[j as usize] == tag && st.level[j as usize] == l + 1) {
                 sep.push(k);
             } else {
                 part_a.push(k);

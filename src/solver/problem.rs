@@ -42,13 +42,7 @@ impl<'s> JacobianSink<'s> {
         active: &'s mut [bool],
         row_offset: usize,
     ) -> Self {
-        Self {
-            rows,
-            cols,
-            vals,
-            active,
-            row_offset: row_offset as u32,
-        }
+        Self { rows, cols, vals, active, row_offset: row_offset as u32 }
     }
 
     /// Adds `∂r_row/∂x_col = value` (summed with earlier entries at the same position).
@@ -119,13 +113,7 @@ pub struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// A problem over `n_vars` free variables and no terms.
     pub fn new(n_vars: usize) -> Self {
-        Self {
-            n_vars,
-            fixed: vec![false; n_vars],
-            groups: (0..n_vars as u32).collect(),
-            terms: Vec::new(),
-            admissible: None,
-        }
+        Self { n_vars, fixed: vec![false; n_vars], groups: (0..n_vars as u32).collect(), terms: Vec::new(), admissible: None }
     }
 
     /// Only points that `admissible` accepts are taken as steps (the solver treats any other
@@ -175,20 +163,14 @@ impl<'a> Problem<'a> {
     }
 
     pub fn add_boxed(&mut self, term: Box<dyn Term + 'a>, weight: f64) -> TermId {
-        assert!(
-            weight >= 0.0 && weight.is_finite(),
-            "term weight must be finite and ≥ 0"
-        );
+        assert!(weight >= 0.0 && weight.is_finite(), "term weight must be finite and ≥ 0");
         self.terms.push(TermSlot { term, weight });
         TermId(self.terms.len() - 1)
     }
 
     /// Changes a term's weight (≥ 0; 0 switches the term off without changing the pattern).
     pub fn set_weight(&mut self, id: TermId, weight: f64) {
-        assert!(
-            weight >= 0.0 && weight.is_finite(),
-            "term weight must be finite and ≥ 0"
-        );
+        assert!(weight >= 0.0 && weight.is_finite(), "term weight must be finite and ≥ 0");
         self.terms[id.0].weight = weight;
     }
 

@@ -64,20 +64,12 @@ impl UnitLength {
 
     /// |v|² − 1 for blocks of `dim` variables.
     pub fn vectors_dim(offsets: Vec<usize>, dim: usize) -> Self {
-        Self {
-            name: "unit_length".into(),
-            offsets,
-            kind: UnitKind::Vector(dim),
-        }
+        Self { name: "unit_length".into(), offsets, kind: UnitKind::Vector(dim) }
     }
 
     /// bᵀb − 4ac − 1 for the generalized-sphere 5-blocks starting at `offsets`.
     pub fn spheres(offsets: Vec<usize>) -> Self {
-        Self {
-            name: "sphere_normalization".into(),
-            offsets,
-            kind: UnitKind::Sphere,
-        }
+        Self { name: "sphere_normalization".into(), offsets, kind: UnitKind::Sphere }
     }
 }
 
@@ -125,11 +117,7 @@ named!(Anchor);
 impl Anchor {
     pub fn new(indices: Vec<usize>, targets: Vec<f64>) -> Self {
         assert_eq!(indices.len(), targets.len());
-        Self {
-            name: "anchor".into(),
-            indices,
-            targets,
-        }
+        Self { name: "anchor".into(), indices, targets }
     }
 
     /// Anchors variables `start..start + targets.len()`.
@@ -176,11 +164,7 @@ named!(Proximal);
 impl Proximal {
     pub fn new(indices: Vec<usize>) -> Self {
         let at = vec![0.0; indices.len()];
-        Self {
-            name: "regularization".into(),
-            indices,
-            at,
-        }
+        Self { name: "regularization".into(), indices, at }
     }
 }
 
@@ -217,10 +201,7 @@ pub struct Hinge<T> {
 
 impl<T: Term> Hinge<T> {
     pub fn new(inner: T) -> Self {
-        Self {
-            name: format!("hinge({})", inner.name()),
-            inner,
-        }
+        Self { name: format!("hinge({})", inner.name()), inner }
     }
 
     pub fn with_name(mut self, name: impl Into<String>) -> Self {
@@ -275,15 +256,8 @@ pub struct Band<T> {
 impl<T: Term> Band<T> {
     /// `half_width` τ must be positive and finite.
     pub fn new(inner: T, half_width: f64) -> Self {
-        assert!(
-            half_width > 0.0 && half_width.is_finite(),
-            "a tolerance band needs 0 < τ < ∞, not {half_width}"
-        );
-        Self {
-            name: format!("band({})", inner.name()),
-            inner,
-            half_width,
-        }
+        assert!(half_width > 0.0 && half_width.is_finite(), "a tolerance band needs 0 < τ < ∞, not {half_width}");
+        Self { name: format!("band({})", inner.name()), inner, half_width }
     }
 
     pub fn inner(&self) -> &T {
@@ -412,10 +386,7 @@ named!(PointOnSphere);
 impl PointOnSphere {
     /// `pairs`: (point 3-block offset, sphere 5-block offset).
     pub fn new(pairs: Vec<(usize, usize)>) -> Self {
-        Self {
-            name: "point_on_sphere".into(),
-            pairs,
-        }
+        Self { name: "point_on_sphere".into(), pairs }
     }
 }
 
@@ -450,11 +421,7 @@ named!(SphereFit);
 
 impl SphereFit {
     pub fn new(sphere: usize, points: Vec<DVec3>) -> Self {
-        Self {
-            name: "sphere_fit".into(),
-            sphere,
-            points,
-        }
+        Self { name: "sphere_fit".into(), sphere, points }
     }
 }
 
@@ -492,11 +459,7 @@ named!(InversiveProduct);
 impl InversiveProduct {
     /// `pairs` of sphere 5-block offsets.
     pub fn new(pairs: Vec<(usize, usize)>, target: f64) -> Self {
-        Self {
-            name: "inversive_product".into(),
-            pairs,
-            target,
-        }
+        Self { name: "inversive_product".into(), pairs, target }
     }
 }
 
@@ -531,12 +494,7 @@ named!(InversiveProductFixed);
 
 impl InversiveProductFixed {
     pub fn new(spheres: Vec<usize>, fixed: [f64; 5], target: f64) -> Self {
-        Self {
-            name: "inversive_product_fixed".into(),
-            spheres,
-            fixed,
-            target,
-        }
+        Self { name: "inversive_product_fixed".into(), spheres, fixed, target }
     }
 }
 
@@ -572,10 +530,7 @@ named!(PointOnPlane);
 impl PointOnPlane {
     /// `items`: (point offset, normal offset, offset-variable index).
     pub fn new(items: Vec<(usize, usize, usize)>) -> Self {
-        Self {
-            name: "point_on_plane".into(),
-            items,
-        }
+        Self { name: "point_on_plane".into(), items }
     }
 }
 
@@ -609,11 +564,7 @@ pub struct FnTerm<F> {
 
 impl<F: Fn(&[f64], &mut [f64], &mut JacobianSink)> FnTerm<F> {
     pub fn new(name: impl Into<String>, residual_count: usize, f: F) -> Self {
-        Self {
-            name: name.into(),
-            count: residual_count,
-            f,
-        }
+        Self { name: name.into(), count: residual_count, f }
     }
 }
 

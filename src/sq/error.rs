@@ -15,32 +15,17 @@ pub enum SqError {
     /// A parameter out of range.
     Parameter(ParamError),
     /// S_u × S_v vanishes at a point of G.
-    Singular {
-        uv: [f64; 2],
-    },
+    Singular { uv: [f64; 2] },
     /// H takes both signs (Sec. 6.3): area shares of H > 0 and H < 0, and where the other sign
     /// is strongest inside the patch.
-    MeanCurvatureSignChange {
-        positive_share: f64,
-        negative_share: f64,
-        at: Option<[f64; 2]>,
-    },
+    MeanCurvatureSignChange { positive_share: f64, negative_share: f64, at: Option<[f64; 2]> },
     /// |H| · diag below [`super::radius::MIN_MEAN_CURVATURE`] at a point of G.
-    MeanCurvatureNearZero {
-        uv: [f64; 2],
-        h_diag: f64,
-    },
+    MeanCurvatureNearZero { uv: [f64; 2], h_diag: f64 },
     RadiusBasis(String),
     /// Too few samples for the radius basis.
-    RadiusFit {
-        samples: usize,
-        coefficients: usize,
-    },
+    RadiusFit { samples: usize, coefficients: usize },
     /// c_u × c_v vanishes: the spheres do not vary (e.g. a sphere patch's central spheres).
-    SingularCentreSurface {
-        points: usize,
-        total: usize,
-    },
+    SingularCentreSurface { points: usize, total: usize },
     /// No grid quad has real torsal directions to remesh along.
     NoTorsalField,
     /// The quad remeshing failed (Sec. 5.2).

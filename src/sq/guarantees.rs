@@ -22,87 +22,31 @@ use super::sq_mesh::SqMeshFigures;
 pub const EXACT: f64 = 1e-8;
 
 /// The congruence's guarantees at θ and α (degrees).
-pub fn congruence_guarantees(
-    f: &CongruenceFigures,
-    theta_deg: f64,
-    alpha_deg: f64,
-) -> Vec<Guarantee> {
+pub fn congruence_guarantees(f: &CongruenceFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
     vec![
-        Guarantee::at_most(
-            "max_line_normal_angle_deg",
-            f.max_line_normal_angle_deg,
-            theta_deg,
-            "deg",
-        ),
-        Guarantee::count_at_most(
-            "quads_without_real_torsal_directions",
-            f.quads_without_real_torsal_directions,
-            0,
-        ),
-        Guarantee::at_least(
-            "min_torsal_plane_angle_deg",
-            f.min_torsal_plane_angle_deg,
-            alpha_deg,
-            "deg",
-        ),
+        Guarantee::at_most("max_line_normal_angle_deg", f.max_line_normal_angle_deg, theta_deg, "deg"),
+        Guarantee::count_at_most("quads_without_real_torsal_directions", f.quads_without_real_torsal_directions, 0),
+        Guarantee::at_least("min_torsal_plane_angle_deg", f.min_torsal_plane_angle_deg, alpha_deg, "deg"),
     ]
 }
 
 /// The SQ mesh's guarantees at θ and α (degrees).
-pub fn mesh_guarantees(
-    mesh: &PolyMesh,
-    f: &SqMeshFigures,
-    theta_deg: f64,
-    alpha_deg: f64,
-) -> Vec<Guarantee> {
+pub fn mesh_guarantees(mesh: &PolyMesh, f: &SqMeshFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
     let not_quads = mesh.faces.iter().filter(|face| face.len() != 4).count();
     let mut all = vec![
         Guarantee::at_least("faces", mesh.faces.len() as f64, 1.0, ""),
         Guarantee::count_at_most("faces_not_quads", not_quads, 0),
-        Guarantee::at_most(
-            "max_vertex_sphere_residual",
-            f.max_vertex_sphere_residual,
-            EXACT,
-            "of the diagonal",
-        ),
-        Guarantee::at_most(
-            "max_centre_face_planarity",
-            f.max_centre_face_planarity,
-            EXACT,
-            "of the diagonal",
-        ),
-        Guarantee::at_most(
-            "max_axis_normal_angle_deg",
-            f.max_axis_normal_angle_deg,
-            theta_deg,
-            "deg",
-        ),
-        Guarantee::at_least(
-            "min_support_plane_angle_deg",
-            f.min_torsal_plane_angle_deg,
-            alpha_deg,
-            "deg",
-        ),
+        Guarantee::at_most("max_vertex_sphere_residual", f.max_vertex_sphere_residual, EXACT, "of the diagonal"),
+        Guarantee::at_most("max_centre_face_planarity", f.max_centre_face_planarity, EXACT, "of the diagonal"),
+        Guarantee::at_most("max_axis_normal_angle_deg", f.max_axis_normal_angle_deg, theta_deg, "deg"),
+        Guarantee::at_least("min_support_plane_angle_deg", f.min_torsal_plane_angle_deg, alpha_deg, "deg"),
     ];
     for (valence, name, figure) in [
-        (
-            3,
-            "min_support_plane_angle_valence_3_deg",
-            f.min_support_plane_angle_valence_3_deg,
-        ),
-        (
-            5,
-            "min_support_plane_angle_valence_5_deg",
-            f.min_support_plane_angle_valence_5_deg,
-        ),
+        (3, "min_support_plane_angle_valence_3_deg", f.min_support_plane_angle_valence_3_deg),
+        (5, "min_support_plane_angle_valence_5_deg", f.min_support_plane_angle_valence_5_deg),
     ] {
         if let Some(worst) = figure {
-            all.push(Guarantee::at_least(
-                name,
-                worst,
-                support_plane_aim_deg(valence, alpha_deg),
-                "deg",
-            ));
+            all.push(Guarantee::at_least(name, worst, support_plane_aim_deg(valence, alpha_deg), "deg"));
         }
     }
     all
@@ -119,21 +63,12 @@ pub enum Delivered<'a> {
 
 /// The verdict of a run on what it delivers: the congruence's guarantees when it stopped there
 /// (with quads only when it stopped after the quad mesh), the SQ mesh's otherwise.
-pub fn verdict(
-    congruence: &CongruenceFigures,
-    delivered: Delivered,
-    theta_deg: f64,
-    alpha_deg: f64,
-) -> Verdict {
+pub fn verdict(congruence: &CongruenceFigures, delivered: Delivered, theta_deg: f64, alpha_deg: f64) -> Verdict {
     Verdict::new(match delivered {
         Delivered::Congruence => congruence_guarantees(congruence, theta_deg, alpha_deg),
         Delivered::QuadMesh(m) => {
             let mut all = congruence_guarantees(congruence, theta_deg, alpha_deg);
-            all.push(Guarantee::count_at_most(
-                "faces_not_quads",
-                m.faces.iter().filter(|f| f.len() != 4).count(),
-                0,
-            ));
+            all.push(Guarantee::count_at_most("faces_not_quads", m.faces.iter().filter(|f| f.len() != 4).count(), 0));
             all
         }
         Delivered::SqMesh(m, f) => mesh_guarantees(m, f, theta_deg, alpha_deg),

@@ -34,17 +34,7 @@ pub fn torsal_pairs(grid: &SamplingGrid, lines: &[DVec3]) -> Vec<Option<TorsalPa
 
 /// ∠(l, n) in degrees at every point.
 pub fn line_normal_angles(grid: &SamplingGrid, lines: &[DVec3]) -> Vec<f64> {
-    grid.frames
-        .iter()
-        .zip(lines)
-        .map(|(f, l)| {
-            l.normalize_or_zero()
-                .dot(f.normal)
-                .clamp(-1.0, 1.0)
-                .acos()
-                .to_degrees()
-        })
-        .collect()
+    grid.frames.iter().zip(lines).map(|(f, l)| l.normalize_or_zero().dot(f.normal).clamp(-1.0, 1.0).acos().to_degrees()).collect()
 }
 
 impl CongruenceFigures {
@@ -55,16 +45,8 @@ impl CongruenceFigures {
             max_line_normal_angle_deg: angles.iter().copied().fold(0.0, f64::max),
             mean_line_normal_angle_deg: mean(&angles),
             quads_without_real_torsal_directions: pairs.iter().filter(|p| p.is_none()).count(),
-            min_torsal_plane_angle_deg: if planes.is_empty() {
-                0.0
-            } else {
-                planes.iter().copied().fold(f64::INFINITY, f64::min)
-            },
-            p10_torsal_plane_angle_deg: if planes.is_empty() {
-                0.0
-            } else {
-                percentile(planes.iter().copied(), 0.1)
-            },
+            min_torsal_plane_angle_deg: if planes.is_empty() { 0.0 } else { planes.iter().copied().fold(f64::INFINITY, f64::min) },
+            p10_torsal_plane_angle_deg: if planes.is_empty() { 0.0 } else { percentile(planes.iter().copied(), 0.1) },
             mean_torsal_plane_angle_deg: mean(&planes),
         }
     }
@@ -72,20 +54,7 @@ impl CongruenceFigures {
 
 /// Grid points whose line is beyond θ, quads without real torsal directions and quads whose
 /// torsal planes meet below α (degrees).
-pub fn misses(
-    grid: &SamplingGrid,
-    lines: &[DVec3],
-    pairs: &[Option<TorsalPair>],
-    theta_deg: f64,
-    alpha_deg: f64,
-) -> usize {
-    let beyond = line_normal_angles(grid, lines)
-        .iter()
-        .filter(|&&a| !(a <= theta_deg))
-        .count();
-    beyond
-        + pairs
-            .iter()
-            .filter(|p| p.is_none_or(|p| !(p.angle_deg >= alpha_deg)))
-            .count()
+pub fn misses(grid: &SamplingGrid, lines: &[DVec3], pairs: &[Option<TorsalPair>], theta_deg: f64, alpha_deg: f64) -> usize {
+    let beyond = line_normal_angles(grid, lines).iter().filter(|&&a| !(a <= theta_deg)).count();
+    beyond + pairs.iter().filter(|p| p.is_none_or(|p| !(p.angle_deg >= alpha_deg))).count()
 }

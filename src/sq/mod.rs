@@ -56,9 +56,7 @@ use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
 use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
-use self::sphere_optimization::{
-    on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase,
-};
+use self::sphere_optimization::{on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
 use self::start::{constant_function, constant_radius, spherical_reference};
 use crate::geometry::mesh::PolyMesh;
@@ -222,15 +220,7 @@ pub fn compute_congruence(
     let model_points: Vec<DVec3> = grid.frames.iter().map(|f| t + s * f.point).collect();
     if let Some((centre, radius)) = spherical_reference(&grid) {
         let sphere = (t + s * centre, s * radius);
-        return Ok(spherical_congruence(
-            grid,
-            model_points,
-            sphere,
-            params,
-            [du, dv],
-            spline.domain(),
-            timings,
-        ));
+        return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
     }
     let signs = check_mean_curvature(&surface, &grid, (hi - lo).length() / s, params.faces)?;
     let fit = fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?;
@@ -238,102 +228,25 @@ pub fn compute_congruence(
     let grid = &problem.grid;
     timings.lap("radius");
 
-    let starts: &[RadiusStart] = match params.start {
-        RadiusStart::Auto => &[RadiusStart::Central, RadiusStart::Constant],
-        RadiusStart::Central => &[RadiusStart::Central],
-        RadiusStart::Constant => &[RadiusStart::Constant],
-    };
-    let mut attempts: Vec<CongruenceAttempt> = Vec::new();
-    // The kept start: the first that meets θ and α, else the first with the fewest misses.
-    let mut best: Option<(
-        usize,
-        Optimized,
-        Vec<DVec3>,
-        Vec<DVec3>,
-        Vec<Option<TorsalPair>>,
-    )> = None;
-    for (k, &start) in starts.iter().enumerate() {
-        let function = match start {
-            RadiusStart::Constant => {
-                constant_function(&fit.function, constant_radius(grid, signs.sign))
-            }
-            _ => fit.function.clone(),
-        };
-        let initial_lines = match start {
-            // The offset's lines are the normals (module docs of `start`).
-            RadiusStart::Constant => grid.frames.iter().map(|f| f.normal).collect(),
-            _ => problem.congruence_lines(&function.coefficients)?,
-        };
-        let initial_figures =
-            CongruenceFigures::of(grid, &initial_lines, &torsal_pairs(grid, &initial_lines));
-        if k == 0 {
-            on_event(SqEvent::Started {
-                points: &model_points,
-                lines: &initial_lines,
-            })?;
-        } else {
-            on_event(SqEvent::Restarted {
-                start,
-                lines: &initial_lines,
-            })?;
-        }
-        let optimized = optimize(
-            &problem,
-            &function.coefficients,
-            &initial_lines,
-            params,
-            clock,
-            on_event,
-        )?;
-        let lines = problem.measured_lines(&optimized.x);
-        let pairs = torsal_pairs(grid, &lines);
-        let figures = CongruenceFigures::of(grid, &lines, &pairs);
-        let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-        attempts.push(CongruenceAttempt {
-            start,
-            initial_figures,
-            figures,
-            misses,
-        });
-        if best.as_ref().is_none_or(|b| misses < attempts[b.0].misses) {
-            best = Some((k, optimized, initial_lines, lines, pairs));
-        }
-        if misses == 0 {
-            break;
-        }
-    }
+    let (attempts, kept) = optimize_starts(&problem, &fit.function, signs.sign, &model_points, params, clock, on_event)?;
     timings.lap("congruence");
-    let (chosen, optimized, initial_lines, lines, pairs) = best.expect("at least one start");
+    let Kept { chosen, optimized, initial_lines, lines, pairs } = kept;
     let figures = attempts[chosen].figures.clone();
     let x = optimized.x;
     let lc_residual = problem.lc_residual(&x);
-    let coefficients: Vec<f64> = x[problem.layout.radius.clone()]
-        .iter()
-        .map(|c| c * s)
-        .collect();
-    let torsal_uv = pairs
-        .iter()
-        .map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv]))))
-        .collect();
-    let radius = BSplineFunction {
-        coefficients,
-        ..fit.function.clone()
-    };
-    let radii = grid
-        .uv
-        .iter()
-        .map(|p| radius.evaluate(p[0], p[1]).0)
-        .collect();
+    let coefficients: Vec<f64> = x[problem.layout.radius.clone()].iter().map(|c| c * s).collect();
+    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv])))).collect();
+    let radius = BSplineFunction { coefficients, ..fit.function.clone() };
+    let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
     timings.lap("metrics");
-    let mut warnings = Vec::new();
-    warnings.extend(signs.warnings);
+    let mut warnings = signs.warnings;
     if chosen > 0 {
-        let a = &attempts[0];
+        let a = &attempts[0].figures;
         warnings.push(Warning::CentralCongruenceReplaced {
-            max_line_normal_angle_deg: a.figures.max_line_normal_angle_deg,
+            max_line_normal_angle_deg: a.max_line_normal_angle_deg,
             theta_deg: params.theta_deg,
-            quads_without_real_torsal_directions: a.figures.quads_without_real_torsal_directions,
-            min_torsal_plane_angle_deg: a.figures.min_torsal_plane_angle_deg,
+            quads_without_real_torsal_directions: a.quads_without_real_torsal_directions,
+            min_torsal_plane_angle_deg: a.min_torsal_plane_angle_deg,
             alpha_deg: params.alpha_deg,
         });
     }
@@ -367,6 +280,68 @@ pub fn compute_congruence(
     })
 }
 
+/// The start kept by [`optimize_starts`]: its index among the attempts, the optimized
+/// variables, the start's lines, the optimized lines and their torsal pairs.
+struct Kept {
+    chosen: usize,
+    optimized: Optimized,
+    initial_lines: Vec<DVec3>,
+    lines: Vec<DVec3>,
+    pairs: Vec<Option<TorsalPair>>,
+}
+
+/// Optimizes the congruence from each start `params.start` asks for (H of sign `sign`); keeps
+/// the first that meets θ and α, else the first with the fewest misses.
+fn optimize_starts(
+    problem: &CongruenceProblem,
+    fitted: &BSplineFunction,
+    sign: f64,
+    model_points: &[DVec3],
+    params: &SqParams,
+    clock: Clock,
+    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+) -> Result<(Vec<CongruenceAttempt>, Kept), SqError> {
+    let grid = &problem.grid;
+    let starts: &[RadiusStart] = match params.start {
+        RadiusStart::Auto => &[RadiusStart::Central, RadiusStart::Constant],
+        RadiusStart::Central => &[RadiusStart::Central],
+        RadiusStart::Constant => &[RadiusStart::Constant],
+    };
+    let mut attempts: Vec<CongruenceAttempt> = Vec::new();
+    // The kept start: the first that meets θ and α, else the first with the fewest misses.
+    let mut best: Option<Kept> = None;
+    for (k, &start) in starts.iter().enumerate() {
+        let function = match start {
+            RadiusStart::Constant => constant_function(fitted, constant_radius(grid, sign)),
+            _ => fitted.clone(),
+        };
+        let initial_lines = match start {
+            // The offset's lines are the normals (module docs of `start`).
+            RadiusStart::Constant => grid.frames.iter().map(|f| f.normal).collect(),
+            _ => problem.congruence_lines(&function.coefficients)?,
+        };
+        let initial_figures = CongruenceFigures::of(grid, &initial_lines, &torsal_pairs(grid, &initial_lines));
+        if k == 0 {
+            on_event(SqEvent::Started { points: model_points, lines: &initial_lines })?;
+        } else {
+            on_event(SqEvent::Restarted { start, lines: &initial_lines })?;
+        }
+        let optimized = optimize(problem, &function.coefficients, &initial_lines, params, clock, on_event)?;
+        let lines = problem.measured_lines(&optimized.x);
+        let pairs = torsal_pairs(grid, &lines);
+        let figures = CongruenceFigures::of(grid, &lines, &pairs);
+        let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
+        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses });
+        if best.as_ref().is_none_or(|b| misses < attempts[b.chosen].misses) {
+            best = Some(Kept { chosen: k, optimized, initial_lines, lines, pairs });
+        }
+        if misses == 0 {
+            break;
+        }
+    }
+    Ok((attempts, best.expect("at least one start")))
+}
+
 /// A unit direction in parameters of (μ0, μ1) on a grid quad of spacing (Δu, Δv): d⁺ is
 /// (Δu, Δv) and d⁻ is (Δu, −Δv) (Fig. 20).
 fn parameter_direction([m0, m1]: [f64; 2], [du, dv]: [f64; 2]) -> [f64; 2] {
@@ -385,24 +360,14 @@ fn optimize(
     on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
 ) -> Result<Optimized, SqError> {
     let mut hook = |step: SqStep, iteration: usize, terms: &[TermStats], x: &[f64]| {
-        on_event(SqEvent::Iteration {
-            step,
-            iteration,
-            terms,
-            lines: problem.lines(x),
-        })
+        on_event(SqEvent::Iteration { step, iteration, terms, lines: problem.lines(x) })
     };
     let mut x = problem.initial_point(coefficients, lines, params);
     let lc = problem.line_congruence_step(&mut x, params, clock, &mut hook)?;
     let lc_residual_step1 = problem.lc_residual(&x);
     let mut x = problem.extend_for_torsal(&x);
     let torsal = problem.torsal_step(&mut x, params, clock, &mut hook)?;
-    Ok(Optimized {
-        x,
-        lc_residual_step1,
-        lc,
-        torsal,
-    })
+    Ok(Optimized { x, lc_residual_step1, lc, torsal })
 }
 
 /// The trivial case: a sphere patch (see [`start`]). The lines are the normals, and every
@@ -424,19 +389,11 @@ fn spherical_congruence(
         })
         .collect();
     let figures = CongruenceFigures::of(&grid, &lines, &pairs);
-    let torsal_uv = pairs
-        .iter()
-        .map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, spacing))))
-        .collect();
+    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, spacing)))).collect();
     let function = BSplineFunction::constant(sphere.1, domain);
     timings.lap("radius");
     let misses = metrics::misses(&grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-    let attempt = CongruenceAttempt {
-        start: RadiusStart::Central,
-        initial_figures: figures.clone(),
-        figures: figures.clone(),
-        misses,
-    };
+    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses };
     SqCongruence {
         grid: params.grid,
         uv: grid.uv.clone(),
@@ -493,9 +450,7 @@ pub struct SqResult {
 impl SqResult {
     /// Median time of a full-optimization iteration (ms).
     pub fn final_iteration_median_ms(&self) -> Option<f64> {
-        self.sq_mesh
-            .as_ref()
-            .and_then(|f| median(&f.outcome.iteration_ms))
+        self.sq_mesh.as_ref().and_then(|f| median(&f.outcome.iteration_ms))
     }
 }
 
@@ -511,34 +466,17 @@ pub fn compute(
     let mut warnings = congruence.warnings.clone();
     let (theta, alpha) = (params.theta_deg, params.alpha_deg);
     let verdict = guarantees::verdict(&congruence.figures, Delivered::Congruence, theta, alpha);
-    let mut result = SqResult {
-        congruence,
-        quad_mesh: None,
-        sq_mesh: None,
-        timings_ms: Vec::new(),
-        warnings: Vec::new(),
-        verdict,
-    };
+    let mut result = SqResult { congruence, quad_mesh: None, sq_mesh: None, timings_ms: Vec::new(), warnings: Vec::new(), verdict };
     if params.until == Until::Congruence {
         result.warnings = warnings;
         return Ok(result);
     }
     let mut timings = Timings::start(clock);
     on_event(SqEvent::Progress(Progress::new("remesh", 0, 1)))?;
-    let quad = quad_mesh(
-        reference,
-        result.congruence.grid,
-        &result.congruence.torsal_uv,
-        params,
-        clock,
-        &mut |iteration, terms, positions| {
-            on_event(SqEvent::Fairing {
-                iteration,
-                terms,
-                positions,
-            })
-        },
-    );
+    let quad =
+        quad_mesh(reference, result.congruence.grid, &result.congruence.torsal_uv, params, clock, &mut |iteration, terms, positions| {
+            on_event(SqEvent::Fairing { iteration, terms, positions })
+        });
     let quad = match quad {
         Err(SqError::Cancelled) => return Err(SqError::Cancelled),
         other => other?,
@@ -548,32 +486,15 @@ pub fn compute(
     timings.lap("remesh");
     warnings.extend(quad.warnings.iter().cloned());
     if params.until == Until::Remesh {
-        result.verdict = guarantees::verdict(
-            &result.congruence.figures,
-            Delivered::QuadMesh(&quad.mesh),
-            theta,
-            alpha,
-        );
+        result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::QuadMesh(&quad.mesh), theta, alpha);
         result.quad_mesh = Some(quad);
         result.timings_ms = timings.laps;
         result.warnings = warnings;
         return Ok(result);
     }
-    let done = final_mesh(
-        reference,
-        &result.congruence,
-        &quad,
-        params,
-        clock,
-        &mut timings,
-        on_event,
-    )?;
-    result.verdict = guarantees::verdict(
-        &result.congruence.figures,
-        Delivered::SqMesh(&done.mesh.sphere_mesh.mesh, &done.mesh.figures),
-        theta,
-        alpha,
-    );
+    let done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
+    result.verdict =
+        guarantees::verdict(&result.congruence.figures, Delivered::SqMesh(&done.mesh.sphere_mesh.mesh, &done.mesh.figures), theta, alpha);
     result.quad_mesh = Some(quad);
     result.sq_mesh = Some(done);
     result.timings_ms = timings.laps;
@@ -593,40 +514,16 @@ fn spherical_mesh(
     timings: &mut Timings,
 ) -> SqFinal {
     let diag = reference.diagonal();
-    let positions: Vec<DVec3> = quad
-        .mesh
-        .positions
-        .iter()
-        .map(|p| centre + r * (*p - centre).normalize_or(DVec3::Z))
-        .collect();
+    let positions: Vec<DVec3> = quad.mesh.positions.iter().map(|p| centre + r * (*p - centre).normalize_or(DVec3::Z)).collect();
     let normals: Vec<DVec3> = positions.iter().map(|p| (centre - *p) / r).collect();
     let sphere = Sphere::from_center_radius(centre, r).normalized();
     let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
     let spheres = vec![sphere; mesh.face_count()];
-    let mut out = sq_mesh(
-        mesh,
-        spheres,
-        &normals,
-        stars,
-        diag,
-        params.support_depth * diag,
-        params.axis_length * diag,
-    );
-    let distance = out
-        .sphere_mesh
-        .mesh
-        .positions
-        .iter()
-        .map(|p| (p.distance(centre) - r).abs())
-        .fold(0.0, f64::max);
+    let mut out = sq_mesh(mesh, spheres, &normals, stars, diag, params.support_depth * diag, params.axis_length * diag);
+    let distance = out.sphere_mesh.mesh.positions.iter().map(|p| (p.distance(centre) - r).abs()).fold(0.0, f64::max);
     out.figures.max_vertex_distance_to_reference = distance / diag;
     timings.lap("panels");
-    SqFinal {
-        mesh: out,
-        uv: quad.uv.clone(),
-        edge_angles_deg: quad.edge_angles_deg.clone(),
-        outcome: SphereOutcome::default(),
-    }
+    SqFinal { mesh: out, uv: quad.uv.clone(), edge_angles_deg: quad.edge_angles_deg.clone(), outcome: SphereOutcome::default() }
 }
 
 /// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
@@ -645,25 +542,9 @@ fn final_mesh(
     let (t, s) = (0.5 * (lo + hi), reference.diagonal());
     let framed = reference.in_frame(t, s);
     let mesh = &quad.mesh;
-    let frame_mesh = PolyMesh::new(
-        mesh.positions.iter().map(|p| (*p - t) / s).collect(),
-        mesh.faces.clone(),
-    );
-    let radii: Vec<f64> = quad
-        .uv
-        .iter()
-        .map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s)
-        .collect();
-    let normals: Vec<DVec3> = quad
-        .uv
-        .iter()
-        .map(|uv| {
-            surface
-                .derivatives(uv[0], uv[1])
-                .normal()
-                .unwrap_or(DVec3::Z)
-        })
-        .collect();
+    let frame_mesh = PolyMesh::new(mesh.positions.iter().map(|p| (*p - t) / s).collect(), mesh.faces.clone());
+    let radii: Vec<f64> = quad.uv.iter().map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s).collect();
+    let normals: Vec<DVec3> = quad.uv.iter().map(|uv| surface.derivatives(uv[0], uv[1]).normal().unwrap_or(DVec3::Z)).collect();
     let lines: Vec<DVec3> = quad
         .uv
         .iter()
@@ -679,9 +560,7 @@ fn final_mesh(
         .collect();
     let stars = QuadStars::new(mesh);
     if let Some((centre, r)) = congruence.sphere {
-        return Ok(spherical_mesh(
-            reference, quad, &stars, centre, r, params, timings,
-        ));
+        return Ok(spherical_mesh(reference, quad, &stars, centre, r, params, timings));
     }
     let input = SphereInput {
         mesh: &frame_mesh,
@@ -693,39 +572,19 @@ fn final_mesh(
         reference: &framed,
         cos2_theta: params.target_theta_deg().to_radians().cos().powi(2),
         cos2_alpha: params.target_alpha_deg().to_radians().cos().powi(2),
-        limits: [
-            params.theta_deg - PROJECTION_MARGIN_DEG,
-            (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0),
-        ],
+        limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
     };
     // The Spheres event carries the phase and iteration: it is the progress of this step.
-    let (vertices, spheres, outcome) = optimize_spheres(
-        &input,
-        &stars,
-        params,
-        clock,
-        &mut |phase, iteration, terms, v, sp| {
-            let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
-            let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
-            on_event(SqEvent::Spheres {
-                phase,
-                iteration,
-                terms,
-                positions: &positions,
-                spheres: &spheres,
-            })
-        },
-    )?;
+    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, params, clock, &mut |phase, iteration, terms, v, sp| {
+        let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
+        let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+        on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
+    })?;
     timings.lap("spheres");
     let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
-    let spheres: Vec<Sphere> = spheres
-        .iter()
-        .map(|x| x.from_frame(t, s).normalized())
-        .collect();
+    let spheres: Vec<Sphere> = spheres.iter().map(|x| x.from_frame(t, s).normalized()).collect();
     if positions.iter().any(|p| !p.is_finite()) || spheres.iter().any(|x| !x.is_finite()) {
-        return Err(SqError::FinalOptimization(
-            "a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into(),
-        ));
+        return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
     }
     on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
     // The reference's closest points: (u, v), normals and the vertices' distance.
@@ -741,22 +600,9 @@ fn final_mesh(
     let diag = reference.diagonal();
     let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
     let edge_angles_deg = edge_field_angles(surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
-    let mut out = sq_mesh(
-        mesh,
-        spheres,
-        &final_normals,
-        &stars,
-        diag,
-        params.support_depth * diag,
-        params.axis_length * diag,
-    );
+    let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
     out.figures.max_vertex_distance_to_reference = distance / diag;
     on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
     timings.lap("panels");
-    Ok(SqFinal {
-        mesh: out,
-        uv,
-        edge_angles_deg,
-        outcome,
-    })
+    Ok(SqFinal { mesh: out, uv, edge_angles_deg, outcome })
 }

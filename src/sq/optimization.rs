@@ -21,16 +21,12 @@ use crate::congruence::torsal::{quadratic_roots, torsal_quadratic};
 use crate::geometry::bspline::{BSplineFunction, FunctionRow};
 use crate::progress::{Cancelled, Clock};
 use crate::solver::terms::v3;
-use crate::solver::{
-    Hinge, PhaseTimes, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength,
-};
+use crate::solver::{Hinge, PhaseTimes, Problem, Proximal, Solver, SolverOptions, Term, TermStats, UnitLength};
 
 use super::error::SqError;
 use super::params::{Inequality, SqParams};
 use super::radius::SamplingGrid;
-use super::terms::{
-    line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalDirection,
-};
+use super::terms::{line_fairness, Layout, LineCongruence, LineNormalAngle, TorsalAngle, TorsalDirection};
 
 /// The two steps, as reported to the hook.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,8 +46,7 @@ impl SqStep {
 
 /// Called after every solver iteration with the step, the iteration (1-based within the step),
 /// the term statistics and the variables; `Err(Cancelled)` stops the step.
-pub type IterationHook<'h> =
-    dyn FnMut(SqStep, usize, &[TermStats], &[f64]) -> Result<(), Cancelled> + 'h;
+pub type IterationHook<'h> = dyn FnMut(SqStep, usize, &[TermStats], &[f64]) -> Result<(), Cancelled> + 'h;
 
 /// What a step did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -76,11 +71,7 @@ pub struct CongruenceProblem {
 
 impl CongruenceProblem {
     pub fn new(grid: SamplingGrid, radius: &BSplineFunction, inequality: Inequality) -> Self {
-        let rows = grid
-            .uv
-            .iter()
-            .map(|p| BSplineFunction::row(&radius.u, &radius.v, p[0], p[1]))
-            .collect();
+        let rows = grid.uv.iter().map(|p| BSplineFunction::row(&radius.u, &radius.v, p[0], p[1])).collect();
         let quads: Vec<[usize; 4]> = (0..grid.quad_count()).map(|q| grid.quad(q)).collect();
         let diagonals = quads
             .iter()
@@ -89,19 +80,8 @@ impl CongruenceProblem {
                 (f[2] - f[0], f[1] - f[3])
             })
             .collect();
-        let layout = Layout::new(
-            radius.coefficients.len(),
-            grid.point_count(),
-            quads.len(),
-            inequality == Inequality::Slack,
-        );
-        Self {
-            grid,
-            rows,
-            layout,
-            quads,
-            diagonals,
-        }
+        let layout = Layout::new(radius.coefficients.len(), grid.point_count(), quads.len(), inequality == Inequality::Slack);
+        Self { grid, rows, layout, quads, diagonals }
     }
 
     /// The lines of the congruence with radius coefficients `coefficients`; an error where the
@@ -115,29 +95,20 @@ impl CongruenceProblem {
             .zip(&self.rows)
             .map(|(f, row)| {
                 let c = centre_derivatives(f, row.apply(coefficients));
-                c.line(f.normal, f.su.length() * f.sv.length())
-                    .unwrap_or_else(|| {
-                        singular += 1;
-                        f.normal
-                    })
+                c.line(f.normal, f.su.length() * f.sv.length()).unwrap_or_else(|| {
+                    singular += 1;
+                    f.normal
+                })
             })
             .collect();
         if singular > 0 {
-            return Err(SqError::SingularCentreSurface {
-                points: singular,
-                total: lines.len(),
-            });
+            return Err(SqError::SingularCentreSurface { points: singular, total: lines.len() });
         }
         Ok(lines)
     }
 
     /// The starting point of step 1: coefficients, lines and (slack form) line slacks.
-    pub fn initial_point(
-        &self,
-        coefficients: &[f64],
-        lines: &[DVec3],
-        params: &SqParams,
-    ) -> Vec<f64> {
+    pub fn initial_point(&self, coefficients: &[f64], lines: &[DVec3], params: &SqParams) -> Vec<f64> {
         let lay = &self.layout;
         let mut x = vec![0.0; lay.line_variables()];
         x[lay.radius.clone()].copy_from_slice(coefficients);
@@ -165,11 +136,7 @@ impl CongruenceProblem {
             .iter()
             .zip(&self.rows)
             .zip(variables)
-            .map(|((f, row), l)| {
-                centre_derivatives(f, row.apply(coefficients))
-                    .line(f.normal, f.su.length() * f.sv.length())
-                    .unwrap_or(l)
-            })
+            .map(|((f, row), l)| centre_derivatives(f, row.apply(coefficients)).line(f.normal, f.su.length() * f.sv.length()).unwrap_or(l))
             .collect()
     }
 
@@ -194,11 +161,7 @@ impl CongruenceProblem {
     }
 
     fn line_congruence(&self) -> LineCongruence<'_> {
-        LineCongruence {
-            frames: &self.grid.frames,
-            rows: &self.rows,
-            layout: &self.layout,
-        }
+        LineCongruence { frames: &self.grid.frames, rows: &self.rows, layout: &self.layout }
     }
 
     fn line_normal_angle(&self, params: &SqParams) -> Box<dyn Term + '_> {
@@ -214,9 +177,7 @@ impl CongruenceProblem {
     }
 
     fn line_offsets(&self) -> Vec<usize> {
-        (0..self.layout.points)
-            .map(|p| self.layout.line(p))
-            .collect()
+        (0..self.layout.points).map(|p| self.layout.line(p)).collect()
     }
 
     fn group_blocks(&self, problem: &mut Problem) {
@@ -249,15 +210,9 @@ impl CongruenceProblem {
         problem.add_term(UnitLength::vectors(self.line_offsets()), w.unit);
         self.group_blocks(&mut problem);
         // Lines in 3 × 3 blocks with the radius coefficients as a dense border: supernodal is faster.
-        let mut solver = Solver::new(SolverOptions {
-            max_iterations: params.lc_iterations,
-            clock,
-            supernodal: true,
-            ..SolverOptions::default()
-        });
-        let report = solver.solve(&mut problem, x, |it| {
-            hook(SqStep::LineCongruence, it.iteration, it.terms, it.x)
-        });
+        let mut solver =
+            Solver::new(SolverOptions { max_iterations: params.lc_iterations, clock, supernodal: true, ..SolverOptions::default() });
+        let report = solver.solve(&mut problem, x, |it| hook(SqStep::LineCongruence, it.iteration, it.terms, it.x));
         // Back to unit lines on the side of n.
         for (p, l) in self.lines(x).into_iter().enumerate() {
             x[self.layout.line(p)..self.layout.line(p) + 3].copy_from_slice(&l.to_array());
@@ -265,11 +220,7 @@ impl CongruenceProblem {
         if report.termination == crate::solver::Termination::Cancelled {
             return Err(Cancelled);
         }
-        Ok(StepOutcome {
-            iterations: report.iterations,
-            iteration_ms: report.iteration_ms,
-            phase_ms: report.phase_ms,
-        })
+        Ok(StepOutcome { iterations: report.iterations, iteration_ms: report.iteration_ms, phase_ms: report.phase_ms })
     }
 
     /// Extends step 1's variables with the per-quad unknowns of the torsal directions.
@@ -340,13 +291,7 @@ impl CongruenceProblem {
     }
 
     /// Step 2 (see the module docs); `x` from [`Self::extend_for_torsal`].
-    pub fn torsal_step(
-        &self,
-        x: &mut [f64],
-        params: &SqParams,
-        clock: Clock,
-        hook: &mut IterationHook,
-    ) -> Result<StepOutcome, Cancelled> {
+    pub fn torsal_step(&self, x: &mut [f64], params: &SqParams, clock: Clock, hook: &mut IterationHook) -> Result<StepOutcome, Cancelled> {
         let w = params.torsal_weights;
         let lay = &self.layout;
         let cos2_alpha = params.target_alpha_deg().to_radians().cos().powi(2);
@@ -354,35 +299,15 @@ impl CongruenceProblem {
         problem.add_term(self.line_congruence(), w.lc);
         problem.add_boxed(self.line_normal_angle(params), w.lc_orth);
         problem.add_term(UnitLength::vectors(self.line_offsets()), w.unit);
-        let normals: Vec<usize> = (0..lay.quad_count)
-            .flat_map(|q| [lay.plane_normal(q, 0), lay.plane_normal(q, 1)])
-            .collect();
-        problem.add_term(
-            UnitLength::vectors(normals.clone()).with_name("plane_normal_unit"),
-            w.unit,
-        );
-        problem.add_term(
-            TorsalDirection {
-                quads: self.quads.clone(),
-                diagonals: self.diagonals.clone(),
-                layout: lay,
-            },
-            w.torsal,
-        );
-        let angle = TorsalAngle {
-            cos2: cos2_alpha,
-            layout: lay,
-        };
+        let normals: Vec<usize> = (0..lay.quad_count).flat_map(|q| [lay.plane_normal(q, 0), lay.plane_normal(q, 1)]).collect();
+        problem.add_term(UnitLength::vectors(normals.clone()).with_name("plane_normal_unit"), w.unit);
+        problem.add_term(TorsalDirection { quads: self.quads.clone(), diagonals: self.diagonals.clone(), layout: lay }, w.torsal);
+        let angle = TorsalAngle { cos2: cos2_alpha, layout: lay };
         let angle_id = match params.inequality {
-            Inequality::Hinge => {
-                problem.add_term(Hinge::new(angle).with_name("torsal_angle"), w.angle)
-            }
+            Inequality::Hinge => problem.add_term(Hinge::new(angle).with_name("torsal_angle"), w.angle),
             Inequality::Slack => problem.add_term(angle, w.angle),
         };
-        let fair_id = problem.add_term(
-            line_fairness(self.grid.n, lay).with_name("line_fairness"),
-            w.fair,
-        );
+        let fair_id = problem.add_term(line_fairness(self.grid.n, lay).with_name("line_fairness"), w.fair);
         let reg: Vec<usize> = normals.iter().flat_map(|&o| o..o + 3).collect();
         problem.add_term(Proximal::new(reg), w.reg);
         self.group_blocks(&mut problem);
@@ -390,10 +315,7 @@ impl CongruenceProblem {
         let total = params.torsal_iterations;
         let final_from = total.saturating_sub(params.final_iterations);
         let every = params.recompute_every.max(1);
-        let mut solver = Solver::new(SolverOptions {
-            clock,
-            ..SolverOptions::default()
-        });
+        let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
         let mut outcome = StepOutcome::default();
         let mut done = 0;
         while done < total {
@@ -412,9 +334,7 @@ impl CongruenceProblem {
             }
             solver.options.max_iterations = end - done;
             let offset = done;
-            let report = solver.solve(&mut problem, x, |it| {
-                hook(SqStep::Torsal, offset + it.iteration, it.terms, it.x)
-            });
+            let report = solver.solve(&mut problem, x, |it| hook(SqStep::Torsal, offset + it.iteration, it.terms, it.x));
             outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
             outcome.phase_ms.add(&report.phase_ms);
             if report.termination == crate::solver::Termination::Cancelled {

@@ -32,11 +32,7 @@ pub enum RadiusStart {
 }
 
 impl RadiusStart {
-    pub const ALL: [RadiusStart; 3] = [
-        RadiusStart::Auto,
-        RadiusStart::Central,
-        RadiusStart::Constant,
-    ];
+    pub const ALL: [RadiusStart; 3] = [RadiusStart::Auto, RadiusStart::Central, RadiusStart::Constant];
 
     pub fn key(self) -> &'static str {
         match self {
@@ -61,10 +57,7 @@ pub struct RadiusBasis {
 impl Default for RadiusBasis {
     /// The authors' code: degree 5, 6 × 6 coefficients.
     fn default() -> Self {
-        Self {
-            degree: 5,
-            controls: 6,
-        }
+        Self { degree: 5, controls: 6 }
     }
 }
 
@@ -80,11 +73,7 @@ pub struct LineCongruenceWeights {
 
 impl Default for LineCongruenceWeights {
     fn default() -> Self {
-        Self {
-            lc: 1.0,
-            lc_orth: 2.0,
-            unit: 1.0,
-        }
+        Self { lc: 1.0, lc_orth: 2.0, unit: 1.0 }
     }
 }
 
@@ -105,15 +94,7 @@ pub struct TorsalWeights {
 
 impl Default for TorsalWeights {
     fn default() -> Self {
-        Self {
-            lc: 1.0,
-            lc_orth: 1.0,
-            torsal: 1.0,
-            angle: 2.0,
-            fair: 0.1,
-            reg: 0.05,
-            unit: 1.0,
-        }
+        Self { lc: 1.0, lc_orth: 1.0, torsal: 1.0, angle: 2.0, fair: 0.1, reg: 0.05, unit: 1.0 }
     }
 }
 

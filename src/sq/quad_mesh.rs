@@ -26,10 +26,7 @@ use crate::progress::{Cancelled, Clock};
 use crate::reference::assumptions::Warning;
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
-use crate::remeshing::quad_remeshing::{
-    coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField,
-    QuadRemesh, QuadRemeshParams, SingularPoint,
-};
+use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint};
 use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats, Termination};
 
 use super::error::SqError;
@@ -82,12 +79,7 @@ pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> Result<()
 /// coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the patch
 /// boundary are left out: the boundary cuts the last segment of a polyline short, and fairing it
 /// would drag the polyline off the torsal direction.
-pub fn polyline_fairness(
-    polylines: &[[u32; 3]],
-    on_boundary: &[bool],
-    edges: &[[u32; 2]],
-    offset: impl Fn(usize) -> usize,
-) -> Linear {
+pub fn polyline_fairness(polylines: &[[u32; 3]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
     let edge_set: HashSet<[u32; 2]> = edges.iter().copied().collect();
     let joined = |a: u32, b: u32| edge_set.contains(&[a.min(b), a.max(b)]);
     let mut fair = Linear::new();
@@ -96,14 +88,7 @@ pub fn polyline_fairness(
             continue;
         }
         for c in 0..3 {
-            fair.push_row(
-                &[
-                    (offset(a as usize) + c, 1.0),
-                    (offset(v as usize) + c, -2.0),
-                    (offset(b as usize) + c, 1.0),
-                ],
-                0.0,
-            );
+            fair.push_row(&[(offset(a as usize) + c, 1.0), (offset(v as usize) + c, -2.0), (offset(b as usize) + c, 1.0)], 0.0);
         }
     }
     fair.with_name("fairness")
@@ -123,10 +108,7 @@ pub fn quad_mesh(
 ) -> Result<SqQuadMesh, SqError> {
     let surface = reference.spline().ok_or(SqError::NotBSpline)?;
     let torsal = CrossField::new(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
-    let remesh_params = QuadRemeshParams {
-        target_faces: params.faces,
-        ..QuadRemeshParams::default()
-    };
+    let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
     let mut warnings = Vec::new();
     let prepared = prepare(surface, &torsal, &remesh_params)?;
     let singular_points = prepared.field.singular.clone();
@@ -135,10 +117,7 @@ pub fn quad_mesh(
     } else {
         let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
         let field = CrossField::new(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
-        let (three, five) = (
-            singular_points.iter().filter(|s| s.quarters > 0).count(),
-            singular_points.iter().filter(|s| s.quarters < 0).count(),
-        );
+        let (three, five) = (singular_points.iter().filter(|s| s.quarters > 0).count(), singular_points.iter().filter(|s| s.quarters < 0).count());
         warnings.push(Warning::SingularTorsalField {
             valence_3: three,
             valence_5: five,
@@ -147,20 +126,9 @@ pub fn quad_mesh(
         quad_remesh(surface, &field, &remesh_params)?
     };
     if remesh.folded_triangles > 0 {
-        warnings.push(Warning::FoldedFieldTriangles {
-            triangles: remesh.folded_triangles,
-        });
+        warnings.push(Warning::FoldedFieldTriangles { triangles: remesh.folded_triangles });
     }
-    let QuadRemesh {
-        mesh: remesh,
-        uv,
-        polylines,
-        on_boundary,
-        dropped,
-        singular,
-        folded_triangles,
-        ..
-    } = remesh;
+    let QuadRemesh { mesh: remesh, uv, polylines, on_boundary, dropped, singular, folded_triangles, .. } = remesh;
     let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
 
     // Q′ in the frame of the bounding box.
@@ -168,29 +136,16 @@ pub fn quad_mesh(
     let (t, s) = (0.5 * (lo + hi), reference.diagonal());
     let framed = reference.in_frame(t, s);
     let nv = remesh.vertex_count();
-    let mut x: Vec<f64> = remesh
-        .positions
-        .iter()
-        .flat_map(|p| ((*p - t) / s).to_array())
-        .collect();
+    let mut x: Vec<f64> = remesh.positions.iter().flat_map(|p| ((*p - t) / s).to_array()).collect();
     let offsets: Vec<usize> = (0..nv).map(|v| 3 * v).collect();
     let mut problem = Problem::new(3 * nv);
     let tangent = ReferenceProximity::tangent(&framed, offsets.clone());
-    let mut point = ReferenceProximity::point(
-        &framed,
-        offsets,
-        vec![params.sphere_weights.epsilon.sqrt(); nv],
-    );
+    let mut point = ReferenceProximity::point(&framed, offsets, vec![params.sphere_weights.epsilon.sqrt(); nv]);
     point.share_closest_with(&tangent);
     problem.add_term(tangent.with_name("glide_tangent"), 1.0);
     problem.add_term(point.with_name("glide_point"), 1.0);
-    let edges = crate::geometry::mesh::topology::Topology::new(&remesh)
-        .edges()
-        .to_vec();
-    problem.add_term(
-        polyline_fairness(&polylines, &on_boundary, &edges, |v| 3 * v),
-        params.fairing_weight,
-    );
+    let edges = crate::geometry::mesh::topology::Topology::new(&remesh).edges().to_vec();
+    problem.add_term(polyline_fairness(&polylines, &on_boundary, &edges, |v| 3 * v), params.fairing_weight);
     problem.add_term(Proximal::new((0..3 * nv).collect()), 0.05);
     for (v, &b) in on_boundary.iter().enumerate() {
         problem.group_variables(3 * v..3 * v + 3);
@@ -198,16 +153,9 @@ pub fn quad_mesh(
             problem.fix_range(3 * v..3 * v + 3);
         }
     }
-    let mut solver = Solver::new(SolverOptions {
-        max_iterations: params.fairing_iterations,
-        clock,
-        ..SolverOptions::default()
-    });
+    let mut solver = Solver::new(SolverOptions { max_iterations: params.fairing_iterations, clock, ..SolverOptions::default() });
     let report = solver.solve(&mut problem, &mut x, |it| {
-        let pts: Vec<DVec3> =
-            it.x.chunks(3)
-                .map(|c| t + s * DVec3::new(c[0], c[1], c[2]))
-                .collect();
+        let pts: Vec<DVec3> = it.x.chunks(3).map(|c| t + s * DVec3::new(c[0], c[1], c[2])).collect();
         hook(it.iteration, it.terms, &pts)
     });
     if report.termination == Termination::Cancelled {

@@ -18,9 +18,7 @@
 // Negated float comparisons are deliberate: they also reject NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::geometry::bspline::{
-    BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame,
-};
+use crate::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame};
 use crate::reference::assumptions::Warning;
 use crate::sq::params::RadiusBasis;
 
@@ -34,12 +32,7 @@ pub const SIGN_GRID: usize = 200;
 /// The corners of quad q = i + (n − 1) j of an n × n grid: (i, j), (i+1, j), (i+1, j+1), (i, j+1).
 pub fn grid_quad(n: usize, q: usize) -> [usize; 4] {
     let (i, j) = (q % (n - 1), q / (n - 1));
-    [
-        i + n * j,
-        i + 1 + n * j,
-        i + 1 + n * (j + 1),
-        i + n * (j + 1),
-    ]
+    [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)]
 }
 
 /// The sampling grid G with the surface's frames.
@@ -60,16 +53,10 @@ impl SamplingGrid {
                 a + (b - a) * k as f64 / (n - 1) as f64
             }
         };
-        let uv: Vec<[f64; 2]> = (0..n)
-            .flat_map(|j| (0..n).map(move |i| [at(u0, u1, i), at(v0, v1, j)]))
-            .collect();
+        let uv: Vec<[f64; 2]> = (0..n).flat_map(|j| (0..n).map(move |i| [at(u0, u1, i), at(v0, v1, j)])).collect();
         let frames = uv
             .iter()
-            .map(|p| {
-                surface
-                    .frame(p[0], p[1])
-                    .ok_or(SqError::Singular { uv: *p })
-            })
+            .map(|p| surface.frame(p[0], p[1]).ok_or(SqError::Singular { uv: *p }))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self { n, uv, frames })
     }
@@ -122,12 +109,7 @@ pub const MAX_EXCLUDED_SHARE: f64 = 0.25;
 
 /// The sign check of the module docs; `diag` is the bounding-box diagonal and `faces` the
 /// number of panels asked for (the panel size of the speck test).
-pub fn check_mean_curvature(
-    surface: &BSplineSurface,
-    grid: &SamplingGrid,
-    diag: f64,
-    faces: usize,
-) -> Result<MeanCurvatureSigns, SqError> {
+pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64, faces: usize) -> Result<MeanCurvatureSigns, SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let n = grid.n;
     // The strip between the boundary and G's second row, in parameters.
@@ -137,10 +119,7 @@ pub fn check_mean_curvature(
     let mut cells = Vec::with_capacity(SIGN_GRID * SIGN_GRID);
     for j in 0..SIGN_GRID {
         for i in 0..SIGN_GRID {
-            let (u, v) = (
-                u0 + (u1 - u0) * (i as f64 + 0.5) / SIGN_GRID as f64,
-                v0 + (v1 - v0) * (j as f64 + 0.5) / SIGN_GRID as f64,
-            );
+            let (u, v) = (u0 + (u1 - u0) * (i as f64 + 0.5) / SIGN_GRID as f64, v0 + (v1 - v0) * (j as f64 + 0.5) / SIGN_GRID as f64);
             let d = surface.derivatives(u, v);
             let area = d.su.cross(d.sv).length();
             let h = d.frame().map_or(0.0, |f| f.mean);
@@ -171,11 +150,7 @@ pub fn check_mean_curvature(
     // The sagitta |H| h² / 8 over a panel of edge h = √(area / faces).
     let bend = |h: f64| h.abs() * area / faces.max(1) as f64 / 8.0;
     let sagitta = bend(worst);
-    let refusal = SqError::MeanCurvatureSignChange {
-        positive_share,
-        negative_share,
-        at: Some(worst_uv),
-    };
+    let refusal = SqError::MeanCurvatureSignChange { positive_share, negative_share, at: Some(worst_uv) };
     if speck_area > 0.0 && !(speck_share <= MAX_SPECK_SHARE && sagitta <= SPECK_TOLERANCE * diag) {
         return Err(refusal);
     }
@@ -187,55 +162,27 @@ pub fn check_mean_curvature(
             if !in_strip(uv[0], uv[1]) {
                 // Inside: a point of the speck, or where H nearly vanishes, bending the wrong way
                 // by at most the speck's tolerance over a panel.
-                if !(bend(f.mean) <= SPECK_TOLERANCE * diag)
-                    || (f.mean * sign < 0.0 && speck_area == 0.0)
-                {
-                    return Err(if f.mean * sign < 0.0 {
-                        refusal
-                    } else {
-                        SqError::MeanCurvatureNearZero {
-                            uv,
-                            h_diag: f.mean * diag,
-                        }
-                    });
+                if !(bend(f.mean) <= SPECK_TOLERANCE * diag) || (f.mean * sign < 0.0 && speck_area == 0.0) {
+                    return Err(if f.mean * sign < 0.0 { refusal } else { SqError::MeanCurvatureNearZero { uv, h_diag: f.mean * diag } });
                 }
                 in_speck += 1;
             }
             excluded.push(p);
         }
     }
-    if excluded.len() == grid.point_count()
-        || in_speck as f64 > MAX_EXCLUDED_SHARE * grid.point_count() as f64
-    {
-        return Err(
-            match excluded
-                .iter()
-                .find(|&&p| grid.frames[p].mean * sign >= 0.0)
-            {
-                Some(&p) if speck_area == 0.0 => SqError::MeanCurvatureNearZero {
-                    uv: grid.uv[p],
-                    h_diag: grid.frames[p].mean * diag,
-                },
-                _ => refusal,
-            },
-        );
+    if excluded.len() == grid.point_count() || in_speck as f64 > MAX_EXCLUDED_SHARE * grid.point_count() as f64 {
+        return Err(match excluded.iter().find(|&&p| grid.frames[p].mean * sign >= 0.0) {
+            Some(&p) if speck_area == 0.0 => SqError::MeanCurvatureNearZero { uv: grid.uv[p], h_diag: grid.frames[p].mean * diag },
+            _ => refusal,
+        });
     }
     let mut warnings = Vec::new();
-    let strip_flips = cells
-        .iter()
-        .any(|&(u, v, h, _)| h * sign < 0.0 && in_strip(u, v))
-        || excluded.len() > in_speck;
+    let strip_flips = cells.iter().any(|&(u, v, h, _)| h * sign < 0.0 && in_strip(u, v)) || excluded.len() > in_speck;
     let other_positive = sign < 0.0;
     if strip_flips {
         warnings.push(Warning::MeanCurvatureTurnsNearBoundary {
             other_positive,
-            share_percent: 100.0
-                * if sign > 0.0 {
-                    negative_share
-                } else {
-                    positive_share
-                }
-                - 100.0 * speck_share,
+            share_percent: 100.0 * if sign > 0.0 { negative_share } else { positive_share } - 100.0 * speck_share,
             left_out: excluded.len() - in_speck,
             grid_points: grid.point_count(),
         });
@@ -251,13 +198,7 @@ pub fn check_mean_curvature(
             grid_points: grid.point_count(),
         });
     }
-    Ok(MeanCurvatureSigns {
-        positive_share,
-        negative_share,
-        sign,
-        excluded,
-        warnings,
-    })
+    Ok(MeanCurvatureSigns { positive_share, negative_share, sign, excluded, warnings })
 }
 
 /// The fitted radius function and how well it matches r = 1/H on G.
@@ -272,31 +213,13 @@ pub struct RadiusFit {
 }
 
 /// Fits r = 1/H over G (minus `excluded`) with the basis `basis` on the surface's domain.
-pub fn fit_radius(
-    surface: &BSplineSurface,
-    grid: &SamplingGrid,
-    basis: RadiusBasis,
-    excluded: &[usize],
-) -> Result<RadiusFit, SqError> {
+pub fn fit_radius(surface: &BSplineSurface, grid: &SamplingGrid, basis: RadiusBasis, excluded: &[usize]) -> Result<RadiusFit, SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
-    let make = |lo: f64, hi: f64| {
-        BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi))
-            .map_err(|e| SqError::RadiusBasis(e.to_string()))
-    };
+    let make = |lo: f64, hi: f64| BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi)).map_err(|e| SqError::RadiusBasis(e.to_string()));
     let (bu, bv) = (make(u0, u1)?, make(v0, v1)?);
-    let samples: Vec<([f64; 2], f64)> = (0..grid.point_count())
-        .filter(|p| !excluded.contains(p))
-        .map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean))
-        .collect();
-    let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit {
-        samples: samples.len(),
-        coefficients: basis.controls * basis.controls,
-    })?;
+    let samples: Vec<([f64; 2], f64)> =
+        (0..grid.point_count()).filter(|p| !excluded.contains(p)).map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean)).collect();
+    let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit { samples: samples.len(), coefficients: basis.controls * basis.controls })?;
     let mean = samples.iter().map(|s| s.1.abs()).sum::<f64>() / samples.len() as f64;
-    Ok(RadiusFit {
-        function,
-        error,
-        relative_error: error.max / mean,
-        samples: samples.len(),
-    })
+    Ok(RadiusFit { function, error, relative_error: error.max / mean, samples: samples.len() })
 }

@@ -81,10 +81,7 @@ impl SqSection {
     pub fn of(result: &SqResult, params: &SqParams) -> Self {
         let c = &result.congruence;
         let quad_mesh = result.quad_mesh.as_ref().map(|q| {
-            let angles = result
-                .sq_mesh
-                .as_ref()
-                .map_or(&q.edge_angles_deg, |f| &f.edge_angles_deg);
+            let angles = result.sq_mesh.as_ref().map_or(&q.edge_angles_deg, |f| &f.edge_angles_deg);
             QuadMeshSection {
                 coverage: q.coverage,
                 mean_edge_torsal_angle_deg: mean(angles),
@@ -93,19 +90,10 @@ impl SqSection {
         });
         let sq_mesh = result.sq_mesh.as_ref().map(|f| SqMeshSection {
             figures: f.mesh.figures,
-            final_iterations: [
-                f.outcome.warm_up_iterations,
-                f.outcome.iterations,
-                f.outcome.projection_iterations,
-            ],
+            final_iterations: [f.outcome.warm_up_iterations, f.outcome.iterations, f.outcome.projection_iterations],
         });
-        let fairing = result
-            .quad_mesh
-            .as_ref()
-            .map_or(0, |q| q.fairing_iterations);
-        let spheres = sq_mesh
-            .as_ref()
-            .map_or(0, |s| s.final_iterations.iter().sum());
+        let fairing = result.quad_mesh.as_ref().map_or(0, |q| q.fairing_iterations);
+        let spheres = sq_mesh.as_ref().map_or(0, |s| s.final_iterations.iter().sum());
         Self {
             grid: c.grid,
             theta_deg: params.theta_deg,

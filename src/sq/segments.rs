@@ -38,21 +38,12 @@ pub fn grid_spacing(n: usize, points: &[DVec3]) -> f64 {
 
 /// From every point of G along its unit line, `length` long.
 pub fn line_segments(points: &[DVec3], lines: &[DVec3], length: f64) -> Vec<(DVec3, DVec3)> {
-    points
-        .iter()
-        .zip(lines)
-        .map(|(&p, &l)| (p, p + length * l))
-        .collect()
+    points.iter().zip(lines).map(|(&p, &l)| (p, p + length * l)).collect()
 }
 
 /// Two arms per quad with real torsal directions, centred at the quad's centre, each with the
 /// quad's torsal-plane angle (degrees).
-pub fn cross_field(
-    n: usize,
-    points: &[DVec3],
-    torsal: &[Option<TorsalPair>],
-    length: f64,
-) -> (Vec<(DVec3, DVec3)>, Vec<f64>) {
+pub fn cross_field(n: usize, points: &[DVec3], torsal: &[Option<TorsalPair>], length: f64) -> (Vec<(DVec3, DVec3)>, Vec<f64>) {
     let (mut segments, mut angles) = (Vec::new(), Vec::new());
     for (q, pair) in torsal.iter().enumerate() {
         let Some(pair) = pair else { continue };
@@ -66,11 +57,7 @@ pub fn cross_field(
 }
 
 /// The four edges of every quad of G without real torsal directions.
-pub fn quad_outlines(
-    n: usize,
-    points: &[DVec3],
-    torsal: &[Option<TorsalPair>],
-) -> Vec<(DVec3, DVec3)> {
+pub fn quad_outlines(n: usize, points: &[DVec3], torsal: &[Option<TorsalPair>]) -> Vec<(DVec3, DVec3)> {
     torsal
         .iter()
         .enumerate()

@@ -41,16 +41,13 @@ use crate::progress::{Cancelled, Clock};
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
 use crate::solver::terms::v3;
-use crate::solver::{
-    Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermStats,
-    Termination, UnitLength,
-};
+use crate::solver::{Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermStats, Termination, UnitLength};
 
 use super::params::SqParams;
 use super::quad_mesh::polyline_fairness;
 use super::sphere_terms::{
-    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation,
-    FanAxisAngle, NodeAxis, TorsalPlane, VertexNormals,
+    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane,
+    VertexNormals,
 };
 
 /// Neighbouring face centres keep at least this share of their initial distance.
@@ -76,8 +73,7 @@ impl SpherePhase {
 
 /// Called after every iteration with the phase, the iteration within it, the term statistics,
 /// the vertices and the spheres (frame units); false cancels.
-pub type SphereHook<'h> =
-    dyn FnMut(SpherePhase, usize, &[TermStats], &[DVec3], &[Sphere]) -> Result<(), Cancelled> + 'h;
+pub type SphereHook<'h> = dyn FnMut(SpherePhase, usize, &[TermStats], &[DVec3], &[Sphere]) -> Result<(), Cancelled> + 'h;
 
 /// The combinatorics the optimization needs.
 #[derive(Clone, Debug)]
@@ -103,12 +99,7 @@ impl QuadStars {
                 incident[v as usize].push(f as u32);
             }
         }
-        let corner = |f: u32, v: u32| {
-            mesh.faces[f as usize]
-                .corners()
-                .iter()
-                .position(|&c| c == v)
-        };
+        let corner = |f: u32, v: u32| mesh.faces[f as usize].corners().iter().position(|&c| c == v);
         let mut stars = Vec::new();
         let mut star_of = vec![None; nv];
         let mut fans = Vec::new();
@@ -128,10 +119,7 @@ impl QuadStars {
                 let f = order[k - 1];
                 let c = mesh.faces[f as usize].corners();
                 let next = c[(corner(f, v).unwrap() + 1) % c.len()];
-                let g = faces
-                    .iter()
-                    .copied()
-                    .find(|&g| g != f && corner(g, next).is_some());
+                let g = faces.iter().copied().find(|&g| g != f && corner(g, next).is_some());
                 match (k == m, g) {
                     (true, Some(g)) => closed &= g == order[0],
                     (false, Some(g)) => order[k] = g,
@@ -150,12 +138,7 @@ impl QuadStars {
             }
         }
         let topo = crate::geometry::mesh::topology::Topology::new(mesh);
-        Self {
-            stars,
-            star_of,
-            fans,
-            edges: topo.edges().to_vec(),
-        }
+        Self { stars, star_of, fans, edges: topo.edges().to_vec() }
     }
 }
 
@@ -228,11 +211,7 @@ pub fn initial_spheres(mesh: &PolyMesh, radii: &[f64], normals: &[DVec3]) -> Vec
         .map(|face| {
             let c = face.corners();
             let k = c.len() as f64;
-            let centre = c
-                .iter()
-                .map(|&v| mesh.positions[v as usize] + radii[v as usize] * normals[v as usize])
-                .sum::<DVec3>()
-                / k;
+            let centre = c.iter().map(|&v| mesh.positions[v as usize] + radii[v as usize] * normals[v as usize]).sum::<DVec3>() / k;
             let r = c.iter().map(|&v| radii[v as usize]).sum::<f64>() / k;
             Sphere::from_center_radius(centre, r)
         })
@@ -241,18 +220,8 @@ pub fn initial_spheres(mesh: &PolyMesh, radii: &[f64], normals: &[DVec3]) -> Vec
 
 /// The vertices and spheres of `x`.
 pub fn unpack(layout: &SphereLayout, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
-    let vertices = (0..layout.vertices)
-        .map(|v| v3(x, layout.vertex(v)))
-        .collect();
-    let spheres = (0..layout.faces)
-        .map(|f| {
-            Sphere::from_array(
-                x[layout.sphere(f)..layout.sphere(f) + 5]
-                    .try_into()
-                    .unwrap(),
-            )
-        })
-        .collect();
+    let vertices = (0..layout.vertices).map(|v| v3(x, layout.vertex(v))).collect();
+    let spheres = (0..layout.faces).map(|f| Sphere::from_array(x[layout.sphere(f)..layout.sphere(f) + 5].try_into().unwrap())).collect();
     (vertices, spheres)
 }
 
@@ -269,12 +238,8 @@ pub fn optimize_spheres(
 ) -> Result<(Vec<DVec3>, Vec<Sphere>, SphereOutcome), Cancelled> {
     let (w, iterations) = (&params.sphere_weights, params.sphere_iterations);
     let mesh = input.mesh;
-    let layout = SphereLayout {
-        faces: mesh.face_count(),
-        vertices: mesh.vertex_count(),
-        stars: stars.stars.len(),
-        edges: stars.edges.len(),
-    };
+    let layout =
+        SphereLayout { faces: mesh.face_count(), vertices: mesh.vertex_count(), stars: stars.stars.len(), edges: stars.edges.len() };
     let mut x = vec![0.0; layout.len()];
     let spheres = initial_spheres(mesh, input.radii, input.normals);
     for (f, s) in spheres.iter().enumerate() {
@@ -284,8 +249,7 @@ pub fn optimize_spheres(
         x[layout.vertex(v)..layout.vertex(v) + 3].copy_from_slice(&p.to_array());
     }
     for (s, &(v, _)) in stars.stars.iter().enumerate() {
-        x[layout.star_normal(s)..layout.star_normal(s) + 3]
-            .copy_from_slice(&input.lines[v as usize].to_array());
+        x[layout.star_normal(s)..layout.star_normal(s) + 3].copy_from_slice(&input.lines[v as usize].to_array());
     }
     let axis = |v: u32| match stars.star_of[v as usize] {
         Some(s) => NodeAxis::Variable(layout.star_normal(s)),
@@ -297,13 +261,7 @@ pub fn optimize_spheres(
         let l = input.lines[u as usize] + input.lines[w as usize];
         let n = (pu - pw).cross(l).try_normalize().unwrap_or(DVec3::Z);
         x[layout.edge_normal(e)..layout.edge_normal(e) + 3].copy_from_slice(&n.to_array());
-        torsal_edges.push((
-            layout.vertex(u as usize),
-            layout.vertex(w as usize),
-            axis(u),
-            axis(w),
-            layout.edge_normal(e),
-        ));
+        torsal_edges.push((layout.vertex(u as usize), layout.vertex(w as usize), axis(u), axis(w), layout.edge_normal(e)));
     }
 
     let mut problem = Problem::new(layout.len());
@@ -311,53 +269,26 @@ pub fn optimize_spheres(
         .faces
         .iter()
         .enumerate()
-        .flat_map(|(f, face)| {
-            face.corners()
-                .iter()
-                .map(move |&v| (layout.vertex(v as usize), layout.sphere(f)))
-        })
+        .flat_map(|(f, face)| face.corners().iter().map(move |&v| (layout.vertex(v as usize), layout.sphere(f))))
         .collect();
     let sphere_id = problem.add_term(PointOnSphere::new(pairs).with_name("sphere"), w.sphere);
     let sphere_offsets: Vec<usize> = (0..layout.faces).map(|f| layout.sphere(f)).collect();
-    let unit_id = problem.add_term(
-        UnitLength::spheres(sphere_offsets).with_name("sphere_unit"),
-        w.unit,
-    );
+    let unit_id = problem.add_term(UnitLength::spheres(sphere_offsets).with_name("sphere_unit"), w.unit);
     let star_terms: Vec<(Vec<usize>, usize)> = stars
         .stars
         .iter()
         .enumerate()
-        .map(|(s, (_, faces))| {
-            (
-                faces.iter().map(|&f| layout.sphere(f as usize)).collect(),
-                layout.star_normal(s),
-            )
-        })
+        .map(|(s, (_, faces))| (faces.iter().map(|&f| layout.sphere(f as usize)).collect(), layout.star_normal(s)))
         .collect();
     let supp_id = problem.add_term(CentrePlanarity { stars: star_terms }, w.supp);
     let star_normals: Vec<usize> = (0..layout.stars).map(|s| layout.star_normal(s)).collect();
-    let star_unit_id = problem.add_term(
-        UnitLength::vectors(star_normals).with_name("axis_unit"),
-        w.unit,
-    );
-    let torsal_id = problem.add_term(
-        TorsalPlane {
-            edges: torsal_edges,
-        },
-        w.torsal_plane,
-    );
+    let star_unit_id = problem.add_term(UnitLength::vectors(star_normals).with_name("axis_unit"), w.unit);
+    let torsal_id = problem.add_term(TorsalPlane { edges: torsal_edges }, w.torsal_plane);
     let edge_normals: Vec<usize> = (0..layout.edges).map(|e| layout.edge_normal(e)).collect();
-    let edge_unit_id = problem.add_term(
-        UnitLength::vectors(edge_normals).with_name("torsal_plane_unit"),
-        w.unit,
-    );
+    let edge_unit_id = problem.add_term(UnitLength::vectors(edge_normals).with_name("torsal_plane_unit"), w.unit);
     let vertex_offsets: Vec<usize> = (0..layout.vertices).map(|v| layout.vertex(v)).collect();
     let tangent = ReferenceProximity::tangent(input.reference, vertex_offsets.clone());
-    let mut point = ReferenceProximity::point(
-        input.reference,
-        vertex_offsets,
-        vec![w.epsilon.sqrt(); layout.vertices],
-    );
+    let mut point = ReferenceProximity::point(input.reference, vertex_offsets, vec![w.epsilon.sqrt(); layout.vertices]);
     point.share_closest_with(&tangent);
     let lookups = tangent.lookups();
     let tangent_id = problem.add_term(tangent.with_name("vertex_proximity"), w.prox_f);
@@ -367,56 +298,19 @@ pub fn optimize_spheres(
         .iter()
         .enumerate()
         .map(|(f, face)| {
-            let l = face
-                .corners()
-                .iter()
-                .map(|&v| input.lines[v as usize])
-                .sum::<DVec3>()
-                .normalize_or_zero();
-            (
-                layout.sphere(f),
-                spheres[f].center().unwrap_or(DVec3::ZERO),
-                l,
-            )
+            let l = face.corners().iter().map(|&v| input.lines[v as usize]).sum::<DVec3>().normalize_or_zero();
+            (layout.sphere(f), spheres[f].center().unwrap_or(DVec3::ZERO), l)
         })
         .collect();
-    let centre_id = problem.add_term(
-        CentreProximity {
-            faces: centre_faces,
-            epsilon: w.epsilon,
-        },
-        w.prox_c,
-    );
-    let fair_id = problem.add_term(
-        polyline_fairness(input.polylines, input.on_boundary, &stars.edges, |v| {
-            layout.vertex(v)
-        }),
-        w.fair,
-    );
-    let quads: Vec<Vec<usize>> = stars
-        .stars
-        .iter()
-        .map(|(_, faces)| faces.iter().map(|&f| layout.sphere(f as usize)).collect())
-        .collect();
-    let axes: Vec<(usize, usize)> = stars
-        .stars
-        .iter()
-        .enumerate()
-        .map(|(s, &(v, _))| (layout.star_normal(s), v as usize))
-        .collect();
-    let fans: Vec<([usize; 3], usize)> = stars
-        .fans
-        .iter()
-        .map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize))
-        .collect();
+    let centre_id = problem.add_term(CentreProximity { faces: centre_faces, epsilon: w.epsilon }, w.prox_c);
+    let fair_id = problem.add_term(polyline_fairness(input.polylines, input.on_boundary, &stars.edges, |v| layout.vertex(v)), w.fair);
+    let quads: Vec<Vec<usize>> = stars.stars.iter().map(|(_, faces)| faces.iter().map(|&f| layout.sphere(f as usize)).collect()).collect();
+    let axes: Vec<(usize, usize)> = stars.stars.iter().enumerate().map(|(s, &(v, _))| (layout.star_normal(s), v as usize)).collect();
+    let fans: Vec<([usize; 3], usize)> =
+        stars.fans.iter().map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize)).collect();
     // The proximity terms come first, so their lookups are fresh when the hinges prepare.
-    let normals = VertexNormals::new(
-        input.reference,
-        (0..layout.vertices).map(|v| layout.vertex(v)).collect(),
-        input.normals.to_vec(),
-        &x,
-    )
-    .with_lookups(lookups);
+    let normals = VertexNormals::new(input.reference, (0..layout.vertices).map(|v| layout.vertex(v)).collect(), input.normals.to_vec(), &x)
+        .with_lookups(lookups);
     // The hinges at the targets (with margins) for the optimization, and at θ and α themselves
     // (less a margin) for the projection.
     let mut hinges = |cos2_alpha: f64, cos2_theta: f64, suffix: &str| {
@@ -424,72 +318,32 @@ pub fn optimize_spheres(
         let alpha = cos2_alpha.sqrt().acos().to_degrees();
         let stars = quads
             .iter()
-            .map(|q| {
-                (
-                    q.clone(),
-                    super::sphere_terms::support_plane_aim_deg(q.len(), alpha)
-                        .to_radians()
-                        .cos()
-                        .powi(2),
-                )
-            })
+            .map(|q| (q.clone(), super::sphere_terms::support_plane_aim_deg(q.len(), alpha).to_radians().cos().powi(2)))
             .collect();
-        let angle =
-            Hinge::new(CentreQuadAngle { stars }).with_name(format!("support_plane_angle{suffix}"));
-        let axis = Hinge::new(AxisNormalAngle {
-            axes: axes.clone(),
-            normals: normals.clone(),
-            cos2: cos2_theta,
-        })
-        .with_name(format!("axis_normal_angle{suffix}"));
-        let fan = Hinge::new(FanAxisAngle {
-            fans: fans.clone(),
-            normals: normals.clone(),
-            cos2: cos2_theta,
-        })
-        .with_name(format!("fan_axis_normal_angle{suffix}"));
-        (
-            problem.add_term(angle, 0.0),
-            problem.add_term(axis, 0.0),
-            problem.add_term(fan, 0.0),
-        )
+        let angle = Hinge::new(CentreQuadAngle { stars }).with_name(format!("support_plane_angle{suffix}"));
+        let axis = Hinge::new(AxisNormalAngle { axes: axes.clone(), normals: normals.clone(), cos2: cos2_theta })
+            .with_name(format!("axis_normal_angle{suffix}"));
+        let fan = Hinge::new(FanAxisAngle { fans: fans.clone(), normals: normals.clone(), cos2: cos2_theta })
+            .with_name(format!("fan_axis_normal_angle{suffix}"));
+        (problem.add_term(angle, 0.0), problem.add_term(axis, 0.0), problem.add_term(fan, 0.0))
     };
     let (angle_id, axis_id, fan_id) = hinges(input.cos2_alpha, input.cos2_theta, "");
-    let (exact_angle_id, exact_axis_id, exact_fan_id) = hinges(
-        input.limits[1].to_radians().cos().powi(2),
-        input.limits[0].to_radians().cos().powi(2),
-        "_limit",
-    );
+    let (exact_angle_id, exact_axis_id, exact_fan_id) =
+        hinges(input.limits[1].to_radians().cos().powi(2), input.limits[0].to_radians().cos().powi(2), "_limit");
     let topo = crate::geometry::mesh::topology::Topology::new(mesh);
     let pairs: Vec<(usize, usize, f64)> = topo
         .interior_edges()
         .filter_map(|(_, f, g)| {
             let (cf, cg) = (spheres[f as usize].center()?, spheres[g as usize].center()?);
-            Some((
-                layout.sphere(f as usize),
-                layout.sphere(g as usize),
-                cf.distance_squared(cg),
-            ))
+            Some((layout.sphere(f as usize), layout.sphere(g as usize), cf.distance_squared(cg)))
         })
         .collect();
-    let separation_id = problem.add_term(
-        Hinge::new(CentreSeparation {
-            pairs,
-            share: CENTRE_SEPARATION,
-        })
-        .with_name("centre_separation"),
-        1.0,
-    );
+    let separation_id =
+        problem.add_term(Hinge::new(CentreSeparation { pairs, share: CENTRE_SEPARATION }).with_name("centre_separation"), 1.0);
     let sphere_vars: Vec<usize> = (0..5 * layout.faces).collect();
-    let reg_sphere_id = problem.add_term(
-        Proximal::new(sphere_vars).with_name("regularization_spheres"),
-        w.reg_sphere,
-    );
+    let reg_sphere_id = problem.add_term(Proximal::new(sphere_vars).with_name("regularization_spheres"), w.reg_sphere);
     let normal_vars: Vec<usize> = (layout.star_normal(0)..layout.len()).collect();
-    let reg_normal_id = problem.add_term(
-        Proximal::new(normal_vars).with_name("regularization_normals"),
-        w.reg_normal,
-    );
+    let reg_normal_id = problem.add_term(Proximal::new(normal_vars).with_name("regularization_normals"), w.reg_normal);
     for f in 0..layout.faces {
         problem.group_variables(layout.sphere(f)..layout.sphere(f) + 5);
     }
@@ -504,10 +358,7 @@ pub fn optimize_spheres(
     }
 
     let mut outcome = SphereOutcome::default();
-    let mut solver = Solver::new(SolverOptions {
-        clock,
-        ..SolverOptions::default()
-    });
+    let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
     let mut run = |problem: &mut Problem,
                    x: &mut [f64],
                    phase: SpherePhase,
@@ -575,14 +426,7 @@ pub fn optimize_spheres(
     );
     problem.fix_range(layout.vertex(0)..layout.star_normal(0));
     problem.fix_range(layout.edge_normal(0)..layout.len());
-    outcome.warm_up_iterations = run(
-        &mut problem,
-        &mut x,
-        SpherePhase::WarmUp,
-        iterations[0],
-        &mut solver,
-        &mut outcome,
-    )?;
+    outcome.warm_up_iterations = run(&mut problem, &mut x, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome)?;
 
     // The full optimization (Eq. 10).
     set(
@@ -610,14 +454,7 @@ pub fn optimize_spheres(
         problem.unfix(i);
     }
     solver.options.relative_decrease_tolerance = params.sphere_decrease_tolerance;
-    outcome.iterations = run(
-        &mut problem,
-        &mut x,
-        SpherePhase::Full,
-        iterations[1],
-        &mut solver,
-        &mut outcome,
-    )?;
+    outcome.iterations = run(&mut problem, &mut x, SpherePhase::Full, iterations[1], &mut solver, &mut outcome)?;
 
     // Projection: only the equations of exactness, Gauss–Newton with a tiny damping.
     // First with the hinges at θ and α (the exact solutions form a large family: land on one
@@ -644,31 +481,9 @@ pub fn optimize_spheres(
         step_tolerance: 1e-16,
         ..SolverOptions::default()
     });
-    outcome.projection_iterations = run(
-        &mut problem,
-        &mut x,
-        SpherePhase::Projection,
-        iterations[2],
-        &mut projection,
-        &mut outcome,
-    )?;
-    set(
-        &mut problem,
-        &[
-            (sphere_id, 1.0),
-            (unit_id, 1.0),
-            (supp_id, 1.0),
-            (star_unit_id, 1.0),
-        ],
-    );
-    outcome.projection_iterations += run(
-        &mut problem,
-        &mut x,
-        SpherePhase::Projection,
-        iterations[2],
-        &mut projection,
-        &mut outcome,
-    )?;
+    outcome.projection_iterations = run(&mut problem, &mut x, SpherePhase::Projection, iterations[2], &mut projection, &mut outcome)?;
+    set(&mut problem, &[(sphere_id, 1.0), (unit_id, 1.0), (supp_id, 1.0), (star_unit_id, 1.0)]);
+    outcome.projection_iterations += run(&mut problem, &mut x, SpherePhase::Projection, iterations[2], &mut projection, &mut outcome)?;
     let (v, s) = unpack(&layout, &x);
     Ok((v, s.into_iter().map(|s| s.normalized()).collect(), outcome))
 }
@@ -684,14 +499,8 @@ pub fn on_grid<T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output =
     let ((u0, u1), (v0, v1)) = surface.domain();
     let s = ((uv[0] - u0) / (u1 - u0) * (n - 1) as f64).clamp(0.0, (n - 1) as f64);
     let t = ((uv[1] - v0) / (v1 - v0) * (n - 1) as f64).clamp(0.0, (n - 1) as f64);
-    let (i, j) = (
-        (s.floor() as usize).min(n - 2),
-        (t.floor() as usize).min(n - 2),
-    );
+    let (i, j) = ((s.floor() as usize).min(n - 2), (t.floor() as usize).min(n - 2));
     let (fs, ft) = (s - i as f64, t - j as f64);
     let at = |a: usize, b: usize| values[(i + a) + n * (j + b)];
-    at(0, 0) * ((1.0 - fs) * (1.0 - ft))
-        + at(1, 0) * (fs * (1.0 - ft))
-        + at(0, 1) * ((1.0 - fs) * ft)
-        + at(1, 1) * (fs * ft)
+    at(0, 0) * ((1.0 - fs) * (1.0 - ft)) + at(1, 0) * (fs * (1.0 - ft)) + at(0, 1) * ((1.0 - fs) * ft) + at(1, 1) * (fs * ft)
 }

@@ -51,15 +51,7 @@ fn centre(x: &[f64], o: usize) -> (DVec3, f64, DVec3) {
 
 /// Adds ⟨∂c/∂(a, b), g⟩ of the sphere at `o` to row `row`, scaled by `sign`.
 #[inline]
-fn add_centre_gradient(
-    jac: &mut JacobianSink,
-    row: usize,
-    o: usize,
-    a: f64,
-    b: DVec3,
-    g: DVec3,
-    sign: f64,
-) {
+fn add_centre_gradient(jac: &mut JacobianSink, row: usize, o: usize, a: f64, b: DVec3, g: DVec3, sign: f64) {
     // ∂c/∂a = −b/(2a²), ∂c/∂b = I/(2a).
     jac.add(row, o, sign * (-b.dot(g) / (2.0 * a * a)));
     let gb = sign * g / (2.0 * a);
@@ -143,17 +135,9 @@ impl Term for TorsalPlane {
             let row = 3 * e + 2;
             let d = v3(x, *wo) - v3(x, *uo);
             let len = d.length();
-            let (eh, rho) = if len > 0.0 {
-                (d / len, d.dot(n) / len)
-            } else {
-                (DVec3::ZERO, 0.0)
-            };
+            let (eh, rho) = if len > 0.0 { (d / len, d.dot(n) / len) } else { (DVec3::ZERO, 0.0) };
             r[row] = rho;
-            let g = if len > 0.0 {
-                (n - rho * eh) / len
-            } else {
-                DVec3::ZERO
-            };
+            let g = if len > 0.0 { (n - rho * eh) / len } else { DVec3::ZERO };
             jac.add_block(row, *wo, &g.to_array());
             jac.add_block(row, *uo, &(-g).to_array());
             jac.add_block(row, *no, &eh.to_array());
@@ -204,11 +188,7 @@ pub fn support_plane_bound_deg(valence: usize) -> f64 {
 
 /// The angle the support planes at a vertex of `valence` edges are held to at α (degrees).
 pub fn support_plane_aim_deg(valence: usize, alpha_deg: f64) -> f64 {
-    if valence == 4 {
-        alpha_deg
-    } else {
-        alpha_deg.min(support_plane_bound_deg(valence) - SINGULAR_MARGIN_DEG)
-    }
+    if valence == 4 { alpha_deg } else { alpha_deg.min(support_plane_bound_deg(valence) - SINGULAR_MARGIN_DEG) }
 }
 
 /// Per star: its 3 to 5 sphere offsets in order around the vertex; one residual per face (see
@@ -279,29 +259,16 @@ struct NormalTable {
 
 impl<'a> VertexNormals<'a> {
     /// `normals`: the normals at the vertices' current positions in `x`.
-    pub fn new(
-        reference: &'a Reference,
-        offsets: Vec<usize>,
-        normals: Vec<DVec3>,
-        x: &[f64],
-    ) -> Self {
+    pub fn new(reference: &'a Reference, offsets: Vec<usize>, normals: Vec<DVec3>, x: &[f64]) -> Self {
         let at = offsets.iter().map(|&o| v3(x, o)).collect();
         let hits = vec![None; offsets.len()];
-        Self {
-            reference,
-            offsets,
-            table: Rc::new(RefCell::new(NormalTable { normals, at, hits })),
-            lookups: None,
-        }
+        Self { reference, offsets, table: Rc::new(RefCell::new(NormalTable { normals, at, hits })), lookups: None }
     }
 
     /// Takes the normals a proximity term over the same vertices (in the same order) found,
     /// where it found them at the current positions; that term must be prepared first.
     pub fn with_lookups(self, lookups: ClosestLookups) -> Self {
-        Self {
-            lookups: Some(lookups),
-            ..self
-        }
+        Self { lookups: Some(lookups), ..self }
     }
 
     fn refresh(&self, x: &[f64]) {

@@ -77,12 +77,7 @@ pub struct SqMesh {
 /// The unit normal of the support plane of edge uw between two face spheres: the plane of their
 /// circle; where the two spheres coincide (panels of one sphere, whose common edge may be any
 /// circle through u and w), the plane through the edge and the mean of its node axes `axes`.
-pub fn support_plane_normal(
-    s1: &Sphere,
-    s2: &Sphere,
-    [u, w]: [DVec3; 2],
-    axes: [DVec3; 2],
-) -> Option<DVec3> {
+pub fn support_plane_normal(s1: &Sphere, s2: &Sphere, [u, w]: [DVec3; 2], axes: [DVec3; 2]) -> Option<DVec3> {
     let substitute = (w - u).cross(axes[0] + axes[1]);
     edge_circle(s1, Some(s2), [u, w], EdgePlane::WhereCoincident(substitute)).map(|c| c.normal)
 }
@@ -105,10 +100,7 @@ pub fn sq_mesh(
     let mut planes = HashMap::new();
     for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
         if topo.edge_faces(e).len() == 1 {
-            let (p, q) = (
-                sm.mesh.positions[lo as usize],
-                sm.mesh.positions[hi as usize],
-            );
+            let (p, q) = (sm.mesh.positions[lo as usize], sm.mesh.positions[hi as usize]);
             let d = axes[lo as usize].1 + axes[hi as usize].1;
             if let Some(n) = (q - p).cross(d).try_normalize() {
                 planes.insert([lo, hi], n);
@@ -126,34 +118,17 @@ pub fn sq_mesh(
         }
         let (f, k) = faces[0];
         let circle = panels[f as usize].arcs[k as usize].circle;
-        let (u, w) = (
-            sm.mesh.positions[lo as usize],
-            sm.mesh.positions[hi as usize],
-        );
-        if let Some(el) = support_element(
-            [lo, hi],
-            circle,
-            [u, w],
-            [axes[lo as usize].1, axes[hi as usize].1],
-            depth,
-        ) {
+        let (u, w) = (sm.mesh.positions[lo as usize], sm.mesh.positions[hi as usize]);
+        if let Some(el) = support_element([lo, hi], circle, [u, w], [axes[lo as usize].1, axes[hi as usize].1], depth) {
             support_elements.push(el);
         }
     }
-    let support_geometry = support_strips(&support_elements, |el| {
-        edge_arc_points(&sm, &panels, el.edge)
-    });
+    let support_geometry = support_strips(&support_elements, |el| edge_arc_points(&sm, &panels, el.edge));
     let figures = figures(&sm, &node_axes, normals, stars, diag);
     SqMesh {
         sphere_mesh: sm,
         panels,
-        support: SupportStructure {
-            node_axes,
-            depth,
-            elements: support_elements,
-            geometry: support_geometry,
-            axis_length,
-        },
+        support: SupportStructure { node_axes, depth, elements: support_elements, geometry: support_geometry, axis_length },
         figures,
     }
 }
@@ -165,12 +140,7 @@ fn support_side_axes(sm: &SphereMesh, normals: &[DVec3]) -> NodeAxes {
     let topo = sm.topology();
     let toward = |v: usize| {
         let p = mesh.positions[v];
-        let side: f64 = topo
-            .vertex_faces(v)
-            .iter()
-            .filter_map(|&f| spheres[f as usize].center())
-            .map(|c| (c - p).dot(normals[v]))
-            .sum();
+        let side: f64 = topo.vertex_faces(v).iter().filter_map(|&f| spheres[f as usize].center()).map(|c| (c - p).dot(normals[v])).sum();
         if side < 0.0 {
             -normals[v]
         } else {
@@ -178,15 +148,7 @@ fn support_side_axes(sm: &SphereMesh, normals: &[DVec3]) -> NodeAxes {
         }
     };
     let none = |_: [DVec3; 2]| EdgePlane::WhereCoincident(DVec3::ZERO);
-    node_axes(
-        &mesh.positions,
-        topo,
-        spheres,
-        &toward,
-        &none,
-        &mut crate::progress::ignore,
-    )
-    .expect("ignore never cancels")
+    node_axes(&mesh.positions, topo, spheres, &toward, &none, &mut crate::progress::ignore).expect("ignore never cancels")
 }
 
 /// The smaller of two figures, NaN when either is (a figure that cannot be measured fails).
@@ -201,23 +163,14 @@ fn nan_min(a: f64, b: f64) -> f64 {
 /// The smallest angle (deg) between the support planes of consecutive edges at vertex `v`, whose
 /// faces are `faces` in order around it: the planes of consecutive face pairs, whose shared edge
 /// runs from v to their other common corner. NaN when a plane cannot be measured.
-pub fn star_support_plane_angle_deg(
-    sm: &SphereMesh,
-    axes: &[(DVec3, DVec3)],
-    v: u32,
-    faces: &[u32],
-) -> f64 {
+pub fn star_support_plane_angle_deg(sm: &SphereMesh, axes: &[(DVec3, DVec3)], v: u32, faces: &[u32]) -> f64 {
     let (mesh, spheres) = (&sm.mesh, &sm.face_spheres);
     let m = faces.len();
     let p = mesh.positions[v as usize];
     let planes: Vec<Option<DVec3>> = (0..m)
         .map(|k| {
             let (f, g) = (faces[k] as usize, faces[(k + 1) % m] as usize);
-            let other = mesh.faces[f]
-                .corners()
-                .iter()
-                .copied()
-                .find(|&c| c != v && mesh.faces[g].corners().contains(&c))?;
+            let other = mesh.faces[f].corners().iter().copied().find(|&c| c != v && mesh.faces[g].corners().contains(&c))?;
             support_plane_normal(
                 &spheres[f],
                 &spheres[g],
@@ -235,26 +188,14 @@ pub fn star_support_plane_angle_deg(
 }
 
 /// The figures of [`SqMeshFigures`] except the distance to the reference.
-fn figures(
-    sm: &SphereMesh,
-    node_axes: &NodeAxes,
-    normals: &[DVec3],
-    stars: &QuadStars,
-    diag: f64,
-) -> SqMeshFigures {
+fn figures(sm: &SphereMesh, node_axes: &NodeAxes, normals: &[DVec3], stars: &QuadStars, diag: f64) -> SqMeshFigures {
     let (axes, from_spheres) = (&node_axes.axes, &node_axes.from_spheres);
     let spheres = &sm.face_spheres;
-    let mut out = SqMeshFigures {
-        min_torsal_plane_angle_deg: 90.0,
-        ..SqMeshFigures::default()
-    };
+    let mut out = SqMeshFigures { min_torsal_plane_angle_deg: 90.0, ..SqMeshFigures::default() };
     out.max_vertex_sphere_residual = sm.max_vertex_sphere_residual() / diag;
     for (v, faces) in &stars.stars {
         let m = faces.len();
-        let centres: Vec<DVec3> = faces
-            .iter()
-            .filter_map(|&f| spheres[f as usize].center())
-            .collect();
+        let centres: Vec<DVec3> = faces.iter().filter_map(|&f| spheres[f as usize].center()).collect();
         if centres.len() < m {
             out.max_centre_face_planarity = f64::INFINITY;
             continue;
@@ -262,20 +203,13 @@ fn figures(
         let mid = centres.iter().sum::<DVec3>() / m as f64;
         let rows: Vec<[f64; 3]> = centres.iter().map(|c| (*c - mid).to_array()).collect();
         let n = DVec3::from_array(Svd::new(&rows).v[2]).normalize_or_zero();
-        let worst = centres
-            .iter()
-            .map(|c| (*c - mid).dot(n).abs())
-            .fold(0.0, f64::max);
+        let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
         out.max_centre_face_planarity = out.max_centre_face_planarity.max(worst / diag);
         let star_min = star_support_plane_angle_deg(sm, axes, *v, faces);
         if m == 4 {
             out.min_torsal_plane_angle_deg = nan_min(out.min_torsal_plane_angle_deg, star_min);
         } else {
-            let slot = if m == 3 {
-                &mut out.min_support_plane_angle_valence_3_deg
-            } else {
-                &mut out.min_support_plane_angle_valence_5_deg
-            };
+            let slot = if m == 3 { &mut out.min_support_plane_angle_valence_3_deg } else { &mut out.min_support_plane_angle_valence_5_deg };
             *slot = Some(slot.map_or(star_min, |a| nan_min(a, star_min)));
         }
     }
@@ -289,17 +223,9 @@ fn figures(
         }
         let ends = [sm.mesh.positions[u as usize], sm.mesh.positions[w as usize]];
         let plane = EdgePlane::WhereCoincident(DVec3::ZERO);
-        if let Some(c) = edge_circle(
-            &spheres[*f as usize],
-            Some(&spheres[*g as usize]),
-            ends,
-            plane,
-        ) {
+        if let Some(c) = edge_circle(&spheres[*f as usize], Some(&spheres[*g as usize]), ends, plane) {
             let (du, dw) = (axes[u as usize].1, axes[w as usize].1);
-            out.max_torsal_plane_residual = out
-                .max_torsal_plane_residual
-                .max(du.dot(c.normal).abs())
-                .max(dw.dot(c.normal).abs());
+            out.max_torsal_plane_residual = out.max_torsal_plane_residual.max(du.dot(c.normal).abs()).max(dw.dot(c.normal).abs());
         }
     }
     let angles = node_axes.normal_angles_deg(normals);

@@ -27,16 +27,8 @@ pub const MIN_OFFSET_AREA: f64 = 0.25;
 pub fn constant_radius(grid: &SamplingGrid, sign: f64) -> f64 {
     let frames = &grid.frames;
     let mean_h = frames.iter().map(|f| f.mean * sign).sum::<f64>() / frames.len().max(1) as f64;
-    let max_k = frames
-        .iter()
-        .map(|f| f.k1.abs().max(f.k2.abs()))
-        .fold(0.0, f64::max);
-    let area = |r: f64| {
-        frames
-            .iter()
-            .map(|f| ((1.0 - r * f.k1) * (1.0 - r * f.k2)).abs())
-            .fold(f64::INFINITY, f64::min)
-    };
+    let max_k = frames.iter().map(|f| f.k1.abs().max(f.k2.abs())).fold(0.0, f64::max);
+    let area = |r: f64| frames.iter().map(|f| ((1.0 - r * f.k1) * (1.0 - r * f.k2)).abs()).fold(f64::INFINITY, f64::min);
     let harmonic = sign / mean_h;
     if mean_h > 0.0 && area(harmonic) >= MIN_OFFSET_AREA {
         return harmonic;
@@ -46,10 +38,7 @@ pub fn constant_radius(grid: &SamplingGrid, sign: f64) -> f64 {
 
 /// The radius function r ≡ `r` on the basis of `function` (a B-spline basis sums to one).
 pub fn constant_function(function: &BSplineFunction, r: f64) -> BSplineFunction {
-    BSplineFunction {
-        coefficients: vec![r; function.coefficients.len()],
-        ..function.clone()
-    }
+    BSplineFunction { coefficients: vec![r; function.coefficients.len()], ..function.clone() }
 }
 
 /// Relative spread of the central spheres below which the reference is one sphere.
@@ -70,10 +59,6 @@ pub fn spherical_reference(grid: &SamplingGrid) -> Option<(DVec3, f64)> {
         .iter()
         // Umbilic: H² − K = ((κ1 − κ2)/2)² vanishes (κ1 − κ2 itself carries the square root's
         // rounding, about 1e-8).
-        .all(|f| {
-            (f.mean * f.mean - f.gauss).abs() * r * r <= tol
-                && (1.0 / f.mean - r).abs() <= tol
-                && (f.point + r * f.normal).distance(centre) <= tol
-        })
+        .all(|f| (f.mean * f.mean - f.gauss).abs() * r * r <= tol && (1.0 / f.mean - r).abs() <= tol && (f.point + r * f.normal).distance(centre) <= tol)
         .then_some((centre, r.abs()))
 }

@@ -41,20 +41,8 @@ impl Layout {
     pub fn new(coefficients: usize, points: usize, quad_count: usize, slack: bool) -> Self {
         let lines = coefficients;
         let after_lines = lines + 3 * points;
-        let (line_slack, quads) = if slack {
-            (Some(after_lines), after_lines + points)
-        } else {
-            (None, after_lines)
-        };
-        Self {
-            radius: 0..coefficients,
-            points,
-            lines,
-            line_slack,
-            quads,
-            quad_count,
-            quad_block: if slack { 11 } else { 10 },
-        }
+        let (line_slack, quads) = if slack { (Some(after_lines), after_lines + points) } else { (None, after_lines) };
+        Self { radius: 0..coefficients, points, lines, line_slack, quads, quad_count, quad_block: if slack { 11 } else { 10 } }
     }
 
     /// Variables of the line-congruence step (a prefix of the torsal step's).
@@ -108,17 +96,10 @@ impl Term for LineCongruence<'_> {
             let (radius, ru, rv) = row.apply(coefficients);
             let l = v3(x, self.layout.line(p));
             let n = f.normal;
-            for (k, c, dn, d) in [
-                (0, f.su + ru * n + radius * f.nu, f.nu, &row.du),
-                (1, f.sv + rv * n + radius * f.nv, f.nv, &row.dv),
-            ] {
+            for (k, c, dn, d) in [(0, f.su + ru * n + radius * f.nu, f.nu, &row.du), (1, f.sv + rv * n + radius * f.nv, f.nv, &row.dv)] {
                 let i = 2 * p + k;
                 let len = c.length();
-                let (ch, rho) = if len > 0.0 {
-                    (c / len, l.dot(c) / len)
-                } else {
-                    (DVec3::ZERO, 0.0)
-                };
+                let (ch, rho) = if len > 0.0 { (c / len, l.dot(c) / len) } else { (DVec3::ZERO, 0.0) };
                 r[i] = rho;
                 jac.add_block(i, self.layout.line(p), &ch.to_array());
                 let inv = if len > 0.0 { 1.0 / len } else { 0.0 };
@@ -191,11 +172,7 @@ impl Term for TorsalDirection<'_> {
             let (lp, lm) = (l[2] - l[0], l[1] - l[3]);
             let lc = 0.25 * (l[0] + l[1] + l[2] + l[3]);
             let lc_len = lc.length();
-            let lc_hat = if lc_len > 0.0 {
-                lc / lc_len
-            } else {
-                DVec3::ZERO
-            };
+            let lc_hat = if lc_len > 0.0 { lc / lc_len } else { DVec3::ZERO };
             for k in 0..2 {
                 let (om, on) = (lay.mu(q, k), lay.plane_normal(q, k));
                 let (m0, m1) = (x[om], x[om + 1]);
@@ -203,26 +180,13 @@ impl Term for TorsalDirection<'_> {
                 let t = m0 * dp + m1 * dm;
                 let lt = m0 * lp + m1 * lm;
                 let lt_len = lt.length();
-                let lt_hat = if lt_len > 0.0 {
-                    lt / lt_len
-                } else {
-                    DVec3::ZERO
-                };
+                let lt_hat = if lt_len > 0.0 { lt / lt_len } else { DVec3::ZERO };
                 let i = 8 * q + 4 * k;
                 // ρ1 = ⟨l_t/|l_t|, n*⟩: ∂/∂l_t = (n* − ρ1 l̂_t)/|l_t|.
                 let rho1 = lt_hat.dot(ns);
                 r[i] = rho1;
-                let g1 = if lt_len > 0.0 {
-                    (ns - rho1 * lt_hat) / lt_len
-                } else {
-                    DVec3::ZERO
-                };
-                for (corner, coef) in [
-                    (corners[2], m0),
-                    (corners[0], -m0),
-                    (corners[1], m1),
-                    (corners[3], -m1),
-                ] {
+                let g1 = if lt_len > 0.0 { (ns - rho1 * lt_hat) / lt_len } else { DVec3::ZERO };
+                for (corner, coef) in [(corners[2], m0), (corners[0], -m0), (corners[1], m1), (corners[3], -m1)] {
                     jac.add_block(i, lay.line(corner), &(coef * g1).to_array());
                 }
                 jac.add(i, om, g1.dot(lp));
@@ -231,11 +195,7 @@ impl Term for TorsalDirection<'_> {
                 // ρ2 = ⟨l_c/|l_c|, n*⟩.
                 let rho2 = lc_hat.dot(ns);
                 r[i + 1] = rho2;
-                let g2 = if lc_len > 0.0 {
-                    0.25 * (ns - rho2 * lc_hat) / lc_len
-                } else {
-                    DVec3::ZERO
-                };
+                let g2 = if lc_len > 0.0 { 0.25 * (ns - rho2 * lc_hat) / lc_len } else { DVec3::ZERO };
                 for &corner in corners {
                     jac.add_block(i + 1, lay.line(corner), &g2.to_array());
                 }
@@ -298,11 +258,7 @@ pub fn line_fairness(n: usize, layout: &Layout) -> Linear {
                 }
                 for c in 0..3 {
                     fair.push_row(
-                        &[
-                            (layout.line(p - step) + c, 1.0),
-                            (layout.line(p) + c, -2.0),
-                            (layout.line(p + step) + c, 1.0),
-                        ],
+                        &[(layout.line(p - step) + c, 1.0), (layout.line(p) + c, -2.0), (layout.line(p + step) + c, 1.0)],
                         0.0,
                     );
                 }

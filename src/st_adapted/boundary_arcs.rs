@@ -27,19 +27,14 @@ const MAX_BULGE: f64 = 0.25;
 /// (any cut is the straight edge), when the reference boundary is farther than
 /// [`MAX_BULGE`] × its length from its midpoint, or when the arc would bulge farther than that
 /// (a corner or a thin strip of the reference).
-pub fn boundary_planes(
-    sphere_mesh: &SphereMesh,
-    reference: &Reference,
-) -> HashMap<[u32; 2], DVec3> {
+pub fn boundary_planes(sphere_mesh: &SphereMesh, reference: &Reference) -> HashMap<[u32; 2], DVec3> {
     let topology = sphere_mesh.topology();
     let positions = &sphere_mesh.mesh.positions;
     let boundary = reference.boundary_bvh();
     let diag = reference.diagonal();
     let mut planes = HashMap::new();
     for (e, &[lo, hi]) in topology.edges().iter().enumerate() {
-        let &[(f, _)] = topology.edge_faces(e) else {
-            continue;
-        };
+        let &[(f, _)] = topology.edge_faces(e) else { continue };
         let sphere = &sphere_mesh.face_spheres[f as usize];
         if cuts_straight(sphere, diag) {
             continue;
@@ -47,9 +42,7 @@ pub fn boundary_planes(
         let (p, q) = (positions[lo as usize], positions[hi as usize]);
         let length = p.distance(q);
         let mid = 0.5 * (p + q);
-        let Some(hit) = boundary.closest_point_within(mid, MAX_BULGE * length) else {
-            continue;
-        };
+        let Some(hit) = boundary.closest_point_within(mid, MAX_BULGE * length) else { continue };
         let u = (q - p) / length;
         let b = hit.point - (hit.point - mid).dot(u) * u;
         let bulge = sphere.closest_point(b) - mid;

@@ -13,12 +13,7 @@ pub const EXACT: f64 = 1e-8;
 /// The verdict of an ST result.
 pub fn verdict(m: &StAdaptedMetrics) -> Verdict {
     Verdict::new(vec![
-        Guarantee::at_most(
-            "max_vertex_sphere_residual",
-            m.max_vertex_sphere_residual,
-            EXACT,
-            "of the diagonal",
-        ),
+        Guarantee::at_most("max_vertex_sphere_residual", m.max_vertex_sphere_residual, EXACT, "of the diagonal"),
         Guarantee::count_at_most("folded_faces", m.flipped_faces, 0),
     ])
 }

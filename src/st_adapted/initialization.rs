@@ -10,9 +10,7 @@ use crate::geometry::sphere::Sphere;
 /// triangle (component along the plane member ≥ 0).
 pub fn closest_family_member(p: [DVec3; 3], target: &Sphere) -> Sphere {
     let [s0, s1] = Sphere::through_points_family(p);
-    let theta = s1
-        .inversive_product(target)
-        .atan2(s0.inversive_product(target));
+    let theta = s1.inversive_product(target).atan2(s0.inversive_product(target));
     let (sn, cs) = theta.sin_cos();
     let s = Sphere::combine(&s0, cs, &s1, sn);
     if cs < 0.0 {
@@ -26,9 +24,7 @@ pub fn closest_family_member(p: [DVec3; 3], target: &Sphere) -> Sphere {
 pub fn initial_spheres(mesh: &TriMesh, vertex_spheres: &[Sphere]) -> Vec<Sphere> {
     (0..mesh.face_count())
         .map(|f| {
-            let c = Sphere::blend(
-                mesh.triangles[f].map(|v| vertex_spheres[v as usize].to_array().map(|a| a / 3.0)),
-            );
+            let c = Sphere::blend(mesh.triangles[f].map(|v| vertex_spheres[v as usize].to_array().map(|a| a / 3.0)));
             closest_family_member(mesh.face_points(f), &c)
         })
         .collect()

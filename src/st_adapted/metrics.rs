@@ -64,9 +64,7 @@ pub fn shape(sm: &SphereMesh, reference: &Reference) -> StAdaptedShape {
         .filter(|&f| {
             let points = mesh.face_points(f);
             let c = points.iter().sum::<DVec3>() / points.len() as f64;
-            let Some(normal) = reference.closest_point(c).and_then(|p| p.normal) else {
-                return false;
-            };
+            let Some(normal) = reference.closest_point(c).and_then(|p| p.normal) else { return false };
             mesh.face_area_vector(f).dot(normal) < 0.0
         })
         .count();
@@ -74,12 +72,7 @@ pub fn shape(sm: &SphereMesh, reference: &Reference) -> StAdaptedShape {
         max_vertex_sphere_residual: sm.max_vertex_sphere_residual() / diag,
         mean_kink_angle_deg: mean(&kinks),
         max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),
-        max_vertex_distance_to_reference: mesh
-            .positions
-            .iter()
-            .map(|&p| reference.bvh().distance(p))
-            .fold(0.0, f64::max)
-            / diag,
+        max_vertex_distance_to_reference: mesh.positions.iter().map(|&p| reference.bvh().distance(p)).fold(0.0, f64::max) / diag,
         faces: mesh.face_count(),
         interior_edges: kinks.len(),
         flipped_faces,
@@ -89,21 +82,13 @@ pub fn shape(sm: &SphereMesh, reference: &Reference) -> StAdaptedShape {
 /// Metrics of a sphere mesh against the reference (see [`StAdaptedMetrics`]), with its panels
 /// for `variant` (tessellated to [`DEFAULT_CHORD_TOLERANCE`] of the diagonal) and each panel's
 /// [`max_deviation`] (absolute), for the schedule.
-pub fn metrics(
-    sm: &SphereMesh,
-    reference: &Reference,
-    variant: EdgeArcs,
-) -> (StAdaptedMetrics, Vec<Panel>, Vec<f64>) {
+pub fn metrics(sm: &SphereMesh, reference: &Reference, variant: EdgeArcs) -> (StAdaptedMetrics, Vec<Panel>, Vec<f64>) {
     let diag = reference.diagonal().max(f64::MIN_POSITIVE);
     let s = shape(sm, reference);
     let panels = build_panels_with(sm, DEFAULT_CHORD_TOLERANCE * diag, variant);
-    let deviations: Vec<f64> = panels
-        .iter()
-        .map(|p| max_deviation(p, reference.bvh()))
-        .collect();
+    let deviations: Vec<f64> = panels.iter().map(|p| max_deviation(p, reference.bvh())).collect();
     let dist = deviations.iter().copied().fold(0.0, f64::max) / diag;
-    let gap = (variant == EdgeArcs::BisectingPlanes)
-        .then(|| max_arc_gap(&panels, sm.topology(), GAP_SAMPLES));
+    let gap = (variant == EdgeArcs::BisectingPlanes).then(|| max_arc_gap(&panels, sm.topology(), GAP_SAMPLES));
     let metrics = StAdaptedMetrics {
         max_vertex_sphere_residual: s.max_vertex_sphere_residual,
         mean_kink_angle_deg: s.mean_kink_angle_deg,

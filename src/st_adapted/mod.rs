@@ -79,7 +79,7 @@ use std::fmt;
 
 use glam::DVec3;
 
-use crate::congruence::central_spheres::UnusableCentralSpheres;
+use crate::congruence::central_spheres::{CurvatureField, UnusableCentralSpheres};
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
@@ -110,13 +110,7 @@ pub enum StAdaptedEvent<'a> {
     /// After every solver iteration: the optimizer stage, the iteration over all stages (`done`
     /// of `total`), its energy and per-term statistics, and the current vertices and face
     /// spheres (model coordinates).
-    Iteration {
-        progress: Progress<'a>,
-        energy: f64,
-        terms: &'a [TermStats],
-        vertices: &'a [DVec3],
-        spheres: &'a [Sphere],
-    },
+    Iteration { progress: Progress<'a>, energy: f64, terms: &'a [TermStats], vertices: &'a [DVec3], spheres: &'a [Sphere] },
 }
 
 /// Why the method gave no mesh.
@@ -204,139 +198,52 @@ pub struct StAdaptedResult {
     pub warnings: Vec<Warning>,
 }
 
-/// The angle-minimizing ST method end to end (see the module docs).
+/// What the method reports to while it runs.
+type OnEvent<'a> = dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled> + 'a;
+
+/// Announces a step (0 of 0).
+fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {
+    on_event(StAdaptedEvent::Progress(Progress::new(name, 0, 0)))
+}
+
+/// The angle-minimizing ST method end to end (see the module docs): the curvature and its
+/// refusal, sizing and remeshing, the initial spheres, the optimization, the metrics.
 pub fn compute(
     reference: &Reference,
     params: &StAdaptedParams,
     clock: Clock,
-    on_event: &mut dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled>,
+    on_event: &mut OnEvent,
 ) -> Result<StAdaptedResult, StAdaptedError> {
     reference.validate().map_err(StAdaptedError::Reference)?;
-    let diag = reference.diagonal();
-    let mesh = reference.mesh();
-    let step = |on_event: &mut dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled>, name: &str| {
-        on_event(StAdaptedEvent::Progress(Progress::new(name, 0, 0)))
-    };
     let mut timings = Timings::start(clock);
-
-    // Curvature of the reference and the refusal.
     step(on_event, "jet_fit")?;
     timings.skip();
     let field = reference.curvature(&params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
     field
-        .usable_central_spheres(
-            mesh.vertex_count(),
-            diag,
-            params.min_curvature_ratio,
-            params.min_usable_fraction,
-        )
+        .usable_central_spheres(reference.mesh().vertex_count(), reference.diagonal(), params.min_curvature_ratio, params.min_usable_fraction)
         .map_err(StAdaptedError::NoCentralSpheres)?;
     timings.lap("jet_fit");
-
-    // Sizing and remeshing.
-    step(on_event, "remesh")?;
-    timings.skip();
-    let topo = reference.topology();
-    let sphere_of = |i: usize| {
-        field
-            .central_spheres
-            .get(i)
-            .copied()
-            .unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z))
-    };
-    let bounds = SizingBounds::for_mesh(mesh, topo);
-    let sizing = params
-        .sizing
-        .guarded_field(mesh, topo, &sphere_of, bounds, &mut |p| {
-            on_event(StAdaptedEvent::Progress(p))
-        })?;
-    timings.lap("sizing");
-    let remeshed = match &sizing {
-        Some(sizing) => {
-            on_event(StAdaptedEvent::Sizing {
-                values: sizing.values(),
-            })?;
-            timings.skip();
-            let warnings = || method_warnings(reference, &field, None);
-            params
-                .sizing
-                .remesh_to(mesh, sizing, &params.remesh, &warnings, &mut |p| {
-                    on_event(StAdaptedEvent::Progress(p))
-                })?
-        }
-        None => mesh.clone(),
-    };
-    let remeshed_by_sizing = sizing.is_some();
-    timings.lap("remesh");
-    on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
-
-    // The reference's central spheres at the remeshed vertices, and the initialization (a jet
-    // fit on the coarser remeshed mesh would be noisier where its faces are large).
+    let (remeshed, remeshed_by_sizing) = remesh(reference, &field, params, &mut timings, on_event)?;
     step(on_event, "init")?;
     timings.skip();
-    let central_spheres = if remeshed_by_sizing {
-        reference.central_spheres_at(&field, &remeshed.positions)
-    } else {
-        field.central_spheres.clone()
-    };
+    // The reference's central spheres at the remeshed vertices (a jet fit on the coarser remeshed
+    // mesh would be noisier where its faces are large).
+    let central_spheres =
+        if remeshed_by_sizing { reference.central_spheres_at(&field, &remeshed.positions) } else { field.central_spheres.clone() };
     let init = initial_spheres(&remeshed, &central_spheres);
-    let rule = BoundaryArcRule::Parallel(DVec3::ZERO);
-    let initial_sphere_mesh = SphereMesh::new(&remeshed, init.clone(), rule);
+    let initial_sphere_mesh = SphereMesh::new(&remeshed, init.clone(), BoundaryArcRule::Parallel(DVec3::ZERO));
     timings.lap("init");
-    on_event(StAdaptedEvent::Initialized {
-        sphere_mesh: &initial_sphere_mesh,
-    })?;
-
-    // Optimization in the normalized frame.
+    on_event(StAdaptedEvent::Initialized { sphere_mesh: &initial_sphere_mesh })?;
     step(on_event, "optimize")?;
     timings.skip();
-    let frame = OptimizationFrame::new(reference, &remeshed, &init, params);
-    let mut x = frame.x0.clone();
-    let (mut problem, ids) = frame.problem(&params.variant_weights());
-    let mut solver = Solver::new(SolverOptions {
-        clock,
-        ..SolverOptions::default()
-    });
-    let total = params.total_iterations();
-    let mut iteration = 0usize;
-    let run = run_stages(
-        &mut problem,
-        &ids,
-        &mut x,
-        params,
-        &mut solver,
-        &mut |name, rep| {
-            iteration += 1;
-            let (vertices, spheres) = frame.to_model(rep.x);
-            on_event(StAdaptedEvent::Iteration {
-                progress: Progress::new(name, iteration, total),
-                energy: rep.energy,
-                terms: rep.terms,
-                vertices: &vertices,
-                spheres: &spheres,
-            })
-        },
-    )
-    .map_err(|Cancelled| StAdaptedError::Cancelled)?;
-    let iteration_ms = run.iteration_ms;
-    let supernodal = run.last.as_ref().is_some_and(|r| r.supernodal);
-    problem.prepare(&x);
-    let terms = problem.term_stats(&x);
-    let (verts, sph) = frame.to_model(&x);
-    let sphere_mesh = SphereMesh::new(TriMesh::new(verts, remeshed.triangles.clone()), sph, rule);
-    let sphere_mesh = {
-        let planes = boundary_arcs::boundary_planes(&sphere_mesh, reference);
-        sphere_mesh.with_boundary_planes(planes)
-    };
+    let optimized = optimize(reference, &remeshed, &init, params, clock, on_event)?;
     timings.lap("optimize");
-
     step(on_event, "metrics")?;
     timings.skip();
     let initial_shape = shape(&initial_sphere_mesh, reference);
-    let (final_metrics, panels, panel_deviations) =
-        metrics(&sphere_mesh, reference, params.variant);
+    let sphere_mesh = optimized.sphere_mesh;
+    let (final_metrics, panels, panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
-    let angle_iteration_median_ms = median(&iteration_ms);
     let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
     if let Some(epsilon) = params.epsilon() {
@@ -350,18 +257,95 @@ pub fn compute(
         remeshed,
         initial_shape,
         metrics: final_metrics,
-        iterations: iteration,
-        iteration_ms,
-        angle_iteration_median_ms,
-        supernodal,
-        timings_ms: if clock.0.is_some() {
-            timings.laps
-        } else {
-            Vec::new()
-        },
-        diag,
+        iterations: optimized.iterations,
+        angle_iteration_median_ms: median(&optimized.iteration_ms),
+        iteration_ms: optimized.iteration_ms,
+        supernodal: optimized.supernodal,
+        timings_ms: if clock.0.is_some() { timings.laps } else { Vec::new() },
+        diag: reference.diagonal(),
         variant: params.variant,
-        terms,
+        terms: optimized.terms,
         warnings,
+    })
+}
+
+/// The sizing field g and the pliant remesh to it (Sec. 3) behind the shared guards; the mesh
+/// as is without a sizing. Whether it was remeshed.
+fn remesh(
+    reference: &Reference,
+    field: &CurvatureField,
+    params: &StAdaptedParams,
+    timings: &mut Timings,
+    on_event: &mut OnEvent,
+) -> Result<(TriMesh, bool), StAdaptedError> {
+    step(on_event, "remesh")?;
+    timings.skip();
+    let (mesh, topo) = (reference.mesh(), reference.topology());
+    let sphere_of = |i: usize| field.central_spheres.get(i).copied().unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z));
+    let bounds = SizingBounds::for_mesh(mesh, topo);
+    let sizing = params.sizing.guarded_field(mesh, topo, &sphere_of, bounds, &mut |p| on_event(StAdaptedEvent::Progress(p)))?;
+    timings.lap("sizing");
+    let remeshed = match &sizing {
+        Some(sizing) => {
+            on_event(StAdaptedEvent::Sizing { values: sizing.values() })?;
+            timings.skip();
+            let warnings = || method_warnings(reference, field, None);
+            params.sizing.remesh_to(mesh, sizing, &params.remesh, &warnings, &mut |p| on_event(StAdaptedEvent::Progress(p)))?
+        }
+        None => mesh.clone(),
+    };
+    timings.lap("remesh");
+    on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
+    Ok((remeshed, sizing.is_some()))
+}
+
+/// What the optimization made.
+struct Optimized {
+    sphere_mesh: SphereMesh,
+    terms: Vec<TermStats>,
+    iterations: usize,
+    iteration_ms: Vec<f64>,
+    supernodal: bool,
+}
+
+/// The optimization in the normalized frame, its stages one after the other; the boundary arcs
+/// cut along the reference boundary.
+fn optimize(
+    reference: &Reference,
+    remeshed: &TriMesh,
+    init: &[Sphere],
+    params: &StAdaptedParams,
+    clock: Clock,
+    on_event: &mut OnEvent,
+) -> Result<Optimized, StAdaptedError> {
+    let frame = OptimizationFrame::new(reference, remeshed, init, params);
+    let mut x = frame.x0.clone();
+    let (mut problem, ids) = frame.problem(&params.variant_weights());
+    let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
+    let total = params.total_iterations();
+    let mut iteration = 0usize;
+    let run = run_stages(&mut problem, &ids, &mut x, params, &mut solver, &mut |name, rep| {
+        iteration += 1;
+        let (vertices, spheres) = frame.to_model(rep.x);
+        on_event(StAdaptedEvent::Iteration {
+            progress: Progress::new(name, iteration, total),
+            energy: rep.energy,
+            terms: rep.terms,
+            vertices: &vertices,
+            spheres: &spheres,
+        })
+    })
+    .map_err(|Cancelled| StAdaptedError::Cancelled)?;
+    problem.prepare(&x);
+    let terms = problem.term_stats(&x);
+    let (verts, sph) = frame.to_model(&x);
+    let sphere_mesh = SphereMesh::new(TriMesh::new(verts, remeshed.triangles.clone()), sph, BoundaryArcRule::Parallel(DVec3::ZERO));
+    let planes = boundary_arcs::boundary_planes(&sphere_mesh, reference);
+    Ok(Optimized {
+        sphere_mesh: sphere_mesh.with_boundary_planes(planes),
+        terms,
+        iterations: iteration,
+        supernodal: run.last.as_ref().is_some_and(|r| r.supernodal),
+        iteration_ms: run.iteration_ms,
     })
 }

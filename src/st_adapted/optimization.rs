@@ -5,8 +5,8 @@ use glam::DVec3;
 use super::params::StAdaptedParams;
 use super::params::StAdaptedWeights;
 use super::terms::{boundary_vertices, build_problem, pack, unpack, vertex_offset, StAdaptedTerms};
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
 use crate::progress::Cancelled;
 use crate::reference::Reference;
@@ -45,10 +45,7 @@ pub fn run_stages(
         if stage.iterations == 0 {
             continue;
         }
-        problem.set_weight(
-            ids.tangent_distance,
-            w.tangent_distance * stage.proximity_scale,
-        );
+        problem.set_weight(ids.tangent_distance, w.tangent_distance * stage.proximity_scale);
         problem.set_weight(ids.point_distance, w.point_distance * stage.proximity_scale);
         problem.set_weight(ids.face_distance, w.face_distance * stage.proximity_scale);
         solver.options.max_iterations = stage.iterations;
@@ -89,27 +86,16 @@ pub struct OptimizationFrame {
 
 impl OptimizationFrame {
     /// `init`: one face sphere per face of `remeshed`, model coordinates.
-    pub fn new(
-        reference: &Reference,
-        remeshed: &TriMesh,
-        init: &[Sphere],
-        params: &StAdaptedParams,
-    ) -> Self {
+    pub fn new(reference: &Reference, remeshed: &TriMesh, init: &[Sphere], params: &StAdaptedParams) -> Self {
         let diag = reference.diagonal();
         let (lo, hi) = reference.mesh().bbox();
         let t = 0.5 * (lo + hi);
         let nref = reference.in_frame(t, diag);
         let inv = 1.0 / diag;
-        let mesh = TriMesh::new(
-            remeshed.positions.iter().map(|&p| (p - t) * inv).collect(),
-            remeshed.triangles.clone(),
-        );
+        let mesh = TriMesh::new(remeshed.positions.iter().map(|&p| (p - t) * inv).collect(), remeshed.triangles.clone());
         let topology = Topology::new(&mesh);
         let boundary = boundary_vertices(&topology);
-        let spheres: Vec<Sphere> = init
-            .iter()
-            .map(|s| s.in_frame(t, diag).normalized())
-            .collect();
+        let spheres: Vec<Sphere> = init.iter().map(|s| s.in_frame(t, diag).normalized()).collect();
         let x0 = pack(&mesh, &spheres);
         let nv = mesh.vertex_count();
         let mut fixed = vec![false; nv];
@@ -123,10 +109,7 @@ impl OptimizationFrame {
             for (e, f, g) in topology.interior_edges() {
                 let [a, b] = topology.edges()[e];
                 let (f, g) = (f as usize, g as usize);
-                let (nf, ng) = (
-                    mesh.face_area_vector(f).normalize_or_zero(),
-                    mesh.face_area_vector(g).normalize_or_zero(),
-                );
+                let (nf, ng) = (mesh.face_area_vector(f).normalize_or_zero(), mesh.face_area_vector(g).normalize_or_zero());
                 if nf.dot(ng) < cos_max {
                     fixed[a as usize] = true;
                     fixed[b as usize] = true;
@@ -134,30 +117,12 @@ impl OptimizationFrame {
             }
         }
         let fixed = (0..nv).filter(|&v| fixed[v]).collect();
-        Self {
-            t,
-            diag,
-            reference: nref,
-            mesh,
-            topology,
-            x0,
-            fixed,
-            tolerance: params
-                .tolerance_band()
-                .map(|t| t.max(reference.facet_sagitta())),
-        }
+        Self { t, diag, reference: nref, mesh, topology, x0, fixed, tolerance: params.tolerance_band().map(|t| t.max(reference.facet_sagitta())) }
     }
 
     /// [`build_problem`] at the initial point, with the fixed vertices fixed.
     pub fn problem(&self, weights: &StAdaptedWeights) -> (Problem<'_>, StAdaptedTerms) {
-        let (mut problem, ids) = build_problem(
-            &self.mesh,
-            &self.topology,
-            &self.reference,
-            weights,
-            self.tolerance,
-            &self.x0,
-        );
+        let (mut problem, ids) = build_problem(&self.mesh, &self.topology, &self.reference, weights, self.tolerance, &self.x0);
         let nf = self.mesh.face_count();
         for &v in &self.fixed {
             let o = vertex_offset(nf, v);
@@ -170,10 +135,7 @@ impl OptimizationFrame {
     pub fn to_model(&self, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
         let (verts, sph) = unpack(x, &self.mesh.triangles, self.mesh.vertex_count());
         let verts = verts.iter().map(|&p| self.t + p * self.diag).collect();
-        let sph = sph
-            .iter()
-            .map(|s| s.from_frame(self.t, self.diag).normalized())
-            .collect();
+        let sph = sph.iter().map(|s| s.from_frame(self.t, self.diag).normalized()).collect();
         (verts, sph)
     }
 }

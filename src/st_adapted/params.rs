@@ -86,16 +86,8 @@ pub struct StAdaptedParams {
 impl StAdaptedParams {
     /// Default stages with the given iteration counts per stage (proximity, angle, relax).
     pub fn stages_with(iterations: [usize; 3]) -> Vec<OptimizationStage> {
-        let mk = |name: &str, p: f64, it: usize| OptimizationStage {
-            name: name.into(),
-            proximity_scale: p,
-            iterations: it,
-        };
-        vec![
-            mk("proximity", 10.0, iterations[0]),
-            mk("angle", 1.0, iterations[1]),
-            mk("relax", 0.5, iterations[2]),
-        ]
+        let mk = |name: &str, p: f64, it: usize| OptimizationStage { name: name.into(), proximity_scale: p, iterations: it };
+        vec![mk("proximity", 10.0, iterations[0]), mk("angle", 1.0, iterations[1]), mk("relax", 0.5, iterations[2])]
     }
 
     /// The weights the variant uses: variant (b) cuts its arcs by bisecting planes and has no
@@ -103,11 +95,7 @@ impl StAdaptedParams {
     pub fn variant_weights(&self) -> StAdaptedWeights {
         match self.variant {
             EdgeArcs::Intersection => self.weights.clone(),
-            EdgeArcs::BisectingPlanes => StAdaptedWeights {
-                edge_circle: 0.0,
-                sagitta_match: 0.0,
-                ..self.weights.clone()
-            },
+            EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, sagitta_match: 0.0, ..self.weights.clone() },
         }
     }
 
@@ -138,9 +126,7 @@ impl StAdaptedParams {
 impl Default for StAdaptedParams {
     fn default() -> Self {
         Self {
-            sizing: Sizing::Adaptive {
-                epsilon: DEFAULT_EPSILON,
-            },
+            sizing: Sizing::Adaptive { epsilon: DEFAULT_EPSILON },
             variant: EdgeArcs::Intersection,
             remesh: RemeshParams::default(),
             jet: JetParams::default(),

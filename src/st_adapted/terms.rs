@@ -10,17 +10,15 @@ use std::rc::Rc;
 use glam::DVec3;
 
 use super::params::StAdaptedWeights;
-use crate::geometry::dual::{Dual, D3};
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
+use crate::geometry::mesh::topology::Topology;
+use crate::geometry::dual::{Dual, D3};
 use crate::geometry::pencil::{pencil_angle, pencil_member, PencilMember};
 use crate::geometry::sphere::Sphere;
-use crate::reference::proximity::{
-    value_gradient, CentroidTargets, ClosestLookups, ReferenceProximity,
-};
+use crate::reference::proximity::{value_gradient, CentroidTargets, ClosestLookups, ReferenceProximity};
 use crate::reference::Reference;
-use crate::solver::terms::v3;
 use crate::solver::{Band, Hinge, JacobianSink, Linear, Problem, Term, TermId};
+use crate::solver::terms::v3;
 
 /// Boundary vertices get this factor on their point-distance residuals.
 pub const BOUNDARY_POINT_FACTOR: f64 = 10.0;
@@ -47,10 +45,7 @@ pub struct FaceOrientation {
 impl FaceOrientation {
     /// `items`: the offsets of each face's three vertices in `x`, counter-clockwise.
     pub fn new(items: Vec<[usize; 3]>, x: &[f64], tau: f64) -> Self {
-        let (mut normals, mut inv_areas) = (
-            Vec::with_capacity(items.len()),
-            Vec::with_capacity(items.len()),
-        );
+        let (mut normals, mut inv_areas) = (Vec::with_capacity(items.len()), Vec::with_capacity(items.len()));
         for o in &items {
             let [a, b, c] = o.map(|k| DVec3::new(x[k], x[k + 1], x[k + 2]));
             let area = (b - a).cross(c - a);
@@ -58,23 +53,14 @@ impl FaceOrientation {
             normals.push(if len > 0.0 { area / len } else { DVec3::ZERO });
             inv_areas.push(if len > 0.0 { 1.0 / len } else { 0.0 });
         }
-        Self {
-            items,
-            normals,
-            inv_areas,
-            tau,
-        }
+        Self { items, normals, inv_areas, tau }
     }
 }
 
 impl FaceOrientation {
     /// The faces with `normal(centroid)` as their normals, each signed to the side its face
     /// starts on (zero where there is none or the face is degenerate).
-    pub fn along(
-        items: Vec<[usize; 3]>,
-        x: &[f64],
-        normal: impl Fn(DVec3) -> Option<DVec3>,
-    ) -> Self {
+    pub fn along(items: Vec<[usize; 3]>, x: &[f64], normal: impl Fn(DVec3) -> Option<DVec3>) -> Self {
         let normals = items
             .iter()
             .map(|o| {
@@ -93,32 +79,19 @@ impl FaceOrientation {
             .map(|(o, n): (&[usize; 3], &DVec3)| {
                 let [a, b, c] = o.map(|k| DVec3::new(x[k], x[k + 1], x[k + 2]));
                 let area = (b - a).cross(c - a).dot(*n);
-                if area > 0.0 {
-                    1.0 / area
-                } else {
-                    0.0
-                }
+                if area > 0.0 { 1.0 / area } else { 0.0 }
             })
             .collect();
-        Self {
-            items,
-            normals,
-            inv_areas,
-            tau: UNFOLDED_AREA_FRACTION,
-        }
+        Self { items, normals, inv_areas, tau: UNFOLDED_AREA_FRACTION }
     }
 
     /// Whether every face (with an initial orientation) keeps a positive oriented area along its
     /// normal: no face folds over.
     pub fn keeps_orientation(&self, x: &[f64]) -> bool {
-        self.items
-            .iter()
-            .zip(&self.normals)
-            .zip(&self.inv_areas)
-            .all(|((o, n), inv)| {
-                let [a, b, c] = o.map(|i| DVec3::new(x[i], x[i + 1], x[i + 2]));
-                *n == DVec3::ZERO || (b - a).cross(c - a).dot(*n) * inv > self.tau
-            })
+        self.items.iter().zip(&self.normals).zip(&self.inv_areas).all(|((o, n), inv)| {
+            let [a, b, c] = o.map(|i| DVec3::new(x[i], x[i + 1], x[i + 2]));
+            *n == DVec3::ZERO || (b - a).cross(c - a).dot(*n) * inv > self.tau
+        })
     }
 }
 
@@ -168,12 +141,7 @@ struct SharedSpheres {
 
 impl FaceSpheres {
     pub fn new(corners: Vec<[usize; 3]>) -> Self {
-        Self {
-            shared: Rc::new(SharedSpheres {
-                corners,
-                cache: RefCell::new((Vec::new(), Vec::new())),
-            }),
-        }
+        Self { shared: Rc::new(SharedSpheres { corners, cache: RefCell::new((Vec::new(), Vec::new())) }) }
     }
 
     /// Calls `f` with the members at `x` (recomputed only when θ or a corner changed).
@@ -182,16 +150,9 @@ impl FaceSpheres {
         let mut cache = self.shared.cache.borrow_mut();
         let (key, members) = &mut *cache;
         let fresh = key.len() == 10 * corners.len()
-            && corners
-                .iter()
-                .zip(key.chunks_exact(10))
-                .enumerate()
-                .all(|(k, (c, kk))| {
-                    kk[0] == x[angle_offset(k)]
-                        && c.iter()
-                            .enumerate()
-                            .all(|(i, &o)| kk[1 + 3 * i..4 + 3 * i] == x[o..o + 3])
-                });
+            && corners.iter().zip(key.chunks_exact(10)).enumerate().all(|(k, (c, kk))| {
+                kk[0] == x[angle_offset(k)] && c.iter().enumerate().all(|(i, &o)| kk[1 + 3 * i..4 + 3 * i] == x[o..o + 3])
+            });
         if !fresh {
             key.clear();
             members.clear();
@@ -201,24 +162,14 @@ impl FaceSpheres {
                 for &o in c {
                     key.extend_from_slice(&x[o..o + 3]);
                 }
-                members.push(pencil_member(
-                    c.map(|o| DVec3::new(x[o], x[o + 1], x[o + 2])),
-                    theta,
-                ));
+                members.push(pencil_member(c.map(|o| DVec3::new(x[o], x[o + 1], x[o + 2])), theta));
             }
         }
         f(members)
     }
 
     /// Adds the Jacobian row `row` of a scalar g(s_f), given ∂g/∂s_f = `grad`.
-    fn add_chain(
-        &self,
-        jac: &mut JacobianSink,
-        row: usize,
-        f: usize,
-        member: &PencilMember,
-        grad: &[f64; 5],
-    ) {
+    fn add_chain(&self, jac: &mut JacobianSink, row: usize, f: usize, member: &PencilMember, grad: &[f64; 5]) {
         let (dt, dp) = member.chain(grad);
         jac.add(row, angle_offset(f), dt);
         for (k, &o) in self.shared.corners[f].iter().enumerate() {
@@ -252,10 +203,8 @@ impl Term for KinkAngle {
             for (k, &(f, g)) in self.edges.iter().enumerate() {
                 let (sf, sg) = (&m[f].sphere, &m[g].sphere);
                 r[k] = Sphere::from_array(*sf).inversive_product(&Sphere::from_array(*sg)) - 1.0;
-                self.spheres
-                    .add_chain(jac, k, f, &m[f], &inversive_product_gradient(sg));
-                self.spheres
-                    .add_chain(jac, k, g, &m[g], &inversive_product_gradient(sf));
+                self.spheres.add_chain(jac, k, f, &m[f], &inversive_product_gradient(sg));
+                self.spheres.add_chain(jac, k, g, &m[g], &inversive_product_gradient(sf));
             }
         });
     }
@@ -317,19 +266,10 @@ pub struct EdgeCircle {
 /// κ sin φ of the intersection circle of s_f and s_g (see [`EdgeCircle`]) and its gradient by
 /// (s_f, s_g); None where the circle is undefined (tangent or equal spheres).
 fn edge_circle_bulge(sf: &[f64; 5], sg: &[f64; 5], n: DVec3) -> Option<(f64, [f64; 10])> {
-    let v: [Dual<10>; 10] =
-        std::array::from_fn(|k| Dual::variable(if k < 5 { sf[k] } else { sg[k - 5] }, k));
+    let v: [Dual<10>; 10] = std::array::from_fn(|k| Dual::variable(if k < 5 { sf[k] } else { sg[k - 5] }, k));
     let (af, cf, ag, cg) = (v[0], v[4], v[5], v[9]);
-    let bf = D3 {
-        x: v[1],
-        y: v[2],
-        z: v[3],
-    };
-    let bg = D3 {
-        x: v[6],
-        y: v[7],
-        z: v[8],
-    };
+    let bf = D3 { x: v[1], y: v[2], z: v[3] };
+    let bg = D3 { x: v[6], y: v[7], z: v[8] };
     let c = bf.dot(bg) - (af * cg + ag * cf) * 2.0;
     let one_minus_c = Dual::constant(1.0) - c;
     let da = af - ag;
@@ -355,10 +295,7 @@ impl Term for EdgeCircle {
     }
     fn prepare(&mut self, x: &[f64]) {
         for (k, (&(_, _, po, qo), &(p, q))) in self.edges.iter().zip(&self.ends).enumerate() {
-            if let (Some(a), Some(b)) = (
-                self.lookups.normal_at(p, v3(x, po)),
-                self.lookups.normal_at(q, v3(x, qo)),
-            ) {
+            if let (Some(a), Some(b)) = (self.lookups.normal_at(p, v3(x, po)), self.lookups.normal_at(q, v3(x, qo))) {
                 self.normals[k] = (a + b).normalize_or(self.normals[k]);
             }
         }
@@ -368,8 +305,7 @@ impl Term for EdgeCircle {
             for (k, &(f, g, po, qo)) in self.edges.iter().enumerate() {
                 // No intersection circle to bend (equal or tangent spheres): residual 0, with
                 // the same Jacobian pattern, so the solver keeps its symbolic factorization.
-                let (bulge, grad) = edge_circle_bulge(&m[f].sphere, &m[g].sphere, self.normals[k])
-                    .unwrap_or((0.0, [0.0; 10]));
+                let (bulge, grad) = edge_circle_bulge(&m[f].sphere, &m[g].sphere, self.normals[k]).unwrap_or((0.0, [0.0; 10]));
                 let d = v3(x, po) - v3(x, qo);
                 let l2 = d.length_squared() / 8.0;
                 r[k] = l2 * bulge;
@@ -411,10 +347,8 @@ impl Term for SagittaMatch {
                 let l2 = d.length_squared() / 4.0;
                 let da = m[f].sphere[0] - m[g].sphere[0];
                 r[k] = l2 * da;
-                self.spheres
-                    .add_chain(jac, k, f, &m[f], &[l2, 0.0, 0.0, 0.0, 0.0]);
-                self.spheres
-                    .add_chain(jac, k, g, &m[g], &[-l2, 0.0, 0.0, 0.0, 0.0]);
+                self.spheres.add_chain(jac, k, f, &m[f], &[l2, 0.0, 0.0, 0.0, 0.0]);
+                self.spheres.add_chain(jac, k, g, &m[g], &[-l2, 0.0, 0.0, 0.0, 0.0]);
                 let dp = d * (da / 2.0);
                 jac.add_block(k, po, &dp.to_array());
                 jac.add_block(k, qo, &(-dp).to_array());
@@ -467,12 +401,7 @@ pub fn vertex_offset(faces: usize, v: usize) -> usize {
 /// face's vertices).
 pub fn pack(mesh: &TriMesh, spheres: &[Sphere]) -> Vec<f64> {
     let mut x = Vec::with_capacity(spheres.len() + 3 * mesh.vertex_count());
-    x.extend(
-        spheres
-            .iter()
-            .enumerate()
-            .map(|(f, s)| pencil_angle(mesh.face_points(f), s)),
-    );
+    x.extend(spheres.iter().enumerate().map(|(f, s)| pencil_angle(mesh.face_points(f), s)));
     for v in &mesh.positions {
         x.extend_from_slice(&v.to_array());
     }
@@ -508,14 +437,7 @@ pub fn build_problem<'a>(
     let boundary = boundary_vertices(topology);
     let interior: Vec<(u32, u32, usize, usize)> = topology
         .interior_edges()
-        .map(|(e, f, g)| {
-            (
-                topology.edges()[e][0],
-                topology.edges()[e][1],
-                f as usize,
-                g as usize,
-            )
-        })
+        .map(|(e, f, g)| (topology.edges()[e][0], topology.edges()[e][1], f as usize, g as usize))
         .collect();
     let nf = mesh.face_count();
     let nv = mesh.vertex_count();
@@ -527,30 +449,12 @@ pub fn build_problem<'a>(
     for v in 0..nv {
         problem.group_variables(vertex_offset(nf, v)..vertex_offset(nf, v) + 3);
     }
-    let corners: Vec<[usize; 3]> = mesh
-        .triangles
-        .iter()
-        .map(|t| t.map(|v| vertex_offset(nf, v as usize)))
-        .collect();
+    let corners: Vec<[usize; 3]> = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(nf, v as usize))).collect();
     let spheres = FaceSpheres::new(corners.clone());
     let edges: Vec<(usize, usize)> = interior.iter().map(|&(_, _, f, g)| (f, g)).collect();
-    let angle = problem.add_term(
-        KinkAngle {
-            spheres: spheres.clone(),
-            edges: edges.clone(),
-        },
-        weights.angle,
-    );
+    let angle = problem.add_term(KinkAngle { spheres: spheres.clone(), edges: edges.clone() }, weights.angle);
     let offsets: Vec<usize> = (0..nv).map(|v| vertex_offset(nf, v)).collect();
-    let scales = (0..nv)
-        .map(|v| {
-            if boundary[v] {
-                BOUNDARY_POINT_FACTOR
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let scales = (0..nv).map(|v| if boundary[v] { BOUNDARY_POINT_FACTOR } else { 1.0 }).collect();
     let tangent = ReferenceProximity::tangent(reference, offsets.clone());
     let mut point = ReferenceProximity::point(reference, offsets.clone(), scales);
     point.share_closest_with(&tangent);
@@ -561,10 +465,7 @@ pub fn build_problem<'a>(
     let tangent_distance = problem.add_term(tangent, weights.tangent_distance);
     let point_distance = problem.add_term(point, weights.point_distance);
     let targets = CentroidTargets::new(reference, corners.iter().map(|c| c.to_vec()).collect(), x);
-    let face = FaceDistance {
-        spheres: spheres.clone(),
-        targets: Rc::new(RefCell::new(targets)),
-    };
+    let face = FaceDistance { spheres: spheres.clone(), targets: Rc::new(RefCell::new(targets)) };
     let face_distance = problem.add_term(face.clone(), weights.face_distance);
     let mut lap = Linear::new().with_name("fairness");
     for (v, &on_boundary) in boundary.iter().enumerate() {
@@ -583,88 +484,30 @@ pub fn build_problem<'a>(
     // The tolerance band: vertices and face centroids farther than τ from the reference.
     let tolerance_terms = tolerance.filter(|_| weights.tolerance > 0.0).map(|tau| {
         [
-            problem.add_term(
-                Band::new(vertex_band, tau).with_name("vertex_tolerance"),
-                weights.tolerance,
-            ),
-            problem.add_term(
-                Band::new(face, tau).with_name("face_tolerance"),
-                weights.tolerance,
-            ),
+            problem.add_term(Band::new(vertex_band, tau).with_name("vertex_tolerance"), weights.tolerance),
+            problem.add_term(Band::new(face, tau).with_name("face_tolerance"), weights.tolerance),
         ]
     });
     // No step folds a face: each keeps the side of the reference normal at its centroid's closest
     // point that it starts on (the folded-face count of the metrics, with normals held fixed).
-    let unfolded = FaceOrientation::along(corners.clone(), x, |c| {
-        reference.closest_point(c).and_then(|p| p.normal)
-    });
+    let unfolded = FaceOrientation::along(corners.clone(), x, |c| reference.closest_point(c).and_then(|p| p.normal));
     problem.set_admissible(move |x| unfolded.keeps_orientation(x));
-    let orientation = problem.add_term(
-        Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"),
-        weights.orientation,
-    );
+    let orientation =
+        problem.add_term(Hinge::new(FaceOrientation::new(corners, x, MIN_AREA_FRACTION)).with_name("orientation"), weights.orientation);
     // (f, g, offset of p, offset of q) per interior edge pq.
-    let edge_faces: Vec<_> = interior
-        .iter()
-        .map(|&(a, b, f, g)| {
-            (
-                f,
-                g,
-                vertex_offset(nf, a as usize),
-                vertex_offset(nf, b as usize),
-            )
-        })
-        .collect();
+    let edge_faces: Vec<_> = interior.iter().map(|&(a, b, f, g)| (f, g, vertex_offset(nf, a as usize), vertex_offset(nf, b as usize))).collect();
     let edge_circle = (weights.edge_circle > 0.0).then(|| {
-        let ends = interior
-            .iter()
-            .map(|&(a, b, _, _)| (a as usize, b as usize))
-            .collect();
+        let ends = interior.iter().map(|&(a, b, _, _)| (a as usize, b as usize)).collect();
         // Until the proximity terms have looked the vertices up: the mean of the faces' normals.
         let normals = interior
             .iter()
-            .map(|&(_, _, f, g)| {
-                (mesh.face_area_vector(f).normalize_or_zero()
-                    + mesh.face_area_vector(g).normalize_or_zero())
-                .normalize_or_zero()
-            })
+            .map(|&(_, _, f, g)| (mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero()).normalize_or_zero())
             .collect();
-        problem.add_term(
-            EdgeCircle {
-                spheres: spheres.clone(),
-                edges: edge_faces.clone(),
-                ends,
-                lookups: lookups.clone(),
-                normals,
-            },
-            weights.edge_circle,
-        )
+        problem.add_term(EdgeCircle { spheres: spheres.clone(), edges: edge_faces.clone(), ends, lookups: lookups.clone(), normals }, weights.edge_circle)
     });
-    let sagitta_match = tolerance
-        .filter(|_| weights.sagitta_match > 0.0)
-        .map(|tau| {
-            problem.add_term(
-                Band::new(
-                    SagittaMatch {
-                        spheres: spheres.clone(),
-                        edges: edge_faces,
-                    },
-                    tau,
-                )
-                .with_name("sagitta_match"),
-                weights.sagitta_match,
-            )
-        });
-    let terms = StAdaptedTerms {
-        angle,
-        tangent_distance,
-        point_distance,
-        face_distance,
-        fairness,
-        edge_circle,
-        sagitta_match,
-        orientation,
-        tolerance: tolerance_terms,
-    };
+    let sagitta_match = tolerance.filter(|_| weights.sagitta_match > 0.0).map(|tau| {
+        problem.add_term(Band::new(SagittaMatch { spheres: spheres.clone(), edges: edge_faces }, tau).with_name("sagitta_match"), weights.sagitta_match)
+    });
+    let terms = StAdaptedTerms { angle, tangent_distance, point_distance, face_distance, fairness, edge_circle, sagitta_match, orientation, tolerance: tolerance_terms };
     (problem, terms)
 }

@@ -120,11 +120,7 @@ pub struct AbsoluteSphereEstimate {
 
 /// E_center(m) = Σ (1 − ⟨v_i − m, n_i⟩/|v_i − m|)² (unit normals; see [`e_center_residuals`]).
 pub fn e_center(points: &[DVec3], normals: &[DVec3], m: DVec3) -> f64 {
-    points
-        .iter()
-        .zip(normals)
-        .map(|(v, n)| residual(*v, *n, m).powi(2))
-        .sum()
+    points.iter().zip(normals).map(|(v, n)| residual(*v, *n, m).powi(2)).sum()
 }
 
 /// 1 − ⟨u, n⟩ evaluated as ½|u − n|² (equal for unit u, n): accurate for small angles, where
@@ -163,10 +159,7 @@ pub fn e_center_residuals(points: &[DVec3], normals: &[DVec3], m: DVec3) -> (Vec
 fn frame(points: &[DVec3]) -> (DVec3, f64) {
     let (lo, hi) = bbox(points);
     let d = (hi - lo).length();
-    (
-        0.5 * (lo + hi),
-        if d > 0.0 && d.is_finite() { d } else { 1.0 },
-    )
+    (0.5 * (lo + hi), if d > 0.0 && d.is_finite() { d } else { 1.0 })
 }
 
 /// m0 of Eq. (7): QᵀQ m0 = Qᵀb with Q_i = [n_i]ₓ, b_i = Q_i v_i, i.e.
@@ -182,8 +175,7 @@ pub fn m0_from_normal_lines(points: &[DVec3], normals: &[DVec3]) -> Option<DVec3
     let mut rhs = DVec3::ZERO;
     for (v, n) in points.iter().zip(normals) {
         let y = (*v - t) / s;
-        let q = DMat3::from_diagonal(DVec3::splat(n.length_squared()))
-            - DMat3::from_cols(*n * n.x, *n * n.y, *n * n.z);
+        let q = DMat3::from_diagonal(DVec3::splat(n.length_squared())) - DMat3::from_cols(*n * n.x, *n * n.y, *n * n.z);
         a += q;
         rhs += q * y;
     }
@@ -213,18 +205,9 @@ pub fn center_from_normals(
 ) -> Option<(CenterEstimate, Vec<DVec3>)> {
     let m0 = m0_from_normal_lines(points, normals)?;
     let n = points.len() as f64;
-    let side = points
-        .iter()
-        .zip(normals)
-        .map(|(v, nn)| (m0 - *v).normalize_or_zero().dot(*nn))
-        .sum::<f64>()
-        / n;
+    let side = points.iter().zip(normals).map(|(v, nn)| (m0 - *v).normalize_or_zero().dot(*nn)).sum::<f64>() / n;
     let flipped = side > 0.0;
-    let normals: Vec<DVec3> = if flipped {
-        normals.iter().map(|x| -*x).collect()
-    } else {
-        normals.to_vec()
-    };
+    let normals: Vec<DVec3> = if flipped { normals.iter().map(|x| -*x).collect() } else { normals.to_vec() };
     let (m, iterations) = levenberg_marquardt(points, &normals, m0, params);
     let est = CenterEstimate {
         m0,
@@ -303,10 +286,7 @@ fn levenberg_marquardt(
 /// normalized mean, then y ← exp_y(mean log_y(n_i)) until the step is below 1e-15. None when the
 /// mean vanishes.
 pub fn spherical_barycenter(normals: &[DVec3]) -> Option<DVec3> {
-    let mut a = normals
-        .iter()
-        .fold(DVec3::ZERO, |s, n| s + *n)
-        .try_normalize()?;
+    let mut a = normals.iter().fold(DVec3::ZERO, |s, n| s + *n).try_normalize()?;
     for _ in 0..100 {
         let mut g = DVec3::ZERO;
         for n in normals {
@@ -377,12 +357,7 @@ pub fn estimate_absolute_sphere(
     let points = &mesh.positions[..nv];
     let diag = mesh.bbox_diagonal();
     let usable = field
-        .usable_central_spheres(
-            nv,
-            diag,
-            params.min_curvature_ratio,
-            params.min_usable_fraction,
-        )
+        .usable_central_spheres(nv, diag, params.min_curvature_ratio, params.min_usable_fraction)
         .map_err(AbsoluteSphereError::NoCentralSpheres)?;
     let usable_count = usable.iter().filter(|&&u| u).count();
     let skipped = nv - usable_count;
@@ -391,18 +366,12 @@ pub fn estimate_absolute_sphere(
         center_from_normals(points, &jet_normals, params).ok_or(AbsoluteSphereError::NoCenter)?;
     let (t, _) = frame(points);
     let axis = spherical_barycenter(&normals);
-    let e_inf = axis.map_or(f64::INFINITY, |a| {
-        normals.iter().map(|n| (1.0 - a.dot(*n)).powi(2)).sum()
-    });
+    let e_inf = axis.map_or(f64::INFINITY, |a| normals.iter().map(|n| (1.0 - a.dot(*n)).powi(2)).sum());
     let far = (center.m - t).length() > params.far_factor * diag;
     let no_gain = !(center.e_m <= (1.0 - params.min_gain) * e_inf);
     let at_infinity = (far || no_gain || !center.m.is_finite()) && axis.is_some();
 
-    let angles_m0_deg: Vec<f64> = points
-        .iter()
-        .zip(&normals)
-        .map(|(v, n)| angle_deg(*v - center.m0, *n))
-        .collect();
+    let angles_m0_deg: Vec<f64> = points.iter().zip(&normals).map(|(v, n)| angle_deg(*v - center.m0, *n)).collect();
     let mut r2_samples = Vec::with_capacity(usable_count);
     let mut r2_vertices = Vec::with_capacity(usable_count);
     let mut d_samples = Vec::new();
@@ -432,11 +401,7 @@ pub fn estimate_absolute_sphere(
         if !m.is_finite() || !r2.is_finite() {
             return Err(AbsoluteSphereError::NoCenter);
         }
-        let angles = points
-            .iter()
-            .zip(&normals)
-            .map(|(v, n)| angle_deg(*v - m, *n))
-            .collect();
+        let angles = points.iter().zip(&normals).map(|(v, n)| angle_deg(*v - m, *n)).collect();
         (AbsoluteSphere::Sphere { center: m, r2 }, angles)
     };
     Ok(AbsoluteSphereEstimate {

@@ -10,11 +10,7 @@ use crate::reference::assumptions::is_sliver;
 
 /// The face spheres of `mesh` orthogonal to `omega`, and how many faces are degenerate: slivers,
 /// and faces whose sphere could not be made orthogonal to Ω (they keep their triangle's plane).
-pub fn face_spheres(
-    mesh: &TriMesh,
-    omega: &AbsoluteSphere,
-    progress: &mut OnProgress,
-) -> Result<(Vec<Sphere>, usize), Cancelled> {
+pub fn face_spheres(mesh: &TriMesh, omega: &AbsoluteSphere, progress: &mut OnProgress) -> Result<(Vec<Sphere>, usize), Cancelled> {
     let nf = mesh.face_count();
     let omega_coefficients = omega.coefficients();
     let mut face_spheres = Vec::with_capacity(nf);

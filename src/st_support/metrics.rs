@@ -67,22 +67,16 @@ pub fn metrics(
     };
     for (f, s) in sphere_mesh.face_spheres.iter().enumerate() {
         for p in mesh.face_points(f) {
-            metrics.max_vertex_sphere_residual =
-                metrics.max_vertex_sphere_residual.max(s.distance(p) / diag);
+            metrics.max_vertex_sphere_residual = metrics.max_vertex_sphere_residual.max(s.distance(p) / diag);
         }
         let defect = omega.orthogonality_defect(s);
         match omega {
             AbsoluteSphere::Sphere { .. } => {
-                let rel = if s.a.abs() > 1e-300 {
-                    defect / (diag * diag)
-                } else {
-                    defect / diag
-                };
+                let rel = if s.a.abs() > 1e-300 { defect / (diag * diag) } else { defect / diag };
                 metrics.max_orthogonality_residual = metrics.max_orthogonality_residual.max(rel);
             }
             AbsoluteSphere::Plane { .. } => {
-                metrics.max_center_plane_residual =
-                    metrics.max_center_plane_residual.max(defect / diag);
+                metrics.max_center_plane_residual = metrics.max_center_plane_residual.max(defect / diag);
             }
         }
     }

@@ -47,9 +47,7 @@ use std::rc::Rc;
 use glam::DVec3;
 
 use crate::congruence::central_spheres::CurvatureField;
-use crate::congruence::support_structure::{
-    node_axes, support_strips, EdgePlane, SupportStructure,
-};
+use crate::congruence::support_structure::{node_axes, support_strips, EdgePlane, SupportStructure};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
@@ -61,12 +59,9 @@ use crate::progress::{Cancelled, Clock, OnProgress, Progress, Timings};
 use crate::reference::assumptions::{kink_warning, method_warnings, Warning};
 use crate::reference::{Reference, ReferenceError};
 use crate::remeshing::{
-    local_spheres_orthogonal, mean_edge_length, GuardedRemeshError, RemeshParams, RemeshRefused,
-    Sizing, SizingBounds, TooManyFaces,
+    local_spheres_orthogonal, mean_edge_length, GuardedRemeshError, RemeshParams, RemeshRefused, Sizing, SizingBounds, TooManyFaces,
 };
-use absolute_sphere::{
-    estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams,
-};
+use absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams};
 use face_spheres::face_spheres;
 pub use metrics::StSupportMetrics;
 use metrics::{metrics, Counts};
@@ -176,23 +171,12 @@ fn remeshed_reference(
         }
         _ => Vec::new(),
     };
-    let sphere_of = |i: usize| {
-        spheres
-            .get(i)
-            .copied()
-            .unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z))
-    };
-    let Some(sizing) = params
-        .remesh
-        .guarded_field(mesh, topo, &sphere_of, bounds, progress)?
-    else {
+    let sphere_of = |i: usize| spheres.get(i).copied().unwrap_or_else(|| Sphere::plane(mesh.positions[i], DVec3::Z));
+    let Some(sizing) = params.remesh.guarded_field(mesh, topo, &sphere_of, bounds, progress)? else {
         return Ok(None);
     };
     let warnings = || method_warnings(reference, field, None);
-    let remeshed =
-        params
-            .remesh
-            .remesh_to(mesh, &sizing, &RemeshParams::default(), &warnings, progress)?;
+    let remeshed = params.remesh.remesh_to(mesh, &sizing, &RemeshParams::default(), &warnings, progress)?;
     Ok(Some(Reference::from_triangles(remeshed)))
 }
 
@@ -218,20 +202,9 @@ pub fn compute(
         }
         None => (reference, field),
     };
-    let steps = steps(
-        work.mesh(),
-        work.topology(),
-        &field,
-        params,
-        &mut timings,
-        progress,
-    )?;
+    let steps = steps(work.mesh(), work.topology(), &field, params, &mut timings, progress)?;
     warnings.extend(kink_warning(&steps.sphere_mesh.kink_angles_deg(), work));
-    Ok(StSupportResult {
-        timings_ms: timings.laps,
-        warnings,
-        ..steps
-    })
+    Ok(StSupportResult { timings_ms: timings.laps, warnings, ..steps })
 }
 
 /// Steps 1 to 7 on a triangle mesh with its topology and curvature; the warnings are the
@@ -251,13 +224,7 @@ fn steps(
     timings.lap("absolute_sphere");
     let work = working_orientation(mesh, absolute.flipped);
     let interior: Vec<[u32; 2]> = topo.interior_edges().map(|(_, f, g)| [f, g]).collect();
-    let chosen = choose_omega(
-        &work,
-        &absolute,
-        &interior,
-        params.optimize_radius,
-        progress,
-    )?;
+    let chosen = choose_omega(&work, &absolute, &interior, params.optimize_radius, progress)?;
     if params.optimize_radius {
         timings.lap("optimize_radius");
     }
@@ -265,9 +232,7 @@ fn steps(
     let (spheres, degenerate_faces) = face_spheres(&work, &omega, progress)?;
     timings.lap("face_spheres");
     let toward = |v: usize| match omega {
-        AbsoluteSphere::Sphere { center, .. } => (center - work.positions[v])
-            .try_normalize()
-            .unwrap_or(-absolute.normals[v]),
+        AbsoluteSphere::Sphere { center, .. } => (center - work.positions[v]).try_normalize().unwrap_or(-absolute.normals[v]),
         AbsoluteSphere::Plane { axis, .. } => -axis,
     };
     let plane = |_: [DVec3; 2]| edge_plane(&omega);
@@ -275,47 +240,26 @@ fn steps(
     timings.lap("node_axes");
     let depth = params.support_depth * diag;
     let rule = boundary_arc_rule(&omega);
-    let (elements, edges_without_support) = support_elements(
-        &work,
-        topo,
-        &spheres,
-        &axes.axes,
-        edge_plane(&omega),
-        depth,
-        progress,
-    )?;
+    let (elements, edges_without_support) = support_elements(&work, topo, &spheres, &axes.axes, edge_plane(&omega), depth, progress)?;
     timings.lap("support_elements");
     let second_envelope = second_envelope(&work, &omega);
     timings.lap("second_envelope");
     progress(Progress::new("metrics", 0, 1))?;
     let sphere_mesh = SphereMesh::new(work, spheres, rule);
-    let counts = Counts {
-        degenerate_faces,
-        edges_without_support,
-    };
+    let counts = Counts { degenerate_faces, edges_without_support };
     let metrics = metrics(&sphere_mesh, &omega, &axes, &absolute.normals, diag, counts);
     progress(Progress::new("metrics", 1, 1))?;
     timings.lap("metrics");
     progress(Progress::new("panels", 0, 1))?;
     let panels = build_panels(&sphere_mesh, DEFAULT_CHORD_TOLERANCE * diag);
-    let support_geometry = support_strips(&elements, |el| {
-        edge_arc_points(&sphere_mesh, &panels, el.edge)
-    });
+    let support_geometry = support_strips(&elements, |el| edge_arc_points(&sphere_mesh, &panels, el.edge));
     progress(Progress::new("panels", 1, 1))?;
     timings.lap("panels");
     Ok(StSupportResult {
-        mean_kink_estimate_deg: chosen
-            .mean_kink_estimate_deg
-            .unwrap_or(metrics.mean_kink_angle_deg),
+        mean_kink_estimate_deg: chosen.mean_kink_estimate_deg.unwrap_or(metrics.mean_kink_angle_deg),
         sphere_mesh,
         panels,
-        support: SupportStructure {
-            node_axes: axes,
-            depth,
-            elements,
-            geometry: support_geometry,
-            axis_length: params.axis_length * diag,
-        },
+        support: SupportStructure { node_axes: axes, depth, elements, geometry: support_geometry, axis_length: params.axis_length * diag },
         absolute,
         omega,
         optimized_parameter: chosen.optimized_parameter,
@@ -330,11 +274,7 @@ fn steps(
 /// The mesh in the working orientation of step 1: every triangle's winding reversed when m0
 /// lay on the positive side, so that the normals point away from m.
 fn working_orientation(mesh: &TriMesh, flipped: bool) -> TriMesh {
-    let triangles = if flipped {
-        mesh.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect()
-    } else {
-        mesh.triangles.clone()
-    };
+    let triangles = if flipped { mesh.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect() } else { mesh.triangles.clone() };
     TriMesh::new(mesh.positions.clone(), triangles)
 }
 

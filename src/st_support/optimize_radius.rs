@@ -47,11 +47,7 @@ fn mean_kink_for(families: &[[Sphere; 2]], interior: &[[u32; 2]], omega: &Absolu
     mean(
         &interior
             .iter()
-            .map(|[f, g]| {
-                spheres[*f as usize]
-                    .kink_angle(&spheres[*g as usize])
-                    .to_degrees()
-            })
+            .map(|[f, g]| spheres[*f as usize].kink_angle(&spheres[*g as usize]).to_degrees())
             .collect::<Vec<_>>(),
     )
 }
@@ -69,11 +65,7 @@ pub fn optimize_parameter(
     let x0 = parameter_of(&base);
     let w = match base {
         AbsoluteSphere::Sphere { center, .. } => {
-            mesh.positions
-                .iter()
-                .map(|p| (*p - center).length_squared())
-                .sum::<f64>()
-                / mesh.vertex_count() as f64
+            mesh.positions.iter().map(|p| (*p - center).length_squared()).sum::<f64>() / mesh.vertex_count() as f64
         }
         AbsoluteSphere::Plane { .. } => mesh.bbox_diagonal(),
     };
@@ -85,11 +77,7 @@ pub fn optimize_parameter(
     let initial = best.1;
     for k in -n..=n {
         if k % 4 == 0 {
-            progress(Progress::new(
-                "optimize_radius",
-                (k + n) as usize,
-                (2 * n + 1) as usize,
-            ))?;
+            progress(Progress::new("optimize_radius", (k + n) as usize, (2 * n + 1) as usize))?;
         }
         let u = k as f64 * h;
         let v = if k == 0 { initial } else { f(u) };

@@ -5,9 +5,7 @@
 
 use glam::DVec3;
 
-use crate::congruence::support_structure::{
-    edge_circle, support_element, EdgePlane, SupportElement,
-};
+use crate::congruence::support_structure::{edge_circle, support_element, EdgePlane, SupportElement};
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
@@ -32,23 +30,13 @@ pub fn support_elements(
             progress(Progress::new("support_elements", e, edges.len()))?;
         }
         let faces: Vec<u32> = topo.edge_faces(e).iter().map(|&(f, _)| f).collect();
-        let (u, w) = (
-            mesh.positions[edge[0] as usize],
-            mesh.positions[edge[1] as usize],
-        );
+        let (u, w) = (mesh.positions[edge[0] as usize], mesh.positions[edge[1] as usize]);
         let circle = faces.first().and_then(|&f1| {
             let s2 = (faces.len() == 2).then(|| &face_spheres[faces[1] as usize]);
             edge_circle(&face_spheres[f1 as usize], s2, [u, w], plane)
         });
-        let element = circle.and_then(|c| {
-            support_element(
-                *edge,
-                c,
-                [u, w],
-                [node_axes[edge[0] as usize].1, node_axes[edge[1] as usize].1],
-                depth,
-            )
-        });
+        let element =
+            circle.and_then(|c| support_element(*edge, c, [u, w], [node_axes[edge[0] as usize].1, node_axes[edge[1] as usize].1], depth));
         match element {
             Some(el) => elements.push(el),
             None => without_support += 1,

@@ -16,10 +16,7 @@ pub fn robust_range(values: &[f32]) -> ((f32, f32), bool) {
         let m = lo.abs().max(hi.abs());
         ((-m, m), true)
     } else if hi - lo <= f32::EPSILON * hi.abs().max(1e-30) {
-        (
-            (lo - 0.5 * lo.abs().max(1e-6), hi + 0.5 * hi.abs().max(1e-6)),
-            false,
-        )
+        ((lo - 0.5 * lo.abs().max(1e-6), hi + 0.5 * hi.abs().max(1e-6)), false)
     } else {
         ((lo, hi), false)
     }
@@ -47,19 +44,9 @@ pub fn viridis(t: f32) -> [f32; 3] {
 }
 
 pub fn diverging(t: f32) -> [f32; 3] {
-    let mix = |a: [f32; 3], b: [f32; 3], s: f32| {
-        [
-            a[0] + (b[0] - a[0]) * s,
-            a[1] + (b[1] - a[1]) * s,
-            a[2] + (b[2] - a[2]) * s,
-        ]
-    };
+    let mix = |a: [f32; 3], b: [f32; 3], s: f32| [a[0] + (b[0] - a[0]) * s, a[1] + (b[1] - a[1]) * s, a[2] + (b[2] - a[2]) * s];
     let (blue, white, red) = ([0.23, 0.30, 0.75], [0.87, 0.87, 0.87], [0.71, 0.02, 0.15]);
-    if t < 0.5 {
-        mix(blue, white, t * 2.0)
-    } else {
-        mix(white, red, (t - 0.5) * 2.0)
-    }
+    if t < 0.5 { mix(blue, white, t * 2.0) } else { mix(white, red, (t - 0.5) * 2.0) }
 }
 
 /// The shader writes linear values into an sRGB target; match that for the legend.
@@ -68,13 +55,7 @@ fn to_color(c: [f32; 3]) -> Color32 {
 }
 
 /// A vertical colour bar with its range, in the viewport's top-right corner.
-pub fn legend(
-    painter: &Painter,
-    viewport: Rect,
-    label: &str,
-    range: (f32, f32),
-    diverging_map: bool,
-) {
+pub fn legend(painter: &Painter, viewport: Rect, label: &str, range: (f32, f32), diverging_map: bool) {
     let size = Vec2::new(18.0, 160.0);
     let min = Pos2::new(viewport.max.x - 90.0, viewport.min.y + 36.0);
     let bar = Rect::from_min_size(min, size);
@@ -82,49 +63,18 @@ pub fn legend(
     for i in 0..steps {
         let t0 = i as f32 / steps as f32;
         let t1 = (i + 1) as f32 / steps as f32;
-        let c = if diverging_map {
-            diverging(1.0 - t0)
-        } else {
-            viridis(1.0 - t0)
-        };
-        let r = Rect::from_min_max(
-            Pos2::new(bar.min.x, bar.min.y + t0 * size.y),
-            Pos2::new(bar.max.x, bar.min.y + t1 * size.y + 0.5),
-        );
+        let c = if diverging_map { diverging(1.0 - t0) } else { viridis(1.0 - t0) };
+        let r = Rect::from_min_max(Pos2::new(bar.min.x, bar.min.y + t0 * size.y), Pos2::new(bar.max.x, bar.min.y + t1 * size.y + 0.5));
         painter.rect_filled(r, 0.0, to_color(c));
     }
     let font = egui::FontId::proportional(12.0);
     let text = Color32::from_gray(220);
-    painter.text(
-        bar.right_top() + Vec2::new(4.0, 0.0),
-        egui::Align2::LEFT_TOP,
-        format!("{:.3}", range.1),
-        font.clone(),
-        text,
-    );
-    painter.text(
-        bar.right_bottom() + Vec2::new(4.0, 0.0),
-        egui::Align2::LEFT_BOTTOM,
-        format!("{:.3}", range.0),
-        font.clone(),
-        text,
-    );
+    painter.text(bar.right_top() + Vec2::new(4.0, 0.0), egui::Align2::LEFT_TOP, format!("{:.3}", range.1), font.clone(), text);
+    painter.text(bar.right_bottom() + Vec2::new(4.0, 0.0), egui::Align2::LEFT_BOTTOM, format!("{:.3}", range.0), font.clone(), text);
     if diverging_map {
-        painter.text(
-            Pos2::new(bar.max.x + 4.0, bar.center().y),
-            egui::Align2::LEFT_CENTER,
-            "0",
-            font.clone(),
-            text,
-        );
+        painter.text(Pos2::new(bar.max.x + 4.0, bar.center().y), egui::Align2::LEFT_CENTER, "0", font.clone(), text);
     }
-    painter.text(
-        bar.center_top() - Vec2::new(0.0, 6.0),
-        egui::Align2::CENTER_BOTTOM,
-        label,
-        font,
-        text,
-    );
+    painter.text(bar.center_top() - Vec2::new(0.0, 6.0), egui::Align2::CENTER_BOTTOM, label, font, text);
 }
 
 /// The colour of bin `k` of `bins` (viridis at the bin's centre), as the viewer draws it.
@@ -135,13 +85,7 @@ pub fn bin_color(k: usize, bins: usize) -> [f32; 4] {
 
 /// A legend of `bins` colour bins over `range` (lowest at the bottom), in the viewport's
 /// top-right corner.
-pub fn binned_legend(
-    painter: &Painter,
-    viewport: Rect,
-    label: &str,
-    range: (f32, f32),
-    bins: usize,
-) {
+pub fn binned_legend(painter: &Painter, viewport: Rect, label: &str, range: (f32, f32), bins: usize) {
     let size = Vec2::new(18.0, 160.0);
     let min = Pos2::new(viewport.max.x - 90.0, viewport.min.y + 36.0);
     let bar = Rect::from_min_size(min, size);
@@ -151,32 +95,10 @@ pub fn binned_legend(
     for k in 0..bins {
         let top = bar.max.y - (k + 1) as f32 * h;
         let c = bin_color(k, bins);
-        painter.rect_filled(
-            Rect::from_min_size(Pos2::new(bar.min.x, top), Vec2::new(size.x, h - 1.0)),
-            0.0,
-            to_color([c[0], c[1], c[2]]),
-        );
+        painter.rect_filled(Rect::from_min_size(Pos2::new(bar.min.x, top), Vec2::new(size.x, h - 1.0)), 0.0, to_color([c[0], c[1], c[2]]));
         let value = range.0 + (range.1 - range.0) * k as f32 / bins as f32;
-        painter.text(
-            Pos2::new(bar.max.x + 4.0, top + h),
-            egui::Align2::LEFT_BOTTOM,
-            format!("{value:.1}"),
-            font.clone(),
-            text,
-        );
+        painter.text(Pos2::new(bar.max.x + 4.0, top + h), egui::Align2::LEFT_BOTTOM, format!("{value:.1}"), font.clone(), text);
     }
-    painter.text(
-        bar.right_top() + Vec2::new(4.0, 0.0),
-        egui::Align2::LEFT_TOP,
-        format!("{:.1}", range.1),
-        font.clone(),
-        text,
-    );
-    painter.text(
-        bar.center_top() - Vec2::new(0.0, 6.0),
-        egui::Align2::CENTER_BOTTOM,
-        label,
-        font,
-        text,
-    );
+    painter.text(bar.right_top() + Vec2::new(4.0, 0.0), egui::Align2::LEFT_TOP, format!("{:.1}", range.1), font.clone(), text);
+    painter.text(bar.center_top() - Vec2::new(0.0, 6.0), egui::Align2::CENTER_BOTTOM, label, font, text);
 }

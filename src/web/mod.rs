@@ -14,10 +14,7 @@ use wasm_bindgen::prelude::*;
 #[wasm_bindgen]
 pub async fn start_app(canvas: web_sys::HtmlCanvasElement, backend: String) -> Result<(), JsValue> {
     console_error_panic_hook::set_once();
-    let mut options = eframe::WebOptions {
-        depth_buffer: 24,
-        ..Default::default()
-    };
+    let mut options = eframe::WebOptions { depth_buffer: 24, ..Default::default() };
     if let egui_wgpu::WgpuSetup::CreateNew(create) = &mut options.wgpu_options.wgpu_setup {
         create.instance_descriptor.backends = match backend.as_str() {
             "webgpu" => egui_wgpu::wgpu::Backends::BROWSER_WEBGPU,
@@ -26,10 +23,6 @@ pub async fn start_app(canvas: web_sys::HtmlCanvasElement, backend: String) -> R
         };
     }
     eframe::WebRunner::new()
-        .start(
-            canvas,
-            options,
-            Box::new(|cc| Ok(Box::new(app::App::new(cc)))),
-        )
+        .start(canvas, options, Box::new(|cc| Ok(Box::new(app::App::new(cc)))))
         .await
 }

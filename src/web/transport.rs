@@ -49,9 +49,7 @@ pub fn from_js(value: &JsValue) -> Result<Envelope, TransportError> {
     if let Ok(list) = Reflect::get(value, &"bodies".into()) {
         if let Some(list) = list.dyn_ref::<Array>() {
             for b in list.iter() {
-                let buf = b
-                    .dyn_into::<ArrayBuffer>()
-                    .map_err(|_| TransportError::BodyNotArrayBuffer)?;
+                let buf = b.dyn_into::<ArrayBuffer>().map_err(|_| TransportError::BodyNotArrayBuffer)?;
                 bodies.push(Uint8Array::new(&buf).to_vec());
             }
         }

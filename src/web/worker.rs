@@ -51,25 +51,11 @@ pub fn worker_start(cancel: JsValue) {
 pub fn worker_handle(data: JsValue) {
     let env = match transport::from_js(&data) {
         Ok(e) => e,
-        Err(e) => {
-            return WorkerOutbox.send(
-                FromWorker::Error {
-                    message: e.to_string(),
-                    remesh_to: None,
-                },
-                Vec::new(),
-            )
-        }
+        Err(e) => return WorkerOutbox.send(FromWorker::Error { message: e.to_string(), remesh_to: None }, Vec::new()),
     };
     match decode_to_worker(&env) {
         Ok((msg, bytes)) => SESSION.with(|s| s.borrow_mut().handle(msg, bytes, &mut WorkerOutbox)),
-        Err(e) => WorkerOutbox.send(
-            FromWorker::Error {
-                message: e.to_string(),
-                remesh_to: None,
-            },
-            Vec::new(),
-        ),
+        Err(e) => WorkerOutbox.send(FromWorker::Error { message: e.to_string(), remesh_to: None }, Vec::new()),
     }
 }
 
@@ -77,46 +63,21 @@ pub fn worker_handle(data: JsValue) {
 /// `{name, kind, summary, text}` and the reader's notes.
 #[wasm_bindgen]
 pub fn worker_load_objects(file: String, objects: JsValue, notes: JsValue) {
-    let text = |o: &JsValue, key: &str| {
-        Reflect::get(o, &key.into())
-            .ok()
-            .and_then(|v| v.as_string())
-            .unwrap_or_default()
-    };
+    let text = |o: &JsValue, key: &str| Reflect::get(o, &key.into()).ok().and_then(|v| v.as_string()).unwrap_or_default();
     let (mut list, mut texts) = (Vec::new(), Vec::new());
     for o in js_sys::Array::from(&objects).iter() {
-        list.push(FileObject {
-            name: text(&o, "name"),
-            kind: text(&o, "kind"),
-            summary: text(&o, "summary"),
-        });
+        list.push(FileObject { name: text(&o, "name"), kind: text(&o, "kind"), summary: text(&o, "summary") });
         texts.push(text(&o, "text"));
     }
-    let notes: Vec<String> = js_sys::Array::from(&notes)
-        .iter()
-        .filter_map(|n| n.as_string())
-        .collect();
-    SESSION.with(|s| {
-        s.borrow_mut()
-            .load_objects(&file, list, texts, notes, &mut WorkerOutbox)
-    });
+    let notes: Vec<String> = js_sys::Array::from(&notes).iter().filter_map(|n| n.as_string()).collect();
+    SESSION.with(|s| s.borrow_mut().load_objects(&file, list, texts, notes, &mut WorkerOutbox));
 }
 
 /// Called by worker.js when rhino3dm.js could not read a .3dm file.
 #[wasm_bindgen]
 pub fn worker_load_failed(file: String, message: String) {
-    let message = format!(
-        "{}: {}",
-        crate::text::clip(&file, 120),
-        crate::text::printable(&message)
-    );
-    WorkerOutbox.send(
-        FromWorker::Error {
-            message,
-            remesh_to: None,
-        },
-        Vec::new(),
-    );
+    let message = format!("{}: {}", crate::text::clip(&file, 120), crate::text::printable(&message));
+    WorkerOutbox.send(FromWorker::Error { message, remesh_to: None }, Vec::new());
 }
 
 struct WorkerOutbox;
@@ -135,11 +96,7 @@ impl Outbox for WorkerOutbox {
     }
 
     fn cancel_requested(&mut self) -> bool {
-        CANCEL.with(|c| {
-            c.borrow()
-                .as_ref()
-                .is_some_and(|a| Atomics::load(a, CANCEL_SLOT).unwrap_or(0) != 0)
-        })
+        CANCEL.with(|c| c.borrow().as_ref().is_some_and(|a| Atomics::load(a, CANCEL_SLOT).unwrap_or(0) != 0))
     }
 
     fn now_ms(&self) -> f64 {

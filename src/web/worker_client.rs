@@ -33,9 +33,7 @@ pub enum WorkerStartError {
 impl std::fmt::Display for WorkerStartError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            WorkerStartError::Spawn(e) | WorkerStartError::Init(e) => {
-                write!(f, "cannot start the pipeline worker: {e}")
-            }
+            WorkerStartError::Spawn(e) | WorkerStartError::Init(e) => write!(f, "cannot start the pipeline worker: {e}"),
         }
     }
 }
@@ -87,10 +85,7 @@ impl WorkerClient {
             let repaint = repaint.clone();
             Closure::<dyn FnMut(MessageEvent)>::new(move |ev: MessageEvent| {
                 let data = ev.data();
-                let item = if let Some(p) = Reflect::get(&data, &"panic".into())
-                    .ok()
-                    .and_then(|p| p.as_string())
-                {
+                let item = if let Some(p) = Reflect::get(&data, &"panic".into()).ok().and_then(|p| p.as_string()) {
                     Incoming::Crashed(p)
                 } else {
                     let decoded = transport::from_js(&data)
@@ -98,19 +93,11 @@ impl WorkerClient {
                         .and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string()));
                     match decoded {
                         Ok((msg, fields)) => Incoming::Message(msg, fields),
-                        Err(message) => Incoming::Message(
-                            FromWorker::Error {
-                                message,
-                                remesh_to: None,
-                            },
-                            Vec::new(),
-                        ),
+                        Err(message) => Incoming::Message(FromWorker::Error { message, remesh_to: None }, Vec::new()),
                     }
                 };
                 let wake = match &item {
-                    Incoming::Message(FromWorker::Progress(_) | FromWorker::Snapshot { .. }, _) => {
-                        Wake::Soon
-                    }
+                    Incoming::Message(FromWorker::Progress(_) | FromWorker::Snapshot { .. }, _) => Wake::Soon,
                     _ => Wake::Now,
                 };
                 inbox.borrow_mut().push_back(item);
@@ -122,10 +109,7 @@ impl WorkerClient {
             let repaint = repaint.clone();
             Closure::<dyn FnMut(web_sys::ErrorEvent)>::new(move |ev: web_sys::ErrorEvent| {
                 ev.prevent_default();
-                inbox.borrow_mut().push_back(Incoming::Crashed(format!(
-                    "The pipeline worker failed: {}",
-                    ev.message()
-                )));
+                inbox.borrow_mut().push_back(Incoming::Crashed(format!("The pipeline worker failed: {}", ev.message())));
                 repaint(Wake::Now);
             })
         };
@@ -138,13 +122,9 @@ impl WorkerClient {
             .unwrap_or(false);
         let cancel_flag = isolated.then(|| Int32Array::new(&SharedArrayBuffer::new(8)));
         let init = Object::new();
-        let flag: JsValue = cancel_flag
-            .as_ref()
-            .map_or(JsValue::UNDEFINED, |a| a.clone().into());
+        let flag: JsValue = cancel_flag.as_ref().map_or(JsValue::UNDEFINED, |a| a.clone().into());
         let _ = Reflect::set(&init, &"init".into(), &flag);
-        worker
-            .post_message(&init)
-            .map_err(|e| WorkerStartError::Init(format!("{e:?}")))?;
+        worker.post_message(&init).map_err(|e| WorkerStartError::Init(format!("{e:?}")))?;
         Ok(Self {
             worker,
             inbox,
@@ -170,10 +150,7 @@ impl WorkerClient {
         }
         if let Err(e) = self.worker.post_message_with_transfer(&obj, &transfer) {
             self.inbox.borrow_mut().push_back(Incoming::Message(
-                FromWorker::Error {
-                    message: format!("could not send to the worker: {e:?}"),
-                    remesh_to: None,
-                },
+                FromWorker::Error { message: format!("could not send to the worker: {e:?}"), remesh_to: None },
                 Vec::new(),
             ));
         }
@@ -205,22 +182,14 @@ impl WorkerClient {
     /// Replaces the worker with a fresh one.
     pub fn restart(&mut self) {
         self.worker.terminate();
-        self.inbox
-            .borrow_mut()
-            .retain(|m| !matches!(m, Incoming::Message(..)));
+        self.inbox.borrow_mut().retain(|m| !matches!(m, Incoming::Message(..)));
         let restarts = self.restarts + 1;
         match Self::spawn(self.repaint.clone()) {
             Ok(w) => {
                 *self = w;
                 self.restarts = restarts;
             }
-            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(
-                FromWorker::Error {
-                    message: e.to_string(),
-                    remesh_to: None,
-                },
-                Vec::new(),
-            )),
+            Err(e) => self.inbox.borrow_mut().push_back(Incoming::Message(FromWorker::Error { message: e.to_string(), remesh_to: None }, Vec::new())),
         }
     }
 

@@ -11,28 +11,19 @@ use spherical_faces::reference::Reference;
 
 /// A file of `../shared`, e.g. `data/meshes/tri_mesh.obj`.
 pub fn shared_path(relative: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared")
-        .join(relative)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared").join(relative)
 }
 
 /// The bytes of a file of `../shared` (panics, naming it, when it is missing).
 pub fn shared_bytes(relative: &str) -> Vec<u8> {
     let path = shared_path(relative);
-    std::fs::read(&path).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e} (../shared must be beside the repo)",
-            path.display()
-        )
-    })
+    std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e} (../shared must be beside the repo)", path.display()))
 }
 
 /// A mesh of `../shared/data/meshes` (name without `.obj`), through the crate's importer.
 pub fn load(name: &str) -> TriMesh {
     let bytes = shared_bytes(&format!("data/meshes/{name}.obj"));
-    import_mesh(&bytes, &format!("{name}.obj"))
-        .expect("imports")
-        .mesh
+    import_mesh(&bytes, &format!("{name}.obj")).expect("imports").mesh
 }
 
 /// [`load`] as a reference surface.
@@ -53,15 +44,10 @@ pub fn khronos_validate(file: &Path) -> (bool, Value) {
         .arg(file)
         .current_dir(&e2e)
         .output()
-        .unwrap_or_else(|e| {
-            panic!("cannot run `node` ({e}); install Node.js and run `npm ci` in tests/e2e")
-        });
+        .unwrap_or_else(|e| panic!("cannot run `node` ({e}); install Node.js and run `npm ci` in tests/e2e"));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let json: Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
-        panic!(
-            "validate-gltf.mjs printed no JSON ({e}); stdout: {stdout}; stderr: {}",
-            String::from_utf8_lossy(&out.stderr)
-        )
+        panic!("validate-gltf.mjs printed no JSON ({e}); stdout: {stdout}; stderr: {}", String::from_utf8_lossy(&out.stderr))
     });
     (out.status.success(), json)
 }

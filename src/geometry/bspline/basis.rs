@@ -38,27 +38,13 @@ impl fmt::Display for BasisError {
         match self {
             BasisError::Degree(p) => write!(f, "degree {p} is outside 1..={MAX_DEGREE}"),
             BasisError::TooFewFunctions { functions, degree } => {
-                write!(
-                    f,
-                    "{functions} control points are too few for degree {degree} (at least {})",
-                    degree + 1
-                )
+                write!(f, "{functions} control points are too few for degree {degree} (at least {})", degree + 1)
             }
-            BasisError::KnotCount { knots, expected } => {
-                write!(f, "{knots} knots, expected {expected}")
-            }
+            BasisError::KnotCount { knots, expected } => write!(f, "{knots} knots, expected {expected}"),
             BasisError::NonFiniteKnot { index } => write!(f, "knot {index} is not a finite number"),
-            BasisError::Decreasing { index } => {
-                write!(f, "knot {index} is smaller than knot {}", index - 1)
-            }
-            BasisError::Multiplicity {
-                index,
-                multiplicity,
-            } => {
-                write!(
-                    f,
-                    "interior knot {index} is repeated {multiplicity} times, more than the degree"
-                )
+            BasisError::Decreasing { index } => write!(f, "knot {index} is smaller than knot {}", index - 1),
+            BasisError::Multiplicity { index, multiplicity } => {
+                write!(f, "interior knot {index} is repeated {multiplicity} times, more than the degree")
             }
             BasisError::EmptyDomain => f.write_str("the knot vector's domain is empty"),
         }
@@ -106,16 +92,10 @@ impl BSplineBasis {
         }
         let mut i = 0;
         while i < knots.len() {
-            let j = (i..knots.len())
-                .take_while(|&j| knots[j] == knots[i])
-                .last()
-                .unwrap_or(i);
+            let j = (i..knots.len()).take_while(|&j| knots[j] == knots[i]).last().unwrap_or(i);
             let multiplicity = j - i + 1;
             if knots[i] > lo && knots[i] < hi && multiplicity > degree {
-                return Err(BasisError::Multiplicity {
-                    index: i,
-                    multiplicity,
-                });
+                return Err(BasisError::Multiplicity { index: i, multiplicity });
             }
             i = j + 1;
         }
@@ -124,11 +104,7 @@ impl BSplineBasis {
 
     /// A clamped basis with `functions` functions of degree `degree` and uniform interior knots
     /// on `[lo, hi]`.
-    pub fn clamped_uniform(
-        degree: usize,
-        functions: usize,
-        (lo, hi): (f64, f64),
-    ) -> Result<Self, BasisError> {
+    pub fn clamped_uniform(degree: usize, functions: usize, (lo, hi): (f64, f64)) -> Result<Self, BasisError> {
         let interior = functions.saturating_sub(degree + 1);
         let mut knots = vec![lo; degree + 1];
         knots.extend((1..=interior).map(|k| lo + (hi - lo) * k as f64 / (interior + 1) as f64));
@@ -162,10 +138,7 @@ impl BSplineBasis {
         let (lo, hi) = self.domain();
         let t = if t.is_nan() { lo } else { t.clamp(lo, hi) };
         if t >= hi {
-            return (p..n)
-                .rev()
-                .find(|&k| self.knots[k] < self.knots[k + 1])
-                .unwrap_or(n - 1);
+            return (p..n).rev().find(|&k| self.knots[k] < self.knots[k + 1]).unwrap_or(n - 1);
         }
         // The largest k in p..n with t_k ≤ t (then t < t_{k+1}).
         let (mut a, mut b) = (p, n);
@@ -204,11 +177,7 @@ impl BSplineBasis {
             }
             ndu[j][j] = saved;
         }
-        let mut out = BasisValues {
-            first: span - p,
-            count: p + 1,
-            values: [[0.0; M]; DERIVATIVES + 1],
-        };
+        let mut out = BasisValues { first: span - p, count: p + 1, values: [[0.0; M]; DERIVATIVES + 1] };
         for j in 0..=p {
             out.values[0][j] = ndu[j][p];
         }
@@ -226,11 +195,7 @@ impl BSplineBasis {
                     d = a[s2][0] * ndu[rk as usize][pk];
                 }
                 let j1 = if rk >= -1 { 1 } else { (-rk) as usize };
-                let j2 = if r as isize - 1 <= pk as isize {
-                    k - 1
-                } else {
-                    p - r
-                };
+                let j2 = if r as isize - 1 <= pk as isize { k - 1 } else { p - r };
                 for j in j1..=j2 {
                     let idx = (rk + j as isize) as usize;
                     a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
@@ -257,8 +222,6 @@ impl BSplineBasis {
     /// The Greville abscissae (t_{i+1} + … + t_{i+p})/p: where each function peaks, roughly.
     pub fn greville(&self) -> Vec<f64> {
         let p = self.degree;
-        (0..self.count())
-            .map(|i| self.knots[i + 1..=i + p].iter().sum::<f64>() / p as f64)
-            .collect()
+        (0..self.count()).map(|i| self.knots[i + 1..=i + p].iter().sum::<f64>() / p as f64).collect()
     }
 }

@@ -51,11 +51,7 @@ impl BSplineFunction {
     /// The constant function `value` on the domain (degree 1, a 2 × 2 grid of coefficients).
     pub fn constant(value: f64, (u, v): ((f64, f64), (f64, f64))) -> Self {
         let basis = |d| BSplineBasis::clamped_uniform(1, 2, d).expect("a linear basis on a domain");
-        Self {
-            u: basis(u),
-            v: basis(v),
-            coefficients: vec![value; 4],
-        }
+        Self { u: basis(u), v: basis(v), coefficients: vec![value; 4] }
     }
 
     /// The row of parameter (u, v) (clamped to the domain).
@@ -65,12 +61,7 @@ impl BSplineFunction {
 
     fn row_with(nu: usize, bu: &BasisValues, bv: &BasisValues) -> FunctionRow {
         let n = bu.count * bv.count;
-        let mut row = FunctionRow {
-            index: Vec::with_capacity(n),
-            value: Vec::with_capacity(n),
-            du: Vec::with_capacity(n),
-            dv: Vec::with_capacity(n),
-        };
+        let mut row = FunctionRow { index: Vec::with_capacity(n), value: Vec::with_capacity(n), du: Vec::with_capacity(n), dv: Vec::with_capacity(n) };
         for jb in 0..bv.count {
             for ib in 0..bu.count {
                 row.index.push(bu.first + ib + nu * (bv.first + jb));
@@ -89,18 +80,10 @@ impl BSplineFunction {
 
     /// The least-squares fit of `samples` ((u, v), value) on the bases; None when the samples do
     /// not determine the coefficients (too few, or none under some basis function).
-    pub fn fit(
-        u: BSplineBasis,
-        v: BSplineBasis,
-        samples: &[([f64; 2], f64)],
-    ) -> Option<(Self, FitError)> {
+    pub fn fit(u: BSplineBasis, v: BSplineBasis, samples: &[([f64; 2], f64)]) -> Option<(Self, FitError)> {
         let n = u.count() * v.count();
         let m = samples.len();
-        if m < n
-            || samples
-                .iter()
-                .any(|(uv, g)| !(uv[0].is_finite() && uv[1].is_finite() && g.is_finite()))
-        {
+        if m < n || samples.iter().any(|(uv, g)| !(uv[0].is_finite() && uv[1].is_finite() && g.is_finite())) {
             return None;
         }
         let mut a = Mat::<f64>::zeros(m, n);
@@ -131,12 +114,6 @@ impl BSplineFunction {
             max = max.max(e);
             sum += e * e;
         }
-        Some((
-            f,
-            FitError {
-                max,
-                rms: (sum / m as f64).sqrt(),
-            },
-        ))
+        Some((f, FitError { max, rms: (sum / m as f64).sqrt() }))
     }
 }

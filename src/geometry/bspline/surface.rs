@@ -41,17 +41,10 @@ impl fmt::Display for SurfaceError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SurfaceError::ControlCount { found, expected } => {
-                write!(
-                    f,
-                    "{found} control points, expected {expected} (n_u · n_v from the knot vectors)"
-                )
+                write!(f, "{found} control points, expected {expected} (n_u · n_v from the knot vectors)")
             }
-            SurfaceError::NonFinitePoint { index } => {
-                write!(f, "control point {index} is not finite")
-            }
-            SurfaceError::Weight { index } => {
-                write!(f, "weight {index} is not a positive finite number")
-            }
+            SurfaceError::NonFinitePoint { index } => write!(f, "control point {index} is not finite"),
+            SurfaceError::Weight { index } => write!(f, "weight {index} is not a positive finite number"),
         }
     }
 }
@@ -105,18 +98,10 @@ pub struct SurfaceFrame {
 
 impl BSplineSurface {
     /// A surface over the bases with control points (U fastest) and weights (all 1: a B-spline).
-    pub fn new(
-        u: BSplineBasis,
-        v: BSplineBasis,
-        control: Vec<DVec3>,
-        weights: Vec<f64>,
-    ) -> Result<Self, SurfaceError> {
+    pub fn new(u: BSplineBasis, v: BSplineBasis, control: Vec<DVec3>, weights: Vec<f64>) -> Result<Self, SurfaceError> {
         let expected = u.count() * v.count();
         if control.len() != expected || weights.len() != expected {
-            return Err(SurfaceError::ControlCount {
-                found: control.len().min(weights.len()),
-                expected,
-            });
+            return Err(SurfaceError::ControlCount { found: control.len().min(weights.len()), expected });
         }
         if let Some(index) = control.iter().position(|p| !p.is_finite()) {
             return Err(SurfaceError::NonFinitePoint { index });
@@ -125,13 +110,7 @@ impl BSplineSurface {
             return Err(SurfaceError::Weight { index });
         }
         let rational = weights.iter().any(|&w| w != 1.0);
-        Ok(Self {
-            u,
-            v,
-            control,
-            weights,
-            rational,
-        })
+        Ok(Self { u, v, control, weights, rational })
     }
 
     pub fn basis_u(&self) -> &BSplineBasis {
@@ -170,10 +149,7 @@ impl BSplineSurface {
     /// The surface moved by −`t` and scaled by 1/`s` (exact: B-splines are affinely invariant).
     pub fn in_frame(&self, t: DVec3, s: f64) -> Self {
         let control = self.control.iter().map(|&p| (p - t) / s).collect();
-        Self {
-            control,
-            ..self.clone()
-        }
+        Self { control, ..self.clone() }
     }
 
     /// S(u, v).
@@ -214,14 +190,7 @@ impl BSplineSurface {
         let suu = (a[2][0] - 2.0 * w[1][0] * su - w[2][0] * s) / w0;
         let svv = (a[0][2] - 2.0 * w[0][1] * sv - w[0][2] * s) / w0;
         let suv = (a[1][1] - w[1][0] * sv - w[0][1] * su - w[1][1] * s) / w0;
-        SurfaceDerivatives {
-            s,
-            su,
-            sv,
-            suu,
-            suv,
-            svv,
-        }
+        SurfaceDerivatives { s, su, sv, suu, suv, svv }
     }
 
     /// The differential geometry at (u, v); None where S_u × S_v vanishes.
@@ -233,25 +202,11 @@ impl BSplineSurface {
     /// (counter-clockwise about S_u × S_v; vertex i + (s_u + 1) j), and every vertex's (u, v).
     pub fn tessellate(&self, [su, sv]: [usize; 2]) -> (PolyMesh, Vec<[f64; 2]>) {
         let ((u0, u1), (v0, v1)) = self.domain();
-        let param = |a: f64, b: f64, k: usize, n: usize| {
-            if k == n {
-                b
-            } else {
-                a + (b - a) * k as f64 / n as f64
-            }
-        };
-        let uv: Vec<[f64; 2]> = (0..=sv)
-            .flat_map(|j| (0..=su).map(move |i| [param(u0, u1, i, su), param(v0, v1, j, sv)]))
-            .collect();
+        let param = |a: f64, b: f64, k: usize, n: usize| if k == n { b } else { a + (b - a) * k as f64 / n as f64 };
+        let uv: Vec<[f64; 2]> = (0..=sv).flat_map(|j| (0..=su).map(move |i| [param(u0, u1, i, su), param(v0, v1, j, sv)])).collect();
         let positions = uv.iter().map(|p| self.point(p[0], p[1])).collect();
         let id = |i: usize, j: usize| (i + (su + 1) * j) as u32;
-        let faces = (0..sv)
-            .flat_map(|j| {
-                (0..su).map(move |i| {
-                    Face::quad([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
-                })
-            })
-            .collect();
+        let faces = (0..sv).flat_map(|j| (0..su).map(move |i| Face::quad([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))).collect();
         (PolyMesh::new(positions, faces), uv)
     }
 
@@ -265,77 +220,42 @@ impl BSplineSurface {
         let diag = bbox_diagonal(&self.control).max(f64::MIN_POSITIVE);
         let tol = tolerance * diag;
         let ((u0, u1), (v0, v1)) = self.domain();
-        let (nu, nv) = (
-            (4 * self.u.count()).clamp(16, 64),
-            (4 * self.v.count()).clamp(16, 64),
-        );
+        let (nu, nv) = ((4 * self.u.count()).clamp(16, 64), (4 * self.v.count()).clamp(16, 64));
         let mut samples = Vec::with_capacity((nu + 1) * (nv + 1));
         for j in 0..=nv {
             for i in 0..=nu {
-                let d = self.derivatives(
-                    u0 + (u1 - u0) * i as f64 / nu as f64,
-                    v0 + (v1 - v0) * j as f64 / nv as f64,
-                );
+                let d = self.derivatives(u0 + (u1 - u0) * i as f64 / nu as f64, v0 + (v1 - v0) * j as f64 / nv as f64);
                 // Normal curvatures along S_u and S_v: L/E and N/G.
                 let (ku, kv) = match d.normal() {
-                    Some(n) => (
-                        d.suu.dot(n) / d.su.length_squared(),
-                        d.svv.dot(n) / d.sv.length_squared(),
-                    ),
+                    Some(n) => (d.suu.dot(n) / d.su.length_squared(), d.svv.dot(n) / d.sv.length_squared()),
                     None => (0.0, 0.0),
                 };
                 samples.push((d.s, ku.abs(), kv.abs()));
             }
         }
         let at = |i: usize, j: usize| samples[i + (nu + 1) * j];
-        let need = |len: f64, k: f64| {
-            if k.is_finite() {
-                len * (k / (8.0 * tol)).sqrt()
-            } else {
-                0.0
-            }
-        };
+        let need = |len: f64, k: f64| if k.is_finite() { len * (k / (8.0 * tol)).sqrt() } else { 0.0 };
         // (segments for the sagitta, length) of the longest-needing and of the longest line.
-        let fold = |lines: Vec<(f64, f64)>| {
-            lines
-                .into_iter()
-                .fold((0.0f64, 0.0f64), |a, l| (a.0.max(l.0), a.1.max(l.1)))
-        };
+        let fold = |lines: Vec<(f64, f64)>| lines.into_iter().fold((0.0f64, 0.0f64), |a, l| (a.0.max(l.0), a.1.max(l.1)));
         let (need_u, len_u) = fold(
             (0..=nv)
-                .map(|j| {
-                    (0..nu).fold((0.0, 0.0), |a, i| {
-                        let l = at(i, j).0.distance(at(i + 1, j).0);
-                        (a.0 + need(l, at(i, j).1.max(at(i + 1, j).1)), a.1 + l)
-                    })
-                })
+                .map(|j| (0..nu).fold((0.0, 0.0), |a, i| {
+                    let l = at(i, j).0.distance(at(i + 1, j).0);
+                    (a.0 + need(l, at(i, j).1.max(at(i + 1, j).1)), a.1 + l)
+                }))
                 .collect(),
         );
         let (need_v, len_v) = fold(
             (0..=nu)
-                .map(|i| {
-                    (0..nv).fold((0.0, 0.0), |a, j| {
-                        let l = at(i, j).0.distance(at(i, j + 1).0);
-                        (a.0 + need(l, at(i, j).2.max(at(i, j + 1).2)), a.1 + l)
-                    })
-                })
+                .map(|i| (0..nv).fold((0.0, 0.0), |a, j| {
+                    let l = at(i, j).0.distance(at(i, j + 1).0);
+                    (a.0 + need(l, at(i, j).2.max(at(i, j + 1).2)), a.1 + l)
+                }))
                 .collect(),
         );
-        let h = [
-            len_u / need_u.max(1.0),
-            len_v / need_v.max(1.0),
-            diag / EDGES_PER_DIAGONAL,
-        ]
-        .into_iter()
-        .fold(f64::INFINITY, f64::min);
+        let h = [len_u / need_u.max(1.0), len_v / need_v.max(1.0), diag / EDGES_PER_DIAGONAL].into_iter().fold(f64::INFINITY, f64::min);
         let (along_u, along_v) = (len_u / h, len_v / h);
-        let clamp = |x: f64| {
-            if x.is_finite() {
-                (x.ceil() as usize).clamp(MIN_SEGMENTS, MAX_SEGMENTS)
-            } else {
-                MAX_SEGMENTS
-            }
-        };
+        let clamp = |x: f64| if x.is_finite() { (x.ceil() as usize).clamp(MIN_SEGMENTS, MAX_SEGMENTS) } else { MAX_SEGMENTS };
         [clamp(along_u), clamp(along_v)]
     }
 }
@@ -354,11 +274,7 @@ impl SurfaceDerivatives {
         if !(len > 0.0) {
             return None;
         }
-        let (e, f, g) = (
-            self.su.dot(self.su),
-            self.su.dot(self.sv),
-            self.sv.dot(self.sv),
-        );
+        let (e, f, g) = (self.su.dot(self.su), self.su.dot(self.sv), self.sv.dot(self.sv));
         let (l, m, nn) = (self.suu.dot(n), self.suv.dot(n), self.svv.dot(n));
         let det = e * g - f * f;
         let mean = (e * nn - 2.0 * f * m + g * l) / (2.0 * det);
@@ -392,30 +308,18 @@ impl SurfaceDerivatives {
 
     /// The unit tangent direction of principal curvature `k`: (du, dv) in the kernel of
     /// II − k I, from the better-conditioned of its two rows; S_u's direction at an umbilic.
-    fn principal_direction(
-        &self,
-        k: f64,
-        [e, f, g]: [f64; 3],
-        [l, m, n]: [f64; 3],
-        normal: DVec3,
-    ) -> DVec3 {
+    fn principal_direction(&self, k: f64, [e, f, g]: [f64; 3], [l, m, n]: [f64; 3], normal: DVec3) -> DVec3 {
         let (a, b, c) = (l - k * e, m - k * f, n - k * g);
         // Rows (a, b) and (b, c): (du, dv) = (−b, a) or (c, −b).
         let r1 = (-b, a);
         let r2 = (c, -b);
-        let pick = if a * a + b * b >= b * b + c * c {
-            r1
-        } else {
-            r2
-        };
+        let pick = if a * a + b * b >= b * b + c * c { r1 } else { r2 };
         let t = pick.0 * self.su + pick.1 * self.sv;
         let size = l.abs() + m.abs() + n.abs() + k.abs() * (e + g);
         let row = (a * a + b * b).max(b * b + c * c).sqrt();
         match t.try_normalize() {
             Some(d) if row > 1e-10 * size => d,
-            _ => (self.su - normal * normal.dot(self.su))
-                .try_normalize()
-                .unwrap_or(DVec3::X),
+            _ => (self.su - normal * normal.dot(self.su)).try_normalize().unwrap_or(DVec3::X),
         }
     }
 }

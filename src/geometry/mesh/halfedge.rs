@@ -96,9 +96,7 @@ impl HalfedgeMesh {
             .triangles
             .iter()
             .copied()
-            .filter(|t| {
-                t.iter().all(|&v| (v as usize) < nv) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2]
-            })
+            .filter(|t| t.iter().all(|&v| (v as usize) < nv) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
             .collect();
         let nh = tri.len() * 3;
         let mut m = HalfedgeMesh {
@@ -409,14 +407,9 @@ impl HalfedgeMesh {
         let t = self.twin[h as usize];
         let (a, b, c) = (self.from(h), self.to(h), self.from(prev(h)));
         let flag = self.edge_flag[h as usize];
-        let kind = if self.is_constrained(h) {
-            VertexKind::Slide
-        } else {
-            VertexKind::Free
-        };
+        let kind = if self.is_constrained(h) { VertexKind::Slide } else { VertexKind::Free };
         let m = self.add_vertex(p, kind);
-        self.normal[m as usize] =
-            (self.normal[a as usize] + self.normal[b as usize]).normalize_or_zero();
+        self.normal[m as usize] = (self.normal[a as usize] + self.normal[b as usize]).normalize_or_zero();
         // (a, b, c) → (a, m, c) + (m, b, c).
         let g0 = self.split_face(h, m);
         self.edge_flag[g0 as usize] = flag;
@@ -505,12 +498,7 @@ impl HalfedgeMesh {
         self.pos[keep as usize] = p;
         // New outgoing halfedges for keep, c, d.
         let alive = |m: &Self, e: u32| e != NONE && !m.face_dead[face(e)];
-        let pick = |m: &Self, v: u32, cands: &[u32]| {
-            cands
-                .iter()
-                .copied()
-                .find(|&e| alive(m, e) && m.from(e) == v)
-        };
+        let pick = |m: &Self, v: u32, cands: &[u32]| cands.iter().copied().find(|&e| alive(m, e) && m.from(e) == v);
         let mut cands: Vec<u32> = vec![x, y2];
         cands.extend(removed_out.iter().copied());
         cands.extend(kept_out.iter().copied());
@@ -540,12 +528,8 @@ impl HalfedgeMesh {
         let (hn, hp, tn, tp) = (next(h), prev(h), next(t), prev(t));
         let (a, b, c, d) = (self.from(h), self.to(h), self.from(hp), self.from(tp));
         // Outer twins and flags: b→c (hn), c→a (hp), a→d (tn), d→b (tp).
-        let (o_bc, o_ca, o_ad, o_db) = (
-            self.twin[hn as usize],
-            self.twin[hp as usize],
-            self.twin[tn as usize],
-            self.twin[tp as usize],
-        );
+        let (o_bc, o_ca, o_ad, o_db) =
+            (self.twin[hn as usize], self.twin[hp as usize], self.twin[tn as usize], self.twin[tp as usize]);
         let (f_bc, f_ca, f_ad, f_db) = (
             self.edge_flag[hn as usize],
             self.edge_flag[hp as usize],
@@ -579,17 +563,9 @@ impl HalfedgeMesh {
     /// interior edge between two boundary vertices, no isolated triangle or three-edge boundary
     /// loop, and the opposite vertices keep valence ≥ 3 (≥ 2 on the boundary). `stamp` is scratch
     /// space (one u32 per vertex) with a generation counter.
-    pub fn collapse_is_topologically_ok(
-        &self,
-        h: u32,
-        stamp: &mut Stamp,
-        ring: &mut Vec<u32>,
-    ) -> bool {
+    pub fn collapse_is_topologically_ok(&self, h: u32, stamp: &mut Stamp, ring: &mut Vec<u32>) -> bool {
         let (a, b) = (self.from(h), self.to(h));
-        if self.locked[a as usize]
-            || self.locked[b as usize]
-            || self.edge_flag[h as usize] & EDGE_FROZEN != 0
-        {
+        if self.locked[a as usize] || self.locked[b as usize] || self.edge_flag[h as usize] & EDGE_FROZEN != 0 {
             return false;
         }
         let t = self.twin[h as usize];
@@ -697,13 +673,7 @@ impl HalfedgeMesh {
                 kf += 1;
             }
         }
-        let hmap = |h: u32| {
-            if h == NONE {
-                NONE
-            } else {
-                3 * fmap[face(h)] + h % 3
-            }
-        };
+        let hmap = |h: u32| if h == NONE { NONE } else { 3 * fmap[face(h)] + h % 3 };
         let mut tri = Vec::with_capacity(kf as usize);
         let mut twin = Vec::with_capacity(3 * kf as usize);
         let mut edge_flag = Vec::with_capacity(3 * kf as usize);
@@ -830,10 +800,7 @@ pub struct Stamp {
 
 impl Stamp {
     pub fn new(n: usize) -> Self {
-        Self {
-            marks: vec![0; n],
-            generation: 0,
-        }
+        Self { marks: vec![0; n], generation: 0 }
     }
 
     /// A fresh generation: no vertex is marked with it yet.

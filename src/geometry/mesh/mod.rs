@@ -11,6 +11,7 @@ pub mod weld;
 
 use glam::DVec3;
 
+
 /// A triangle mesh with f64 positions. Connectivity is derived by [`topology::Topology`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
@@ -20,10 +21,7 @@ pub struct TriMesh {
 
 impl TriMesh {
     pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
-        Self {
-            positions,
-            triangles,
-        }
+        Self { positions, triangles }
     }
 
     pub fn vertex_count(&self) -> usize {
@@ -55,21 +53,13 @@ impl TriMesh {
                 hi = hi.max(*p);
             }
         }
-        if lo.x > hi.x {
-            0.0
-        } else {
-            (hi - lo).length()
-        }
+        if lo.x > hi.x { 0.0 } else { (hi - lo).length() }
     }
 
     /// Corner positions of face `f`.
     pub fn face_points(&self, f: usize) -> [DVec3; 3] {
         let t = self.triangles[f];
-        [
-            self.positions[t[0] as usize],
-            self.positions[t[1] as usize],
-            self.positions[t[2] as usize],
-        ]
+        [self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]]
     }
 
     /// Area vector (normal times area) of face `f`, following its orientation.
@@ -87,9 +77,7 @@ impl TriMesh {
                 n[v as usize] += a;
             }
         }
-        n.into_iter()
-            .map(|v| v.try_normalize().unwrap_or(DVec3::Z))
-            .collect()
+        n.into_iter().map(|v| v.try_normalize().unwrap_or(DVec3::Z)).collect()
     }
 }
 
@@ -98,10 +86,9 @@ pub fn bbox(points: &[DVec3]) -> (DVec3, DVec3) {
     if points.is_empty() {
         return (DVec3::ZERO, DVec3::ZERO);
     }
-    points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    )
+    points
+        .iter()
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
 }
 
 /// The diagonal of [`bbox`]: the unit of every relative tolerance.
@@ -139,10 +126,7 @@ pub struct Face {
 
 impl Face {
     pub fn triangle(t: [u32; 3]) -> Self {
-        Self {
-            corners: [t[0], t[1], t[2], u32::MAX],
-            len: 3,
-        }
+        Self { corners: [t[0], t[1], t[2], u32::MAX], len: 3 }
     }
 
     pub fn quad(q: [u32; 4]) -> Self {
@@ -213,11 +197,7 @@ impl PolyMesh {
 
     /// Corner positions of face `f`, in order.
     pub fn face_points(&self, f: usize) -> Vec<DVec3> {
-        self.faces[f]
-            .corners()
-            .iter()
-            .map(|&v| self.positions[v as usize])
-            .collect()
+        self.faces[f].corners().iter().map(|&v| self.positions[v as usize]).collect()
     }
 
     /// Area vector of face `f` (normal times area; for a quad the sum over its two triangles,
@@ -234,28 +214,19 @@ impl PolyMesh {
 
     /// The triangles of every face ([`Face::triangles`]), face by face.
     pub fn triangulated(&self) -> TriMesh {
-        TriMesh::new(
-            self.positions.clone(),
-            self.faces.iter().flat_map(|f| f.triangles()).collect(),
-        )
+        TriMesh::new(self.positions.clone(), self.faces.iter().flat_map(|f| f.triangles()).collect())
     }
 }
 
 impl From<TriMesh> for PolyMesh {
     fn from(m: TriMesh) -> Self {
-        Self {
-            positions: m.positions,
-            faces: m.triangles.into_iter().map(Face::triangle).collect(),
-        }
+        Self { positions: m.positions, faces: m.triangles.into_iter().map(Face::triangle).collect() }
     }
 }
 
 impl From<&TriMesh> for PolyMesh {
     fn from(m: &TriMesh) -> Self {
-        Self {
-            positions: m.positions.clone(),
-            faces: m.triangles.iter().map(|&t| Face::triangle(t)).collect(),
-        }
+        Self { positions: m.positions.clone(), faces: m.triangles.iter().map(|&t| Face::triangle(t)).collect() }
     }
 }
 

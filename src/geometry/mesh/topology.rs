@@ -260,11 +260,7 @@ mod tests {
             let n = 4 + round % 9;
             let pick = |rng: &mut Rng| ((rng.uniform() * n as f64) as u32).min(n as u32 - 1);
             let faces: Vec<Vec<u32>> = (0..3 + round)
-                .map(|_| {
-                    (0..if rng.uniform() < 0.5 { 3 } else { 4 })
-                        .map(|_| pick(&mut rng))
-                        .collect()
-                })
+                .map(|_| (0..if rng.uniform() < 0.5 { 3 } else { 4 }).map(|_| pick(&mut rng)).collect())
                 .collect();
             let soup = Soup { n, faces };
             let topo = Topology::new(&soup);
@@ -272,9 +268,7 @@ mod tests {
             for (f, c) in soup.faces.iter().enumerate() {
                 for k in 0..c.len() {
                     let (a, b) = (c[k], c[(k + 1) % c.len()]);
-                    map.entry([a.min(b), a.max(b)])
-                        .or_default()
-                        .push((f as u32, k as u8));
+                    map.entry([a.min(b), a.max(b)]).or_default().push((f as u32, k as u8));
                 }
             }
             let edges: Vec<[u32; 2]> = map.keys().copied().collect();

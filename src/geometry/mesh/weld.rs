@@ -96,25 +96,14 @@ pub fn weld_with_face_map(mesh: &TriMesh, tolerance: f64) -> (TriMesh, WeldRepor
             report.dropped_faces += 1;
             continue;
         }
-        let f = [
-            rep_of[t[0] as usize],
-            rep_of[t[1] as usize],
-            rep_of[t[2] as usize],
-        ];
+        let f = [rep_of[t[0] as usize], rep_of[t[1] as usize], rep_of[t[2] as usize]];
         if f[0] == f[1] || f[1] == f[2] || f[0] == f[2] {
             report.dropped_faces += 1;
             continue;
         }
-        let [a, b, c] = [
-            reps[f[0] as usize],
-            reps[f[1] as usize],
-            reps[f[2] as usize],
-        ];
+        let [a, b, c] = [reps[f[0] as usize], reps[f[1] as usize], reps[f[2] as usize]];
         let twice_area = (b - a).cross(c - a).length();
-        let longest2 = (b - a)
-            .length_squared()
-            .max((c - b).length_squared())
-            .max((a - c).length_squared());
+        let longest2 = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
         // Written so that NaN counts as degenerate.
         let has_area = twice_area > AREA_REL * longest2 && 0.5 * twice_area >= abs_area;
         if !has_area {
@@ -190,11 +179,7 @@ fn merge_vertices(positions: &[DVec3], tolerance: f64) -> Vec<u32> {
     if !usable {
         // Exact merging: key on the bit patterns (normalising -0.0).
         for (i, p) in positions.iter().enumerate() {
-            let key = (
-                (p.x + 0.0).to_bits() as i64,
-                (p.y + 0.0).to_bits() as i64,
-                (p.z + 0.0).to_bits() as i64,
-            );
+            let key = ((p.x + 0.0).to_bits() as i64, (p.y + 0.0).to_bits() as i64, (p.z + 0.0).to_bits() as i64);
             let r = *cells.entry(key).or_insert(i as u32);
             remap.push(r);
         }
@@ -225,16 +210,8 @@ fn merge_vertices(positions: &[DVec3], tolerance: f64) -> Vec<u32> {
         // the neighbouring cells the query ball reaches.
         let mut found = scan(&cells, &next, own, *p);
         if found == NONE {
-            let lo = (
-                coord(p.x - tolerance),
-                coord(p.y - tolerance),
-                coord(p.z - tolerance),
-            );
-            let hi = (
-                coord(p.x + tolerance),
-                coord(p.y + tolerance),
-                coord(p.z + tolerance),
-            );
+            let lo = (coord(p.x - tolerance), coord(p.y - tolerance), coord(p.z - tolerance));
+            let hi = (coord(p.x + tolerance), coord(p.y + tolerance), coord(p.z + tolerance));
             // Saturated coordinates: never more than two cells per axis.
             for cx in lo.0..=hi.0.min(lo.0.saturating_add(1)) {
                 for cy in lo.1..=hi.1.min(lo.1.saturating_add(1)) {
@@ -257,3 +234,4 @@ fn merge_vertices(positions: &[DVec3], tolerance: f64) -> Vec<u32> {
     }
     remap
 }
+

@@ -42,9 +42,7 @@ impl StageError {
     pub fn remesh_to(&self) -> Option<usize> {
         match self {
             StageError::StAdapted(crate::st_adapted::StAdaptedError::TooManyFaces(e))
-            | StageError::StSupport(crate::st_support::StSupportError::TooManyFaces(e)) => {
-                Some(e.suggested())
-            }
+            | StageError::StSupport(crate::st_support::StSupportError::TooManyFaces(e)) => Some(e.suggested()),
             _ => None,
         }
     }

@@ -21,12 +21,10 @@ use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
-use crate::pipeline::fields::{field, Energy, Field};
-use crate::pipeline::panel_output::{
-    export_panels, f32s, panel_fields, support_fields, PanelExport,
-};
+use crate::pipeline::fields::{field, Energy, Field, StageId};
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
-use crate::progress::{ignore, Clock, Progress};
+use crate::progress::{ignore, Cancelled, Clock, Progress};
 use crate::reference::Reference;
 use crate::solver::TermStats;
 use crate::sq::params::{SqParams, Until};
@@ -35,9 +33,9 @@ use crate::sq::segments::{grid_spacing, line_segments, LINE_LENGTH};
 use crate::sq::{compute, SqError, SqEvent, SqResult};
 
 /// Stage name of the method in the worker protocol (the design link's `method=sq`).
-pub const STAGE: &str = "sq";
+pub const STAGE: StageId = StageId::Sq;
 /// Snapshot of H at the reference vertices, sent when SQ refuses the surface (Sec. 6.3).
-pub const REFUSED_STAGE: &str = "sq.refused";
+pub const REFUSED_STAGE: StageId = StageId::SqRefused;
 /// Least time between two live snapshots (ms); every iteration still sends its energies.
 pub const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
 /// Chord tolerance of the live panels, relative to the diagonal (coarser than the export's).
@@ -58,14 +56,8 @@ pub struct SqSummary {
 fn energies(terms: &[TermStats], switched_on_only: bool) -> Vec<Energy> {
     let on = |t: &&TermStats| !switched_on_only || t.weight > 0.0;
     let total: f64 = terms.iter().filter(on).map(|t| t.energy).sum();
-    let mut out = vec![Energy {
-        name: "total".into(),
-        value: total,
-    }];
-    out.extend(terms.iter().filter(on).map(|t| Energy {
-        name: t.name.clone(),
-        value: t.energy,
-    }));
+    let mut out = vec![Energy { name: "total".into(), value: total }];
+    out.extend(terms.iter().filter(on).map(|t| Energy { name: t.name.clone(), value: t.energy }));
     out
 }
 
@@ -80,236 +72,16 @@ pub fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
 
 /// Runs the method on `reference`, streaming every stage to `sink`; returns the summary after
 /// sending the display fields and the files.
-pub fn run(
-    reference: &Reference,
-    params: &SqParams,
-    clock: Clock,
-    sink: &mut dyn Sink,
-) -> Result<SqSummary, StageError> {
-    let start_ms = sink.now_ms();
-    let diag = reference.diagonal();
-    let mut last_snapshot = f64::NEG_INFINITY;
-    let (mut points, mut length) = (Vec::new(), 0.0);
-    let mut faces: Vec<crate::geometry::mesh::Face> = Vec::new();
-    // One count across the stages: iterations done, and at most how many there will be.
-    let [warm, full, projection] = params.sphere_iterations;
-    let later = match params.until {
-        Until::Congruence => 0,
-        Until::Remesh => params.fairing_iterations + 1,
-        Until::Final => params.fairing_iterations + 1 + warm + full + 2 * projection + 1,
-    };
-    let mut planned = params.lc_iterations + params.torsal_iterations + later;
-    let mut done = 0usize;
-    let mut lc_done = 0usize;
-    // Iterations of earlier starts of the congruence (a restart from constant radii).
-    let mut base = 0usize;
-    // The first live snapshot of Q′ and of the panels goes out at once, later ones when due.
-    let (mut first_fairing, mut first_spheres) = (true, true);
-    let mut on_event = |e: SqEvent| -> Result<(), crate::progress::Cancelled> {
-        let mut due = |sink: &mut dyn Sink| {
-            let now = sink.now_ms();
-            let due = now - last_snapshot >= SNAPSHOT_INTERVAL_MS;
-            if due {
-                last_snapshot = now;
-            }
-            due
-        };
-        match e {
-            SqEvent::Progress(p) => report(
-                sink,
-                STAGE,
-                Progress::new(p.step, done.min(planned), planned),
-                Vec::new(),
-                start_ms,
-            ),
-            SqEvent::Started { points: p, lines } => {
-                points = p.to_vec();
-                length = LINE_LENGTH * grid_spacing(params.grid, &points);
-                let initial = line_segments(&points, lines, length);
-                sink.snapshot(
-                    STAGE,
-                    0,
-                    vec![
-                        segments_field(field::SQ_INITIAL_LINES, &initial),
-                        segments_field(field::SQ_LINES, &initial),
-                    ],
-                );
-                last_snapshot = sink.now_ms();
-                report(
-                    sink,
-                    STAGE,
-                    Progress::new("line_congruence", 0, planned),
-                    Vec::new(),
-                    start_ms,
-                )
-            }
-            SqEvent::Iteration {
-                step,
-                iteration,
-                terms,
-                lines,
-            } => {
-                // Step 1 may converge early: the count goes on from where it stopped.
-                if step == crate::sq::optimization::SqStep::LineCongruence {
-                    lc_done = base + iteration;
-                    done = lc_done;
-                } else {
-                    planned = lc_done + params.torsal_iterations + later;
-                    done = lc_done + iteration;
-                }
-                let go = report(
-                    sink,
-                    STAGE,
-                    Progress::new(step.key(), done, planned),
-                    energies(terms, false),
-                    start_ms,
-                );
-                if go.is_ok() && due(sink) {
-                    sink.snapshot(
-                        STAGE,
-                        done as u32,
-                        vec![segments_field(
-                            field::SQ_LINES,
-                            &line_segments(&points, &lines, length),
-                        )],
-                    );
-                }
-                go
-            }
-            SqEvent::Restarted { start, lines } => {
-                base = done;
-                planned = done + params.lc_iterations + params.torsal_iterations + later;
-                sink.snapshot(
-                    STAGE,
-                    done as u32,
-                    vec![segments_field(
-                        field::SQ_LINES,
-                        &line_segments(&points, lines, length),
-                    )],
-                );
-                report(
-                    sink,
-                    STAGE,
-                    Progress::new(start.key(), done, planned),
-                    Vec::new(),
-                    start_ms,
-                )
-            }
-            SqEvent::Congruence(c) => {
-                done = lc_done + c.torsal_iterations;
-                planned = done + later;
-                sink.snapshot(
-                    STAGE,
-                    done as u32,
-                    display_fields(&CongruenceSegments::of(c)),
-                );
-                report(
-                    sink,
-                    STAGE,
-                    Progress::new("cross_field", done, planned),
-                    Vec::new(),
-                    start_ms,
-                )
-            }
-            SqEvent::Remeshed { mesh } => {
-                faces = mesh.faces.clone();
-                sink.snapshot(
-                    STAGE,
-                    done as u32,
-                    vec![segments_field(
-                        field::SQ_QUAD_MESH,
-                        &mesh_edge_segments(mesh),
-                    )],
-                );
-                Ok(())
-            }
-            SqEvent::Fairing {
-                iteration,
-                terms,
-                positions,
-            } => {
-                done += 1;
-                let go = report(
-                    sink,
-                    STAGE,
-                    Progress::new("fairing", done, planned),
-                    energies(terms, false),
-                    start_ms,
-                );
-                if go.is_ok()
-                    && (std::mem::take(&mut first_fairing) | due(sink))
-                    && !faces.is_empty()
-                {
-                    let mesh = PolyMesh::new(positions.to_vec(), faces.clone());
-                    sink.snapshot(
-                        STAGE,
-                        iteration as u32,
-                        vec![segments_field(
-                            field::SQ_QUAD_MESH,
-                            &mesh_edge_segments(&mesh),
-                        )],
-                    );
-                }
-                go
-            }
-            SqEvent::QuadMesh(q) => {
-                faces = q.mesh.faces.clone();
-                done += 1;
-                sink.snapshot(
-                    STAGE,
-                    done as u32,
-                    vec![segments_field(
-                        field::SQ_QUAD_MESH,
-                        &mesh_edge_segments(&q.mesh),
-                    )],
-                );
-                report(
-                    sink,
-                    STAGE,
-                    Progress::new("quad_mesh", done, planned),
-                    Vec::new(),
-                    start_ms,
-                )
-            }
-            SqEvent::Spheres {
-                phase,
-                terms,
-                positions,
-                spheres,
-                ..
-            } => {
-                done += 1;
-                let go = report(
-                    sink,
-                    STAGE,
-                    Progress::new(phase.key(), done.min(planned), planned),
-                    energies(terms, true),
-                    start_ms,
-                );
-                if go.is_ok() && (std::mem::take(&mut first_spheres) | due(sink)) {
-                    sink.snapshot(
-                        STAGE,
-                        done as u32,
-                        live_panels(positions, &faces, spheres, diag),
-                    );
-                }
-                go
-            }
-        }
-    };
+pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<SqSummary, StageError> {
+    let mut stream = Stream::new(sink, params, reference.diagonal());
+    let mut on_event = |e: SqEvent| stream.event(e);
     let result = match compute(reference, params, clock, &mut on_event) {
         Ok(r) => r,
-        Err(
-            e @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. }),
-        ) => {
+        Err(e @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
             // Exact H at the vertices of a B-spline reference (cached for the app's colour map).
             if let Ok(c) = reference.curvature(&JetParams::default(), &mut ignore) {
                 let h = c.vertices.iter().map(|v| v.mean as f32).collect();
-                sink.snapshot(
-                    REFUSED_STAGE,
-                    0,
-                    vec![Field::f32(field::MEAN_CURVATURE, 1, h)],
-                );
+                stream.sink.snapshot(REFUSED_STAGE, 0, vec![Field::f32(field::MEAN_CURVATURE, 1, h)]);
             }
             return Err(e.into());
         }
@@ -319,54 +91,171 @@ pub fn run(
     let (report, files) = export(reference, &result, params, &segments, clock);
     let mut fields = display_fields(&segments);
     if let Some(q) = &result.quad_mesh {
-        let mesh = result
-            .sq_mesh
-            .as_ref()
-            .map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
-        fields.push(segments_field(
-            field::SQ_QUAD_MESH,
-            &mesh_edge_segments(mesh),
-        ));
+        let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
+        fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
     }
     if let Some(f) = &result.sq_mesh {
         fields.extend(panel_fields(&f.mesh.panels));
-        fields.extend(support_fields(
-            &f.mesh.support.geometry,
-            &f.mesh.support.axis_segments(),
-        ));
+        fields.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
     }
+    let (sink, planned) = (stream.sink, stream.planned);
     sink.snapshot(STAGE, planned as u32, fields);
     sink.files(STAGE, files);
-    Ok(SqSummary {
-        section: SqSection::of(&result, params),
-        report,
-    })
+    Ok(SqSummary { section: SqSection::of(&result, params), report })
+}
+
+/// What the stage streams while the method runs, with one progress count across its steps:
+/// iterations done and at most how many there will be.
+struct Stream<'a> {
+    sink: &'a mut dyn Sink,
+    params: &'a SqParams,
+    start_ms: f64,
+    diag: f64,
+    last_snapshot: f64,
+    /// The grid's points and the length the lines are drawn at.
+    points: Vec<DVec3>,
+    length: f64,
+    /// The quad mesh's faces, for Q′ and the live panels.
+    faces: Vec<crate::geometry::mesh::Face>,
+    planned: usize,
+    done: usize,
+    lc_done: usize,
+    /// Iterations of earlier starts of the congruence (a restart from constant radii).
+    base: usize,
+    /// Iterations after the congruence.
+    later: usize,
+    /// The first live snapshot of Q′ and of the panels goes out at once, later ones when due.
+    first_fairing: bool,
+    first_spheres: bool,
+}
+
+impl<'a> Stream<'a> {
+    fn new(sink: &'a mut dyn Sink, params: &'a SqParams, diag: f64) -> Self {
+        let [warm, full, projection] = params.sphere_iterations;
+        let later = match params.until {
+            Until::Congruence => 0,
+            Until::Remesh => params.fairing_iterations + 1,
+            Until::Final => params.fairing_iterations + 1 + warm + full + 2 * projection + 1,
+        };
+        Self {
+            start_ms: sink.now_ms(),
+            sink,
+            params,
+            diag,
+            last_snapshot: f64::NEG_INFINITY,
+            points: Vec::new(),
+            length: 0.0,
+            faces: Vec::new(),
+            planned: params.lc_iterations + params.torsal_iterations + later,
+            done: 0,
+            lc_done: 0,
+            base: 0,
+            later,
+            first_fairing: true,
+            first_spheres: true,
+        }
+    }
+
+    /// Whether a live snapshot is due.
+    fn due(&mut self) -> bool {
+        let now = self.sink.now_ms();
+        let due = now - self.last_snapshot >= SNAPSHOT_INTERVAL_MS;
+        if due {
+            self.last_snapshot = now;
+        }
+        due
+    }
+
+    fn report(&mut self, step: &str, energies: Vec<Energy>) -> Result<(), Cancelled> {
+        report(self.sink, STAGE, Progress::new(step, self.done.min(self.planned), self.planned), energies, self.start_ms)
+    }
+
+    fn lines(&mut self, iteration: usize, name: &'static str, lines: &[DVec3]) {
+        self.sink.snapshot(STAGE, iteration as u32, vec![segments_field(name, &line_segments(&self.points, lines, self.length))]);
+    }
+
+    fn quad_mesh(&mut self, iteration: usize, mesh: &PolyMesh) {
+        self.sink.snapshot(STAGE, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh))]);
+    }
+
+    fn event(&mut self, e: SqEvent) -> Result<(), Cancelled> {
+        match e {
+            SqEvent::Progress(p) => self.report(p.step, Vec::new()),
+            SqEvent::Started { points, lines } => {
+                self.points = points.to_vec();
+                self.length = LINE_LENGTH * grid_spacing(self.params.grid, &self.points);
+                let initial = line_segments(&self.points, lines, self.length);
+                self.sink.snapshot(STAGE, 0, vec![segments_field(field::SQ_INITIAL_LINES, &initial), segments_field(field::SQ_LINES, &initial)]);
+                self.last_snapshot = self.sink.now_ms();
+                self.report("line_congruence", Vec::new())
+            }
+            SqEvent::Iteration { step, iteration, terms, lines } => {
+                // Step 1 may converge early: the count goes on from where it stopped.
+                if step == crate::sq::optimization::SqStep::LineCongruence {
+                    self.lc_done = self.base + iteration;
+                    self.done = self.lc_done;
+                } else {
+                    self.planned = self.lc_done + self.params.torsal_iterations + self.later;
+                    self.done = self.lc_done + iteration;
+                }
+                let go = self.report(step.key(), energies(terms, false));
+                if go.is_ok() && self.due() {
+                    self.lines(self.done, field::SQ_LINES, &lines);
+                }
+                go
+            }
+            SqEvent::Restarted { start, lines } => {
+                self.base = self.done;
+                self.planned = self.done + self.params.lc_iterations + self.params.torsal_iterations + self.later;
+                self.lines(self.done, field::SQ_LINES, lines);
+                self.report(start.key(), Vec::new())
+            }
+            SqEvent::Congruence(c) => {
+                self.done = self.lc_done + c.torsal_iterations;
+                self.planned = self.done + self.later;
+                self.sink.snapshot(STAGE, self.done as u32, display_fields(&CongruenceSegments::of(c)));
+                self.report("cross_field", Vec::new())
+            }
+            SqEvent::Remeshed { mesh } => {
+                self.faces = mesh.faces.clone();
+                self.quad_mesh(self.done, mesh);
+                Ok(())
+            }
+            SqEvent::Fairing { iteration, terms, positions } => {
+                self.done += 1;
+                let go = self.report("fairing", energies(terms, false));
+                if go.is_ok() && (std::mem::take(&mut self.first_fairing) | self.due()) && !self.faces.is_empty() {
+                    self.quad_mesh(iteration, &PolyMesh::new(positions.to_vec(), self.faces.clone()));
+                }
+                go
+            }
+            SqEvent::QuadMesh(q) => {
+                self.faces = q.mesh.faces.clone();
+                self.done += 1;
+                self.quad_mesh(self.done, &q.mesh);
+                self.report("quad_mesh", Vec::new())
+            }
+            SqEvent::Spheres { phase, terms, positions, spheres, .. } => {
+                self.done += 1;
+                let go = self.report(phase.key(), energies(terms, true));
+                if go.is_ok() && (std::mem::take(&mut self.first_spheres) | self.due()) {
+                    let fields = live_panels(positions, &self.faces, spheres, self.diag);
+                    self.sink.snapshot(STAGE, self.done as u32, fields);
+                }
+                go
+            }
+        }
+    }
 }
 
 /// Panels of the current spheres, coarsely tessellated, for the live view.
-fn live_panels(
-    positions: &[DVec3],
-    faces: &[crate::geometry::mesh::Face],
-    spheres: &[Sphere],
-    diag: f64,
-) -> Vec<Field> {
+fn live_panels(positions: &[DVec3], faces: &[crate::geometry::mesh::Face], spheres: &[Sphere], diag: f64) -> Vec<Field> {
     if faces.is_empty() || faces.len() != spheres.len() {
         return Vec::new();
     }
-    let sm = SphereMesh::new(
-        PolyMesh::new(positions.to_vec(), faces.to_vec()),
-        spheres.to_vec(),
-        BoundaryArcRule::Parallel(DVec3::ZERO),
-    );
-    let mut fields = panel_fields(&build_live_panels(
-        &sm,
-        LIVE_PANEL_TOLERANCE * diag,
-        EdgeArcs::Intersection,
-    ));
-    fields.push(segments_field(
-        field::SQ_QUAD_MESH,
-        &mesh_edge_segments(&sm.mesh),
-    ));
+    let sm = SphereMesh::new(PolyMesh::new(positions.to_vec(), faces.to_vec()), spheres.to_vec(), BoundaryArcRule::Parallel(DVec3::ZERO));
+    let mut fields = panel_fields(&build_live_panels(&sm, LIVE_PANEL_TOLERANCE * diag, EdgeArcs::Intersection));
+    fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(&sm.mesh)));
     fields
 }
 
@@ -382,11 +271,7 @@ pub fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
         segments_field(field::SQ_INITIAL_LINES, &s.initial_lines),
         segments_field(field::SQ_LINES, &s.lines),
         segments_field(field::SQ_CROSS_FIELD, &s.cross_field),
-        Field::f32(
-            field::SQ_CROSS_FIELD_ANGLE,
-            1,
-            s.cross_field_angle_deg.iter().map(|&a| a as f32).collect(),
-        ),
+        Field::f32(field::SQ_CROSS_FIELD_ANGLE, 1, s.cross_field_angle_deg.iter().map(|&a| a as f32).collect()),
         segments_field(field::SQ_NO_REAL_QUADS, &s.no_real_quads),
     ]
 }
@@ -404,94 +289,58 @@ pub fn export(
 ) -> (Report, Vec<ExportFile>) {
     let c = &result.congruence;
     let section = SqSection::of(result, params);
-    let ((u0, u1), (v0, v1)) = reference
-        .spline()
-        .map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
+    let ((u0, u1), (v0, v1)) = reference.spline().map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
     let json = CongruenceJson::of(c, params.theta_deg, params.alpha_deg, [[u0, u1], [v0, v1]]);
     let extras = serde_json::json!({
-        "method": STAGE,
+        "method": STAGE.key(),
         "theta_deg": params.theta_deg,
         "alpha_deg": params.alpha_deg,
         "grid": c.grid,
         "congruence": &section.congruence,
     });
     let mut files = vec![
-        ExportFile::new(
-            "congruence.glb",
-            "model/gltf-binary",
-            congruence_glb(reference.mesh(), segments, extras),
-        ),
-        ExportFile::new(
-            "congruence.json",
-            "application/json",
-            json.to_json().into_bytes(),
-        ),
+        ExportFile::new("congruence.glb", "model/gltf-binary", congruence_glb(reference.mesh(), segments, extras)),
+        ExportFile::new("congruence.json", "application/json", json.to_json().into_bytes()),
     ];
     let mut timings = c.timings_ms.clone();
-    timings.push((
-        "lc_iteration_median".into(),
-        c.lc_iteration_median_ms().unwrap_or(0.0),
-    ));
-    timings.push((
-        "torsal_iteration_median".into(),
-        c.torsal_iteration_median_ms().unwrap_or(0.0),
-    ));
+    timings.push(("lc_iteration_median".into(), c.lc_iteration_median_ms().unwrap_or(0.0)));
+    timings.push(("torsal_iteration_median".into(), c.torsal_iteration_median_ms().unwrap_or(0.0)));
     timings.extend(result.timings_ms.iter().cloned());
-    let mesh = result.quad_mesh.as_ref().map(|q| {
-        result
-            .sq_mesh
-            .as_ref()
-            .map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh)
-    });
+    let mesh = result.quad_mesh.as_ref().map(|q| result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh));
     if let Some(mesh) = mesh {
-        files.push(ExportFile::new(
-            "mesh.obj",
-            "text/plain",
-            write_mesh_obj(mesh, "sq_mesh").into_bytes(),
-        ));
+        files.push(ExportFile::new("mesh.obj", "text/plain", write_mesh_obj(mesh, "sq_mesh").into_bytes()));
     }
     let mut report = match &result.sq_mesh {
         Some(f) => {
-            timings.push((
-                "final_iteration_median".into(),
-                result.final_iteration_median_ms().unwrap_or(0.0),
-            ));
-            let export = PanelExport::new(STAGE, &f.mesh.sphere_mesh, &f.mesh.panels, reference.diagonal(), params.radius_tolerance, &section, &timings)
-                .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
-                .with_support(&f.mesh.support);
+            timings.push(("final_iteration_median".into(), result.final_iteration_median_ms().unwrap_or(0.0)));
+            let export = PanelExport::new(
+                STAGE.key(),
+                &f.mesh.sphere_mesh,
+                &f.mesh.panels,
+                reference.diagonal(),
+                params.radius_tolerance,
+                &section,
+                &timings,
+            )
+            .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
+            .with_support(&f.mesh.support);
             let (report, panel_files) = export_panels(reference, export, clock);
             files.extend(panel_files);
             report
         }
         None => {
-            let mut report = Report::new(STAGE);
+            let mut report = Report::new(STAGE.key());
             report.set_section(&section);
             report.add_timings(&timings);
             report
         }
     };
-    report.input = InputCounts {
-        vertices: reference.mesh().positions.len(),
-        faces: reference.surface().face_count(),
-    };
+    report.input = InputCounts { vertices: reference.mesh().positions.len(), faces: reference.surface().face_count() };
     report.output = match mesh {
-        Some(m) => OutputCounts {
-            vertices: m.vertex_count(),
-            faces: m.face_count(),
-            panels: report.output.panels,
-        },
-        None => OutputCounts {
-            vertices: c.points.len(),
-            faces: c.torsal.len(),
-            panels: 0,
-        },
+        Some(m) => OutputCounts { vertices: m.vertex_count(), faces: m.face_count(), panels: report.output.panels },
+        None => OutputCounts { vertices: c.points.len(), faces: c.torsal.len(), panels: 0 },
     };
-    let total: f64 = c
-        .timings_ms
-        .iter()
-        .chain(&result.timings_ms)
-        .map(|(_, ms)| ms)
-        .sum();
+    let total: f64 = c.timings_ms.iter().chain(&result.timings_ms).map(|(_, ms)| ms).sum();
     report.timings_ms.insert("total".into(), total);
     report.warnings = result.warnings.iter().map(ToString::to_string).collect();
     report.set_verdict(&result.verdict);

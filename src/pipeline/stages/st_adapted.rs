@@ -10,10 +10,8 @@ use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
-use crate::pipeline::fields::{field, Energy, Field};
-use crate::pipeline::panel_output::{
-    export_panels, panel_fields, triangle_mesh_fields, PanelExport,
-};
+use crate::pipeline::fields::{field, Energy, Field, StageId};
+use crate::pipeline::panel_output::{export_panels, panel_fields, triangle_mesh_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
@@ -23,10 +21,10 @@ use crate::st_adapted::report::StAdaptedSection;
 use crate::st_adapted::{compute, StAdaptedEvent, StAdaptedResult};
 
 /// Stage name of the method in the worker protocol (the design link's `method=st`).
-pub const STAGE: &str = "st";
+pub const STAGE: StageId = StageId::StAdapted;
 /// Snapshot stage names: the sizing field on the reference, and the remeshed triangulation.
-pub const SIZING_STAGE: &str = "st.sizing";
-pub const REMESHED_STAGE: &str = "st.remeshed";
+pub const SIZING_STAGE: StageId = StageId::StAdaptedSizing;
+pub const REMESHED_STAGE: StageId = StageId::StAdaptedRemeshed;
 /// Chord tolerance of the live panels (× diag): coarser than the exports, cheap to rebuild.
 pub const LIVE_CHORD_TOLERANCE: f64 = 1e-3;
 /// Least time between two live panel snapshots (ms); every iteration still sends its energies.
@@ -46,12 +44,7 @@ pub struct StAdaptedSummary {
 
 /// Runs the method on `reference`, streaming snapshots and progress to `sink`; returns the
 /// summary after sending the files.
-pub fn run(
-    reference: &Reference,
-    params: &StAdaptedParams,
-    clock: Clock,
-    sink: &mut dyn Sink,
-) -> Result<StAdaptedSummary, StageError> {
+pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: &mut dyn Sink) -> Result<StAdaptedSummary, StageError> {
     let start = sink.now_ms();
     let diag = reference.diagonal();
     let mut last_snapshot = f64::NEG_INFINITY;
@@ -61,67 +54,27 @@ pub fn run(
         match e {
             StAdaptedEvent::Progress(p) => return report(sink, STAGE, p, Vec::new(), start),
             StAdaptedEvent::Sizing { values } => {
-                let (lo, hi) = values.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &g| {
-                    (lo.min(g), hi.max(g))
-                });
+                let (lo, hi) = values.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &g| (lo.min(g), hi.max(g)));
                 sizing_range = Some((lo, hi));
-                sink.snapshot(
-                    SIZING_STAGE,
-                    0,
-                    vec![Field::f32(
-                        field::SIZING,
-                        1,
-                        values.iter().map(|&g| g as f32).collect(),
-                    )],
-                );
+                sink.snapshot(SIZING_STAGE, 0, vec![Field::f32(field::SIZING, 1, values.iter().map(|&g| g as f32).collect())]);
             }
             StAdaptedEvent::Remeshed { mesh } => {
                 remeshed_triangles = mesh.triangles.clone();
                 sink.snapshot(REMESHED_STAGE, 0, triangle_mesh_fields(mesh));
             }
             StAdaptedEvent::Initialized { sphere_mesh } => {
-                send_panels(
-                    sink,
-                    sphere_mesh,
-                    0,
-                    LIVE_CHORD_TOLERANCE * diag,
-                    params.variant,
-                );
+                send_panels(sink, sphere_mesh, 0, LIVE_CHORD_TOLERANCE * diag, params.variant);
                 last_snapshot = sink.now_ms();
             }
-            StAdaptedEvent::Iteration {
-                progress,
-                energy,
-                terms,
-                vertices,
-                spheres,
-            } => {
-                let mut energies = vec![Energy {
-                    name: "total".into(),
-                    value: energy,
-                }];
-                energies.extend(terms.iter().map(|t| Energy {
-                    name: t.name.clone(),
-                    value: t.energy,
-                }));
+            StAdaptedEvent::Iteration { progress, energy, terms, vertices, spheres } => {
+                let mut energies = vec![Energy { name: "total".into(), value: energy }];
+                energies.extend(terms.iter().map(|t| Energy { name: t.name.clone(), value: t.energy }));
                 let Progress { done, total, .. } = progress;
                 let go = report(sink, STAGE, progress, energies, start);
-                if go.is_ok()
-                    && (sink.now_ms() - last_snapshot >= SNAPSHOT_INTERVAL_MS || done == total)
-                {
+                if go.is_ok() && (sink.now_ms() - last_snapshot >= SNAPSHOT_INTERVAL_MS || done == total) {
                     let mesh = TriMesh::new(vertices.to_vec(), remeshed_triangles.clone());
-                    let sm = SphereMesh::new(
-                        mesh,
-                        spheres.to_vec(),
-                        BoundaryArcRule::Parallel(glam::DVec3::ZERO),
-                    );
-                    send_panels(
-                        sink,
-                        &sm,
-                        done as u32,
-                        LIVE_CHORD_TOLERANCE * diag,
-                        params.variant,
-                    );
+                    let sm = SphereMesh::new(mesh, spheres.to_vec(), BoundaryArcRule::Parallel(glam::DVec3::ZERO));
+                    send_panels(sink, &sm, done as u32, LIVE_CHORD_TOLERANCE * diag, params.variant);
                     last_snapshot = sink.now_ms();
                 }
                 return go;
@@ -135,11 +88,7 @@ pub fn run(
     };
     let result = compute(reference, params, clock, &mut on_event)?;
     let (report, files) = export(reference, &result, params, clock);
-    sink.snapshot(
-        STAGE,
-        result.iterations as u32,
-        panel_fields(&result.panels),
-    );
+    sink.snapshot(STAGE, result.iterations as u32, panel_fields(&result.panels));
     sink.files(STAGE, files);
     Ok(StAdaptedSummary {
         report,
@@ -152,29 +101,14 @@ pub fn run(
 }
 
 /// A panel snapshot of the method's stage at `iteration`.
-fn send_panels(
-    sink: &mut dyn Sink,
-    sm: &SphereMesh,
-    iteration: u32,
-    chord_tolerance: f64,
-    variant: EdgeArcs,
-) {
-    sink.snapshot(
-        STAGE,
-        iteration,
-        panel_fields(&build_live_panels(sm, chord_tolerance, variant)),
-    );
+fn send_panels(sink: &mut dyn Sink, sm: &SphereMesh, iteration: u32, chord_tolerance: f64, variant: EdgeArcs) {
+    sink.snapshot(STAGE, iteration, panel_fields(&build_live_panels(sm, chord_tolerance, variant)));
 }
 
 /// The report (method "st") and the export files of a result. `max_distance_to_reference` comes
 /// from the schedule (sampled panels); the timings include "angle_iteration_median"; the
 /// iteration count is `metrics.angle_iterations`.
-pub fn export(
-    reference: &Reference,
-    result: &StAdaptedResult,
-    params: &StAdaptedParams,
-    clock: Clock,
-) -> (Report, Vec<ExportFile>) {
+pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedParams, clock: Clock) -> (Report, Vec<ExportFile>) {
     let m = &result.metrics;
     let variant = result.variant.key();
     let section = StAdaptedSection::of(result);
@@ -183,19 +117,12 @@ pub fn export(
     if let Some(med) = result.angle_iteration_median_ms {
         timings.push(("angle_iteration_median".into(), med));
     }
-    let export = PanelExport::new(
-        STAGE,
-        &result.sphere_mesh,
-        &result.panels,
-        result.diag,
-        params.radius_tolerance,
-        &section,
-        &timings,
-    )
-    .with_extras(serde_json::json!({ "variant": variant }))
-    .with_deviations(&result.panel_deviations)
-    .with_warnings(&result.warnings)
-    .with_verdict(&verdict);
+    let export =
+        PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, &section, &timings)
+            .with_extras(serde_json::json!({ "variant": variant }))
+            .with_deviations(&result.panel_deviations)
+            .with_warnings(&result.warnings)
+            .with_verdict(&verdict);
     let (report, mut files) = export_panels(reference, export, clock);
     files.push(report_file(&report));
     (report, files)

@@ -7,10 +7,8 @@ use serde::{Deserialize, Serialize};
 use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::pipeline::fields::{field, Field};
-use crate::pipeline::panel_output::{
-    export_panels, f32s, panel_fields, support_fields, PanelExport,
-};
+use crate::pipeline::fields::{field, Field, StageId};
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
 use crate::reference::Reference;
@@ -19,7 +17,7 @@ use crate::st_support::{compute, StSupportParams, StSupportResult};
 use crate::stats::Histogram;
 
 /// Stage name of the method in the worker protocol (the design link's `method=st-support`).
-pub const STAGE: &str = "st-support";
+pub const STAGE: StageId = StageId::StSupport;
 
 /// Data for the histograms of Fig. 14 and the Ω display.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -40,25 +38,14 @@ pub struct StSupportSummary {
 }
 
 /// Runs the method on `reference`, sends its display fields and files; returns the summary.
-pub fn run(
-    reference: &Reference,
-    params: &StSupportParams,
-    clock: Clock,
-    sink: &mut dyn Sink,
-) -> Result<StSupportSummary, StageError> {
+pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<StSupportSummary, StageError> {
     let start = sink.now_ms();
-    let result = compute(reference, params, clock, &mut |p| {
-        report(sink, STAGE, p, Vec::new(), start)
-    })?;
+    let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
     let (report, files) = export(reference, &result, params, clock);
     sink.snapshot(STAGE, 1, display_fields(&result));
     sink.files(STAGE, files);
     let a = &result.absolute;
-    let r2_values = if a.at_infinity {
-        &a.d_samples
-    } else {
-        &a.r2_samples
-    };
+    let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
     Ok(StSupportSummary {
         section: StSupportSection::of(&result, params.remesh),
         distinct_radii: report.metrics.as_ref().map_or(0, |m| m.distinct_radii),
@@ -75,15 +62,10 @@ pub fn run(
 
 /// The report (method "st-support") and the export files of a result; distances are measured to
 /// the reference as loaded, also when the method remeshed it.
-pub fn export(
-    reference: &Reference,
-    result: &StSupportResult,
-    params: &StSupportParams,
-    clock: Clock,
-) -> (Report, Vec<ExportFile>) {
+pub fn export(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>) {
     let section = StSupportSection::of(result, params.remesh);
     let export = PanelExport::new(
-        STAGE,
+        STAGE.key(),
         &result.sphere_mesh,
         &result.panels,
         result.diag,
@@ -102,21 +84,10 @@ pub fn export(
 /// Display fields: panels, support, node axes, second envelope.
 pub fn display_fields(result: &StSupportResult) -> Vec<Field> {
     let mut fields = panel_fields(&result.panels);
-    fields.extend(support_fields(
-        &result.support.geometry,
-        &result.support.axis_segments(),
-    ));
+    fields.extend(support_fields(&result.support.geometry, &result.support.axis_segments()));
     if let Some(env) = &result.second_envelope {
-        fields.push(Field::f32(
-            field::ENVELOPE_POSITIONS,
-            3,
-            f32s(env.positions.iter().copied()),
-        ));
-        fields.push(Field::u32(
-            field::ENVELOPE_TRIANGLES,
-            3,
-            env.triangles.iter().flatten().copied().collect(),
-        ));
+        fields.push(Field::f32(field::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));
+        fields.push(Field::u32(field::ENVELOPE_TRIANGLES, 3, env.triangles.iter().flatten().copied().collect()));
     }
     fields
 }

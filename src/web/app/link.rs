@@ -24,8 +24,9 @@ impl App {
             || design.st_support != self.design.st_support
             || design.st_adapted != self.design.st_adapted;
         self.camera_from_link = design.camera;
-        self.st_adapted_sizing.remember(design.st_adapted.sizing);
-        self.st_support_remesh.remember(design.st_support.remesh);
+        for v in &mut self.views {
+            v.link_applied(&design);
+        }
         self.design = design;
         if reference_changed {
             self.load_design_reference();
@@ -34,8 +35,7 @@ impl App {
                 self.camera.yaw = c.yaw as f32;
                 self.camera.pitch = c.pitch as f32;
                 self.camera.distance = c.distance as f32;
-                self.camera.target =
-                    Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
+                self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
             }
             if jet_changed {
                 self.run_method();
@@ -52,11 +52,7 @@ impl App {
             yaw: self.camera.yaw as f64,
             pitch: self.camera.pitch as f64,
             distance: self.camera.distance as f64,
-            target: [
-                self.camera.target.x as f64,
-                self.camera.target.y as f64,
-                self.camera.target.z as f64,
-            ],
+            target: [self.camera.target.x as f64, self.camera.target.y as f64, self.camera.target.z as f64],
         });
         let frag = d.to_fragment();
         if frag != self.last_fragment {
@@ -74,12 +70,7 @@ impl App {
         let base = w
             .and_then(|w| {
                 let l = w.location();
-                Some(format!(
-                    "{}{}{}",
-                    l.origin().ok()?,
-                    l.pathname().ok()?,
-                    l.search().ok()?
-                ))
+                Some(format!("{}{}{}", l.origin().ok()?, l.pathname().ok()?, l.search().ok()?))
             })
             .unwrap_or_default();
         format!("{base}{}", self.last_fragment)

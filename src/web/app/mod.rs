@@ -3,8 +3,10 @@
 //!
 //! - [`state`]: what the app holds of the worker's results;
 //! - [`messages`]: the reducer of worker messages;
-//! - [`panels`]: the side panel's sections, one file per method;
-//! - [`view`]: the viewport (camera, layers, picking);
+//! - [`views`]: one view per method behind one trait: controls, results, layers, what its
+//!   snapshots update;
+//! - [`panels`]: the side panel's shared sections and widgets;
+//! - [`view`]: the viewport (camera, the reference and the method's layers, picking);
 //! - [`link`]: the design link in the URL;
 //! - [`automation`]: the state JSON the end-to-end tests read;
 //! - [`plots`], [`dom`]: painted plots and the page around the app.
@@ -17,6 +19,7 @@ pub mod panels;
 mod plots;
 mod state;
 mod view;
+mod views;
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
@@ -27,15 +30,15 @@ use glam::Vec3;
 use wasm_bindgen::prelude::*;
 
 use crate::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
+use crate::pipeline::fields::StageId;
 use crate::pipeline::protocol::ToWorker;
-use crate::remeshing::Sizing;
 use crate::samples::Sample;
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::ViewerResources;
 use crate::web::worker_client::{Wake, WorkerClient, LIVE_REPAINT_MS};
 use dom::{count_events, make_file_input, now_ms, save_file};
-use panels::SizingMemory;
-use state::{Busy, Download, ScalarView, Scene, SqView, StAdaptedView};
+use state::{Busy, Download, ScalarView, Scene};
+use views::MethodView;
 
 /// How many frames' `ui` times are kept for the state's percentiles.
 const UI_TIMES: usize = 120;
@@ -61,18 +64,12 @@ pub struct App {
     busy: Option<Busy>,
     /// The last stage that finished and how long it took from the request to its result (ms,
     /// in the page, for the automation state).
-    last_run: Option<(String, f64)>,
+    last_run: Option<(StageId, f64)>,
     downloads: Vec<Download>,
     /// Method parameters changed while a slider is held: rerun on release.
     params_dirty: bool,
-    /// ε and N of each method's remeshing, kept while the kind changes.
-    st_adapted_sizing: SizingMemory,
-    st_support_remesh: SizingMemory,
-    show_reference: bool,
-    show_envelope: bool,
-    show_remeshed: bool,
-    /// What the SQ view shows.
-    sq_display: panels::sq::SqDisplay,
+    /// One view per method ([`views::views`]).
+    views: Vec<Box<dyn MethodView>>,
     /// A fresh worker is being given the current design back: keep the view and the message.
     restoring: bool,
     camera: OrbitCamera,
@@ -117,10 +114,7 @@ impl App {
     pub fn new(cc: &eframe::CreationContext<'_>) -> Self {
         let mut backend = String::new();
         if let Some(rs) = cc.wgpu_render_state.as_ref() {
-            rs.renderer
-                .write()
-                .callback_resources
-                .insert(ViewerResources::new(&rs.device, rs.target_format));
+            rs.renderer.write().callback_resources.insert(ViewerResources::new(&rs.device, rs.target_format));
             backend = match rs.adapter.get_info().backend {
                 egui_wgpu::wgpu::Backend::BrowserWebGpu => "WebGPU".into(),
                 egui_wgpu::wgpu::Backend::Gl => "WebGL2".into(),
@@ -133,9 +127,7 @@ impl App {
         let ctx = cc.egui_ctx.clone();
         let repaint: Rc<dyn Fn(Wake)> = Rc::new(move |wake| match wake {
             Wake::Now => ctx.request_repaint(),
-            Wake::Soon => {
-                ctx.request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS))
-            }
+            Wake::Soon => ctx.request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS)),
         });
         let (worker, error) = match WorkerClient::spawn(repaint) {
             Ok(w) => (Some(w), None),
@@ -148,25 +140,10 @@ impl App {
         // Automation: `new Event('sf-cancel')` presses Cancel.
         let (cancel_requests, cancel_listener) = count_events("sf-cancel", &cc.egui_ctx);
         // Automation: `new CustomEvent('sf-download', {detail: 'panels.glb'})` saves that file.
-        let download_requests = Rc::new(RefCell::new(Vec::new()));
-        let download_listener = {
-            let (queue, ctx) = (download_requests.clone(), cc.egui_ctx.clone());
-            let c =
-                Closure::<dyn FnMut(web_sys::CustomEvent)>::new(move |ev: web_sys::CustomEvent| {
-                    if let Some(name) = ev.detail().as_string() {
-                        queue.borrow_mut().push(name);
-                        ctx.request_repaint();
-                    }
-                });
-            web_sys::window().map(|w| {
-                w.add_event_listener_with_callback("sf-download", c.as_ref().unchecked_ref())
-            });
-            Some(c)
-        };
+        let (download_requests, download_listener) = dom::queue_events("sf-download", &cc.egui_ctx);
         let mut app = Self {
             camera_from_link: design.camera,
-            st_adapted_sizing: SizingMemory::of(design.st_adapted.sizing),
-            st_support_remesh: SizingMemory::of(design.st_support.remesh),
+            views: views::views(&design),
             design,
             notices,
             error,
@@ -180,10 +157,6 @@ impl App {
             last_run: None,
             downloads: Vec::new(),
             params_dirty: false,
-            show_reference: false,
-            show_envelope: false,
-            show_remeshed: false,
-            sq_display: panels::sq::SqDisplay::default(),
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -209,7 +182,7 @@ impl App {
             side_panel_heights: (0.0, 0.0),
             copy_link_rect: Rect::NOTHING,
             download_requests,
-            _download_listener: download_listener,
+            _download_listener: Some(download_listener),
             file_input,
             _file_input_closure: closure,
         };
@@ -245,15 +218,13 @@ impl App {
         }
         self.send(&ToWorker::LoadFile { name: file.name() }, Some(&file));
         self.file_in_flight = Some(file);
-        self.busy = Some(Busy::new("import"));
+        self.busy = Some(Busy::new(StageId::Import));
     }
 
     fn send(&mut self, msg: &ToWorker, file: Option<&web_sys::File>) {
         match &self.worker {
             Some(w) => w.send(msg, file),
-            None => {
-                self.error = Some("The pipeline worker is not running; reload the page.".into())
-            }
+            None => self.error = Some("The pipeline worker is not running; reload the page.".into()),
         }
     }
 
@@ -264,28 +235,22 @@ impl App {
         if self.loaded.is_none() {
             return;
         }
-        if self.busy.as_ref().is_some_and(|b| b.stage != "import") {
+        if self.busy.as_ref().is_some_and(|b| b.stage != StageId::Import) {
             self.cancel();
         }
         let stages = self.design.stage_requests();
-        if let Some(l) = self.loaded.as_mut() {
-            l.st_support = None;
-            l.st_adapted = (self.design.method == Method::StAdapted).then(StAdaptedView::default);
-            l.sq = (self.design.method == Method::Sq).then(SqView::default);
-        }
-        if self.design.method == Method::Sq {
-            // A new run shows its congruence again while it optimizes.
-            let d = &mut self.sq_display;
-            (d.lines, d.cross_field, d.surface) = (true, true, true);
+        for v in &mut self.views {
+            if v.method() == self.design.method {
+                v.start();
+            } else {
+                v.clear();
+            }
         }
         if self.design.color == ColorBy::Sizing {
             self.scalars = None;
         }
         self.downloads.clear();
-        let last = stages
-            .last()
-            .map(|s| s.name().to_string())
-            .unwrap_or_default();
+        let last = stages.last().map_or(StageId::Curvature, |s| s.name());
         self.busy = Some(Busy::new(last));
         for stage in stages {
             self.send(&ToWorker::Run(Box::new(stage)), None);
@@ -302,8 +267,7 @@ impl App {
                 self.note_cancel_point();
             } else {
                 // Without shared memory the worker was replaced; its Ready reloads the design.
-                self.notices
-                    .push("Cancelled (the worker was restarted).".into());
+                self.notices.push("Cancelled (the worker was restarted).".into());
             }
         }
         self.busy = None;
@@ -324,11 +288,15 @@ impl App {
                     let selected = self.design.reference == DesignSurface::Sample(s);
                     if ui.selectable_label(selected, s.title()).on_hover_text(s.description()).clicked() && !selected {
                         self.send(&ToWorker::LoadSample(s), None);
-                        self.busy = Some(Busy::new("import"));
+                        self.busy = Some(Busy::new(StageId::Import));
                     }
                 }
             });
-            if ui.button("Open…").on_hover_text("OBJ, glTF (.gltf with embedded data), GLB, or a B-spline surface (.json); or drop a file on the view").clicked() {
+            if ui
+                .button("Open…")
+                .on_hover_text("OBJ, glTF (.gltf with embedded data), GLB, or a B-spline surface (.json); or drop a file on the view")
+                .clicked()
+            {
                 if let Some(input) = &self.file_input {
                     input.set_value("");
                     input.click();
@@ -348,171 +316,142 @@ impl App {
         });
     }
 
+    /// The view of the design's method.
+    fn view(&self) -> &dyn MethodView {
+        let m = self.design.method;
+        self.views.iter().find(|v| v.method() == m).expect("a view per method").as_ref()
+    }
+
     fn side_panel(&mut self, ui: &mut egui::Ui) {
-        let out = egui::ScrollArea::vertical()
-            .auto_shrink([false, false])
-            .show(ui, |ui| {
-                if let Some(err) = self.error.clone() {
-                    egui::Frame::new()
-                        .fill(Color32::from_rgb(90, 24, 24))
-                        .inner_margin(6.0)
-                        .corner_radius(4.0)
-                        .show(ui, |ui| {
-                            ui.label(RichText::new(err).color(Color32::WHITE));
-                            ui.horizontal(|ui| {
-                                if let Some(n) = self.remesh_to {
-                                    if ui
-                                        .small_button(format!("Remesh to about {n} faces and run"))
-                                        .clicked()
-                                    {
-                                        match self.design.method {
-                                            Method::StAdapted => {
-                                                self.design.st_adapted.sizing =
-                                                    Sizing::UniformFaces(n)
-                                            }
-                                            Method::StSupport => {
-                                                self.design.st_support.remesh =
-                                                    Sizing::UniformFaces(n)
-                                            }
-                                            _ => {}
-                                        }
-                                        (self.error, self.remesh_to) = (None, None);
-                                        self.run_method();
-                                    }
-                                }
-                                if ui.small_button("Dismiss").clicked() {
-                                    (self.error, self.remesh_to) = (None, None);
-                                }
-                            });
-                        });
-                    ui.add_space(6.0);
-                }
-                ui.strong("Method");
-                let mut method = self.design.method;
-                egui::ComboBox::from_id_salt("method")
-                    .selected_text(method.title())
-                    .show_ui(ui, |ui| {
-                        for m in Method::ALL {
-                            ui.selectable_value(&mut method, m, m.title());
+        let out = egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
+            if let Some(err) = self.error.clone() {
+                self.error_box(ui, err);
+                ui.add_space(6.0);
+            }
+            self.method_section(ui);
+            ui.separator();
+            self.display_section(ui);
+            ui.separator();
+            if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
+                self.send(&ToWorker::PickObject(k), None);
+                self.busy = Some(Busy::new(StageId::Import));
+            }
+            if self.loaded.is_some() {
+                let results = ui.scope(|ui| self.view().results(ui, &self.design));
+                let bottom = results.response.rect.left_bottom() + egui::vec2(1.0, -1.0);
+                self.results_visible = ui.clip_rect().contains(bottom);
+            }
+            self.downloads_section(ui);
+            self.notices_section(ui);
+        });
+        self.side_panel_heights = (out.content_size.y, out.inner_rect.height());
+    }
+
+    /// The error, with the remesh a method's size refusal offers.
+    fn error_box(&mut self, ui: &mut egui::Ui, err: String) {
+        egui::Frame::new().fill(Color32::from_rgb(90, 24, 24)).inner_margin(6.0).corner_radius(4.0).show(ui, |ui| {
+            ui.label(RichText::new(err).color(Color32::WHITE));
+            ui.horizontal(|ui| {
+                if let Some(n) = self.remesh_to {
+                    if ui.small_button(format!("Remesh to about {n} faces and run")).clicked() {
+                        let m = self.design.method;
+                        if let Some(v) = self.views.iter().find(|v| v.method() == m) {
+                            v.remesh_to(&mut self.design, n);
                         }
-                    });
-                if method != self.design.method {
-                    self.design.method = method;
-                    if method == Method::StAdapted && self.design.color == ColorBy::MeanCurvature {
-                        self.design.color = ColorBy::Sizing;
-                    } else if method != Method::StAdapted && self.design.color == ColorBy::Sizing {
-                        self.design.color = ColorBy::MeanCurvature;
+                        (self.error, self.remesh_to) = (None, None);
+                        self.run_method();
                     }
-                    self.run_method();
                 }
-                ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
-                let mut jet = self.design.jet.clone();
-                let mut degree = jet.degree as u32;
-                ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
-                jet.degree = degree as u8;
-                ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
-                if jet != self.design.jet {
-                    self.design.jet = jet;
-                    self.run_method();
-                }
-                let changed = match self.design.method {
-                    Method::Curvature => false,
-                    Method::StAdapted => panels::st_adapted::controls(
-                        ui,
-                        &mut self.design.st_adapted,
-                        &mut self.st_adapted_sizing,
-                        &mut self.show_reference,
-                        &mut self.show_remeshed,
-                    ),
-                    Method::StSupport => panels::st_support::controls(
-                        ui,
-                        &mut self.design.st_support,
-                        &mut self.st_support_remesh,
-                        &mut self.show_reference,
-                        &mut self.show_envelope,
-                    ),
-                    Method::Sq => {
-                        panels::sq::controls(ui, &mut self.design.sq, &mut self.sq_display)
-                    }
-                };
-                self.params_dirty |= changed;
-                if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
-                    self.params_dirty = false;
-                    self.run_method();
-                }
-                ui.separator();
-                ui.strong("Display");
-                ui.horizontal(|ui| {
-                    for s in Shading::ALL {
-                        ui.radio_value(&mut self.design.shading, s, s.key());
-                    }
-                });
-                ui.checkbox(&mut self.design.edges, "edges");
-                egui::ComboBox::from_label("colour by")
-                    .selected_text(self.design.color.label())
-                    .show_ui(ui, |ui| {
-                        for c in ColorBy::ALL {
-                            ui.selectable_value(&mut self.design.color, c, c.label());
-                        }
-                    });
-                ui.separator();
-                if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
-                    self.send(&ToWorker::PickObject(k), None);
-                    self.busy = Some(Busy::new("import"));
-                }
-                if let Some(l) = &self.loaded {
-                    let results = ui.scope(|ui| match self.design.method {
-                        Method::Curvature => {}
-                        Method::StAdapted => {
-                            if let Some(v) = &l.st_adapted {
-                                panels::st_adapted::results(ui, v);
-                            }
-                        }
-                        Method::StSupport => {
-                            if let Some(v) = &l.st_support {
-                                panels::st_support::results(ui, v);
-                            }
-                        }
-                        Method::Sq => {
-                            if let Some(v) = &l.sq {
-                                panels::sq::results(ui, v, &self.design.sq);
-                            }
-                        }
-                    });
-                    let bottom = results.response.rect.left_bottom() + egui::vec2(1.0, -1.0);
-                    self.results_visible = ui.clip_rect().contains(bottom);
-                }
-                if !self.downloads.is_empty() {
-                    ui.separator();
-                    ui.strong("Downloads");
-                    ui.horizontal_wrapped(|ui| {
-                        for d in &self.downloads {
-                            if ui
-                                .button(&d.name)
-                                .on_hover_text(format!("{} bytes", d.bytes.len()))
-                                .clicked()
-                            {
-                                if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
-                                    self.error = Some(format!("could not save {}: {e:?}", d.name));
-                                }
-                            }
-                        }
-                    });
-                }
-                if !self.notices.is_empty() {
-                    ui.separator();
-                    ui.horizontal(|ui| {
-                        ui.strong("Notices");
-                        if ui.small_button("clear").clicked() {
-                            self.notices.clear();
-                        }
-                    });
-                    for n in self.notices.iter().rev().take(8) {
-                        ui.label(RichText::new(n).small());
-                    }
+                if ui.small_button("Dismiss").clicked() {
+                    (self.error, self.remesh_to) = (None, None);
                 }
             });
-        self.side_panel_heights = (out.content_size.y, out.inner_rect.height());
+        });
+    }
+
+    /// The method, the jet fit, and the method's own controls (a change reruns it).
+    fn method_section(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Method");
+        let mut method = self.design.method;
+        egui::ComboBox::from_id_salt("method").selected_text(method.title()).show_ui(ui, |ui| {
+            for m in Method::ALL {
+                ui.selectable_value(&mut method, m, m.title());
+            }
+        });
+        if method != self.design.method {
+            self.design.method = method;
+            if method == Method::StAdapted && self.design.color == ColorBy::MeanCurvature {
+                self.design.color = ColorBy::Sizing;
+            } else if method != Method::StAdapted && self.design.color == ColorBy::Sizing {
+                self.design.color = ColorBy::MeanCurvature;
+            }
+            self.run_method();
+        }
+        ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
+        let mut jet = self.design.jet.clone();
+        let mut degree = jet.degree as u32;
+        ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
+        jet.degree = degree as u8;
+        ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
+        if jet != self.design.jet {
+            self.design.jet = jet;
+            self.run_method();
+        }
+        let m = self.design.method;
+        let view = self.views.iter_mut().find(|v| v.method() == m).expect("a view per method");
+        self.params_dirty |= view.controls(ui, &mut self.design);
+        if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
+            self.params_dirty = false;
+            self.run_method();
+        }
+    }
+
+    fn display_section(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Display");
+        ui.horizontal(|ui| {
+            for s in Shading::ALL {
+                ui.radio_value(&mut self.design.shading, s, s.key());
+            }
+        });
+        ui.checkbox(&mut self.design.edges, "edges");
+        egui::ComboBox::from_label("colour by").selected_text(self.design.color.label()).show_ui(ui, |ui| {
+            for c in ColorBy::ALL {
+                ui.selectable_value(&mut self.design.color, c, c.label());
+            }
+        });
+    }
+
+    fn downloads_section(&mut self, ui: &mut egui::Ui) {
+        if self.downloads.is_empty() {
+            return;
+        }
+        ui.separator();
+        ui.strong("Downloads");
+        ui.horizontal_wrapped(|ui| {
+            for d in &self.downloads {
+                if ui.button(&d.name).on_hover_text(format!("{} bytes", d.bytes.len())).clicked() {
+                    if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
+                        self.error = Some(format!("could not save {}: {e:?}", d.name));
+                    }
+                }
+            }
+        });
+    }
+
+    fn notices_section(&mut self, ui: &mut egui::Ui) {
+        if self.notices.is_empty() {
+            return;
+        }
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.strong("Notices");
+            if ui.small_button("clear").clicked() {
+                self.notices.clear();
+            }
+        });
+        for n in self.notices.iter().rev().take(8) {
+            ui.label(RichText::new(n).small());
+        }
     }
 
     /// What the tests read of the side panel and the buttons they click.
@@ -527,12 +466,9 @@ impl App {
     }
 }
 
-impl eframe::App for App {
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        let started = now_ms();
-        self.frames += 1;
-        self.handle_messages();
-        self.apply_link_if_changed();
+impl App {
+    /// Downloads, crashes and cancels asked for by automation events, and dropped or picked files.
+    fn take_requests(&mut self, ui: &egui::Ui) {
         let requested: Vec<String> = self.download_requests.borrow_mut().drain(..).collect();
         for name in requested {
             match self.downloads.iter().find(|d| d.name == name) {
@@ -541,48 +477,33 @@ impl eframe::App for App {
                         self.error = Some(format!("could not save {name}: {e:?}"));
                     }
                 }
-                None => self
-                    .notices
-                    .push(format!("no file named '{name}' to download yet")),
+                None => self.notices.push(format!("no file named '{name}' to download yet")),
             }
         }
-        let crashes = std::mem::take(&mut *self.crash_requests.borrow_mut());
-        if crashes > 0 {
+        if std::mem::take(&mut *self.crash_requests.borrow_mut()) > 0 {
             self.send(&ToWorker::Crash, None);
         }
         if std::mem::take(&mut *self.cancel_requests.borrow_mut()) > 0 && self.busy.is_some() {
             self.cancel();
         }
-
         // Dropped files (eframe) and picked files (the Open… dialog).
-        let dropped: Vec<web_sys::File> = ui.input(|i| {
-            i.raw
-                .dropped_files
-                .iter()
-                .filter_map(|f| f.web_file().cloned())
-                .collect()
-        });
+        let dropped: Vec<web_sys::File> = ui.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.web_file().cloned()).collect());
         let picked: Vec<web_sys::File> = self.picked_files.borrow_mut().drain(..).collect();
         if let Some(f) = dropped.into_iter().chain(picked).last() {
             self.load_file(f);
         }
+    }
 
-        egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
+    /// The running stage's progress bar with Cancel; the status bar of a missed guarantee.
+    fn status_bars(&mut self, ui: &mut egui::Ui) {
         if self.busy.is_some() {
             egui::Panel::bottom("progress").show(ui, |ui| {
                 ui.horizontal(|ui| {
                     let (frac, text) = match self.busy.as_ref().and_then(|b| b.progress.as_ref()) {
-                        Some(p) if p.total > 0 => (
-                            p.iteration as f32 / p.total as f32,
-                            format!("{} {} {}/{}", p.stage, p.detail, p.iteration, p.total),
-                        ),
-                        _ => (
-                            0.0,
-                            self.busy
-                                .as_ref()
-                                .map(|b| b.stage.clone())
-                                .unwrap_or_default(),
-                        ),
+                        Some(p) if p.total > 0 => {
+                            (p.iteration as f32 / p.total as f32, format!("{} {} {}/{}", p.stage, p.detail, p.iteration, p.total))
+                        }
+                        _ => (0.0, self.busy.as_ref().map(|b| b.stage.to_string()).unwrap_or_default()),
                     };
                     if ui.button("Cancel").clicked() {
                         self.cancel();
@@ -593,22 +514,27 @@ impl eframe::App for App {
         }
         if let (None, Some(missed)) = (&self.busy, &self.missed_guarantees) {
             egui::Panel::bottom("verdict").show(ui, |ui| {
-                ui.colored_label(
-                    panels::MISSED_COLOR,
-                    RichText::new(format!("✘ {missed}")).strong(),
-                );
+                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {missed}")).strong());
             });
         }
-        egui::Panel::left("side")
-            .default_size(290.0)
-            .resizable(true)
-            .show(ui, |ui| self.side_panel(ui));
+    }
+}
+
+impl eframe::App for App {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let started = now_ms();
+        self.frames += 1;
+        self.handle_messages();
+        self.apply_link_if_changed();
+        self.take_requests(ui);
+        egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
+        self.status_bars(ui);
+        egui::Panel::left("side").default_size(290.0).resizable(true).show(ui, |ui| self.side_panel(ui));
         let hovering = ui.input(|i| !i.raw.hovered_files.is_empty());
         egui::CentralPanel::no_frame().show(ui, |ui| {
             self.viewport(ui);
             if hovering {
-                ui.painter()
-                    .rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
+                ui.painter().rect_filled(self.viewport, 0.0, Color32::from_black_alpha(140));
                 ui.painter().text(
                     self.viewport.center(),
                     egui::Align2::CENTER_CENTER,
@@ -629,8 +555,7 @@ impl eframe::App for App {
             ui.ctx().request_repaint();
         } else if self.busy.is_some() {
             // The elapsed time ticks; worker messages wake the view sooner.
-            ui.ctx()
-                .request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS));
+            ui.ctx().request_repaint_after(std::time::Duration::from_millis(LIVE_REPAINT_MS));
         }
     }
 

@@ -40,9 +40,7 @@ impl OrbitCamera {
     pub fn proj(&self, aspect: f32) -> Mat4 {
         // Keep far/near moderate: 24-bit depth must still order lines and faces.
         let far = self.distance + 4.0 * self.scene_radius;
-        let near = (self.distance - 4.0 * self.scene_radius)
-            .max(0.01 * self.scene_radius)
-            .max(far * 1e-4);
+        let near = (self.distance - 4.0 * self.scene_radius).max(0.01 * self.scene_radius).max(far * 1e-4);
         Mat4::perspective_rh(Self::FOV_Y, aspect.max(1e-3), near, far)
     }
 
@@ -61,8 +59,7 @@ impl OrbitCamera {
     }
 
     pub fn zoom(&mut self, factor: f32) {
-        self.distance = (self.distance / factor.max(1e-3))
-            .clamp(self.scene_radius * 1e-3, self.scene_radius * 1e3);
+        self.distance = (self.distance / factor.max(1e-3)).clamp(self.scene_radius * 1e-3, self.scene_radius * 1e3);
     }
 
     /// World-space ray through a point given in normalized device coordinates.

@@ -68,11 +68,7 @@ pub struct ColorMap {
 #[derive(Clone)]
 pub enum Style {
     /// Opaque shaded triangles; `shading` 0 flat, 1 smooth, 2 reflective.
-    Surface {
-        shading: u32,
-        color: [f32; 4],
-        color_map: Option<ColorMap>,
-    },
+    Surface { shading: u32, color: [f32; 4], color_map: Option<ColorMap> },
     /// The geometry's line segments.
     Lines { color: [f32; 4] },
     /// Alpha-blended triangles, not writing depth.
@@ -112,11 +108,7 @@ struct GpuMesh {
 
 impl GpuMesh {
     fn new(device: &wgpu::Device, p: &[f32], n: &[f32], t: &[u32], e: &[u32]) -> Self {
-        let normals = if n.len() == p.len() {
-            n.to_vec()
-        } else {
-            vec![0.0; p.len()]
-        };
+        let normals = if n.len() == p.len() { n.to_vec() } else { vec![0.0; p.len()] };
         Self {
             positions: init_buffer(device, p, wgpu::BufferUsages::VERTEX),
             normals: init_buffer(device, &normals, wgpu::BufferUsages::VERTEX),
@@ -179,9 +171,7 @@ impl ViewerResources {
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: true,
-                    min_binding_size: std::num::NonZeroU64::new(
-                        std::mem::size_of::<Uniforms>() as u64
-                    ),
+                    min_binding_size: std::num::NonZeroU64::new(std::mem::size_of::<Uniforms>() as u64),
                 },
                 count: None,
             }],
@@ -192,21 +182,11 @@ impl ViewerResources {
             immediate_size: 0,
         });
         let buf = |stride, attrs: &'static [wgpu::VertexAttribute]| {
-            Some(wgpu::VertexBufferLayout {
-                array_stride: stride,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: attrs,
-            })
+            Some(wgpu::VertexBufferLayout { array_stride: stride, step_mode: wgpu::VertexStepMode::Vertex, attributes: attrs })
         };
         let surface_buffers = [buf(12, &POS_ATTR), buf(12, &NRM_ATTR), buf(4, &SCALAR_ATTR)];
         let line_buffers = [buf(12, &POS_ATTR)];
-        let pipeline = |label,
-                        vs,
-                        fs,
-                        buffers: &[Option<wgpu::VertexBufferLayout>],
-                        topology,
-                        write,
-                        blend| {
+        let pipeline = |label, vs, fs, buffers: &[Option<wgpu::VertexBufferLayout>], topology, write, blend| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
@@ -216,11 +196,7 @@ impl ViewerResources {
                     compilation_options: Default::default(),
                     buffers,
                 },
-                primitive: wgpu::PrimitiveState {
-                    topology,
-                    cull_mode: None,
-                    ..Default::default()
-                },
+                primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
                     depth_write_enabled: Some(write),
@@ -244,24 +220,8 @@ impl ViewerResources {
             })
         };
         let tri = wgpu::PrimitiveTopology::TriangleList;
-        let surface = pipeline(
-            "surface",
-            "vs_surface",
-            "fs_surface",
-            &surface_buffers,
-            tri,
-            true,
-            None,
-        );
-        let lines = pipeline(
-            "lines",
-            "vs_edges",
-            "fs_edges",
-            &line_buffers,
-            wgpu::PrimitiveTopology::LineList,
-            true,
-            None,
-        );
+        let surface = pipeline("surface", "vs_surface", "fs_surface", &surface_buffers, tri, true, None);
+        let lines = pipeline("lines", "vs_edges", "fs_edges", &line_buffers, wgpu::PrimitiveTopology::LineList, true, None);
         let translucent = pipeline(
             "translucent",
             "vs_surface",
@@ -314,11 +274,7 @@ impl ViewerResources {
     }
 }
 
-fn init_buffer<T: Pod>(
-    device: &wgpu::Device,
-    data: &[T],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
+fn init_buffer<T: Pod>(device: &wgpu::Device, data: &[T], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     // Zero-sized buffers are not allowed everywhere; keep at least one element's room.
     let bytes: &[u8] = bytemuck::cast_slice(data);
     let padded;
@@ -328,11 +284,7 @@ fn init_buffer<T: Pod>(
     } else {
         bytes
     };
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents,
-        usage,
-    })
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage })
 }
 
 impl egui_wgpu::CallbackTrait for ViewerFrame {
@@ -353,9 +305,9 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
         for (slot, layer) in self.layers.iter().take(MAX_LAYERS).enumerate() {
             let (key, vertex_count) = match &layer.geometry {
                 Geometry::Mesh(m) => {
-                    r.meshes.entry(m.generation).or_insert_with(|| {
-                        GpuMesh::new(device, &m.positions, &m.normals, &m.triangles, &m.edges)
-                    });
+                    r.meshes
+                        .entry(m.generation)
+                        .or_insert_with(|| GpuMesh::new(device, &m.positions, &m.normals, &m.triangles, &m.edges));
                     used_meshes.push(m.generation);
                     (Key::Mesh(m.generation), m.positions.len() / 3)
                 }
@@ -372,21 +324,12 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
             };
             let mut scalars = None;
             let kind = match &layer.style {
-                Style::Surface {
-                    shading,
-                    color,
-                    color_map,
-                } => {
+                Style::Surface { shading, color, color_map } => {
                     u.mode[0] = *shading;
                     u.base_color = *color;
-                    if let Some(cm) = color_map
-                        .as_ref()
-                        .filter(|cm| cm.scalars.values.len() == vertex_count)
-                    {
+                    if let Some(cm) = color_map.as_ref().filter(|cm| cm.scalars.values.len() == vertex_count) {
                         let g = cm.scalars.generation;
-                        r.scalars.entry(g).or_insert_with(|| {
-                            init_buffer(device, &cm.scalars.values, wgpu::BufferUsages::VERTEX)
-                        });
+                        r.scalars.entry(g).or_insert_with(|| init_buffer(device, &cm.scalars.values, wgpu::BufferUsages::VERTEX));
                         used_scalars.push(g);
                         scalars = Some(g);
                         u.mode[1] = 1;
@@ -405,11 +348,7 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
                 }
             };
             queue.write_buffer(&r.uniforms, slot as u64 * SLOT, bytemuck::bytes_of(&u));
-            r.draws.push(Draw {
-                geometry: key,
-                scalars,
-                kind,
-            });
+            r.draws.push(Draw { geometry: key, scalars, kind });
         }
         // Keep GPU buffers only for what is still shown.
         r.meshes.retain(|g, _| used_meshes.contains(g));
@@ -423,28 +362,17 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
         pass: &mut wgpu::RenderPass<'static>,
         resources: &egui_wgpu::CallbackResources,
     ) {
-        let Some(r) = resources.get::<ViewerResources>() else {
-            return;
-        };
+        let Some(r) = resources.get::<ViewerResources>() else { return };
         for (slot, d) in r.draws.iter().enumerate() {
-            let Some(m) = r.gpu_mesh(d.geometry) else {
-                continue;
-            };
+            let Some(m) = r.gpu_mesh(d.geometry) else { continue };
             pass.set_bind_group(0, &r.bind, &[(slot as u64 * SLOT) as u32]);
             match d.kind {
                 Kind::Surface | Kind::Translucent => {
                     if m.triangle_count == 0 {
                         continue;
                     }
-                    let scalars = d
-                        .scalars
-                        .and_then(|g| r.scalars.get(&g))
-                        .unwrap_or(&m.zeros);
-                    pass.set_pipeline(if matches!(d.kind, Kind::Surface) {
-                        &r.surface
-                    } else {
-                        &r.translucent
-                    });
+                    let scalars = d.scalars.and_then(|g| r.scalars.get(&g)).unwrap_or(&m.zeros);
+                    pass.set_pipeline(if matches!(d.kind, Kind::Surface) { &r.surface } else { &r.translucent });
                     pass.set_vertex_buffer(0, m.positions.slice(..));
                     pass.set_vertex_buffer(1, m.normals.slice(..));
                     pass.set_vertex_buffer(2, scalars.slice(..));
@@ -473,11 +401,7 @@ fn unit_sphere(slices: u32, stacks: u32) -> (Vec<f32>, Vec<f32>, Vec<u32>) {
         let theta = std::f32::consts::PI * j as f32 / stacks as f32;
         for i in 0..=slices {
             let phi = std::f32::consts::TAU * i as f32 / slices as f32;
-            p.extend_from_slice(&[
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
-            ]);
+            p.extend_from_slice(&[theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]);
         }
     }
     let w = slices + 1;

@@ -16,9 +16,7 @@ pub fn pick_vertex(positions: &[f32], triangles: &[u32], o: Vec3, d: Vec3) -> Op
         }
     }
     let (_, tri, hit) = best?;
-    tri.into_iter()
-        .min_by(|&a, &b| (vtx(a) - hit).length().total_cmp(&(vtx(b) - hit).length()))
-        .map(|v| v as usize)
+    tri.into_iter().min_by(|&a, &b| (vtx(a) - hit).length().total_cmp(&(vtx(b) - hit).length())).map(|v| v as usize)
 }
 
 /// Möller–Trumbore: the ray parameter of the hit, if any.

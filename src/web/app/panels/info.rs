@@ -17,27 +17,14 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) 
     let mut picked = None;
     if l.info.objects.len() > 1 {
         let current = l.info.object.unwrap_or(0);
-        let label = |k: usize| {
-            l.info
-                .objects
-                .get(k)
-                .map_or(String::new(), |o| format!("{k}: {} ({})", o.name, o.kind))
-        };
-        egui::ComboBox::from_id_salt("file-object")
-            .selected_text(label(current))
-            .width(250.0)
-            .show_ui(ui, |ui| {
-                for (k, o) in l.info.objects.iter().enumerate() {
-                    if ui
-                        .selectable_label(k == current, label(k))
-                        .on_hover_text(&o.summary)
-                        .clicked()
-                        && k != current
-                    {
-                        picked = Some(k);
-                    }
+        let label = |k: usize| l.info.objects.get(k).map_or(String::new(), |o| format!("{k}: {} ({})", o.name, o.kind));
+        egui::ComboBox::from_id_salt("file-object").selected_text(label(current)).width(250.0).show_ui(ui, |ui| {
+            for (k, o) in l.info.objects.iter().enumerate() {
+                if ui.selectable_label(k == current, label(k)).on_hover_text(&o.summary).clicked() && k != current {
+                    picked = Some(k);
                 }
-            });
+            }
+        });
     }
     let s = &l.info.stats;
     key_values(
@@ -59,17 +46,11 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) 
             ui,
             "curvature",
             &[
-                (
-                    "H min / max",
-                    format!("{:.4} / {:.4}", sum.min_h, sum.max_h),
-                ),
+                ("H min / max", format!("{:.4} / {:.4}", sum.min_h, sum.max_h)),
                 ("H mean", format!("{:.4}", sum.mean_h)),
                 ("boundary vertices", sum.boundary_vertices.to_string()),
                 ("H ≈ 0 vertices", sum.planar_vertices.to_string()),
-                (
-                    "low-degree / failed fits",
-                    format!("{} / {}", sum.low_degree_fits, sum.failed_fits),
-                ),
+                ("low-degree / failed fits", format!("{} / {}", sum.low_degree_fits, sum.failed_fits)),
             ],
         );
         if sum.h_changes_sign {
@@ -79,13 +60,7 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) 
             );
         }
         if sum.planar_vertices > 0 {
-            ui.label(
-                RichText::new(format!(
-                    "{} vertices have H ≈ 0: their central spheres are planes.",
-                    sum.planar_vertices
-                ))
-                .small(),
-            );
+            ui.label(RichText::new(format!("{} vertices have H ≈ 0: their central spheres are planes.", sum.planar_vertices)).small());
         }
     }
     match (selected, l.curvature.as_ref()) {
@@ -105,12 +80,8 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) 
 
 /// The central sphere (Def. 2.9) of vertex `v`, as sent by the curvature stage.
 pub fn central_sphere(c: &CurvatureView, v: usize) -> Option<Sphere> {
-    let s = find(&c.fields, field::CENTRAL_SPHERES)?
-        .as_f32()?
-        .get(5 * v..5 * v + 5)?;
-    Some(Sphere::from_array(
-        [s[0], s[1], s[2], s[3], s[4]].map(f64::from),
-    ))
+    let s = find(&c.fields, field::CENTRAL_SPHERES)?.as_f32()?.get(5 * v..5 * v + 5)?;
+    Some(Sphere::from_array([s[0], s[1], s[2], s[3], s[4]].map(f64::from)))
 }
 
 /// Centre and signed radius of a central sphere; None for a plane (H ≈ 0).
@@ -122,36 +93,12 @@ pub fn center_radius(s: &Sphere) -> Option<(glam::DVec3, f64)> {
 }
 
 fn vertex_text(c: &CurvatureView, v: usize) -> Option<String> {
-    let val = |k| {
-        find(&c.fields, k)
-            .and_then(Field::as_f32)
-            .and_then(|x| x.get(v).copied())
-    };
-    let (h, k1, k2) = (
-        val(field::MEAN_CURVATURE)?,
-        val(field::K1)?,
-        val(field::K2)?,
-    );
+    let val = |k| find(&c.fields, k).and_then(Field::as_f32).and_then(|x| x.get(v).copied());
+    let (h, k1, k2) = (val(field::MEAN_CURVATURE)?, val(field::K1)?, val(field::K2)?);
     let desc = match center_radius(&central_sphere(c, v)?) {
-        Some((center, r)) => format!(
-            "centre ({:.3}, {:.3}, {:.3})\nradius {:.4}",
-            center.x,
-            center.y,
-            center.z,
-            r.abs()
-        ),
+        Some((center, r)) => format!("centre ({:.3}, {:.3}, {:.3})\nradius {:.4}", center.x, center.y, center.z, r.abs()),
         None => "central sphere is a plane (H ≈ 0)".into(),
     };
-    let boundary = find(&c.fields, field::BOUNDARY)
-        .and_then(Field::as_u32)
-        .and_then(|b| b.get(v).copied())
-        == Some(1);
-    Some(format!(
-        "H  {h:.5}\nκ1 {k1:.5}\nκ2 {k2:.5}\n{desc}{}",
-        if boundary {
-            "\n(boundary vertex: one-sided fit)"
-        } else {
-            ""
-        }
-    ))
+    let boundary = find(&c.fields, field::BOUNDARY).and_then(Field::as_u32).and_then(|b| b.get(v).copied()) == Some(1);
+    Some(format!("H  {h:.5}\nκ1 {k1:.5}\nκ2 {k2:.5}\n{desc}{}", if boundary { "\n(boundary vertex: one-sided fit)" } else { "" }))
 }

@@ -1,10 +1,8 @@
-//! The side panel's sections, one file per method: its controls (they edit the method's
-//! parameters and say whether they changed) and its results.
+//! The side panel's shared sections and widgets: the reference's info, remeshing controls, the
+//! verdict and the warnings. Each method's own controls and results are its view's
+//! ([`super::views`]).
 
 pub mod info;
-pub mod sq;
-pub mod st_adapted;
-pub mod st_support;
 
 use crate::design_link::SizingKind;
 use crate::remeshing::DEFAULT_FACES;
@@ -20,10 +18,7 @@ pub struct SizingMemory {
 impl SizingMemory {
     /// Remembers the values of `sizing`, defaults for the others.
     pub fn of(sizing: Sizing) -> Self {
-        let mut m = Self {
-            epsilon: DEFAULT_EPSILON,
-            faces: DEFAULT_FACES,
-        };
+        let mut m = Self { epsilon: DEFAULT_EPSILON, faces: DEFAULT_FACES };
         m.remember(sizing);
         m
     }
@@ -38,21 +33,13 @@ impl SizingMemory {
 }
 
 /// Remeshing controls: kind, ε (log slider) or the face count.
-pub fn sizing_controls(
-    ui: &mut egui::Ui,
-    id: &str,
-    sizing: &mut Sizing,
-    memory: &mut SizingMemory,
-    kinds: &[SizingKind],
-) {
+pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory: &mut SizingMemory, kinds: &[SizingKind]) {
     let mut kind = SizingKind::of(*sizing);
-    egui::ComboBox::from_id_salt(id)
-        .selected_text(kind.label())
-        .show_ui(ui, |ui| {
-            for &k in kinds {
-                ui.selectable_value(&mut kind, k, k.label());
-            }
-        });
+    egui::ComboBox::from_id_salt(id).selected_text(kind.label()).show_ui(ui, |ui| {
+        for &k in kinds {
+            ui.selectable_value(&mut kind, k, k.label());
+        }
+    });
     let (mut epsilon, mut faces) = (memory.epsilon, memory.faces);
     match kind {
         SizingKind::Adaptive => {
@@ -61,11 +48,7 @@ pub fn sizing_controls(
         }
         SizingKind::Faces => {
             // The methods' own cap: more faces are refused with an offer to remesh.
-            ui.add(
-                egui::Slider::new(&mut faces, 50..=crate::remeshing::MAX_METHOD_FACES)
-                    .logarithmic(true)
-                    .text("faces"),
-            );
+            ui.add(egui::Slider::new(&mut faces, 50..=crate::remeshing::MAX_METHOD_FACES).logarithmic(true).text("faces"));
         }
         SizingKind::None => {}
     }
@@ -79,25 +62,14 @@ pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);
 
 /// The status line of a result that misses its method's guarantees, None when it meets them.
 pub fn missed_guarantees(report: &crate::export::Report) -> Option<String> {
-    (report.meets_guarantees == Some(false)).then(|| {
-        format!(
-            "The result misses its guarantees: {}",
-            report.failure_text()
-        )
-    })
+    (report.meets_guarantees == Some(false)).then(|| format!("The result misses its guarantees: {}", report.failure_text()))
 }
 
 /// The verdict at the top of a method's results: the missed guarantees in red, or a check mark.
 pub fn verdict(ui: &mut egui::Ui, report: &crate::export::Report) {
     match missed_guarantees(report) {
-        Some(text) => ui.colored_label(
-            MISSED_COLOR,
-            egui::RichText::new(format!("✘ {text}")).strong(),
-        ),
-        None if report.meets_guarantees == Some(true) => ui.colored_label(
-            egui::Color32::from_rgb(120, 200, 120),
-            "✔ Meets every guarantee (see the figures below)",
-        ),
+        Some(text) => ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {text}")).strong()),
+        None if report.meets_guarantees == Some(true) => ui.colored_label(egui::Color32::from_rgb(120, 200, 120), "✔ Meets every guarantee (see the figures below)"),
         None => return,
     };
 }
