@@ -495,7 +495,7 @@ fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressL
         Ok(())
     })
     .map_err(|e| Failure::input(format!("{}: {e}", input.surface)))?;
-    let segments = spherical_faces::export::congruence::CongruenceSegments::of(&result.congruence);
+    let segments = spherical_faces::sq::congruence_file::CongruenceSegments::of(&result.congruence);
     let (report, files) = stages::sq::export(&reference, &result, &params, &segments, clock);
     progress.clear();
     write_files(output, &files, &report)?;

@@ -198,7 +198,8 @@ pub struct CameraState {
 pub struct Design {
     pub reference: DesignSurface,
     pub method: Method,
-    /// The jet fit of every method (their own `jet` follows this one).
+    /// The jet fit of every method, held here once: the methods' own `jet` in `st_adapted` and
+    /// `st_support` is never set or read in a design; [`Self::stage_requests`] fills it in.
     pub jet: JetParams,
     pub st_adapted: StAdaptedParams,
     pub st_support: StSupportParams,
@@ -425,8 +426,6 @@ impl Design {
                 notices.push(format!("ignored invalid value for 'faces': '{n}' (SQ takes {} to {})", FACES_RANGE.lo, FACES_RANGE.hi));
             }
         }
-        d.st_adapted.jet = d.jet.clone();
-        d.st_support.jet = d.jet.clone();
         if wants_file {
             let name = file_name.unwrap_or_else(|| "your file".into());
             notices.push(format!("this design uses the file '{name}': drop it on the viewport to continue"));

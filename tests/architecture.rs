@@ -389,6 +389,26 @@ fn the_toolkit_imports_no_method() {
     }
 }
 
+/// The recipe of ARCHITECTURE.md for every method on the methods row: its folder with a driver,
+/// `params.rs` and `report.rs`, its stage file, its view module and its line in `views::views`.
+#[test]
+fn every_method_follows_the_recipe() {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md")).unwrap();
+    assert!(doc.contains("<!-- recipe") && doc.contains("<!-- /recipe -->"), "ARCHITECTURE.md shows the recipe");
+    let files = source_files();
+    let layers = documented_layers();
+    let row = layers["st_adapted"];
+    let methods: Vec<&String> = layers.iter().filter(|(_, &l)| l == row).map(|(m, _)| m).collect();
+    assert_eq!(methods.len(), 3, "the three methods of the paper: {methods:?}");
+    let views = &files["web/app/views/mod.rs"];
+    for m in methods {
+        for part in [format!("{m}/mod.rs"), format!("{m}/params.rs"), format!("{m}/report.rs"), format!("pipeline/stages/{m}.rs"), format!("web/app/views/{m}.rs")] {
+            assert!(files.contains_key(&part), "{m}: src/{part} is missing (ARCHITECTURE.md, How to add a method)");
+        }
+        assert!(views.contains(&format!("{m}::")), "{m}: no line in views::views");
+    }
+}
+
 /// The checker itself: it finds an upward import, a cycle between files, an import through a
 /// `use` group and through `super::`, and it does not flag what is allowed.
 #[test]

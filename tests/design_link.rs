@@ -23,14 +23,18 @@ fn round_trip() {
         camera: Some(CameraState { yaw: 0.5, pitch: -0.25, distance: 6.0, target: [1.0, -2.0, 0.125] }),
         ..Design::default()
     };
-    let d = Design {
-        st_adapted: StAdaptedParams { jet: d.jet.clone(), ..StAdaptedParams::default() },
-        st_support: StSupportParams { jet: d.jet.clone(), ..StSupportParams::default() },
-        ..d
-    };
     let (back, notices) = Design::from_fragment(&d.to_fragment());
     assert!(notices.is_empty(), "{notices:?}");
     assert_eq!(back, d);
+    // The jet is held once: the methods' copies stay at their defaults and the stages get it.
+    assert_eq!(back.st_adapted.jet, JetParams::default());
+    for stage in (Design { method: Method::StAdapted, ..back.clone() }).stage_requests() {
+        match stage {
+            StageRequest::Curvature(jet) => assert_eq!(jet, d.jet),
+            StageRequest::StAdapted(p) => assert_eq!(p.jet, d.jet),
+            other => panic!("{other:?}"),
+        }
+    }
 }
 
 #[test]

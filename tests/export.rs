@@ -1039,6 +1039,24 @@ fn panel_files_are_the_four_files_and_the_report_follows() {
 // ---------------------------------------------------------------------------------------------
 // report.json
 
+/// A figure that cannot be measured (NaN) is written as null and read back as NaN, so a summary
+/// with such a figure still reaches the app.
+#[test]
+fn sections_read_back_with_unmeasurable_figures() {
+    use spherical_faces::sq::metrics::CongruenceFigures;
+    use spherical_faces::sq::report::QuadMeshSection;
+    use spherical_faces::sq::sq_mesh::SqMeshFigures;
+    let mesh = SqMeshFigures { min_torsal_plane_angle_deg: f64::NAN, ..SqMeshFigures::default() };
+    let back: SqMeshFigures = serde_json::from_str(&serde_json::to_string(&mesh).unwrap()).unwrap();
+    assert!(back.min_torsal_plane_angle_deg.is_nan());
+    let quads = QuadMeshSection { coverage: 0.5, mean_edge_torsal_angle_deg: f64::NAN, max_edge_torsal_angle_deg: f64::NAN };
+    let back: QuadMeshSection = serde_json::from_str(&serde_json::to_string(&quads).unwrap()).unwrap();
+    assert!(back.mean_edge_torsal_angle_deg.is_nan() && back.coverage == 0.5);
+    let c = CongruenceFigures { max_line_normal_angle_deg: f64::NAN, ..CongruenceFigures::default() };
+    let back: CongruenceFigures = serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
+    assert!(back.max_line_normal_angle_deg.is_nan());
+}
+
 #[test]
 fn report_schema() {
     let mut r = Report::new("st-support");

@@ -5,7 +5,6 @@
 //! support structure ([`crate::congruence::support_structure::SupportGeometry`]) and the node
 //! axes as line segments.
 
-pub mod congruence;
 pub mod glb;
 pub mod obj;
 pub mod report;

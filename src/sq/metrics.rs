@@ -13,12 +13,17 @@ use super::radius::SamplingGrid;
 /// The figures of a congruence on G.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CongruenceFigures {
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_line_normal_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub mean_line_normal_angle_deg: f64,
     pub quads_without_real_torsal_directions: usize,
     /// Over the quads with real torsal directions (0 when there are none).
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub min_torsal_plane_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub p10_torsal_plane_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub mean_torsal_plane_angle_deg: f64,
 }
 

@@ -25,6 +25,7 @@
 //! so the weights are dimensionless; results are returned in model units.
 
 mod error;
+pub mod congruence_file;
 pub mod guarantees;
 pub mod metrics;
 pub mod optimization;

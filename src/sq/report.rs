@@ -14,7 +14,9 @@ pub struct SqSection {
     /// Points per direction of G, θ and α (degrees), the basis of r, and the stage the run
     /// stopped after.
     pub grid: usize,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub theta_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub alpha_deg: f64,
     pub radius_basis: RadiusBasis,
     pub stopped_after: String,
@@ -34,9 +36,12 @@ pub struct CongruenceSection {
     pub initial: CongruenceFigures,
     pub figures: CongruenceFigures,
     /// E_LC per term (dimensionless, c_u and c_v normalized) after both steps, and after step 1.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub lc_residual: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub lc_residual_step1: f64,
     /// Largest |r − 1/H| of the radius fit on G, relative to the mean |1/H|.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub radius_fit_error: f64,
     /// Solver iterations of the line-congruence and the torsal step.
     pub line_congruence_iterations: usize,
@@ -47,10 +52,13 @@ pub struct CongruenceSection {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct QuadMeshSection {
     /// The covered share of the patch's area.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub coverage: f64,
     /// Angle between the mesh edges and the torsal directions at the edge midpoints (degrees;
     /// edges not along the patch boundary).
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub mean_edge_torsal_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_edge_torsal_angle_deg: f64,
 }
 

@@ -40,25 +40,32 @@ use super::sphere_optimization::QuadStars;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SqMeshFigures {
     /// max over faces and corners of |dist(v, sphere)|.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_sphere_residual: f64,
     /// max over inner vertices of the distance of their four sphere centres to the
     /// least-squares plane through them.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_centre_face_planarity: f64,
     /// max over interior edges whose ends both have axes from spheres of |⟨l, n_uw⟩| for both
     /// axes l, n_uw the unit normal of the edge's circle (its torsal plane): the sine of the angle
     /// between axis and plane.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_torsal_plane_residual: f64,
     /// Angle between node axes and the reference normals (deg).
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_axis_normal_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub mean_axis_normal_angle_deg: f64,
     /// min over inner vertices of four edges of the angle between the support planes of two
     /// consecutive edges.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub min_torsal_plane_angle_deg: f64,
     /// The same at the singular vertices of three and of five edges (None without any), for the
     /// bound of [`super::sphere_terms::support_plane_bound_deg`].
     pub min_support_plane_angle_valence_3_deg: Option<f64>,
     pub min_support_plane_angle_valence_5_deg: Option<f64>,
     /// max distance of a vertex to the reference.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_distance_to_reference: f64,
     /// Vertices whose node axis comes from three or more spheres.
     pub axes_from_spheres: usize,

@@ -18,13 +18,18 @@ use crate::stats::mean;
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StAdaptedMetrics {
     /// max over faces and corners of | |v − c| − r |, relative.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_sphere_residual: f64,
     /// Kink angles over interior edges (degrees).
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub mean_kink_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_kink_angle_deg: f64,
     /// Sampled over the panels ([`max_distance_to_reference`]), relative.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_distance_to_reference: f64,
     /// Max vertex distance to the reference, relative.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_distance_to_reference: f64,
     /// Variant (b): the largest gap between the two arcs of an edge ([`max_arc_gap`]), relative.
     pub max_gap: Option<f64>,
@@ -42,11 +47,15 @@ pub struct StAdaptedMetrics {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StAdaptedShape {
     /// max over faces and corners of | |v − c| − r |, relative.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_sphere_residual: f64,
     /// Kink angles over interior edges (degrees).
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub mean_kink_angle_deg: f64,
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_kink_angle_deg: f64,
     /// Max vertex distance to the reference, relative.
+    #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_distance_to_reference: f64,
     pub faces: usize,
     pub interior_edges: usize,

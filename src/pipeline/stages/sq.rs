@@ -13,7 +13,9 @@ use serde::{Deserialize, Serialize};
 
 use super::StageError;
 use crate::congruence::central_spheres::JetParams;
-use crate::export::congruence::{congruence_glb, CongruenceJson, CongruenceSegments};
+use crate::export::glb::{write_lines_glb, LineSet};
+use crate::geometry::mesh::TriMesh;
+use crate::sq::congruence_file::{CongruenceJson, CongruenceSegments};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::{report_file, write_mesh_obj, ExportFile, Report};
 use crate::geometry::mesh::PolyMesh;
@@ -346,4 +348,15 @@ pub fn export(
     report.set_verdict(&result.verdict);
     files.push(report_file(&report));
     (report, files)
+}
+
+/// `congruence.glb` (see the module docs).
+pub fn congruence_glb(surface: &TriMesh, segments: &CongruenceSegments, extras: serde_json::Value) -> Vec<u8> {
+    let sets = [
+        LineSet { name: "lines", color: [0.10, 0.35, 0.85, 1.0], segments: &segments.lines },
+        LineSet { name: "initial_lines", color: [0.55, 0.55, 0.55, 1.0], segments: &segments.initial_lines },
+        LineSet { name: "cross_field", color: [0.90, 0.45, 0.10, 1.0], segments: &segments.cross_field },
+        LineSet { name: "quads_without_real_torsal_directions", color: [0.90, 0.10, 0.10, 1.0], segments: &segments.no_real_quads },
+    ];
+    write_lines_glb(surface, &sets, extras)
 }

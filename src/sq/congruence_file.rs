@@ -1,4 +1,5 @@
-//! The files of the SQ congruence stage (Sec. 5.1): `congruence.json` and `congruence.glb`.
+//! What the SQ congruence stage writes (Sec. 5.1): the data of `congruence.json` and the display
+//! segments of `congruence.glb` (written by the stage, `crate::pipeline::stages::sq`).
 //!
 //! `congruence.json`, lengths in model units:
 //! ```json
@@ -20,12 +21,10 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::glb::{write_lines_glb, LineSet};
-use crate::geometry::mesh::TriMesh;
-use crate::sq::params::RadiusBasis;
-use crate::sq::segments::{cross_field, grid_spacing, line_segments, quad_outlines, CROSS_LENGTH, LINE_LENGTH};
-use crate::sq::SqCongruence;
-use crate::sq::radius::grid_quad;
+use super::params::RadiusBasis;
+use super::radius::grid_quad;
+use super::segments::{cross_field, grid_spacing, line_segments, quad_outlines, CROSS_LENGTH, LINE_LENGTH};
+use super::SqCongruence;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CongruenceJson {
@@ -135,15 +134,4 @@ impl CongruenceSegments {
             no_real_quads: quad_outlines(c.grid, &c.points, &c.torsal),
         }
     }
-}
-
-/// `congruence.glb` (see the module docs).
-pub fn congruence_glb(surface: &TriMesh, segments: &CongruenceSegments, extras: serde_json::Value) -> Vec<u8> {
-    let sets = [
-        LineSet { name: "lines", color: [0.10, 0.35, 0.85, 1.0], segments: &segments.lines },
-        LineSet { name: "initial_lines", color: [0.55, 0.55, 0.55, 1.0], segments: &segments.initial_lines },
-        LineSet { name: "cross_field", color: [0.90, 0.45, 0.10, 1.0], segments: &segments.cross_field },
-        LineSet { name: "quads_without_real_torsal_directions", color: [0.90, 0.10, 0.10, 1.0], segments: &segments.no_real_quads },
-    ];
-    write_lines_glb(surface, &sets, extras)
 }
