@@ -117,27 +117,6 @@ pub enum Sizing {
 }
 
 impl Sizing {
-    /// The sizing field this asks for on `mesh`: the influence zones of `sphere_of(i)` (ε × the
-    /// bbox diagonal, clamped to `bounds`), the uniform field for about N faces, or None (keep
-    /// the mesh).
-    pub fn field(
-        &self,
-        mesh: &TriMesh,
-        topo: &Topology,
-        sphere_of: &dyn Fn(usize) -> Sphere,
-        bounds: SizingBounds,
-        progress: &mut OnProgress,
-    ) -> Result<Option<SizingField>, Cancelled> {
-        Ok(match *self {
-            Sizing::Adaptive { epsilon } => {
-                let eps = epsilon * mesh.bbox_diagonal();
-                Some(SizingField::from_sphere_fn(mesh, topo, sphere_of, eps, bounds, progress)?)
-            }
-            Sizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(mesh, n)),
-            Sizing::None => None,
-        })
-    }
-
     /// The size guard: the faces the method will work on (the mesh's own, N, or what the
     /// adaptive `field` asks for) must not exceed `limit`.
     pub fn check_size(&self, mesh: &TriMesh, field: Option<&SizingField>, limit: usize) -> Result<(), TooManyFaces> {
@@ -149,9 +128,10 @@ impl Sizing {
         if faces > limit { Err(TooManyFaces { faces, limit }) } else { Ok(()) }
     }
 
-    /// The sizing field a method asks for ([`Self::field`]) behind the size guard
-    /// ([`Self::check_size`], before any remeshing); None for [`Sizing::None`], the mesh checked
-    /// for size. [`Self::remesh_to`] remeshes to it.
+    /// The sizing field a method asks for on `mesh` (the influence zones of `sphere_of(i)`, ε × the
+    /// bbox diagonal, clamped to `bounds`; the uniform field for about N faces) behind the size
+    /// guard ([`Self::check_size`], before any remeshing); None for [`Sizing::None`] (keep the
+    /// mesh), the mesh checked for size. [`Self::remesh_to`] remeshes to it.
     pub fn guarded_field(
         &self,
         mesh: &TriMesh,
@@ -160,9 +140,15 @@ impl Sizing {
         bounds: SizingBounds,
         progress: &mut OnProgress,
     ) -> Result<Option<SizingField>, GuardedRemeshError> {
-        let field = self
-            .field(mesh, topo, sphere_of, bounds, progress)
-            .map_err(|Cancelled| GuardedRemeshError::Cancelled)?;
+        let field = match *self {
+            Sizing::Adaptive { epsilon } => {
+                let eps = epsilon * mesh.bbox_diagonal();
+                let field = SizingField::from_sphere_fn(mesh, topo, sphere_of, eps, bounds, progress);
+                Some(field.map_err(|Cancelled| GuardedRemeshError::Cancelled)?)
+            }
+            Sizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(mesh, n)),
+            Sizing::None => None,
+        };
         self.check_size(mesh, field.as_ref(), MAX_METHOD_FACES)
             .map_err(GuardedRemeshError::TooManyFaces)?;
         Ok(field)

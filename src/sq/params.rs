@@ -292,6 +292,12 @@ pub struct ParamRange<T> {
     pub hi: T,
 }
 
+impl<T: Copy> ParamRange<T> {
+    pub const fn new(name: &'static str, lo: T, hi: T) -> Self {
+        Self { name, lo, hi }
+    }
+}
+
 impl<T: PartialOrd + Copy + std::fmt::Display> ParamRange<T> {
     pub fn contains(&self, x: T) -> bool {
         self.lo <= x && x <= self.hi
@@ -349,34 +355,14 @@ impl std::fmt::Display for ParamError {
 impl std::error::Error for ParamError {}
 
 /// The accepted ranges.
-pub const GRID_RANGE: ParamRange<usize> = ParamRange {
-    name: "grid",
-    lo: 4,
-    hi: 100,
-};
-pub const THETA_RANGE: ParamRange<f64> = ParamRange {
-    name: "θ",
-    lo: 1.0,
-    hi: 89.0,
-};
-pub const ALPHA_RANGE: ParamRange<f64> = ParamRange {
-    name: "α",
-    lo: 1.0,
-    hi: 90.0,
-};
-pub const RECOMPUTE_RANGE: ParamRange<usize> = ParamRange {
-    name: "RS",
-    lo: 1,
-    hi: 1000,
-};
+pub const GRID_RANGE: ParamRange<usize> = ParamRange::new("grid", 4, 100);
+pub const THETA_RANGE: ParamRange<f64> = ParamRange::new("θ", 1.0, 89.0);
+pub const ALPHA_RANGE: ParamRange<f64> = ParamRange::new("α", 1.0, 90.0);
+pub const RECOMPUTE_RANGE: ParamRange<usize> = ParamRange::new("RS", 1, 1000);
 /// Quads: at most what finishes within a minute and 1 GB natively on 2 cores. Measured with
 /// --faces 5000: `tunnel_arch` 23 s and 0.52 GB, the saddle roof 24 s, `paraboloid_dome` 77 s and
 /// 0.72 GB (the remesh and the final optimization both grow faster than linearly).
-pub const FACES_RANGE: ParamRange<usize> = ParamRange {
-    name: "faces",
-    lo: 4,
-    hi: 3_000,
-};
+pub const FACES_RANGE: ParamRange<usize> = ParamRange::new("faces", 4, 3_000);
 
 /// How far below the bound of a singular vertex its support planes may meet (degrees).
 pub const SINGULAR_MARGIN_DEG: f64 = 1.0;
