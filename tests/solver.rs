@@ -1,7 +1,7 @@
 //! Tests of the sparse nonlinear least-squares solver (`spherical_faces::solver`).
 
 use glam::DVec3;
-use spherical_faces::progress::{Cancelled, Clock};
+use spherical_faces::progress::Cancelled;
 use spherical_faces::solver::*;
 
 /// Small deterministic generator (splitmix64).
@@ -682,7 +682,7 @@ fn timing_synthetic_600_faces() {
             max_iterations: 30,
             step_tolerance: 0.0,
             relative_decrease_tolerance: 0.0,
-            clock: Clock(Some(now_ms)),
+            clock: spherical_faces::progress::Clock(Some(now_ms)),
             ..Default::default()
         });
         let t0 = now_ms();

@@ -9,7 +9,7 @@ use wasm_bindgen_test::*;
 
 use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::import::{import_mesh, Format};
-use spherical_faces::pipeline::fields::{field, Field};
+use spherical_faces::pipeline::fields::{field, Field, StageId};
 use spherical_faces::pipeline::protocol::*;
 use spherical_faces::pipeline::{Outbox, Session};
 use spherical_faces::samples::Sample;
@@ -38,7 +38,7 @@ async fn protocol_round_trip_across_a_message_channel() {
         Field::u32(field::TRIANGLES, 3, vec![0, 1, 1]),
         Field::f32(field::MEAN_CURVATURE, 1, vec![0.5, -0.25]),
     ];
-    let msg = FromWorker::Snapshot { stage: "curvature".into(), iteration: 7, fields: fields.iter().map(Field::header).collect() };
+    let msg = FromWorker::Snapshot { stage: StageId::Curvature, iteration: 7, fields: fields.iter().map(Field::header).collect() };
     let (obj, transfer) = transport::to_js(&encode_from_worker(&msg, &fields));
     let first_body = Reflect::get(&obj, &"bodies".into()).unwrap();
     let first_body: js_sys::ArrayBuffer = js_sys::Array::from(&first_body).get(0).unchecked_into();
