@@ -49,9 +49,9 @@ pub enum Scale {
 }
 
 /// Dome rings for the jet-fit mesh: 1 + 3·182·183 = 99 919 vertices.
-pub const JET_RINGS: usize = 182;
+pub(crate) const JET_RINGS: usize = 182;
 /// Dome rings for the remeshing reference: 6·129² = 99 846 triangles.
-pub const REMESH_RINGS: usize = 129;
+pub(crate) const REMESH_RINGS: usize = 129;
 /// Relative tolerance ε of the adaptive sizing field. Not the app's default (4e-4, which asks
 /// for about 500 faces, so a round would mostly collapse): 2e-6 gives a field of about the
 /// reference's density (median g ≈ its mean edge length), so the round splits, collapses, flips
@@ -78,7 +78,7 @@ pub fn result_line(name: &str, samples_ms: &[f64]) -> String {
 }
 
 /// Times `f` `n` times with `clock`, in milliseconds.
-pub fn time_n(clock: Clock, n: usize, mut f: impl FnMut()) -> Vec<f64> {
+pub(crate) fn time_n(clock: Clock, n: usize, mut f: impl FnMut()) -> Vec<f64> {
     (0..n)
         .map(|_| {
             let t = clock.now();
@@ -159,7 +159,7 @@ impl RemeshWorkload {
     }
 
     /// Times `n` rounds, each on a fresh remesher (built and dropped outside the timing).
-    pub fn time_rounds(&self, sizing: RoundSizing, clock: Clock, n: usize) -> (Vec<f64>, RoundStats) {
+    pub(crate) fn time_rounds(&self, sizing: RoundSizing, clock: Clock, n: usize) -> (Vec<f64>, RoundStats) {
         let mut stats = RoundStats::default();
         let ms = (0..n)
             .map(|_| {
@@ -252,7 +252,7 @@ pub fn phase_line(name: &str, phases: &PhaseTimes, iterations: usize) -> String 
 // --- 4. SQ congruence iterations ----------------------------------------------------------------
 
 /// `tunnel_arch.json` (benches/data, a copy of ../shared/data/bsplines).
-pub const TUNNEL_ARCH: &str = include_str!("../benches/data/tunnel_arch.json");
+pub(crate) const TUNNEL_ARCH: &str = include_str!("../benches/data/tunnel_arch.json");
 
 /// The SQ method on `tunnel_arch` (grid 20 and about 237 quads, or a 6 × 6 grid and 16 quads
 /// when tiny).

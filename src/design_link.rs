@@ -11,7 +11,7 @@ use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, 
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
 
-pub const VERSION: u32 = 1;
+pub(crate) const VERSION: u32 = 1;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ColorBy {

@@ -24,7 +24,7 @@ pub enum Bound {
 
 /// Reads a figure that JSON wrote as null (a NaN) back as NaN: `#[serde(deserialize_with)]` on
 /// every f64 of a report that can be NaN.
-pub fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+pub(crate) fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Option::<f64>::deserialize(d).map(|x| x.unwrap_or(f64::NAN))
 }
 
@@ -44,16 +44,16 @@ pub struct Guarantee {
 }
 
 impl Guarantee {
-    pub fn at_most(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
+    pub(crate) fn at_most(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
         Self { name: name.into(), measured, bound: Bound::AtMost, limit, unit: unit.into(), holds: measured <= limit }
     }
 
-    pub fn at_least(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
+    pub(crate) fn at_least(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
         Self { name: name.into(), measured, bound: Bound::AtLeast, limit, unit: unit.into(), holds: measured >= limit }
     }
 
     /// A count that must not exceed `limit`.
-    pub fn count_at_most(name: &str, measured: usize, limit: usize) -> Self {
+    pub(crate) fn count_at_most(name: &str, measured: usize, limit: usize) -> Self {
         Self::at_most(name, measured as f64, limit as f64, "")
     }
 }

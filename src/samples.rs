@@ -185,7 +185,7 @@ pub fn sphere_cap(radius: f64, base_radius: f64, rings: usize) -> TriMesh {
 }
 
 /// The undulating canopy over [−16, 16] × [−10, 10] m, `nx` × `ny` grid cells.
-pub fn wave_roof(nx: usize, ny: usize) -> TriMesh {
+pub(crate) fn wave_roof(nx: usize, ny: usize) -> TriMesh {
     grid_mesh(nx, ny, false, false, |s, t| {
         let (x, y) = (-16.0 + 32.0 * s, -10.0 + 20.0 * t);
         let z = 6.0 + 0.9 * (TAU * x / 16.0 + 0.4 * y / 10.0).cos() * (1.0 - 0.3 * (y / 10.0).powi(2))

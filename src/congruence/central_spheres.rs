@@ -185,7 +185,7 @@ impl CurvatureField {
 
     /// [`Self::is_usable`] for the first `vertices` vertices; an error when none or fewer than
     /// `min_fraction` of them are usable.
-    pub fn usable_central_spheres(
+    pub(crate) fn usable_central_spheres(
         &self,
         vertices: usize,
         diag: f64,
@@ -271,7 +271,7 @@ pub fn jet_fit(
 impl CurvatureField {
     /// The field of curvatures known exactly at the vertices `positions` (a parametric reference
     /// surface): central spheres, planar flags and summary as [`jet_fit`] makes them.
-    pub fn from_vertex_curvatures(positions: &[DVec3], vertices: Vec<VertexCurvature>, boundary: Vec<bool>, diag: f64) -> Self {
+    pub(crate) fn from_vertex_curvatures(positions: &[DVec3], vertices: Vec<VertexCurvature>, boundary: Vec<bool>, diag: f64) -> Self {
         let central_spheres = positions
             .iter()
             .zip(&vertices)

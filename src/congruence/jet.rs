@@ -81,7 +81,7 @@ impl JetFitter {
     /// PCA normal of a point set: the eigenvector of the smallest covariance eigenvalue, oriented
     /// to have a non-negative component along `orient`. None for fewer than 3 points or a
     /// degenerate (collinear or coincident) set.
-    pub fn pca_normal(points: impl Iterator<Item = DVec3> + Clone, orient: DVec3) -> Option<DVec3> {
+    pub(crate) fn pca_normal(points: impl Iterator<Item = DVec3> + Clone, orient: DVec3) -> Option<DVec3> {
         let (mut count, mut mean) = (0usize, DVec3::ZERO);
         for p in points.clone() {
             count += 1;
@@ -191,7 +191,7 @@ impl JetFitter {
 }
 
 /// An orthonormal tangent basis (t1, t2) with t1 × t2 = n.
-pub fn tangent_basis(n: DVec3) -> (DVec3, DVec3) {
+pub(crate) fn tangent_basis(n: DVec3) -> (DVec3, DVec3) {
     let helper = if n.x.abs() < 0.6 {
         DVec3::X
     } else if n.y.abs() < 0.6 {
@@ -208,7 +208,7 @@ pub fn tangent_basis(n: DVec3) -> (DVec3, DVec3) {
 /// first fundamental form E, F, G and second L, M, N w.r.t. the graph normal (−hx, −hy, 1)/W; the
 /// generalized eigenproblem II v = κ I v is made symmetric with the Cholesky factor of I.
 #[allow(clippy::too_many_arguments)]
-pub fn shape_operator(
+pub(crate) fn shape_operator(
     t1: DVec3,
     t2: DVec3,
     n0: DVec3,

@@ -19,7 +19,7 @@ pub struct CentreDerivatives {
 }
 
 /// c, c_u and c_v of the congruence with radius (r, r_u, r_v) at a surface frame.
-pub fn centre_derivatives(frame: &SurfaceFrame, (r, ru, rv): (f64, f64, f64)) -> CentreDerivatives {
+pub(crate) fn centre_derivatives(frame: &SurfaceFrame, (r, ru, rv): (f64, f64, f64)) -> CentreDerivatives {
     let n = frame.normal;
     CentreDerivatives { c: frame.point + r * n, cu: frame.su + ru * n + r * frame.nu, cv: frame.sv + rv * n + r * frame.nv }
 }

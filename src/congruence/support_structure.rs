@@ -121,7 +121,7 @@ impl NodeAxes {
     }
 
     /// Per vertex: the angle (deg) between its node axis, as a line, and `normals[v]`.
-    pub fn normal_angles_deg(&self, normals: &[DVec3]) -> Vec<f64> {
+    pub(crate) fn normal_angles_deg(&self, normals: &[DVec3]) -> Vec<f64> {
         self.axes
             .iter()
             .zip(normals)
@@ -130,7 +130,7 @@ impl NodeAxes {
     }
 
     /// Vertices whose axis comes from their star's spheres.
-    pub fn count_from_spheres(&self) -> usize {
+    pub(crate) fn count_from_spheres(&self) -> usize {
         self.from_spheres.iter().filter(|&&b| b).count()
     }
 }

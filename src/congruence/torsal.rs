@@ -17,7 +17,7 @@
 use glam::DVec3;
 
 /// The quadratic form's coefficients [a, b, c] of a quad.
-pub fn torsal_quadratic(f: [DVec3; 4], l: [DVec3; 4]) -> [f64; 3] {
+pub(crate) fn torsal_quadratic(f: [DVec3; 4], l: [DVec3; 4]) -> [f64; 3] {
     let (dp, dm) = (f[2] - f[0], f[1] - f[3]);
     let (lp, lm) = (l[2] - l[0], l[1] - l[3]);
     let lc = 0.25 * (l[0] + l[1] + l[2] + l[3]);
@@ -27,7 +27,7 @@ pub fn torsal_quadratic(f: [DVec3; 4], l: [DVec3; 4]) -> [f64; 3] {
 
 /// The real roots (μ0 : μ1) of a μ0² + b μ0 μ1 + c μ1², each scaled to |(μ0, μ1)| = 1; None
 /// when there are none (b² < 4ac) or every direction is a root (a = b = c = 0).
-pub fn quadratic_roots([a, b, c]: [f64; 3]) -> Option<[[f64; 2]; 2]> {
+pub(crate) fn quadratic_roots([a, b, c]: [f64; 3]) -> Option<[[f64; 2]; 2]> {
     let disc = b * b - 4.0 * a * c;
     let size = a.abs().max(b.abs()).max(c.abs());
     if !(disc >= 0.0) || size == 0.0 {
@@ -92,7 +92,7 @@ fn pair_of(f: [DVec3; 4], l: [DVec3; 4], roots: [[f64; 2]; 2]) -> Option<TorsalP
 
 /// The pair of parameter directions of a quad (f1 − f0 along u, f3 − f0 along v): the torsal
 /// directions where every direction is torsal (a sphere's normals all meet at its centre).
-pub fn parameter_pair(f: [DVec3; 4], l: [DVec3; 4]) -> Option<TorsalPair> {
+pub(crate) fn parameter_pair(f: [DVec3; 4], l: [DVec3; 4]) -> Option<TorsalPair> {
     // u: d⁺ + d⁻ = 2 Δu f_u; v: d⁺ − d⁻ = 2 Δv f_v.
     pair_of(f, l, [[1.0, 1.0], [1.0, -1.0]])
 }

@@ -233,7 +233,7 @@ pub struct LineSet<'a> {
 
 /// Writes a GLB of a surface (node `surface`: triangles with vertex normals) and line sets (one
 /// node each, named by the set; empty sets are left out); `extras` goes to `asset.extras`.
-pub fn write_lines_glb(surface: &TriMesh, line_sets: &[LineSet], extras: Value) -> Vec<u8> {
+pub(crate) fn write_lines_glb(surface: &TriMesh, line_sets: &[LineSet], extras: Value) -> Vec<u8> {
     let mut b = Builder::default();
     let mut nodes = Vec::new();
     if !surface.triangles.is_empty() {

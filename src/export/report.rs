@@ -107,7 +107,7 @@ impl Report {
     }
 
     /// Records step timings (ms, in order; a repeated step adds up).
-    pub fn add_timings(&mut self, timings: &[(String, f64)]) {
+    pub(crate) fn add_timings(&mut self, timings: &[(String, f64)]) {
         for (step, ms) in timings {
             self.add_timing(step.clone(), *ms);
         }

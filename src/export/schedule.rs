@@ -290,7 +290,7 @@ fn opt3(out: &mut String, v: Option<[f64; 3]>) {
 
 impl PanelSchedule {
     /// Corners of the largest panel (3 when there are none).
-    pub fn max_corners(&self) -> usize {
+    pub(crate) fn max_corners(&self) -> usize {
         self.panels.iter().map(|r| r.vertex_ids.len()).max().unwrap_or(3)
     }
 

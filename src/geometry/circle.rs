@@ -37,7 +37,7 @@ impl Circle {
     }
 
     /// The circle where the plane through `p` with normal `n` cuts `sphere`.
-    pub fn plane_cut(sphere: &Sphere, p: DVec3, n: DVec3) -> Option<Circle> {
+    pub(crate) fn plane_cut(sphere: &Sphere, p: DVec3, n: DVec3) -> Option<Circle> {
         let n = n.try_normalize()?;
         Self::cut(sphere, n, n.dot(p))
     }
@@ -57,13 +57,13 @@ impl Circle {
 
     /// The point at angle `phi` from the direction `u` (unit, in the plane), counter-clockwise
     /// about the normal: centre + r (cos φ u + sin φ (n × u)).
-    pub fn point_at(&self, u: DVec3, phi: f64) -> DVec3 {
+    pub(crate) fn point_at(&self, u: DVec3, phi: f64) -> DVec3 {
         let (s, c) = phi.sin_cos();
         self.center + self.radius * (c * u + s * self.normal.cross(u))
     }
 
     /// The angle of `x` about the normal, from the direction `u` (unit, in the plane), in (−π, π].
-    pub fn angle_of(&self, u: DVec3, x: DVec3) -> f64 {
+    pub(crate) fn angle_of(&self, u: DVec3, x: DVec3) -> f64 {
         let d = x - self.center;
         d.dot(self.normal.cross(u)).atan2(d.dot(u))
     }

@@ -199,7 +199,7 @@ impl TriangleBvh {
     }
 
     /// The closest point at distance at most `max_distance`; None if there is none.
-    pub fn closest_point_within(&self, p: DVec3, max_distance: f64) -> Option<ClosestHit> {
+    pub(crate) fn closest_point_within(&self, p: DVec3, max_distance: f64) -> Option<ClosestHit> {
         let d2 = if max_distance.is_finite() { max_distance * max_distance } else { f64::INFINITY };
         self.search(p, d2, None)
     }
@@ -207,7 +207,7 @@ impl TriangleBvh {
     /// [`Self::closest_point`], started from triangle `hint` (e.g. the last hit of a moving
     /// point): its closest point bounds the search, so a coherent query visits only the part of
     /// the hierarchy that could hold a nearer one. The same point as an unstarted search.
-    pub fn closest_point_from(&self, p: DVec3, hint: usize) -> Option<ClosestHit> {
+    pub(crate) fn closest_point_from(&self, p: DVec3, hint: usize) -> Option<ClosestHit> {
         let Some(&[a, b, c]) = self.tris.get(hint) else { return self.closest_point(p) };
         if !(a.is_finite() && b.is_finite() && c.is_finite()) {
             return self.closest_point(p);

@@ -38,7 +38,7 @@ impl<const N: usize> Dual<N> {
         self.chain(r, 0.5 / r)
     }
 
-    pub fn recip(self) -> Self {
+    pub(crate) fn recip(self) -> Self {
         let r = 1.0 / self.v;
         self.chain(r, -r * r)
     }

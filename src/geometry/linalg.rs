@@ -94,7 +94,7 @@ fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
 /// Eigen-decomposition of the symmetric 2×2 matrix [[p, q], [q, r]]: (λ1, λ2, (c, s)) with
 /// λ1 ≥ λ2 and (c, s) the unit eigenvector of λ1 ((−s, c) belongs to λ2). Umbilic (λ1 = λ2) gives
 /// (1, 0).
-pub fn sym2_eigen(p: f64, q: f64, r: f64) -> (f64, f64, (f64, f64)) {
+pub(crate) fn sym2_eigen(p: f64, q: f64, r: f64) -> (f64, f64, (f64, f64)) {
     let mean = 0.5 * (p + r);
     let half_diff = 0.5 * (p - r);
     let d = half_diff.hypot(q);
@@ -105,7 +105,7 @@ pub fn sym2_eigen(p: f64, q: f64, r: f64) -> (f64, f64, (f64, f64)) {
 /// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations: eigenvalues ascending
 /// and the matching orthonormal eigenvectors.
 #[allow(clippy::needless_range_loop)]
-pub fn sym3_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
+pub(crate) fn sym3_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
     let mut a = m;
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _sweep in 0..32 {

@@ -67,12 +67,12 @@ pub fn pencil_member(p: [DVec3; 3], theta: f64) -> PencilMember {
 }
 
 /// The basis [s₀, s₁] of the pencil through `p` (see the module docs).
-pub fn pencil_basis(p: [DVec3; 3]) -> [Sphere; 2] {
+pub(crate) fn pencil_basis(p: [DVec3; 3]) -> [Sphere; 2] {
     pencil_basis_dual(p).map(|s| Sphere::from_array(s.map(|d| d.v)))
 }
 
 /// The angle θ of the pencil member closest to `target` (max ⟨s(θ), target⟩).
-pub fn pencil_angle(p: [DVec3; 3], target: &Sphere) -> f64 {
+pub(crate) fn pencil_angle(p: [DVec3; 3], target: &Sphere) -> f64 {
     let [s0, s1] = pencil_basis(p);
     s1.inversive_product(target).atan2(s0.inversive_product(target))
 }

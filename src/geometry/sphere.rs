@@ -132,7 +132,7 @@ impl Sphere {
     }
 
     /// From (a, b₁, b₂, b₃, c).
-    pub fn from_array(v: [f64; 5]) -> Self {
+    pub(crate) fn from_array(v: [f64; 5]) -> Self {
         Self { a: v[0], b: DVec3::new(v[1], v[2], v[3]), c: v[4] }
     }
 
@@ -168,7 +168,7 @@ impl Sphere {
     }
 
     /// The oriented unit normal at `x`: [`Self::normal_at`] normalized (+z where it vanishes).
-    pub fn unit_normal_at(&self, x: DVec3) -> DVec3 {
+    pub(crate) fn unit_normal_at(&self, x: DVec3) -> DVec3 {
         self.normal_at(x).try_normalize().unwrap_or(DVec3::Z)
     }
 

@@ -19,13 +19,13 @@ use super::raw::{check_scale, Ctx, ImportError, MAX_COORDINATE};
 use crate::geometry::bspline::{BSplineBasis, BSplineSurface, MAX_DEGREE};
 
 /// Most control points accepted.
-pub const MAX_CONTROL_POINTS: usize = 1_000_000;
+pub(crate) const MAX_CONTROL_POINTS: usize = 1_000_000;
 
 /// The five keys of the format.
-pub const KEYS: [&str; 5] = ["degreeU", "degreeV", "knotsU", "knotsV", "controlPoints"];
+pub(crate) const KEYS: [&str; 5] = ["degreeU", "degreeV", "knotsU", "knotsV", "controlPoints"];
 
 /// Whether JSON text looks like this format: it names one of its keys (no glTF key is one).
-pub fn looks_like_bspline(bytes: &[u8]) -> bool {
+pub(crate) fn looks_like_bspline(bytes: &[u8]) -> bool {
     let head = &bytes[..bytes.len().min(1 << 20)];
     let has = |key: &str| head.windows(key.len() + 2).any(|w| w[0] == b'"' && &w[1..=key.len()] == key.as_bytes() && w[key.len() + 1] == b'"');
     KEYS.iter().any(|k| has(k))

@@ -24,7 +24,7 @@ pub use raw::{ImportError, MAX_BYTES, MAX_COORDINATE, MAX_TRIANGLES, MAX_VERTICE
 use raw::{check_scale, Ctx, RawMesh};
 
 /// Vertices closer than this fraction of the bounding-box diagonal are merged.
-pub const WELD_TOLERANCE: f64 = 1e-7;
+pub(crate) const WELD_TOLERANCE: f64 = 1e-7;
 
 /// Input file formats.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

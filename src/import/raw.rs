@@ -79,7 +79,7 @@ impl Ctx {
         ImportError::Malformed { file: self.file.clone(), line, message: printable(&message.into()) }
     }
 
-    pub fn unsupported(&self, message: impl Into<String>) -> ImportError {
+    pub(crate) fn unsupported(&self, message: impl Into<String>) -> ImportError {
         ImportError::Unsupported { file: self.file.clone(), message: printable(&message.into()) }
     }
 
@@ -92,7 +92,7 @@ impl Ctx {
     }
 
     /// Rejects counts over [`MAX_TRIANGLES`] / [`MAX_VERTICES`].
-    pub fn check_limits(&self, triangles: u64, vertices: u64) -> Result<(), ImportError> {
+    pub(crate) fn check_limits(&self, triangles: u64, vertices: u64) -> Result<(), ImportError> {
         if triangles > MAX_TRIANGLES as u64 {
             return Err(self.too_large("triangles", triangles, MAX_TRIANGLES));
         }

@@ -35,7 +35,7 @@ impl Arc {
         Arc { circle: Circle { normal: -self.circle.normal, ..self.circle }, from: self.to, to: self.from }
     }
 
-    pub fn chord_length(&self) -> f64 {
+    pub(crate) fn chord_length(&self) -> f64 {
         self.from.distance(self.to)
     }
 
@@ -105,7 +105,7 @@ impl Arc {
 
     /// Number of equal-angle segments whose sagitta is at most `tol` (1 for straight arcs), at
     /// most [`MAX_ARC_SEGMENTS`], and at most 90° each.
-    pub fn segments_for(&self, tol: f64) -> usize {
+    pub(crate) fn segments_for(&self, tol: f64) -> usize {
         let r = self.circle.radius;
         let theta = self.sweep();
         if !r.is_finite() || theta <= 0.0 {
@@ -154,13 +154,14 @@ impl Arc {
     }
 
     /// Sagitta of one of `segments` equal segments.
-    pub fn segment_sagitta(&self, segments: usize) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn segment_sagitta(&self, segments: usize) -> f64 {
         segment_sagitta(self.circle.radius, self.sweep() / segments.max(1) as f64)
     }
 }
 
 /// Sagitta of a circular segment of radius r and angle θ: 2r sin²(θ/4) (0 for r = ∞).
-pub fn segment_sagitta(r: f64, theta: f64) -> f64 {
+pub(crate) fn segment_sagitta(r: f64, theta: f64) -> f64 {
     if !r.is_finite() {
         return 0.0;
     }

@@ -45,7 +45,7 @@ impl EdgeArcs {
 /// (variant (b), Fig. 12): the plane through the edge containing n_f + n_g (n_f − n_g when the
 /// faces are not `consistent`ly oriented along the edge). If that direction is (nearly) along
 /// the edge, the plane containing n_f, else n_g; `None` when all are degenerate.
-pub fn bisecting_plane_normal(p: DVec3, q: DVec3, af: DVec3, ag: DVec3, consistent: bool) -> Option<DVec3> {
+pub(crate) fn bisecting_plane_normal(p: DVec3, q: DVec3, af: DVec3, ag: DVec3, consistent: bool) -> Option<DVec3> {
     let eh = (q - p).try_normalize()?;
     let (nf, ng) = (af.normalize_or_zero(), ag.normalize_or_zero());
     let sum = if consistent { nf + ng } else { nf - ng };
@@ -56,12 +56,12 @@ pub fn bisecting_plane_normal(p: DVec3, q: DVec3, af: DVec3, ag: DVec3, consiste
 }
 
 /// The triangles of face `f` (one for a triangle, two for a quad), for the side tests below.
-pub fn face_triangles(mesh: &PolyMesh, f: usize) -> Vec<[DVec3; 3]> {
+pub(crate) fn face_triangles(mesh: &PolyMesh, f: usize) -> Vec<[DVec3; 3]> {
     mesh.faces[f].triangles().map(|t| t.map(|v| mesh.positions[v as usize])).collect()
 }
 
 /// The arc of edge p→q shared by `faces` (one or two faces).
-pub fn edge_arc(
+pub(crate) fn edge_arc(
     p: DVec3,
     q: DVec3,
     faces: &[usize],
@@ -111,13 +111,13 @@ pub fn edge_arc(
 
 /// Whether every plane cut of `s` is a straight edge: a plane, or a sphere so flat
 /// (r > 5e11·diag) that it deviates from its tangent plane by < 1e-12·diag over the model.
-pub fn cuts_straight(s: &Sphere, diag: f64) -> bool {
+pub(crate) fn cuts_straight(s: &Sphere, diag: f64) -> bool {
     s.a.abs() * diag <= 1e-12
 }
 
 /// The arc p→q of the circle where the plane through p with normal `n` (made orthogonal to the
 /// edge) cuts the sphere `s`; the arc nearer the faces (given by their triangles).
-pub fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DVec3; 3]>], diag: f64) -> Arc {
+pub(crate) fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DVec3; 3]>], diag: f64) -> Arc {
     let e = q - p;
     let l = e.length();
     let eh = e / l;
@@ -160,7 +160,7 @@ pub fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DVec3; 3]
 
 /// Normalized face sphere, or the plane of the face's first triangle (corners 0, 1, 2) when the
 /// given sphere is unusable (non-finite or imaginary).
-pub fn usable_sphere(s: &Sphere, face: &[DVec3]) -> Sphere {
+pub(crate) fn usable_sphere(s: &Sphere, face: &[DVec3]) -> Sphere {
     let tri = [face[0], face[1], face[2]];
     let n = s.normalized();
     if n.is_finite() && (n.discriminant() - 1.0).abs() < 1e-6 {

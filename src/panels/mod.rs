@@ -114,7 +114,7 @@ pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeA
 }
 
 /// The panels of a live view: [`build_panels_with`] under [`LIVE_PANEL_TRIANGLE_BUDGET`].
-pub fn build_live_panels(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
+pub(crate) fn build_live_panels(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
     build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), LIVE_PANEL_TRIANGLE_BUDGET, 4))
 }
 

@@ -44,7 +44,7 @@ impl SphereMesh {
     }
 
     /// The same mesh with its boundary edges cut by the planes with these normals.
-    pub fn with_boundary_planes(self, boundary_planes: HashMap<[u32; 2], DVec3>) -> Self {
+    pub(crate) fn with_boundary_planes(self, boundary_planes: HashMap<[u32; 2], DVec3>) -> Self {
         Self { boundary_planes, ..self }
     }
 

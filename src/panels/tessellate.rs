@@ -17,7 +17,7 @@ pub const MAX_PANEL_TRIANGLES: usize = 2 * MAX_LEVEL * MAX_LEVEL + 4 * (super::a
 /// Fraction of the chord tolerance allowed for the sagitta of an arc segment. The flat triangles
 /// on a boundary segment deviate from the sphere by a bit more than its sagitta (their longest
 /// edge is a little longer than the segment), so leave them room.
-pub const ARC_TOL_FACTOR: f64 = 0.5;
+pub(crate) const ARC_TOL_FACTOR: f64 = 0.5;
 
 /// The tessellation of one panel.
 #[derive(Clone, Debug, PartialEq)]
@@ -301,7 +301,7 @@ pub fn triangle_chord_error(s: &Sphere, x0: DVec3, x1: DVec3, x2: DVec3) -> f64 
 
 /// max over the triangle of Σ_{i<j} βᵢβⱼ|xᵢ − xⱼ|² (the negated power of the point w.r.t. the
 /// circumcircle): R² when acute, (ℓ_max/2)² otherwise.
-pub fn triangle_q_max(x0: DVec3, x1: DVec3, x2: DVec3) -> f64 {
+pub(crate) fn triangle_q_max(x0: DVec3, x1: DVec3, x2: DVec3) -> f64 {
     let l = [x1.distance_squared(x2), x2.distance_squared(x0), x0.distance_squared(x1)];
     let lmax = l[0].max(l[1]).max(l[2]);
     let acute = l[0] < l[1] + l[2] && l[1] < l[2] + l[0] && l[2] < l[0] + l[1];
@@ -317,7 +317,7 @@ pub fn triangle_q_max(x0: DVec3, x1: DVec3, x2: DVec3) -> f64 {
 /// Projects `x` radially onto the sphere (from its centre; orthogonally for a plane) by Newton
 /// steps along ∇ψ, in coordinates local to `base` (a point on or near the sphere, e.g. a panel
 /// corner: this keeps precision for huge radii).
-pub fn project_to_sphere(s: &Sphere, base: DVec3, x: DVec3) -> DVec3 {
+pub(crate) fn project_to_sphere(s: &Sphere, base: DVec3, x: DVec3) -> DVec3 {
     let g0 = 2.0 * s.a * base - s.b;
     let psi0 = s.eval(base);
     let mut y = x - base;

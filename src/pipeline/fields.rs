@@ -88,36 +88,36 @@ pub mod field {
     /// Triangle indices, u32 × 3.
     pub const TRIANGLES: &str = "triangles";
     /// Unique undirected edges, u32 × 2.
-    pub const EDGES: &str = "edges";
+    pub(crate) const EDGES: &str = "edges";
     pub const MEAN_CURVATURE: &str = "H";
     pub const K1: &str = "k1";
-    pub const K2: &str = "k2";
-    pub const K1_MINUS_K2: &str = "k1-k2";
+    pub(crate) const K2: &str = "k2";
+    pub(crate) const K1_MINUS_K2: &str = "k1-k2";
     /// Vertex normals used for the curvature sign, f32 × 3.
-    pub const NORMALS: &str = "normals";
+    pub(crate) const NORMALS: &str = "normals";
     /// Normalized generalized central spheres (a, b.x, b.y, b.z, c), f32 × 5.
     pub const CENTRAL_SPHERES: &str = "central_spheres";
     /// 1 where the vertex is on the boundary, u32 × 1.
-    pub const BOUNDARY: &str = "boundary";
+    pub(crate) const BOUNDARY: &str = "boundary";
     /// The sizing field g at the reference vertices (absolute length), f32 × 1.
     pub const SIZING: &str = "sizing";
     /// Panel tessellations: positions with the sphere normals there, triangles, and the
     /// boundary arcs of every panel as line segments over the positions.
     pub const PANEL_POSITIONS: &str = "panels.positions";
-    pub const PANEL_NORMALS: &str = "panels.normals";
+    pub(crate) const PANEL_NORMALS: &str = "panels.normals";
     pub const PANEL_TRIANGLES: &str = "panels.triangles";
-    pub const PANEL_EDGES: &str = "panels.edges";
-    pub const SUPPORT_POSITIONS: &str = "support.positions";
+    pub(crate) const PANEL_EDGES: &str = "panels.edges";
+    pub(crate) const SUPPORT_POSITIONS: &str = "support.positions";
     pub const SUPPORT_TRIANGLES: &str = "support.triangles";
-    pub const AXES_POSITIONS: &str = "axes.positions";
+    pub(crate) const AXES_POSITIONS: &str = "axes.positions";
     pub const AXES_LINES: &str = "axes.lines";
     /// The second envelope: the mesh inverted in Ω.
-    pub const ENVELOPE_POSITIONS: &str = "envelope2.positions";
-    pub const ENVELOPE_TRIANGLES: &str = "envelope2.triangles";
+    pub(crate) const ENVELOPE_POSITIONS: &str = "envelope2.positions";
+    pub(crate) const ENVELOPE_TRIANGLES: &str = "envelope2.triangles";
     /// SQ (Sec. 5.1): line segments as point pairs, f32 × 3: the optimized lines over the
     /// surface, the lines of the central congruence, the torsal cross field (two arms per quad)
     /// and the outlines of the quads without real torsal directions.
-    pub const SQ_LINES: &str = "sq.lines";
+    pub(crate) const SQ_LINES: &str = "sq.lines";
     pub const SQ_INITIAL_LINES: &str = "sq.initial_lines";
     pub const SQ_CROSS_FIELD: &str = "sq.cross_field";
     /// The torsal-plane angle (degrees) of each cross-field arm, f32 × 1.

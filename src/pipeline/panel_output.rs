@@ -18,7 +18,7 @@ use crate::progress::Clock;
 use crate::reference::Reference;
 
 /// Points as f32 triples.
-pub fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
+pub(crate) fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
     points.flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect()
 }
 
@@ -34,12 +34,12 @@ pub fn mesh_fields(mesh: &TriMesh, edges: &[[u32; 2]]) -> Vec<Field> {
 }
 
 /// [`mesh_fields`] of a triangle mesh with all its edges.
-pub fn triangle_mesh_fields(mesh: &TriMesh) -> Vec<Field> {
+pub(crate) fn triangle_mesh_fields(mesh: &TriMesh) -> Vec<Field> {
     mesh_fields(mesh, Topology::new(mesh).edges())
 }
 
 /// Per-vertex curvature fields for the viewer's colour maps and central spheres.
-pub fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
+pub(crate) fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
     let v = &c.vertices;
     vec![
         Field::f32(field::MEAN_CURVATURE, 1, v.iter().map(|x| x.mean as f32).collect()),
@@ -57,7 +57,7 @@ pub fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
 
 /// The panels as display fields: positions with their sphere normals, triangles, and the
 /// boundary arcs as line segments.
-pub fn panel_fields(panels: &[Panel]) -> Vec<Field> {
+pub(crate) fn panel_fields(panels: &[Panel]) -> Vec<Field> {
     let (mut pos, mut nrm, mut tri, mut edges) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for p in panels {
         let base = pos.len() as u32;
@@ -79,7 +79,7 @@ pub fn panel_fields(panels: &[Panel]) -> Vec<Field> {
 }
 
 /// The support strips and the node axes (segments) as display fields.
-pub fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec<Field> {
+pub(crate) fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec<Field> {
     vec![
         Field::f32(field::SUPPORT_POSITIONS, 3, f32s(support.positions.iter().copied())),
         Field::u32(field::SUPPORT_TRIANGLES, 3, support.triangles.iter().flatten().copied().collect()),
@@ -143,27 +143,27 @@ impl<'a> PanelExport<'a> {
     }
 
     /// The verdict the report carries ([`crate::guarantees`]).
-    pub fn with_verdict(self, verdict: &'a Verdict) -> Self {
+    pub(crate) fn with_verdict(self, verdict: &'a Verdict) -> Self {
         Self { verdict: Some(verdict), ..self }
     }
 
     /// The warnings the report carries (the failed assumptions of the reference).
-    pub fn with_warnings(self, warnings: &[impl ToString]) -> Self {
+    pub(crate) fn with_warnings(self, warnings: &[impl ToString]) -> Self {
         Self { warnings: warnings.iter().map(ToString::to_string).collect(), ..self }
     }
 
-    pub fn with_extras(self, extras: serde_json::Value) -> Self {
+    pub(crate) fn with_extras(self, extras: serde_json::Value) -> Self {
         Self { extras, ..self }
     }
 
     /// The support structure (its strips and elements) and the node axes.
-    pub fn with_support(self, support: &'a SupportStructure) -> Self {
+    pub(crate) fn with_support(self, support: &'a SupportStructure) -> Self {
         Self { support: Some(support), ..self }
     }
 
     /// Each panel's [`crate::panels::deviation::max_deviation`] from the reference, measured by
     /// the method: the schedule takes them instead of measuring again.
-    pub fn with_deviations(self, deviations: &'a [f64]) -> Self {
+    pub(crate) fn with_deviations(self, deviations: &'a [f64]) -> Self {
         Self { deviations: Some(deviations), ..self }
     }
 }
@@ -171,7 +171,7 @@ impl<'a> PanelExport<'a> {
 /// The report and the panel files of a panel method: `panels.glb`, `panels.obj`, the schedule
 /// as `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `support.csv`;
 /// the caller adds `report.json` ([`crate::export::report_file`]) once the report is complete.
-pub fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
+pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
     let t0 = clock.now();
     let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations);
     schedule.support_elements = e.support.map(|s| SupportRecord::of(&s.elements)).unwrap_or_default();

@@ -94,7 +94,7 @@ impl Loaded {
     }
 
     /// Positions, triangles, normals and the edges of the faces as loaded, for display.
-    pub fn geometry_fields(&self) -> Vec<Field> {
+    pub(crate) fn geometry_fields(&self) -> Vec<Field> {
         let edges = Topology::new(self.surface.surface()).edges().to_vec();
         mesh_fields(self.surface.mesh(), &edges)
     }

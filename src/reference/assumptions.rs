@@ -167,7 +167,7 @@ impl fmt::Display for Warning {
 }
 
 /// The failed assumptions of `mesh` with its topology and curvature.
-pub fn surface_warnings(mesh: &TriMesh, topo: &Topology, field: &CurvatureField) -> Vec<Warning> {
+pub(crate) fn surface_warnings(mesh: &TriMesh, topo: &Topology, field: &CurvatureField) -> Vec<Warning> {
     let mut warnings = Vec::new();
     warnings.extend(sign_change(mesh, field));
     let folds = fold_edges(mesh, topo);
@@ -201,7 +201,7 @@ fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<Warning> {
 
 /// The kink warning of a result whose interior edges meet at `kinks_deg`, beside the reference's
 /// own largest dihedral angle.
-pub fn kink_warning(kinks_deg: &[f64], reference: &crate::reference::Reference) -> Option<Warning> {
+pub(crate) fn kink_warning(kinks_deg: &[f64], reference: &crate::reference::Reference) -> Option<Warning> {
     let edges = kinks_deg.iter().filter(|&&k| !(k <= KINK_WARNING_DEG)).count();
     let max_deg = kinks_deg.iter().copied().fold(0.0, f64::max);
     (edges > 0).then(|| Warning::Kinks { edges, max_deg, reference_max_deg: reference.max_dihedral_angle_deg() })
@@ -216,14 +216,14 @@ pub fn coarseness_warning(reference: &crate::reference::Reference, epsilon: f64)
 }
 
 /// The sliver warning of `mesh`, if it has slivers.
-pub fn sliver_warning(mesh: &TriMesh) -> Option<Warning> {
+pub(crate) fn sliver_warning(mesh: &TriMesh) -> Option<Warning> {
     let faces = (0..mesh.face_count()).filter(|&f| is_sliver(mesh.face_points(f))).count();
     (faces > 0).then_some(Warning::Slivers { faces })
 }
 
 /// The warnings of a method that ran on `work`, a remesh of the reference when given: H and
 /// folds are the reference's, slivers those of the mesh the method used.
-pub fn method_warnings(reference: &crate::reference::Reference, field: &CurvatureField, work: Option<&TriMesh>) -> Vec<Warning> {
+pub(crate) fn method_warnings(reference: &crate::reference::Reference, field: &CurvatureField, work: Option<&TriMesh>) -> Vec<Warning> {
     let mut warnings = surface_warnings(reference.mesh(), reference.topology(), field);
     if let Some(work) = work {
         warnings.retain(|w| !matches!(w, Warning::Slivers { .. }));
@@ -234,7 +234,7 @@ pub fn method_warnings(reference: &crate::reference::Reference, field: &Curvatur
 
 /// Whether the triangle's height over its longest edge is below [`SLIVER_ASPECT`] (a repeated
 /// corner counts: degenerate faces are slivers too).
-pub fn is_sliver(p: [DVec3; 3]) -> bool {
+pub(crate) fn is_sliver(p: [DVec3; 3]) -> bool {
     let l2 = (p[1] - p[0]).length_squared().max((p[2] - p[1]).length_squared()).max((p[0] - p[2]).length_squared());
     let twice_area = (p[1] - p[0]).cross(p[2] - p[0]).length();
     !(twice_area > SLIVER_ASPECT * l2)
@@ -242,7 +242,7 @@ pub fn is_sliver(p: [DVec3; 3]) -> bool {
 
 /// Edges on which some two faces fold back: their third corners lie on the same side
 /// of the edge, within [`FOLD_ANGLE_DEG`] (independent of the faces' orientation).
-pub fn fold_edges(mesh: &TriMesh, topo: &Topology) -> usize {
+pub(crate) fn fold_edges(mesh: &TriMesh, topo: &Topology) -> usize {
     let cos_fold = FOLD_ANGLE_DEG.to_radians().cos();
     let mut folds = 0;
     for (e, [a, b]) in topo.edges().iter().enumerate() {

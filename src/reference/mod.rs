@@ -155,7 +155,7 @@ impl Reference {
 
     /// The closest-point hierarchy of the boundary of [`Self::mesh`]: its edges with one
     /// face, each as a degenerate triangle (a, b, b). Empty for a closed surface.
-    pub fn boundary_bvh(&self) -> &TriangleBvh {
+    pub(crate) fn boundary_bvh(&self) -> &TriangleBvh {
         self.boundary_bvh.get_or_init(|| {
             let topology = self.topology();
             let p = &self.mesh.positions;
@@ -183,7 +183,7 @@ impl Reference {
     /// The largest angle (degrees) between the normals of two facets sharing an interior edge of
     /// the triangulation: how sharply the reference itself bends from facet to facet, against
     /// which the panels' kinks are judged.
-    pub fn max_dihedral_angle_deg(&self) -> f64 {
+    pub(crate) fn max_dihedral_angle_deg(&self) -> f64 {
         *self.max_dihedral_angle_deg.get_or_init(|| {
             let normal = |f: u32| {
                 let t = self.mesh.triangles[f as usize].map(|v| self.mesh.positions[v as usize]);
@@ -218,7 +218,7 @@ impl Reference {
     }
 
     /// The curvature computed with `params`, if it is.
-    pub fn cached_curvature(&self, params: &JetParams) -> Option<Rc<CurvatureField>> {
+    pub(crate) fn cached_curvature(&self, params: &JetParams) -> Option<Rc<CurvatureField>> {
         self.curvature.borrow().as_ref().filter(|(p, _)| p == params).map(|(_, f)| f.clone())
     }
 
@@ -262,7 +262,7 @@ impl Reference {
     /// [`Self::closest_point`], started from triangle `previous` of [`Self::mesh`] (e.g. the
     /// triangle of a moving point's last closest point): the same point as an unstarted search,
     /// visiting a small part of the hierarchy.
-    pub fn closest_point_near(&self, p: DVec3, previous: Option<usize>) -> Option<SurfacePoint> {
+    pub(crate) fn closest_point_near(&self, p: DVec3, previous: Option<usize>) -> Option<SurfacePoint> {
         let bvh = self.bvh();
         match previous {
             Some(t) => bvh.closest_point_from(p, t),

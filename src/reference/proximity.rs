@@ -214,6 +214,6 @@ impl<'a> CentroidTargets<'a> {
 }
 
 /// ∂ψ(p)/∂(a, b, c) = (|p|², −p, 1): the gradient of a sphere's value at a fixed point.
-pub fn value_gradient(p: DVec3) -> [f64; 5] {
+pub(crate) fn value_gradient(p: DVec3) -> [f64; 5] {
     [p.length_squared(), -p.x, -p.y, -p.z, 1.0]
 }

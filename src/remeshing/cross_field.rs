@@ -54,19 +54,19 @@ impl Cross {
     }
 
     /// The quarter turns that bring this cross's labels nearest to angle `reference`.
-    pub fn quarters_to(self, reference: f64) -> i32 {
+    pub(crate) fn quarters_to(self, reference: f64) -> i32 {
         ((reference - self.angle) / FRAC_PI_2).round() as i32
     }
 
     /// Labelled like the cross at angle `reference` (the nearest of its four labellings).
-    pub fn aligned_to(self, reference: f64) -> Self {
+    pub(crate) fn aligned_to(self, reference: f64) -> Self {
         self.turned(self.quarters_to(reference))
     }
 }
 
 /// The weighted mean of crosses: the angle from the mean of z, the skew from the crosses labelled
 /// like it. None when z averages to (nearly) zero.
-pub fn mean_cross(crosses: impl IntoIterator<Item = (f64, Cross)>) -> Option<Cross> {
+pub(crate) fn mean_cross(crosses: impl IntoIterator<Item = (f64, Cross)>) -> Option<Cross> {
     let items: Vec<(f64, Cross)> = crosses.into_iter().collect();
     let z = items.iter().fold(DVec2::ZERO, |s, (w, c)| s + *w * c.z());
     let total: f64 = items.iter().map(|(w, _)| w).sum();
@@ -79,7 +79,7 @@ pub fn mean_cross(crosses: impl IntoIterator<Item = (f64, Cross)>) -> Option<Cro
 }
 
 /// The difference b − a of two cross angles, modulo a quarter turn, in (−π/4, π/4].
-pub fn angle_step(a: f64, b: f64) -> f64 {
+pub(crate) fn angle_step(a: f64, b: f64) -> f64 {
     let d = (b - a).rem_euclid(FRAC_PI_2);
     if d > 0.5 * FRAC_PI_2 { d - FRAC_PI_2 } else { d }
 }
@@ -148,7 +148,7 @@ impl CrossField {
     }
 
     /// The cross at (u, v), bilinear (on z) between cell centres, clamped to the domain.
-    pub fn cross_at(&self, u: f64, v: f64) -> Cross {
+    pub(crate) fn cross_at(&self, u: f64, v: f64) -> Cross {
         let cells = self.n - 1;
         if cells == 1 {
             return self.crosses[0];
@@ -170,7 +170,7 @@ impl CrossField {
     }
 
     /// The two directions at (u, v) as unit 3D tangent vectors of `surface`.
-    pub fn at_3d(&self, surface: &BSplineSurface, u: f64, v: f64) -> [DVec3; 2] {
+    pub(crate) fn at_3d(&self, surface: &BSplineSurface, u: f64, v: f64) -> [DVec3; 2] {
         let d = surface.derivatives(u, v);
         self.at(u, v).map(|t| (d.su * t.x + d.sv * t.y).normalize_or_zero())
     }
@@ -192,7 +192,7 @@ impl FineGrid {
     pub fn node(&self, i: usize, j: usize) -> usize {
         i + self.nu * j
     }
-    pub fn node_count(&self) -> usize {
+    pub(crate) fn node_count(&self) -> usize {
         self.nu * self.nv
     }
     pub fn triangle_count(&self) -> usize {
@@ -216,7 +216,7 @@ impl FineGrid {
         self.triangle(t).iter().map(|&n| self.uv(n)).sum::<DVec2>() / 3.0
     }
     /// The triangle holding parameter point p (clamped to the grid).
-    pub fn triangle_at(&self, p: DVec2) -> usize {
+    pub(crate) fn triangle_at(&self, p: DVec2) -> usize {
         let s = ((p.x - self.origin[0]) / self.step[0]).clamp(0.0, (self.nu - 1) as f64);
         let t = ((p.y - self.origin[1]) / self.step[1]).clamp(0.0, (self.nv - 1) as f64);
         let (i, j) = ((s.floor() as usize).min(self.nu - 2), (t.floor() as usize).min(self.nv - 2));
@@ -224,7 +224,7 @@ impl FineGrid {
         if (s - i as f64) + (t - j as f64) <= 1.0 { cell } else { cell + 1 }
     }
     /// Whether `node` is on the grid's outer boundary.
-    pub fn on_border(&self, node: usize) -> bool {
+    pub(crate) fn on_border(&self, node: usize) -> bool {
         let (i, j) = (node % self.nu, node / self.nu);
         i == 0 || j == 0 || i + 1 == self.nu || j + 1 == self.nv
     }

@@ -73,9 +73,9 @@ use crate::progress::{ignore, Cancelled, OnProgress, Progress};
 pub const DEFAULT_EPSILON: f64 = 4e-4;
 
 /// Default g_min as a fraction of the mean edge length of the reference.
-pub const DEFAULT_G_MIN_EDGE_FACTOR: f64 = 0.5;
+pub(crate) const DEFAULT_G_MIN_EDGE_FACTOR: f64 = 0.5;
 /// Default g_max as a fraction of the bounding-box diagonal.
-pub const DEFAULT_G_MAX_DIAGONAL_FACTOR: f64 = 0.25;
+pub(crate) const DEFAULT_G_MAX_DIAGONAL_FACTOR: f64 = 0.25;
 /// How fast g may grow along the surface, per unit length ([`limit_gradation`]).
 pub const GRADATION: f64 = 0.5;
 
@@ -147,7 +147,7 @@ impl SizingField {
     /// About how many faces a remesh to this field makes on `mesh` (the mesh it was built on):
     /// Σ over triangles of A_t / (√3/4 · g_t²), g_t the mean of its corners' values, plus the
     /// boundary's length in units of g (Sec. 3).
-    pub fn expected_faces(&self, mesh: &TriMesh) -> f64 {
+    pub(crate) fn expected_faces(&self, mesh: &TriMesh) -> f64 {
         let g_of = |v: u32| self.values.get(v as usize).copied().unwrap_or(self.bounds.g_min).max(f64::MIN_POSITIVE);
         let per_area = 4.0 / 3f64.sqrt();
         let interior: f64 = mesh
@@ -206,7 +206,7 @@ impl SizingField {
     }
 
     /// A field from given per-vertex values (clamped to `bounds`).
-    pub fn from_values(mesh: &TriMesh, values: Vec<f64>, bounds: SizingBounds) -> Self {
+    pub(crate) fn from_values(mesh: &TriMesh, values: Vec<f64>, bounds: SizingBounds) -> Self {
         let values = values
             .into_iter()
             .map(|v| if v.is_finite() { v.clamp(bounds.g_min, bounds.g_max) } else { bounds.g_max })
@@ -225,7 +225,7 @@ impl SizingField {
     }
 
     /// Some(g) for a constant field.
-    pub fn uniform_value(&self) -> Option<f64> {
+    pub(crate) fn uniform_value(&self) -> Option<f64> {
         self.uniform
     }
 
@@ -236,7 +236,7 @@ impl SizingField {
 
     /// Whether the field was built on exactly this mesh's triangles (so a hit of a BVH of `mesh`
     /// can be passed to [`Self::at_hit`]).
-    pub fn is_defined_on(&self, mesh: &TriMesh) -> bool {
+    pub(crate) fn is_defined_on(&self, mesh: &TriMesh) -> bool {
         self.uniform.is_none()
             && self.triangles == mesh.triangles
             && self.bvh.len() == mesh.face_count()
@@ -256,7 +256,7 @@ impl SizingField {
 
     /// [`Self::at`] for a point known to be within about `max_distance` of the reference (the
     /// search is pruned by it; farther points fall back to the unbounded search).
-    pub fn at_near(&self, p: DVec3, max_distance: f64) -> f64 {
+    pub(crate) fn at_near(&self, p: DVec3, max_distance: f64) -> f64 {
         if let Some(g) = self.uniform {
             return g;
         }

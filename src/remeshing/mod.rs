@@ -43,7 +43,7 @@ pub const MAX_FACES: usize = 200_000;
 /// The fewest.
 pub const MIN_FACES: usize = 4;
 /// The face count of a uniform remesh when none is given.
-pub const DEFAULT_FACES: usize = 600;
+pub(crate) const DEFAULT_FACES: usize = 600;
 
 /// A remesh refused, with the reference's failed assumptions (folds, slivers), which often say
 /// why; one type for every method that remeshes.

@@ -365,7 +365,7 @@ impl<'a> Remesher<'a> {
 
     // --- 1. Splits ---------------------------------------------------------------------------
 
-    pub fn split_long_edges(&mut self) -> usize {
+    pub(crate) fn split_long_edges(&mut self) -> usize {
         let mut queue: Vec<(f64, u32)> = self
             .edges()
             .into_iter()
@@ -400,7 +400,7 @@ impl<'a> Remesher<'a> {
     /// boundary, often an "ear" face with three boundary corners). A face sphere there has its
     /// vertices pinned to the boundary and little freedom left, and the arc of such a chord runs
     /// over the boundary; the split gives the edge an interior vertex. Returns the number of splits.
-    pub fn split_boundary_chords(&mut self) -> usize {
+    pub(crate) fn split_boundary_chords(&mut self) -> usize {
         let chords: Vec<u32> = self
             .edges()
             .into_iter()
@@ -468,7 +468,7 @@ impl<'a> Remesher<'a> {
 
     // --- 2. Collapses ------------------------------------------------------------------------
 
-    pub fn collapse_short_edges(&mut self) -> usize {
+    pub(crate) fn collapse_short_edges(&mut self) -> usize {
         let mut total = 0;
         // The first pass looks at every edge, later passes only at the edges around vertices
         // whose neighbourhood changed (the kept vertex of each collapse and its one-ring).
@@ -675,7 +675,7 @@ impl<'a> Remesher<'a> {
         }
     }
 
-    pub fn flip_edges(&mut self) -> usize {
+    pub(crate) fn flip_edges(&mut self) -> usize {
         let mut total = 0;
         for _pass in 0..3 {
             let mut done = 0;
@@ -762,7 +762,7 @@ impl<'a> Remesher<'a> {
         self.m.pos.iter().enumerate().map(|(v, &p)| if self.m.vertex_dead[v] { 1.0 } else { self.g_at(p) }).collect()
     }
 
-    pub fn smooth_and_project(&mut self) -> (usize, usize) {
+    pub(crate) fn smooth_and_project(&mut self) -> (usize, usize) {
         let gv = self.vertex_sizing();
         let (mut moved, mut rejected) = (0, 0);
         let mut out = Vec::with_capacity(16);
@@ -869,7 +869,7 @@ impl<'a> Remesher<'a> {
 
     /// Projects every vertex that is not on the reference (with the usual checks). Returns the
     /// number of vertices that could not be projected and the largest distance to the reference.
-    pub fn final_projection(&mut self) -> (usize, f64) {
+    pub(crate) fn final_projection(&mut self) -> (usize, f64) {
         let mut out = Vec::new();
         let mut failed = 0;
         let mut max_d: f64 = 0.0;

@@ -745,7 +745,7 @@ pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRe
 }
 
 /// [`quad_remesh`] from its [`prepare`]d field.
-pub fn quad_remesh_prepared(surface: &BSplineSurface, field: &CrossField, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
+pub(crate) fn quad_remesh_prepared(surface: &BSplineSurface, field: &CrossField, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
     let target = params.target_faces;
     let Prepared { patch_area, spacing: mut h, reach, field: fg } = prepared;
     let mut g = integrate(&fg, params.direction_weight, h)?;

@@ -49,7 +49,7 @@ pub struct Cuts {
 }
 
 /// M^r as a 2 × 2 matrix (rows).
-pub fn quarter_turn(r: i32) -> [[f64; 2]; 2] {
+pub(crate) fn quarter_turn(r: i32) -> [[f64; 2]; 2] {
     match r.rem_euclid(4) {
         0 => [[1.0, 0.0], [0.0, 1.0]],
         1 => [[0.0, 1.0], [-1.0, 0.0]],
@@ -126,7 +126,7 @@ impl Cuts {
 
     /// The corner value of node `node` in triangle `t`: φ there, with the right copy's transition
     /// where the corner is on the right of a cut.
-    pub fn corner_value(&self, t: usize, node: usize, phi: impl Fn(usize) -> DVec2) -> DVec2 {
+    pub(crate) fn corner_value(&self, t: usize, node: usize, phi: impl Fn(usize) -> DVec2) -> DVec2 {
         match self.right.get(&(t, node)) {
             None => phi(node),
             Some(&c) => {
@@ -138,7 +138,7 @@ impl Cuts {
     }
 
     /// The corner value as a linear combination: per function k, (node, function, coefficient).
-    pub fn corner_terms(&self, t: usize, node: usize, k: usize) -> Vec<(usize, usize, f64)> {
+    pub(crate) fn corner_terms(&self, t: usize, node: usize, k: usize) -> Vec<(usize, usize, f64)> {
         match self.right.get(&(t, node)) {
             None => vec![(node, k, 1.0)],
             Some(&c) => {

@@ -195,7 +195,7 @@ impl System {
         self.chol.as_ref().map_or(0.0, factor_flops)
     }
 
-    pub fn is_supernodal(&self) -> bool {
+    pub(crate) fn is_supernodal(&self) -> bool {
         matches!(
             self.chol.as_ref().map(|c| c.raw()),
             Some(faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_))
@@ -209,7 +209,7 @@ impl System {
             && self.matches_structure(buf)
     }
 
-    pub fn matches_structure(&self, buf: &EvalBuffers) -> bool {
+    pub(crate) fn matches_structure(&self, buf: &EvalBuffers) -> bool {
         self.term_rows == buf.term_rows
             && self.term_trips == buf.term_trips
             && same_indices(&self.rows, &buf.rows)
@@ -433,13 +433,13 @@ impl System {
     }
 
     /// |JᵀWr|∞.
-    pub fn gradient_inf_norm(&self) -> f64 {
+    pub(crate) fn gradient_inf_norm(&self) -> f64 {
         self.g.iter().fold(0.0, |m, g| m.max(g.abs()))
     }
 
     /// Solves (JᵀWJ + μI) Δ = −JᵀWr into `delta` (length n_free). False if the numeric
     /// factorization failed (not positive definite).
-    pub fn factor_solve(&mut self, mu: f64, delta: &mut [f64]) -> bool {
+    pub(crate) fn factor_solve(&mut self, mu: f64, delta: &mut [f64]) -> bool {
         let nf = self.n_free();
         assert_eq!(delta.len(), nf);
         let Some(chol) = self.chol.as_ref() else {

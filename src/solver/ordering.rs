@@ -121,7 +121,7 @@ impl BlockGraph {
     }
 
     /// Expands a node order to the free-variable permutation (new → old) and its inverse.
-    pub fn expand(&self, node_order: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    pub(crate) fn expand(&self, node_order: &[u32]) -> (Vec<u32>, Vec<u32>) {
         let nf = self.vars.len();
         let mut fwd = Vec::with_capacity(nf);
         for &k in node_order {
@@ -183,7 +183,7 @@ impl BlockGraph {
     }
 
     /// Block AMD node order.
-    pub fn amd_order(&self) -> Vec<u32> {
+    pub(crate) fn amd_order(&self) -> Vec<u32> {
         let mut local = vec![u32::MAX; self.n()];
         let mut out = Vec::with_capacity(self.n());
         self.amd_into(None, &mut local, &mut out);
@@ -191,7 +191,7 @@ impl BlockGraph {
     }
 
     /// Nested-dissection node order.
-    pub fn nested_dissection_order(&self) -> Vec<u32> {
+    pub(crate) fn nested_dissection_order(&self) -> Vec<u32> {
         let n = self.n();
         let mut st = NdState {
             stamp: vec![0; n],

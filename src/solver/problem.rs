@@ -56,7 +56,7 @@ impl<'s> JacobianSink<'s> {
 
     /// Adds `values[k]` at `(row, col0 + k)`.
     #[inline]
-    pub fn add_block(&mut self, row: usize, col0: usize, values: &[f64]) {
+    pub(crate) fn add_block(&mut self, row: usize, col0: usize, values: &[f64]) {
         for (k, &v) in values.iter().enumerate() {
             self.add(row, col0 + k, v);
         }
@@ -119,12 +119,12 @@ impl<'a> Problem<'a> {
     /// Only points that `admissible` accepts are taken as steps (the solver treats any other
     /// trial point as a failed step and raises the damping): a barrier that no weight can
     /// trade away, e.g. no folded face.
-    pub fn set_admissible(&mut self, admissible: impl Fn(&[f64]) -> bool + 'a) {
+    pub(crate) fn set_admissible(&mut self, admissible: impl Fn(&[f64]) -> bool + 'a) {
         self.admissible = Some(Box::new(admissible));
     }
 
     /// Whether `x` is admissible (always, without a constraint).
-    pub fn is_admissible(&self, x: &[f64]) -> bool {
+    pub(crate) fn is_admissible(&self, x: &[f64]) -> bool {
         self.admissible.as_ref().is_none_or(|f| f(x))
     }
 
@@ -149,7 +149,7 @@ impl<'a> Problem<'a> {
     }
 
     /// The ordering group key of every variable (equal keys = one block).
-    pub fn variable_groups(&self) -> &[u32] {
+    pub(crate) fn variable_groups(&self) -> &[u32] {
         &self.groups
     }
 
@@ -162,7 +162,7 @@ impl<'a> Problem<'a> {
         self.add_boxed(Box::new(term), weight)
     }
 
-    pub fn add_boxed(&mut self, term: Box<dyn Term + 'a>, weight: f64) -> TermId {
+    pub(crate) fn add_boxed(&mut self, term: Box<dyn Term + 'a>, weight: f64) -> TermId {
         assert!(weight >= 0.0 && weight.is_finite(), "term weight must be finite and ≥ 0");
         self.terms.push(TermSlot { term, weight });
         TermId(self.terms.len() - 1)
@@ -202,11 +202,11 @@ impl<'a> Problem<'a> {
         }
     }
 
-    pub fn unfix(&mut self, i: usize) {
+    pub(crate) fn unfix(&mut self, i: usize) {
         self.fixed[i] = false;
     }
 
-    pub fn fixed_mask(&self) -> &[bool] {
+    pub(crate) fn fixed_mask(&self) -> &[bool] {
         &self.fixed
     }
 

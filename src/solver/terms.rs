@@ -14,7 +14,7 @@ use glam::DVec3;
 
 /// The 3-block of `x` at offset `o` (a vertex, a normal, the b of a sphere).
 #[inline]
-pub fn v3(x: &[f64], o: usize) -> DVec3 {
+pub(crate) fn v3(x: &[f64], o: usize) -> DVec3 {
     DVec3::new(x[o], x[o + 1], x[o + 2])
 }
 
@@ -213,9 +213,6 @@ impl<T: Term> Hinge<T> {
         &self.inner
     }
 
-    pub fn inner_mut(&mut self) -> &mut T {
-        &mut self.inner
-    }
 }
 
 impl<T: Term> Term for Hinge<T> {
@@ -264,9 +261,6 @@ impl<T: Term> Band<T> {
         &self.inner
     }
 
-    pub fn inner_mut(&mut self) -> &mut T {
-        &mut self.inner
-    }
 
     pub fn with_name(mut self, name: impl Into<String>) -> Self {
         self.name = name.into();

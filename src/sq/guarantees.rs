@@ -22,7 +22,7 @@ use super::sq_mesh::SqMeshFigures;
 pub const EXACT: f64 = 1e-8;
 
 /// The congruence's guarantees at θ and α (degrees).
-pub fn congruence_guarantees(f: &CongruenceFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
+pub(crate) fn congruence_guarantees(f: &CongruenceFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
     vec![
         Guarantee::at_most("max_line_normal_angle_deg", f.max_line_normal_angle_deg, theta_deg, "deg"),
         Guarantee::count_at_most("quads_without_real_torsal_directions", f.quads_without_real_torsal_directions, 0),
@@ -31,7 +31,7 @@ pub fn congruence_guarantees(f: &CongruenceFigures, theta_deg: f64, alpha_deg: f
 }
 
 /// The SQ mesh's guarantees at θ and α (degrees).
-pub fn mesh_guarantees(mesh: &PolyMesh, f: &SqMeshFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
+pub(crate) fn mesh_guarantees(mesh: &PolyMesh, f: &SqMeshFigures, theta_deg: f64, alpha_deg: f64) -> Vec<Guarantee> {
     let not_quads = mesh.faces.iter().filter(|face| face.len() != 4).count();
     let mut all = vec![
         Guarantee::at_least("faces", mesh.faces.len() as f64, 1.0, ""),

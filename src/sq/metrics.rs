@@ -38,7 +38,7 @@ pub fn torsal_pairs(grid: &SamplingGrid, lines: &[DVec3]) -> Vec<Option<TorsalPa
 }
 
 /// ∠(l, n) in degrees at every point.
-pub fn line_normal_angles(grid: &SamplingGrid, lines: &[DVec3]) -> Vec<f64> {
+pub(crate) fn line_normal_angles(grid: &SamplingGrid, lines: &[DVec3]) -> Vec<f64> {
     grid.frames.iter().zip(lines).map(|(f, l)| l.normalize_or_zero().dot(f.normal).clamp(-1.0, 1.0).acos().to_degrees()).collect()
 }
 

@@ -128,7 +128,7 @@ impl CongruenceProblem {
     /// the side of the normals: what the guarantees are measured on, not the optimizer's line
     /// variables. Where the centre surface is singular (a focal point of a constant radius),
     /// the line variable stands in.
-    pub fn measured_lines(&self, x: &[f64]) -> Vec<DVec3> {
+    pub(crate) fn measured_lines(&self, x: &[f64]) -> Vec<DVec3> {
         let coefficients = &x[self.layout.radius.clone()];
         let variables = self.lines(x);
         self.grid

@@ -273,12 +273,12 @@ impl SqParams {
     }
 
     /// The angle the line-normal term aims at: θ − margins[0] (at least half of θ).
-    pub fn target_theta_deg(&self) -> f64 {
+    pub(crate) fn target_theta_deg(&self) -> f64 {
         (self.theta_deg - self.margins_deg[0]).max(0.5 * self.theta_deg)
     }
 
     /// The angle the torsal-angle term aims at: α + margins[1] (at most 90°).
-    pub fn target_alpha_deg(&self) -> f64 {
+    pub(crate) fn target_alpha_deg(&self) -> f64 {
         (self.alpha_deg + self.margins_deg[1]).min(90.0)
     }
 }
@@ -365,8 +365,8 @@ pub const RECOMPUTE_RANGE: ParamRange<usize> = ParamRange::new("RS", 1, 1000);
 pub const FACES_RANGE: ParamRange<usize> = ParamRange::new("faces", 4, 3_000);
 
 /// How far below the bound of a singular vertex its support planes may meet (degrees).
-pub const SINGULAR_MARGIN_DEG: f64 = 1.0;
+pub(crate) const SINGULAR_MARGIN_DEG: f64 = 1.0;
 
 /// The projection's hinges keep θ and α by this much (degrees): its last, pure Gauss–Newton
 /// steps may still move the angles by a few tenths.
-pub const PROJECTION_MARGIN_DEG: f64 = 0.5;
+pub(crate) const PROJECTION_MARGIN_DEG: f64 = 0.5;

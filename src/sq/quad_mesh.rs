@@ -79,7 +79,7 @@ pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> Result<()
 /// coordinate, over the vertex 3-blocks at `offset(v)`. Triples with a vertex on the patch
 /// boundary are left out: the boundary cuts the last segment of a polyline short, and fairing it
 /// would drag the polyline off the torsal direction.
-pub fn polyline_fairness(polylines: &[[u32; 3]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
+pub(crate) fn polyline_fairness(polylines: &[[u32; 3]], on_boundary: &[bool], edges: &[[u32; 2]], offset: impl Fn(usize) -> usize) -> Linear {
     let edge_set: HashSet<[u32; 2]> = edges.iter().copied().collect();
     let joined = |a: u32, b: u32| edge_set.contains(&[a.min(b), a.max(b)]);
     let mut fair = Linear::new();

@@ -27,10 +27,10 @@ use super::error::SqError;
 /// Smallest |H| · diag accepted at a point of G.
 pub const MIN_MEAN_CURVATURE: f64 = 1e-2;
 /// Cells per direction of the fine grid that measures the sign of H.
-pub const SIGN_GRID: usize = 200;
+pub(crate) const SIGN_GRID: usize = 200;
 
 /// The corners of quad q = i + (n − 1) j of an n × n grid: (i, j), (i+1, j), (i+1, j+1), (i, j+1).
-pub fn grid_quad(n: usize, q: usize) -> [usize; 4] {
+pub(crate) fn grid_quad(n: usize, q: usize) -> [usize; 4] {
     let (i, j) = (q % (n - 1), q / (n - 1));
     [i + n * j, i + 1 + n * j, i + 1 + n * (j + 1), i + n * (j + 1)]
 }
@@ -61,11 +61,11 @@ impl SamplingGrid {
         Ok(Self { n, uv, frames })
     }
 
-    pub fn point_count(&self) -> usize {
+    pub(crate) fn point_count(&self) -> usize {
         self.n * self.n
     }
 
-    pub fn quad_count(&self) -> usize {
+    pub(crate) fn quad_count(&self) -> usize {
         (self.n - 1) * (self.n - 1)
     }
 
@@ -105,7 +105,7 @@ pub const MAX_SPECK_SHARE: f64 = 0.05;
 pub const SPECK_TOLERANCE: f64 = 1e-3;
 
 /// At most this share of G's points inside the patch may be left out of the radius fit.
-pub const MAX_EXCLUDED_SHARE: f64 = 0.25;
+pub(crate) const MAX_EXCLUDED_SHARE: f64 = 0.25;
 
 /// The sign check of the module docs; `diag` is the bounding-box diagonal and `faces` the
 /// number of panels asked for (the panel size of the speck test).

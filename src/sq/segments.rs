@@ -9,12 +9,12 @@ use crate::congruence::torsal::TorsalPair;
 use super::radius::grid_quad;
 
 /// Line segments drawn per line of the congruence: this many grid spacings long.
-pub const LINE_LENGTH: f64 = 1.5;
+pub(crate) const LINE_LENGTH: f64 = 1.5;
 /// Each arm of the cross field: this share of the grid spacing, centred at the quad's centre.
-pub const CROSS_LENGTH: f64 = 0.7;
+pub(crate) const CROSS_LENGTH: f64 = 0.7;
 
 /// Mean distance between neighbouring points of G (n × n points, i + n j).
-pub fn grid_spacing(n: usize, points: &[DVec3]) -> f64 {
+pub(crate) fn grid_spacing(n: usize, points: &[DVec3]) -> f64 {
     let (mut sum, mut count) = (0.0, 0usize);
     for j in 0..n {
         for i in 0..n {
@@ -37,7 +37,7 @@ pub fn grid_spacing(n: usize, points: &[DVec3]) -> f64 {
 }
 
 /// From every point of G along its unit line, `length` long.
-pub fn line_segments(points: &[DVec3], lines: &[DVec3], length: f64) -> Vec<(DVec3, DVec3)> {
+pub(crate) fn line_segments(points: &[DVec3], lines: &[DVec3], length: f64) -> Vec<(DVec3, DVec3)> {
     points.iter().zip(lines).map(|(&p, &l)| (p, p + length * l)).collect()
 }
 
@@ -57,7 +57,7 @@ pub fn cross_field(n: usize, points: &[DVec3], torsal: &[Option<TorsalPair>], le
 }
 
 /// The four edges of every quad of G without real torsal directions.
-pub fn quad_outlines(n: usize, points: &[DVec3], torsal: &[Option<TorsalPair>]) -> Vec<(DVec3, DVec3)> {
+pub(crate) fn quad_outlines(n: usize, points: &[DVec3], torsal: &[Option<TorsalPair>]) -> Vec<(DVec3, DVec3)> {
     torsal
         .iter()
         .enumerate()

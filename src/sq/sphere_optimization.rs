@@ -51,7 +51,7 @@ use super::sphere_terms::{
 };
 
 /// Neighbouring face centres keep at least this share of their initial distance.
-pub const CENTRE_SEPARATION: f64 = 0.25;
+pub(crate) const CENTRE_SEPARATION: f64 = 0.25;
 
 /// The phases, as reported to the hook.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -158,10 +158,10 @@ impl SphereLayout {
     pub fn vertex(&self, v: usize) -> usize {
         5 * self.faces + 3 * v
     }
-    pub fn star_normal(&self, s: usize) -> usize {
+    pub(crate) fn star_normal(&self, s: usize) -> usize {
         5 * self.faces + 3 * self.vertices + 3 * s
     }
-    pub fn edge_normal(&self, e: usize) -> usize {
+    pub(crate) fn edge_normal(&self, e: usize) -> usize {
         5 * self.faces + 3 * self.vertices + 3 * self.stars + 3 * e
     }
     pub fn len(&self) -> usize {
@@ -229,7 +229,7 @@ pub fn unpack(layout: &SphereLayout, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
 /// `params`' sphere weights, iterations and decrease tolerance (the full optimization stops early
 /// when an accepted step lowers its energy by at most that fraction); returns the vertices, the
 /// spheres (normalized) and what happened.
-pub fn optimize_spheres(
+pub(crate) fn optimize_spheres(
     input: &SphereInput,
     stars: &QuadStars,
     params: &SqParams,
@@ -490,7 +490,7 @@ pub fn optimize_spheres(
 
 /// The congruence's line and radius at a parameter: bilinear in the points of the grid G
 /// (`n` × `n`, point (i, j) at i + n j) over the domain.
-pub fn on_grid<T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>>(
+pub(crate) fn on_grid<T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>>(
     surface: &BSplineSurface,
     n: usize,
     values: &[T],

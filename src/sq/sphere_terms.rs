@@ -187,7 +187,7 @@ pub fn support_plane_bound_deg(valence: usize) -> f64 {
 }
 
 /// The angle the support planes at a vertex of `valence` edges are held to at α (degrees).
-pub fn support_plane_aim_deg(valence: usize, alpha_deg: f64) -> f64 {
+pub(crate) fn support_plane_aim_deg(valence: usize, alpha_deg: f64) -> f64 {
     if valence == 4 { alpha_deg } else { alpha_deg.min(support_plane_bound_deg(valence) - SINGULAR_MARGIN_DEG) }
 }
 
@@ -267,7 +267,7 @@ impl<'a> VertexNormals<'a> {
 
     /// Takes the normals a proximity term over the same vertices (in the same order) found,
     /// where it found them at the current positions; that term must be prepared first.
-    pub fn with_lookups(self, lookups: ClosestLookups) -> Self {
+    pub(crate) fn with_lookups(self, lookups: ClosestLookups) -> Self {
         Self { lookups: Some(lookups), ..self }
     }
 

@@ -84,7 +84,7 @@ pub struct SqMesh {
 /// The unit normal of the support plane of edge uw between two face spheres: the plane of their
 /// circle; where the two spheres coincide (panels of one sphere, whose common edge may be any
 /// circle through u and w), the plane through the edge and the mean of its node axes `axes`.
-pub fn support_plane_normal(s1: &Sphere, s2: &Sphere, [u, w]: [DVec3; 2], axes: [DVec3; 2]) -> Option<DVec3> {
+pub(crate) fn support_plane_normal(s1: &Sphere, s2: &Sphere, [u, w]: [DVec3; 2], axes: [DVec3; 2]) -> Option<DVec3> {
     let substitute = (w - u).cross(axes[0] + axes[1]);
     edge_circle(s1, Some(s2), [u, w], EdgePlane::WhereCoincident(substitute)).map(|c| c.normal)
 }

@@ -19,7 +19,7 @@ use super::radius::SamplingGrid;
 
 /// Least |(1 − r κ1)(1 − r κ2)| over G for a constant radius r: the offset's area element
 /// relative to the surface's.
-pub const MIN_OFFSET_AREA: f64 = 0.25;
+pub(crate) const MIN_OFFSET_AREA: f64 = 0.25;
 
 /// The constant radius of the constant start (frame units), with the sign of H: the harmonic
 /// mean of the central radii when the offset stays regular there, else half the smallest
@@ -37,12 +37,12 @@ pub fn constant_radius(grid: &SamplingGrid, sign: f64) -> f64 {
 }
 
 /// The radius function r ≡ `r` on the basis of `function` (a B-spline basis sums to one).
-pub fn constant_function(function: &BSplineFunction, r: f64) -> BSplineFunction {
+pub(crate) fn constant_function(function: &BSplineFunction, r: f64) -> BSplineFunction {
     BSplineFunction { coefficients: vec![r; function.coefficients.len()], ..function.clone() }
 }
 
 /// Relative spread of the central spheres below which the reference is one sphere.
-pub const SPHERE_TOLERANCE: f64 = 1e-9;
+pub(crate) const SPHERE_TOLERANCE: f64 = 1e-9;
 
 /// The reference's one sphere (centre, radius in frame units) when every point of G is umbilic
 /// with the same central sphere.

@@ -46,7 +46,7 @@ impl Layout {
     }
 
     /// Variables of the line-congruence step (a prefix of the torsal step's).
-    pub fn line_variables(&self) -> usize {
+    pub(crate) fn line_variables(&self) -> usize {
         self.quads
     }
 
@@ -70,7 +70,7 @@ impl Layout {
     }
 
     /// ν of quad q (slack form).
-    pub fn angle_slack(&self, q: usize) -> Option<usize> {
+    pub(crate) fn angle_slack(&self, q: usize) -> Option<usize> {
         (self.quad_block == 11).then(|| self.quads + self.quad_block * q + 10)
     }
 }

@@ -132,7 +132,7 @@ impl OptimizationFrame {
     }
 
     /// Vertices and face spheres of `x`, in model coordinates.
-    pub fn to_model(&self, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
+    pub(crate) fn to_model(&self, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
         let (verts, sph) = unpack(x, &self.mesh.triangles, self.mesh.vertex_count());
         let verts = verts.iter().map(|&p| self.t + p * self.diag).collect();
         let sph = sph.iter().map(|s| s.from_frame(self.t, self.diag).normalized()).collect();

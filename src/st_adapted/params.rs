@@ -92,7 +92,7 @@ impl StAdaptedParams {
 
     /// The weights the variant uses: variant (b) cuts its arcs by bisecting planes and has no
     /// edge-circle or sagitta-match term.
-    pub fn variant_weights(&self) -> StAdaptedWeights {
+    pub(crate) fn variant_weights(&self) -> StAdaptedWeights {
         match self.variant {
             EdgeArcs::Intersection => self.weights.clone(),
             EdgeArcs::BisectingPlanes => StAdaptedWeights { edge_circle: 0.0, sagitta_match: 0.0, ..self.weights.clone() },
@@ -118,7 +118,7 @@ impl StAdaptedParams {
     }
 
     /// Solver iterations over all stages.
-    pub fn total_iterations(&self) -> usize {
+    pub(crate) fn total_iterations(&self) -> usize {
         self.stages.iter().map(|s| s.iterations).sum()
     }
 }

@@ -24,12 +24,12 @@ use crate::solver::terms::v3;
 pub const BOUNDARY_POINT_FACTOR: f64 = 10.0;
 
 /// Least oriented area a face keeps, as a fraction of its initial area ([`FaceOrientation`]).
-pub const MIN_AREA_FRACTION: f64 = 0.2;
+pub(crate) const MIN_AREA_FRACTION: f64 = 0.2;
 
 /// The share of its initial oriented area along the reference normal that a face keeps in every
 /// step ([`FaceOrientation::along`]): a margin, since that normal is taken at the centroid's
 /// initial closest point.
-pub const UNFOLDED_AREA_FRACTION: f64 = 0.1;
+pub(crate) const UNFOLDED_AREA_FRACTION: f64 = 0.1;
 
 /// Face orientation (no folded panels while vertices glide; the optimization also takes no step
 /// that folds a face, [`FaceOrientation::keeps_orientation`]): per face, the residual
@@ -387,12 +387,12 @@ pub fn boundary_vertices(topology: &Topology) -> Vec<bool> {
 }
 
 /// Offset of face f's pencil angle θ_f.
-pub fn angle_offset(f: usize) -> usize {
+pub(crate) fn angle_offset(f: usize) -> usize {
     f
 }
 
 /// Offset of vertex v's block in a problem with `faces` faces.
-pub fn vertex_offset(faces: usize, v: usize) -> usize {
+pub(crate) fn vertex_offset(faces: usize, v: usize) -> usize {
     faces + 3 * v
 }
 

@@ -15,14 +15,14 @@ use crate::progress::{Cancelled, OnProgress, Progress};
 use crate::stats::mean;
 
 /// R² of a sphere Ω, d of a plane.
-pub fn parameter_of(omega: &AbsoluteSphere) -> f64 {
+pub(crate) fn parameter_of(omega: &AbsoluteSphere) -> f64 {
     match *omega {
         AbsoluteSphere::Sphere { r2, .. } => r2,
         AbsoluteSphere::Plane { d, .. } => d,
     }
 }
 
-pub fn with_parameter(omega: &AbsoluteSphere, x: f64) -> AbsoluteSphere {
+pub(crate) fn with_parameter(omega: &AbsoluteSphere, x: f64) -> AbsoluteSphere {
     match *omega {
         AbsoluteSphere::Sphere { center, .. } => AbsoluteSphere::Sphere { center, r2: x },
         AbsoluteSphere::Plane { axis, .. } => AbsoluteSphere::Plane { axis, d: x },
@@ -54,7 +54,7 @@ fn mean_kink_for(families: &[[Sphere; 2]], interior: &[[u32; 2]], omega: &Absolu
 
 /// Scan + golden section of the mean kink angle over R² = R̂² + w sinh(u) (or d = d̂ + diag sinh u).
 /// Returns (best parameter, its mean kink, the mean kink at the estimate).
-pub fn optimize_parameter(
+pub(crate) fn optimize_parameter(
     mesh: &TriMesh,
     absolute: &AbsoluteSphereEstimate,
     families: &[[Sphere; 2]],

@@ -12,7 +12,7 @@ use std::fmt;
 /// The largest degree accepted (p + 1 ≤ 16 functions per span).
 pub const MAX_DEGREE: usize = 15;
 /// Derivatives computed by [`BSplineBasis::evaluate`]: values, first and second.
-pub const DERIVATIVES: usize = 2;
+pub(crate) const DERIVATIVES: usize = 2;
 
 /// Why a knot vector cannot define a basis.
 #[derive(Clone, Debug, PartialEq)]

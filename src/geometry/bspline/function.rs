@@ -21,7 +21,7 @@ pub struct FunctionRow {
 
 impl FunctionRow {
     /// (g, g_u, g_v) for coefficients `c`.
-    pub fn apply(&self, c: &[f64]) -> (f64, f64, f64) {
+    pub(crate) fn apply(&self, c: &[f64]) -> (f64, f64, f64) {
         let mut out = (0.0, 0.0, 0.0);
         for (k, &i) in self.index.iter().enumerate() {
             out.0 += self.value[k] * c[i];

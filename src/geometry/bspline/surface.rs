@@ -131,7 +131,7 @@ impl BSplineSurface {
     }
 
     /// Whether some weight differs from 1.
-    pub fn is_rational(&self) -> bool {
+    pub(crate) fn is_rational(&self) -> bool {
         self.rational
     }
 
@@ -163,7 +163,7 @@ impl BSplineSurface {
     }
 
     /// [`Self::derivatives`] from basis values evaluated beforehand (a fixed grid).
-    pub fn derivatives_with(&self, bu: &BasisValues, bv: &BasisValues) -> SurfaceDerivatives {
+    pub(crate) fn derivatives_with(&self, bu: &BasisValues, bv: &BasisValues) -> SurfaceDerivatives {
         let nu = self.u.count();
         // Homogeneous sums A_kl = Σ ∂^k N ∂^l M w P and w_kl = Σ ∂^k N ∂^l M w, k + l ≤ 2.
         let mut a = [[DVec3::ZERO; 3]; 3];

@@ -275,7 +275,7 @@ impl HalfedgeMesh {
 
     /// Boundary or feature (or frozen) edge.
     #[inline]
-    pub fn is_constrained(&self, h: u32) -> bool {
+    pub(crate) fn is_constrained(&self, h: u32) -> bool {
         self.twin[h as usize] == NONE || self.edge_flag[h as usize] != 0
     }
 
@@ -303,7 +303,7 @@ impl HalfedgeMesh {
 
     /// Makes `vhe[v]` the outgoing boundary halfedge if there is one, starting from the outgoing
     /// halfedge `h`.
-    pub fn fix_vhe(&mut self, v: u32, h: u32) {
+    pub(crate) fn fix_vhe(&mut self, v: u32, h: u32) {
         debug_assert_eq!(self.from(h), v);
         let mut cur = h;
         loop {
@@ -328,7 +328,7 @@ impl HalfedgeMesh {
     }
 
     /// [`Self::outgoing`] into a reused buffer.
-    pub fn outgoing_into(&self, v: u32, out: &mut Vec<u32>) {
+    pub(crate) fn outgoing_into(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
         let start = self.vhe[v as usize];
         if start == NONE {
@@ -346,7 +346,7 @@ impl HalfedgeMesh {
     }
 
     /// Neighbours of `v` (targets of its outgoing halfedges, plus the last boundary neighbour).
-    pub fn one_ring_into(&self, v: u32, out: &mut Vec<u32>) {
+    pub(crate) fn one_ring_into(&self, v: u32, out: &mut Vec<u32>) {
         self.outgoing_into(v, out);
         let Some(&last) = out.last() else { return };
         let p = prev(last);
@@ -381,7 +381,7 @@ impl HalfedgeMesh {
     }
 
     /// Appends a vertex (reference normal zero until set).
-    pub fn add_vertex(&mut self, p: DVec3, kind: VertexKind) -> u32 {
+    pub(crate) fn add_vertex(&mut self, p: DVec3, kind: VertexKind) -> u32 {
         self.pos.push(p);
         self.normal.push(DVec3::ZERO);
         self.vhe.push(NONE);
@@ -615,7 +615,7 @@ impl HalfedgeMesh {
     }
 
     /// Number of edges of the boundary loop through boundary vertex `v`, counted up to `cap`.
-    pub fn boundary_loop_len(&self, v: u32, cap: usize) -> usize {
+    pub(crate) fn boundary_loop_len(&self, v: u32, cap: usize) -> usize {
         let mut cur = v;
         for n in 1..=cap {
             let h = self.vhe[cur as usize];

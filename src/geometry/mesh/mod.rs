@@ -44,7 +44,7 @@ impl TriMesh {
 
     /// Bounding-box diagonal of the vertices faces refer to (stray and out-of-range indices
     /// do not count); 0 without faces.
-    pub fn referenced_diagonal(&self) -> f64 {
+    pub(crate) fn referenced_diagonal(&self) -> f64 {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for &v in self.triangles.iter().flatten() {

@@ -66,7 +66,7 @@ pub fn weld(mesh: &TriMesh, tolerance: f64) -> (TriMesh, WeldReport) {
 }
 
 /// [`weld`], and for every input face the index of its output face (`u32::MAX` when dropped).
-pub fn weld_with_face_map(mesh: &TriMesh, tolerance: f64) -> (TriMesh, WeldReport, Vec<u32>) {
+pub(crate) fn weld_with_face_map(mesh: &TriMesh, tolerance: f64) -> (TriMesh, WeldReport, Vec<u32>) {
     let n = mesh.positions.len();
     let mut report = WeldReport::default();
 

@@ -39,9 +39,9 @@ pub const STAGE: StageId = StageId::Sq;
 /// Snapshot of H at the reference vertices, sent when SQ refuses the surface (Sec. 6.3).
 pub const REFUSED_STAGE: StageId = StageId::SqRefused;
 /// Least time between two live snapshots (ms); every iteration still sends its energies.
-pub const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
+pub(crate) const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
 /// Chord tolerance of the live panels, relative to the diagonal (coarser than the export's).
-pub const LIVE_PANEL_TOLERANCE: f64 = 2e-3;
+pub(crate) const LIVE_PANEL_TOLERANCE: f64 = 2e-3;
 
 /// What the UI shows after the run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,7 +64,7 @@ fn energies(terms: &[TermStats], switched_on_only: bool) -> Vec<Energy> {
 }
 
 /// The edges of a mesh of polygons as point pairs.
-pub fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
+pub(crate) fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
     crate::geometry::mesh::topology::Topology::new(mesh)
         .edges()
         .iter()
@@ -268,7 +268,7 @@ fn segments_field(name: &str, segments: &[(glam::DVec3, glam::DVec3)]) -> Field 
 
 /// Lines (initial and optimized), the cross field with its angles, and the quads without real
 /// torsal directions.
-pub fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
+pub(crate) fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
     vec![
         segments_field(field::SQ_INITIAL_LINES, &s.initial_lines),
         segments_field(field::SQ_LINES, &s.lines),
@@ -351,7 +351,7 @@ pub fn export(
 }
 
 /// `congruence.glb` (see the module docs).
-pub fn congruence_glb(surface: &TriMesh, segments: &CongruenceSegments, extras: serde_json::Value) -> Vec<u8> {
+pub(crate) fn congruence_glb(surface: &TriMesh, segments: &CongruenceSegments, extras: serde_json::Value) -> Vec<u8> {
     let sets = [
         LineSet { name: "lines", color: [0.10, 0.35, 0.85, 1.0], segments: &segments.lines },
         LineSet { name: "initial_lines", color: [0.55, 0.55, 0.55, 1.0], segments: &segments.initial_lines },

@@ -26,9 +26,9 @@ pub const STAGE: StageId = StageId::StAdapted;
 pub const SIZING_STAGE: StageId = StageId::StAdaptedSizing;
 pub const REMESHED_STAGE: StageId = StageId::StAdaptedRemeshed;
 /// Chord tolerance of the live panels (× diag): coarser than the exports, cheap to rebuild.
-pub const LIVE_CHORD_TOLERANCE: f64 = 1e-3;
+pub(crate) const LIVE_CHORD_TOLERANCE: f64 = 1e-3;
 /// Least time between two live panel snapshots (ms); every iteration still sends its energies.
-pub const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
+pub(crate) const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
 
 /// What the UI shows after the run: the report and the before/after metrics.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

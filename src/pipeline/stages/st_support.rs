@@ -82,7 +82,7 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
 }
 
 /// Display fields: panels, support, node axes, second envelope.
-pub fn display_fields(result: &StSupportResult) -> Vec<Field> {
+pub(crate) fn display_fields(result: &StSupportResult) -> Vec<Field> {
     let mut fields = panel_fields(&result.panels);
     fields.extend(support_fields(&result.support.geometry, &result.support.axis_segments()));
     if let Some(env) = &result.second_envelope {

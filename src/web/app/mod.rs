@@ -379,11 +379,11 @@ impl App {
             }
         });
         if method != self.design.method {
+            // The colours follow the method where they were the old method's own.
+            let before = self.view().colors();
             self.design.method = method;
-            if method == Method::StAdapted && self.design.color == ColorBy::MeanCurvature {
-                self.design.color = ColorBy::Sizing;
-            } else if method != Method::StAdapted && self.design.color == ColorBy::Sizing {
-                self.design.color = ColorBy::MeanCurvature;
+            if self.design.color == before {
+                self.design.color = self.view().colors();
             }
             self.run_method();
         }

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::design_link::{Design, Method};
+use crate::design_link::{ColorBy, Design, Method};
 use crate::export::Report;
 use crate::pipeline::fields::{Field, StageId, StageProgress};
 use crate::pipeline::protocol::StageResult;
@@ -70,6 +70,10 @@ pub trait MethodView {
     /// Optimizer iterations received so far (where a cancel is measured from).
     fn iterations(&self) -> usize {
         0
+    }
+    /// The reference's colours this method shows first.
+    fn colors(&self) -> ColorBy {
+        ColorBy::MeanCurvature
     }
     /// Values at the reference vertices for the colour choice "sizing", when it has them.
     fn sizing(&self) -> Option<&[f32]> {

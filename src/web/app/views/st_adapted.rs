@@ -9,7 +9,7 @@ use glam::Mat4;
 use serde::Serialize;
 
 use super::method_view::{Drawn, Frame, MethodView};
-use crate::design_link::{Design, Method, SizingKind};
+use crate::design_link::{ColorBy, Design, Method, SizingKind};
 use crate::export::Report;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::pipeline::fields::{field, find, Field, StageId, StageProgress};
@@ -164,6 +164,9 @@ impl MethodView for StAdaptedMethod {
     }
     fn iterations(&self) -> usize {
         self.run.as_ref().map_or(0, |a| a.energy.len())
+    }
+    fn colors(&self) -> ColorBy {
+        ColorBy::Sizing
     }
     fn sizing(&self) -> Option<&[f32]> {
         self.run.as_ref()?.sizing.as_deref()
