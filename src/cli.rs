@@ -499,7 +499,7 @@ fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressL
     let (report, files) = stages::sq::export(&reference, &result, &params, &segments, clock);
     progress.clear();
     write_files(output, &files, &report)?;
-    let sq = SqSection::of(&result, &params);
+    let sq: SqSection = report.section().expect("the SQ report has its section");
     let panels = report.metrics.clone().unwrap_or_default();
     let quads = sq.quad_mesh.as_ref();
     let summary = match (params.until, &sq.sq_mesh) {

@@ -150,7 +150,7 @@ fn st_support_streams_panels_files_and_a_report() {
     assert_eq!(mime.len(), 6);
     assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
     let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
-    let m = &summary.section;
+    let m = &summary.section().expect("the report's section");
     assert!(m.max_vertex_sphere_residual <= 1e-9);
     assert!(m.max_orthogonality_residual <= 1e-9);
     assert!(m.max_node_axis_offset <= 1e-9);
@@ -331,8 +331,9 @@ fn sq_streams_lines_and_energies_then_files() {
     let Some((FromWorker::Finished { result: StageResult::Sq(summary), .. }, _)) = r.messages.last() else {
         panic!("{:?}", r.messages.last())
     };
-    assert_eq!(energies, summary.section.iterations, "one energy report per iteration");
-    let figures = &summary.section.congruence.figures;
+    let section = summary.section().expect("the report's section");
+    assert_eq!(energies, section.iterations, "one energy report per iteration");
+    let figures = &section.congruence.figures;
     assert!(figures.max_line_normal_angle_deg <= 20.0 && figures.min_torsal_plane_angle_deg >= 75.0, "{figures:?}");
     let snapshots: Vec<&Vec<Field>> = r
         .messages
@@ -351,9 +352,10 @@ fn sq_streams_lines_and_energies_then_files() {
     }
     // Live panels while the spheres optimize.
     assert!(snapshots[..snapshots.len() - 1].iter().any(|f| find(f, field::PANEL_TRIANGLES).is_some()), "live panels");
-    let mesh = summary.section.sq_mesh.as_ref().expect("the SQ mesh's figures").figures;
+    let section = summary.section().expect("the report's section");
+    let mesh = section.sq_mesh.as_ref().expect("the SQ mesh's figures").figures;
     assert!(mesh.max_vertex_sphere_residual <= 1e-8 && mesh.max_centre_face_planarity <= 1e-8, "{mesh:?}");
-    assert_eq!(summary.section.stopped_after, "final");
+    assert_eq!(section.stopped_after, "final");
     let files: Vec<&str> = r
         .messages
         .iter()

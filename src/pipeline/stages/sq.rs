@@ -47,9 +47,14 @@ pub(crate) const LIVE_PANEL_TOLERANCE: f64 = 2e-3;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SqSummary {
     pub report: Report,
-    /// The report's section, typed: the congruence's figures, the quad mesh's and the SQ
-    /// mesh's where the run got there.
-    pub section: SqSection,
+}
+
+impl SqSummary {
+    /// The report's section, typed: the congruence's figures, the quad mesh's and the SQ mesh's
+    /// where the run got there.
+    pub fn section(&self) -> Option<SqSection> {
+        self.report.section()
+    }
 }
 
 /// The energies of an iteration: the total first, then every term (with `switched_on_only`,
@@ -103,7 +108,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
     let (sink, planned) = (stream.sink, stream.planned);
     sink.snapshot(STAGE, planned as u32, fields);
     sink.files(STAGE, files);
-    Ok(SqSummary { section: SqSection::of(&result, params), report })
+    Ok(SqSummary { report })
 }
 
 /// What the stage streams while the method runs, with one progress count across its steps:

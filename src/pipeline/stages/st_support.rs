@@ -23,8 +23,6 @@ pub const STAGE: StageId = StageId::StSupport;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StSupportSummary {
     pub report: Report,
-    /// The report's section, typed.
-    pub section: StSupportSection,
     pub omega: AbsoluteSphere,
     pub m0: [f64; 3],
     pub m: [f64; 3],
@@ -37,6 +35,13 @@ pub struct StSupportSummary {
     pub distinct_radii: usize,
 }
 
+impl StSupportSummary {
+    /// The report's section, typed.
+    pub fn section(&self) -> Option<StSupportSection> {
+        self.report.section()
+    }
+}
+
 /// Runs the method on `reference`, sends its display fields and files; returns the summary.
 pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<StSupportSummary, StageError> {
     let start = sink.now_ms();
@@ -47,7 +52,6 @@ pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: 
     let a = &result.absolute;
     let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
     Ok(StSupportSummary {
-        section: StSupportSection::of(&result, params.remesh),
         distinct_radii: report.metrics.as_ref().map_or(0, |m| m.distinct_radii),
         report,
         omega: result.omega,

@@ -15,7 +15,8 @@ use crate::design_link::{Design, Method};
 use crate::export::Report;
 use crate::pipeline::fields::{field, find, Energy, Field, StageId, StageProgress};
 use crate::pipeline::protocol::StageResult;
-use crate::pipeline::stages::sq::{SqSummary, REFUSED_STAGE, STAGE};
+use crate::pipeline::stages::sq::{REFUSED_STAGE, STAGE};
+use crate::sq::report::SqSection;
 use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::{verdict, warnings};
@@ -48,7 +49,7 @@ pub struct SqView {
     /// (iteration, step, energy of every term and the total).
     pub energy: Vec<(u32, String, Vec<Energy>)>,
     pub refused_h: Option<Arc<ScalarData>>,
-    pub summary: Option<SqSummary>,
+    pub summary: Option<SqFinished>,
 }
 
 /// Colour bins of the cross field by torsal-plane angle.
@@ -106,6 +107,12 @@ impl SqView {
         self.cross_field_range = (lo, 90.0);
         self.cross_field_arms = angles.len();
     }
+}
+
+/// A finished run: its report and the report's section, read once.
+pub struct SqFinished {
+    pub report: Report,
+    pub section: SqSection,
 }
 
 /// The method's view: its run and what the viewport shows of it.
@@ -186,15 +193,15 @@ impl MethodView for SqMethod {
         let (StageResult::Sq(summary), Some(v)) = (result, self.run.as_mut()) else {
             return None;
         };
+        let section = summary.section()?;
         // With the SQ mesh done, the panels take the stage: the congruence and the reference step
         // back (each can be switched on again).
-        if summary.section.sq_mesh.is_some() {
+        if section.sq_mesh.is_some() {
             let d = &mut self.display;
             (d.lines, d.cross_field, d.surface) = (false, false, false);
         }
-        let report = summary.report.clone();
-        v.summary = Some(*summary);
-        Some(report)
+        v.summary = Some(SqFinished { report: summary.report.clone(), section });
+        Some(summary.report)
     }
     fn draw(&self, frame: &Frame) -> Drawn {
         let Some(v) = &self.run else {
@@ -428,7 +435,7 @@ fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
 }
 
 /// The congruence's figures at the start and optimized (Sec. 5.1).
-fn congruence_figures(ui: &mut egui::Ui, sum: &SqSummary, params: &SqParams) {
+fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
     let sec = &sum.section;
     let c = &sec.congruence;
     let (i, f) = (&c.initial, &c.figures);
@@ -471,7 +478,7 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqSummary, params: &SqParams) {
 }
 
 /// The SQ mesh's figures (Sec. 5.2), when the run got there.
-fn mesh_figures(ui: &mut egui::Ui, sum: &SqSummary, params: &SqParams) {
+fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
     let (sec, r) = (&sum.section, &sum.report);
     let panels = r.metrics.clone();
     let g = |x: f64| format!("{x:.2e}");

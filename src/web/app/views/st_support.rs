@@ -16,6 +16,7 @@ use crate::pipeline::fields::{field, find, Field, StageId};
 use crate::pipeline::protocol::StageResult;
 use crate::pipeline::stages::st_support::{StSupportSummary, STAGE};
 use crate::remeshing::Sizing;
+use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
 use crate::web::app::panels::{sizing_controls, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
@@ -29,6 +30,8 @@ pub struct StSupportView {
     pub axes: Arc<MeshData>,
     pub envelope: Option<Arc<MeshData>>,
     pub summary: Option<StSupportSummary>,
+    /// The summary's report section, read once.
+    pub section: Option<StSupportSection>,
 }
 
 impl StSupportView {
@@ -42,6 +45,7 @@ impl StSupportView {
             axes: mesh_from_fields(fields, generation, AXES_FIELDS),
             envelope,
             summary: None,
+            section: None,
         }
     }
 }
@@ -99,6 +103,7 @@ impl MethodView for StSupportMethod {
             return None;
         };
         let report = summary.report.clone();
+        v.section = summary.section();
         v.summary = Some(*summary);
         Some(report)
     }
@@ -215,7 +220,8 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
     };
     ui.label(RichText::new(omega).monospace().small());
     let r = &sum.report;
-    let (s, m) = (&sum.section, r.metrics.clone().unwrap_or_default());
+    let Some(s) = view.section.as_ref() else { return };
+    let m = r.metrics.clone().unwrap_or_default();
     let g = |x: f64| format!("{x:.3e}");
     let d = |x: f64| format!("{x:.3}°");
     key_values(
