@@ -222,5 +222,15 @@ fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
             }
         }
         assert!(result.verdict.holds(), "{name}: {}", result.verdict.failure_text());
+        if let Some(f) = result.sq_mesh.as_ref().map(|m| m.mesh.figures) {
+            console_log!(
+                "{name} in wasm: {} quads, vertex–sphere {:.1e}, planarity {:.1e}, axes ≤ {:.2}°, support planes ≥ {:.2}°",
+                result.sq_mesh.as_ref().map_or(0, |m| m.mesh.panels.len()),
+                f.max_vertex_sphere_residual,
+                f.max_centre_face_planarity,
+                f.max_axis_normal_angle_deg,
+                f.min_torsal_plane_angle_deg
+            );
+        }
     }
 }
