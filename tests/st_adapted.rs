@@ -618,27 +618,6 @@ fn a_reference_coarser_than_epsilon_is_named() {
     assert_eq!(coarseness_warning(&load_reference("tri_mesh"), 2e-3), None);
 }
 
-/// The reference's central spheres at arbitrary points of a spherical cap are the cap's sphere
-/// (the blend of its corners' central spheres): centre and radius within 1 % of the radius.
-#[test]
-fn central_spheres_at_points_of_a_sphere_are_the_sphere() {
-    use spherical_faces::samples::sphere_cap;
-    let reference = Reference::from_triangles(sphere_cap(20.0, 12.0, 24));
-    let field = reference.curvature(&StAdaptedParams::default().jet, &mut |_| Ok(())).unwrap();
-    let center = DVec3::new(0.0, 0.0, -16.0);
-    let points: Vec<DVec3> = [(0.0, 0.0), (3.1, -2.2), (-7.5, 4.0), (9.0, 5.0)]
-        .iter()
-        .map(|&(x, y): &(f64, f64)| {
-            center + 20.0 * DVec3::new(x, y, (400.0 - x * x - y * y).sqrt()).normalize() + DVec3::new(0.01, -0.02, 0.03)
-        })
-        .collect();
-    for (p, s) in points.iter().zip(reference.central_spheres_at(&field, &points)) {
-        assert!((s.discriminant() - 1.0).abs() < 1e-12, "{p}: not normalized");
-        let (c, r) = (s.center().unwrap(), s.signed_radius().unwrap().abs());
-        assert!(c.distance(center) < 0.2 && (r - 20.0).abs() < 0.2, "{p}: centre {c}, radius {r}");
-    }
-}
-
 /// The trivial case stays trivial at the default tolerance: a Chebyshev net on a sphere (a
 /// coarse reference, its facets 1.9ε from the sphere) gets nearly equal face spheres and panels
 /// near the reference. Without the sizing field's gradation its large faces met the boundary's

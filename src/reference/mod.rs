@@ -22,7 +22,6 @@ use self::bspline::{SplineReference, SplineReferenceError};
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
-use crate::geometry::sphere::Sphere;
 use crate::geometry::mesh::{PolyMesh, TriMesh};
 use crate::geometry::mesh::topology::Topology;
 use crate::progress::{Cancelled, OnProgress};
@@ -235,23 +234,6 @@ impl Reference {
             return Err(ReferenceError::DegenerateBoundingBox);
         }
         Ok(())
-    }
-
-    /// The central spheres of `field` (this reference's curvature) at the surface points closest
-    /// to `points`: the barycentric blend of the central spheres at the corners of the triangle
-    /// the closest point lies on, normalized (Sec. 2.6; the initialization of Sec. 3 on another
-    /// mesh of the same surface).
-    pub fn central_spheres_at(&self, field: &CurvatureField, points: &[DVec3]) -> Vec<Sphere> {
-        let mut previous = None;
-        points
-            .iter()
-            .map(|&p| {
-                let hit = self.closest_point_near(p, previous).expect("a validated reference has faces");
-                previous = Some(hit.triangle);
-                let corners = self.mesh.triangles[hit.triangle];
-                Sphere::blend(corners.iter().zip(hit.barycentric).map(|(&v, w)| field.central_spheres[v as usize].to_array().map(|a| w * a)))
-            })
-            .collect()
     }
 
     /// The closest point of the surface to `p` (None for an empty surface).

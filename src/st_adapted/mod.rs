@@ -2,8 +2,8 @@
 //!
 //! Steps ([`compute`]): jet fit of the reference → refusal when the central spheres are
 //! unusable (H ≈ 0, minimal surfaces) → sizing field (influence zones of the central spheres, or
-//! a uniform field for a face count) → pliant remeshing → the reference's central spheres at the
-//! remeshed vertices ([`Reference::central_spheres_at`]) → initialization → staged optimization
+//! a uniform field for a face count) → pliant remeshing → the remesh's central spheres (jets
+//! on the remeshed mesh) → initialization → staged optimization
 //! with [`crate::solver`] → boundary arcs along the reference boundary → metrics and warnings.
 //!
 //! **Initialization.** Every face sphere is the member of the pencil through its three vertices
@@ -226,10 +226,12 @@ pub fn compute(
     let (remeshed, remeshed_by_sizing) = remesh(reference, &field, params, &mut timings, on_event)?;
     step(on_event, "init")?;
     timings.skip();
-    // The reference's central spheres at the remeshed vertices (a jet fit on the coarser remeshed
-    // mesh would be noisier where its faces are large).
-    let central_spheres =
-        if remeshed_by_sizing { reference.central_spheres_at(&field, &remeshed.positions) } else { field.central_spheres.clone() };
+    // The remesh's own central spheres, as ST with support structure takes them: jets on the
+    // mesh the face spheres pass through (examples/remesh_central_spheres.rs measures both ways).
+    let central_spheres = match remeshed_by_sizing {
+        true => Reference::from_triangles(remeshed.clone()).curvature(&params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?.central_spheres.clone(),
+        false => field.central_spheres.clone(),
+    };
     let init = initial_spheres(&remeshed, &central_spheres);
     let initial_sphere_mesh = SphereMesh::new(&remeshed, init.clone(), BoundaryArcRule::Parallel(DVec3::ZERO));
     timings.lap("init");
