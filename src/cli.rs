@@ -15,6 +15,7 @@ use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::export::{ExportFile, Report};
 use spherical_faces::import::MAX_BYTES;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::panels::moulds::{Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{Clock, Progress};
@@ -30,6 +31,7 @@ use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_adapted::StAdaptedEvent;
 use spherical_faces::st_support::StSupportParams;
 use spherical_faces::text::printable;
+use spherical_faces::units::{Length, Units};
 
 const EXIT_CODES: &str = "Exit codes: 0 done; 1 the output could not be written; 2 bad arguments, bad input, or a \
 refusal (the surface does not suit the method); 3 the files are written but the result misses a guarantee of its method \
@@ -84,6 +86,8 @@ enum Command {
         #[arg(long, value_name = "a|b", default_value = "a", value_parser = variant)]
         variant: EdgeArcs,
         #[command(flatten)]
+        fabrication: FabricationArgs,
+        #[command(flatten)]
         output: Output,
     },
     /// ST mesh with support structure (paper Sec. 4): Ω, face spheres orthogonal to it, node axes,
@@ -114,6 +118,8 @@ enum Command {
         /// Remesh first uniformly to about N faces.
         #[arg(long, value_name = "N", value_parser = face_count)]
         faces: Option<usize>,
+        #[command(flatten)]
+        fabrication: FabricationArgs,
         #[command(flatten)]
         output: Output,
     },
@@ -150,6 +156,8 @@ enum Command {
         #[arg(long, value_name = "D", default_value_t = SqParams::default().support_depth, value_parser = fraction_in::<0, 1>)]
         depth: f64,
         #[command(flatten)]
+        fabrication: FabricationArgs,
+        #[command(flatten)]
         output: Output,
     },
 }
@@ -162,6 +170,32 @@ struct Input {
     /// default: the first NURBS surface, else the first mesh.
     #[arg(long, value_name = "K")]
     object: Option<usize>,
+}
+
+/// The model unit and the moulds the panels are fitted to.
+#[derive(Args)]
+struct FabricationArgs {
+    /// What one model unit is: m, cm, mm, ft or in.
+    #[arg(long, value_name = "UNIT", default_value = "m", value_parser = units)]
+    units: Units,
+    /// The fewest moulds (radii the panels share) within this fit tolerance δ, e.g. 2mm or
+    /// 0.1in (a bare number is in model units). Default 2mm.
+    #[arg(long, value_name = "LENGTH", value_parser = length, conflicts_with = "moulds")]
+    mould_tolerance: Option<Length>,
+    /// Exactly this many moulds at most, at the smallest fit tolerance that allows it.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    moulds: Option<u32>,
+}
+
+impl FabricationArgs {
+    fn fabrication(&self) -> Fabrication {
+        let moulds = match (self.moulds, self.mould_tolerance) {
+            (Some(k), _) => MouldTarget::Count(k as usize),
+            (None, Some(t)) => MouldTarget::Tolerance(t),
+            (None, None) => MouldTarget::Tolerance(DEFAULT_MOULD_TOLERANCE),
+        };
+        Fabrication { units: self.units, moulds }
+    }
 }
 
 #[derive(Args)]
@@ -236,14 +270,15 @@ pub fn main() -> ExitCode {
     let mut progress = ProgressLine::new(mode);
     let result = match cli.command {
         Command::Info { input, list_objects } => info(&input, list_objects),
-        Command::St { input, epsilon, faces, variant, output } => {
+        Command::St { input, epsilon, faces, variant, fabrication, output } => {
             let sizing = match faces {
                 Some(n) => Sizing::UniformFaces(n),
                 None => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
             };
-            st(&input, StAdaptedParams { sizing, variant, ..StAdaptedParams::default() }, &output, &mut progress)
+            let fabrication = fabrication.fabrication();
+            st(&input, StAdaptedParams { sizing, variant, fabrication, ..StAdaptedParams::default() }, &output, &mut progress)
         }
-        Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, output } => {
+        Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, fabrication, output } => {
             let remesh = match (adaptive, faces) {
                 (true, _) => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
                 (false, Some(n)) => Sizing::UniformFaces(n),
@@ -255,11 +290,12 @@ pub fn main() -> ExitCode {
                 axis_length,
                 radius_tolerance,
                 remesh,
+                fabrication: fabrication.fabrication(),
                 ..StSupportParams::default()
             };
             st_support(&input, params, &output, &mut progress)
         }
-        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, output } => {
+        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, fabrication, output } => {
             let params = SqParams {
                 theta_deg: theta,
                 alpha_deg: alpha,
@@ -269,6 +305,7 @@ pub fn main() -> ExitCode {
                 until,
                 start,
                 support_depth: depth,
+                fabrication: fabrication.fabrication(),
                 ..SqParams::default()
             };
             sq(&input, params, &output, &mut progress)
@@ -436,13 +473,31 @@ fn st_support(input: &Input, params: StSupportParams, output: &Output, progress:
     let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
     progress.clear();
     write_files(output, &files, &report)?;
-    Ok(format!(
-        "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
-        result.panels.len(),
-        output.out.display(),
-        result.metrics.max_kink_angle_deg,
-        report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
+    Ok(with_moulds(
+        format!(
+            "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
+            result.panels.len(),
+            output.out.display(),
+            result.metrics.max_kink_angle_deg,
+            report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
+        ),
+        &report,
     ))
+}
+
+/// `summary`, then the moulds of the report: how many, within what, in model units.
+fn with_moulds(summary: String, report: &Report) -> String {
+    match &report.moulds {
+        Some(m) => format!(
+            "{summary}; {} mould{} within {:.4} {u} (largest fit deviation {:.4} {u}; moulds.csv)",
+            m.count,
+            if m.count == 1 { "" } else { "s" },
+            m.tolerance,
+            m.max_deviation,
+            u = m.units
+        ),
+        None => summary,
+    }
 }
 
 /// `st SURFACE [--epsilon E | --faces N] [--variant a|b] --out DIR`.
@@ -470,7 +525,7 @@ fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut Pr
         result.metrics.max_distance_to_reference,
         result.metrics.flipped_faces
     );
-    verdict(summary, &report)
+    verdict(with_moulds(summary, &report), &report)
 }
 
 /// The summary when the report meets its guarantees; else the summary (what was written) goes
@@ -550,7 +605,7 @@ fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressL
             )
         }
     };
-    verdict(summary, &report)
+    verdict(with_moulds(summary, &report), &report)
 }
 
 /// One JSON object: counts after triangulation and welding (of a B-spline: its tessellation),
@@ -694,6 +749,14 @@ fn open_fraction(s: &str) -> Result<f64, String> {
     } else {
         Err(format!("{x} is not in (0, 1)"))
     }
+}
+
+fn units(s: &str) -> Result<Units, String> {
+    s.parse().map_err(|e: spherical_faces::units::UnitsError| e.to_string())
+}
+
+fn length(s: &str) -> Result<Length, String> {
+    s.parse().map_err(|e: spherical_faces::units::UnitsError| e.to_string())
 }
 
 fn radius_tolerance(s: &str) -> Result<f64, String> {

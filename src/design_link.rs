@@ -4,12 +4,14 @@
 
 use crate::congruence::central_spheres::JetParams;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::{Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
 use crate::pipeline::protocol::StageRequest;
 use crate::remeshing::{Sizing, DEFAULT_EPSILON, DEFAULT_FACES, MAX_FACES, MIN_FACES};
 use crate::samples::Sample;
 use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_support::StSupportParams;
+use crate::units::{Length, Units};
 
 pub(crate) const VERSION: u32 = 1;
 
@@ -204,6 +206,9 @@ pub struct Design {
     pub st_adapted: StAdaptedParams,
     pub st_support: StSupportParams,
     pub sq: SqParams,
+    /// The model unit and the moulds, held here once for every panel method (filled into their
+    /// params by [`Self::stage_requests`], like the jet).
+    pub fabrication: Fabrication,
     pub color: ColorBy,
     pub shading: Shading,
     pub edges: bool,
@@ -220,6 +225,7 @@ impl Default for Design {
             st_adapted: StAdaptedParams::default(),
             st_support: StSupportParams::default(),
             sq: SqParams::default(),
+            fabrication: Fabrication::default(),
             color: ColorBy::MeanCurvature,
             shading: Shading::Smooth,
             edges: false,
@@ -273,6 +279,16 @@ impl Design {
                 }
             }
         }
+        // Units and moulds only when not the defaults, so older links stay as they were.
+        let f = &self.fabrication;
+        if f.units != Units::default() {
+            s += &format!("&units={}", f.units);
+        }
+        match f.moulds {
+            MouldTarget::Tolerance(t) if t == DEFAULT_MOULD_TOLERANCE => {}
+            MouldTarget::Tolerance(t) => s += &format!("&mould_tol={}", percent_encode(&t.to_string())),
+            MouldTarget::Count(k) => s += &format!("&moulds={k}"),
+        }
         s += &format!("&color={}&shading={}&edges={}", self.color.key(), self.shading.key(), self.edges as u8);
         if let Some(c) = self.camera {
             s += &format!(
@@ -294,9 +310,17 @@ impl Design {
         let mut stages = vec![StageRequest::Curvature(self.jet.clone())];
         match self.method {
             Method::Curvature => {}
-            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams { jet: self.jet.clone(), ..self.st_adapted.clone() })),
-            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams { jet: self.jet.clone(), ..self.st_support.clone() })),
-            Method::Sq => stages.push(StageRequest::Sq(self.sq.clone())),
+            Method::StAdapted => stages.push(StageRequest::StAdapted(StAdaptedParams {
+                jet: self.jet.clone(),
+                fabrication: self.fabrication,
+                ..self.st_adapted.clone()
+            })),
+            Method::StSupport => stages.push(StageRequest::StSupport(StSupportParams {
+                jet: self.jet.clone(),
+                fabrication: self.fabrication,
+                ..self.st_support.clone()
+            })),
+            Method::Sq => stages.push(StageRequest::Sq(SqParams { fabrication: self.fabrication, ..self.sq.clone() })),
         }
         stages
     }
@@ -388,6 +412,9 @@ impl Design {
                     _ => false,
                 },
                 "cam" => parse_camera(v).map(|c| d.camera = Some(c)).is_some(),
+                "units" => v.parse::<Units>().map(|u| d.fabrication.units = u).is_ok(),
+                "mould_tol" => v.parse::<Length>().map(|t| d.fabrication.moulds = MouldTarget::Tolerance(t)).is_ok(),
+                "moulds" => parse_in(v, 1, 1_000_000).map(|k| d.fabrication.moulds = MouldTarget::Count(k as usize)).is_some(),
                 _ => {
                     notices.push(format!("ignored unknown design-link field '{}'", clip(k)));
                     continue;

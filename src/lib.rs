@@ -13,6 +13,8 @@ pub mod stats;
 pub mod rng;
 /// User-facing text: control characters escaped.
 pub mod text;
+/// Model units (m, cm, mm, ft, in) and lengths written with a unit.
+pub mod units;
 /// Sparse Levenberg–Marquardt on faer: residual terms, finite-difference checks, ordering.
 pub mod solver;
 /// Generalized spheres, circles, the absolute sphere Ω, closest points, meshes.

@@ -66,7 +66,7 @@ fn st_support_writes_panels_and_report() {
     assert_eq!(r["method"], "st-support");
     assert_eq!(r["input"]["vertices"], 272);
     assert_eq!(r["output"]["panels"], 480);
-    assert_eq!(r["schema"], 2);
+    assert_eq!(r["schema"], 3);
     let (m, s) = (&r["metrics"], &r["st-support"]);
     for k in ["max_vertex_sphere_residual", "max_orthogonality_residual", "max_node_axis_offset"] {
         assert!(s[k].as_f64().unwrap() <= 1e-9, "{k} = {}", s[k]);
@@ -303,4 +303,34 @@ fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
         "≥ 90",
     );
     assert!(dir.join("panels.glb").exists() && dir.join("panels.json").exists(), "the files are written");
+}
+
+/// `--units` and `--mould-tolerance` (or `--moulds`) reach the report, the schedule and the mould
+/// table in the design's units; a bad unit is a one-line refusal.
+#[test]
+fn units_and_moulds_from_the_command_line() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-moulds-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--units", "cm", "--mould-tolerance", "20mm", "--out", d, "-q"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(r["moulds"]["units"], "cm");
+    assert!((r["moulds"]["tolerance"].as_f64().unwrap() - 2.0).abs() < 1e-12);
+    assert_eq!(r["metrics"]["units"], "cm");
+    let count = r["moulds"]["count"].as_u64().unwrap() as usize;
+    let csv = std::fs::read_to_string(dir.join("moulds.csv")).unwrap();
+    assert!(csv.starts_with("mould,radius_cm,"), "{csv}");
+    assert_eq!(csv.lines().count(), count + 1);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains(&format!("{count} mould")) && stdout.contains("within 2.0000 cm"), "{stdout}");
+    let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--moulds", "2", "--out", d, "-q"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    assert!(r["moulds"]["count"].as_u64().unwrap() <= 2);
+    assert_eq!(r["moulds"]["target"]["count"], 2);
+    let out = run(&["st", "../shared/data/meshes/cmc1.obj", "--mould-tolerance", "2 furlongs", "--out", d]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("unknown unit") && err.lines().count() == 1, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -188,3 +188,38 @@ fn sq_parameters_round_trip() {
     assert_eq!(bad.sq, SqParams::default());
     assert_eq!(notices.len(), 5, "{notices:?}");
 }
+
+/// Units and moulds round-trip, are held once in the design and reach every panel method's
+/// stage; the defaults add nothing to the link.
+#[test]
+fn units_and_moulds_round_trip() {
+    use spherical_faces::panels::moulds::{Fabrication, MouldTarget};
+    use spherical_faces::units::{Length, Units};
+    assert!(!Design::default().to_fragment().contains("units") && !Design::default().to_fragment().contains("mould"));
+    for fabrication in [
+        Fabrication { units: Units::Mm, moulds: MouldTarget::Tolerance(Length::new(0.5, Units::In)) },
+        Fabrication { units: Units::Ft, moulds: MouldTarget::Count(8) },
+        Fabrication { units: Units::Cm, moulds: MouldTarget::Tolerance(Length { value: 0.25, unit: None }) },
+    ] {
+        for method in [Method::StAdapted, Method::StSupport, Method::Sq] {
+            let d = Design { method, fabrication, ..Design::default() };
+            let (back, notices) = Design::from_fragment(&d.to_fragment());
+            assert!(notices.is_empty(), "{notices:?}");
+            assert_eq!(back, d, "{}", d.to_fragment());
+            let got: Vec<Fabrication> = back
+                .stage_requests()
+                .into_iter()
+                .filter_map(|s| match s {
+                    StageRequest::StAdapted(p) => Some(p.fabrication),
+                    StageRequest::StSupport(p) => Some(p.fabrication),
+                    StageRequest::Sq(p) => Some(p.fabrication),
+                    StageRequest::Curvature(_) => None,
+                })
+                .collect();
+            assert_eq!(got, vec![fabrication]);
+        }
+    }
+    let (d, notices) = Design::from_fragment("#v=1&units=furlong&moulds=0&mould_tol=-2mm");
+    assert_eq!(d.fabrication, Fabrication::default());
+    assert_eq!(notices.len(), 3, "{notices:?}");
+}

@@ -726,7 +726,7 @@ fn f32_at(bin: &[u8], at: usize) -> f32 {
 #[test]
 fn glb_structure() {
     let s = scene();
-    let glb = write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone());
+    let glb = write_glb(&s.panels, Some(&s.support), Some(&s.axes), None, s.extras.clone());
     // Header and chunks.
     assert_eq!(&glb[0..4], b"glTF");
     assert_eq!(u32::from_le_bytes(glb[4..8].try_into().unwrap()), 2);
@@ -793,10 +793,10 @@ fn glb_structure() {
     assert_eq!(j["buffers"][0]["byteLength"], blen);
 
     // Without support and axes: only the panels node; without panels: an empty panels node.
-    let only = glb_json(&write_glb(&s.panels, None, None, Value::Null)).unwrap();
+    let only = glb_json(&write_glb(&s.panels, None, None, None, Value::Null)).unwrap();
     assert_eq!(only["nodes"].as_array().unwrap().len(), 1);
     assert!(only["asset"].get("extras").is_none());
-    let empty = write_glb(&[], None, None, Value::Null);
+    let empty = write_glb(&[], None, None, None, Value::Null);
     assert_eq!(empty.len() % 4, 0);
     assert_eq!(glb_json(&empty).unwrap()["nodes"][0]["extras"]["panel_count"], 0);
 }
@@ -805,7 +805,7 @@ fn glb_structure() {
 fn glb_reimports_with_the_panel_triangles() {
     let s = scene();
     let n_panel = total_triangles(&s.panels);
-    let panels_only = write_glb(&s.panels, None, None, s.extras.clone());
+    let panels_only = write_glb(&s.panels, None, None, None, s.extras.clone());
     let im = import_mesh(&panels_only, "panels.glb").unwrap();
     assert_eq!(im.mesh.face_count(), n_panel, "notes: {:?}", im.notes);
     // Shared arc points weld: the result is one connected surface with as many vertices as
@@ -816,7 +816,7 @@ fn glb_reimports_with_the_panel_triangles() {
     distinct.dedup();
     assert_eq!(im.mesh.vertex_count(), distinct.len());
 
-    let full = write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone());
+    let full = write_glb(&s.panels, Some(&s.support), Some(&s.axes), None, s.extras.clone());
     let im = import_mesh(&full, "panels.glb").unwrap();
     assert_eq!(im.mesh.face_count(), n_panel + s.support.triangles.len(), "notes: {:?}", im.notes);
     // Panel primitives counted from the JSON chunk.
@@ -830,13 +830,13 @@ fn glb_passes_the_khronos_validator() {
     let s = scene();
     let dir = temp_dir("validator");
     let cases = [
-        ("full.glb", write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone())),
-        ("panels.glb", write_glb(&s.panels, None, None, Value::Null)),
+        ("full.glb", write_glb(&s.panels, Some(&s.support), Some(&s.axes), None, s.extras.clone())),
+        ("panels.glb", write_glb(&s.panels, None, None, None, Value::Null)),
         ("flat.glb", {
             let f = flat();
-            write_glb(&build_panels(&f, tol_for(&f)), None, None, Value::Null)
+            write_glb(&build_panels(&f, tol_for(&f)), None, None, None, Value::Null)
         }),
-        ("empty.glb", write_glb(&[], None, None, Value::Null)),
+        ("empty.glb", write_glb(&[], None, None, None, Value::Null)),
     ];
     for (name, bytes) in cases {
         let path = dir.join(name);
@@ -847,7 +847,7 @@ fn glb_passes_the_khronos_validator() {
         assert_eq!(summary["numWarnings"], 0, "{name}: {summary:#}");
     }
     // The validator does catch a broken file (so a pass means something).
-    let mut bad = write_glb(&s.panels, None, None, Value::Null);
+    let mut bad = write_glb(&s.panels, None, None, None, Value::Null);
     let jlen = u32::from_le_bytes(bad[12..16].try_into().unwrap()) as usize;
     bad.truncate(20 + jlen + 8 + 16);
     let n = bad.len() as u32;
@@ -1021,7 +1021,7 @@ fn distinct_radii_counting() {
 fn panel_files_are_the_four_files_and_the_report_follows() {
     let s = scene();
     let sched = build_schedule(&s.panels, &reference_of(&s.sm), 1e-4);
-    let glb = write_glb(&s.panels, Some(&s.support), Some(&s.axes), s.extras.clone());
+    let glb = write_glb(&s.panels, Some(&s.support), Some(&s.axes), None, s.extras.clone());
     let obj = write_obj(&s.panels, Some(&s.support), Some(&s.axes));
     let mut files = panel_files(glb, obj, &sched);
     files.push(report_file(&Report::new("st-support")));
@@ -1063,7 +1063,7 @@ fn report_schema() {
     r.input = InputCounts { vertices: 49, faces: 72 };
     r.output = OutputCounts { vertices: 49, faces: 72, panels: 72 };
     r.metrics =
-        Some(PanelMetrics { mean_kink_angle_deg: 1.25, max_kink_angle_deg: 3.5, max_distance_to_reference: 2e-3, distinct_radii: 15 });
+        Some(PanelMetrics { mean_kink_angle_deg: 1.25, max_kink_angle_deg: 3.5, max_distance_to_reference: 2e-3, distinct_radii: 15, ..Default::default() });
     let omega: AbsoluteSphereSection = (&AbsoluteSphere::Sphere { center: M_STRESS, r2: 2.0 }).into();
     r.set_section(&serde_json::json!({ "absolute_sphere": omega, "max_node_axis_offset": 1e-13 }));
     r.add_timing("absolute_sphere", 1.5);
@@ -1085,7 +1085,7 @@ fn report_schema() {
     assert!(section["absolute_sphere"].get("d").is_none());
     assert_eq!(section["max_node_axis_offset"], 1e-13);
     let m = v["metrics"].as_object().unwrap();
-    assert_eq!(m.len(), 4, "the shared section: {m:?}");
+    assert_eq!(m.len(), 7, "the shared section: {m:?}");
     assert_eq!(m["max_kink_angle_deg"], 3.5);
     assert_eq!(m["distinct_radii"], 15);
     assert!(!m.contains_key("max_node_axis_offset"), "a method's figure stays in its section");

@@ -447,7 +447,7 @@ fn exports_accept_variant_b_panels() {
         let panels = panels_b(&sm);
         let total: usize = panels.iter().map(|p| p.triangles.len()).sum();
 
-        let glb = write_glb(&panels, None, None, Value::Null);
+        let glb = write_glb(&panels, None, None, None, Value::Null);
         let im = import_mesh(&glb, "variant-b.glb").unwrap();
         assert_eq!(im.mesh.face_count(), total, "{name}: notes {:?}", im.notes);
         assert_eq!(im.dropped_faces, 0, "{name}");
@@ -461,7 +461,7 @@ fn exports_accept_variant_b_panels() {
         distinct.dedup();
         assert_eq!(im.mesh.vertex_count(), distinct.len(), "{name}");
         let a = build_panels(&sm, 1e-4 * diag(&sm));
-        let im_a = import_mesh(&write_glb(&a, None, None, Value::Null), "variant-a.glb").unwrap();
+        let im_a = import_mesh(&write_glb(&a, None, None, None, Value::Null), "variant-a.glb").unwrap();
         println!(
             "{name}: GLB re-import {} triangles, {} vertices, {} boundary vertices (variant (a): {} triangles, {} vertices, {} boundary vertices)",
             im.mesh.face_count(),

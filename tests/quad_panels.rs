@@ -225,7 +225,7 @@ fn quad_panels_export() {
 
     let obj = write_obj(&panels, None, None);
     assert_eq!(obj.lines().filter(|l| l.starts_with("g panel_")).count(), panels.len());
-    let glb = write_glb(&panels, None, None, serde_json::json!({ "method": "quad test" }));
+    let glb = write_glb(&panels, None, None, None, serde_json::json!({ "method": "quad test" }));
     let j = glb_json(&glb).unwrap();
     assert_eq!(j["nodes"][0]["extras"]["panels"][5]["corners"].as_array().unwrap().len(), 4);
     let dir = common::temp_dir("quad-glb");

@@ -5,9 +5,12 @@
 //! - scene 0 with the nodes `panels`, `support` and `node_axes` (the last two only when given);
 //! - mesh `panels`: **one primitive per panel**, in panel order (POSITION, NORMAL = the sphere's
 //!   outward normal −∇ψ/|∇ψ|, u32 indices, mode TRIANGLES); each primitive's `extras` is
-//!   `{"panel": id}`. The `panels` node's `extras` hold `panel_count`, `primitive_per_panel` and
-//!   per panel its sphere: `{id, face, corners, a, b, c, center, radius, signed_radius, plane,
-//!   normal, area, triangles}` (center/radius null and normal set for planes);
+//!   `{"panel": id}` (and `"mould": j` with moulds). The `panels` node's `extras` hold
+//!   `panel_count`, `primitive_per_panel` and per panel its sphere: `{id, face, corners, a, b, c,
+//!   center, radius, signed_radius, plane, normal, area, triangles}` (center/radius null and
+//!   normal set for planes; with moulds also `mould` and `mould_deviation`), and with moulds the
+//!   table `moulds: [{id, radius, curvature, panels, max_deviation}]`. With moulds, each mould
+//!   has its own material, named `mould j`, in [`mould_colour`];
 //! - mesh `support`: one indexed triangle primitive (double-sided material);
 //! - mesh `node_axes`: one non-indexed LINES primitive (two points per segment);
 //! - `asset.extras`: the caller's `extras` (e.g. Ω from [`absolute_sphere_extras`]).
@@ -20,6 +23,8 @@ use glam::DVec3;
 use serde_json::{json, Map, Value};
 
 use crate::congruence::support_structure::SupportGeometry;
+use crate::export::schedule::MouldRecord;
+use crate::panels::moulds::{mould_colour, MouldAssignment};
 use crate::panels::panel::Panel;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::TriMesh;
@@ -254,36 +259,60 @@ pub fn write_glb(
     panels: &[Panel],
     support: Option<&SupportGeometry>,
     node_axes: Option<&[(DVec3, DVec3)]>,
+    moulds: Option<&MouldAssignment>,
     extras: Value,
 ) -> Vec<u8> {
     let mut b = Builder::default();
     let mut nodes: Vec<Value> = Vec::new();
+    let moulds = moulds.filter(|m| m.panel_mould.len() == panels.len());
 
     // Panels.
     let mut panels_node = json!({ "name": "panels" });
+    let mut records: Vec<Value> = panels.iter().map(panel_extras).collect();
+    if let Some(m) = moulds {
+        for (r, (&j, &d)) in records.iter_mut().zip(m.panel_mould.iter().zip(&m.panel_deviation)) {
+            r["mould"] = json!(j);
+            r["mould_deviation"] = json!(d);
+        }
+    }
     panels_node["extras"] = json!({
         "panel_count": panels.len(),
         "primitive_per_panel": true,
-        "panels": panels.iter().map(panel_extras).collect::<Vec<_>>(),
+        "panels": records,
     });
+    if let Some(m) = moulds {
+        panels_node["extras"]["moulds"] = json!(MouldRecord::of(m));
+    }
     if !panels.is_empty() {
         let (vp, vn, vi) = (b.view(Some(12), ARRAY_BUFFER), b.view(Some(12), ARRAY_BUFFER), b.view(None, ELEMENT_ARRAY_BUFFER));
-        b.materials.push(json!({
-            "name": "panels",
-            "pbrMetallicRoughness": { "baseColorFactor": [0.80, 0.82, 0.86, 1.0], "metallicFactor": 0.9, "roughnessFactor": 0.25 },
-            "doubleSided": true
-        }));
-        let mat = b.materials.len() - 1;
+        let material = |name: String, [r, g, bl]: [f32; 3]| {
+            json!({
+                "name": name,
+                "pbrMetallicRoughness": { "baseColorFactor": [r, g, bl, 1.0], "metallicFactor": 0.9, "roughnessFactor": 0.25 },
+                "doubleSided": true
+            })
+        };
+        let first = b.materials.len();
+        match moulds {
+            Some(m) => b.materials.extend((0..m.moulds.len()).map(|j| material(format!("mould {j}"), mould_colour(j)))),
+            None => b.materials.push(material("panels".into(), [0.80, 0.82, 0.86])),
+        }
         let primitives: Vec<Value> = panels
             .iter()
-            .map(|p| {
+            .enumerate()
+            .map(|(i, p)| {
                 let pos = b.vec3(vp, p.positions.iter().copied(), true);
                 let nrm = b.vec3(vn, p.positions.iter().map(|&x| p.normal_at(x)), false);
                 let idx = b.indices(vi, &p.triangles);
+                let mould = moulds.map(|m| m.panel_mould[i]);
+                let mut extras = json!({ "panel": p.face });
+                if let Some(j) = mould {
+                    extras["mould"] = json!(j);
+                }
                 json!({
                     "attributes": { "POSITION": pos, "NORMAL": nrm },
-                    "indices": idx, "mode": MODE_TRIANGLES, "material": mat,
-                    "extras": { "panel": p.face }
+                    "indices": idx, "mode": MODE_TRIANGLES, "material": first + mould.unwrap_or(0) as usize,
+                    "extras": extras
                 })
             })
             .collect();

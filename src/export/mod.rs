@@ -12,7 +12,7 @@ pub mod schedule;
 
 pub use glb::{absolute_sphere_extras, write_glb};
 pub use obj::{write_mesh_obj, write_obj};
-pub use report::{PanelMetrics, Report, REPORT_SCHEMA};
+pub use report::{MouldReport, PanelMetrics, Report, REPORT_SCHEMA};
 pub use schedule::{build_schedule, build_schedule_with, count_distinct_radii, PanelSchedule};
 
 /// A file for download or for the CLI's output folder.
@@ -35,13 +35,19 @@ pub fn report_file(report: &Report) -> ExportFile {
 }
 
 /// The panel files every panel method writes, in this order: `panels.glb`, `panels.obj`, the
-/// schedule as `panels.csv` and `panels.json` (`report.json` follows with [`report_file`]).
+/// schedule as `panels.csv` and `panels.json`, and its mould table as `moulds.csv` when it has
+/// one (`report.json` follows with [`report_file`]).
 pub fn panel_files(glb: Vec<u8>, obj: String, schedule: &PanelSchedule) -> Vec<ExportFile> {
     let file = ExportFile::new;
-    vec![
+    let mut files = vec![
         file("panels.glb", "model/gltf-binary", glb),
         file("panels.obj", "text/plain", obj.into_bytes()),
         file("panels.csv", "text/csv", schedule.to_csv().into_bytes()),
         file("panels.json", "application/json", schedule.to_json().into_bytes()),
-    ]
+    ];
+    if !schedule.moulds.is_empty() {
+        let csv = schedule::MouldRecord::to_csv(&schedule.moulds, schedule.units);
+        files.push(file("moulds.csv", "text/csv", csv.into_bytes()));
+    }
+    files
 }

@@ -1,12 +1,16 @@
 //! `report.json`: the run report every method writes, typed. Schema [`REPORT_SCHEMA`]:
 //!
 //! ```json
-//! {"schema": 2,
+//! {"schema": 3,
 //!  "method": "st-support",
 //!  "input":  {"vertices": N, "faces": N},
 //!  "output": {"vertices": N, "faces": N, "panels": N},
 //!  "metrics": {"mean_kink_angle_deg": x, "max_kink_angle_deg": x,
-//!              "max_distance_to_reference": x, "distinct_radii": N},
+//!              "max_distance_to_reference": x, "distinct_radii": N,
+//!              "units": "m", "diagonal": x, "max_distance": x},
+//!  "moulds": {"units": "m", "target": {...}, "tolerance": x, "tolerance_relative": x,
+//!             "count": N, "max_deviation": x, "moulds": [{"id", "radius", ...}],
+//!             "against_tolerance": [[tolerance, count], ...]},
 //!  "st-support": {...},
 //!  "timings_ms": {"<stage>": x, ...},
 //!  "warnings": ["..."],
@@ -16,8 +20,9 @@
 //! `metrics` is the shared section: what every panel method measures on its panels (left out
 //! when a run made none, e.g. SQ stopped after its congruence). The method's own section sits
 //! under its name (`"st"`, `"st-support"`, `"sq"`), written by the method from its own type; this
-//! file knows no method. Lengths are relative to the reference's bounding-box diagonal; angles
-//! are in degrees. Timings are in milliseconds, keyed by stage name (sorted). Non-finite numbers
+//! file knows no method. Lengths are relative to the bounding-box diagonal, except those of
+//! `moulds` and `metrics.diagonal` / `metrics.max_distance`, which are in model units (`units`);
+//! angles are in degrees. Timings are in milliseconds, keyed by stage name (sorted). Non-finite numbers
 //! are written as null.
 
 use std::collections::BTreeMap;
@@ -26,11 +31,15 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::export::schedule::MouldRecord;
 use crate::guarantees::{f64_or_nan, Guarantee, Verdict};
+use crate::panels::moulds::MouldTarget;
+use crate::units::Units;
 
-/// The layout version of `report.json`, raised whenever a key moves. 2: the shared `metrics`
-/// and one section per method (1 had one flat `metrics` of every method's keys).
-pub const REPORT_SCHEMA: u32 = 2;
+/// The layout version of `report.json`, raised whenever a key moves. 3: model units and the
+/// shared `moulds`; 2: the shared `metrics` and one section per method (1 had one flat
+/// `metrics` of every method's keys).
+pub const REPORT_SCHEMA: u32 = 3;
 
 /// Vertex and face counts of the input mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -62,6 +71,31 @@ pub struct PanelMetrics {
     pub max_distance_to_reference: f64,
     /// Distinct panel radii after rounding to the radius tolerance (planes count as one more).
     pub distinct_radii: usize,
+    /// What one model unit is; the diagonal and the largest distance in model units.
+    #[serde(default)]
+    pub units: Units,
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub diagonal: f64,
+    #[serde(default, deserialize_with = "f64_or_nan")]
+    pub max_distance: f64,
+}
+
+/// The shared moulds section: the fewest moulds the panels need within the fit tolerance
+/// ([`crate::panels::moulds`]), lengths in model units.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MouldReport {
+    pub units: Units,
+    /// As asked: a tolerance, or a count.
+    pub target: MouldTarget,
+    /// The fit tolerance δ (the smallest one for the count, when a count was asked).
+    pub tolerance: f64,
+    pub tolerance_relative: f64,
+    pub count: usize,
+    /// The largest fit deviation of any panel (≤ `tolerance`).
+    pub max_deviation: f64,
+    pub moulds: Vec<MouldRecord>,
+    /// Moulds needed against the tolerance: (tolerance, count) pairs, ascending.
+    pub against_tolerance: Vec<(f64, usize)>,
 }
 
 /// The report of one run.
@@ -75,6 +109,8 @@ pub struct Report {
     pub output: OutputCounts,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub metrics: Option<PanelMetrics>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moulds: Option<MouldReport>,
     /// The method's own section, under its name ([`Self::set_section`], [`Self::section`]).
     #[serde(flatten)]
     pub sections: BTreeMap<String, serde_json::Value>,

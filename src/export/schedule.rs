@@ -16,7 +16,10 @@
 //!   panel surface), in model units; the schedule also gives the maximum relative to the
 //!   reference's bounding-box diagonal;
 //! - distinct radii: spherical panels are grouped by round(|r| / radius_tolerance); all planar
-//!   panels count as one more "radius" (a flat mould), reported separately as `planar_panels`.
+//!   panels count as one more "radius" (a flat mould), reported separately as `planar_panels`;
+//! - moulds ([`crate::panels::moulds`]): the fewest mould radii within the fit tolerance, each
+//!   panel's mould id and its fit deviation (the largest distance of its boundary from the mould
+//!   placed tangent at its centre); lengths in the design's `units`.
 
 use std::collections::BTreeSet;
 use std::fmt::Write;
@@ -26,8 +29,10 @@ use serde::{Deserialize, Serialize};
 use crate::congruence::support_structure::SupportElement;
 use crate::panels::arc::Arc;
 use crate::panels::deviation::max_deviation;
+use crate::panels::moulds::MouldAssignment;
 use crate::panels::panel::Panel;
 use crate::reference::Reference;
+use crate::units::Units;
 
 /// A panel's sphere in the schedule.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,6 +84,46 @@ pub struct PanelRecord {
     pub max_deviation: f64,
     /// Tessellation triangles of this panel.
     pub triangles: usize,
+    /// Its mould (an id of [`PanelSchedule::moulds`]) and the largest distance of its boundary
+    /// from that mould, model units.
+    #[serde(default)]
+    pub mould: u32,
+    #[serde(default)]
+    pub mould_deviation: f64,
+}
+
+/// One mould: every panel of this radius is cut from it, either way up.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MouldRecord {
+    pub id: u32,
+    /// Model units; null for a flat mould.
+    pub radius: Option<f64>,
+    pub curvature: f64,
+    pub panels: usize,
+    /// The largest fit deviation of its panels, model units.
+    pub max_deviation: f64,
+}
+
+impl MouldRecord {
+    pub fn of(moulds: &MouldAssignment) -> Vec<MouldRecord> {
+        moulds
+            .moulds
+            .iter()
+            .enumerate()
+            .map(|(id, m)| MouldRecord { id: id as u32, radius: m.radius, curvature: m.curvature, panels: m.panels, max_deviation: m.max_deviation })
+            .collect()
+    }
+
+    /// The mould table as CSV: a header and one row each.
+    pub fn to_csv(records: &[MouldRecord], units: Units) -> String {
+        let mut out = format!("mould,radius_{units},curvature_per_{units},panels,max_deviation_{units}\n");
+        for r in records {
+            let _ = write!(out, "{},", r.id);
+            opt(&mut out, r.radius);
+            let _ = writeln!(out, ",{},{},{}", r.curvature, r.panels, r.max_deviation);
+        }
+        out
+    }
 }
 
 /// The whole schedule.
@@ -103,6 +148,14 @@ pub struct PanelSchedule {
     /// The support structure's planar elements (methods with support structure).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub support_elements: Vec<SupportRecord>,
+    /// What one model unit is.
+    #[serde(default)]
+    pub units: Units,
+    /// The fit tolerance of the moulds, model units.
+    #[serde(default)]
+    pub mould_tolerance: f64,
+    #[serde(default)]
+    pub moulds: Vec<MouldRecord>,
 }
 
 /// One planar support element in the schedule: its plane and its corners.
@@ -223,7 +276,8 @@ fn sphere_record(p: &Panel) -> SphereRecord {
     }
 }
 
-/// Builds the schedule of `panels` against the `reference` surface.
+/// Builds the schedule of `panels` against the `reference` surface (every panel on mould 0 of
+/// no table: [`PanelSchedule::with_moulds`] adds them).
 pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance: f64) -> PanelSchedule {
     build_schedule_with(panels, reference, radius_tolerance, None)
 }
@@ -253,6 +307,8 @@ pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_toler
                     None => max_deviation(p, bvh),
                 },
                 triangles: p.triangles.len(),
+                mould: 0,
+                mould_deviation: 0.0,
             }
         })
         .collect();
@@ -270,6 +326,9 @@ pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_toler
         max_deviation: max_dev,
         max_deviation_relative: if diag > 0.0 { max_dev / diag } else { max_dev },
         panels: records,
+        units: Units::default(),
+        mould_tolerance: 0.0,
+        moulds: Vec::new(),
     }
 }
 
@@ -289,6 +348,18 @@ fn opt3(out: &mut String, v: Option<[f64; 3]>) {
 }
 
 impl PanelSchedule {
+    /// The schedule with its moulds (one per panel in `moulds`, in panel order) in `units`.
+    pub fn with_moulds(mut self, moulds: &MouldAssignment, units: Units) -> Self {
+        for (r, (&m, &d)) in self.panels.iter_mut().zip(moulds.panel_mould.iter().zip(&moulds.panel_deviation)) {
+            r.mould = m;
+            r.mould_deviation = d;
+        }
+        self.units = units;
+        self.mould_tolerance = moulds.tolerance;
+        self.moulds = MouldRecord::of(moulds);
+        self
+    }
+
     /// Corners of the largest panel (3 when there are none).
     pub(crate) fn max_corners(&self) -> usize {
         self.panels.iter().map(|r| r.vertex_ids.len()).max().unwrap_or(3)
@@ -312,6 +383,8 @@ impl PanelSchedule {
         }
         h.push("area".into());
         h.push("max_deviation".into());
+        h.push("mould".into());
+        h.push("mould_deviation".into());
         h.join(",")
     }
 
@@ -362,7 +435,7 @@ impl PanelSchedule {
             }
             let _ = write!(out, ",{},", r.area);
             opt(&mut out, Some(r.max_deviation).filter(|d| d.is_finite()));
-            out.push('\n');
+            let _ = writeln!(out, ",{},{}", r.mould, r.mould_deviation);
         }
         out
     }

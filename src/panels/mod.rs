@@ -69,6 +69,7 @@ pub mod edge_arcs;
 pub mod gaps;
 pub mod panel;
 pub mod sphere_mesh;
+pub mod moulds;
 pub mod tessellate;
 
 use glam::DVec3;

@@ -9,9 +9,11 @@ use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{SupportGeometry, SupportStructure};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::schedule::SupportRecord;
-use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, PanelMetrics, Report};
+use crate::export::schedule::MouldRecord;
+use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, MouldReport, PanelMetrics, Report};
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
+use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::progress::Clock;
@@ -95,6 +97,8 @@ pub struct PanelExport<'a> {
     pub panels: &'a [Panel],
     pub diag: f64,
     pub radius_tolerance: f64,
+    /// The model unit and the moulds asked for.
+    pub fabrication: Fabrication,
     /// The method's own section of the report.
     pub section: serde_json::Value,
     pub timings: &'a [(String, f64)],
@@ -115,13 +119,16 @@ impl<'a> PanelExport<'a> {
     /// The export of a panel method (its key in reports and files: "st", "st-support"): its
     /// sphere mesh and panels, lengths relative to `diag` (of the mesh the method ran on), radii
     /// closer than `radius_tolerance` × `diag` counted as one, its own section of the report
-    /// (a serializable type of the method's) and its timings.
+    /// (a serializable type of the method's) and its timings; the moulds and units as
+    /// `fabrication` asks.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         method: &'a str,
         sphere_mesh: &'a SphereMesh,
         panels: &'a [Panel],
         diag: f64,
         radius_tolerance: f64,
+        fabrication: Fabrication,
         section: &impl serde::Serialize,
         timings: &'a [(String, f64)],
     ) -> Self {
@@ -132,6 +139,7 @@ impl<'a> PanelExport<'a> {
             panels,
             diag,
             radius_tolerance,
+            fabrication,
             section: serde_json::to_value(section).expect("a report section serializes"),
             timings,
             extras,
@@ -168,18 +176,41 @@ impl<'a> PanelExport<'a> {
     }
 }
 
+/// The shared moulds section of the report: the assignment, and the count against tolerances
+/// from 1/30 to 30 times its own (1e-5 to 1e-2 of `diag` when that is 0).
+pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, fabrication: &Fabrication, diag: f64) -> MouldReport {
+    let t = moulds.tolerance;
+    let (lo, hi) = if t > 0.0 { (t / 30.0, t * 30.0) } else { (1e-5 * diag, 1e-2 * diag) };
+    let steps = 24;
+    let tolerances: Vec<f64> = (0..=steps).map(|k| lo * (hi / lo).powf(k as f64 / steps as f64)).collect();
+    MouldReport {
+        units: fabrication.units,
+        target: fabrication.moulds,
+        tolerance: t,
+        tolerance_relative: if diag > 0.0 { t / diag } else { t },
+        count: moulds.moulds.len(),
+        max_deviation: moulds.panel_deviation.iter().copied().fold(0.0, f64::max),
+        moulds: MouldRecord::of(moulds),
+        against_tolerance: tolerances.iter().copied().zip(fits.counts(&tolerances)).collect(),
+    }
+}
+
 /// The report and the panel files of a panel method: `panels.glb`, `panels.obj`, the schedule
 /// as `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `support.csv`;
 /// the caller adds `report.json` ([`crate::export::report_file`]) once the report is complete.
 pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
     let t0 = clock.now();
-    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations);
+    let fits = MouldFits::of(e.panels);
+    let moulds = e.fabrication.assign(&fits, e.diag);
+    let units = e.fabrication.units;
+    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations).with_moulds(&moulds, units);
     schedule.support_elements = e.support.map(|s| SupportRecord::of(&s.elements)).unwrap_or_default();
     let mut extras = e.extras;
     extras["method"] = e.method.into();
+    extras["units"] = units.symbol().into();
     let axes = e.support.map(SupportStructure::axis_segments);
     let (geometry, axes) = (e.support.map(|s| &s.geometry), axes.as_deref());
-    let glb = write_glb(e.panels, geometry, axes, extras);
+    let glb = write_glb(e.panels, geometry, axes, Some(&moulds), extras);
     let obj = write_obj(e.panels, geometry, axes);
     let kinks = e.sphere_mesh.kink_angles_deg();
     let mesh = reference.mesh();
@@ -192,7 +223,11 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),
         max_distance_to_reference: schedule.max_deviation / e.diag,
         distinct_radii: schedule.distinct_radii,
+        units,
+        diagonal: e.diag,
+        max_distance: schedule.max_deviation,
     });
+    report.moulds = Some(mould_report(&fits, &moulds, &e.fabrication, e.diag));
     report.sections.insert(e.method.to_string(), e.section);
     report.add_timings(e.timings);
     report.add_timing("export", clock.now() - t0);

@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::panels::moulds::Fabrication;
+
 /// How an inequality (∠(l, n) ≤ θ, torsal planes meeting at ≥ α) enters the energy. Measured on
 /// `tunnel_arch` and the vault (θ 20°, α 75°): with slacks, step 1 stalls at E_LC ≈ 4e-5 per term
 /// (the slacks stick at 0, as the authors found); with hinges it reaches 1e-30.
@@ -219,6 +221,8 @@ pub struct SqParams {
     pub axis_length: f64,
     /// Radii closer than this (relative to the diagonal) count as one in the schedule.
     pub radius_tolerance: f64,
+    /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
+    pub fabrication: Fabrication,
 }
 
 impl Default for SqParams {
@@ -247,6 +251,7 @@ impl Default for SqParams {
             support_depth: 0.02,
             axis_length: 0.06,
             radius_tolerance: 1e-3,
+            fabrication: Fabrication::default(),
         }
     }
 }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::congruence::central_spheres::JetParams;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::Fabrication;
 use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
 
 /// Term weights (frame scaled to diagonal 1).
@@ -81,6 +82,8 @@ pub struct StAdaptedParams {
     pub fix_features: bool,
     /// Radii closer than this (× the bbox diagonal) count as one in the panel schedule.
     pub radius_tolerance: f64,
+    /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
+    pub fabrication: Fabrication,
 }
 
 impl StAdaptedParams {
@@ -138,6 +141,7 @@ impl Default for StAdaptedParams {
             fix_boundary: true,
             fix_features: true,
             radius_tolerance: 1e-3,
+            fabrication: Fabrication::default(),
         }
     }
 }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::absolute_sphere::AbsoluteSphereParams;
 use crate::congruence::central_spheres::JetParams;
+use crate::panels::moulds::Fabrication;
 use crate::remeshing::Sizing;
 
 /// Neighbours of a local sphere orthogonal to Ω (remeshing with `Sizing::Adaptive`).
@@ -23,6 +24,8 @@ pub struct StSupportParams {
     pub axis_length: f64,
     /// Radii closer than this count as one in the panel schedule. Default 1e-3.
     pub radius_tolerance: f64,
+    /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
+    pub fabrication: Fabrication,
     /// Remesh first: adaptively with the sizing field of the local spheres orthogonal to Ω
     /// (Fig. 16, bottom; ε × diag), uniformly to about N faces, or not at all (the default).
     pub remesh: Sizing,
@@ -37,6 +40,7 @@ impl Default for StSupportParams {
             support_depth: 0.02,
             axis_length: 0.1,
             radius_tolerance: 1e-3,
+            fabrication: Fabrication::default(),
             remesh: Sizing::None,
             jet: JetParams::default(),
             absolute: AbsoluteSphereParams::default(),

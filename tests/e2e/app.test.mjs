@@ -246,7 +246,7 @@ for (const project of PROJECTS) {
         const shown = await scrollResultsIntoView(app, s);
         t.diagnostic(`side panel: ${JSON.stringify(shown.side_panel)}`);
         assert.equal(shown.side_panel.results_visible, true, 'the metrics and histograms can be scrolled into view at 1280×800');
-        for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'report.json']) {
+        for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'moulds.csv', 'report.json']) {
           assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
         }
         assertDrawn(await measureViewport(app, s, 'st-support'), 'panels and support structure');
@@ -427,7 +427,7 @@ for (const project of PROJECTS) {
         const c = sq.congruence;
         t.diagnostic(`sq: ${JSON.stringify({ ...s.sq, report: undefined })}; section ${JSON.stringify(sq)}`);
         assert.equal(s.method, 'sq');
-        assert.equal(r.schema, 2);
+        assert.equal(r.schema, 3);
         assert.ok(!s.error, `error: ${s.error}`);
         assert.equal(s.source, 'sample:vault');
         for (const part of ['method=sq&', 'theta=20&alpha=75&grid=20&rs=10']) {
@@ -505,7 +505,7 @@ for (const project of PROJECTS) {
         for (const step of ['line_congruence', 'torsal', 'fairing', 'warm_up', 'spheres', 'projection']) {
           assert.ok(s.sq.energy_steps.includes(step), `energies of ${step} plotted (${s.sq.energy_steps})`);
         }
-        for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'support.csv', 'mesh.obj', 'report.json', 'congruence.glb']) {
+        for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'moulds.csv', 'support.csv', 'mesh.obj', 'report.json', 'congruence.glb']) {
           assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
         }
         assertDrawn(await measureViewport(app, s, 'sq-final'), 'panels, support and axes');

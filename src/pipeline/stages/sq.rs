@@ -326,6 +326,7 @@ pub fn export(
                 &f.mesh.panels,
                 reference.diagonal(),
                 params.radius_tolerance,
+        params.fabrication,
                 &section,
                 &timings,
             )

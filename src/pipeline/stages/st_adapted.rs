@@ -118,7 +118,8 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         timings.push(("angle_iteration_median".into(), med));
     }
     let export =
-        PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, &section, &timings)
+        PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance,
+        params.fabrication, &section, &timings)
             .with_extras(serde_json::json!({ "variant": variant }))
             .with_deviations(&result.panel_deviations)
             .with_warnings(&result.warnings)

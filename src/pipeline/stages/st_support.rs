@@ -74,6 +74,7 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
         &result.panels,
         result.diag,
         params.radius_tolerance,
+        params.fabrication,
         &section,
         &result.timings_ms,
     )

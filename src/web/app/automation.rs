@@ -41,6 +41,8 @@ struct AutomationState<'a> {
     error: &'a Option<String>,
     /// The status bar's line when the last result misses its method's guarantees.
     missed_guarantees: &'a Option<String>,
+    /// The moulds of the last panel result: how many, and within what (model units).
+    moulds: Option<(usize, f64)>,
     notices: &'a [String],
     design_link: &'a str,
     clear_color: [u8; 3],
@@ -100,6 +102,7 @@ impl App {
             jet_degree: self.design.jet.degree,
             error: &self.error,
             missed_guarantees: &self.missed_guarantees,
+            moulds: self.moulds.as_ref().map(|m| (m.count, m.tolerance)),
             notices: &self.notices,
             design_link: &self.last_fragment,
             clear_color: [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],

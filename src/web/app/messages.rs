@@ -153,6 +153,7 @@ impl App {
         } else if let Some(v) = self.views.iter_mut().find(|v| v.owns(stage)) {
             if let Some(report) = v.finished(result) {
                 self.missed_guarantees = super::panels::missed_guarantees(&report);
+                self.moulds = report.moulds;
             }
         }
     }

@@ -53,6 +53,8 @@ pub struct App {
     /// The last result misses a guarantee of its method: which, by how much (the status bar
     /// shows it in red).
     missed_guarantees: Option<String>,
+    /// The moulds of the last panel result.
+    moulds: Option<crate::export::MouldReport>,
     /// The method refused its input's size: a remesh to about this many faces is offered.
     remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
@@ -148,6 +150,7 @@ impl App {
             notices,
             error,
             missed_guarantees: None,
+            moulds: None,
             remesh_to: None,
             worker,
             loaded: None,
@@ -232,6 +235,7 @@ impl App {
     fn run_method(&mut self) {
         self.remesh_to = None;
         self.missed_guarantees = None;
+        self.moulds = None;
         if self.loaded.is_none() {
             return;
         }
@@ -337,7 +341,13 @@ impl App {
                 self.busy = Some(Busy::new(StageId::Import));
             }
             if self.loaded.is_some() {
-                let results = ui.scope(|ui| self.view().results(ui, &self.design));
+                let results = ui.scope(|ui| {
+                    self.view().results(ui, &self.design);
+                    if let Some(m) = self.moulds.as_ref().filter(|_| self.design.method != Method::Curvature) {
+                        ui.separator();
+                        panels::moulds::results(ui, m);
+                    }
+                });
                 let bottom = results.response.rect.left_bottom() + egui::vec2(1.0, -1.0);
                 self.results_visible = ui.clip_rect().contains(bottom);
             }
@@ -400,6 +410,10 @@ impl App {
         let m = self.design.method;
         let view = self.views.iter_mut().find(|v| v.method() == m).expect("a view per method");
         self.params_dirty |= view.controls(ui, &mut self.design);
+        if m != Method::Curvature {
+            ui.separator();
+            self.params_dirty |= panels::moulds::controls(ui, &mut self.design.fabrication);
+        }
         if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
             self.params_dirty = false;
             self.run_method();

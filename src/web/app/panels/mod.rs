@@ -1,8 +1,9 @@
 //! The side panel's shared sections and widgets: the reference's info, remeshing controls, the
-//! verdict and the warnings. Each method's own controls and results are its view's
+//! verdict, the warnings and the moulds of every panel method. Each method's own controls and results are its view's
 //! ([`super::views`]).
 
 pub mod info;
+pub mod moulds;
 
 use crate::design_link::SizingKind;
 use crate::remeshing::DEFAULT_FACES;

@@ -1,0 +1,331 @@
+//! Fewest moulds: panels of one radius share a mould (a sphere looks the same everywhere, and a
+//! panel can be turned over), so the moulds a result needs are the radii its panels can share
+//! within a fit tolerance δ.
+//!
+//! **Fit.** A mould of curvature κ is placed tangent to the panel at its centre c (the point of
+//! the panel's sphere nearest the mean of its boundary samples), with the panel's normal n there.
+//! A boundary point x, with h = ⟨x − c, n⟩ and q = |x − c|², lies at distance
+//! |κq − 2h| / (1 + √(κ²q − 2κh + 1)) from it, and within δ exactly for
+//! κ ∈ [2(h − δ)/(q − δ²), 2(h + δ)/(q − δ²)] (any κ when q ≤ δ²). The panel fits the mould when
+//! all its boundary points do: an interval of κ around the panel's own curvature, and, since a
+//! panel can be turned over, an interval of mould curvatures |κ|, a plane (0) included.
+//!
+//! **Fewest moulds.** The fewest values hitting every interval: sorted by right end, each
+//! interval not yet hit takes its right end (the classic greedy, optimal). Each mould then takes
+//! the middle of the intersection of its panels' intervals, which every one of them fits.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::panel::Panel;
+use crate::units::{Length, Units};
+
+/// Boundary samples per arc of a panel (the arcs' own points, corners included).
+pub const SAMPLES_PER_ARC: usize = 16;
+
+/// What fitting needs of each panel: its own curvature and its boundary samples (h, q) in the
+/// frame of its centre.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MouldFits {
+    /// Signed curvature of each panel's sphere along its normal at the centre (0: a plane).
+    pub curvature: Vec<f64>,
+    /// Each panel's centre c, where its mould is placed tangent, and its unit normal there.
+    pub centres: Vec<DVec3>,
+    pub normals: Vec<DVec3>,
+    /// `(h, q)` of the boundary samples; panel i's are `samples[offsets[i]..offsets[i + 1]]`.
+    samples: Vec<[f64; 2]>,
+    offsets: Vec<usize>,
+}
+
+/// One mould: its curvature (0 for a flat mould) and the panels cut from it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Mould {
+    pub curvature: f64,
+    /// 1/curvature; None for a flat mould.
+    pub radius: Option<f64>,
+    pub panels: usize,
+    /// The largest distance of a panel's boundary from this mould.
+    pub max_deviation: f64,
+}
+
+/// The moulds of a result at one tolerance: each panel's mould and fit deviation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MouldAssignment {
+    pub tolerance: f64,
+    /// By increasing curvature.
+    pub moulds: Vec<Mould>,
+    /// Index into `moulds` per panel.
+    pub panel_mould: Vec<u32>,
+    /// Each panel's largest boundary distance from its mould (≤ `tolerance`).
+    pub panel_deviation: Vec<f64>,
+}
+
+impl MouldFits {
+    /// The fit data of `panels`.
+    pub fn of(panels: &[Panel]) -> Self {
+        let mut fits = MouldFits { offsets: vec![0], ..Default::default() };
+        for p in panels {
+            let points: Vec<DVec3> = p.arcs.iter().flat_map(|a| a.sample(SAMPLES_PER_ARC)).collect();
+            let mean = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+            let s = p.sphere;
+            let c = s.closest_point(mean);
+            let n = s.normal_at(c).try_normalize().unwrap_or(DVec3::Z);
+            // normal_at is unit on a normalized sphere and points to the centre: c + n/(2a).
+            let scale = s.normal_at(c).length();
+            fits.curvature.push(if scale > 0.0 { 2.0 * s.a / scale } else { 0.0 });
+            fits.centres.push(c);
+            fits.normals.push(n);
+            fits.samples.extend(points.iter().map(|&x| [(x - c).dot(n), (x - c).length_squared()]));
+            fits.offsets.push(fits.samples.len());
+        }
+        fits
+    }
+
+    pub fn len(&self) -> usize {
+        self.curvature.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.curvature.is_empty()
+    }
+
+    fn samples(&self, i: usize) -> &[[f64; 2]] {
+        &self.samples[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    /// The signed curvatures κ (along the panel's normal) of the moulds panel `i` fits within
+    /// `tolerance`: an interval containing its own curvature.
+    pub fn signed_interval(&self, i: usize, tolerance: f64) -> [f64; 2] {
+        let d = tolerance.max(0.0);
+        let mut range = [f64::NEG_INFINITY, f64::INFINITY];
+        for &[h, q] in self.samples(i) {
+            let denominator = q - d * d;
+            if denominator > 0.0 {
+                range[0] = range[0].max(2.0 * (h - d) / denominator);
+                range[1] = range[1].min(2.0 * (h + d) / denominator);
+            }
+        }
+        // Rounding can leave the own curvature a hair outside at δ = 0.
+        let own = self.curvature[i];
+        [range[0].min(own), range[1].max(own)]
+    }
+
+    /// The mould curvatures |κ| panel `i` fits within `tolerance`, turned over or not.
+    pub fn interval(&self, i: usize, tolerance: f64) -> [f64; 2] {
+        let [lo, hi] = self.signed_interval(i, tolerance);
+        if lo <= 0.0 && hi >= 0.0 {
+            [0.0, (-lo).max(hi)]
+        } else if lo > 0.0 {
+            [lo, hi]
+        } else {
+            [-hi, -lo]
+        }
+    }
+
+    /// The largest distance of panel `i`'s boundary samples from a mould of curvature
+    /// `magnitude`, the better of the two ways up.
+    pub fn deviation(&self, i: usize, magnitude: f64) -> f64 {
+        let way = |k: f64| self.samples(i).iter().map(|&[h, q]| tangent_sphere_distance(k, h, q)).fold(0.0, f64::max);
+        way(magnitude).min(way(-magnitude))
+    }
+
+    /// The fewest moulds within `tolerance`, each panel's mould and deviation.
+    pub fn assign(&self, tolerance: f64) -> MouldAssignment {
+        let intervals: Vec<[f64; 2]> = (0..self.len()).map(|i| self.interval(i, tolerance)).collect();
+        let stabs = fewest_stabbing_values(&intervals);
+        // Each panel to the mould nearest its own |κ| among those it fits.
+        let mut panel_mould = Vec::with_capacity(intervals.len());
+        let mut common: Vec<[f64; 2]> = vec![[f64::NEG_INFINITY, f64::INFINITY]; stabs.len()];
+        for (i, &[lo, hi]) in intervals.iter().enumerate() {
+            let first = stabs.partition_point(|&s| s < lo);
+            let last = stabs.partition_point(|&s| s <= hi);
+            let own = self.curvature[i].abs();
+            let j = (first..last.max(first + 1).min(stabs.len()))
+                .min_by(|&a, &b| (stabs[a] - own).abs().total_cmp(&(stabs[b] - own).abs()))
+                .unwrap_or(first.min(stabs.len().saturating_sub(1)));
+            common[j] = [common[j][0].max(lo), common[j][1].min(hi)];
+            panel_mould.push(j as u32);
+        }
+        let values: Vec<f64> = common.iter().zip(&stabs).map(|(&[lo, hi], &s)| if lo <= hi { 0.5 * (lo + hi) } else { s }).collect();
+        let mut moulds: Vec<Mould> = values
+            .iter()
+            .map(|&k| Mould { curvature: k, radius: (k > 0.0).then(|| 1.0 / k), panels: 0, max_deviation: 0.0 })
+            .collect();
+        let panel_deviation: Vec<f64> = panel_mould
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| {
+                let m = &mut moulds[j as usize];
+                let d = self.deviation(i, m.curvature);
+                m.panels += 1;
+                m.max_deviation = m.max_deviation.max(d);
+                d
+            })
+            .collect();
+        MouldAssignment { tolerance, moulds, panel_mould, panel_deviation }
+    }
+
+    /// The fewest moulds within `tolerance` (the count of [`Self::assign`], without assigning).
+    pub fn count(&self, tolerance: f64) -> usize {
+        let intervals: Vec<[f64; 2]> = (0..self.len()).map(|i| self.interval(i, tolerance)).collect();
+        fewest_stabbing_values(&intervals).len()
+    }
+
+    /// The smallest tolerance for which `moulds` moulds suffice (bisection on the count, which
+    /// never grows with the tolerance), to a relative 1e-6; `upper` is a tolerance known to need
+    /// one mould at most (e.g. the bounding-box diagonal). 0 when no panel needs to move.
+    pub fn tolerance_for_count(&self, moulds: usize, upper: f64) -> f64 {
+        let moulds = moulds.max(1);
+        if self.count(0.0) <= moulds {
+            return 0.0;
+        }
+        let mut hi = upper.max(f64::MIN_POSITIVE);
+        while self.count(hi) > moulds && hi < f64::MAX / 4.0 {
+            hi *= 2.0;
+        }
+        let mut lo = 0.0;
+        while hi - lo > 1e-6 * hi {
+            let mid = 0.5 * (lo + hi);
+            if self.count(mid) <= moulds {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    }
+
+    /// Moulds against tolerance: the count at each of `tolerances`.
+    pub fn counts(&self, tolerances: &[f64]) -> Vec<usize> {
+        tolerances.iter().map(|&t| self.count(t)).collect()
+    }
+}
+
+/// How many moulds: the fewest within a tolerance, or a count (the smallest tolerance that
+/// needs no more).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MouldTarget {
+    Tolerance(Length),
+    Count(usize),
+}
+
+/// The default fit tolerance δ: 2 mm.
+pub const DEFAULT_MOULD_TOLERANCE: Length = Length { value: 2.0, unit: Some(Units::Mm) };
+
+/// The fabrication settings of a design: its model unit and the moulds asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Fabrication {
+    pub units: Units,
+    pub moulds: MouldTarget,
+}
+
+impl Default for Fabrication {
+    fn default() -> Self {
+        Self { units: Units::M, moulds: MouldTarget::Tolerance(DEFAULT_MOULD_TOLERANCE) }
+    }
+}
+
+impl Fabrication {
+    /// The moulds of `fits` as asked, in model units; `diagonal` (of the result) bounds the
+    /// tolerance a count can need.
+    pub fn assign(&self, fits: &MouldFits, diagonal: f64) -> MouldAssignment {
+        let tolerance = match self.moulds {
+            MouldTarget::Tolerance(length) => length.in_model_units(self.units),
+            MouldTarget::Count(k) => fits.tolerance_for_count(k, diagonal),
+        };
+        fits.assign(tolerance)
+    }
+}
+
+/// The display colour of mould `j` (linear RGB in [0, 1]): hues a golden angle apart, so
+/// neighbouring ids differ; the app and the GLB's materials use the same.
+pub fn mould_colour(j: usize) -> [f32; 3] {
+    let hue = (j as f32 * 0.618_034).fract() * 6.0;
+    let (s, v) = (0.55, 0.9);
+    let f = hue.fract();
+    let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));
+    match hue as u32 {
+        0 => [v, t, p],
+        1 => [q, v, p],
+        2 => [p, v, t],
+        3 => [p, q, v],
+        4 => [t, p, v],
+        _ => [v, p, q],
+    }
+}
+
+/// Distance from x (h = ⟨x − c, n⟩, q = |x − c|²) to the sphere of signed curvature `k` tangent
+/// at c with normal n (centre c + n/k; the tangent plane for k = 0), without cancellation.
+pub fn tangent_sphere_distance(k: f64, h: f64, q: f64) -> f64 {
+    (k * q - 2.0 * h).abs() / (1.0 + (k * k * q - 2.0 * k * h + 1.0).max(0.0).sqrt())
+}
+
+/// The fewest values such that every interval `[lo, hi]` holds one, ascending: sorted by right
+/// end, each interval not yet holding a value adds its right end. Optimal (an exchange argument:
+/// any solution needs a value in the first interval not yet hit, and its right end hits the most
+/// of the rest).
+pub fn fewest_stabbing_values(intervals: &[[f64; 2]]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..intervals.len()).collect();
+    order.sort_unstable_by(|&a, &b| intervals[a][1].total_cmp(&intervals[b][1]));
+    let mut values: Vec<f64> = Vec::new();
+    for i in order {
+        let [lo, hi] = intervals[i];
+        if values.last().is_none_or(|&v| v < lo) {
+            values.push(hi);
+        }
+    }
+    values
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// Brute force: the smallest k such that some k of the candidate values (the right ends)
+    /// hit every interval.
+    fn brute_force(intervals: &[[f64; 2]]) -> usize {
+        let ends: Vec<f64> = intervals.iter().map(|i| i[1]).collect();
+        let n = ends.len();
+        (0..=n)
+            .find(|&k| {
+                (0u32..1 << n).filter(|m| m.count_ones() as usize == k).any(|m| {
+                    intervals.iter().all(|&[lo, hi]| (0..n).any(|j| m & (1 << j) != 0 && ends[j] >= lo && ends[j] <= hi))
+                })
+            })
+            .unwrap()
+    }
+
+    #[test]
+    fn the_sweep_is_optimal_against_brute_force() {
+        let mut rng = Rng(7);
+        for case in 0..400 {
+            let n = 1 + case % 11;
+            let intervals: Vec<[f64; 2]> = (0..n)
+                .map(|_| {
+                    let a = rng.range(0.0, 10.0);
+                    [a, a + rng.range(0.0, 3.0)]
+                })
+                .collect();
+            let values = fewest_stabbing_values(&intervals);
+            assert!(intervals.iter().all(|&[lo, hi]| values.iter().any(|&v| v >= lo && v <= hi)), "case {case}: an interval is missed");
+            assert_eq!(values.len(), brute_force(&intervals), "case {case}: {intervals:?}");
+        }
+    }
+
+    #[test]
+    fn interval_ends_are_at_the_tolerance() {
+        let mut rng = Rng(3);
+        for _ in 0..1000 {
+            let (h, q, d) = (rng.range(-0.3, 0.3), rng.range(0.5, 2.0), rng.range(1e-4, 0.05));
+            let q = q.max(h * h);
+            for k in [2.0 * (h - d) / (q - d * d), 2.0 * (h + d) / (q - d * d)] {
+                assert!((tangent_sphere_distance(k, h, q) - d).abs() < 1e-12, "h {h} q {q} δ {d} κ {k}");
+            }
+            let inside = 2.0 * h / q;
+            assert!(tangent_sphere_distance(inside, h, q) < 1e-12);
+        }
+    }
+}

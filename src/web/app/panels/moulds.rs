@@ -1,0 +1,115 @@
+//! The moulds of a panel method's result, shared by every panel method: the model unit and the
+//! mould settings (a fit tolerance δ, or a count K), the mould table with each mould's colour,
+//! radius, panel count and largest fit deviation, and the moulds needed against δ.
+
+use egui::{Color32, Pos2, RichText, Sense, Vec2};
+
+use crate::export::MouldReport;
+use crate::panels::moulds::{mould_colour, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
+use crate::units::{Length, Units};
+
+/// Moulds listed in the table (the rest are counted).
+const TABLE_ROWS: usize = 24;
+
+/// The unit and the moulds asked for; true when they changed (the method reruns).
+pub fn controls(ui: &mut egui::Ui, fabrication: &mut Fabrication) -> bool {
+    let before = *fabrication;
+    ui.label(RichText::new("Moulds: panels of one radius share a mould").small());
+    ui.horizontal(|ui| {
+        ui.label("model unit");
+        egui::ComboBox::from_id_salt("units").selected_text(fabrication.units.symbol()).show_ui(ui, |ui| {
+            for u in Units::ALL {
+                ui.selectable_value(&mut fabrication.units, u, u.symbol());
+            }
+        });
+    });
+    let by_count = matches!(fabrication.moulds, MouldTarget::Count(_));
+    ui.horizontal(|ui| {
+        if ui.radio(!by_count, "within δ").clicked() && by_count {
+            fabrication.moulds = MouldTarget::Tolerance(DEFAULT_MOULD_TOLERANCE);
+        }
+        if ui.radio(by_count, "K moulds").clicked() && !by_count {
+            fabrication.moulds = MouldTarget::Count(8);
+        }
+    });
+    match &mut fabrication.moulds {
+        MouldTarget::Tolerance(t) => {
+            let unit = t.unit.unwrap_or(fabrication.units);
+            let mut value = t.value;
+            let mut u = unit;
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(&mut value).range(0.0..=1e6).speed(0.1).prefix("δ "));
+                egui::ComboBox::from_id_salt("mould_unit").selected_text(u.symbol()).width(48.0).show_ui(ui, |ui| {
+                    for x in Units::ALL {
+                        ui.selectable_value(&mut u, x, x.symbol());
+                    }
+                });
+            });
+            *t = Length::new(value, u);
+        }
+        MouldTarget::Count(k) => {
+            ui.add(egui::DragValue::new(k).range(1..=10_000).prefix("K "));
+        }
+    }
+    *fabrication != before
+}
+
+/// The result's moulds: their count and tolerance, the table and the count against δ.
+pub fn results(ui: &mut egui::Ui, moulds: &MouldReport) {
+    let u = moulds.units;
+    ui.strong("Moulds");
+    ui.label(format!(
+        "{} mould{} within δ = {:.4} {u} (largest fit deviation {:.4} {u})",
+        moulds.count,
+        if moulds.count == 1 { "" } else { "s" },
+        moulds.tolerance,
+        moulds.max_deviation
+    ));
+    egui::Grid::new("moulds_table").striped(true).show(ui, |ui| {
+        ui.label("");
+        ui.label(RichText::new(format!("radius ({u})")).small());
+        ui.label(RichText::new("panels").small());
+        ui.label(RichText::new(format!("max dev. ({u})")).small());
+        ui.end_row();
+        for m in moulds.moulds.iter().take(TABLE_ROWS) {
+            let [r, g, b] = mould_colour(m.id as usize).map(|c| (c * 255.0) as u8);
+            let (rect, _) = ui.allocate_exact_size(Vec2::splat(10.0), Sense::hover());
+            ui.painter().rect_filled(rect, 2.0, Color32::from_rgb(r, g, b));
+            ui.label(m.radius.map_or("flat".into(), |r| format!("{r:.4}")));
+            ui.label(m.panels.to_string());
+            ui.label(format!("{:.4}", m.max_deviation));
+            ui.end_row();
+        }
+    });
+    if moulds.moulds.len() > TABLE_ROWS {
+        ui.label(RichText::new(format!("… and {} more (moulds.csv)", moulds.moulds.len() - TABLE_ROWS)).small());
+    }
+    against_tolerance(ui, moulds);
+}
+
+/// Moulds against δ on log–log axes, the result's δ marked.
+fn against_tolerance(ui: &mut egui::Ui, moulds: &MouldReport) {
+    let points: Vec<(f64, f64)> =
+        moulds.against_tolerance.iter().filter(|(t, n)| *t > 0.0 && *n > 0).map(|&(t, n)| (t.log10(), (n as f64).log10())).collect();
+    if points.len() < 2 {
+        return;
+    }
+    let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width().min(260.0), 90.0), Sense::hover());
+    let p = ui.painter();
+    p.rect_filled(rect, 2.0, Color32::from_gray(30));
+    let (x0, x1) = (points[0].0, points[points.len() - 1].0);
+    let y1 = points.iter().map(|q| q.1).fold(0.0, f64::max).max(1e-9);
+    let at = |(x, y): (f64, f64)| {
+        Pos2::new(rect.left() + ((x - x0) / (x1 - x0)) as f32 * rect.width(), rect.bottom() - 4.0 - (y / y1) as f32 * (rect.height() - 18.0))
+    };
+    p.add(egui::Shape::line(points.iter().map(|&q| at(q)).collect(), egui::Stroke::new(1.5, Color32::from_rgb(120, 190, 255))));
+    if moulds.tolerance > 0.0 {
+        let m = at((moulds.tolerance.log10(), (moulds.count.max(1) as f64).log10()));
+        p.circle_filled(m, 3.5, Color32::from_rgb(255, 200, 80));
+    }
+    let font = egui::FontId::proportional(10.0);
+    let u = moulds.units;
+    p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, format!("moulds against δ ({u}), log–log"), font.clone(), Color32::LIGHT_GRAY);
+    p.text(rect.left_bottom() + Vec2::new(2.0, -1.0), egui::Align2::LEFT_BOTTOM, format!("{:.2e}", 10f64.powf(x0)), font.clone(), Color32::LIGHT_GRAY);
+    p.text(rect.right_bottom() + Vec2::new(-2.0, -1.0), egui::Align2::RIGHT_BOTTOM, format!("{:.2e}", 10f64.powf(x1)), font, Color32::LIGHT_GRAY);
+}

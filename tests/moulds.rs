@@ -1,0 +1,155 @@
+//! Fewest moulds on the results of every method: each panel fits its mould within δ (its
+//! boundary sampled densely against the mould sphere placed tangent at the panel's centre), the
+//! count is the sweep's, a count asked for is met at the smallest tolerance, and the schedule,
+//! the report and the GLB say the same.
+
+mod common;
+
+use common::load_reference;
+use glam::DVec3;
+use spherical_faces::export::glb::glb_json;
+use spherical_faces::export::{ExportFile, Report};
+use spherical_faces::panels::moulds::{fewest_stabbing_values, Fabrication, MouldFits, MouldTarget};
+use spherical_faces::panels::panel::Panel;
+use spherical_faces::pipeline::stages;
+use spherical_faces::progress::Clock;
+use spherical_faces::reference::Reference;
+use spherical_faces::remeshing::Sizing;
+use spherical_faces::samples::Sample;
+use spherical_faces::sq::congruence_file::CongruenceSegments;
+use spherical_faces::sq::params::SqParams;
+use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_support::StSupportParams;
+use spherical_faces::units::{Length, Units};
+
+/// The largest distance of panel `i`'s boundary (200 points per arc) from the mould of curvature
+/// magnitude `k` tangent at the panel's centre, the better way up.
+fn dense_deviation(panel: &Panel, centre: DVec3, normal: DVec3, k: f64) -> f64 {
+    let points: Vec<DVec3> = panel.arcs.iter().flat_map(|a| a.sample(200)).collect();
+    let way = |k: f64| {
+        points
+            .iter()
+            .map(|&x| if k == 0.0 { (x - centre).dot(normal).abs() } else { ((x - (centre + normal / k)).length() - 1.0 / k.abs()).abs() })
+            .fold(0.0, f64::max)
+    };
+    way(k).min(way(-k))
+}
+
+fn file<'a>(files: &'a [ExportFile], name: &str) -> &'a ExportFile {
+    files.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no {name}"))
+}
+
+/// Every guarantee of the moulds on one result, at the tolerance δ (model units).
+fn check(name: &str, panels: &[Panel], report: &Report, files: &[ExportFile], delta: f64) {
+    let fits = MouldFits::of(panels);
+    let moulds = fits.assign(delta);
+    let n = panels.len();
+    assert_eq!(moulds.panel_mould.len(), n);
+    // The count is the sweep's: no fewer values hit every panel's interval.
+    let intervals: Vec<[f64; 2]> = (0..n).map(|i| fits.interval(i, delta)).collect();
+    assert_eq!(moulds.moulds.len(), fewest_stabbing_values(&intervals).len(), "{name}");
+    assert_eq!(moulds.moulds.iter().map(|m| m.panels).sum::<usize>(), n, "{name}");
+    // Each panel fits its mould within δ, sampled densely and measured independently.
+    let diag = report.metrics.as_ref().unwrap().diagonal;
+    let mut worst: f64 = 0.0;
+    for (i, p) in panels.iter().enumerate() {
+        let k = moulds.moulds[moulds.panel_mould[i] as usize].curvature;
+        let d = dense_deviation(p, fits.centres[i], fits.normals[i], k);
+        worst = worst.max(d / delta);
+        assert!(d <= delta * (1.0 + 1e-3) + 1e-12 * diag, "{name}: panel {i} is {d} from its mould (δ {delta})");
+        assert!((d - moulds.panel_deviation[i]).abs() <= 1e-3 * delta + 1e-12 * diag, "{name}: panel {i}: {d} vs {}", moulds.panel_deviation[i]);
+    }
+    eprintln!("{name}: {n} panels, {} moulds within δ {delta:.3e}, worst dense deviation {worst:.4} δ", moulds.moulds.len());
+    // A panel's own sphere is its own mould (0 deviation): the interval holds its curvature.
+    for i in 0..n {
+        let [lo, hi] = fits.interval(i, 0.0);
+        assert!(lo <= fits.curvature[i].abs() && fits.curvature[i].abs() <= hi, "{name}: panel {i}");
+    }
+    // The report, the schedule and the GLB say the same.
+    let m = report.moulds.as_ref().expect("the report has its moulds");
+    assert_eq!(m.count, moulds.moulds.len(), "{name}");
+    assert!((m.tolerance - delta).abs() <= 1e-12 * delta, "{name}");
+    assert!(m.max_deviation <= delta * (1.0 + 1e-9), "{name}");
+    assert!(m.against_tolerance.windows(2).all(|w| w[0].0 < w[1].0 && w[0].1 >= w[1].1), "{name}: counts grow with δ");
+    let schedule: serde_json::Value = serde_json::from_slice(&file(files, "panels.json").bytes).unwrap();
+    assert_eq!(schedule["moulds"].as_array().unwrap().len(), m.count);
+    for (i, r) in schedule["panels"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(r["mould"], moulds.panel_mould[i], "{name}: panel {i}");
+    }
+    let csv = String::from_utf8(file(files, "moulds.csv").bytes.clone()).unwrap();
+    assert_eq!(csv.lines().count(), m.count + 1, "{name}");
+    let glb = glb_json(&file(files, "panels.glb").bytes).unwrap();
+    let materials: Vec<&str> = glb["materials"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(materials.iter().filter(|m| m.starts_with("mould ")).count(), m.count, "{name}: one material per mould");
+    let prims = glb["meshes"][0]["primitives"].as_array().unwrap();
+    for (i, prim) in prims.iter().enumerate() {
+        let j = moulds.panel_mould[i] as usize;
+        assert_eq!(prim["extras"]["mould"], j, "{name}: panel {i}");
+        assert_eq!(materials[prim["material"].as_u64().unwrap() as usize], format!("mould {j}"));
+    }
+    // K moulds: the smallest tolerance that needs no more than K.
+    for k in [1, 3, m.count.max(2) - 1] {
+        let t = fits.tolerance_for_count(k, diag);
+        assert!(fits.count(t) <= k, "{name}: K {k}");
+        assert!(t == 0.0 || fits.count(t * (1.0 - 1e-4)) > k, "{name}: K {k} at {t} is not the smallest");
+    }
+}
+
+fn fabrication(delta: f64) -> Fabrication {
+    Fabrication { units: Units::M, moulds: MouldTarget::Tolerance(Length { value: delta, unit: None }) }
+}
+
+#[test]
+fn st_adapted_panels_fit_their_moulds() {
+    let reference = load_reference("tri_mesh");
+    let delta = 2e-4 * reference.diagonal();
+    let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, fabrication: fabrication(delta), ..Default::default() };
+    let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_adapted::export(&reference, &result, &params, Clock::default());
+    check("st tri_mesh", &result.panels, &report, &files, delta);
+}
+
+#[test]
+fn st_support_panels_fit_their_moulds() {
+    let reference = load_reference("cmc1");
+    let delta = 1e-4 * reference.diagonal();
+    let params = StSupportParams { fabrication: fabrication(delta), ..Default::default() };
+    let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
+    check("st-support cmc1", &result.panels, &report, &files, delta);
+}
+
+#[test]
+fn sq_panels_fit_their_moulds() {
+    let reference = Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap();
+    let delta = 1e-4 * reference.diagonal();
+    let params = SqParams { fabrication: fabrication(delta), ..Default::default() };
+    let result = spherical_faces::sq::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    let segments = CongruenceSegments::of(&result.congruence);
+    let (report, files) = stages::sq::export(&reference, &result, &params, &segments, Clock::default());
+    let panels = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh.panels;
+    check("sq vault", panels, &report, &files, delta);
+}
+
+/// Units: a tolerance in millimetres on a design in metres is 1e-3 of the same in metres, and
+/// the report and the schedule say the unit.
+#[test]
+fn tolerances_are_read_in_the_design_units() {
+    let reference = load_reference("cmc1");
+    let run = |fabrication: Fabrication| {
+        let params = StSupportParams { fabrication, ..Default::default() };
+        let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+        stages::st_support::export(&reference, &result, &params, Clock::default())
+    };
+    let (mm, files) = run(Fabrication { units: Units::Cm, moulds: MouldTarget::Tolerance(Length::new(20.0, Units::Mm)) });
+    let m = mm.moulds.unwrap();
+    assert_eq!(m.units, Units::Cm);
+    assert!((m.tolerance - 2.0).abs() < 1e-12, "20 mm in cm: {}", m.tolerance);
+    assert_eq!(mm.metrics.unwrap().units, Units::Cm);
+    let schedule: serde_json::Value = serde_json::from_slice(&file(&files, "panels.json").bytes).unwrap();
+    assert_eq!(schedule["units"], "cm");
+    assert!(String::from_utf8_lossy(&file(&files, "moulds.csv").bytes).starts_with("mould,radius_cm,"));
+    let (count, _) = run(Fabrication { units: Units::Cm, moulds: MouldTarget::Count(4) });
+    let c = count.moulds.unwrap();
+    assert!(c.count <= 4 && c.tolerance > 0.0, "{} moulds at {}", c.count, c.tolerance);
+}
