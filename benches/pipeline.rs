@@ -14,9 +14,10 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
-    phase_line, result_line, AngleWorkload, JetWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES,
-    JET_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
+    phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES,
+    ANGLE_SAMPLES, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
 };
+use spherical_faces::panels::moulds::MouldFits;
 use spherical_faces::progress::{native_clock_ms, Clock};
 use spherical_faces::solver::PhaseTimes;
 
@@ -138,5 +139,15 @@ fn sq_iterations(bencher: Bencher) {
         record("sq_torsal_iteration", s.torsal_ms);
         record("sq_final_iteration", s.final_ms);
         record("sq_pipeline", vec![s.total_ms]);
+    });
+}
+
+#[divan::bench(sample_count = MOULD_SAMPLES as u32, sample_size = 1)]
+fn moulds(bencher: Bencher) {
+    let m = MouldWorkload::new(scale());
+    info("moulds", format!("# mould_assign_10k: {} panels", m.panels.len()));
+    bencher.bench_local(|| {
+        timed("mould_fits_10k", || MouldFits::of(&m.panels));
+        timed("mould_assign_10k", || m.fits.assign(m.tolerance));
     });
 }

@@ -20,6 +20,11 @@
 //!   of the two congruence steps (Sec. 5.1) and of the full final optimization (Eq. 10) are
 //!   measured, and the whole run from the B-spline to the panels and support structure.
 //!
+//! - `mould_fits_10k` / `mould_assign_10k`: the fit data of about 10 000 panels (the dome
+//!   remeshed uniformly, each face's sphere the pencil member nearest its central sphere,
+//!   tessellated) and the fewest moulds within 2e-4 of the diagonal on them
+//!   ([`crate::panels::moulds`]); the panels are built once, untimed.
+//!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
 
@@ -38,6 +43,9 @@ use crate::solver::{PhaseTimes, Problem, Solver, SolverOptions};
 use crate::st_adapted::initialization::initial_spheres;
 use crate::st_adapted::optimization::OptimizationFrame;
 use crate::st_adapted::params::StAdaptedParams;
+use crate::panels::build_panels;
+use crate::panels::moulds::MouldFits;
+use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::Clock;
 use crate::stats;
 
@@ -337,11 +345,41 @@ impl SqSample {
 
 // --- the whole suite, as the wasm runner runs it -------------------------------------------------
 
+// --- 5. moulds -----------------------------------------------------------------------------------
+
+/// About 10 000 panels of the dome and their mould fit data.
+pub struct MouldWorkload {
+    pub panels: Vec<crate::panels::panel::Panel>,
+    pub fits: crate::panels::moulds::MouldFits,
+    pub tolerance: f64,
+}
+
+impl MouldWorkload {
+    pub fn new(scale: Scale) -> Self {
+        let faces = match scale {
+            Scale::Full => 10_000,
+            Scale::Tiny => 60,
+        };
+        let params = StAdaptedParams::default();
+        let reference = Reference::from_triangles(samples::Sample::Dome.mesh());
+        let sizing = SizingField::uniform_for_face_count(reference.mesh(), faces);
+        let remeshed = pliant_remesh(reference.mesh(), &sizing, &params.remesh, &mut ignore).expect("remesh");
+        let field = jet_fit(&remeshed, &Topology::new(&remeshed), &params.jet, &mut ignore).expect("jet fit");
+        let spheres = initial_spheres(&remeshed, &field.central_spheres);
+        let diag = remeshed.bbox_diagonal();
+        let sphere_mesh = SphereMesh::new(remeshed, spheres, BoundaryArcRule::Parallel(glam::DVec3::ZERO));
+        let panels = build_panels(&sphere_mesh, crate::panels::DEFAULT_CHORD_TOLERANCE * diag);
+        let fits = MouldFits::of(&panels);
+        Self { panels, fits, tolerance: 2e-4 * diag }
+    }
+}
+
 /// Samples per benchmark for [`run_suite`] (the divan bench uses the same workloads).
 pub const JET_SAMPLES: usize = 5;
 pub const REMESH_SAMPLES: usize = 5;
 pub const ANGLE_SAMPLES: usize = 6;
 pub const SQ_SAMPLES: usize = 5;
+pub const MOULD_SAMPLES: usize = 10;
 
 /// Runs every benchmark with `clock` and passes one [`result_line`] per benchmark to `out`, plus
 /// informational lines starting with `#`. Awaits `pause()` between benchmarks (the browser runner
@@ -413,4 +451,14 @@ where
     out(&result_line("sq_torsal_iteration", &all.torsal_ms));
     out(&result_line("sq_final_iteration", &all.final_ms));
     out(&result_line("sq_pipeline", &totals));
+    drop(sq);
+
+    let m = MouldWorkload::new(scale);
+    pause().await;
+    let fits_ms: Vec<f64> = (0..MOULD_SAMPLES).flat_map(|_| time_n(clock, 1, || drop(MouldFits::of(&m.panels)))).collect();
+    let mut moulds = 0;
+    let assign_ms: Vec<f64> = (0..MOULD_SAMPLES).flat_map(|_| time_n(clock, 1, || moulds = m.fits.assign(m.tolerance).moulds.len())).collect();
+    out(&format!("# mould_assign_10k: {} panels, {moulds} moulds within 2e-4 of the diagonal", m.panels.len()));
+    out(&result_line("mould_fits_10k", &fits_ms));
+    out(&result_line("mould_assign_10k", &assign_ms));
 }

@@ -31,7 +31,7 @@ use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_adapted::StAdaptedEvent;
 use spherical_faces::st_support::StSupportParams;
 use spherical_faces::text::printable;
-use spherical_faces::units::{Length, Units};
+use spherical_faces::units::{format_length, Length, Units};
 
 const EXIT_CODES: &str = "Exit codes: 0 done; 1 the output could not be written; 2 bad arguments, bad input, or a \
 refusal (the surface does not suit the method); 3 the files are written but the result misses a guarantee of its method \
@@ -489,12 +489,11 @@ fn st_support(input: &Input, params: StSupportParams, output: &Output, progress:
 fn with_moulds(summary: String, report: &Report) -> String {
     match &report.moulds {
         Some(m) => format!(
-            "{summary}; {} mould{} within {:.4} {u} (largest fit deviation {:.4} {u}; moulds.csv)",
+            "{summary}; {} mould{} within {} (largest fit deviation {}; moulds.csv)",
             m.count,
             if m.count == 1 { "" } else { "s" },
-            m.tolerance,
-            m.max_deviation,
-            u = m.units
+            format_length(m.tolerance, m.units),
+            format_length(m.max_deviation, m.units),
         ),
         None => summary,
     }

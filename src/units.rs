@@ -56,6 +56,15 @@ impl fmt::Display for Units {
     }
 }
 
+/// `value` with four significant digits and the unit symbol ("2.000 mm", "0.00005000 m").
+pub fn format_length(value: f64, units: Units) -> String {
+    if !value.is_finite() || value == 0.0 {
+        return format!("{value} {units}");
+    }
+    let decimals = (3 - value.abs().log10().floor() as i32).clamp(0, 15) as usize;
+    format!("{value:.decimals$} {units}")
+}
+
 /// A text that is no unit or no length.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum UnitsError {
@@ -155,6 +164,9 @@ mod tests {
         assert!(matches!("2 furlong".parse::<Length>(), Err(UnitsError::UnknownUnit(_))));
         assert!(matches!("-1mm".parse::<Length>(), Err(UnitsError::NotALength(_))));
         assert!(matches!("NaN".parse::<Length>(), Err(UnitsError::NotALength(_))));
+        assert_eq!(format_length(2.0, Units::Mm), "2.000 mm");
+        assert_eq!(format_length(5e-5, Units::M), "0.00005000 m");
+        assert_eq!(format_length(1234.5, Units::In), "1234 in");
         for u in Units::ALL {
             assert_eq!(u.symbol().parse::<Units>().unwrap(), u);
             let l: Length = format!("{}", Length::new(0.25, u)).parse().unwrap();

@@ -322,7 +322,7 @@ fn units_and_moulds_from_the_command_line() {
     assert!(csv.starts_with("mould,radius_cm,"), "{csv}");
     assert_eq!(csv.lines().count(), count + 1);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains(&format!("{count} mould")) && stdout.contains("within 2.0000 cm"), "{stdout}");
+    assert!(stdout.contains(&format!("{count} mould")) && stdout.contains("within 2.000 cm"), "{stdout}");
     let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--moulds", "2", "--out", d, "-q"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();

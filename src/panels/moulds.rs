@@ -239,10 +239,13 @@ impl Fabrication {
     }
 }
 
-/// The display colour of mould `j` (linear RGB in [0, 1]): hues a golden angle apart, so
-/// neighbouring ids differ; the app and the GLB's materials use the same.
+/// Distinct mould colours; mould j has colour j mod this.
+pub const MOULD_COLOURS: usize = 16;
+
+/// The display colour of mould `j` (RGB in [0, 1]): hues a golden angle apart, so neighbouring
+/// ids differ, repeating every [`MOULD_COLOURS`]; the app and the GLB's materials use the same.
 pub fn mould_colour(j: usize) -> [f32; 3] {
-    let hue = (j as f32 * 0.618_034).fract() * 6.0;
+    let hue = ((j % MOULD_COLOURS) as f32 * 0.618_034).fract() * 6.0;
     let (s, v) = (0.55, 0.9);
     let f = hue.fract();
     let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));

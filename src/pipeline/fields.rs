@@ -107,6 +107,8 @@ pub mod field {
     pub(crate) const PANEL_NORMALS: &str = "panels.normals";
     pub const PANEL_TRIANGLES: &str = "panels.triangles";
     pub(crate) const PANEL_EDGES: &str = "panels.edges";
+    /// The mould of each panel vertex (its panel's, [`crate::panels::moulds`]), u32 × 1.
+    pub const PANEL_MOULDS: &str = "panels.moulds";
     pub(crate) const SUPPORT_POSITIONS: &str = "support.positions";
     pub const SUPPORT_TRIANGLES: &str = "support.triangles";
     pub(crate) const AXES_POSITIONS: &str = "axes.positions";

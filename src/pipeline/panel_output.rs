@@ -80,6 +80,16 @@ pub(crate) fn panel_fields(panels: &[Panel]) -> Vec<Field> {
     ]
 }
 
+/// A result's panels as display fields ([`panel_fields`]) with each panel vertex's mould
+/// ([`field::PANEL_MOULDS`]), assigned as the export assigns them.
+pub(crate) fn result_panel_fields(panels: &[Panel], fabrication: &Fabrication, diag: f64) -> Vec<Field> {
+    let moulds = fabrication.assign(&MouldFits::of(panels), diag);
+    let per_vertex = panels.iter().zip(&moulds.panel_mould).flat_map(|(p, &m)| std::iter::repeat_n(m, p.positions.len())).collect();
+    let mut fields = panel_fields(panels);
+    fields.push(Field::u32(field::PANEL_MOULDS, 1, per_vertex));
+    fields
+}
+
 /// The support strips and the node axes (segments) as display fields.
 pub(crate) fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)]) -> Vec<Field> {
     vec![

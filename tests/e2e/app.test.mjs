@@ -469,7 +469,8 @@ for (const project of PROJECTS) {
 
     test(`[${project.name}] n. SQ end to end (Sec. 5.2) on the vault sample: quad mesh, Q′, live panels, an exact SQ mesh with support structure, downloads`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
-      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&faces=237&until=final';
+      // Moulds within 0.05 mm of a vault in metres: several, each in its own colour.
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&faces=237&until=final&mould_tol=0.05mm';
       await withApp(t, browser, server, project, { name: 'n-sq-final', fragment }, async (app) => {
         const s = await waitForState(
           app,
@@ -483,9 +484,18 @@ for (const project of PROJECTS) {
         assert.equal(r.sq.stopped_after, 'final');
         assert.equal(r.meets_guarantees, true, `the verdict: ${JSON.stringify(r.guarantees)}`);
         assert.equal(s.missed_guarantees, null, 'no miss in the status bar');
-        for (const part of ['faces=237', 'until=final']) {
+        for (const part of ['faces=237', 'until=final', 'mould_tol=0.05mm']) {
           assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
         }
+        // The mould view: the report's moulds within δ, the panels in their moulds' colours.
+        const mo = r.moulds;
+        t.diagnostic(`moulds: ${mo.count} within ${mo.tolerance} ${mo.units}, largest deviation ${mo.max_deviation}; colours ${s.sq.mould_colours}`);
+        assert.equal(mo.units, 'm');
+        assert.ok(Math.abs(mo.tolerance - 5e-5) < 1e-12, `δ = 0.05 mm in metres: ${mo.tolerance}`);
+        assert.ok(mo.count > 1 && mo.max_deviation <= mo.tolerance, `${mo.count} moulds, largest deviation ${mo.max_deviation}`);
+        assert.equal(mo.moulds.reduce((n, m) => n + m.panels, 0), r.output.panels, 'every panel on a mould');
+        assert.deepEqual(s.moulds, [mo.count, mo.tolerance], 'the side panel shows the same moulds');
+        assert.equal(s.sq.mould_colours, Math.min(mo.count, 16), 'one panel mesh per mould colour');
         const m = r.sq.sq_mesh;
         const q = r.sq.quad_mesh;
         assert.ok(r.output.faces >= 150 && r.output.faces <= 330, `about 237 quads: ${r.output.faces}`);

@@ -24,7 +24,7 @@ use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{ignore, Cancelled, Clock, Progress};
 use crate::reference::Reference;
@@ -102,7 +102,7 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
         fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
     }
     if let Some(f) = &result.sq_mesh {
-        fields.extend(panel_fields(&f.mesh.panels));
+        fields.extend(result_panel_fields(&f.mesh.panels, &params.fabrication, reference.diagonal()));
         fields.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
     }
     let (sink, planned) = (stream.sink, stream.planned);
@@ -326,7 +326,7 @@ pub fn export(
                 &f.mesh.panels,
                 reference.diagonal(),
                 params.radius_tolerance,
-        params.fabrication,
+                params.fabrication,
                 &section,
                 &timings,
             )

@@ -11,7 +11,7 @@ use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, panel_fields, triangle_mesh_fields, PanelExport};
+use crate::pipeline::panel_output::{export_panels, panel_fields, result_panel_fields, triangle_mesh_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
@@ -88,7 +88,7 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
     };
     let result = compute(reference, params, clock, &mut on_event)?;
     let (report, files) = export(reference, &result, params, clock);
-    sink.snapshot(STAGE, result.iterations as u32, panel_fields(&result.panels));
+    sink.snapshot(STAGE, result.iterations as u32, result_panel_fields(&result.panels, &params.fabrication, result.diag));
     sink.files(STAGE, files);
     Ok(StAdaptedSummary {
         report,
@@ -118,8 +118,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         timings.push(("angle_iteration_median".into(), med));
     }
     let export =
-        PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance,
-        params.fabrication, &section, &timings)
+        PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, params.fabrication, &section, &timings)
             .with_extras(serde_json::json!({ "variant": variant }))
             .with_deviations(&result.panel_deviations)
             .with_warnings(&result.warnings)

@@ -8,7 +8,7 @@ use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, support_fields, PanelExport};
+use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
 use crate::reference::Reference;
@@ -47,7 +47,7 @@ pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: 
     let start = sink.now_ms();
     let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
     let (report, files) = export(reference, &result, params, clock);
-    sink.snapshot(STAGE, 1, display_fields(&result));
+    sink.snapshot(STAGE, 1, display_fields(&result, params));
     sink.files(STAGE, files);
     let a = &result.absolute;
     let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
@@ -87,8 +87,8 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
 }
 
 /// Display fields: panels, support, node axes, second envelope.
-pub(crate) fn display_fields(result: &StSupportResult) -> Vec<Field> {
-    let mut fields = panel_fields(&result.panels);
+pub(crate) fn display_fields(result: &StSupportResult, params: &StSupportParams) -> Vec<Field> {
+    let mut fields = result_panel_fields(&result.panels, &params.fabrication, result.diag);
     fields.extend(support_fields(&result.support.geometry, &result.support.axis_segments()));
     if let Some(env) = &result.second_envelope {
         fields.push(Field::f32(field::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));

@@ -53,8 +53,9 @@ pub struct App {
     /// The last result misses a guarantee of its method: which, by how much (the status bar
     /// shows it in red).
     missed_guarantees: Option<String>,
-    /// The moulds of the last panel result.
+    /// The moulds of the last panel result, and whether the panels show them.
     moulds: Option<crate::export::MouldReport>,
+    mould_colours: bool,
     /// The method refused its input's size: a remesh to about this many faces is offered.
     remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
@@ -151,6 +152,7 @@ impl App {
             error,
             missed_guarantees: None,
             moulds: None,
+            mould_colours: true,
             remesh_to: None,
             worker,
             loaded: None,
@@ -428,6 +430,9 @@ impl App {
             }
         });
         ui.checkbox(&mut self.design.edges, "edges");
+        if self.design.method != Method::Curvature {
+            ui.checkbox(&mut self.mould_colours, "panels in their moulds' colours");
+        }
         egui::ComboBox::from_label("colour by").selected_text(self.design.color.label()).show_ui(ui, |ui| {
             for c in ColorBy::ALL {
                 ui.selectable_value(&mut self.design.color, c, c.label());

@@ -68,7 +68,7 @@ impl App {
         };
         let design_colors = self.scalar_view().map(|s| ColorMap { scalars: s.data.clone(), range: s.range, diverging: s.diverging });
         let edge_color = [0.05, 0.06, 0.08, 1.0];
-        let drawn = self.view().draw(&Frame { shading, edge_color, center, radius });
+        let drawn = self.view().draw(&Frame { shading, edge_color, center, radius, moulds: self.mould_colours });
         let mut layers = Vec::new();
         if drawn.reference {
             let color_map = drawn.reference_colors.clone().unwrap_or(design_colors);

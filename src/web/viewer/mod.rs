@@ -31,6 +31,7 @@ pub struct Uniforms {
 }
 
 /// Display-ready geometry of a snapshot. `generation` changes whenever the data does.
+#[derive(Default)]
 pub struct MeshData {
     pub generation: u64,
     pub positions: Vec<f32>,

@@ -2,11 +2,79 @@
 //! mould settings (a fit tolerance δ, or a count K), the mould table with each mould's colour,
 //! radius, panel count and largest fit deviation, and the moulds needed against δ.
 
+use std::sync::Arc;
+
 use egui::{Color32, Pos2, RichText, Sense, Vec2};
+use glam::Mat4;
 
 use crate::export::MouldReport;
-use crate::panels::moulds::{mould_colour, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
-use crate::units::{Length, Units};
+use crate::panels::moulds::{mould_colour, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE, MOULD_COLOURS};
+use crate::pipeline::fields::{field, find, Field};
+use crate::units::{format_length, Length, Units};
+use crate::web::viewer::{Geometry, Layer, MeshData, Style};
+
+/// A result's panels split by mould colour: one mesh per colour in use, built once per result.
+pub struct MouldMeshes {
+    meshes: Vec<(Arc<MeshData>, [f32; 4])>,
+}
+
+impl MouldMeshes {
+    /// The panels of a result snapshot grouped by their vertices' moulds (None without moulds).
+    pub fn from_fields(fields: &[Field], generation: &mut u64) -> Option<Self> {
+        let moulds = find(fields, field::PANEL_MOULDS)?.as_u32()?;
+        let positions = find(fields, field::PANEL_POSITIONS)?.as_f32()?;
+        let normals = find(fields, field::PANEL_NORMALS).and_then(Field::as_f32).unwrap_or(&[]);
+        let triangles = find(fields, field::PANEL_TRIANGLES)?.as_u32()?;
+        let n = positions.len() / 3;
+        if moulds.len() != n || normals.len() != positions.len() {
+            return None;
+        }
+        let mut parts: Vec<MeshData> = (0..MOULD_COLOURS).map(|_| MeshData::default()).collect();
+        let mut index = vec![u32::MAX; n];
+        for t in triangles.chunks_exact(3) {
+            if t.iter().any(|&v| v as usize >= n) {
+                return None;
+            }
+            let part = &mut parts[moulds[t[0] as usize] as usize % MOULD_COLOURS];
+            for &v in t {
+                let v = v as usize;
+                // A panel's vertices are its own, so a vertex falls in one part only.
+                if index[v] == u32::MAX {
+                    index[v] = (part.positions.len() / 3) as u32;
+                    part.positions.extend_from_slice(&positions[3 * v..3 * v + 3]);
+                    part.normals.extend_from_slice(&normals[3 * v..3 * v + 3]);
+                }
+                part.triangles.push(index[v]);
+            }
+        }
+        let meshes = parts
+            .into_iter()
+            .enumerate()
+            .filter(|(_, m)| !m.triangles.is_empty())
+            .map(|(k, mut m)| {
+                *generation += 1;
+                m.generation = *generation;
+                let [r, g, b] = mould_colour(k);
+                (Arc::new(m), [r, g, b, 1.0])
+            })
+            .collect();
+        Some(Self { meshes })
+    }
+
+    /// The colours in use.
+    pub fn colours(&self) -> usize {
+        self.meshes.len()
+    }
+
+    /// The panels in their moulds' colours.
+    pub fn layers(&self, shading: u32) -> impl Iterator<Item = Layer> + '_ {
+        self.meshes.iter().map(move |(m, color)| Layer {
+            geometry: Geometry::Mesh(m.clone()),
+            model: Mat4::IDENTITY,
+            style: Style::Surface { shading, color: *color, color_map: None },
+        })
+    }
+}
 
 /// Moulds listed in the table (the rest are counted).
 const TABLE_ROWS: usize = 24;
@@ -59,11 +127,11 @@ pub fn results(ui: &mut egui::Ui, moulds: &MouldReport) {
     let u = moulds.units;
     ui.strong("Moulds");
     ui.label(format!(
-        "{} mould{} within δ = {:.4} {u} (largest fit deviation {:.4} {u})",
+        "{} mould{} within δ = {} (largest fit deviation {})",
         moulds.count,
         if moulds.count == 1 { "" } else { "s" },
-        moulds.tolerance,
-        moulds.max_deviation
+        format_length(moulds.tolerance, u),
+        format_length(moulds.max_deviation, u)
     ));
     egui::Grid::new("moulds_table").striped(true).show(ui, |ui| {
         ui.label("");
@@ -77,7 +145,7 @@ pub fn results(ui: &mut egui::Ui, moulds: &MouldReport) {
             ui.painter().rect_filled(rect, 2.0, Color32::from_rgb(r, g, b));
             ui.label(m.radius.map_or("flat".into(), |r| format!("{r:.4}")));
             ui.label(m.panels.to_string());
-            ui.label(format!("{:.4}", m.max_deviation));
+            ui.label(format!("{:.3e}", m.max_deviation));
             ui.end_row();
         }
     });

@@ -8,13 +8,15 @@ use crate::pipeline::fields::{Field, StageId, StageProgress};
 use crate::pipeline::protocol::StageResult;
 use crate::web::viewer::{ColorMap, Layer};
 
-/// What a view needs to draw: the design's shading, the edge colour, and the reference's centre
-/// and radius.
+/// What a view needs to draw: the design's shading, the edge colour, the reference's centre
+/// and radius, and whether panels show their moulds.
 pub struct Frame {
     pub shading: u32,
     pub edge_color: [f32; 4],
     pub center: Vec3,
     pub radius: f32,
+    /// Panels in their moulds' colours ([`crate::web::app::panels::moulds::MouldMeshes`]).
+    pub moulds: bool,
 }
 
 /// A colour legend in the viewport's corner.

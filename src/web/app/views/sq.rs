@@ -21,6 +21,7 @@ use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, 
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::{verdict, warnings};
 use crate::web::app::plots::{key_values, term_plot};
+use crate::web::app::panels::moulds::MouldMeshes;
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::colormap;
 use crate::web::viewer::{ColorMap, Geometry, Layer, MeshData, ScalarData, Style};
@@ -44,6 +45,8 @@ pub struct SqView {
     /// while the spheres optimize, then final), the support structure and the node axes.
     pub quad_mesh: Option<Arc<MeshData>>,
     pub panels: Option<Arc<MeshData>>,
+    /// The final panels by mould.
+    pub moulds: Option<MouldMeshes>,
     pub support: Option<Arc<MeshData>>,
     pub axes: Option<Arc<MeshData>>,
     /// (iteration, step, energy of every term and the total).
@@ -86,6 +89,7 @@ impl SqView {
         }
         if find(fields, field::PANEL_POSITIONS).is_some() {
             self.panels = Some(mesh_from_fields(fields, generation, PANEL_FIELDS));
+            self.moulds = MouldMeshes::from_fields(fields, generation);
         }
         if find(fields, field::SUPPORT_POSITIONS).is_some() {
             self.support = Some(mesh_from_fields(fields, generation, SUPPORT_FIELDS));
@@ -138,6 +142,8 @@ struct Automation<'a> {
     panel_triangles: usize,
     support_triangles: usize,
     axes: usize,
+    /// Panel meshes in mould colours (one per colour in use).
+    mould_colours: usize,
     mesh: Option<SqMeshFigures>,
     refused: bool,
     ready: bool,
@@ -246,6 +252,7 @@ impl MethodView for SqMethod {
             panel_triangles: v.panels.as_ref().map_or(0, |m| m.triangles.len() / 3),
             support_triangles: v.support.as_ref().map_or(0, |m| m.triangles.len() / 3),
             axes: v.axes.as_ref().map_or(0, |m| m.edges.len() / 2),
+            mould_colours: v.moulds.as_ref().map_or(0, MouldMeshes::colours),
             mesh: v.summary.as_ref().and_then(|s| s.section.sq_mesh.as_ref().map(|m| m.figures)),
             refused: v.refused_h.is_some(),
             ready: v.summary.is_some(),
@@ -283,7 +290,10 @@ impl SqMethod {
         }
         layers.extend(v.no_real_quads.as_ref().filter(|m| !m.edges.is_empty()).map(|m| lines(m, [0.95, 0.10, 0.10, 1.0])));
         if let Some(p) = v.panels.as_ref().filter(|_| d.panels) {
-            layers.push(surface(p, frame.shading, [0.70, 0.80, 0.88, 1.0]));
+            match v.moulds.as_ref().filter(|_| frame.moulds) {
+                Some(m) => layers.extend(m.layers(frame.shading)),
+                None => layers.push(surface(p, frame.shading, [0.70, 0.80, 0.88, 1.0])),
+            }
             layers.push(lines(p, frame.edge_color));
         }
         if d.quad_mesh && (v.panels.is_none() || !d.panels) {

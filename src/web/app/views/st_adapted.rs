@@ -17,6 +17,7 @@ use crate::pipeline::protocol::StageResult;
 use crate::pipeline::stages::st_adapted::{StAdaptedSummary, REMESHED_STAGE, SIZING_STAGE, STAGE};
 use crate::remeshing::Sizing;
 use crate::st_adapted::params::StAdaptedParams;
+use crate::web::app::panels::moulds::MouldMeshes;
 use crate::web::app::panels::{sizing_controls, verdict, warnings, SizingMemory};
 use crate::web::app::plots::{energy_plot, key_values};
 use crate::web::app::state::{mesh_from_fields, MESH_FIELDS, PANEL_FIELDS};
@@ -30,6 +31,8 @@ pub struct StAdaptedView {
     pub sizing: Option<Vec<f32>>,
     pub remeshed: Option<Arc<MeshData>>,
     pub panels: Option<Arc<MeshData>>,
+    /// The final panels by mould.
+    pub moulds: Option<MouldMeshes>,
     /// Iteration of the panels shown, and how many panel snapshots arrived.
     pub panel_iteration: u32,
     pub panel_snapshots: u32,
@@ -103,6 +106,7 @@ impl MethodView for StAdaptedMethod {
             a.remeshed = Some(mesh_from_fields(fields, generation, MESH_FIELDS));
         } else {
             a.panels = Some(mesh_from_fields(fields, generation, PANEL_FIELDS));
+            a.moulds = MouldMeshes::from_fields(fields, generation);
             a.panel_iteration = iteration;
             a.panel_snapshots += 1;
         }
@@ -135,7 +139,10 @@ impl MethodView for StAdaptedMethod {
             |m: &Arc<MeshData>, color| Layer { geometry: Geometry::Mesh(m.clone()), model: Mat4::IDENTITY, style: Style::Lines { color } };
         let mut layers = Vec::new();
         match (&a.panels, &a.remeshed) {
-            (Some(p), _) => layers.extend([surface(p), lines(p, frame.edge_color)]),
+            (Some(p), _) => match a.moulds.as_ref().filter(|_| frame.moulds) {
+                Some(m) => layers.extend(m.layers(frame.shading).chain([lines(p, frame.edge_color)])),
+                None => layers.extend([surface(p), lines(p, frame.edge_color)]),
+            },
             (None, Some(r)) => layers.push(surface(r)),
             (None, None) => {}
         }

@@ -20,12 +20,14 @@ use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
 use crate::web::app::panels::{sizing_controls, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
+use crate::web::app::panels::moulds::MouldMeshes;
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
 
 /// The result as display meshes.
 pub struct StSupportView {
     pub panels: Arc<MeshData>,
+    pub moulds: Option<MouldMeshes>,
     pub support: Arc<MeshData>,
     pub axes: Arc<MeshData>,
     pub envelope: Option<Arc<MeshData>>,
@@ -41,6 +43,7 @@ impl StSupportView {
             .then(|| mesh_from_fields(fields, generation, [field::ENVELOPE_POSITIONS, "", field::ENVELOPE_TRIANGLES, ""]));
         Self {
             panels: mesh_from_fields(fields, generation, PANEL_FIELDS),
+            moulds: MouldMeshes::from_fields(fields, generation),
             support: mesh_from_fields(fields, generation, SUPPORT_FIELDS),
             axes: mesh_from_fields(fields, generation, AXES_FIELDS),
             envelope,
@@ -135,12 +138,15 @@ impl StSupportMethod {
             model: id,
             style: Style::Surface { shading, color, color_map: None },
         };
-        let mut layers = vec![
-            surface(&st.panels, frame.shading, [0.70, 0.80, 0.88, 1.0]),
+        let mut layers = match st.moulds.as_ref().filter(|_| frame.moulds) {
+            Some(m) => m.layers(frame.shading).collect(),
+            None => vec![surface(&st.panels, frame.shading, [0.70, 0.80, 0.88, 1.0])],
+        };
+        layers.extend([
             Layer { geometry: Geometry::Mesh(st.panels.clone()), model: id, style: Style::Lines { color: frame.edge_color } },
             surface(&st.support, 0, [0.80, 0.55, 0.30, 1.0]),
             Layer { geometry: Geometry::Mesh(st.axes.clone()), model: id, style: Style::Lines { color: [0.85, 0.15, 0.12, 1.0] } },
-        ];
+        ]);
         if let Some(env) = st.envelope.as_ref().filter(|_| self.show_envelope) {
             layers.push(surface(env, 0, [0.55, 0.75, 0.55, 1.0]));
         }
