@@ -85,6 +85,10 @@ enum Command {
         /// bisecting face planes.
         #[arg(long, value_name = "a|b", default_value = "a", value_parser = variant)]
         variant: EdgeArcs,
+        /// After optimizing, move the panels onto fewer moulds (keeping the largest kink within
+        /// 1.2× and the panels within 2ε of the reference).
+        #[arg(long)]
+        optimize_moulds: bool,
         #[command(flatten)]
         fabrication: FabricationArgs,
         #[command(flatten)]
@@ -270,13 +274,13 @@ pub fn main() -> ExitCode {
     let mut progress = ProgressLine::new(mode);
     let result = match cli.command {
         Command::Info { input, list_objects } => info(&input, list_objects),
-        Command::St { input, epsilon, faces, variant, fabrication, output } => {
+        Command::St { input, epsilon, faces, variant, optimize_moulds, fabrication, output } => {
             let sizing = match faces {
                 Some(n) => Sizing::UniformFaces(n),
                 None => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
             };
             let fabrication = fabrication.fabrication();
-            st(&input, StAdaptedParams { sizing, variant, fabrication, ..StAdaptedParams::default() }, &output, &mut progress)
+            st(&input, StAdaptedParams { sizing, variant, fabrication, optimize_moulds, ..StAdaptedParams::default() }, &output, &mut progress)
         }
         Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, fabrication, output } => {
             let remesh = match (adaptive, faces) {

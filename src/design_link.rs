@@ -250,6 +250,9 @@ impl Design {
             Method::StAdapted => {
                 s += &sizing_fragment("sizing", self.st_adapted.sizing);
                 s += &format!("&variant={}", self.st_adapted.variant.key());
+                if self.st_adapted.optimize_moulds {
+                    s += "&opt_moulds=1";
+                }
             }
             Method::StSupport => {
                 let st = &self.st_support;
@@ -381,6 +384,13 @@ impl Design {
                 "opt_r" => match v.as_str() {
                     "0" | "1" => {
                         d.st_support.optimize_radius = v == "1";
+                        true
+                    }
+                    _ => false,
+                },
+                "opt_moulds" => match v.as_str() {
+                    "0" | "1" => {
+                        d.st_adapted.optimize_moulds = v == "1";
                         true
                     }
                     _ => false,

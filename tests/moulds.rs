@@ -153,3 +153,29 @@ fn tolerances_are_read_in_the_design_units() {
     let c = count.moulds.unwrap();
     assert!(c.count <= 4 && c.tolerance > 0.0, "{} moulds at {}", c.count, c.tolerance);
 }
+
+/// The ST method's mould rounds (`--optimize-moulds`) on `tri_mesh` at 2 mm on a 30 m diagonal:
+/// fewer moulds (at most 15, the pavilion target), the method's guarantees and targets kept
+/// (every vertex on its spheres, no fold, largest kink within 1.2×, panels within 2ε), and every
+/// panel within δ of its mould.
+#[test]
+fn st_adapted_moves_its_panels_onto_fewer_moulds() {
+    let reference = load_reference("tri_mesh");
+    let delta = 2e-3 / 30.0 * reference.diagonal();
+    let base = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, fabrication: fabrication(delta), ..Default::default() };
+    let plain = spherical_faces::st_adapted::compute(&reference, &base, Clock::default(), &mut |_| Ok(())).unwrap();
+    let params = StAdaptedParams { optimize_moulds: true, ..base.clone() };
+    let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_adapted::export(&reference, &result, &params, Clock::default());
+    let before = MouldFits::of(&plain.panels).count(delta);
+    let after = report.moulds.as_ref().unwrap().count;
+    eprintln!("tri_mesh: moulds {before} → {after}; rounds {:?}", result.mould_rounds);
+    assert_eq!(result.moulds_before, Some(before));
+    assert!(after <= 15 && after < before, "{before} → {after}");
+    assert_eq!(report.meets_guarantees, Some(true), "{:?}", report.guarantees);
+    assert_eq!(result.metrics.flipped_faces, 0);
+    assert!(result.metrics.max_vertex_sphere_residual <= 1e-8);
+    assert!(result.metrics.max_kink_angle_deg <= 1.2 * plain.metrics.max_kink_angle_deg);
+    assert!(result.metrics.max_distance_to_reference <= 2.0 * 2e-3);
+    check("st tri_mesh, fewer moulds", &result.panels, &report, &files, delta);
+}

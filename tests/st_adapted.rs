@@ -20,7 +20,7 @@ use spherical_faces::solver::{check_jacobian, jacobians, Hinge, Term, TermId};
 use spherical_faces::st_adapted::initialization::{closest_family_member, initial_spheres};
 use spherical_faces::st_adapted::metrics::metrics;
 use spherical_faces::st_adapted::params::{StAdaptedParams, StAdaptedWeights};
-use spherical_faces::st_adapted::terms::{build_problem, pack, FaceOrientation};
+use spherical_faces::st_adapted::terms::{build_problem, pack, unpack, FaceOrientation};
 use spherical_faces::st_adapted::{compute, StAdaptedError, StAdaptedEvent, StAdaptedResult};
 
 fn params(sizing: Sizing, variant: EdgeArcs, iterations: [usize; 3]) -> StAdaptedParams {
@@ -691,4 +691,25 @@ fn the_optimization_folds_no_face_on_a_coarse_uniform_remesh() {
     assert_eq!(r.initial_shape.flipped_faces, 0);
     assert_eq!(r.metrics.flipped_faces, 0, "{:?}", r.metrics);
     assert!(spherical_faces::st_adapted::guarantees::verdict(&r.metrics).holds());
+}
+
+/// E_mould ([`spherical_faces::st_adapted::moulds::MouldCurvature`]) against finite differences,
+/// and its value: 2a − κ_target, 0 for faces without a target.
+#[test]
+fn mould_curvature_jacobian_and_values() {
+    use spherical_faces::st_adapted::moulds::MouldCurvature;
+    use spherical_faces::st_adapted::terms::{vertex_offset, FaceSpheres};
+    let (_, mesh, x) = patch();
+    let nf = mesh.face_count();
+    let corners: Vec<[usize; 3]> = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(nf, v as usize))).collect();
+    let targets: Vec<f64> = (0..nf).map(|f| if f % 5 == 0 { f64::NAN } else { 0.5 + 0.1 * f as f64 }).collect();
+    let term = MouldCurvature::new(FaceSpheres::new(corners), targets.clone());
+    let err = check_jacobian(&term, &x, 1e-6);
+    assert!(err < 1e-6, "FD error {err}");
+    let (_, spheres) = unpack(&x, &mesh.triangles, mesh.vertex_count());
+    let r = spherical_faces::solver::residuals(&term, &x);
+    for f in 0..nf {
+        let want = if targets[f].is_nan() { 0.0 } else { 2.0 * spheres[f].normalized().a - targets[f] };
+        assert!((r[f] - want).abs() < 1e-9, "face {f}: {} vs {want}", r[f]);
+    }
 }

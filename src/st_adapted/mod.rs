@@ -70,6 +70,7 @@ pub mod boundary_arcs;
 pub mod guarantees;
 pub mod initialization;
 pub mod metrics;
+pub mod moulds;
 pub mod optimization;
 pub mod params;
 pub mod report;
@@ -94,6 +95,7 @@ use crate::stats::median;
 use initialization::initial_spheres;
 use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
 use optimization::{run_stages, OptimizationFrame};
+use moulds::{fewer_moulds, MouldRound};
 use params::StAdaptedParams;
 
 /// What the method reports while it runs; answering `Err(Cancelled)` stops it.
@@ -193,6 +195,10 @@ pub struct StAdaptedResult {
     pub variant: EdgeArcs,
     /// Final term statistics.
     pub terms: Vec<TermStats>,
+    /// The rounds toward fewer moulds (`optimize_moulds`; empty otherwise or when none helped).
+    pub mould_rounds: Vec<MouldRound>,
+    /// The moulds at δ before those rounds.
+    pub moulds_before: Option<usize>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers, not
     /// coarser than ε) and the kinks over the warning angle.
     pub warnings: Vec<Warning>,
@@ -243,9 +249,21 @@ pub fn compute(
     step(on_event, "metrics")?;
     timings.skip();
     let initial_shape = shape(&initial_sphere_mesh, reference);
-    let sphere_mesh = optimized.sphere_mesh;
-    let (final_metrics, panels, panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
+    let mut sphere_mesh = optimized.sphere_mesh;
+    let (mut final_metrics, mut panels, mut panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
+    let (mut mould_rounds, mut moulds_before) = (Vec::new(), None);
+    if params.optimize_moulds {
+        step(on_event, "fewer_moulds")?;
+        timings.skip();
+        if let Some(f) = fewer_moulds(reference, &sphere_mesh, &params.fabrication, params, clock, &mut |p| on_event(StAdaptedEvent::Progress(p)))? {
+            (sphere_mesh, panels, panel_deviations) = (f.sphere_mesh, f.panels, f.deviations);
+            final_metrics = metrics(&sphere_mesh, reference, params.variant).0;
+            mould_rounds = f.rounds;
+            moulds_before = Some(f.before);
+        }
+        timings.lap("fewer_moulds");
+    }
     let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
     if let Some(epsilon) = params.epsilon() {
@@ -267,6 +285,8 @@ pub fn compute(
         diag: reference.diagonal(),
         variant: params.variant,
         terms: optimized.terms,
+        mould_rounds,
+        moulds_before,
         warnings,
     })
 }

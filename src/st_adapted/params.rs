@@ -84,6 +84,8 @@ pub struct StAdaptedParams {
     pub radius_tolerance: f64,
     /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
     pub fabrication: Fabrication,
+    /// Move the panels onto fewer moulds after optimizing ([`super::moulds::fewer_moulds`]).
+    pub optimize_moulds: bool,
 }
 
 impl StAdaptedParams {
@@ -142,6 +144,7 @@ impl Default for StAdaptedParams {
             fix_features: true,
             radius_tolerance: 1e-3,
             fabrication: Fabrication::default(),
+            optimize_moulds: false,
         }
     }
 }

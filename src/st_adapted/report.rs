@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::moulds::MouldRound;
 use super::StAdaptedResult;
 use crate::guarantees::f64_or_nan;
 
@@ -31,6 +32,12 @@ pub struct StAdaptedSection {
     /// arcs ([`crate::panels::gaps`]), relative.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_gap: Option<f64>,
+    /// With `--optimize-moulds`: each round toward fewer moulds (coarsening, moulds at δ, largest
+    /// kink, distance, kept).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub mould_rounds: Vec<MouldRound>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moulds_before: Option<usize>,
 }
 
 impl StAdaptedSection {
@@ -46,6 +53,8 @@ impl StAdaptedSection {
             initial_mean_kink_angle_deg: i.mean_kink_angle_deg,
             initial_max_kink_angle_deg: i.max_kink_angle_deg,
             max_gap: m.max_gap,
+            mould_rounds: result.mould_rounds.clone(),
+            moulds_before: result.moulds_before,
         }
     }
 }

@@ -169,7 +169,7 @@ impl FaceSpheres {
     }
 
     /// Adds the Jacobian row `row` of a scalar g(s_f), given ∂g/∂s_f = `grad`.
-    fn add_chain(&self, jac: &mut JacobianSink, row: usize, f: usize, member: &PencilMember, grad: &[f64; 5]) {
+    pub(crate) fn add_chain(&self, jac: &mut JacobianSink, row: usize, f: usize, member: &PencilMember, grad: &[f64; 5]) {
         let (dt, dp) = member.chain(grad);
         jac.add(row, angle_offset(f), dt);
         for (k, &o) in self.shared.corners[f].iter().enumerate() {
@@ -392,7 +392,7 @@ pub(crate) fn angle_offset(f: usize) -> usize {
 }
 
 /// Offset of vertex v's block in a problem with `faces` faces.
-pub(crate) fn vertex_offset(faces: usize, v: usize) -> usize {
+pub fn vertex_offset(faces: usize, v: usize) -> usize {
     faces + 3 * v
 }
 

@@ -200,6 +200,8 @@ fn controls(
         ui.radio_value(&mut params.variant, EdgeArcs::BisectingPlanes, "(b) bisecting planes")
             .on_hover_text("Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain");
     });
+    ui.checkbox(&mut params.optimize_moulds, "then move the panels onto fewer moulds")
+        .on_hover_text("Rounds that pull every panel's curvature to a coarser mould's, keeping the largest kink within 1.2× and the panels within 2ε");
     ui.checkbox(show_reference, "show reference surface (sizing colours)");
     ui.checkbox(show_remeshed, "overlay the remeshed triangulation (before optimization)");
     *params != before
@@ -232,6 +234,11 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     }
     if let Some((lo, hi)) = sum.sizing_range {
         rows.push(("sizing g min / max", format!("{lo:.4} / {hi:.4}")));
+    }
+    let section: Option<crate::st_adapted::report::StAdaptedSection> = sum.report.section();
+    if let (Some(before), Some(after)) = (section.as_ref().and_then(|s| s.moulds_before), sum.report.moulds.as_ref()) {
+        let rounds = section.as_ref().map_or(0, |s| s.mould_rounds.len());
+        rows.push(("moulds, before → after", format!("{before} → {} ({rounds} rounds)", after.count)));
     }
     if let Some(ms) = sum.report.timings_ms.get("angle_iteration_median") {
         rows.push(("median iteration", format!("{ms:.2} ms")));

@@ -1,0 +1,159 @@
+//! Fewer moulds (Sec. 3 with the fabrication's moulds, [`crate::panels::moulds`]): the panels
+//! of the angle-minimizing ST mesh are moved so that they land on fewer radii. Each round assigns
+//! the panels to the moulds of a coarser tolerance (γ δ, fewer moulds), adds [`MouldCurvature`]
+//! pulling every face sphere's curvature to its mould's, and optimizes again from the last
+//! result with all the method's terms. A round is kept when the moulds at δ fell and the method's
+//! targets hold (largest kink ≤ [`KINK_GROWTH`] × before, panels within 2ε); the rounds stop
+//! when the count stops falling.
+
+use std::cell::RefCell;
+
+use super::metrics::metrics;
+use super::optimization::{run_stages, OptimizationFrame};
+use super::params::StAdaptedParams;
+use super::terms::{FaceSpheres, vertex_offset};
+use crate::geometry::mesh::TriMesh;
+use crate::panels::moulds::{Fabrication, MouldFits};
+use crate::panels::panel::Panel;
+use crate::panels::sphere_mesh::SphereMesh;
+use crate::progress::{Cancelled, Clock, OnProgress, Progress};
+use crate::reference::Reference;
+use crate::solver::{JacobianSink, Solver, SolverOptions, Term};
+
+/// The largest kink may grow by this factor.
+pub const KINK_GROWTH: f64 = 1.2;
+/// Coarser tolerances tried, as multiples of δ, in order.
+const COARSENING: [f64; 6] = [1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
+/// Weight of [`MouldCurvature`] against the kink term's (frame units).
+const MOULD_WEIGHT: f64 = 1e-2;
+
+/// E_mould: 2a_f − κ_f for every face with a target, the curvature of face f's sphere
+/// (normalized: κ = 2a along its normal) minus its mould's, in the optimization's frame.
+pub struct MouldCurvature {
+    spheres: FaceSpheres,
+    /// Signed target curvature per face (NaN: none).
+    targets: Vec<f64>,
+}
+
+impl MouldCurvature {
+    pub fn new(spheres: FaceSpheres, targets: Vec<f64>) -> Self {
+        Self { spheres, targets }
+    }
+}
+
+impl Term for MouldCurvature {
+    fn name(&self) -> &str {
+        "mould"
+    }
+    fn residual_count(&self) -> usize {
+        self.targets.len()
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        self.spheres.with(x, |m| {
+            for (f, (&target, member)) in self.targets.iter().zip(m).enumerate() {
+                if target.is_nan() {
+                    r[f] = 0.0;
+                    continue;
+                }
+                r[f] = 2.0 * member.sphere[0] - target;
+                self.spheres.add_chain(jac, f, f, member, &[2.0, 0.0, 0.0, 0.0, 0.0]);
+            }
+        });
+    }
+}
+
+/// What the rounds made: the kept sphere mesh with its panels and deviations, and per round
+/// (γ, moulds at δ, largest kink, largest distance) for the report.
+pub struct FewerMoulds {
+    pub sphere_mesh: SphereMesh,
+    pub panels: Vec<Panel>,
+    pub deviations: Vec<f64>,
+    pub rounds: Vec<MouldRound>,
+    pub iterations: usize,
+    /// Moulds at δ before the rounds.
+    pub before: usize,
+}
+
+/// One round of [`fewer_moulds`].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MouldRound {
+    pub coarsening: f64,
+    pub moulds: usize,
+    pub max_kink_angle_deg: f64,
+    pub max_distance_to_reference: f64,
+    pub kept: bool,
+}
+
+/// The rounds on `sphere_mesh` (the method's result on `reference`, of largest kink
+/// `max_kink_deg`); None when no round kept fewer moulds.
+pub fn fewer_moulds(
+    reference: &Reference,
+    sphere_mesh: &SphereMesh,
+    fabrication: &Fabrication,
+    params: &StAdaptedParams,
+    clock: Clock,
+    progress: &mut OnProgress,
+) -> Result<Option<FewerMoulds>, Cancelled> {
+    let diag = reference.diagonal();
+    let (start, _, _) = metrics(sphere_mesh, reference, params.variant);
+    let max_kink = KINK_GROWTH * start.max_kink_angle_deg;
+    let max_distance = params.epsilon().map_or(f64::INFINITY, |e| (2.0 * e).max(start.max_distance_to_reference));
+    let (_, panels, _) = metrics(sphere_mesh, reference, params.variant);
+    let before = fabrication.assign(&MouldFits::of(&panels), diag).moulds.len();
+    let mut best_count = before;
+    let mut best: Option<FewerMoulds> = None;
+    let mut rounds = Vec::new();
+    let mut iterations = 0;
+    let mut current = sphere_mesh.clone();
+    for (k, &gamma) in COARSENING.iter().enumerate() {
+        progress(Progress::new("fewer_moulds", k, COARSENING.len()))?;
+        let (_, panels, _) = metrics(&current, reference, params.variant);
+        let fits = MouldFits::of(&panels);
+        let coarse = fabrication.assign(&fits, diag);
+        let coarse = fits.assign(gamma * coarse.tolerance);
+        let mut targets = vec![f64::NAN; current.mesh.face_count()];
+        for (i, p) in panels.iter().enumerate() {
+            let m = coarse.moulds[coarse.panel_mould[i] as usize].curvature;
+            // The frame scales lengths by 1/diag, curvatures by diag; the mould either way up.
+            targets[p.face] = m * diag * if fits.curvature[i] < 0.0 { -1.0 } else { 1.0 };
+        }
+        let mesh = current.mesh.triangulated();
+        let frame = OptimizationFrame::new(reference, &mesh, &current.face_spheres, params);
+        let mut x = frame.x0.clone();
+        let (mut problem, ids) = frame.problem(&params.variant_weights());
+        let corners = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(mesh.face_count(), v as usize))).collect();
+        problem.add_term(MouldCurvature::new(FaceSpheres::new(corners), targets), MOULD_WEIGHT * params.weights.angle);
+        let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
+        let run = RefCell::new(0usize);
+        let stages = StAdaptedParams { stages: params.stages.last().cloned().into_iter().collect(), ..params.clone() };
+        run_stages(&mut problem, &ids, &mut x, &stages, &mut solver, &mut |_, _| {
+            *run.borrow_mut() += 1;
+            Ok(())
+        })?;
+        iterations += run.into_inner();
+        let (verts, spheres) = frame.to_model(&x);
+        let moved = SphereMesh::new(TriMesh::new(verts, mesh.triangles.clone()), spheres, current.boundary_arcs);
+        let planes = super::boundary_arcs::boundary_planes(&moved, reference);
+        let moved = moved.with_boundary_planes(planes);
+        let (m, panels, deviations) = metrics(&moved, reference, params.variant);
+        let count = fabrication.assign(&MouldFits::of(&panels), diag).moulds.len();
+        let holds = m.max_kink_angle_deg <= max_kink && m.max_distance_to_reference <= max_distance && m.flipped_faces == 0;
+        let kept = holds && count < best_count;
+        rounds.push(MouldRound {
+            coarsening: gamma,
+            moulds: count,
+            max_kink_angle_deg: m.max_kink_angle_deg,
+            max_distance_to_reference: m.max_distance_to_reference,
+            kept,
+        });
+        if !holds {
+            break;
+        }
+        if kept {
+            best_count = count;
+            best = Some(FewerMoulds { sphere_mesh: moved.clone(), panels, deviations, rounds: Vec::new(), iterations: 0, before });
+        }
+        current = moved;
+    }
+    Ok(best.map(|b| FewerMoulds { rounds, iterations, ..b }))
+}
