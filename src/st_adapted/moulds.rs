@@ -10,7 +10,7 @@ use std::cell::RefCell;
 
 use super::metrics::metrics;
 use super::optimization::{run_stages, OptimizationFrame};
-use super::params::StAdaptedParams;
+use super::params::{OptimizationStage, StAdaptedParams};
 use super::terms::{FaceSpheres, vertex_offset};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::moulds::{Fabrication, MouldFits};
@@ -24,6 +24,8 @@ use crate::solver::{JacobianSink, Solver, SolverOptions, Term};
 pub const KINK_GROWTH: f64 = 1.2;
 /// Coarser tolerances tried, as multiples of δ, in order.
 const COARSENING: [f64; 6] = [1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
+/// Solver iterations per round (of the method's last stage).
+const ROUND_ITERATIONS: usize = 10;
 /// Weight of [`MouldCurvature`] against the kink term's (frame units).
 const MOULD_WEIGHT: f64 = 1e-2;
 
@@ -95,22 +97,22 @@ pub fn fewer_moulds(
     progress: &mut OnProgress,
 ) -> Result<Option<FewerMoulds>, Cancelled> {
     let diag = reference.diagonal();
-    let (start, _, _) = metrics(sphere_mesh, reference, params.variant);
+    let (start, mut panels, _) = metrics(sphere_mesh, reference, params.variant);
     let max_kink = KINK_GROWTH * start.max_kink_angle_deg;
     let max_distance = params.epsilon().map_or(f64::INFINITY, |e| (2.0 * e).max(start.max_distance_to_reference));
-    let (_, panels, _) = metrics(sphere_mesh, reference, params.variant);
     let before = fabrication.assign(&MouldFits::of(&panels), diag).moulds.len();
     let mut best_count = before;
     let mut best: Option<FewerMoulds> = None;
     let mut rounds = Vec::new();
     let mut iterations = 0;
     let mut current = sphere_mesh.clone();
+    // Each round continues the last stage of the method for a few iterations.
+    let last = params.stages.last().cloned().map(|s| OptimizationStage { iterations: s.iterations.min(ROUND_ITERATIONS), ..s });
+    let stages = StAdaptedParams { stages: last.into_iter().collect(), ..params.clone() };
     for (k, &gamma) in COARSENING.iter().enumerate() {
         progress(Progress::new("fewer_moulds", k, COARSENING.len()))?;
-        let (_, panels, _) = metrics(&current, reference, params.variant);
         let fits = MouldFits::of(&panels);
-        let coarse = fabrication.assign(&fits, diag);
-        let coarse = fits.assign(gamma * coarse.tolerance);
+        let coarse = fits.assign(gamma * fabrication.assign(&fits, diag).tolerance);
         let mut targets = vec![f64::NAN; current.mesh.face_count()];
         for (i, p) in panels.iter().enumerate() {
             let m = coarse.moulds[coarse.panel_mould[i] as usize].curvature;
@@ -125,7 +127,6 @@ pub fn fewer_moulds(
         problem.add_term(MouldCurvature::new(FaceSpheres::new(corners), targets), MOULD_WEIGHT * params.weights.angle);
         let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
         let run = RefCell::new(0usize);
-        let stages = StAdaptedParams { stages: params.stages.last().cloned().into_iter().collect(), ..params.clone() };
         run_stages(&mut problem, &ids, &mut x, &stages, &mut solver, &mut |_, _| {
             *run.borrow_mut() += 1;
             Ok(())
@@ -135,8 +136,8 @@ pub fn fewer_moulds(
         let moved = SphereMesh::new(TriMesh::new(verts, mesh.triangles.clone()), spheres, current.boundary_arcs);
         let planes = super::boundary_arcs::boundary_planes(&moved, reference);
         let moved = moved.with_boundary_planes(planes);
-        let (m, panels, deviations) = metrics(&moved, reference, params.variant);
-        let count = fabrication.assign(&MouldFits::of(&panels), diag).moulds.len();
+        let (m, moved_panels, deviations) = metrics(&moved, reference, params.variant);
+        let count = fabrication.assign(&MouldFits::of(&moved_panels), diag).moulds.len();
         let holds = m.max_kink_angle_deg <= max_kink && m.max_distance_to_reference <= max_distance && m.flipped_faces == 0;
         let kept = holds && count < best_count;
         rounds.push(MouldRound {
@@ -151,9 +152,9 @@ pub fn fewer_moulds(
         }
         if kept {
             best_count = count;
-            best = Some(FewerMoulds { sphere_mesh: moved.clone(), panels, deviations, rounds: Vec::new(), iterations: 0, before });
+            best = Some(FewerMoulds { sphere_mesh: moved.clone(), panels: moved_panels.clone(), deviations, rounds: Vec::new(), iterations: 0, before });
         }
-        current = moved;
+        (current, panels) = (moved, moved_panels);
     }
     Ok(best.map(|b| FewerMoulds { rounds, iterations, ..b }))
 }
