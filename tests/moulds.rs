@@ -178,4 +178,9 @@ fn st_adapted_moves_its_panels_onto_fewer_moulds() {
     assert!(result.metrics.max_kink_angle_deg <= 1.2 * plain.metrics.max_kink_angle_deg);
     assert!(result.metrics.max_distance_to_reference <= 2.0 * 2e-3);
     check("st tri_mesh, fewer moulds", &result.panels, &report, &files, delta);
+    // The count against δ before and after: the middle of the grid is δ itself.
+    let m = report.moulds.as_ref().unwrap();
+    assert_eq!(m.against_tolerance_before.len(), m.against_tolerance.len());
+    assert_eq!(m.against_tolerance_before[12], (m.against_tolerance[12].0, before));
+    assert_eq!(m.against_tolerance[12].1, after);
 }

@@ -96,6 +96,9 @@ pub struct MouldReport {
     pub moulds: Vec<MouldRecord>,
     /// Moulds needed against the tolerance: (tolerance, count) pairs, ascending.
     pub against_tolerance: Vec<(f64, usize)>,
+    /// The same before the method moved its panels onto fewer moulds (empty when it did not).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub against_tolerance_before: Vec<(f64, usize)>,
 }
 
 /// The report of one run.

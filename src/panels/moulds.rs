@@ -195,6 +195,15 @@ impl MouldFits {
         hi
     }
 
+    /// Moulds against tolerance from 1/30 to 30 times `tolerance` (1e-5 to 1e-2 of `diag` when
+    /// that is 0): (tolerance, count) pairs, ascending.
+    pub fn against_tolerance(&self, tolerance: f64, diag: f64) -> Vec<(f64, usize)> {
+        let (lo, hi) = if tolerance > 0.0 { (tolerance / 30.0, tolerance * 30.0) } else { (1e-5 * diag, 1e-2 * diag) };
+        let steps = 24;
+        let tolerances: Vec<f64> = (0..=steps).map(|k| lo * (hi / lo).powf(k as f64 / steps as f64)).collect();
+        tolerances.iter().copied().zip(self.counts(&tolerances)).collect()
+    }
+
     /// Moulds against tolerance: the count at each of `tolerances`.
     pub fn counts(&self, tolerances: &[f64]) -> Vec<usize> {
         tolerances.iter().map(|&t| self.count(t)).collect()

@@ -123,6 +123,8 @@ pub struct PanelExport<'a> {
     pub deviations: Option<&'a [f64]>,
     /// The method's verdict on the result, for the report.
     pub verdict: Option<&'a Verdict>,
+    /// The panels' mould fits before the method moved them onto fewer moulds.
+    pub moulds_before: Option<&'a MouldFits>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -157,6 +159,7 @@ impl<'a> PanelExport<'a> {
             warnings: Vec::new(),
             deviations: None,
             verdict: None,
+            moulds_before: None,
         }
     }
 
@@ -179,6 +182,11 @@ impl<'a> PanelExport<'a> {
         Self { support: Some(support), ..self }
     }
 
+    /// The mould fits of the panels before the method moved them onto fewer moulds.
+    pub(crate) fn with_moulds_before(self, fits: Option<&'a MouldFits>) -> Self {
+        Self { moulds_before: fits, ..self }
+    }
+
     /// Each panel's [`crate::panels::deviation::max_deviation`] from the reference, measured by
     /// the method: the schedule takes them instead of measuring again.
     pub(crate) fn with_deviations(self, deviations: &'a [f64]) -> Self {
@@ -186,22 +194,20 @@ impl<'a> PanelExport<'a> {
     }
 }
 
-/// The shared moulds section of the report: the assignment, and the count against tolerances
-/// from 1/30 to 30 times its own (1e-5 to 1e-2 of `diag` when that is 0).
-pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, fabrication: &Fabrication, diag: f64) -> MouldReport {
+/// The shared moulds section of the report: the assignment, its count against the tolerance,
+/// and the count before the method moved its panels onto fewer moulds, if it did.
+pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, e: &PanelExport) -> MouldReport {
     let t = moulds.tolerance;
-    let (lo, hi) = if t > 0.0 { (t / 30.0, t * 30.0) } else { (1e-5 * diag, 1e-2 * diag) };
-    let steps = 24;
-    let tolerances: Vec<f64> = (0..=steps).map(|k| lo * (hi / lo).powf(k as f64 / steps as f64)).collect();
     MouldReport {
-        units: fabrication.units,
-        target: fabrication.moulds,
+        units: e.fabrication.units,
+        target: e.fabrication.moulds,
         tolerance: t,
-        tolerance_relative: if diag > 0.0 { t / diag } else { t },
+        tolerance_relative: if e.diag > 0.0 { t / e.diag } else { t },
         count: moulds.moulds.len(),
         max_deviation: moulds.panel_deviation.iter().copied().fold(0.0, f64::max),
         moulds: MouldRecord::of(moulds),
-        against_tolerance: tolerances.iter().copied().zip(fits.counts(&tolerances)).collect(),
+        against_tolerance: fits.against_tolerance(t, e.diag),
+        against_tolerance_before: e.moulds_before.map(|f| f.against_tolerance(t, e.diag)).unwrap_or_default(),
     }
 }
 
@@ -215,7 +221,7 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
     let units = e.fabrication.units;
     let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations).with_moulds(&moulds, units);
     schedule.support_elements = e.support.map(|s| SupportRecord::of(&s.elements)).unwrap_or_default();
-    let mut extras = e.extras;
+    let mut extras = e.extras.clone();
     extras["method"] = e.method.into();
     extras["units"] = units.symbol().into();
     let axes = e.support.map(SupportStructure::axis_segments);
@@ -237,7 +243,7 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         diagonal: e.diag,
         max_distance: schedule.max_deviation,
     });
-    report.moulds = Some(mould_report(&fits, &moulds, &e.fabrication, e.diag));
+    report.moulds = Some(mould_report(&fits, &moulds, &e));
     report.sections.insert(e.method.to_string(), e.section);
     report.add_timings(e.timings);
     report.add_timing("export", clock.now() - t0);

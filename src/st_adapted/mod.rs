@@ -95,6 +95,7 @@ use crate::stats::median;
 use initialization::initial_spheres;
 use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
 use optimization::{run_stages, OptimizationFrame};
+use crate::panels::moulds::MouldFits;
 use moulds::{fewer_moulds, MouldRound};
 use params::StAdaptedParams;
 
@@ -197,8 +198,9 @@ pub struct StAdaptedResult {
     pub terms: Vec<TermStats>,
     /// The rounds toward fewer moulds (`optimize_moulds`; empty otherwise or when none helped).
     pub mould_rounds: Vec<MouldRound>,
-    /// The moulds at δ before those rounds.
+    /// The moulds at δ before those rounds, and the fits of the panels then.
     pub moulds_before: Option<usize>,
+    pub fits_before: Option<MouldFits>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers, not
     /// coarser than ε) and the kinks over the warning angle.
     pub warnings: Vec<Warning>,
@@ -252,7 +254,7 @@ pub fn compute(
     let mut sphere_mesh = optimized.sphere_mesh;
     let (mut final_metrics, mut panels, mut panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
-    let (mut mould_rounds, mut moulds_before) = (Vec::new(), None);
+    let (mut mould_rounds, mut moulds_before, mut fits_before) = (Vec::new(), None, None);
     if params.optimize_moulds {
         step(on_event, "fewer_moulds")?;
         timings.skip();
@@ -261,6 +263,7 @@ pub fn compute(
             final_metrics = metrics(&sphere_mesh, reference, params.variant).0;
             mould_rounds = f.rounds;
             moulds_before = Some(f.before);
+            fits_before = Some(f.fits_before);
         }
         timings.lap("fewer_moulds");
     }
@@ -287,6 +290,7 @@ pub fn compute(
         terms: optimized.terms,
         mould_rounds,
         moulds_before,
+        fits_before,
         warnings,
     })
 }

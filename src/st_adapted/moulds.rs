@@ -72,8 +72,9 @@ pub struct FewerMoulds {
     pub deviations: Vec<f64>,
     pub rounds: Vec<MouldRound>,
     pub iterations: usize,
-    /// Moulds at δ before the rounds.
+    /// Moulds at δ before the rounds, and the fits of the panels then.
     pub before: usize,
+    pub fits_before: MouldFits,
 }
 
 /// One round of [`fewer_moulds`].
@@ -100,7 +101,8 @@ pub fn fewer_moulds(
     let (start, mut panels, _) = metrics(sphere_mesh, reference, params.variant);
     let max_kink = KINK_GROWTH * start.max_kink_angle_deg;
     let max_distance = params.epsilon().map_or(f64::INFINITY, |e| (2.0 * e).max(start.max_distance_to_reference));
-    let before = fabrication.assign(&MouldFits::of(&panels), diag).moulds.len();
+    let fits_before = MouldFits::of(&panels);
+    let before = fabrication.assign(&fits_before, diag).moulds.len();
     let mut best_count = before;
     let mut best: Option<FewerMoulds> = None;
     let mut rounds = Vec::new();
@@ -152,9 +154,9 @@ pub fn fewer_moulds(
         }
         if kept {
             best_count = count;
-            best = Some(FewerMoulds { sphere_mesh: moved.clone(), panels: moved_panels.clone(), deviations, rounds: Vec::new(), iterations: 0, before });
+            best = Some(FewerMoulds { sphere_mesh: moved.clone(), panels: moved_panels.clone(), deviations, rounds: Vec::new(), iterations: 0, before, fits_before: MouldFits::default() });
         }
         (current, panels) = (moved, moved_panels);
     }
-    Ok(best.map(|b| FewerMoulds { rounds, iterations, ..b }))
+    Ok(best.map(|b| FewerMoulds { rounds, iterations, fits_before, ..b }))
 }

@@ -121,6 +121,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
         PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, params.fabrication, &section, &timings)
             .with_extras(serde_json::json!({ "variant": variant }))
             .with_deviations(&result.panel_deviations)
+            .with_moulds_before(result.fits_before.as_ref())
             .with_warnings(&result.warnings)
             .with_verdict(&verdict);
     let (report, mut files) = export_panels(reference, export, clock);

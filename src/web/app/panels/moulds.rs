@@ -155,29 +155,36 @@ pub fn results(ui: &mut egui::Ui, moulds: &MouldReport) {
     against_tolerance(ui, moulds);
 }
 
-/// Moulds against δ on log–log axes, the result's δ marked.
+/// Moulds against δ on log–log axes, the result's δ marked; before the panels moved onto fewer
+/// moulds in grey, when they did.
 fn against_tolerance(ui: &mut egui::Ui, moulds: &MouldReport) {
-    let points: Vec<(f64, f64)> =
-        moulds.against_tolerance.iter().filter(|(t, n)| *t > 0.0 && *n > 0).map(|&(t, n)| (t.log10(), (n as f64).log10())).collect();
-    if points.len() < 2 {
+    let log = |c: &[(f64, usize)]| -> Vec<(f64, f64)> {
+        c.iter().filter(|(t, n)| *t > 0.0 && *n > 0).map(|&(t, n)| (t.log10(), (n as f64).log10())).collect()
+    };
+    let (after, before) = (log(&moulds.against_tolerance), log(&moulds.against_tolerance_before));
+    if after.len() < 2 {
         return;
     }
     let (rect, _) = ui.allocate_exact_size(Vec2::new(ui.available_width().min(260.0), 90.0), Sense::hover());
     let p = ui.painter();
     p.rect_filled(rect, 2.0, Color32::from_gray(30));
-    let (x0, x1) = (points[0].0, points[points.len() - 1].0);
-    let y1 = points.iter().map(|q| q.1).fold(0.0, f64::max).max(1e-9);
+    let (x0, x1) = (after[0].0, after[after.len() - 1].0);
+    let y1 = after.iter().chain(&before).map(|q| q.1).fold(0.0, f64::max).max(1e-9);
     let at = |(x, y): (f64, f64)| {
         Pos2::new(rect.left() + ((x - x0) / (x1 - x0)) as f32 * rect.width(), rect.bottom() - 4.0 - (y / y1) as f32 * (rect.height() - 18.0))
     };
-    p.add(egui::Shape::line(points.iter().map(|&q| at(q)).collect(), egui::Stroke::new(1.5, Color32::from_rgb(120, 190, 255))));
+    if before.len() >= 2 {
+        p.add(egui::Shape::line(before.iter().map(|&q| at(q)).collect(), egui::Stroke::new(1.0, Color32::from_gray(140))));
+    }
+    p.add(egui::Shape::line(after.iter().map(|&q| at(q)).collect(), egui::Stroke::new(1.5, Color32::from_rgb(120, 190, 255))));
     if moulds.tolerance > 0.0 {
         let m = at((moulds.tolerance.log10(), (moulds.count.max(1) as f64).log10()));
         p.circle_filled(m, 3.5, Color32::from_rgb(255, 200, 80));
     }
     let font = egui::FontId::proportional(10.0);
     let u = moulds.units;
-    p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, format!("moulds against δ ({u}), log–log"), font.clone(), Color32::LIGHT_GRAY);
+    let title = if before.len() >= 2 { format!("moulds against δ ({u}), log–log; grey: before") } else { format!("moulds against δ ({u}), log–log") };
+    p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, title, font.clone(), Color32::LIGHT_GRAY);
     p.text(rect.left_bottom() + Vec2::new(2.0, -1.0), egui::Align2::LEFT_BOTTOM, format!("{:.2e}", 10f64.powf(x0)), font.clone(), Color32::LIGHT_GRAY);
     p.text(rect.right_bottom() + Vec2::new(-2.0, -1.0), egui::Align2::RIGHT_BOTTOM, format!("{:.2e}", 10f64.powf(x1)), font, Color32::LIGHT_GRAY);
 }
