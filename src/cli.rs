@@ -19,7 +19,6 @@ use spherical_faces::panels::moulds::{Fabrication, MouldTarget, DEFAULT_MOULD_TO
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{Clock, Progress};
-use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::params::{
@@ -179,9 +178,9 @@ struct Input {
 /// The model unit and the moulds the panels are fitted to.
 #[derive(Args)]
 struct FabricationArgs {
-    /// What one model unit is: m, cm, mm, ft or in.
-    #[arg(long, value_name = "UNIT", default_value = "m", value_parser = units)]
-    units: Units,
+    /// What one model unit is: m, cm, mm, ft or in (default: the .3dm file's unit system, else m).
+    #[arg(long, value_name = "UNIT", value_parser = units)]
+    units: Option<Units>,
     /// The fewest moulds (radii the panels share) within this fit tolerance δ, e.g. 2mm or
     /// 0.1in (a bare number is in model units). Default 2mm.
     #[arg(long, value_name = "LENGTH", value_parser = length, conflicts_with = "moulds")]
@@ -198,7 +197,16 @@ impl FabricationArgs {
             (None, Some(t)) => MouldTarget::Tolerance(t),
             (None, None) => MouldTarget::Tolerance(DEFAULT_MOULD_TOLERANCE),
         };
-        Fabrication { units: self.units, moulds }
+        Fabrication { units: self.units.unwrap_or_default(), moulds }
+    }
+
+    /// [`Self::fabrication`] in the file's unit when `--units` is not given.
+    fn fabrication_for(&self, loaded: &Loaded) -> Fabrication {
+        let f = self.fabrication();
+        match (self.units, loaded.info.units) {
+            (None, Some(units)) => Fabrication { units, ..f },
+            _ => f,
+        }
     }
 }
 
@@ -279,8 +287,7 @@ pub fn main() -> ExitCode {
                 Some(n) => Sizing::UniformFaces(n),
                 None => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
             };
-            let fabrication = fabrication.fabrication();
-            st(&input, StAdaptedParams { sizing, variant, fabrication, optimize_moulds, ..StAdaptedParams::default() }, &output, &mut progress)
+            st(&input, StAdaptedParams { sizing, variant, optimize_moulds, ..StAdaptedParams::default() }, &fabrication, &output, &mut progress)
         }
         Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, fabrication, output } => {
             let remesh = match (adaptive, faces) {
@@ -294,10 +301,9 @@ pub fn main() -> ExitCode {
                 axis_length,
                 radius_tolerance,
                 remesh,
-                fabrication: fabrication.fabrication(),
                 ..StSupportParams::default()
             };
-            st_support(&input, params, &output, &mut progress)
+            st_support(&input, params, &fabrication, &output, &mut progress)
         }
         Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, fabrication, output } => {
             let params = SqParams {
@@ -309,10 +315,9 @@ pub fn main() -> ExitCode {
                 until,
                 start,
                 support_depth: depth,
-                fabrication: fabrication.fabrication(),
                 ..SqParams::default()
             };
-            sq(&input, params, &output, &mut progress)
+            sq(&input, params, &fabrication, &output, &mut progress)
         }
     };
     progress.clear();
@@ -401,9 +406,11 @@ fn load(input: &Input) -> Result<Loaded, Failure> {
     }
     let name = Path::new(path).file_name().map_or(path.into(), |n| n.to_string_lossy().into_owned());
     if rhino::is_3dm(path) {
-        let (text, object_name) = rhino::convert(path, input.object)?;
+        let (text, object_name, units) = rhino::convert(path, input.object)?;
         let name = format!("{name} ({object_name})");
-        return Loaded::from_file(text.as_bytes(), &name).map_err(Failure::from);
+        let mut loaded = Loaded::from_file(text.as_bytes(), &name).map_err(Failure::from)?;
+        loaded.info.units = units;
+        return Ok(loaded);
     }
     if input.object.is_some() {
         return Err(Failure::input("--object applies to .3dm files only"));
@@ -451,16 +458,14 @@ fn write_files(output: &Output, files: &[ExportFile], report: &Report) -> Result
     Ok(())
 }
 
-fn reference(input: &Input) -> Result<Reference, Failure> {
-    Ok(load(input)?.surface)
-}
-
 /// `st-support SURFACE [options] --out DIR`.
-fn st_support(input: &Input, params: StSupportParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
     check_output(output)?;
     let clock = Clock::native();
     let t0 = clock.now();
-    let reference = reference(input)?;
+    let loaded = load(input)?;
+    params.fabrication = f.fabrication_for(&loaded);
+    let reference = loaded.surface;
     let import_ms = clock.now() - t0;
     let t1 = clock.now();
     let mut on_progress = |p: Progress| {
@@ -504,9 +509,11 @@ fn with_moulds(summary: String, report: &Report) -> String {
 }
 
 /// `st SURFACE [--epsilon E | --faces N] [--variant a|b] --out DIR`.
-fn st(input: &Input, params: StAdaptedParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn st(input: &Input, mut params: StAdaptedParams, f: &FabricationArgs, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
     check_output(output)?;
-    let reference = reference(input)?;
+    let loaded = load(input)?;
+    params.fabrication = f.fabrication_for(&loaded);
+    let reference = loaded.surface;
     let clock = Clock::native();
     let result = spherical_faces::st_adapted::compute(&reference, &params, clock, &mut |e| {
         match e {
@@ -542,9 +549,11 @@ fn verdict(summary: String, report: &Report) -> Result<String, Failure> {
 }
 
 /// `sq SURFACE [options] --out DIR`.
-fn sq(input: &Input, params: SqParams, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn sq(input: &Input, mut params: SqParams, f: &FabricationArgs, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
     check_output(output)?;
-    let reference = reference(input)?;
+    let loaded = load(input)?;
+    params.fabrication = f.fabrication_for(&loaded);
+    let reference = loaded.surface;
     let clock = Clock::native();
     let result = spherical_faces::sq::compute(&reference, &params, clock, &mut |e| {
         if let SqEvent::Progress(p) = e {
@@ -652,6 +661,7 @@ fn info(input: &Input, list_objects: bool) -> Result<String, Failure> {
 /// converter the app loads in the browser (`www/rhino3dm/convert.mjs`).
 mod rhino {
     use super::Failure;
+    use spherical_faces::units::Units;
     use std::process::Command;
 
     /// The converter script: `SF_RHINO3DM_CLI`, else the one in this source tree.
@@ -689,8 +699,9 @@ mod rhino {
         Ok(String::from_utf8_lossy(&out).trim_end().to_string())
     }
 
-    /// The chosen object as our B-spline JSON or OBJ text, and its description.
-    pub fn convert(path: &str, object: Option<usize>) -> Result<(String, String), Failure> {
+    /// The chosen object as our B-spline JSON or OBJ text, its description, and the file's
+    /// model unit when it names one of ours.
+    pub fn convert(path: &str, object: Option<usize>) -> Result<(String, String, Option<Units>), Failure> {
         let listing = list(path)?;
         let objects: Vec<serde_json::Value> = listing.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
         let pick = match object {
@@ -714,7 +725,8 @@ mod rhino {
         }
         let text = String::from_utf8(node(&[path, "--object", &index])?).map_err(|e| Failure::input(format!("{path}: {e}")))?;
         let name = pick["name"].as_str().filter(|n| !n.is_empty()).map_or(format!("object {index}"), str::to_string);
-        Ok((text, name))
+        let units = pick["units"].as_str().and_then(Units::from_name);
+        Ok((text, name, units))
     }
 
     fn summary(objects: &[serde_json::Value]) -> String {

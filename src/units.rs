@@ -44,6 +44,21 @@ impl Units {
         }
     }
 
+    /// A unit by its English name, as CAD files write it ("Millimeters", "feet", "inch"); None
+    /// for other systems.
+    pub fn from_name(name: &str) -> Option<Units> {
+        let n = name.trim().to_ascii_lowercase();
+        let n = n.strip_suffix('s').unwrap_or(&n).replace("metre", "meter");
+        match n.as_str() {
+            "meter" => Some(Units::M),
+            "centimeter" => Some(Units::Cm),
+            "millimeter" => Some(Units::Mm),
+            "foot" | "feet" => Some(Units::Ft),
+            "inche" | "inch" => Some(Units::In),
+            _ => None,
+        }
+    }
+
     /// A length of `self` in model units `to`.
     pub fn convert(self, length: f64, to: Units) -> f64 {
         length * self.metres() / to.metres()
@@ -167,6 +182,10 @@ mod tests {
         assert_eq!(format_length(2.0, Units::Mm), "2.000 mm");
         assert_eq!(format_length(5e-5, Units::M), "0.00005000 m");
         assert_eq!(format_length(1234.5, Units::In), "1234 in");
+        for (name, u) in [("Millimeters", Units::Mm), ("Meters", Units::M), ("centimetres", Units::Cm), ("Feet", Units::Ft), ("Inches", Units::In), ("inch", Units::In)] {
+            assert_eq!(Units::from_name(name), Some(u), "{name}");
+        }
+        assert_eq!(Units::from_name("Microns"), None);
         for u in Units::ALL {
             assert_eq!(u.symbol().parse::<Units>().unwrap(), u);
             let l: Length = format!("{}", Length::new(0.25, u)).parse().unwrap();

@@ -88,3 +88,25 @@ fn the_cli_opens_3dm_lists_its_objects_and_runs_sq() {
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert!(report["output"]["faces"].as_u64().unwrap() > 100, "{}", report["output"]);
 }
+
+/// A .3dm file brings its model unit: the moulds' tolerance (2 mm by default) is read in it, and
+/// `--units` overrides it.
+#[test]
+fn a_3dm_file_brings_its_model_units() {
+    let dir = std::env::temp_dir().join(format!("sf-3dm-units-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    let report = |extra: &[&str]| {
+        let mut args = vec!["st-support", "tests/data/3dm/mixed.3dm", "--object", "1", "--out", d, "-q"];
+        args.extend_from_slice(extra);
+        let out = cli(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice::<serde_json::Value>(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+    };
+    let r = report(&[]);
+    assert_eq!(r["moulds"]["units"], "mm", "the file is in millimetres");
+    assert_eq!(r["moulds"]["tolerance"], 2.0);
+    let r = report(&["--units", "m"]);
+    assert_eq!(r["moulds"]["units"], "m");
+    assert_eq!(r["moulds"]["tolerance"], 0.002);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -30,7 +30,7 @@ async function handle(data) {
         worker_load_failed(data.file.name, String(err && err.message ? err.message : err));
         return;
       }
-      worker_load_objects(data.file.name, result.objects, result.notes);
+      worker_load_objects(data.file.name, result.objects, result.notes, result.units ?? undefined);
       return;
     }
     if (data.file instanceof File) {

@@ -97,6 +97,9 @@ pub struct ReferenceInfo {
     pub objects: Vec<FileObject>,
     #[serde(default)]
     pub object: Option<usize>,
+    /// The model unit the file names (a Rhino .3dm's unit system), if any.
+    #[serde(default)]
+    pub units: Option<crate::units::Units>,
 }
 
 /// One object of a file holding several (a Rhino .3dm: a NURBS surface or a mesh).

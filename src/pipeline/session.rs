@@ -14,6 +14,7 @@ use crate::reference::bspline::SplineReferenceError;
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::samples::Sample;
+use crate::units::Units;
 
 /// Where the session's messages go (the worker posts them to the main thread), and how it
 /// learns of a cancel request.
@@ -82,6 +83,7 @@ impl Loaded {
             bspline: None,
             objects: Vec::new(),
             object: None,
+            units: None,
         };
         Self { surface, info }
     }
@@ -116,6 +118,7 @@ struct FileObjects {
     objects: Vec<FileObject>,
     texts: Vec<String>,
     notes: Vec<String>,
+    units: Option<Units>,
 }
 
 /// A stage's [`Sink`] over the session's [`Outbox`].
@@ -179,14 +182,23 @@ impl Session {
     /// Loads a file of several objects, converted outside (a Rhino .3dm, by rhino3dm.js in the
     /// worker): `texts[k]` is object k as B-spline JSON or OBJ. The first surface is loaded (else
     /// the first object); [`ToWorker::PickObject`] loads another.
-    pub fn load_objects(&mut self, file: &str, objects: Vec<FileObject>, texts: Vec<String>, notes: Vec<String>, out: &mut dyn Outbox) {
+    /// `units`: the file's model unit, when it names one of [`Units`].
+    pub fn load_objects(
+        &mut self,
+        file: &str,
+        objects: Vec<FileObject>,
+        texts: Vec<String>,
+        notes: Vec<String>,
+        units: Option<Units>,
+        out: &mut dyn Outbox,
+    ) {
         let file = crate::text::clip(file, 120);
         if objects.is_empty() || objects.len() != texts.len() {
             out.send(FromWorker::Error { message: format!("{file}: no NURBS surface or mesh in it"), remesh_to: None }, vec![]);
             return;
         }
         let first = objects.iter().position(|o| o.kind == "surface").unwrap_or(0);
-        self.objects = Some(FileObjects { file, objects, texts, notes });
+        self.objects = Some(FileObjects { file, objects, texts, notes, units });
         self.load_object(first, out);
     }
 
@@ -204,6 +216,7 @@ impl Session {
             Ok(mut r) => {
                 r.info.objects = f.objects.clone();
                 r.info.object = Some(k);
+                r.info.units = f.units;
                 r.info.notes.extend(f.notes.iter().map(|n| crate::text::printable(n)));
                 self.install(r, out)
             }

@@ -60,9 +60,10 @@ pub fn worker_handle(data: JsValue) {
 }
 
 /// Called by worker.js with the objects rhino3dm.js read from a .3dm file: an array of
-/// `{name, kind, summary, text}` and the reader's notes.
+/// `{name, kind, summary, text}`, the reader's notes and the file's model unit system by its
+/// Rhino name.
 #[wasm_bindgen]
-pub fn worker_load_objects(file: String, objects: JsValue, notes: JsValue) {
+pub fn worker_load_objects(file: String, objects: JsValue, notes: JsValue, units: Option<String>) {
     let text = |o: &JsValue, key: &str| Reflect::get(o, &key.into()).ok().and_then(|v| v.as_string()).unwrap_or_default();
     let (mut list, mut texts) = (Vec::new(), Vec::new());
     for o in js_sys::Array::from(&objects).iter() {
@@ -70,7 +71,8 @@ pub fn worker_load_objects(file: String, objects: JsValue, notes: JsValue) {
         texts.push(text(&o, "text"));
     }
     let notes: Vec<String> = js_sys::Array::from(&notes).iter().filter_map(|n| n.as_string()).collect();
-    SESSION.with(|s| s.borrow_mut().load_objects(&file, list, texts, notes, &mut WorkerOutbox));
+    let units = units.as_deref().and_then(crate::units::Units::from_name);
+    SESSION.with(|s| s.borrow_mut().load_objects(&file, list, texts, notes, units, &mut WorkerOutbox));
 }
 
 /// Called by worker.js when rhino3dm.js could not read a .3dm file.

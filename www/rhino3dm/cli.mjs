@@ -1,7 +1,8 @@
 #!/usr/bin/env node
 // node www/rhino3dm/cli.mjs FILE.3dm [--list] [--object K] [--out OUT] [--timeout SECONDS]
 //
-//   --list        one JSON object per line on stdout: {"index","kind","name","summary"}
+//   --list        one JSON object per line on stdout: {"index","kind","name","summary","units"}
+//                 (units: the file's model unit system by its Rhino name, or null)
 //   --object K    the object to write: its index from --list, or its name; default: the first
 //                 surface, else the first mesh
 //   --out OUT     write there instead of stdout (B-spline JSON for a surface, OBJ for a mesh)
@@ -96,7 +97,8 @@ async function main() {
 
   const { objects } = result;
   if (opts.list) {
-    const lines = objects.map(({ index, kind, name, summary }) => JSON.stringify({ index, kind, name, summary }));
+    const units = result.units ?? null;
+    const lines = objects.map(({ index, kind, name, summary }) => JSON.stringify({ index, kind, name, summary, units }));
     process.stdout.write(`${lines.join('\n')}\n`);
     return 0;
   }

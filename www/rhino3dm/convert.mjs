@@ -185,10 +185,15 @@ function convertDoc(doc, rhino, keep) {
   if (inBlocks) notes.push(`${inBlocks} object(s) inside block definitions skipped`);
   const skippedText = [...skipped].map(([t, n]) => `${n} ${t}`).join(', ');
   if (skippedText) notes.push(`skipped (not a surface or mesh): ${skippedText}`);
+  // The model's unit system by its Rhino name ("Millimeters", "Feet"), or null.
+  let units = null;
   try {
     const settings = keep(doc.settings());
-    const units = enumName(rhino.UnitSystem, settings?.modelUnitSystem);
-    if (units && units !== 'None') notes.push(`model units: ${units}`);
+    const name = enumName(rhino.UnitSystem, settings?.modelUnitSystem);
+    if (name && name !== 'None') {
+      units = name;
+      notes.push(`model units: ${name}`);
+    }
   } catch {
     /* settings are optional */
   }
@@ -197,7 +202,7 @@ function convertDoc(doc, rhino, keep) {
     const holds = count === 0 ? 'no objects' : [skippedText, inBlocks ? `${inBlocks} object(s) in block definitions` : ''].filter(Boolean).join(', ') || 'nothing usable';
     throw new Error(`no NURBS surface or mesh in this .3dm file; it holds: ${holds}`);
   }
-  return { objects, notes };
+  return { objects, notes, units };
 }
 
 /** Our B-spline JSON of a rhino3dm NurbsSurface. */

@@ -107,6 +107,11 @@ impl App {
             }
         }
         self.notices.extend(info.notes.iter().cloned());
+        // A file that names its model unit sets the design's (the moulds' tolerance reads in it).
+        if let Some(u) = info.units.filter(|&u| u != self.design.fabrication.units) {
+            self.design.fabrication.units = u;
+            self.notices.push(format!("model unit from the file: {u}"));
+        }
         self.loaded = Some(Scene::new(info));
     }
 
