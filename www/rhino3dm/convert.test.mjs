@@ -202,7 +202,8 @@ test('cli.mjs: --list, default object, --object, --out, errors', () => {
   assert.equal(list.status, 0, list.stderr);
   const rows = list.stdout.trim().split('\n').map((l) => JSON.parse(l));
   assert.deepEqual(rows.map((r) => [r.index, r.kind, r.name]), [[0, 'mesh', 'grid_mesh'], [1, 'surface', 'tunnel_arch'], [2, 'surface', 'torus_patch']]);
-  assert.deepEqual(Object.keys(rows[0]), ['index', 'kind', 'name', 'summary']);
+  assert.deepEqual(Object.keys(rows[0]), ['index', 'kind', 'name', 'summary', 'units']);
+  assert.ok(rows.every((r) => r.units === rows[0].units), 'one unit system per file');
   assert.match(list.stderr, /note: .*LineCurve/);
 
   const first = JSON.parse(execFileSync(process.execPath, [cli, join(DATA, 'mixed.3dm')], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'ignore'] }));
