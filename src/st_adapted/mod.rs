@@ -114,6 +114,8 @@ pub enum StAdaptedEvent<'a> {
     /// of `total`), its energy and per-term statistics, and the current vertices and face
     /// spheres (model coordinates).
     Iteration { progress: Progress<'a>, energy: f64, terms: &'a [TermStats], vertices: &'a [DVec3], spheres: &'a [Sphere] },
+    /// After each round toward fewer moulds ([`moulds::fewer_moulds`]): the panels as moved.
+    MouldRound { round: usize, sphere_mesh: &'a SphereMesh },
 }
 
 /// Why the method gave no mesh.
@@ -207,7 +209,7 @@ pub struct StAdaptedResult {
 }
 
 /// What the method reports to while it runs.
-type OnEvent<'a> = dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled> + 'a;
+pub type OnEvent<'a> = dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled> + 'a;
 
 /// Announces a step (0 of 0).
 fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {
@@ -258,7 +260,7 @@ pub fn compute(
     if params.optimize_moulds {
         step(on_event, "fewer_moulds")?;
         timings.skip();
-        if let Some(f) = fewer_moulds(reference, &sphere_mesh, &params.fabrication, params, clock, &mut |p| on_event(StAdaptedEvent::Progress(p)))? {
+        if let Some(f) = fewer_moulds(reference, &sphere_mesh, &params.fabrication, params, clock, on_event)? {
             (sphere_mesh, panels, panel_deviations) = (f.sphere_mesh, f.panels, f.deviations);
             final_metrics = metrics(&sphere_mesh, reference, params.variant).0;
             mould_rounds = f.rounds;

@@ -16,7 +16,8 @@ use crate::geometry::mesh::TriMesh;
 use crate::panels::moulds::{Fabrication, MouldFits};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
-use crate::progress::{Cancelled, Clock, OnProgress, Progress};
+use super::{OnEvent, StAdaptedEvent};
+use crate::progress::{Cancelled, Clock, Progress};
 use crate::reference::Reference;
 use crate::solver::{JacobianSink, Solver, SolverOptions, Term};
 
@@ -87,15 +88,15 @@ pub struct MouldRound {
     pub kept: bool,
 }
 
-/// The rounds on `sphere_mesh` (the method's result on `reference`, of largest kink
-/// `max_kink_deg`); None when no round kept fewer moulds.
+/// The rounds on `sphere_mesh` (the method's result on `reference`), each sent to `on_event` as
+/// moved; None when no round kept fewer moulds.
 pub fn fewer_moulds(
     reference: &Reference,
     sphere_mesh: &SphereMesh,
     fabrication: &Fabrication,
     params: &StAdaptedParams,
     clock: Clock,
-    progress: &mut OnProgress,
+    on_event: &mut OnEvent,
 ) -> Result<Option<FewerMoulds>, Cancelled> {
     let diag = reference.diagonal();
     let (start, mut panels, _) = metrics(sphere_mesh, reference, params.variant);
@@ -112,7 +113,7 @@ pub fn fewer_moulds(
     let last = params.stages.last().cloned().map(|s| OptimizationStage { iterations: s.iterations.min(ROUND_ITERATIONS), ..s });
     let stages = StAdaptedParams { stages: last.into_iter().collect(), ..params.clone() };
     for (k, &gamma) in COARSENING.iter().enumerate() {
-        progress(Progress::new("fewer_moulds", k, COARSENING.len()))?;
+        on_event(StAdaptedEvent::Progress(Progress::new("fewer_moulds", k, COARSENING.len())))?;
         let fits = MouldFits::of(&panels);
         let coarse = fits.assign(gamma * fabrication.assign(&fits, diag).tolerance);
         let mut targets = vec![f64::NAN; current.mesh.face_count()];
@@ -138,6 +139,7 @@ pub fn fewer_moulds(
         let moved = SphereMesh::new(TriMesh::new(verts, mesh.triangles.clone()), spheres, current.boundary_arcs);
         let planes = super::boundary_arcs::boundary_planes(&moved, reference);
         let moved = moved.with_boundary_planes(planes);
+        on_event(StAdaptedEvent::MouldRound { round: k + 1, sphere_mesh: &moved })?;
         let (m, moved_panels, deviations) = metrics(&moved, reference, params.variant);
         let count = fabrication.assign(&MouldFits::of(&moved_panels), diag).moulds.len();
         let holds = m.max_kink_angle_deg <= max_kink && m.max_distance_to_reference <= max_distance && m.flipped_faces == 0;

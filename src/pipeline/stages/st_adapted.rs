@@ -66,6 +66,10 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
                 send_panels(sink, sphere_mesh, 0, LIVE_CHORD_TOLERANCE * diag, params.variant);
                 last_snapshot = sink.now_ms();
             }
+            StAdaptedEvent::MouldRound { round, sphere_mesh } => {
+                send_panels(sink, sphere_mesh, round as u32, LIVE_CHORD_TOLERANCE * diag, params.variant);
+                last_snapshot = sink.now_ms();
+            }
             StAdaptedEvent::Iteration { progress, energy, terms, vertices, spheres } => {
                 let mut energies = vec![Energy { name: "total".into(), value: energy }];
                 energies.extend(terms.iter().map(|t| Energy { name: t.name.clone(), value: t.energy }));
