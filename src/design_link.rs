@@ -381,20 +381,8 @@ impl Design {
                 "method" => Method::from_key(v).map(|m| d.method = m).is_some(),
                 "jet_degree" => parse_in(v, 2, 4).map(|x| d.jet.degree = x as u8).is_some(),
                 "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
-                "opt_r" => match v.as_str() {
-                    "0" | "1" => {
-                        d.st_support.optimize_radius = v == "1";
-                        true
-                    }
-                    _ => false,
-                },
-                "opt_moulds" => match v.as_str() {
-                    "0" | "1" => {
-                        d.st_adapted.optimize_moulds = v == "1";
-                        true
-                    }
-                    _ => false,
-                },
+                "opt_r" => parse_flag(v).map(|x| d.st_support.optimize_radius = x).is_some(),
+                "opt_moulds" => parse_flag(v).map(|x| d.st_adapted.optimize_moulds = x).is_some(),
                 "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st_support.support_depth = x).is_some(),
                 "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st_support.axis_length = x).is_some(),
                 "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st_support.radius_tolerance = x).is_some(),
@@ -414,13 +402,7 @@ impl Design {
                 "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),
                 "color" => ColorBy::from_key(v).map(|c| d.color = c).is_some(),
                 "shading" => Shading::from_key(v).map(|s| d.shading = s).is_some(),
-                "edges" => match v.as_str() {
-                    "0" | "1" => {
-                        d.edges = v == "1";
-                        true
-                    }
-                    _ => false,
-                },
+                "edges" => parse_flag(v).map(|x| d.edges = x).is_some(),
                 "cam" => parse_camera(v).map(|c| d.camera = Some(c)).is_some(),
                 "units" => v.parse::<Units>().map(|u| d.fabrication.units = u).is_ok(),
                 "mould_tol" => v.parse::<Length>().map(|t| d.fabrication.moulds = MouldTarget::Tolerance(t)).is_ok(),
@@ -469,6 +451,15 @@ impl Design {
             d.reference = DesignSurface::OwnFile(name);
         }
         (d, notices)
+    }
+}
+
+/// "0" or "1".
+fn parse_flag(v: &str) -> Option<bool> {
+    match v {
+        "0" => Some(false),
+        "1" => Some(true),
+        _ => None,
     }
 }
 
