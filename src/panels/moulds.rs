@@ -240,11 +240,15 @@ impl Fabrication {
     /// The moulds of `fits` as asked, in model units; `diagonal` (of the result) bounds the
     /// tolerance a count can need.
     pub fn assign(&self, fits: &MouldFits, diagonal: f64) -> MouldAssignment {
-        let tolerance = match self.moulds {
+        fits.assign(self.tolerance(fits, diagonal))
+    }
+
+    /// The fit tolerance asked for, in model units (for a count, the smallest that allows it).
+    pub fn tolerance(&self, fits: &MouldFits, diagonal: f64) -> f64 {
+        match self.moulds {
             MouldTarget::Tolerance(length) => length.in_model_units(self.units),
             MouldTarget::Count(k) => fits.tolerance_for_count(k, diagonal),
-        };
-        fits.assign(tolerance)
+        }
     }
 }
 

@@ -81,9 +81,8 @@ pub(crate) fn panel_fields(panels: &[Panel]) -> Vec<Field> {
 }
 
 /// A result's panels as display fields ([`panel_fields`]) with each panel vertex's mould
-/// ([`field::PANEL_MOULDS`]), assigned as the export assigns them.
-pub(crate) fn result_panel_fields(panels: &[Panel], fabrication: &Fabrication, diag: f64) -> Vec<Field> {
-    let moulds = fabrication.assign(&MouldFits::of(panels), diag);
+/// ([`field::PANEL_MOULDS`]), as the export assigned them ([`export_panels`]).
+pub(crate) fn result_panel_fields(panels: &[Panel], moulds: &MouldAssignment) -> Vec<Field> {
     let per_vertex = panels.iter().zip(&moulds.panel_mould).flat_map(|(p, &m)| std::iter::repeat_n(m, p.positions.len())).collect();
     let mut fields = panel_fields(panels);
     fields.push(Field::u32(field::PANEL_MOULDS, 1, per_vertex));
@@ -214,7 +213,8 @@ pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, e: &Panel
 /// The report and the panel files of a panel method: `panels.glb`, `panels.obj`, the schedule
 /// as `panels.csv` and `panels.json` (distances to the `reference` as loaded) and `support.csv`;
 /// the caller adds `report.json` ([`crate::export::report_file`]) once the report is complete.
-pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>) {
+/// Also the panels' moulds, for the display ([`result_panel_fields`]).
+pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let t0 = clock.now();
     let fits = MouldFits::of(e.panels);
     let moulds = e.fabrication.assign(&fits, e.diag);
@@ -256,5 +256,5 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         let csv = SupportRecord::to_csv(&schedule.support_elements);
         files.push(ExportFile::new("support.csv", "text/csv", csv.into_bytes()));
     }
-    (report, files)
+    (report, files, moulds)
 }

@@ -260,9 +260,8 @@ pub fn compute(
     if params.optimize_moulds {
         step(on_event, "fewer_moulds")?;
         timings.skip();
-        if let Some(f) = fewer_moulds(reference, &sphere_mesh, &params.fabrication, params, clock, on_event)? {
-            (sphere_mesh, panels, panel_deviations) = (f.sphere_mesh, f.panels, f.deviations);
-            final_metrics = metrics(&sphere_mesh, reference, params.variant).0;
+        if let Some(f) = fewer_moulds(reference, &sphere_mesh, &final_metrics, &panels, &params.fabrication, params, clock, on_event)? {
+            (sphere_mesh, panels, panel_deviations, final_metrics) = (f.sphere_mesh, f.panels, f.deviations, f.metrics);
             mould_rounds = f.rounds;
             moulds_before = Some(f.before);
             fits_before = Some(f.fits_before);

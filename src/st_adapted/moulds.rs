@@ -8,7 +8,7 @@
 
 use std::cell::RefCell;
 
-use super::metrics::metrics;
+use super::metrics::{metrics, StAdaptedMetrics};
 use super::optimization::{run_stages, OptimizationFrame};
 use super::params::{OptimizationStage, StAdaptedParams};
 use super::terms::{FaceSpheres, vertex_offset};
@@ -71,6 +71,7 @@ pub struct FewerMoulds {
     pub sphere_mesh: SphereMesh,
     pub panels: Vec<Panel>,
     pub deviations: Vec<f64>,
+    pub metrics: StAdaptedMetrics,
     pub rounds: Vec<MouldRound>,
     pub iterations: usize,
     /// Moulds at δ before the rounds, and the fits of the panels then.
@@ -90,16 +91,19 @@ pub struct MouldRound {
 
 /// The rounds on `sphere_mesh` (the method's result on `reference`), each sent to `on_event` as
 /// moved; None when no round kept fewer moulds.
+#[allow(clippy::too_many_arguments)]
 pub fn fewer_moulds(
     reference: &Reference,
     sphere_mesh: &SphereMesh,
+    start: &StAdaptedMetrics,
+    panels: &[Panel],
     fabrication: &Fabrication,
     params: &StAdaptedParams,
     clock: Clock,
     on_event: &mut OnEvent,
 ) -> Result<Option<FewerMoulds>, Cancelled> {
     let diag = reference.diagonal();
-    let (start, mut panels, _) = metrics(sphere_mesh, reference, params.variant);
+    let mut panels = panels.to_vec();
     let max_kink = KINK_GROWTH * start.max_kink_angle_deg;
     let max_distance = params.epsilon().map_or(f64::INFINITY, |e| (2.0 * e).max(start.max_distance_to_reference));
     let fits_before = MouldFits::of(&panels);
@@ -115,7 +119,7 @@ pub fn fewer_moulds(
     for (k, &gamma) in COARSENING.iter().enumerate() {
         on_event(StAdaptedEvent::Progress(Progress::new("fewer_moulds", k, COARSENING.len())))?;
         let fits = MouldFits::of(&panels);
-        let coarse = fits.assign(gamma * fabrication.assign(&fits, diag).tolerance);
+        let coarse = fits.assign(gamma * fabrication.tolerance(&fits, diag));
         let mut targets = vec![f64::NAN; current.mesh.face_count()];
         for (i, p) in panels.iter().enumerate() {
             let m = coarse.moulds[coarse.panel_mould[i] as usize].curvature;
@@ -156,7 +160,16 @@ pub fn fewer_moulds(
         }
         if kept {
             best_count = count;
-            best = Some(FewerMoulds { sphere_mesh: moved.clone(), panels: moved_panels.clone(), deviations, rounds: Vec::new(), iterations: 0, before, fits_before: MouldFits::default() });
+            best = Some(FewerMoulds {
+                sphere_mesh: moved.clone(),
+                panels: moved_panels.clone(),
+                deviations,
+                metrics: m,
+                rounds: Vec::new(),
+                iterations: 0,
+                before,
+                fits_before: MouldFits::default(),
+            });
         }
         (current, panels) = (moved, moved_panels);
     }

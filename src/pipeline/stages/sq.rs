@@ -22,6 +22,7 @@ use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::MouldAssignment;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, PanelExport};
@@ -95,14 +96,14 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
         Err(e) => return Err(e.into()),
     };
     let segments = CongruenceSegments::of(&result.congruence);
-    let (report, files) = export(reference, &result, params, &segments, clock);
+    let (report, files, moulds) = exported(reference, &result, params, &segments, clock);
     let mut fields = display_fields(&segments);
     if let Some(q) = &result.quad_mesh {
         let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
         fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
     }
-    if let Some(f) = &result.sq_mesh {
-        fields.extend(result_panel_fields(&f.mesh.panels, &params.fabrication, reference.diagonal()));
+    if let (Some(f), Some(moulds)) = (&result.sq_mesh, &moulds) {
+        fields.extend(result_panel_fields(&f.mesh.panels, moulds));
         fields.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
     }
     let (sink, planned) = (stream.sink, stream.planned);
@@ -294,6 +295,18 @@ pub fn export(
     segments: &CongruenceSegments,
     clock: Clock,
 ) -> (Report, Vec<ExportFile>) {
+    let (report, files, _) = exported(reference, result, params, segments, clock);
+    (report, files)
+}
+
+/// [`export`] with the panels' moulds (when there are panels).
+fn exported(
+    reference: &Reference,
+    result: &SqResult,
+    params: &SqParams,
+    segments: &CongruenceSegments,
+    clock: Clock,
+) -> (Report, Vec<ExportFile>, Option<MouldAssignment>) {
     let c = &result.congruence;
     let section = SqSection::of(result, params);
     let ((u0, u1), (v0, v1)) = reference.spline().map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
@@ -317,6 +330,7 @@ pub fn export(
     if let Some(mesh) = mesh {
         files.push(ExportFile::new("mesh.obj", "text/plain", write_mesh_obj(mesh, "sq_mesh").into_bytes()));
     }
+    let mut moulds = None;
     let mut report = match &result.sq_mesh {
         Some(f) => {
             timings.push(("final_iteration_median".into(), result.final_iteration_median_ms().unwrap_or(0.0)));
@@ -332,8 +346,9 @@ pub fn export(
             )
             .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
             .with_support(&f.mesh.support);
-            let (report, panel_files) = export_panels(reference, export, clock);
+            let (report, panel_files, assigned) = export_panels(reference, export, clock);
             files.extend(panel_files);
+            moulds = Some(assigned);
             report
         }
         None => {
@@ -353,7 +368,7 @@ pub fn export(
     report.warnings = result.warnings.iter().map(ToString::to_string).collect();
     report.set_verdict(&result.verdict);
     files.push(report_file(&report));
-    (report, files)
+    (report, files, moulds)
 }
 
 /// `congruence.glb` (see the module docs).

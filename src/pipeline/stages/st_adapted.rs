@@ -13,6 +13,7 @@ use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, panel_fields, result_panel_fields, triangle_mesh_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
+use crate::panels::moulds::MouldAssignment;
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
 use crate::st_adapted::metrics::{StAdaptedMetrics, StAdaptedShape};
@@ -91,8 +92,8 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
         }
     };
     let result = compute(reference, params, clock, &mut on_event)?;
-    let (report, files) = export(reference, &result, params, clock);
-    sink.snapshot(STAGE, result.iterations as u32, result_panel_fields(&result.panels, &params.fabrication, result.diag));
+    let (report, files, moulds) = exported(reference, &result, params, clock);
+    sink.snapshot(STAGE, result.iterations as u32, result_panel_fields(&result.panels, &moulds));
     sink.files(STAGE, files);
     Ok(StAdaptedSummary {
         report,
@@ -113,6 +114,12 @@ fn send_panels(sink: &mut dyn Sink, sm: &SphereMesh, iteration: u32, chord_toler
 /// from the schedule (sampled panels); the timings include "angle_iteration_median"; the
 /// iteration count is `metrics.angle_iterations`.
 pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedParams, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let (report, files, _) = exported(reference, result, params, clock);
+    (report, files)
+}
+
+/// [`export`] with the panels' moulds.
+fn exported(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let m = &result.metrics;
     let variant = result.variant.key();
     let section = StAdaptedSection::of(result);
@@ -128,7 +135,7 @@ pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdapte
             .with_moulds_before(result.fits_before.as_ref())
             .with_warnings(&result.warnings)
             .with_verdict(&verdict);
-    let (report, mut files) = export_panels(reference, export, clock);
+    let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));
-    (report, files)
+    (report, files, moulds)
 }

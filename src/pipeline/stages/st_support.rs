@@ -10,6 +10,7 @@ use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport};
 use crate::pipeline::sink::{report, Sink};
+use crate::panels::moulds::MouldAssignment;
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::st_support::report::StSupportSection;
@@ -46,8 +47,8 @@ impl StSupportSummary {
 pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<StSupportSummary, StageError> {
     let start = sink.now_ms();
     let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
-    let (report, files) = export(reference, &result, params, clock);
-    sink.snapshot(STAGE, 1, display_fields(&result, params));
+    let (report, files, moulds) = exported(reference, &result, params, clock);
+    sink.snapshot(STAGE, 1, display_fields(&result, &moulds));
     sink.files(STAGE, files);
     let a = &result.absolute;
     let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
@@ -67,6 +68,12 @@ pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: 
 /// The report (method "st-support") and the export files of a result; distances are measured to
 /// the reference as loaded, also when the method remeshed it.
 pub fn export(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let (report, files, _) = exported(reference, result, params, clock);
+    (report, files)
+}
+
+/// [`export`] with the panels' moulds.
+fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let section = StSupportSection::of(result, params.remesh);
     let export = PanelExport::new(
         STAGE.key(),
@@ -81,14 +88,14 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
     .with_extras(crate::export::absolute_sphere_extras(&result.omega))
     .with_support(&result.support)
     .with_warnings(&result.warnings);
-    let (report, mut files) = export_panels(reference, export, clock);
+    let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));
-    (report, files)
+    (report, files, moulds)
 }
 
 /// Display fields: panels, support, node axes, second envelope.
-pub(crate) fn display_fields(result: &StSupportResult, params: &StSupportParams) -> Vec<Field> {
-    let mut fields = result_panel_fields(&result.panels, &params.fabrication, result.diag);
+pub(crate) fn display_fields(result: &StSupportResult, moulds: &MouldAssignment) -> Vec<Field> {
+    let mut fields = result_panel_fields(&result.panels, moulds);
     fields.extend(support_fields(&result.support.geometry, &result.support.axis_segments()));
     if let Some(env) = &result.second_envelope {
         fields.push(Field::f32(field::ENVELOPE_POSITIONS, 3, f32s(env.positions.iter().copied())));
