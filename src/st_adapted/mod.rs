@@ -67,6 +67,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod boundary_arcs;
+pub mod events;
 pub mod guarantees;
 pub mod initialization;
 pub mod metrics;
@@ -98,25 +99,7 @@ use optimization::{run_stages, OptimizationFrame};
 use crate::panels::moulds::MouldFits;
 use moulds::{fewer_moulds, MouldRound};
 use params::StAdaptedParams;
-
-/// What the method reports while it runs; answering `Err(Cancelled)` stops it.
-pub enum StAdaptedEvent<'a> {
-    /// Progress of a step ("jet_fit", "sizing", "remesh", "init", "optimize", "metrics"); a step
-    /// starts with 0 of 0.
-    Progress(Progress<'a>),
-    /// The sizing field g at the reference vertices (absolute lengths), before remeshing.
-    Sizing { values: &'a [f64] },
-    /// The triangulation after remeshing.
-    Remeshed { mesh: &'a TriMesh },
-    /// The face spheres from the central spheres, before optimization.
-    Initialized { sphere_mesh: &'a SphereMesh },
-    /// After every solver iteration: the optimizer stage, the iteration over all stages (`done`
-    /// of `total`), its energy and per-term statistics, and the current vertices and face
-    /// spheres (model coordinates).
-    Iteration { progress: Progress<'a>, energy: f64, terms: &'a [TermStats], vertices: &'a [DVec3], spheres: &'a [Sphere] },
-    /// After each round toward fewer moulds ([`moulds::fewer_moulds`]): the panels as moved.
-    MouldRound { round: usize, sphere_mesh: &'a SphereMesh },
-}
+pub use events::{OnEvent, StAdaptedEvent};
 
 /// Why the method gave no mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -208,8 +191,6 @@ pub struct StAdaptedResult {
     pub warnings: Vec<Warning>,
 }
 
-/// What the method reports to while it runs.
-pub type OnEvent<'a> = dyn FnMut(StAdaptedEvent) -> Result<(), Cancelled> + 'a;
 
 /// Announces a step (0 of 0).
 fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {

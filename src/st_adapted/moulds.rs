@@ -16,7 +16,7 @@ use crate::geometry::mesh::TriMesh;
 use crate::panels::moulds::{Fabrication, MouldFits};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
-use super::{OnEvent, StAdaptedEvent};
+use super::events::{OnEvent, StAdaptedEvent};
 use crate::progress::{Cancelled, Clock, Progress};
 use crate::reference::Reference;
 use crate::solver::{JacobianSink, Solver, SolverOptions, Term};
