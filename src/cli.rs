@@ -85,7 +85,8 @@ enum Command {
         #[arg(long, value_name = "a|b", default_value = "a", value_parser = variant)]
         variant: EdgeArcs,
         /// After optimizing, move the panels onto fewer moulds (keeping the largest kink within
-        /// 1.2× and the panels within 2ε of the reference).
+        /// 1.2× and the panels within 2ε of the reference), then give every panel its mould's
+        /// radius exactly (the schedule's `mould_snapped`).
         #[arg(long)]
         optimize_moulds: bool,
         #[command(flatten)]
@@ -498,11 +499,12 @@ fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, o
 fn with_moulds(summary: String, report: &Report) -> String {
     match &report.moulds {
         Some(m) => format!(
-            "{summary}; {} mould{} within {} (largest fit deviation {}; moulds.csv)",
+            "{summary}; {} mould{} within {} (largest fit deviation {}; moulds.csv); {}",
             m.count,
             if m.count == 1 { "" } else { "s" },
             format_length(m.tolerance, m.units),
             format_length(m.max_deviation, m.units),
+            m.snap.describe(report.output.panels, m.units),
         ),
         None => summary,
     }

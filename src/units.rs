@@ -71,10 +71,14 @@ impl fmt::Display for Units {
     }
 }
 
-/// `value` with four significant digits and the unit symbol ("2.000 mm", "0.00005000 m").
+/// `value` with four significant digits and the unit symbol ("2.000 mm", "0.00005000 m"), in
+/// scientific notation below 1e-6 ("4.0e-15 m": rounding, not a length).
 pub fn format_length(value: f64, units: Units) -> String {
     if !value.is_finite() || value == 0.0 {
         return format!("{value} {units}");
+    }
+    if value.abs() < 1e-6 {
+        return format!("{value:.1e} {units}");
     }
     let decimals = (3 - value.abs().log10().floor() as i32).clamp(0, 15) as usize;
     format!("{value:.decimals$} {units}")
@@ -181,6 +185,7 @@ mod tests {
         assert!(matches!("NaN".parse::<Length>(), Err(UnitsError::NotALength(_))));
         assert_eq!(format_length(2.0, Units::Mm), "2.000 mm");
         assert_eq!(format_length(5e-5, Units::M), "0.00005000 m");
+        assert_eq!(format_length(4.2e-15, Units::M), "4.2e-15 m");
         assert_eq!(format_length(1234.5, Units::In), "1234 in");
         for (name, u) in [("Millimeters", Units::Mm), ("Meters", Units::M), ("centimetres", Units::Cm), ("Feet", Units::Ft), ("Inches", Units::In), ("inch", Units::In)] {
             assert_eq!(Units::from_name(name), Some(u), "{name}");

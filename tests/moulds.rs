@@ -9,7 +9,7 @@ use common::load_reference;
 use glam::DVec3;
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::{ExportFile, Report};
-use spherical_faces::panels::moulds::{fewest_stabbing_values, Fabrication, MouldFits, MouldTarget};
+use spherical_faces::panels::moulds::{fewest_stabbing_values, Fabrication, MouldAssignment, MouldFits, MouldTarget, SnapLimit, SNAPPED};
 use spherical_faces::panels::panel::Panel;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::Clock;
@@ -39,15 +39,21 @@ fn file<'a>(files: &'a [ExportFile], name: &str) -> &'a ExportFile {
     files.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("no {name}"))
 }
 
-/// Every guarantee of the moulds on one result, at the tolerance δ (model units).
-fn check(name: &str, panels: &[Panel], report: &Report, files: &[ExportFile], delta: f64) {
+/// Every guarantee of the moulds on one result, at the tolerance δ (model units); `snapped_to`:
+/// the moulds the method snapped its panels to, else the sweep's.
+fn check(name: &str, panels: &[Panel], report: &Report, files: &[ExportFile], delta: f64, snapped_to: Option<&MouldAssignment>) {
     let fits = MouldFits::of(panels);
-    let moulds = fits.assign(delta);
+    let moulds = snapped_to.map_or_else(|| fits.assign(delta), |given| fits.on_moulds(given));
     let n = panels.len();
     assert_eq!(moulds.panel_mould.len(), n);
-    // The count is the sweep's: no fewer values hit every panel's interval.
+    // The count is the sweep's: no fewer values hit every panel's interval (after a snap the
+    // sweep on the moved panels may need fewer still).
     let intervals: Vec<[f64; 2]> = (0..n).map(|i| fits.interval(i, delta)).collect();
-    assert_eq!(moulds.moulds.len(), fewest_stabbing_values(&intervals).len(), "{name}");
+    let fewest = fewest_stabbing_values(&intervals).len();
+    match snapped_to {
+        None => assert_eq!(moulds.moulds.len(), fewest, "{name}"),
+        Some(given) => assert!(moulds.moulds.len() == given.moulds.len() && fewest <= given.moulds.len(), "{name}"),
+    }
     assert_eq!(moulds.moulds.iter().map(|m| m.panels).sum::<usize>(), n, "{name}");
     // Each panel fits its mould within δ, sampled densely and measured independently.
     let diag = report.metrics.as_ref().unwrap().diagonal;
@@ -95,6 +101,48 @@ fn check(name: &str, panels: &[Panel], report: &Report, files: &[ExportFile], de
     }
 }
 
+/// ST with support structure and SQ fix each sphere by its vertices: a panel not on its
+/// mould's radius says so.
+fn not_snapped_by_the_vertices(name: &str, report: &Report) {
+    let snap = &report.moulds.as_ref().unwrap().snap;
+    let missed: usize = snap.not_snapped.iter().map(|m| m.panels).sum();
+    assert_eq!(snap.snapped + missed, report.output.panels, "{name}");
+    assert!(snap.not_snapped.iter().all(|m| m.reason == SnapLimit::FixedByVertices), "{name}: {snap:?}");
+}
+
+/// Every panel the schedule calls snapped has exactly its mould's radius (≤ 1e-9 of the
+/// diagonal), its corners on that sphere, and no fit deviation; measured on the schedule's own
+/// numbers. Nearly all panels are snapped, and the report counts them.
+fn snapped_panels_have_their_moulds_radius(report: &Report, files: &[ExportFile]) {
+    let diag = report.metrics.as_ref().unwrap().diagonal;
+    let schedule: serde_json::Value = serde_json::from_slice(&file(files, "panels.json").bytes).unwrap();
+    let radii: Vec<Option<f64>> = schedule["moulds"].as_array().unwrap().iter().map(|m| m["radius"].as_f64()).collect();
+    let mut snapped = 0;
+    let mut worst: f64 = 0.0;
+    for r in schedule["panels"].as_array().unwrap() {
+        if !r["mould_snapped"].as_bool().unwrap() {
+            continue;
+        }
+        snapped += 1;
+        let mould = radii[r["mould"].as_u64().unwrap() as usize].expect("a curved mould");
+        let radius = r["sphere"]["radius"].as_f64().expect("a sphere");
+        worst = worst.max((radius - mould).abs() / diag);
+        assert!((radius - mould).abs() <= SNAPPED * diag, "panel {}: radius {radius} vs its mould's {mould}", r["id"]);
+        let c = r["sphere"]["center"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect::<Vec<_>>();
+        let c = DVec3::new(c[0], c[1], c[2]);
+        for v in r["vertices"].as_array().unwrap() {
+            let v = DVec3::new(v[0].as_f64().unwrap(), v[1].as_f64().unwrap(), v[2].as_f64().unwrap());
+            assert!(((v - c).length() - radius).abs() <= 1e-9 * diag, "panel {}: a corner off its sphere", r["id"]);
+        }
+        assert!(r["mould_deviation"].as_f64().unwrap() <= 1e-9 * diag, "panel {}", r["id"]);
+    }
+    let n = report.output.panels;
+    let snap = &report.moulds.as_ref().unwrap().snap;
+    eprintln!("snapped {snapped} of {n}, radius within {worst:.1e} of the diagonal; {snap:?}");
+    assert_eq!(snap.snapped, snapped);
+    assert!(snapped as f64 >= 0.95 * n as f64, "{snapped} of {n} snapped");
+}
+
 fn fabrication(delta: f64) -> Fabrication {
     Fabrication { units: Units::M, moulds: MouldTarget::Tolerance(Length { value: delta, unit: None }) }
 }
@@ -106,7 +154,7 @@ fn st_adapted_panels_fit_their_moulds() {
     let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, fabrication: fabrication(delta), ..Default::default() };
     let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
     let (report, files) = stages::st_adapted::export(&reference, &result, &params, Clock::default());
-    check("st tri_mesh", &result.panels, &report, &files, delta);
+    check("st tri_mesh", &result.panels, &report, &files, delta, None);
 }
 
 #[test]
@@ -116,7 +164,8 @@ fn st_support_panels_fit_their_moulds() {
     let params = StSupportParams { fabrication: fabrication(delta), ..Default::default() };
     let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
     let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
-    check("st-support cmc1", &result.panels, &report, &files, delta);
+    check("st-support cmc1", &result.panels, &report, &files, delta, None);
+    not_snapped_by_the_vertices("st-support cmc1", &report);
 }
 
 #[test]
@@ -128,7 +177,8 @@ fn sq_panels_fit_their_moulds() {
     let segments = CongruenceSegments::of(&result.congruence);
     let (report, files) = stages::sq::export(&reference, &result, &params, &segments, Clock::default());
     let panels = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh.panels;
-    check("sq vault", panels, &report, &files, delta);
+    check("sq vault", panels, &report, &files, delta, None);
+    not_snapped_by_the_vertices("sq vault", &report);
 }
 
 /// Units: a tolerance in millimetres on a design in metres is 1e-3 of the same in metres, and
@@ -177,7 +227,8 @@ fn st_adapted_moves_its_panels_onto_fewer_moulds() {
     assert!(result.metrics.max_vertex_sphere_residual <= 1e-8);
     assert!(result.metrics.max_kink_angle_deg <= 1.2 * plain.metrics.max_kink_angle_deg);
     assert!(result.metrics.max_distance_to_reference <= 2.0 * 2e-3);
-    check("st tri_mesh, fewer moulds", &result.panels, &report, &files, delta);
+    check("st tri_mesh, fewer moulds", &result.panels, &report, &files, delta, Some(&result.mould_snap.as_ref().expect("snapped").moulds));
+    snapped_panels_have_their_moulds_radius(&report, &files);
     // The count against δ before and after: the middle of the grid is δ itself.
     let m = report.moulds.as_ref().unwrap();
     assert_eq!(m.against_tolerance_before.len(), m.against_tolerance.len());

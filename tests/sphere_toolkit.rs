@@ -132,6 +132,42 @@ fn pencil_through_three_points() {
     }
 }
 
+/// The member of the pencil with a given curvature: through the points, exactly that radius,
+/// the orientation of the sphere it starts from, the nearer of the two (small cap before big
+/// cap), and none below the circumradius.
+#[test]
+fn pencil_member_of_a_given_radius() {
+    let mut rng = Rng(11);
+    for k in 0..200 {
+        let scale = [1e-3, 1.0, 50.0][k % 3];
+        let p = triangle(&mut rng, scale);
+        let [plane, sph] = Sphere::through_points_family(p);
+        let rho = sph.signed_radius().unwrap();
+        let diam = (p[1] - p[0]).length().max((p[2] - p[0]).length());
+        // A small cap of either orientation, and its curvature moved by up to 30 %.
+        let theta = [0.2, -0.4, 0.6, 2.9][k % 4];
+        let near = Sphere::combine(&plane, f64::cos(theta), &sph, f64::sin(theta));
+        let own = 2.0 * near.a;
+        let target = own * (0.7 + 0.6 * (k as f64 / 200.0));
+        let s = Sphere::through_points_with_curvature(p, target, &near).expect("above the circumradius");
+        assert_normalized(&s);
+        for q in p {
+            assert!(on(&s, q, diam) < 1e-11, "{}", on(&s, q, diam));
+            // Orientation kept: the normals on the points agree in sign.
+            assert!(s.normal_at(q).dot(near.normal_at(q)) > 0.0);
+        }
+        let r = s.signed_radius().unwrap();
+        assert!((r - 1.0 / target).abs() <= 1e-12 * r.abs().max(diam), "radius {r} vs {}", 1.0 / target);
+        // The nearer member: its angle to `near` is below that of the other solution.
+        let phi = (target * rho).asin();
+        let other = |phi: f64| Sphere::combine(&plane, phi.cos(), &sph, phi.sin());
+        let far = if s.inversive_product(&other(phi)) > 1.0 - 1e-9 { other(std::f64::consts::PI - phi) } else { other(phi) };
+        assert!(s.inversive_product(&near) >= far.inversive_product(&near) - 1e-12);
+        // Below the circumradius there is none.
+        assert!(Sphere::through_points_with_curvature(p, 1.01 / rho, &near).is_none());
+    }
+}
+
 fn check_orthogonal(s: &Sphere, omega: &AbsoluteSphere, scale: f64) {
     let defect = omega.orthogonality_defect(s);
     match omega {

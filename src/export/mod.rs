@@ -12,7 +12,7 @@ pub mod schedule;
 
 pub use glb::{absolute_sphere_extras, write_glb};
 pub use obj::{write_mesh_obj, write_obj};
-pub use report::{MouldReport, PanelMetrics, Report, REPORT_SCHEMA};
+pub use report::{MouldReport, PanelMetrics, Report, SnapMisses, SnapReport, REPORT_SCHEMA};
 pub use schedule::{build_schedule, build_schedule_with, count_distinct_radii, PanelSchedule};
 
 /// A file for download or for the CLI's output folder.

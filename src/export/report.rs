@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::export::schedule::MouldRecord;
 use crate::guarantees::{f64_or_nan, Guarantee, Verdict};
-use crate::panels::moulds::MouldTarget;
+use crate::panels::moulds::{MouldTarget, SnapLimit};
 use crate::units::Units;
 
 /// The layout version of `report.json`, raised whenever a key moves. 3: model units and the
@@ -99,6 +99,40 @@ pub struct MouldReport {
     /// The same before the method moved its panels onto fewer moulds (empty when it did not).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub against_tolerance_before: Vec<(f64, usize)>,
+    /// The panels cut from their mould with no deviation, and why the others are not.
+    #[serde(default)]
+    pub snap: SnapReport,
+}
+
+/// How many panels have exactly their mould's radius (measured on the panels, to
+/// [`crate::panels::moulds::SNAPPED`] of the diagonal), and the others by reason.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SnapReport {
+    pub snapped: usize,
+    pub not_snapped: Vec<SnapMisses>,
+}
+
+impl SnapReport {
+    /// In words: how many of `panels` have exactly their mould's radius, and why the others
+    /// do not, with their largest fit deviation (in `units`).
+    pub fn describe(&self, panels: usize, units: Units) -> String {
+        let mut text = format!("{} of {panels} panel{} snapped to their mould's radius", self.snapped, if panels == 1 { "" } else { "s" });
+        for m in &self.not_snapped {
+            text += &format!("; {} not ({}, up to {} off)", m.panels, m.reason.describe(), crate::units::format_length(m.max_deviation, units));
+        }
+        text
+    }
+}
+
+/// The panels not snapped for one reason: how many, and by how much they miss (their largest
+/// fit deviation and radius difference from their mould, model units).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SnapMisses {
+    pub reason: SnapLimit,
+    pub panels: usize,
+    pub max_deviation: f64,
+    /// None when a flat panel or mould makes the difference infinite.
+    pub max_radius_miss: Option<f64>,
 }
 
 /// The report of one run.

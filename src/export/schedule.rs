@@ -90,6 +90,9 @@ pub struct PanelRecord {
     pub mould: u32,
     #[serde(default)]
     pub mould_deviation: f64,
+    /// Whether its sphere has exactly its mould's radius (cut from it with no deviation).
+    #[serde(default)]
+    pub mould_snapped: bool,
 }
 
 /// One mould: every panel of this radius is cut from it, either way up.
@@ -309,6 +312,7 @@ pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_toler
                 triangles: p.triangles.len(),
                 mould: 0,
                 mould_deviation: 0.0,
+                mould_snapped: false,
             }
         })
         .collect();
@@ -348,11 +352,13 @@ fn opt3(out: &mut String, v: Option<[f64; 3]>) {
 }
 
 impl PanelSchedule {
-    /// The schedule with its moulds (one per panel in `moulds`, in panel order) in `units`.
-    pub fn with_moulds(mut self, moulds: &MouldAssignment, units: Units) -> Self {
-        for (r, (&m, &d)) in self.panels.iter_mut().zip(moulds.panel_mould.iter().zip(&moulds.panel_deviation)) {
+    /// The schedule with its moulds (one per panel in `moulds`, in panel order) in `units`, and
+    /// which panels have exactly their mould's radius.
+    pub fn with_moulds(mut self, moulds: &MouldAssignment, snapped: &[bool], units: Units) -> Self {
+        for (i, (r, (&m, &d))) in self.panels.iter_mut().zip(moulds.panel_mould.iter().zip(&moulds.panel_deviation)).enumerate() {
             r.mould = m;
             r.mould_deviation = d;
+            r.mould_snapped = snapped.get(i).copied().unwrap_or(false);
         }
         self.units = units;
         self.mould_tolerance = moulds.tolerance;
@@ -385,6 +391,7 @@ impl PanelSchedule {
         h.push("max_deviation".into());
         h.push("mould".into());
         h.push("mould_deviation".into());
+        h.push("mould_snapped".into());
         h.join(",")
     }
 
@@ -435,7 +442,7 @@ impl PanelSchedule {
             }
             let _ = write!(out, ",{},", r.area);
             opt(&mut out, Some(r.max_deviation).filter(|d| d.is_finite()));
-            let _ = writeln!(out, ",{},{}", r.mould, r.mould_deviation);
+            let _ = writeln!(out, ",{},{},{}", r.mould, r.mould_deviation, u8::from(r.mould_snapped));
         }
         out
     }

@@ -245,6 +245,25 @@ impl Sphere {
         [s0.from_frame(t, sigma).normalized(), s1.from_frame(t, sigma).normalized()]
     }
 
+    /// The sphere through three points with signed curvature `curvature` (2a, normalized, along
+    /// its own orientation) nearest `near` (a sphere through them, whose orientation it keeps):
+    /// in [`Self::through_points_family`], cos φ `[0]` + sin φ `[1]` has curvature sin φ / ρ (ρ
+    /// the circumradius), so sin φ = κρ, and of φ and π − φ the one nearer `near`'s angle. None
+    /// when |κ| ρ > 1: no sphere of that radius passes through the points.
+    pub fn through_points_with_curvature(p: [DVec3; 3], curvature: f64, near: &Sphere) -> Option<Sphere> {
+        let [plane, centred] = Self::through_points_family(p);
+        // `centred` is normalized with positive radius ρ = 1/(2a).
+        let rho_k = curvature / (2.0 * centred.a);
+        if !rho_k.is_finite() || rho_k.abs() > 1.0 + 1e-12 {
+            return None;
+        }
+        let phi = rho_k.clamp(-1.0, 1.0).asin();
+        let current = near.inversive_product(&centred).atan2(near.inversive_product(&plane));
+        let gap = |a: f64| (a - current + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        let phi = if gap(phi).abs() <= gap(std::f64::consts::PI - phi).abs() { phi } else { std::f64::consts::PI - phi };
+        Some(Sphere::combine(&plane, phi.cos(), &centred, phi.sin()).normalized())
+    }
+
     /// The sphere through three points orthogonal to Ω: the null vector of the 4 × 5 matrix of
     /// the three [`Self::point_row`]s and Ω's row, normalized. Computed as the member of
     /// [`Self::through_points_family`] (in the local frame of the points) on which Ω's row

@@ -147,7 +147,12 @@ impl MouldFits {
             panel_mould.push(j as u32);
         }
         let values: Vec<f64> = common.iter().zip(&stabs).map(|(&[lo, hi], &s)| if lo <= hi { 0.5 * (lo + hi) } else { s }).collect();
-        let mut moulds: Vec<Mould> = values
+        self.cut_from(tolerance, &values, panel_mould)
+    }
+
+    /// Each panel cut from the mould `panel_mould` of `curvatures`, its deviation measured.
+    fn cut_from(&self, tolerance: f64, curvatures: &[f64], panel_mould: Vec<u32>) -> MouldAssignment {
+        let mut moulds: Vec<Mould> = curvatures
             .iter()
             .map(|&k| Mould { curvature: k, radius: (k > 0.0).then(|| 1.0 / k), panels: 0, max_deviation: 0.0 })
             .collect();
@@ -163,6 +168,26 @@ impl MouldFits {
             })
             .collect();
         MouldAssignment { tolerance, moulds, panel_mould, panel_deviation }
+    }
+
+    /// These panels on the moulds of `given` (the same panel order), their deviations measured
+    /// again: the moulds a method snapped its panels to.
+    pub fn on_moulds(&self, given: &MouldAssignment) -> MouldAssignment {
+        let curvatures: Vec<f64> = given.moulds.iter().map(|m| m.curvature).collect();
+        self.cut_from(given.tolerance, &curvatures, given.panel_mould.clone())
+    }
+
+    /// Whether panel `i`'s sphere has exactly the radius of a mould of curvature `magnitude`:
+    /// the radii within [`SNAPPED`] × `diagonal` (a flat mould: the panel's radius at least
+    /// `diagonal` / [`SNAPPED`]).
+    pub fn has_mould_radius(&self, i: usize, magnitude: f64, diagonal: f64) -> bool {
+        let own = self.curvature[i].abs();
+        if magnitude > 0.0 && own > 0.0 {
+            (1.0 / own - 1.0 / magnitude).abs() <= SNAPPED * diagonal
+        } else {
+            // One of them flat: the other too, to a radius of diagonal / SNAPPED.
+            own.max(magnitude) * diagonal <= SNAPPED
+        }
     }
 
     /// The fewest moulds within `tolerance` (the count of [`Self::assign`], without assigning).
@@ -208,6 +233,47 @@ impl MouldFits {
     pub fn counts(&self, tolerances: &[f64]) -> Vec<usize> {
         tolerances.iter().map(|&t| self.count(t)).collect()
     }
+}
+
+/// A panel cut from its mould with no deviation has the mould's radius to this fraction of
+/// the diagonal.
+pub const SNAPPED: f64 = 1e-9;
+
+/// Why a panel's sphere does not have its mould's radius exactly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SnapLimit {
+    /// The method fixes the sphere by the panel's vertices (SQ: four; ST with support
+    /// structure: three and Ω), so a new radius would move them.
+    FixedByVertices,
+    /// The mould's radius is below the circumradius of the panel's corners.
+    MouldBelowCircumradius,
+    /// Snapping would break the method's kink or distance targets.
+    MethodTargets,
+    /// Snapping was not asked for.
+    NotAsked,
+    /// Snapped, but measured off its mould's radius.
+    Missed,
+}
+
+impl SnapLimit {
+    /// In words, for the app and the CLI.
+    pub fn describe(self) -> &'static str {
+        match self {
+            SnapLimit::FixedByVertices => "the sphere is fixed by the panel's vertices",
+            SnapLimit::MouldBelowCircumradius => "the mould is smaller than the panel's corners",
+            SnapLimit::MethodTargets => "snapping would break the method's targets",
+            SnapLimit::NotAsked => "not asked for",
+            SnapLimit::Missed => "snapped but off the mould's radius",
+        }
+    }
+}
+
+/// The moulds a method snapped its panels to, and per panel why it could not (None: snapped).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MouldSnap {
+    pub moulds: MouldAssignment,
+    pub limits: Vec<Option<SnapLimit>>,
 }
 
 /// How many moulds: the fewest within a tolerance, or a count (the smallest tolerance that

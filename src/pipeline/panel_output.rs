@@ -10,10 +10,10 @@ use crate::congruence::support_structure::{SupportGeometry, SupportStructure};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::schedule::SupportRecord;
 use crate::export::schedule::MouldRecord;
-use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, MouldReport, PanelMetrics, Report};
+use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, MouldReport, PanelMetrics, Report, SnapMisses, SnapReport};
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
-use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits};
+use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::progress::Clock;
@@ -99,6 +99,15 @@ pub(crate) fn support_fields(support: &SupportGeometry, axes: &[(DVec3, DVec3)])
     ]
 }
 
+/// Whether a method cut its panels from their moulds with no deviation.
+#[derive(Clone, Copy, Debug)]
+pub enum Snapping<'a> {
+    /// It snapped them to these moulds' radii where it could.
+    Snapped(&'a MouldSnap),
+    /// It did not, for this reason.
+    Not(SnapLimit),
+}
+
 /// What a panel method exports: see [`PanelExport::new`].
 pub struct PanelExport<'a> {
     pub method: &'a str,
@@ -124,6 +133,8 @@ pub struct PanelExport<'a> {
     pub verdict: Option<&'a Verdict>,
     /// The panels' mould fits before the method moved them onto fewer moulds.
     pub moulds_before: Option<&'a MouldFits>,
+    /// The moulds the method snapped its panels to, or why it did not.
+    pub snapping: Snapping<'a>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -159,7 +170,13 @@ impl<'a> PanelExport<'a> {
             deviations: None,
             verdict: None,
             moulds_before: None,
+            snapping: Snapping::Not(SnapLimit::NotAsked),
         }
+    }
+
+    /// The moulds the method snapped its panels to ([`MouldSnap`]), or why it did not.
+    pub(crate) fn with_snapping(self, snapping: Snapping<'a>) -> Self {
+        Self { snapping, ..self }
     }
 
     /// The verdict the report carries ([`crate::guarantees`]).
@@ -195,7 +212,7 @@ impl<'a> PanelExport<'a> {
 
 /// The shared moulds section of the report: the assignment, its count against the tolerance,
 /// and the count before the method moved its panels onto fewer moulds, if it did.
-pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, e: &PanelExport) -> MouldReport {
+pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, snapped: &[bool], e: &PanelExport) -> MouldReport {
     let t = moulds.tolerance;
     MouldReport {
         units: e.fabrication.units,
@@ -207,7 +224,41 @@ pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, e: &Panel
         moulds: MouldRecord::of(moulds),
         against_tolerance: fits.against_tolerance(t, e.diag),
         against_tolerance_before: e.moulds_before.map(|f| f.against_tolerance(t, e.diag)).unwrap_or_default(),
+        snap: snap_report(fits, moulds, snapped, e.snapping),
     }
+}
+
+/// The panels with exactly their mould's radius (`snapped`, measured), and the others by the
+/// reason the method gives, with their largest fit deviation and radius miss.
+fn snap_report(fits: &MouldFits, moulds: &MouldAssignment, snapped: &[bool], snapping: Snapping) -> SnapReport {
+    let mut report = SnapReport::default();
+    for (i, &on) in snapped.iter().enumerate() {
+        if on {
+            report.snapped += 1;
+            continue;
+        }
+        let reason = match snapping {
+            Snapping::Snapped(s) => s.limits.get(i).copied().flatten().unwrap_or(SnapLimit::Missed),
+            Snapping::Not(reason) => reason,
+        };
+        let (own, mould) = (fits.curvature[i].abs(), moulds.moulds[moulds.panel_mould[i] as usize].curvature);
+        let radius_miss = (own > 0.0 && mould > 0.0).then(|| (1.0 / own - 1.0 / mould).abs());
+        let at = match report.not_snapped.iter().position(|m| m.reason == reason) {
+            Some(at) => at,
+            None => {
+                report.not_snapped.push(SnapMisses { reason, panels: 0, max_deviation: 0.0, max_radius_miss: None });
+                report.not_snapped.len() - 1
+            }
+        };
+        let m = &mut report.not_snapped[at];
+        m.panels += 1;
+        m.max_deviation = m.max_deviation.max(moulds.panel_deviation[i]);
+        m.max_radius_miss = match (m.max_radius_miss, radius_miss) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+    }
+    report
 }
 
 /// The report and the panel files of a panel method: `panels.glb`, `panels.obj`, the schedule
@@ -217,9 +268,13 @@ pub(crate) fn mould_report(fits: &MouldFits, moulds: &MouldAssignment, e: &Panel
 pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let t0 = clock.now();
     let fits = MouldFits::of(e.panels);
-    let moulds = e.fabrication.assign(&fits, e.diag);
+    let moulds = match e.snapping {
+        Snapping::Snapped(snap) => fits.on_moulds(&snap.moulds),
+        Snapping::Not(_) => e.fabrication.assign(&fits, e.diag),
+    };
+    let snapped: Vec<bool> = moulds.panel_mould.iter().enumerate().map(|(i, &j)| fits.has_mould_radius(i, moulds.moulds[j as usize].curvature, e.diag)).collect();
     let units = e.fabrication.units;
-    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations).with_moulds(&moulds, units);
+    let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations).with_moulds(&moulds, &snapped, units);
     schedule.support_elements = e.support.map(|s| SupportRecord::of(&s.elements)).unwrap_or_default();
     let mut extras = e.extras.clone();
     extras["method"] = e.method.into();
@@ -243,7 +298,7 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         diagonal: e.diag,
         max_distance: schedule.max_deviation,
     });
-    report.moulds = Some(mould_report(&fits, &moulds, &e));
+    report.moulds = Some(mould_report(&fits, &moulds, &snapped, &e));
     report.sections.insert(e.method.to_string(), e.section);
     report.add_timings(e.timings);
     report.add_timing("export", clock.now() - t0);

@@ -96,8 +96,8 @@ use crate::stats::median;
 use initialization::initial_spheres;
 use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
 use optimization::{run_stages, OptimizationFrame};
-use crate::panels::moulds::MouldFits;
-use moulds::{fewer_moulds, MouldRound};
+use crate::panels::moulds::{MouldFits, MouldSnap};
+use moulds::{fewer_moulds, snap_to_moulds, MouldRound, MouldTargets};
 use params::StAdaptedParams;
 pub use events::{OnEvent, StAdaptedEvent};
 
@@ -186,6 +186,8 @@ pub struct StAdaptedResult {
     /// The moulds at δ before those rounds, and the fits of the panels then.
     pub moulds_before: Option<usize>,
     pub fits_before: Option<MouldFits>,
+    /// The moulds the panels were snapped to, and why some were not (`optimize_moulds`).
+    pub mould_snap: Option<MouldSnap>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers, not
     /// coarser than ε) and the kinks over the warning angle.
     pub warnings: Vec<Warning>,
@@ -237,10 +239,11 @@ pub fn compute(
     let mut sphere_mesh = optimized.sphere_mesh;
     let (mut final_metrics, mut panels, mut panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
-    let (mut mould_rounds, mut moulds_before, mut fits_before) = (Vec::new(), None, None);
+    let (mut mould_rounds, mut moulds_before, mut fits_before, mut mould_snap) = (Vec::new(), None, None, None);
     if params.optimize_moulds {
         step(on_event, "fewer_moulds")?;
         timings.skip();
+        let targets = MouldTargets::of(&final_metrics, params);
         if let Some(f) = fewer_moulds(reference, &sphere_mesh, &final_metrics, &panels, &params.fabrication, params, clock, on_event)? {
             (sphere_mesh, panels, panel_deviations, final_metrics) = (f.sphere_mesh, f.panels, f.deviations, f.metrics);
             mould_rounds = f.rounds;
@@ -248,6 +251,14 @@ pub fn compute(
             fits_before = Some(f.fits_before);
         }
         timings.lap("fewer_moulds");
+        step(on_event, "snap_moulds")?;
+        timings.skip();
+        let (snapped, snap) = snap_to_moulds(reference, &sphere_mesh, &panels, &targets, &params.fabrication, params.variant);
+        if let Some(s) = snapped {
+            (sphere_mesh, panels, panel_deviations, final_metrics) = (s.sphere_mesh, s.panels, s.deviations, s.metrics);
+        }
+        mould_snap = Some(snap);
+        timings.lap("snap_moulds");
     }
     let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
@@ -273,6 +284,7 @@ pub fn compute(
         mould_rounds,
         moulds_before,
         fits_before,
+        mould_snap,
         warnings,
     })
 }

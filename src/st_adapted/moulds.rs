@@ -4,16 +4,21 @@
 //! pulling every face sphere's curvature to its mould's, and optimizes again from the last
 //! result with all the method's terms. A round is kept when the moulds at δ fell and the method's
 //! targets hold (largest kink ≤ [`KINK_GROWTH`] × before, panels within 2ε); the rounds stop
-//! when the count stops falling.
+//! when the count stops falling. Then [`snap_to_moulds`] gives every face sphere its mould's
+//! radius exactly: a face sphere is free in the pencil through its three vertices, which holds
+//! one sphere of each radius above their circumradius, so the vertices stay.
 
 use std::cell::RefCell;
 
+use super::boundary_arcs::boundary_planes;
 use super::metrics::{metrics, StAdaptedMetrics};
 use super::optimization::{run_stages, OptimizationFrame};
 use super::params::{OptimizationStage, StAdaptedParams};
 use super::terms::{FaceSpheres, vertex_offset};
 use crate::geometry::mesh::TriMesh;
-use crate::panels::moulds::{Fabrication, MouldFits};
+use crate::geometry::sphere::Sphere;
+use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
 use super::events::{OnEvent, StAdaptedEvent};
@@ -65,6 +70,28 @@ impl Term for MouldCurvature {
     }
 }
 
+/// The method's targets a mould round or the snap must keep: the largest kink within
+/// [`KINK_GROWTH`] × the method's, the panels within 2ε (or as far as they were), no fold.
+#[derive(Clone, Copy, Debug)]
+pub struct MouldTargets {
+    pub max_kink_angle_deg: f64,
+    pub max_distance_to_reference: f64,
+}
+
+impl MouldTargets {
+    /// The targets around the method's own result `start`.
+    pub fn of(start: &StAdaptedMetrics, params: &StAdaptedParams) -> Self {
+        Self {
+            max_kink_angle_deg: KINK_GROWTH * start.max_kink_angle_deg,
+            max_distance_to_reference: params.epsilon().map_or(f64::INFINITY, |e| (2.0 * e).max(start.max_distance_to_reference)),
+        }
+    }
+
+    pub fn hold(&self, m: &StAdaptedMetrics) -> bool {
+        m.max_kink_angle_deg <= self.max_kink_angle_deg && m.max_distance_to_reference <= self.max_distance_to_reference && m.flipped_faces == 0
+    }
+}
+
 /// What the rounds made: the kept sphere mesh with its panels and deviations, and per round
 /// (γ, moulds at δ, largest kink, largest distance) for the report.
 pub struct FewerMoulds {
@@ -104,8 +131,7 @@ pub fn fewer_moulds(
 ) -> Result<Option<FewerMoulds>, Cancelled> {
     let diag = reference.diagonal();
     let mut panels = panels.to_vec();
-    let max_kink = KINK_GROWTH * start.max_kink_angle_deg;
-    let max_distance = params.epsilon().map_or(f64::INFINITY, |e| (2.0 * e).max(start.max_distance_to_reference));
+    let limits = MouldTargets::of(start, params);
     let fits_before = MouldFits::of(&panels);
     let before = fabrication.assign(&fits_before, diag).moulds.len();
     let mut best_count = before;
@@ -141,12 +167,12 @@ pub fn fewer_moulds(
         iterations += run.into_inner();
         let (verts, spheres) = frame.to_model(&x);
         let moved = SphereMesh::new(TriMesh::new(verts, mesh.triangles.clone()), spheres, current.boundary_arcs);
-        let planes = super::boundary_arcs::boundary_planes(&moved, reference);
+        let planes = boundary_planes(&moved, reference);
         let moved = moved.with_boundary_planes(planes);
         on_event(StAdaptedEvent::MouldRound { round: k + 1, sphere_mesh: &moved })?;
         let (m, moved_panels, deviations) = metrics(&moved, reference, params.variant);
         let count = fabrication.assign(&MouldFits::of(&moved_panels), diag).moulds.len();
-        let holds = m.max_kink_angle_deg <= max_kink && m.max_distance_to_reference <= max_distance && m.flipped_faces == 0;
+        let holds = limits.hold(&m);
         let kept = holds && count < best_count;
         rounds.push(MouldRound {
             coarsening: gamma,
@@ -174,4 +200,83 @@ pub fn fewer_moulds(
         (current, panels) = (moved, moved_panels);
     }
     Ok(best.map(|b| FewerMoulds { rounds, iterations, fits_before, ..b }))
+}
+
+/// The sphere mesh with every face sphere snapped to its mould's radius, its panels, their
+/// distances and the metrics.
+pub struct Snapped {
+    pub sphere_mesh: SphereMesh,
+    pub panels: Vec<Panel>,
+    pub deviations: Vec<f64>,
+    pub metrics: StAdaptedMetrics,
+}
+
+/// Each face sphere becomes the member of the pencil through its three vertices with its
+/// mould's curvature, the one nearest it ([`Sphere::through_points_with_curvature`]): the panel
+/// is then cut from its mould with no deviation. A face whose mould is smaller than its corners'
+/// circumradius keeps its sphere. None (and every panel limited by the targets) when the snapped
+/// mesh misses `targets`.
+pub fn snap_to_moulds(
+    reference: &Reference,
+    sphere_mesh: &SphereMesh,
+    panels: &[Panel],
+    targets: &MouldTargets,
+    fabrication: &Fabrication,
+    variant: EdgeArcs,
+) -> (Option<Snapped>, MouldSnap) {
+    let diag = reference.diagonal();
+    let (mut snapped, mut snap) = snap_once(reference, sphere_mesh, panels, targets, fabrication.assign(&MouldFits::of(panels), diag), variant);
+    // Snapped panels share their moulds' radii exactly, so the sweep may now find fewer moulds:
+    // snap again to those while the count falls.
+    for _ in 0..SNAP_PASSES {
+        let Some(s) = &snapped else { break };
+        let fewer = fabrication.assign(&MouldFits::of(&s.panels), diag);
+        if fewer.moulds.len() >= snap.moulds.moulds.len() {
+            break;
+        }
+        let (again, again_snap) = snap_once(reference, &s.sphere_mesh, &s.panels, targets, fewer, variant);
+        if again.is_none() {
+            break;
+        }
+        (snapped, snap) = (again, again_snap);
+    }
+    (snapped, snap)
+}
+
+/// Snaps beyond the first while the count falls.
+const SNAP_PASSES: usize = 4;
+
+/// One snap of the face spheres to `moulds` (see [`snap_to_moulds`]).
+fn snap_once(
+    reference: &Reference,
+    sphere_mesh: &SphereMesh,
+    panels: &[Panel],
+    targets: &MouldTargets,
+    moulds: MouldAssignment,
+    variant: EdgeArcs,
+) -> (Option<Snapped>, MouldSnap) {
+    let positions = &sphere_mesh.mesh.positions;
+    let mut spheres = sphere_mesh.face_spheres.clone();
+    let mut limits = vec![None; panels.len()];
+    for (i, p) in panels.iter().enumerate() {
+        let current = spheres[p.face];
+        let curvature = moulds.moulds[moulds.panel_mould[i] as usize].curvature.copysign(current.a);
+        let snapped = match p.corners[..] {
+            [a, b, c] => Sphere::through_points_with_curvature([a, b, c].map(|v| positions[v as usize]), curvature, &current),
+            _ => None,
+        };
+        match snapped {
+            Some(s) => spheres[p.face] = s,
+            None => limits[i] = Some(SnapLimit::MouldBelowCircumradius),
+        }
+    }
+    let moved = SphereMesh::new(sphere_mesh.mesh.clone(), spheres, sphere_mesh.boundary_arcs);
+    let planes = boundary_planes(&moved, reference);
+    let moved = moved.with_boundary_planes(planes);
+    let (m, moved_panels, deviations) = metrics(&moved, reference, variant);
+    if !targets.hold(&m) {
+        let limits = vec![Some(SnapLimit::MethodTargets); panels.len()];
+        return (None, MouldSnap { moulds, limits });
+    }
+    (Some(Snapped { sphere_mesh: moved, panels: moved_panels, deviations, metrics: m }), MouldSnap { moulds, limits })
 }

@@ -22,10 +22,10 @@ use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::MouldAssignment;
+use crate::panels::moulds::{MouldAssignment, SnapLimit};
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, PanelExport};
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{ignore, Cancelled, Clock, Progress};
 use crate::reference::Reference;
@@ -345,7 +345,9 @@ fn exported(
                 &timings,
             )
             .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
-            .with_support(&f.mesh.support);
+            .with_support(&f.mesh.support)
+            // A face sphere passes through its four vertices (Sec. 5.2).
+            .with_snapping(Snapping::Not(SnapLimit::FixedByVertices));
             let (report, panel_files, assigned) = export_panels(reference, export, clock);
             files.extend(panel_files);
             moulds = Some(assigned);

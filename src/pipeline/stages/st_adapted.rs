@@ -11,9 +11,9 @@ use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, panel_fields, result_panel_fields, triangle_mesh_fields, PanelExport};
+use crate::pipeline::panel_output::{export_panels, panel_fields, result_panel_fields, triangle_mesh_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
-use crate::panels::moulds::MouldAssignment;
+use crate::panels::moulds::{MouldAssignment, SnapLimit};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
 use crate::st_adapted::metrics::{StAdaptedMetrics, StAdaptedShape};
@@ -134,7 +134,8 @@ fn exported(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedP
             .with_deviations(&result.panel_deviations)
             .with_moulds_before(result.fits_before.as_ref())
             .with_warnings(&result.warnings)
-            .with_verdict(&verdict);
+            .with_verdict(&verdict)
+            .with_snapping(result.mould_snap.as_ref().map_or(Snapping::Not(SnapLimit::NotAsked), Snapping::Snapped));
     let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));
     (report, files, moulds)

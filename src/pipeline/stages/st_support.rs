@@ -8,9 +8,9 @@ use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport};
+use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
-use crate::panels::moulds::MouldAssignment;
+use crate::panels::moulds::{MouldAssignment, SnapLimit};
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::st_support::report::StSupportSection;
@@ -87,7 +87,9 @@ fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportP
     )
     .with_extras(crate::export::absolute_sphere_extras(&result.omega))
     .with_support(&result.support)
-    .with_warnings(&result.warnings);
+    .with_warnings(&result.warnings)
+    // A face sphere is the one through its three vertices orthogonal to Ω (Sec. 4).
+    .with_snapping(Snapping::Not(SnapLimit::FixedByVertices));
     let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));
     (report, files, moulds)

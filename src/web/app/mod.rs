@@ -414,7 +414,7 @@ impl App {
         self.params_dirty |= view.controls(ui, &mut self.design);
         if m != Method::Curvature {
             ui.separator();
-            self.params_dirty |= panels::moulds::controls(ui, &mut self.design.fabrication);
+            self.params_dirty |= panels::moulds::controls(ui, &mut self.design.fabrication, self.moulds.as_ref());
         }
         if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
             self.params_dirty = false;

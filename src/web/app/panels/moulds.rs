@@ -79,8 +79,10 @@ impl MouldMeshes {
 /// Moulds listed in the table (the rest are counted).
 const TABLE_ROWS: usize = 24;
 
-/// The unit and the moulds asked for; true when they changed (the method reruns).
-pub fn controls(ui: &mut egui::Ui, fabrication: &mut Fabrication) -> bool {
+/// The unit and the moulds asked for, δ and K linked through the last result (`last`): each
+/// shows the other's value, and switching starts from it. True when they changed (the method
+/// reruns).
+pub fn controls(ui: &mut egui::Ui, fabrication: &mut Fabrication, last: Option<&MouldReport>) -> bool {
     let before = *fabrication;
     ui.label(RichText::new("Moulds: panels of one radius share a mould").small());
     ui.horizontal(|ui| {
@@ -94,10 +96,14 @@ pub fn controls(ui: &mut egui::Ui, fabrication: &mut Fabrication) -> bool {
     let by_count = matches!(fabrication.moulds, MouldTarget::Count(_));
     ui.horizontal(|ui| {
         if ui.radio(!by_count, "within δ").clicked() && by_count {
-            fabrication.moulds = MouldTarget::Tolerance(DEFAULT_MOULD_TOLERANCE);
+            // The δ the last result needed for its K moulds, in model units.
+            fabrication.moulds = MouldTarget::Tolerance(match last {
+                Some(m) if m.tolerance > 0.0 => Length::new(significant(m.tolerance), m.units),
+                _ => DEFAULT_MOULD_TOLERANCE,
+            });
         }
         if ui.radio(by_count, "K moulds").clicked() && !by_count {
-            fabrication.moulds = MouldTarget::Count(8);
+            fabrication.moulds = MouldTarget::Count(last.map_or(8, |m| m.count.max(1)));
         }
     });
     match &mut fabrication.moulds {
@@ -112,14 +118,29 @@ pub fn controls(ui: &mut egui::Ui, fabrication: &mut Fabrication) -> bool {
                         ui.selectable_value(&mut u, x, x.symbol());
                     }
                 });
+                if let Some(m) = last {
+                    ui.label(RichText::new(format!("→ K = {}", m.count)).small()).on_hover_text("the moulds of the last result at this δ");
+                }
             });
             *t = Length::new(value, u);
         }
         MouldTarget::Count(k) => {
-            ui.add(egui::DragValue::new(k).range(1..=10_000).prefix("K "));
+            ui.horizontal(|ui| {
+                ui.add(egui::DragValue::new(k).range(1..=10_000).prefix("K "));
+                if let Some(m) = last {
+                    ui.label(RichText::new(format!("→ δ = {}", format_length(m.tolerance, m.units))).small())
+                        .on_hover_text("the smallest fit tolerance of the last result for K moulds");
+                }
+            });
         }
     }
     *fabrication != before
+}
+
+/// `value` rounded to four significant digits, for a control.
+fn significant(value: f64) -> f64 {
+    let scale = 10f64.powi(3 - value.abs().log10().floor() as i32);
+    (value * scale).round() / scale
 }
 
 /// The result's moulds: their count and tolerance, the table and the count against δ.
@@ -133,6 +154,8 @@ pub fn results(ui: &mut egui::Ui, moulds: &MouldReport) {
         format_length(moulds.tolerance, u),
         format_length(moulds.max_deviation, u)
     ));
+    let panels = moulds.moulds.iter().map(|m| m.panels).sum();
+    ui.label(RichText::new(moulds.snap.describe(panels, u)).small());
     egui::Grid::new("moulds_table").striped(true).show(ui, |ui| {
         ui.label("");
         ui.label(RichText::new(format!("radius ({u})")).small());

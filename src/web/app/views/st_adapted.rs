@@ -201,7 +201,7 @@ fn controls(
             .on_hover_text("Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain");
     });
     ui.checkbox(&mut params.optimize_moulds, "then move the panels onto fewer moulds")
-        .on_hover_text("Rounds that pull every panel's curvature to a coarser mould's, keeping the largest kink within 1.2× and the panels within 2ε");
+        .on_hover_text("Rounds that pull every panel's curvature to a coarser mould's, keeping the largest kink within 1.2× and the panels within 2ε; then every panel gets its mould's radius exactly");
     ui.checkbox(show_reference, "show reference surface (sizing colours)");
     ui.checkbox(show_remeshed, "overlay the remeshed triangulation (before optimization)");
     *params != before
