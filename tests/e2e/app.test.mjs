@@ -310,6 +310,32 @@ for (const project of PROJECTS) {
       });
     });
 
+    test(`[${project.name}] h2. ST moves its panels onto fewer moulds in the worker and snaps each to its mould's radius`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const fragment = 'v=1&sample=dome&method=st&sizing=faces&faces=300&opt_moulds=1&mould_tol=0.5mm';
+      await withApp(t, browser, server, project, { name: 'h2-st-moulds', fragment }, async (app) => {
+        const s = await waitForState(
+          app,
+          'st finished with its moulds',
+          (s) => s.st_adapted && s.st_adapted.ready && !s.busy && s.moulds !== null && s.downloads.includes('panels.csv'),
+          { timeout: T.load },
+        );
+        const st = s.st_adapted;
+        t.diagnostic(`st: ${JSON.stringify({ ...st, timings_ms: undefined })}; moulds ${JSON.stringify(s.moulds)}; timings ${JSON.stringify(st.timings_ms)}`);
+        assert.ok(!s.error, `error: ${s.error}`);
+        assert.ok(s.design_link.includes('opt_moulds=1') && s.design_link.includes('mould_tol=0.5mm'), s.design_link);
+        const [count, tolerance, snapped] = s.moulds;
+        assert.ok(Math.abs(tolerance - 5e-4) < 1e-12, `δ = 0.5 mm in metres: ${tolerance}`);
+        // The rounds ran in the worker and kept fewer moulds; every panel was snapped.
+        assert.ok(st.timings_ms.fewer_moulds > 0 && st.timings_ms.snap_moulds > 0, 'the rounds and the snap ran');
+        assert.ok(Number.isInteger(st.moulds_before) && count < st.moulds_before, `moulds ${st.moulds_before} → ${count}`);
+        assert.equal(snapped, st.panels, 'every panel has exactly its mould radius');
+        assert.equal(st.mould_colours, Math.min(count, 16), 'one panel mesh per mould colour');
+        assertDrawn(await measureViewport(app, s, 'st-moulds'), 'ST panels in mould colours');
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
     test(`[${project.name}] i. the UI keeps drawing while an 8k-face ST optimizes, and Cancel stops it within one iteration`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
       // 8000 faces: the whole run takes about ten seconds, so the cancel below finds it running
@@ -494,7 +520,9 @@ for (const project of PROJECTS) {
         assert.ok(Math.abs(mo.tolerance - 5e-5) < 1e-12, `δ = 0.05 mm in metres: ${mo.tolerance}`);
         assert.ok(mo.count > 1 && mo.max_deviation <= mo.tolerance, `${mo.count} moulds, largest deviation ${mo.max_deviation}`);
         assert.equal(mo.moulds.reduce((n, m) => n + m.panels, 0), r.output.panels, 'every panel on a mould');
-        assert.deepEqual(s.moulds, [mo.count, mo.tolerance], 'the side panel shows the same moulds');
+        assert.deepEqual(s.moulds, [mo.count, mo.tolerance, mo.snap.snapped], 'the side panel shows the same moulds');
+        assert.equal(mo.snap.snapped, 0, 'SQ fixes each sphere by its four vertices');
+        assert.deepEqual(mo.snap.not_snapped.map((m) => [m.reason, m.panels]), [['fixed_by_vertices', r.output.panels]]);
         assert.equal(s.sq.mould_colours, Math.min(mo.count, 16), 'one panel mesh per mould colour');
         const m = r.sq.sq_mesh;
         const q = r.sq.quad_mesh;

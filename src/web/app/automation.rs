@@ -41,8 +41,9 @@ struct AutomationState<'a> {
     error: &'a Option<String>,
     /// The status bar's line when the last result misses its method's guarantees.
     missed_guarantees: &'a Option<String>,
-    /// The moulds of the last panel result: how many, and within what (model units).
-    moulds: Option<(usize, f64)>,
+    /// The moulds of the last panel result: how many, within what (model units), and how many
+    /// panels have exactly their mould's radius.
+    moulds: Option<(usize, f64, usize)>,
     notices: &'a [String],
     design_link: &'a str,
     clear_color: [u8; 3],
@@ -102,7 +103,7 @@ impl App {
             jet_degree: self.design.jet.degree,
             error: &self.error,
             missed_guarantees: &self.missed_guarantees,
-            moulds: self.moulds.as_ref().map(|m| (m.count, m.tolerance)),
+            moulds: self.moulds.as_ref().map(|m| (m.count, m.tolerance, m.snap.snapped)),
             notices: &self.notices,
             design_link: &self.last_fragment,
             clear_color: [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],

@@ -68,6 +68,10 @@ struct Automation<'a> {
     ready: bool,
     panels: usize,
     timings_ms: Option<&'a std::collections::BTreeMap<String, f64>>,
+    /// Panel meshes by mould colour, and the moulds before the rounds toward fewer (when one
+    /// was kept).
+    mould_colours: usize,
+    moulds_before: Option<usize>,
 }
 
 impl MethodView for StAdaptedMethod {
@@ -163,6 +167,12 @@ impl MethodView for StAdaptedMethod {
             ready: a.summary.is_some(),
             panels: a.summary.as_ref().map_or(0, |s| s.report.output.panels),
             timings_ms: a.summary.as_ref().map(|s| &s.report.timings_ms),
+            mould_colours: a.moulds.as_ref().map_or(0, MouldMeshes::colours),
+            moulds_before: a
+                .summary
+                .as_ref()
+                .and_then(|s| s.report.section::<crate::st_adapted::report::StAdaptedSection>())
+                .and_then(|s| s.moulds_before),
         });
         serde_json::to_value(state).unwrap_or_default()
     }
