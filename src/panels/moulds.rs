@@ -181,13 +181,18 @@ impl MouldFits {
     /// the radii within [`SNAPPED`] × `diagonal` (a flat mould: the panel's radius at least
     /// `diagonal` / [`SNAPPED`]).
     pub fn has_mould_radius(&self, i: usize, magnitude: f64, diagonal: f64) -> bool {
-        let own = self.curvature[i].abs();
-        if magnitude > 0.0 && own > 0.0 {
-            (1.0 / own - 1.0 / magnitude).abs() <= SNAPPED * diagonal
-        } else {
+        match self.radius_miss(i, magnitude) {
+            Some(miss) => miss <= SNAPPED * diagonal,
             // One of them flat: the other too, to a radius of diagonal / SNAPPED.
-            own.max(magnitude) * diagonal <= SNAPPED
+            None => self.curvature[i].abs().max(magnitude) * diagonal <= SNAPPED,
         }
+    }
+
+    /// |r − R|: panel `i`'s radius against a mould of curvature `magnitude`; None when either
+    /// is flat.
+    pub fn radius_miss(&self, i: usize, magnitude: f64) -> Option<f64> {
+        let own = self.curvature[i].abs();
+        (own > 0.0 && magnitude > 0.0).then(|| (1.0 / own - 1.0 / magnitude).abs())
     }
 
     /// The fewest moulds within `tolerance` (the count of [`Self::assign`], without assigning).

@@ -241,8 +241,7 @@ fn snap_report(fits: &MouldFits, moulds: &MouldAssignment, snapped: &[bool], sna
             Snapping::Snapped(s) => s.limits.get(i).copied().flatten().unwrap_or(SnapLimit::Missed),
             Snapping::Not(reason) => reason,
         };
-        let (own, mould) = (fits.curvature[i].abs(), moulds.moulds[moulds.panel_mould[i] as usize].curvature);
-        let radius_miss = (own > 0.0 && mould > 0.0).then(|| (1.0 / own - 1.0 / mould).abs());
+        let radius_miss = fits.radius_miss(i, moulds.moulds[moulds.panel_mould[i] as usize].curvature);
         let at = match report.not_snapped.iter().position(|m| m.reason == reason) {
             Some(at) => at,
             None => {
