@@ -15,7 +15,7 @@ use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::export::{ExportFile, Report};
 use spherical_faces::import::MAX_BYTES;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
-use spherical_faces::panels::moulds::{Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
+use spherical_faces::panels::moulds::{refused_rounds, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{Clock, Progress};
@@ -122,6 +122,10 @@ enum Command {
         /// Remesh first uniformly to about N faces.
         #[arg(long, value_name = "N", value_parser = face_count)]
         faces: Option<usize>,
+        /// Move the vertices so that every panel has the radius of one of fewer moulds exactly,
+        /// every face sphere still orthogonal to Ω (the schedule's `mould_snapped`).
+        #[arg(long)]
+        optimize_moulds: bool,
         #[command(flatten)]
         fabrication: FabricationArgs,
         #[command(flatten)]
@@ -159,6 +163,10 @@ enum Command {
         /// Depth of the support elements, relative to the diagonal.
         #[arg(long, value_name = "D", default_value_t = SqParams::default().support_depth, value_parser = fraction_in::<0, 1>)]
         depth: f64,
+        /// Move the exact SQ mesh so that every panel has the radius of one of fewer moulds
+        /// exactly, keeping exactness, θ and α (the schedule's `mould_snapped`).
+        #[arg(long)]
+        optimize_moulds: bool,
         #[command(flatten)]
         fabrication: FabricationArgs,
         #[command(flatten)]
@@ -290,7 +298,19 @@ pub fn main() -> ExitCode {
             };
             st(&input, StAdaptedParams { sizing, variant, optimize_moulds, ..StAdaptedParams::default() }, &fabrication, &output, &mut progress)
         }
-        Command::StSupport { input, optimize_radius, depth, axis_length, radius_tolerance, adaptive, epsilon, faces, fabrication, output } => {
+        Command::StSupport {
+            input,
+            optimize_radius,
+            depth,
+            axis_length,
+            radius_tolerance,
+            adaptive,
+            epsilon,
+            faces,
+            optimize_moulds,
+            fabrication,
+            output,
+        } => {
             let remesh = match (adaptive, faces) {
                 (true, _) => Sizing::Adaptive { epsilon: epsilon.unwrap_or(DEFAULT_EPSILON) },
                 (false, Some(n)) => Sizing::UniformFaces(n),
@@ -302,11 +322,12 @@ pub fn main() -> ExitCode {
                 axis_length,
                 radius_tolerance,
                 remesh,
+                optimize_moulds,
                 ..StSupportParams::default()
             };
             st_support(&input, params, &fabrication, &output, &mut progress)
         }
-        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, fabrication, output } => {
+        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, optimize_moulds, fabrication, output } => {
             let params = SqParams {
                 theta_deg: theta,
                 alpha_deg: alpha,
@@ -316,6 +337,7 @@ pub fn main() -> ExitCode {
                 until,
                 start,
                 support_depth: depth,
+                optimize_moulds,
                 ..SqParams::default()
             };
             sq(&input, params, &fabrication, &output, &mut progress)
@@ -483,16 +505,25 @@ fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, o
     let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
     progress.clear();
     write_files(output, &files, &report)?;
-    Ok(with_moulds(
-        format!(
-            "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
-            result.panels.len(),
-            output.out.display(),
-            result.metrics.max_kink_angle_deg,
-            report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
-        ),
-        &report,
-    ))
+    let refused = result.moulds.as_ref().and_then(|o| {
+        refused_rounds(o.rounds.iter().map(|r| (r.moulds, r.max_distance_to_reference, r.kept)), o.distance_limit)
+    });
+    let summary = format!(
+        "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
+        result.panels.len(),
+        output.out.display(),
+        result.metrics.max_kink_angle_deg,
+        report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
+    );
+    Ok(with_refusal(with_moulds(summary, &report), refused))
+}
+
+/// `summary`, then why no round toward fewer moulds was kept, if so.
+fn with_refusal(summary: String, refused: Option<String>) -> String {
+    match refused {
+        Some(why) => format!("{summary}; {why}"),
+        None => summary,
+    }
 }
 
 /// `summary`, then the moulds of the report: how many, within what, in model units.
@@ -619,7 +650,11 @@ fn sq(input: &Input, mut params: SqParams, f: &FabricationArgs, output: &Output,
             )
         }
     };
-    verdict(with_moulds(summary, &report), &report)
+    let refused = sq.sq_mesh.as_ref().and_then(|m| {
+        let rounds = m.mould_rounds.iter().map(|r| (r.moulds, r.max_vertex_distance_to_reference, r.kept));
+        refused_rounds(rounds, m.moulds_distance_limit?)
+    });
+    verdict(with_refusal(with_moulds(summary, &report), refused), &report)
 }
 
 /// One JSON object: counts after triangulation and welding (of a B-spline: its tessellation),

@@ -264,6 +264,9 @@ impl Design {
                     fmt_num(st.radius_tolerance)
                 );
                 s += &sizing_fragment("remesh", st.remesh);
+                if st.optimize_moulds {
+                    s += "&opt_moulds=1";
+                }
             }
             Method::Sq => {
                 let sq = &self.sq;
@@ -279,6 +282,9 @@ impl Design {
                 // The starting congruence only when not the default, so older links stay as they were.
                 if sq.start != RadiusStart::Auto {
                     s += &format!("&start={}", sq.start.key());
+                }
+                if sq.optimize_moulds {
+                    s += "&opt_moulds=1";
                 }
             }
         }
@@ -351,7 +357,7 @@ impl Design {
         }
         let mut file_name = None;
         let mut wants_file = false;
-        let (mut eps, mut faces) = (None, None);
+        let (mut eps, mut faces, mut opt_moulds) = (None, None, None);
         let (mut adapted_sizing, mut support_remesh) = (None, None);
         for (k, v) in &pairs {
             let ok = match k.as_str() {
@@ -382,7 +388,8 @@ impl Design {
                 "jet_degree" => parse_in(v, 2, 4).map(|x| d.jet.degree = x as u8).is_some(),
                 "jet_rings" => parse_in(v, 1, 8).map(|x| d.jet.max_rings = x as usize).is_some(),
                 "opt_r" => parse_flag(v).map(|x| d.st_support.optimize_radius = x).is_some(),
-                "opt_moulds" => parse_flag(v).map(|x| d.st_adapted.optimize_moulds = x).is_some(),
+                // The switch belongs to the method the link names (applied below).
+                "opt_moulds" => parse_flag(v).map(|x| opt_moulds = Some(x)).is_some(),
                 "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st_support.support_depth = x).is_some(),
                 "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st_support.axis_length = x).is_some(),
                 "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st_support.radius_tolerance = x).is_some(),
@@ -436,6 +443,14 @@ impl Design {
         let mine = applies(Method::StSupport);
         if let Some(kind) = support_remesh.or(mine.then(|| SizingKind::of(d.st_support.remesh))) {
             d.st_support.remesh = sizing_of(kind, d.st_support.remesh, mine);
+        }
+        if let Some(x) = opt_moulds {
+            match d.method {
+                Method::StAdapted => d.st_adapted.optimize_moulds = x,
+                Method::StSupport => d.st_support.optimize_moulds = x,
+                Method::Sq => d.sq.optimize_moulds = x,
+                Method::Curvature => {}
+            }
         }
         // For SQ, N is the remesh's face count.
         if let Some(n) = faces.filter(|_| applies(Method::Sq)) {

@@ -18,6 +18,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::panel::Panel;
+use crate::progress::{Cancelled, Progress};
 use crate::units::{Length, Units};
 
 /// Boundary samples per arc of a panel (the arcs' own points, corners included).
@@ -279,6 +280,112 @@ impl SnapLimit {
 pub struct MouldSnap {
     pub moulds: MouldAssignment,
     pub limits: Vec<Option<SnapLimit>>,
+}
+
+/// In words, why a method kept none of its rounds toward fewer moulds, from its rounds (moulds,
+/// largest distance to the reference relative to the diagonal, kept) and the `limit` on that
+/// distance; None when a round was kept or none ran.
+pub fn refused_rounds(rounds: impl IntoIterator<Item = (usize, f64, bool)>, limit: f64) -> Option<String> {
+    let rounds: Vec<(usize, f64, bool)> = rounds.into_iter().collect();
+    let &(moulds, distance, _) = rounds.first()?;
+    if rounds.iter().any(|r| r.2) {
+        return None;
+    }
+    let moulds = format!("{moulds} mould{}", if moulds == 1 { "" } else { "s" });
+    Some(if distance > limit {
+        format!("not snapped: on {moulds} exactly the panels would be {distance:.2e} of the diagonal from the reference, over the limit {limit:.2e}")
+    } else {
+        format!("not snapped: on {moulds} exactly the method's guarantees would not hold")
+    })
+}
+
+/// The rounds' tolerances, as multiples of δ, in order: δ itself (the snap), then coarser.
+pub const SNAP_COARSENING: [f64; 7] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
+
+/// What one round of [`snapped_rounds`] found: its coarsening γ, the moulds at δ of the moved
+/// panels, and whether it was kept.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoundCount {
+    pub coarsening: f64,
+    pub moulds: usize,
+    pub kept: bool,
+}
+
+/// What [`snapped_rounds`] made: the last kept result (None: none was kept), the moulds its
+/// panels were snapped to or why none was, and the moulds at δ before with the fits then.
+pub struct SnappedRounds<R> {
+    pub best: Option<R>,
+    pub snap: Result<MouldSnap, SnapLimit>,
+    pub before: usize,
+    pub fits_before: MouldFits,
+}
+
+/// Rounds toward fewer moulds for a method that can give every panel a prescribed curvature
+/// exactly: each round assigns the panels of the last kept result to the moulds of γ δ
+/// ([`SNAP_COARSENING`]; γ = 1 first), and `project` moves that result so that every panel has
+/// its mould's curvature (signed, per panel in order), answering the moved result and whether
+/// the method's guarantees hold (None: it could not; the rounds end). A round is kept when they
+/// hold and the moulds at δ fell; the rounds end at the first that breaks them. A kept round's
+/// panels have their moulds' radii (measured: [`MouldFits::has_mould_radius`]), so the last is
+/// the snap. `on_round` sees every round's result with its count.
+#[allow(clippy::type_complexity)]
+pub fn snapped_rounds<R, E: From<Cancelled>>(
+    start: &R,
+    panels: &dyn Fn(&R) -> &[Panel],
+    diag: f64,
+    fabrication: &Fabrication,
+    project: &mut dyn FnMut(&R, &[f64]) -> Result<Option<(R, bool)>, E>,
+    on_round: &mut dyn FnMut(&R, RoundCount),
+    progress: &mut dyn FnMut(Progress) -> Result<(), Cancelled>,
+) -> Result<SnappedRounds<R>, E> {
+    let fits_before = MouldFits::of(panels(start));
+    let delta = fabrication.tolerance(&fits_before, diag);
+    let before = fabrication.assign(&fits_before, diag).moulds.len();
+    let (mut best, mut best_count, mut snap) = (None::<R>, usize::MAX, Err(SnapLimit::MethodTargets));
+    let n = SNAP_COARSENING.len();
+    for (k, &gamma) in SNAP_COARSENING.iter().enumerate() {
+        progress(Progress::new("fewer_moulds", k, n))?;
+        let current = best.as_ref().unwrap_or(start);
+        let fits = MouldFits::of(panels(current));
+        let coarse = fits.assign(gamma * delta);
+        if coarse.moulds.len() >= best_count {
+            continue;
+        }
+        let curvatures: Vec<f64> = (0..fits.len())
+            .map(|i| {
+                let m = coarse.moulds[coarse.panel_mould[i] as usize].curvature;
+                if fits.curvature[i] < 0.0 {
+                    -m
+                } else {
+                    m
+                }
+            })
+            .collect();
+        let Some((moved, holds)) = project(current, &curvatures)? else {
+            break;
+        };
+        let moved_fits = MouldFits::of(panels(&moved));
+        let count = fabrication.assign(&moved_fits, diag).moulds.len();
+        let kept = holds && count < best_count;
+        on_round(&moved, RoundCount { coarsening: gamma, moulds: count, kept });
+        if !holds {
+            break;
+        }
+        if kept {
+            let limits = coarse
+                .panel_mould
+                .iter()
+                .enumerate()
+                .map(|(i, &j)| (!moved_fits.has_mould_radius(i, coarse.moulds[j as usize].curvature, diag)).then_some(SnapLimit::Missed))
+                .collect();
+            // Snapped panels are cut from their moulds with no deviation: the fit is at δ.
+            snap = Ok(MouldSnap { moulds: MouldAssignment { tolerance: delta, ..coarse }, limits });
+            best_count = count;
+            best = Some(moved);
+        }
+    }
+    progress(Progress::new("fewer_moulds", n, n))?;
+    Ok(SnappedRounds { best, snap, before, fits_before })
 }
 
 /// How many moulds: the fewest within a tolerance, or a count (the smallest tolerance that

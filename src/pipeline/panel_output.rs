@@ -108,6 +108,18 @@ pub enum Snapping<'a> {
     Not(SnapLimit),
 }
 
+impl<'a> Snapping<'a> {
+    /// The snap of a method's rounds toward fewer moulds: the moulds, or why none was kept;
+    /// None when they were not asked for.
+    pub(crate) fn of(rounds: Option<&'a Result<MouldSnap, SnapLimit>>) -> Self {
+        match rounds {
+            Some(Ok(snap)) => Snapping::Snapped(snap),
+            Some(Err(limit)) => Snapping::Not(*limit),
+            None => Snapping::Not(SnapLimit::NotAsked),
+        }
+    }
+}
+
 /// What a panel method exports: see [`PanelExport::new`].
 pub struct PanelExport<'a> {
     pub method: &'a str,

@@ -28,6 +28,7 @@ mod error;
 pub mod congruence_file;
 pub mod guarantees;
 pub mod metrics;
+pub mod moulds;
 pub mod optimization;
 pub mod params;
 pub mod quad_mesh;
@@ -57,7 +58,8 @@ use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
 use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
-use self::sphere_optimization::{on_grid, optimize_spheres, QuadStars, SphereInput, SphereOutcome, SpherePhase};
+use self::moulds::{fewer_moulds, SqMouldOutcome};
+use self::sphere_optimization::{on_grid, optimize_spheres, project_to_curvatures, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
 use self::start::{constant_function, constant_radius, spherical_reference};
 use crate::geometry::mesh::PolyMesh;
@@ -433,6 +435,8 @@ pub struct SqFinal {
     /// Angles (deg) between the final edges and the torsal directions.
     pub edge_angles_deg: Vec<f64>,
     pub outcome: SphereOutcome,
+    /// The rounds toward fewer moulds (`optimize_moulds` on a result that met its guarantees).
+    pub moulds: Option<SqMouldOutcome>,
 }
 
 /// What [`compute`] produced, as far as [`SqParams::until`] asked.
@@ -524,7 +528,7 @@ fn spherical_mesh(
     let distance = out.sphere_mesh.mesh.positions.iter().map(|p| (p.distance(centre) - r).abs()).fold(0.0, f64::max);
     out.figures.max_vertex_distance_to_reference = distance / diag;
     timings.lap("panels");
-    SqFinal { mesh: out, uv: quad.uv.clone(), edge_angles_deg: quad.edge_angles_deg.clone(), outcome: SphereOutcome::default() }
+    SqFinal { mesh: out, uv: quad.uv.clone(), edge_angles_deg: quad.edge_angles_deg.clone(), outcome: SphereOutcome::default(), moulds: None }
 }
 
 /// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
@@ -576,34 +580,64 @@ fn final_mesh(
         limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
     };
     // The Spheres event carries the phase and iteration: it is the progress of this step.
-    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, params, clock, &mut |phase, iteration, terms, v, sp| {
+    let mut hook = |phase, iteration, terms: &[TermStats], v: &[DVec3], sp: &[Sphere]| {
         let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
         let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
         on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
-    })?;
+    };
+    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, params, clock, &mut hook)?;
     timings.lap("spheres");
-    let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
-    let spheres: Vec<Sphere> = spheres.iter().map(|x| x.from_frame(t, s).normalized()).collect();
-    if positions.iter().any(|p| !p.is_finite()) || spheres.iter().any(|x| !x.is_finite()) {
-        return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
-    }
-    on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
-    // The reference's closest points: (u, v), normals and the vertices' distance.
-    let mut uv = Vec::with_capacity(positions.len());
-    let mut final_normals = Vec::with_capacity(positions.len());
-    let mut distance: f64 = 0.0;
-    for (p, start) in positions.iter().zip(&quad.uv) {
-        let (w, q, n) = spline.closest_point(*p, *start);
-        uv.push(w);
-        final_normals.push(n.unwrap_or(DVec3::Z));
-        distance = distance.max(p.distance(q));
-    }
-    let diag = reference.diagonal();
-    let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
-    let edge_angles_deg = edge_field_angles(surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
-    let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
-    out.figures.max_vertex_distance_to_reference = distance / diag;
-    on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
+    let finish = |vertices: &[DVec3], spheres: &[Sphere], outcome: SphereOutcome, on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>| {
+        let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
+        let spheres: Vec<Sphere> = spheres.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+        if positions.iter().any(|p| !p.is_finite()) || spheres.iter().any(|x| !x.is_finite()) {
+            return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
+        }
+        on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
+        // The reference's closest points: (u, v), normals and the vertices' distance.
+        let mut uv = Vec::with_capacity(positions.len());
+        let mut final_normals = Vec::with_capacity(positions.len());
+        let mut distance: f64 = 0.0;
+        for (p, start) in positions.iter().zip(&quad.uv) {
+            let (w, q, n) = spline.closest_point(*p, *start);
+            uv.push(w);
+            final_normals.push(n.unwrap_or(DVec3::Z));
+            distance = distance.max(p.distance(q));
+        }
+        let diag = reference.diagonal();
+        let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
+        let edge_angles_deg = edge_field_angles(surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
+        let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
+        out.figures.max_vertex_distance_to_reference = distance / diag;
+        on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
+        Ok(SqFinal { mesh: out, uv, edge_angles_deg, outcome, moulds: None })
+    };
+    let done = finish(&vertices, &spheres, outcome, on_event)?;
     timings.lap("panels");
-    Ok(SqFinal { mesh: out, uv, edge_angles_deg, outcome })
+    let meets = |f: &SqFinal| guarantees::verdict(&congruence.figures, Delivered::SqMesh(&f.mesh.sphere_mesh.mesh, &f.mesh.figures), params.theta_deg, params.alpha_deg);
+    if !params.optimize_moulds || !meets(&done).holds() {
+        return Ok(done);
+    }
+    // Fewer moulds: the projection again from the exact mesh, every face at its mould's curvature.
+    let events = std::cell::RefCell::new(on_event);
+    let mut project = |from: &SqFinal, curvatures: &[f64]| {
+        let frame_mesh = PolyMesh::new(from.mesh.sphere_mesh.mesh.positions.iter().map(|p| (*p - t) / s).collect(), from.mesh.sphere_mesh.mesh.faces.clone());
+        let spheres: Vec<Sphere> = from.mesh.sphere_mesh.face_spheres.iter().map(|x| x.in_frame(t, s).normalized()).collect();
+        let curvatures: Vec<f64> = curvatures.iter().map(|k| k * s).collect();
+        let input = SphereInput { mesh: &frame_mesh, ..input };
+        let mut hook = |phase, iteration, terms: &[TermStats], v: &[DVec3], sp: &[Sphere]| {
+            let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
+            let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+            (events.borrow_mut())(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
+        };
+        let (v, sp, iterations) = project_to_curvatures(&input, &stars, &spheres, &curvatures, params, clock, &mut hook)?;
+        let moved = finish(&v, &sp, SphereOutcome { projection_iterations: iterations, ..from.outcome.clone() }, &mut **events.borrow_mut())?;
+        let holds = meets(&moved).holds();
+        Ok((moved, holds))
+    };
+    let (best, outcome) = fewer_moulds(&done, &|f: &SqFinal| &f.mesh, reference.diagonal(), &params.fabrication, &mut project, &mut |p| (events.borrow_mut())(SqEvent::Progress(p)))?;
+    timings.lap("fewer_moulds");
+    let mut out = best.unwrap_or(done);
+    out.moulds = Some(outcome);
+    Ok(out)
 }

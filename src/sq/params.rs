@@ -223,6 +223,9 @@ pub struct SqParams {
     pub radius_tolerance: f64,
     /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
     pub fabrication: Fabrication,
+    /// Move the exact mesh onto fewer moulds, its panels snapped to their radii
+    /// ([`super::moulds`]).
+    pub optimize_moulds: bool,
 }
 
 impl Default for SqParams {
@@ -252,6 +255,7 @@ impl Default for SqParams {
             axis_length: 0.06,
             radius_tolerance: 1e-3,
             fabrication: Fabrication::default(),
+            optimize_moulds: false,
         }
     }
 }

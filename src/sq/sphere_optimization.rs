@@ -41,9 +41,11 @@ use crate::progress::{Cancelled, Clock};
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
 use crate::solver::terms::v3;
-use crate::solver::{Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermStats, Termination, UnitLength};
+use crate::solver::{
+    Anchor, Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermId, TermStats, Termination, UnitLength,
+};
 
-use super::params::SqParams;
+use super::params::{SphereWeights, SqParams};
 use super::quad_mesh::polyline_fairness;
 use super::sphere_terms::{
     AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane,
@@ -59,6 +61,8 @@ pub enum SpherePhase {
     WarmUp,
     Full,
     Projection,
+    /// The projection with every face at its mould's curvature ([`super::moulds`]).
+    Moulds,
 }
 
 impl SpherePhase {
@@ -67,6 +71,7 @@ impl SpherePhase {
             SpherePhase::WarmUp => "warm_up",
             SpherePhase::Full => "spheres",
             SpherePhase::Projection => "projection",
+            SpherePhase::Moulds => "moulds",
         }
     }
 }
@@ -225,31 +230,87 @@ pub fn unpack(layout: &SphereLayout, x: &[f64]) -> (Vec<DVec3>, Vec<Sphere>) {
     (vertices, spheres)
 }
 
-/// Runs the warm-up, the full optimization and the projection (see the module docs) with
-/// `params`' sphere weights, iterations and decrease tolerance (the full optimization stops early
-/// when an accepted step lowers its energy by at most that fraction); returns the vertices, the
-/// spheres (normalized) and what happened.
-pub(crate) fn optimize_spheres(
-    input: &SphereInput,
+/// The terms of Eq. 10 and of the projection, by name.
+#[derive(Clone, Copy)]
+struct SphereTerms {
+    sphere: TermId,
+    unit: TermId,
+    supp: TermId,
+    star_unit: TermId,
+    torsal: TermId,
+    edge_unit: TermId,
+    tangent: TermId,
+    point: TermId,
+    centre: TermId,
+    fair: TermId,
+    reg_sphere: TermId,
+    reg_normal: TermId,
+    angle: TermId,
+    axis: TermId,
+    fan: TermId,
+    separation: TermId,
+    exact_angle: TermId,
+    exact_axis: TermId,
+    exact_fan: TermId,
+}
+
+impl SphereTerms {
+    fn all(&self) -> [TermId; 19] {
+        [
+            self.sphere,
+            self.unit,
+            self.supp,
+            self.star_unit,
+            self.torsal,
+            self.edge_unit,
+            self.tangent,
+            self.point,
+            self.centre,
+            self.fair,
+            self.reg_sphere,
+            self.reg_normal,
+            self.angle,
+            self.axis,
+            self.fan,
+            self.separation,
+            self.exact_angle,
+            self.exact_axis,
+            self.exact_fan,
+        ]
+    }
+
+    /// Every term at weight 0 but `weights`.
+    fn set(&self, problem: &mut Problem, weights: &[(TermId, f64)]) {
+        for id in self.all() {
+            problem.set_weight(id, 0.0);
+        }
+        for &(id, wt) in weights {
+            problem.set_weight(id, wt);
+        }
+    }
+}
+
+/// The optimization's problem on `input` with all the terms at their weights, starting from
+/// `input.mesh`'s vertices, `spheres` and the star normals `star_normals` (one per star).
+fn sphere_problem<'a>(
+    input: &SphereInput<'a>,
     stars: &QuadStars,
-    params: &SqParams,
-    clock: Clock,
-    hook: &mut SphereHook,
-) -> Result<(Vec<DVec3>, Vec<Sphere>, SphereOutcome), Cancelled> {
-    let (w, iterations) = (&params.sphere_weights, params.sphere_iterations);
+    w: &SphereWeights,
+    spheres: &[Sphere],
+    star_normals: &[DVec3],
+) -> (Problem<'a>, SphereTerms, SphereLayout, Vec<f64>) {
     let mesh = input.mesh;
     let layout =
         SphereLayout { faces: mesh.face_count(), vertices: mesh.vertex_count(), stars: stars.stars.len(), edges: stars.edges.len() };
     let mut x = vec![0.0; layout.len()];
-    let spheres = initial_spheres(mesh, input.radii, input.normals);
     for (f, s) in spheres.iter().enumerate() {
         x[layout.sphere(f)..layout.sphere(f) + 5].copy_from_slice(&s.to_array());
     }
     for (v, p) in mesh.positions.iter().enumerate() {
         x[layout.vertex(v)..layout.vertex(v) + 3].copy_from_slice(&p.to_array());
     }
-    for (s, &(v, _)) in stars.stars.iter().enumerate() {
-        x[layout.star_normal(s)..layout.star_normal(s) + 3].copy_from_slice(&input.lines[v as usize].to_array());
+    for (s, n) in star_normals.iter().enumerate() {
+        x[layout.star_normal(s)..layout.star_normal(s) + 3].copy_from_slice(&n.to_array());
     }
     let axis = |v: u32| match stars.star_of[v as usize] {
         Some(s) => NodeAxis::Variable(layout.star_normal(s)),
@@ -281,8 +342,8 @@ pub(crate) fn optimize_spheres(
         .map(|(s, (_, faces))| (faces.iter().map(|&f| layout.sphere(f as usize)).collect(), layout.star_normal(s)))
         .collect();
     let supp_id = problem.add_term(CentrePlanarity { stars: star_terms }, w.supp);
-    let star_normals: Vec<usize> = (0..layout.stars).map(|s| layout.star_normal(s)).collect();
-    let star_unit_id = problem.add_term(UnitLength::vectors(star_normals).with_name("axis_unit"), w.unit);
+    let star_normal_offsets: Vec<usize> = (0..layout.stars).map(|s| layout.star_normal(s)).collect();
+    let star_unit_id = problem.add_term(UnitLength::vectors(star_normal_offsets).with_name("axis_unit"), w.unit);
     let torsal_id = problem.add_term(TorsalPlane { edges: torsal_edges }, w.torsal_plane);
     let edge_normals: Vec<usize> = (0..layout.edges).map(|e| layout.edge_normal(e)).collect();
     let edge_unit_id = problem.add_term(UnitLength::vectors(edge_normals).with_name("torsal_plane_unit"), w.unit);
@@ -356,122 +417,84 @@ pub(crate) fn optimize_spheres(
     for e in 0..layout.edges {
         problem.group_variables(layout.edge_normal(e)..layout.edge_normal(e) + 3);
     }
-
-    let mut outcome = SphereOutcome::default();
-    let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
-    let mut run = |problem: &mut Problem,
-                   x: &mut [f64],
-                   phase: SpherePhase,
-                   max: usize,
-                   solver: &mut Solver,
-                   outcome: &mut SphereOutcome|
-     -> Result<usize, Cancelled> {
-        solver.options.max_iterations = max;
-        let report = solver.solve(problem, x, |it| {
-            let (v, s) = unpack(&layout, it.x);
-            hook(phase, it.iteration, it.terms, &v, &s)
-        });
-        outcome.phase_ms.add(&report.phase_ms);
-        if phase == SpherePhase::Full {
-            outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
-            outcome.terms = report.terms.clone();
-        }
-        if report.termination == Termination::Cancelled {
-            return Err(Cancelled);
-        }
-        Ok(report.iterations)
+    let terms = SphereTerms {
+        sphere: sphere_id,
+        unit: unit_id,
+        supp: supp_id,
+        star_unit: star_unit_id,
+        torsal: torsal_id,
+        edge_unit: edge_unit_id,
+        tangent: tangent_id,
+        point: point_id,
+        centre: centre_id,
+        fair: fair_id,
+        reg_sphere: reg_sphere_id,
+        reg_normal: reg_normal_id,
+        angle: angle_id,
+        axis: axis_id,
+        fan: fan_id,
+        separation: separation_id,
+        exact_angle: exact_angle_id,
+        exact_axis: exact_axis_id,
+        exact_fan: exact_fan_id,
     };
+    (problem, terms, layout, x)
+}
 
-    // Warm-up: the spheres and the star normals move; sphericity and a small support weight.
-    let all = [
-        sphere_id,
-        unit_id,
-        supp_id,
-        star_unit_id,
-        torsal_id,
-        edge_unit_id,
-        tangent_id,
-        point_id,
-        centre_id,
-        fair_id,
-        reg_sphere_id,
-        reg_normal_id,
-        angle_id,
-        axis_id,
-        separation_id,
-        exact_angle_id,
-        exact_axis_id,
-        fan_id,
-        exact_fan_id,
-    ];
-    let set = |problem: &mut Problem, weights: &[(crate::solver::TermId, f64)]| {
-        for &id in &all {
-            problem.set_weight(id, 0.0);
-        }
-        for &(id, wt) in weights {
-            problem.set_weight(id, wt);
-        }
-    };
-    set(
-        &mut problem,
-        &[
-            (sphere_id, w.sphere),
-            (unit_id, w.unit),
-            (supp_id, w.warm_up_supp),
-            (star_unit_id, w.unit),
-            (reg_sphere_id, w.reg_sphere),
-            (reg_normal_id, w.reg_normal),
-            (separation_id, 1.0),
-        ],
-    );
-    problem.fix_range(layout.vertex(0)..layout.star_normal(0));
-    problem.fix_range(layout.edge_normal(0)..layout.len());
-    outcome.warm_up_iterations = run(&mut problem, &mut x, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome)?;
-
-    // The full optimization (Eq. 10).
-    set(
-        &mut problem,
-        &[
-            (sphere_id, w.sphere),
-            (unit_id, w.unit),
-            (supp_id, w.supp),
-            (star_unit_id, w.unit),
-            (torsal_id, w.torsal_plane),
-            (edge_unit_id, w.unit),
-            (tangent_id, w.prox_f),
-            (point_id, w.prox_f),
-            (centre_id, w.prox_c),
-            (fair_id, w.fair),
-            (reg_sphere_id, w.reg_sphere),
-            (reg_normal_id, w.reg_normal),
-            (angle_id, w.support_angle),
-            (axis_id, w.axis_angle),
-            (fan_id, w.axis_angle),
-            (separation_id, 1.0),
-        ],
-    );
-    for i in 0..layout.len() {
-        problem.unfix(i);
+/// One phase: the solver on `problem` from `x` for at most `max` iterations, each reported to
+/// `hook`; the full optimization's iteration times and terms kept in `outcome`.
+#[allow(clippy::too_many_arguments)]
+fn run_phase(
+    problem: &mut Problem,
+    x: &mut [f64],
+    layout: &SphereLayout,
+    phase: SpherePhase,
+    max: usize,
+    solver: &mut Solver,
+    outcome: &mut SphereOutcome,
+    hook: &mut SphereHook,
+) -> Result<usize, Cancelled> {
+    solver.options.max_iterations = max;
+    let report = solver.solve(problem, x, |it| {
+        let (v, s) = unpack(layout, it.x);
+        hook(phase, it.iteration, it.terms, &v, &s)
+    });
+    outcome.phase_ms.add(&report.phase_ms);
+    if phase == SpherePhase::Full {
+        outcome.iteration_ms.extend_from_slice(&report.iteration_ms);
+        outcome.terms = report.terms.clone();
     }
-    solver.options.relative_decrease_tolerance = params.sphere_decrease_tolerance;
-    outcome.iterations = run(&mut problem, &mut x, SpherePhase::Full, iterations[1], &mut solver, &mut outcome)?;
+    if report.termination == Termination::Cancelled {
+        return Err(Cancelled);
+    }
+    Ok(report.iterations)
+}
 
-    // Projection: only the equations of exactness, Gauss–Newton with a tiny damping.
-    // First with the hinges at θ and α (the exact solutions form a large family: land on one
-    // that keeps them), then the equations alone, so that nothing pulls against exactness.
-    set(
-        &mut problem,
-        &[
-            (sphere_id, 1.0),
-            (unit_id, 1.0),
-            (supp_id, 1.0),
-            (star_unit_id, 1.0),
-            (exact_angle_id, w.support_angle),
-            (exact_axis_id, w.axis_angle),
-            (exact_fan_id, w.axis_angle),
-            (separation_id, 1.0),
-        ],
-    );
+/// The projection to exactness (see the module docs): the equations of exactness by
+/// Gauss–Newton with a tiny damping, first with the hinges at θ and α (the exact solutions form
+/// a large family: land on one that keeps them), then the equations alone, so that nothing pulls
+/// against exactness; `equations` are further equations held in both passes (the moulds'
+/// curvatures). Returns the iterations.
+#[allow(clippy::too_many_arguments)]
+fn project(
+    problem: &mut Problem,
+    terms: &SphereTerms,
+    layout: &SphereLayout,
+    w: &SphereWeights,
+    x: &mut [f64],
+    equations: &[TermId],
+    (phase, max): (SpherePhase, usize),
+    clock: Clock,
+    outcome: &mut SphereOutcome,
+    hook: &mut SphereHook,
+) -> Result<usize, Cancelled> {
+    let exact = [(terms.sphere, 1.0), (terms.unit, 1.0), (terms.supp, 1.0), (terms.star_unit, 1.0)];
+    let held: Vec<(TermId, f64)> = equations.iter().map(|&id| (id, 1.0)).collect();
+    let hinged = [(terms.exact_angle, w.support_angle), (terms.exact_axis, w.axis_angle), (terms.exact_fan, w.axis_angle), (terms.separation, 1.0)];
+    terms.set(problem, &[&exact[..], &hinged[..], &held[..]].concat());
+    for id in equations {
+        problem.set_weight(*id, 1.0);
+    }
     problem.fix_range(layout.edge_normal(0)..layout.len());
     let mut projection = Solver::new(SolverOptions {
         clock,
@@ -481,11 +504,154 @@ pub(crate) fn optimize_spheres(
         step_tolerance: 1e-16,
         ..SolverOptions::default()
     });
-    outcome.projection_iterations = run(&mut problem, &mut x, SpherePhase::Projection, iterations[2], &mut projection, &mut outcome)?;
-    set(&mut problem, &[(sphere_id, 1.0), (unit_id, 1.0), (supp_id, 1.0), (star_unit_id, 1.0)]);
-    outcome.projection_iterations += run(&mut problem, &mut x, SpherePhase::Projection, iterations[2], &mut projection, &mut outcome)?;
+    let mut iterations = run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
+    terms.set(problem, &[&exact[..], &held[..]].concat());
+    for id in equations {
+        problem.set_weight(*id, 1.0);
+    }
+    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
+    Ok(iterations)
+}
+
+/// Runs the warm-up, the full optimization and the projection (see the module docs) with
+/// `params`' sphere weights, iterations and decrease tolerance (the full optimization stops early
+/// when an accepted step lowers its energy by at most that fraction); returns the vertices, the
+/// spheres (normalized) and what happened.
+pub(crate) fn optimize_spheres(
+    input: &SphereInput,
+    stars: &QuadStars,
+    params: &SqParams,
+    clock: Clock,
+    hook: &mut SphereHook,
+) -> Result<(Vec<DVec3>, Vec<Sphere>, SphereOutcome), Cancelled> {
+    let (w, iterations) = (&params.sphere_weights, params.sphere_iterations);
+    let spheres = initial_spheres(input.mesh, input.radii, input.normals);
+    let star_normals: Vec<DVec3> = stars.stars.iter().map(|&(v, _)| input.lines[v as usize]).collect();
+    let (mut problem, terms, layout, mut x) = sphere_problem(input, stars, w, &spheres, &star_normals);
+    let mut outcome = SphereOutcome::default();
+    let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
+
+    // Warm-up: the spheres and the star normals move; sphericity and a small support weight.
+    terms.set(
+        &mut problem,
+        &[
+            (terms.sphere, w.sphere),
+            (terms.unit, w.unit),
+            (terms.supp, w.warm_up_supp),
+            (terms.star_unit, w.unit),
+            (terms.reg_sphere, w.reg_sphere),
+            (terms.reg_normal, w.reg_normal),
+            (terms.separation, 1.0),
+        ],
+    );
+    problem.fix_range(layout.vertex(0)..layout.star_normal(0));
+    problem.fix_range(layout.edge_normal(0)..layout.len());
+    outcome.warm_up_iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome, hook)?;
+
+    // The full optimization (Eq. 10).
+    terms.set(
+        &mut problem,
+        &[
+            (terms.sphere, w.sphere),
+            (terms.unit, w.unit),
+            (terms.supp, w.supp),
+            (terms.star_unit, w.unit),
+            (terms.torsal, w.torsal_plane),
+            (terms.edge_unit, w.unit),
+            (terms.tangent, w.prox_f),
+            (terms.point, w.prox_f),
+            (terms.centre, w.prox_c),
+            (terms.fair, w.fair),
+            (terms.reg_sphere, w.reg_sphere),
+            (terms.reg_normal, w.reg_normal),
+            (terms.angle, w.support_angle),
+            (terms.axis, w.axis_angle),
+            (terms.fan, w.axis_angle),
+            (terms.separation, 1.0),
+        ],
+    );
+    for i in 0..layout.len() {
+        problem.unfix(i);
+    }
+    solver.options.relative_decrease_tolerance = params.sphere_decrease_tolerance;
+    outcome.iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Full, iterations[1], &mut solver, &mut outcome, hook)?;
+
+    outcome.projection_iterations =
+        project(&mut problem, &terms, &layout, w, &mut x, &[], (SpherePhase::Projection, iterations[2]), clock, &mut outcome, hook)?;
     let (v, s) = unpack(&layout, &x);
     Ok((v, s.into_iter().map(|s| s.normalized()).collect(), outcome))
+}
+
+/// The projection to exactness from an exact state (`input.mesh`'s vertices, `spheres`, and per
+/// star the normal of its centres' plane), with every face's curvature held at `curvatures`
+/// (frame units, signed along the face's normal; NaN: free): the SQ mesh whose panels have their
+/// moulds' radii. The system stays underdetermined (F more equations on 5F + 3V + 3S unknowns
+/// with 4F + 4S before), so Gauss–Newton lands on a nearby exact solution. Returns the vertices,
+/// the spheres (normalized) and the iterations.
+pub(crate) fn project_to_curvatures(
+    input: &SphereInput,
+    stars: &QuadStars,
+    spheres: &[Sphere],
+    curvatures: &[f64],
+    params: &SqParams,
+    clock: Clock,
+    hook: &mut SphereHook,
+) -> Result<(Vec<DVec3>, Vec<Sphere>, usize), Cancelled> {
+    let w = &params.sphere_weights;
+    let star_normals: Vec<DVec3> = stars.stars.iter().map(|(v, faces)| centre_plane_normal(spheres, faces, input.lines[*v as usize])).collect();
+    let (mut problem, terms, layout, mut x) = sphere_problem(input, stars, w, spheres, &star_normals);
+    // A normalized sphere's curvature along its normal is 2a: hold a at |κ|/2 with the sign of
+    // the start's a, so that no panel is asked to turn over.
+    let (faces, halves): (Vec<usize>, Vec<f64>) = curvatures
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| k.is_finite())
+        .map(|(f, &k)| (layout.sphere(f), 0.5 * k.abs().copysign(x[layout.sphere(f)])))
+        .unzip();
+    let mould = problem.add_term(Anchor::new(faces, halves).with_name("mould_curvature"), 1.0);
+    let mut outcome = SphereOutcome::default();
+    // First the curvatures are reached softly, the vertices and centres near the reference
+    // (Eq. 10's proximity terms), so the projection after starts close to an exact mesh.
+    terms.set(
+        &mut problem,
+        &[
+            (terms.sphere, w.sphere),
+            (terms.unit, w.unit),
+            (terms.supp, w.supp),
+            (terms.star_unit, w.unit),
+            (terms.tangent, w.prox_f),
+            (terms.point, w.prox_f),
+            (terms.centre, w.prox_c),
+            (terms.exact_angle, w.support_angle),
+            (terms.exact_axis, w.axis_angle),
+            (terms.exact_fan, w.axis_angle),
+            (terms.separation, 1.0),
+        ],
+    );
+    problem.fix_range(layout.edge_normal(0)..layout.len());
+    let max = params.sphere_iterations[2];
+    let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
+    let mut iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Moulds, max, &mut solver, &mut outcome, hook)?;
+    iterations += project(&mut problem, &terms, &layout, w, &mut x, &[mould], (SpherePhase::Moulds, max), clock, &mut outcome, hook)?;
+    let (v, s) = unpack(&layout, &x);
+    Ok((v, s.into_iter().map(|s| s.normalized()).collect(), iterations))
+}
+
+/// The unit normal of the plane through the centres of `faces`' spheres (least squares, the
+/// smallest principal direction), on the side of `toward`; `toward` where there are no centres.
+fn centre_plane_normal(spheres: &[Sphere], faces: &[u32], toward: DVec3) -> DVec3 {
+    let centres: Vec<DVec3> = faces.iter().filter_map(|&f| spheres[f as usize].center()).collect();
+    if centres.len() < 3 {
+        return toward;
+    }
+    let mean = centres.iter().copied().sum::<DVec3>() / centres.len() as f64;
+    let rows: Vec<[f64; 3]> = centres.iter().map(|c| (*c - mean).to_array()).collect();
+    let n = DVec3::from_array(crate::geometry::linalg::Svd::new(&rows).v[2]).try_normalize().unwrap_or(toward);
+    if n.dot(toward) < 0.0 {
+        -n
+    } else {
+        n
+    }
 }
 
 /// The congruence's line and radius at a parameter: bilinear in the points of the grid G

@@ -35,12 +35,14 @@
 pub mod absolute_sphere;
 pub mod face_spheres;
 pub mod metrics;
+pub mod moulds;
 pub mod optimize_radius;
 pub mod params;
 pub mod report;
 pub mod second_envelope;
 pub mod support_elements;
 
+use std::cell::RefCell;
 use std::fmt;
 use std::rc::Rc;
 
@@ -52,6 +54,8 @@ use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
+use crate::panels::deviation::max_distance_to_reference;
+use crate::panels::moulds::{snapped_rounds, RoundCount};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
@@ -64,6 +68,7 @@ use crate::remeshing::{
 use absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams};
 use face_spheres::face_spheres;
 pub use metrics::StSupportMetrics;
+use moulds::{StSupportMouldOutcome, StSupportMouldRound};
 use metrics::{metrics, Counts};
 use optimize_radius::choose_omega;
 pub use params::{StSupportParams, LOCAL_SPHERE_POINTS};
@@ -148,6 +153,8 @@ pub struct StSupportResult {
     pub timings_ms: Vec<(String, f64)>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers).
     pub warnings: Vec<Warning>,
+    /// The rounds toward fewer moulds (`optimize_moulds`).
+    pub moulds: Option<StSupportMouldOutcome>,
 }
 
 /// The reference remeshed as `params.remesh` asks, or None. The adaptive sizing field uses local
@@ -202,9 +209,83 @@ pub fn compute(
         }
         None => (reference, field),
     };
-    let steps = steps(work.mesh(), work.topology(), &field, params, &mut timings, progress)?;
+    let mut steps = steps(work.mesh(), work.topology(), &field, params, &mut timings, progress)?;
+    if params.optimize_moulds {
+        timings.skip();
+        steps = fewer_moulds(reference, work, steps, params, clock, progress)?;
+        timings.lap("fewer_moulds");
+    }
     warnings.extend(kink_warning(&steps.sphere_mesh.kink_angles_deg(), work));
     Ok(StSupportResult { timings_ms: timings.laps, warnings, ..steps })
+}
+
+/// The rounds toward fewer moulds ([`moulds`], [`snapped_rounds`]) from the method's result
+/// `start` on `work` (the reference it ran on), its panels measured against `reference`.
+fn fewer_moulds(
+    reference: &Reference,
+    work: &Reference,
+    start: StSupportResult,
+    params: &StSupportParams,
+    clock: Clock,
+    progress: &mut OnProgress,
+) -> Result<StSupportResult, StSupportError> {
+    let diag = reference.diagonal();
+    let distance = |panels: &[Panel]| max_distance_to_reference(panels, reference.bvh(), diag);
+    let start_distance = distance(&start.panels);
+    let progress = RefCell::new(progress);
+    let faces = start.sphere_mesh.mesh.face_count();
+    let mut project = |from: &StSupportResult, per_panel: &[f64]| -> Result<Option<(StSupportResult, bool)>, StSupportError> {
+        let mut curvatures = vec![f64::NAN; faces];
+        for (p, &k) in from.panels.iter().zip(per_panel) {
+            curvatures[p.face] = k;
+        }
+        let sm = &from.sphere_mesh;
+        let triangles = sm.mesh.triangulated();
+        let mut iteration = 0;
+        let mut on_iteration = |_: &[DVec3]| {
+            iteration += 1;
+            (progress.borrow_mut())(Progress::new("project_to_moulds", iteration, 2 * moulds::ITERATIONS))
+        };
+        let Some(moved) = moulds::project_to_curvatures(work, &triangles, &sm.face_spheres, &from.omega, &curvatures, clock, &mut on_iteration)? else {
+            return Ok(None);
+        };
+        let chosen = Chosen {
+            omega: from.omega,
+            mean_kink_estimate_deg: Some(from.mean_kink_estimate_deg),
+            optimized_parameter: from.optimized_parameter,
+        };
+        let mesh = TriMesh::new(moved, triangles.triangles);
+        let mut scratch = Timings::start(clock);
+        let moved = structure(mesh, work.topology(), chosen, from.absolute.clone(), params, from.diag, &mut scratch, &mut **progress.borrow_mut())?;
+        let holds = moulds::holds(&start.metrics, &moved.metrics, start_distance, distance(&moved.panels));
+        Ok(Some((moved, holds)))
+    };
+    let mut rounds = Vec::new();
+    let mut on_round = |moved: &StSupportResult, count: RoundCount| {
+        let m = &moved.metrics;
+        rounds.push(StSupportMouldRound {
+            coarsening: count.coarsening,
+            moulds: count.moulds,
+            max_vertex_sphere_residual: m.max_vertex_sphere_residual,
+            max_orthogonality_residual: m.max_orthogonality_residual.max(m.max_center_plane_residual),
+            max_node_axis_offset: m.max_node_axis_offset,
+            max_distance_to_reference: distance(&moved.panels),
+            kept: count.kept,
+        });
+    };
+    let out = snapped_rounds(
+        &start,
+        &|r: &StSupportResult| &r.panels[..],
+        diag,
+        &params.fabrication,
+        &mut project,
+        &mut on_round,
+        &mut |p| (progress.borrow_mut())(p),
+    )?;
+    let outcome = StSupportMouldOutcome { snap: out.snap, rounds, before: out.before, fits_before: out.fits_before, distance_limit: moulds::DISTANCE_GROWTH * start_distance };
+    let mut result = out.best.unwrap_or(start);
+    result.moulds = Some(outcome);
+    Ok(result)
 }
 
 /// Steps 1 to 7 on a triangle mesh with its topology and curvature; the warnings are the
@@ -228,11 +309,37 @@ fn steps(
     if params.optimize_radius {
         timings.lap("optimize_radius");
     }
+    let chosen = Chosen { omega: chosen.omega, mean_kink_estimate_deg: chosen.mean_kink_estimate_deg, optimized_parameter: chosen.optimized_parameter };
+    structure(work, topo, chosen, absolute, params, diag, timings, progress)
+}
+
+/// The Ω of step 3 with what choosing it found.
+#[derive(Clone, Copy, Debug)]
+struct Chosen {
+    omega: AbsoluteSphere,
+    mean_kink_estimate_deg: Option<f64>,
+    optimized_parameter: Option<f64>,
+}
+
+/// Steps 2 and 4 to 7 on the working mesh `work` with Ω chosen, the estimate of step 1 (its
+/// normals at the vertices) and the diagonal `diag` the lengths are relative to.
+#[allow(clippy::too_many_arguments)]
+fn structure(
+    work: TriMesh,
+    topo: &Topology,
+    chosen: Chosen,
+    absolute: AbsoluteSphereEstimate,
+    params: &StSupportParams,
+    diag: f64,
+    timings: &mut Timings,
+    progress: &mut OnProgress,
+) -> Result<StSupportResult, StSupportError> {
     let omega = chosen.omega;
+    let normals = &absolute.normals;
     let (spheres, degenerate_faces) = face_spheres(&work, &omega, progress)?;
     timings.lap("face_spheres");
     let toward = |v: usize| match omega {
-        AbsoluteSphere::Sphere { center, .. } => (center - work.positions[v]).try_normalize().unwrap_or(-absolute.normals[v]),
+        AbsoluteSphere::Sphere { center, .. } => (center - work.positions[v]).try_normalize().unwrap_or(-normals[v]),
         AbsoluteSphere::Plane { axis, .. } => -axis,
     };
     let plane = |_: [DVec3; 2]| edge_plane(&omega);
@@ -247,7 +354,7 @@ fn steps(
     progress(Progress::new("metrics", 0, 1))?;
     let sphere_mesh = SphereMesh::new(work, spheres, rule);
     let counts = Counts { degenerate_faces, edges_without_support };
-    let metrics = metrics(&sphere_mesh, &omega, &axes, &absolute.normals, diag, counts);
+    let metrics = metrics(&sphere_mesh, &omega, &axes, normals, diag, counts);
     progress(Progress::new("metrics", 1, 1))?;
     timings.lap("metrics");
     progress(Progress::new("panels", 0, 1))?;
@@ -268,6 +375,7 @@ fn steps(
         metrics,
         timings_ms: Vec::new(),
         warnings: Vec::new(),
+        moulds: None,
     })
 }
 

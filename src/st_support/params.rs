@@ -31,6 +31,9 @@ pub struct StSupportParams {
     pub remesh: Sizing,
     pub jet: JetParams,
     pub absolute: AbsoluteSphereParams,
+    /// Move the vertices so that the panels have the radii of fewer moulds exactly, every face
+    /// sphere still orthogonal to Ω ([`super::moulds`]).
+    pub optimize_moulds: bool,
 }
 
 impl Default for StSupportParams {
@@ -44,6 +47,7 @@ impl Default for StSupportParams {
             remesh: Sizing::None,
             jet: JetParams::default(),
             absolute: AbsoluteSphereParams::default(),
+            optimize_moulds: false,
         }
     }
 }

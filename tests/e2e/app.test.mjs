@@ -495,8 +495,9 @@ for (const project of PROJECTS) {
 
     test(`[${project.name}] n. SQ end to end (Sec. 5.2) on the vault sample: quad mesh, Q′, live panels, an exact SQ mesh with support structure, downloads`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
-      // Moulds within 0.05 mm of a vault in metres: several, each in its own colour.
-      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&faces=237&until=final&mould_tol=0.05mm';
+      // Moulds within 0.05 mm of a vault in metres: several, each in its own colour; the exact
+      // mesh then moved so that every panel has its mould's radius (opt_moulds).
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&faces=237&until=final&opt_moulds=1&mould_tol=0.05mm';
       await withApp(t, browser, server, project, { name: 'n-sq-final', fragment }, async (app) => {
         const s = await waitForState(
           app,
@@ -510,7 +511,7 @@ for (const project of PROJECTS) {
         assert.equal(r.sq.stopped_after, 'final');
         assert.equal(r.meets_guarantees, true, `the verdict: ${JSON.stringify(r.guarantees)}`);
         assert.equal(s.missed_guarantees, null, 'no miss in the status bar');
-        for (const part of ['faces=237', 'until=final', 'mould_tol=0.05mm']) {
+        for (const part of ['faces=237', 'until=final', 'opt_moulds=1', 'mould_tol=0.05mm']) {
           assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
         }
         // The mould view: the report's moulds within δ, the panels in their moulds' colours.
@@ -521,8 +522,17 @@ for (const project of PROJECTS) {
         assert.ok(mo.count > 1 && mo.max_deviation <= mo.tolerance, `${mo.count} moulds, largest deviation ${mo.max_deviation}`);
         assert.equal(mo.moulds.reduce((n, m) => n + m.panels, 0), r.output.panels, 'every panel on a mould');
         assert.deepEqual(s.moulds, [mo.count, mo.tolerance, mo.snap.snapped], 'the side panel shows the same moulds');
-        assert.equal(mo.snap.snapped, 0, 'SQ fixes each sphere by its four vertices');
-        assert.deepEqual(mo.snap.not_snapped.map((m) => [m.reason, m.panels]), [['fixed_by_vertices', r.output.panels]]);
+        // The rounds ran in the worker: every panel has its mould's radius, or no round was kept
+        // and every panel says the method's targets stopped it.
+        const rounds = r.sq.sq_mesh.mould_rounds;
+        assert.ok(r.timings_ms.fewer_moulds > 0, 'timings_ms.fewer_moulds');
+        assert.ok(rounds.length >= 1, `rounds ${JSON.stringify(rounds)}`);
+        assert.ok(mo.count <= r.sq.sq_mesh.moulds_before, `moulds ${r.sq.sq_mesh.moulds_before} → ${mo.count}`);
+        if (rounds.some((x) => x.kept)) {
+          assert.equal(mo.snap.snapped, r.output.panels, `every panel snapped: ${JSON.stringify(mo.snap)}`);
+        } else {
+          assert.deepEqual(mo.snap.not_snapped.map((m) => [m.reason, m.panels]), [['method_targets', r.output.panels]]);
+        }
         assert.equal(s.sq.mould_colours, Math.min(mo.count, 16), 'one panel mesh per mould colour');
         const m = r.sq.sq_mesh;
         const q = r.sq.quad_mesh;

@@ -22,7 +22,7 @@ use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::{MouldAssignment, SnapLimit};
+use crate::panels::moulds::MouldAssignment;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, PanelExport, Snapping};
@@ -346,8 +346,8 @@ fn exported(
             )
             .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
             .with_support(&f.mesh.support)
-            // A face sphere passes through its four vertices (Sec. 5.2).
-            .with_snapping(Snapping::Not(SnapLimit::FixedByVertices));
+            .with_moulds_before(f.moulds.as_ref().map(|m| &m.fits_before))
+            .with_snapping(Snapping::of(f.moulds.as_ref().map(|m| &m.snap)));
             let (report, panel_files, assigned) = export_panels(reference, export, clock);
             files.extend(panel_files);
             moulds = Some(assigned);

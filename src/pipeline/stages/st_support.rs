@@ -10,7 +10,7 @@ use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
-use crate::panels::moulds::{MouldAssignment, SnapLimit};
+use crate::panels::moulds::MouldAssignment;
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::st_support::report::StSupportSection;
@@ -88,8 +88,8 @@ fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportP
     .with_extras(crate::export::absolute_sphere_extras(&result.omega))
     .with_support(&result.support)
     .with_warnings(&result.warnings)
-    // A face sphere is the one through its three vertices orthogonal to Ω (Sec. 4).
-    .with_snapping(Snapping::Not(SnapLimit::FixedByVertices));
+    .with_moulds_before(result.moulds.as_ref().map(|m| &m.fits_before))
+    .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
     let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));
     (report, files, moulds)

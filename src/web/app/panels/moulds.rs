@@ -143,6 +143,18 @@ fn significant(value: f64) -> f64 {
     (value * scale).round() / scale
 }
 
+/// The row "moulds, before → after" of a result whose method moved its panels onto fewer
+/// moulds (`before` from its report section, with its rounds).
+pub fn before_after(before: Option<usize>, rounds: usize, moulds: Option<&MouldReport>) -> Option<(&'static str, String)> {
+    let (before, after) = (before?, moulds?);
+    Some(("moulds, before → after", format!("{before} → {} ({rounds} rounds)", after.count)))
+}
+
+/// The checkbox of a method's rounds toward fewer moulds, `how` saying what it keeps.
+pub fn optimize_moulds_checkbox(ui: &mut egui::Ui, on: &mut bool, how: &str) {
+    ui.checkbox(on, "then move the panels onto fewer moulds").on_hover_text(how);
+}
+
 /// The result's moulds: their count and tolerance, the table and the count against δ.
 pub fn results(ui: &mut egui::Ui, moulds: &MouldReport) {
     let u = moulds.units;

@@ -21,7 +21,8 @@ use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, 
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::{verdict, warnings};
 use crate::web::app::plots::{key_values, term_plot};
-use crate::web::app::panels::moulds::MouldMeshes;
+use crate::panels::moulds::refused_rounds;
+use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::colormap;
 use crate::web::viewer::{ColorMap, Geometry, Layer, MeshData, ScalarData, Style};
@@ -351,6 +352,7 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
         .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
     ui.add(egui::Slider::new(&mut params.support_depth, 0.002..=0.1).logarithmic(true).text("support depth"))
         .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
+    optimize_moulds_checkbox(ui, &mut params.optimize_moulds, "Projections to exactness with every panel's curvature held at its mould's, coarser each round while exactness, θ and α hold and the vertices stay within 1.2× of their distance to the reference; every kept panel has its mould's radius exactly");
     egui::ComboBox::from_label("run until").selected_text(params.until.key()).show_ui(ui, |ui| {
         for u in Until::ALL {
             ui.selectable_value(&mut params.until, u, u.key());
@@ -534,6 +536,12 @@ fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
             ),
             ("distinct radii", panels.as_ref().map_or("–".into(), |p| p.distinct_radii.to_string())),
         ];
+        let mesh = sec.sq_mesh.as_ref();
+        rows.extend(before_after(mesh.and_then(|m| m.moulds_before), mesh.map_or(0, |m| m.mould_rounds.len()), r.moulds.as_ref()));
+        rows.extend(
+            mesh.and_then(|m| refused_rounds(m.mould_rounds.iter().map(|r| (r.moulds, r.max_vertex_distance_to_reference, r.kept)), m.moulds_distance_limit?))
+                .map(|why| ("mould snap", why)),
+        );
         if let Some(t) = r.timings_ms.get("final_iteration_median") {
             rows.push(("median final iteration", format!("{t:.2} ms")));
         }
@@ -546,4 +554,4 @@ fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
 
 /// The energy plots: one per stage, with the progress steps that belong to it.
 const ENERGY_PLOTS: [(&str, &[&str]); 3] =
-    [("congruence", &["line_congruence", "torsal"]), ("Q′", &["fairing"]), ("spheres", &["warm_up", "spheres", "projection"])];
+    [("congruence", &["line_congruence", "torsal"]), ("Q′", &["fairing"]), ("spheres", &["warm_up", "spheres", "projection", "moulds"])];

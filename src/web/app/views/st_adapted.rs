@@ -17,7 +17,7 @@ use crate::pipeline::protocol::StageResult;
 use crate::pipeline::stages::st_adapted::{StAdaptedSummary, REMESHED_STAGE, SIZING_STAGE, STAGE};
 use crate::remeshing::Sizing;
 use crate::st_adapted::params::StAdaptedParams;
-use crate::web::app::panels::moulds::MouldMeshes;
+use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::panels::{sizing_controls, verdict, warnings, SizingMemory};
 use crate::web::app::plots::{energy_plot, key_values};
 use crate::web::app::state::{mesh_from_fields, MESH_FIELDS, PANEL_FIELDS};
@@ -210,8 +210,7 @@ fn controls(
         ui.radio_value(&mut params.variant, EdgeArcs::BisectingPlanes, "(b) bisecting planes")
             .on_hover_text("Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain");
     });
-    ui.checkbox(&mut params.optimize_moulds, "then move the panels onto fewer moulds")
-        .on_hover_text("Rounds that pull every panel's curvature to a coarser mould's, keeping the largest kink within 1.2× and the panels within 2ε; then every panel gets its mould's radius exactly");
+    optimize_moulds_checkbox(ui, &mut params.optimize_moulds, "Rounds that pull every panel's curvature to a coarser mould's, keeping the largest kink within 1.2× and the panels within 2ε; then every panel gets its mould's radius exactly");
     ui.checkbox(show_reference, "show reference surface (sizing colours)");
     ui.checkbox(show_remeshed, "overlay the remeshed triangulation (before optimization)");
     *params != before
@@ -246,10 +245,8 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
         rows.push(("sizing g min / max", format!("{lo:.4} / {hi:.4}")));
     }
     let section: Option<crate::st_adapted::report::StAdaptedSection> = sum.report.section();
-    if let (Some(before), Some(after)) = (section.as_ref().and_then(|s| s.moulds_before), sum.report.moulds.as_ref()) {
-        let rounds = section.as_ref().map_or(0, |s| s.mould_rounds.len());
-        rows.push(("moulds, before → after", format!("{before} → {} ({rounds} rounds)", after.count)));
-    }
+    let rounds = section.as_ref().map_or(0, |s| s.mould_rounds.len());
+    rows.extend(before_after(section.as_ref().and_then(|s| s.moulds_before), rounds, sum.report.moulds.as_ref()));
     if let Some(ms) = sum.report.timings_ms.get("angle_iteration_median") {
         rows.push(("median iteration", format!("{ms:.2} ms")));
     }

@@ -20,7 +20,8 @@ use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
 use crate::web::app::panels::{sizing_controls, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
-use crate::web::app::panels::moulds::MouldMeshes;
+use crate::panels::moulds::refused_rounds;
+use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
 
@@ -199,6 +200,7 @@ fn controls(
     ui.label(RichText::new("lengths relative to the bbox diagonal").small());
     ui.label(RichText::new("Remesh first (Fig. 16, bottom)").small());
     sizing_controls(ui, "st-remesh", &mut params.remesh, memory, &[SizingKind::None, SizingKind::Adaptive, SizingKind::Faces]);
+    optimize_moulds_checkbox(ui, &mut params.optimize_moulds, "Rounds that move the vertices so that every panel has its mould's radius exactly, coarser each round, every sphere still orthogonal to Ω and the panels within 1.2× of their distance to the reference");
     ui.checkbox(show_reference, "show reference surface");
     ui.checkbox(show_envelope, "show second envelope");
     *params != before
@@ -230,10 +232,7 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
     let m = r.metrics.clone().unwrap_or_default();
     let g = |x: f64| format!("{x:.3e}");
     let d = |x: f64| format!("{x:.3}°");
-    key_values(
-        ui,
-        "st-support-metrics",
-        &[
+    let mut rows = vec![
             ("panels", r.output.panels.to_string()),
             ("distinct radii", sum.distinct_radii.to_string()),
             ("kink mean / max", format!("{} / {}", d(m.mean_kink_angle_deg), d(m.max_kink_angle_deg))),
@@ -242,8 +241,14 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
             ("orthogonality residual", g(s.max_orthogonality_residual)),
             ("node-axis offset", g(s.max_node_axis_offset)),
             ("distance to reference", g(m.max_distance_to_reference)),
-        ],
+    ];
+    rows.extend(before_after(s.moulds_before, s.mould_rounds.len(), r.moulds.as_ref()));
+    rows.extend(
+        s.moulds_distance_limit
+            .and_then(|limit| refused_rounds(s.mould_rounds.iter().map(|r| (r.moulds, r.max_distance_to_reference, r.kept)), limit))
+            .map(|why| ("mould snap", why)),
     );
+    key_values(ui, "st-support-metrics", &rows);
     ui.label(RichText::new("∠(v − m, n): m0 (green) and optimized m (red)").small());
     histogram(ui, &[(&sum.angles_m0, Color32::from_rgb(90, 190, 90)), (&sum.angles_m, Color32::from_rgb(220, 80, 70))], "°");
     ui.label(
