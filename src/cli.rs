@@ -15,7 +15,7 @@ use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::export::{ExportFile, Report};
 use spherical_faces::import::MAX_BYTES;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
-use spherical_faces::panels::moulds::{refused_rounds, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
+use spherical_faces::panels::moulds::{Fabrication, MouldOutcome, MouldTarget, DEFAULT_MOULD_TOLERANCE};
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{Clock, Progress};
@@ -505,9 +505,7 @@ fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, o
     let (report, files) = stages::st_support::export(&reference, &result, &params, clock);
     progress.clear();
     write_files(output, &files, &report)?;
-    let refused = result.moulds.as_ref().and_then(|o| {
-        refused_rounds(o.rounds.iter().map(|r| (r.moulds, r.max_distance_to_reference, r.kept)), o.distance_limit)
-    });
+    let refused = MouldOutcome::section(result.moulds.as_ref()).refused();
     let summary = format!(
         "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
         result.panels.len(),
@@ -650,10 +648,7 @@ fn sq(input: &Input, mut params: SqParams, f: &FabricationArgs, output: &Output,
             )
         }
     };
-    let refused = sq.sq_mesh.as_ref().and_then(|m| {
-        let rounds = m.mould_rounds.iter().map(|r| (r.moulds, r.max_vertex_distance_to_reference, r.kept));
-        refused_rounds(rounds, m.moulds_distance_limit?)
-    });
+    let refused = sq.sq_mesh.as_ref().and_then(|m| m.moulds.refused());
     verdict(with_refusal(with_moulds(summary, &report), refused), &report)
 }
 

@@ -9,7 +9,9 @@ use common::load_reference;
 use glam::DVec3;
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::{ExportFile, Report};
-use spherical_faces::panels::moulds::{fewest_stabbing_values, Fabrication, MouldAssignment, MouldFits, MouldTarget, SnapLimit, SNAPPED};
+use spherical_faces::panels::moulds::{
+    fewest_stabbing_values, Fabrication, MouldAssignment, MouldFits, MouldOutcome, MouldRoundFigures, MouldTarget, SnapLimit, SNAPPED,
+};
 use spherical_faces::panels::panel::Panel;
 use spherical_faces::pipeline::stages;
 use spherical_faces::progress::Clock;
@@ -140,6 +142,19 @@ fn snapped_panels_have_their_moulds_radius(report: &Report, files: &[ExportFile]
     eprintln!("snapped {snapped} of {n}, radius within {worst:.1e} of the diagonal; {snap:?}");
     assert_eq!(snap.snapped, snapped);
     assert!(snapped as f64 >= 0.95 * n as f64, "{snapped} of {n} snapped");
+}
+
+/// A refused snap, reported honestly: no round was kept, the outcome says why in words, the panels
+/// are on the sweep's moulds, and the schedule calls none snapped, each for the method's targets.
+fn refused_honestly<R: MouldRoundFigures + Clone>(name: &str, outcome: &MouldOutcome<R>, panels: &[Panel], report: &Report, files: &[ExportFile], delta: f64) {
+    assert_eq!(outcome.snap.as_ref().err(), Some(&SnapLimit::MethodTargets), "{name}");
+    assert!(outcome.rounds.iter().all(|r| !r.kept()), "{name}");
+    let why = MouldOutcome::section(Some(outcome)).refused().expect("the refusal in words");
+    assert!(why.starts_with("not snapped: on "), "{name}: {why}");
+    check(name, panels, report, files, delta, None);
+    let snap = &report.moulds.as_ref().unwrap().snap;
+    assert_eq!(snap.snapped, 0, "{name}");
+    assert!(snap.not_snapped.iter().all(|m| m.reason == SnapLimit::MethodTargets), "{name}: {snap:?}");
 }
 
 fn fabrication(delta: f64) -> Fabrication {
@@ -276,18 +291,13 @@ fn sq_vault_moulds(scale: f64, max_moulds: usize) -> bool {
             }
             true
         }
-        Err(limit) => {
-            assert_eq!(*limit, SnapLimit::MethodTargets);
+        Err(_) => {
+            refused_honestly("sq vault, not snapped", rounds, &after.mesh.panels, &report, &files, delta);
             let first = rounds.rounds.first().expect("a round ran");
-            assert!(rounds.rounds.iter().all(|r| !r.kept));
             let exact = first.max_vertex_sphere_residual <= 1e-8 && first.max_centre_face_planarity <= 1e-8;
             let angles = first.max_axis_normal_angle_deg <= params.theta_deg && first.min_support_plane_angle_deg >= params.alpha_deg;
             assert!(!exact || !angles || first.max_vertex_distance_to_reference > rounds.distance_limit, "{first:?} was refused");
             assert_eq!(after.mesh.sphere_mesh.mesh.positions, before.mesh.sphere_mesh.mesh.positions, "a refused snap moves nothing");
-            check("sq vault, not snapped", &after.mesh.panels, &report, &files, delta, None);
-            let snap = &report.moulds.as_ref().unwrap().snap;
-            assert_eq!(snap.snapped, 0);
-            assert!(snap.not_snapped.iter().all(|m| m.reason == SnapLimit::MethodTargets), "{snap:?}");
             false
         }
     }
@@ -334,17 +344,12 @@ fn st_support_cmc1_moulds(scale: f64, max_moulds: usize) -> bool {
             snapped_panels_have_their_moulds_radius(&report, &files);
             true
         }
-        Err(limit) => {
-            assert_eq!(*limit, SnapLimit::MethodTargets);
+        Err(_) => {
+            refused_honestly("st-support cmc1, not snapped", rounds, &result.panels, &report, &files, delta);
             let first = rounds.rounds.first().expect("a round ran");
-            assert!(rounds.rounds.iter().all(|r| !r.kept));
             let exact = first.max_vertex_sphere_residual <= 1e-9 && first.max_orthogonality_residual <= 1e-9 && first.max_node_axis_offset <= 1e-9;
             assert!(!exact || first.max_distance_to_reference > rounds.distance_limit, "{first:?} was refused");
             assert_eq!(result.sphere_mesh.mesh.positions, plain.sphere_mesh.mesh.positions, "a refused snap moves nothing");
-            check("st-support cmc1, not snapped", &result.panels, &report, &files, delta, None);
-            let snap = &report.moulds.as_ref().unwrap().snap;
-            assert_eq!(snap.snapped, 0);
-            assert!(snap.not_snapped.iter().all(|m| m.reason == SnapLimit::MethodTargets), "{snap:?}");
             false
         }
     }

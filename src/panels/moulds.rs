@@ -282,21 +282,67 @@ pub struct MouldSnap {
     pub limits: Vec<Option<SnapLimit>>,
 }
 
-/// In words, why a method kept none of its rounds toward fewer moulds, from its rounds (moulds,
-/// largest distance to the reference relative to the diagonal, kept) and the `limit` on that
-/// distance; None when a round was kept or none ran.
-pub fn refused_rounds(rounds: impl IntoIterator<Item = (usize, f64, bool)>, limit: f64) -> Option<String> {
-    let rounds: Vec<(usize, f64, bool)> = rounds.into_iter().collect();
-    let &(moulds, distance, _) = rounds.first()?;
-    if rounds.iter().any(|r| r.2) {
-        return None;
+/// The figures every method's round toward fewer moulds has: the moulds at δ of its moved panels,
+/// their largest distance to the reference (relative to the diagonal), and whether it was kept.
+pub trait MouldRoundFigures {
+    fn moulds(&self) -> usize;
+    fn distance_to_reference(&self) -> f64;
+    fn kept(&self) -> bool;
+}
+
+/// What a method's rounds toward fewer moulds ([`snapped_rounds`]) did.
+#[derive(Clone, Debug)]
+pub struct MouldOutcome<Round> {
+    /// The moulds the kept panels were snapped to, or why none was.
+    pub snap: Result<MouldSnap, SnapLimit>,
+    pub rounds: Vec<Round>,
+    /// Moulds at δ before the rounds, and the fits of the panels then.
+    pub before: usize,
+    pub fits_before: MouldFits,
+    /// The largest distance to the reference a round may reach (relative).
+    pub distance_limit: f64,
+}
+
+impl<Round: Clone> MouldOutcome<Round> {
+    /// The rounds as a method's report section carries them.
+    pub fn section(outcome: Option<&Self>) -> MouldRoundsSection<Round> {
+        MouldRoundsSection {
+            mould_rounds: outcome.map(|o| o.rounds.clone()).unwrap_or_default(),
+            moulds_before: outcome.map(|o| o.before),
+            moulds_distance_limit: outcome.map(|o| o.distance_limit),
+        }
     }
-    let moulds = format!("{moulds} mould{}", if moulds == 1 { "" } else { "s" });
-    Some(if distance > limit {
-        format!("not snapped: on {moulds} exactly the panels would be {distance:.2e} of the diagonal from the reference, over the limit {limit:.2e}")
-    } else {
-        format!("not snapped: on {moulds} exactly the method's guarantees would not hold")
-    })
+}
+
+/// The rounds toward fewer moulds (`optimize_moulds`) in a method's report section, the moulds at
+/// δ before them, and the distance limit the rounds were held to.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MouldRoundsSection<Round> {
+    #[serde(default = "Vec::new", skip_serializing_if = "Vec::is_empty")]
+    pub mould_rounds: Vec<Round>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moulds_before: Option<usize>,
+    /// Relative to the diagonal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moulds_distance_limit: Option<f64>,
+}
+
+impl<Round: MouldRoundFigures> MouldRoundsSection<Round> {
+    /// In words, why the method kept none of its rounds; None when a round was kept or none ran.
+    pub fn refused(&self) -> Option<String> {
+        let limit = self.moulds_distance_limit?;
+        let first = self.mould_rounds.first()?;
+        if self.mould_rounds.iter().any(|r| r.kept()) {
+            return None;
+        }
+        let (moulds, distance) = (first.moulds(), first.distance_to_reference());
+        let moulds = format!("{moulds} mould{}", if moulds == 1 { "" } else { "s" });
+        Some(if distance > limit {
+            format!("not snapped: on {moulds} exactly the panels would be {distance:.2e} of the diagonal from the reference, over the limit {limit:.2e}")
+        } else {
+            format!("not snapped: on {moulds} exactly the method's guarantees would not hold")
+        })
+    }
 }
 
 /// The rounds' tolerances, as multiples of δ, in order: δ itself (the snap), then coarser.

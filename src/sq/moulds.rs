@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::panels::moulds::{snapped_rounds, Fabrication, MouldFits, MouldSnap, RoundCount, SnapLimit};
+use crate::panels::moulds::{snapped_rounds, Fabrication, MouldOutcome, MouldRoundFigures, RoundCount};
 use crate::progress::{Cancelled, Progress};
 
 use super::error::SqError;
@@ -33,16 +33,18 @@ pub struct SqMouldRound {
 }
 
 /// What the rounds did.
-#[derive(Clone, Debug)]
-pub struct SqMouldOutcome {
-    /// The moulds the kept panels were snapped to, or why none was.
-    pub snap: Result<MouldSnap, SnapLimit>,
-    pub rounds: Vec<SqMouldRound>,
-    /// Moulds at δ before the rounds, and the fits of the panels then.
-    pub before: usize,
-    pub fits_before: MouldFits,
-    /// The vertices' largest distance to the reference a round may reach (relative).
-    pub distance_limit: f64,
+pub type SqMouldOutcome = MouldOutcome<SqMouldRound>;
+
+impl MouldRoundFigures for SqMouldRound {
+    fn moulds(&self) -> usize {
+        self.moulds
+    }
+    fn distance_to_reference(&self) -> f64 {
+        self.max_vertex_distance_to_reference
+    }
+    fn kept(&self) -> bool {
+        self.kept
+    }
 }
 
 /// The rounds from the method's result `done` (meeting its guarantees; `mesh` gives its SQ
@@ -89,5 +91,5 @@ pub fn fewer_moulds<R>(
         });
     };
     let out = snapped_rounds(done, &|r: &R| &mesh(r).panels[..], diag, fabrication, &mut on_faces, &mut on_round, progress)?;
-    Ok((out.best, SqMouldOutcome { snap: out.snap, rounds, before: out.before, fits_before: out.fits_before, distance_limit }))
+    Ok((out.best, MouldOutcome { snap: out.snap, rounds, before: out.before, fits_before: out.fits_before, distance_limit }))
 }

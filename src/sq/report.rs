@@ -8,6 +8,7 @@ use super::moulds::SqMouldRound;
 use super::params::{RadiusBasis, SqParams};
 use super::sq_mesh::SqMeshFigures;
 use super::{SqCongruence, SqResult};
+use crate::panels::moulds::{MouldOutcome, MouldRoundsSection};
 use crate::stats::mean;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -70,14 +71,9 @@ pub struct SqMeshSection {
     pub figures: SqMeshFigures,
     /// Iterations of the final optimization: warm-up, full, projection.
     pub final_iterations: [usize; 3],
-    /// The rounds toward fewer moulds (`optimize_moulds`), and the moulds at δ before them.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub mould_rounds: Vec<SqMouldRound>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub moulds_before: Option<usize>,
-    /// The vertices' largest distance to the reference a round may reach (relative).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub moulds_distance_limit: Option<f64>,
+    /// The rounds toward fewer moulds (`optimize_moulds`); their distance is the vertices'.
+    #[serde(flatten)]
+    pub moulds: MouldRoundsSection<SqMouldRound>,
 }
 
 impl CongruenceSection {
@@ -108,9 +104,7 @@ impl SqSection {
         let sq_mesh = result.sq_mesh.as_ref().map(|f| SqMeshSection {
             figures: f.mesh.figures,
             final_iterations: [f.outcome.warm_up_iterations, f.outcome.iterations, f.outcome.projection_iterations],
-            mould_rounds: f.moulds.as_ref().map(|m| m.rounds.clone()).unwrap_or_default(),
-            moulds_before: f.moulds.as_ref().map(|m| m.before),
-            moulds_distance_limit: f.moulds.as_ref().map(|m| m.distance_limit),
+            moulds: MouldOutcome::section(f.moulds.as_ref()),
         });
         let fairing = result.quad_mesh.as_ref().map_or(0, |q| q.fairing_iterations);
         let spheres = sq_mesh.as_ref().map_or(0, |s| s.final_iterations.iter().sum());

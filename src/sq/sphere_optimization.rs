@@ -279,6 +279,27 @@ impl SphereTerms {
         ]
     }
 
+    /// Sphericity (Eq. 10's E_sphere, E_unit, E_supp) at the weights `w`, the support term's at `supp`.
+    fn sphericity(&self, w: &SphereWeights, supp: f64) -> [(TermId, f64); 4] {
+        [(self.sphere, w.sphere), (self.unit, w.unit), (self.supp, supp), (self.star_unit, w.unit)]
+    }
+
+    /// The equations of exactness, each at weight 1.
+    fn exact(&self) -> [(TermId, f64); 4] {
+        [(self.sphere, 1.0), (self.unit, 1.0), (self.supp, 1.0), (self.star_unit, 1.0)]
+    }
+
+    /// The hinges at θ and α that an exact mesh keeps, and the separation of the spheres.
+    fn hinged(&self, w: &SphereWeights) -> [(TermId, f64); 4] {
+        [(self.exact_angle, w.support_angle), (self.exact_axis, w.axis_angle), (self.exact_fan, w.axis_angle), (self.separation, 1.0)]
+    }
+
+    /// Proximity to the reference (Sec. 5.2): tangent and point distance of the vertices, and of
+    /// the centres.
+    fn proximity(&self, w: &SphereWeights) -> [(TermId, f64); 3] {
+        [(self.tangent, w.prox_f), (self.point, w.prox_f), (self.centre, w.prox_c)]
+    }
+
     /// Every term at weight 0 but `weights`.
     fn set(&self, problem: &mut Problem, weights: &[(TermId, f64)]) {
         for id in self.all() {
@@ -488,13 +509,8 @@ fn project(
     outcome: &mut SphereOutcome,
     hook: &mut SphereHook,
 ) -> Result<usize, Cancelled> {
-    let exact = [(terms.sphere, 1.0), (terms.unit, 1.0), (terms.supp, 1.0), (terms.star_unit, 1.0)];
     let held: Vec<(TermId, f64)> = equations.iter().map(|&id| (id, 1.0)).collect();
-    let hinged = [(terms.exact_angle, w.support_angle), (terms.exact_axis, w.axis_angle), (terms.exact_fan, w.axis_angle), (terms.separation, 1.0)];
-    terms.set(problem, &[&exact[..], &hinged[..], &held[..]].concat());
-    for id in equations {
-        problem.set_weight(*id, 1.0);
-    }
+    terms.set(problem, &[&terms.exact()[..], &terms.hinged(w)[..], &held[..]].concat());
     problem.fix_range(layout.edge_normal(0)..layout.len());
     let mut projection = Solver::new(SolverOptions {
         clock,
@@ -505,10 +521,7 @@ fn project(
         ..SolverOptions::default()
     });
     let mut iterations = run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
-    terms.set(problem, &[&exact[..], &held[..]].concat());
-    for id in equations {
-        problem.set_weight(*id, 1.0);
-    }
+    terms.set(problem, &[&terms.exact()[..], &held[..]].concat());
     iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
     Ok(iterations)
 }
@@ -532,44 +545,22 @@ pub(crate) fn optimize_spheres(
     let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
 
     // Warm-up: the spheres and the star normals move; sphericity and a small support weight.
-    terms.set(
-        &mut problem,
-        &[
-            (terms.sphere, w.sphere),
-            (terms.unit, w.unit),
-            (terms.supp, w.warm_up_supp),
-            (terms.star_unit, w.unit),
-            (terms.reg_sphere, w.reg_sphere),
-            (terms.reg_normal, w.reg_normal),
-            (terms.separation, 1.0),
-        ],
-    );
+    let regularization = [(terms.reg_sphere, w.reg_sphere), (terms.reg_normal, w.reg_normal), (terms.separation, 1.0)];
+    terms.set(&mut problem, &[&terms.sphericity(w, w.warm_up_supp)[..], &regularization[..]].concat());
     problem.fix_range(layout.vertex(0)..layout.star_normal(0));
     problem.fix_range(layout.edge_normal(0)..layout.len());
     outcome.warm_up_iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome, hook)?;
 
     // The full optimization (Eq. 10).
-    terms.set(
-        &mut problem,
-        &[
-            (terms.sphere, w.sphere),
-            (terms.unit, w.unit),
-            (terms.supp, w.supp),
-            (terms.star_unit, w.unit),
-            (terms.torsal, w.torsal_plane),
-            (terms.edge_unit, w.unit),
-            (terms.tangent, w.prox_f),
-            (terms.point, w.prox_f),
-            (terms.centre, w.prox_c),
-            (terms.fair, w.fair),
-            (terms.reg_sphere, w.reg_sphere),
-            (terms.reg_normal, w.reg_normal),
-            (terms.angle, w.support_angle),
-            (terms.axis, w.axis_angle),
-            (terms.fan, w.axis_angle),
-            (terms.separation, 1.0),
-        ],
-    );
+    let support = [
+        (terms.torsal, w.torsal_plane),
+        (terms.edge_unit, w.unit),
+        (terms.fair, w.fair),
+        (terms.angle, w.support_angle),
+        (terms.axis, w.axis_angle),
+        (terms.fan, w.axis_angle),
+    ];
+    terms.set(&mut problem, &[&terms.sphericity(w, w.supp)[..], &support[..], &terms.proximity(w)[..], &regularization[..]].concat());
     for i in 0..layout.len() {
         problem.unfix(i);
     }
@@ -612,22 +603,7 @@ pub(crate) fn project_to_curvatures(
     let mut outcome = SphereOutcome::default();
     // First the curvatures are reached softly, the vertices and centres near the reference
     // (Eq. 10's proximity terms), so the projection after starts close to an exact mesh.
-    terms.set(
-        &mut problem,
-        &[
-            (terms.sphere, w.sphere),
-            (terms.unit, w.unit),
-            (terms.supp, w.supp),
-            (terms.star_unit, w.unit),
-            (terms.tangent, w.prox_f),
-            (terms.point, w.prox_f),
-            (terms.centre, w.prox_c),
-            (terms.exact_angle, w.support_angle),
-            (terms.exact_axis, w.axis_angle),
-            (terms.exact_fan, w.axis_angle),
-            (terms.separation, 1.0),
-        ],
-    );
+    terms.set(&mut problem, &[&terms.sphericity(w, w.supp)[..], &terms.proximity(w)[..], &terms.hinged(w)[..]].concat());
     problem.fix_range(layout.edge_normal(0)..layout.len());
     let max = params.sphere_iterations[2];
     let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });

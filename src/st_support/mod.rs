@@ -55,7 +55,7 @@ use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::deviation::max_distance_to_reference;
-use crate::panels::moulds::{snapped_rounds, RoundCount};
+use crate::panels::moulds::{snapped_rounds, MouldOutcome, RoundCount};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
@@ -282,7 +282,7 @@ fn fewer_moulds(
         &mut on_round,
         &mut |p| (progress.borrow_mut())(p),
     )?;
-    let outcome = StSupportMouldOutcome { snap: out.snap, rounds, before: out.before, fits_before: out.fits_before, distance_limit: moulds::DISTANCE_GROWTH * start_distance };
+    let outcome = MouldOutcome { snap: out.snap, rounds, before: out.before, fits_before: out.fits_before, distance_limit: moulds::DISTANCE_GROWTH * start_distance };
     let mut result = out.best.unwrap_or(start);
     result.moulds = Some(outcome);
     Ok(result)

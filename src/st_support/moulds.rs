@@ -17,7 +17,7 @@ use super::metrics::StSupportMetrics;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
-use crate::panels::moulds::{MouldFits, MouldSnap, SnapLimit};
+use crate::panels::moulds::{MouldOutcome, MouldRoundFigures};
 use crate::progress::{Cancelled, Clock};
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
@@ -50,16 +50,18 @@ pub struct StSupportMouldRound {
 }
 
 /// What the rounds did.
-#[derive(Clone, Debug)]
-pub struct StSupportMouldOutcome {
-    /// The moulds the kept panels were snapped to, or why none was.
-    pub snap: Result<MouldSnap, SnapLimit>,
-    pub rounds: Vec<StSupportMouldRound>,
-    /// Moulds at δ before the rounds, and the fits of the panels then.
-    pub before: usize,
-    pub fits_before: MouldFits,
-    /// The panels' largest distance to the reference a round may reach (relative).
-    pub distance_limit: f64,
+pub type StSupportMouldOutcome = MouldOutcome<StSupportMouldRound>;
+
+impl MouldRoundFigures for StSupportMouldRound {
+    fn moulds(&self) -> usize {
+        self.moulds
+    }
+    fn distance_to_reference(&self) -> f64 {
+        self.max_distance_to_reference
+    }
+    fn kept(&self) -> bool {
+        self.kept
+    }
 }
 
 /// Whether `moved` keeps the method's exactness against `start`'s, its panels at

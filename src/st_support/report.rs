@@ -7,6 +7,7 @@ use super::moulds::StSupportMouldRound;
 use super::StSupportResult;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::guarantees::f64_or_nan;
+use crate::panels::moulds::{MouldOutcome, MouldRoundsSection};
 use crate::remeshing::Sizing;
 
 /// Ω in the report. At infinity, `center` and `r2` are null and `axis` (with the plane offset
@@ -61,14 +62,9 @@ pub struct StSupportSection {
     pub axes_from_spheres: usize,
     /// Faces whose sphere could not be made orthogonal to Ω, and slivers.
     pub degenerate_faces: usize,
-    /// The rounds toward fewer moulds (`optimize_moulds`), and the moulds at δ before them.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub mould_rounds: Vec<StSupportMouldRound>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub moulds_before: Option<usize>,
-    /// The panels' largest distance to the reference a round may reach (relative).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub moulds_distance_limit: Option<f64>,
+    /// The rounds toward fewer moulds (`optimize_moulds`); their distance is the panels'.
+    #[serde(flatten)]
+    pub moulds: MouldRoundsSection<StSupportMouldRound>,
 }
 
 impl StSupportSection {
@@ -85,9 +81,7 @@ impl StSupportSection {
             max_axis_normal_angle_deg: m.max_axis_normal_angle_deg,
             axes_from_spheres: m.axes_from_spheres,
             degenerate_faces: m.degenerate_faces,
-            mould_rounds: result.moulds.as_ref().map(|o| o.rounds.clone()).unwrap_or_default(),
-            moulds_before: result.moulds.as_ref().map(|o| o.before),
-            moulds_distance_limit: result.moulds.as_ref().map(|o| o.distance_limit),
+            moulds: MouldOutcome::section(result.moulds.as_ref()),
         }
     }
 }

@@ -21,7 +21,6 @@ use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, 
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::{verdict, warnings};
 use crate::web::app::plots::{key_values, term_plot};
-use crate::panels::moulds::refused_rounds;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::colormap;
@@ -537,11 +536,8 @@ fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
             ("distinct radii", panels.as_ref().map_or("–".into(), |p| p.distinct_radii.to_string())),
         ];
         let mesh = sec.sq_mesh.as_ref();
-        rows.extend(before_after(mesh.and_then(|m| m.moulds_before), mesh.map_or(0, |m| m.mould_rounds.len()), r.moulds.as_ref()));
-        rows.extend(
-            mesh.and_then(|m| refused_rounds(m.mould_rounds.iter().map(|r| (r.moulds, r.max_vertex_distance_to_reference, r.kept)), m.moulds_distance_limit?))
-                .map(|why| ("mould snap", why)),
-        );
+        rows.extend(before_after(mesh.and_then(|m| m.moulds.moulds_before), mesh.map_or(0, |m| m.moulds.mould_rounds.len()), r.moulds.as_ref()));
+        rows.extend(mesh.and_then(|m| m.moulds.refused()).map(|why| ("mould snap", why)));
         if let Some(t) = r.timings_ms.get("final_iteration_median") {
             rows.push(("median final iteration", format!("{t:.2} ms")));
         }

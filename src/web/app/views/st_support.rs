@@ -20,7 +20,6 @@ use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
 use crate::web::app::panels::{sizing_controls, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
-use crate::panels::moulds::refused_rounds;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
@@ -242,12 +241,8 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
             ("node-axis offset", g(s.max_node_axis_offset)),
             ("distance to reference", g(m.max_distance_to_reference)),
     ];
-    rows.extend(before_after(s.moulds_before, s.mould_rounds.len(), r.moulds.as_ref()));
-    rows.extend(
-        s.moulds_distance_limit
-            .and_then(|limit| refused_rounds(s.mould_rounds.iter().map(|r| (r.moulds, r.max_distance_to_reference, r.kept)), limit))
-            .map(|why| ("mould snap", why)),
-    );
+    rows.extend(before_after(s.moulds.moulds_before, s.moulds.mould_rounds.len(), r.moulds.as_ref()));
+    rows.extend(s.moulds.refused().map(|why| ("mould snap", why)));
     key_values(ui, "st-support-metrics", &rows);
     ui.label(RichText::new("∠(v − m, n): m0 (green) and optimized m (red)").small());
     histogram(ui, &[(&sum.angles_m0, Color32::from_rgb(90, 190, 90)), (&sum.angles_m, Color32::from_rgb(220, 80, 70))], "°");
