@@ -436,3 +436,66 @@ fn sq_stage_cancels_within_one_iteration() {
     send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
     assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Finished { result: StageResult::Sq(_), .. }));
 }
+
+/// Progress messages of the method's stage among `messages`.
+fn method_progress(messages: &[(FromWorker, Vec<Field>)], stage: StageId) -> usize {
+    messages.iter().filter(|m| matches!(&m.0, FromWorker::Progress(p) if p.stage == stage)).count()
+}
+
+/// The finished report of the last run.
+fn finished_report(messages: &[(FromWorker, Vec<Field>)]) -> spherical_faces::export::Report {
+    let Some((FromWorker::Finished { mut result, .. }, _)) = messages.last().cloned() else { panic!("{:?}", messages.last()) };
+    result.report_mut().expect("a method's report").clone()
+}
+
+/// A new δ or K for the finished result exports it again without running the method: no
+/// progress, the same panels, the moulds the new tolerance asks for. Anything else, a method that
+/// optimizes for its moulds, or a new reference runs the method again.
+#[test]
+fn new_moulds_export_the_last_result_again() {
+    use spherical_faces::panels::moulds::{Fabrication, MouldTarget};
+    use spherical_faces::sq::params::SqParams;
+    use spherical_faces::units::{Length, Units};
+    let by_count = |k| Fabrication { units: Units::M, moulds: MouldTarget::Count(k) };
+    let tolerance = |t| Fabrication { units: Units::M, moulds: MouldTarget::Tolerance(Length { value: t, unit: None }) };
+    let panels = |m: &[(FromWorker, Vec<Field>)], stage: StageId| {
+        let snap = m.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if *s == stage)).expect("a snapshot");
+        find(&snap.1, field::PANEL_POSITIONS).unwrap().as_f32().unwrap().to_vec()
+    };
+    let cases: [(Sample, fn(Fabrication, bool) -> StageRequest); 2] = [
+        (Sample::Dome, |f, o| StageRequest::StSupport(StSupportParams { fabrication: f, optimize_moulds: o, ..Default::default() })),
+        (Sample::Vault, |f, o| StageRequest::Sq(SqParams { fabrication: f, optimize_moulds: o, ..Default::default() })),
+    ];
+    for (sample, request) in cases {
+        let mut s = Session::new();
+        let mut r = Recorder::default();
+        send(&mut s, &mut r, ToWorker::LoadSample(sample), None);
+        let stage = request(by_count(1), false).name();
+        let ran = |s: &mut Session, req: StageRequest| {
+            let mut r = Recorder::default();
+            send(s, &mut r, run(req), None);
+            r.messages
+        };
+        let first = ran(&mut s, request(by_count(1), false));
+        assert!(method_progress(&first, stage) > 0, "{sample:?}: the method ran");
+        let one = finished_report(&first).moulds.unwrap();
+        assert_eq!(one.count, 1, "{sample:?}");
+        let again = ran(&mut s, request(by_count(3), false));
+        assert_eq!(method_progress(&again, stage), 0, "{sample:?}: exported again, not run");
+        assert_eq!(panels(&again, stage), panels(&first, stage), "{sample:?}: the same panels");
+        assert!(again.iter().any(|m| matches!(m.0, FromWorker::Files { .. })), "{sample:?}: new files");
+        let three = finished_report(&again);
+        assert_eq!(three.moulds.as_ref().unwrap().count, 3, "{sample:?}");
+        assert!(three.moulds.as_ref().unwrap().tolerance < one.tolerance, "{sample:?}");
+        assert_eq!(three.metrics, finished_report(&first).metrics, "{sample:?}: the same result");
+        // A tolerance is a new δ too.
+        let by_tolerance = ran(&mut s, request(tolerance(one.tolerance), false));
+        assert_eq!(method_progress(&by_tolerance, stage), 0, "{sample:?}");
+        assert_eq!(finished_report(&by_tolerance).moulds.unwrap().count, 1, "{sample:?}");
+        // Optimizing for the moulds depends on them: the method runs.
+        assert!(method_progress(&ran(&mut s, request(by_count(3), true)), stage) > 0, "{sample:?}");
+        // A new reference forgets the result.
+        send(&mut s, &mut r, ToWorker::LoadSample(sample), None);
+        assert!(method_progress(&ran(&mut s, request(by_count(1), false)), stage) > 0, "{sample:?}");
+    }
+}

@@ -13,7 +13,9 @@ use super::fields::{Field, FieldHeader, FieldLengthError, StageId, StageProgress
 use super::stages::{curvature, sq, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::geometry::mesh::topology::MeshStats;
+use crate::export::Report;
 use crate::import::Format;
+use crate::panels::moulds::Fabrication;
 use crate::reference::bspline::BSplineInfo;
 use crate::samples::Sample;
 use crate::sq::params::SqParams;
@@ -61,6 +63,41 @@ impl StageRequest {
             StageRequest::StAdapted(_) => st_adapted::STAGE,
             StageRequest::StSupport(_) => st_support::STAGE,
             StageRequest::Sq(_) => sq::STAGE,
+        }
+    }
+
+    /// The method's fabrication settings and whether it optimizes for its moulds (None: the
+    /// curvature, which has no panels).
+    fn fabrication_mut(&mut self) -> Option<(&mut Fabrication, bool)> {
+        match self {
+            StageRequest::Curvature(_) => None,
+            StageRequest::StAdapted(p) => Some((&mut p.fabrication, p.optimize_moulds)),
+            StageRequest::StSupport(p) => Some((&mut p.fabrication, p.optimize_moulds)),
+            StageRequest::Sq(p) => Some((&mut p.fabrication, p.optimize_moulds)),
+        }
+    }
+
+    /// Whether `self` asks for the very result `earlier` made, with other moulds at most (a new
+    /// δ, K or unit): then that result is exported again, not computed again. A method that
+    /// optimizes for its moulds makes a result that depends on them.
+    pub fn same_result_as(&self, earlier: &StageRequest) -> bool {
+        let (mut a, mut b) = (self.clone(), earlier.clone());
+        match (a.fabrication_mut(), b.fabrication_mut()) {
+            (Some((fa, false)), Some((fb, false))) => *fa = *fb,
+            _ => return false,
+        }
+        a == b
+    }
+}
+
+impl StageResult {
+    /// The method's report (None: the curvature).
+    pub fn report_mut(&mut self) -> Option<&mut Report> {
+        match self {
+            StageResult::Curvature(_) => None,
+            StageResult::StAdapted(s) => Some(&mut s.report),
+            StageResult::StSupport(s) => Some(&mut s.report),
+            StageResult::Sq(s) => Some(&mut s.report),
         }
     }
 }

@@ -14,6 +14,9 @@ use crate::reference::bspline::SplineReferenceError;
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::samples::Sample;
+use crate::sq::SqResult;
+use crate::st_adapted::StAdaptedResult;
+use crate::st_support::StSupportResult;
 use crate::units::Units;
 
 /// Where the session's messages go (the worker posts them to the main thread), and how it
@@ -110,6 +113,23 @@ pub struct Session {
     objects: Option<FileObjects>,
     /// Times the stages (none by default: timings read 0).
     pub clock: Clock,
+    /// The last method's result on the loaded reference, for new moulds without a new run.
+    last: Option<LastMethod>,
+}
+
+/// A method's result as the session keeps it: its request, its summary, and the result itself.
+struct LastMethod {
+    request: StageRequest,
+    summary: StageResult,
+    result: Computed,
+}
+
+/// The result of one of the methods.
+enum Computed {
+    StAdapted(Box<StAdaptedResult>),
+    StSupport(Box<StSupportResult>),
+    /// With the iteration of its final snapshot.
+    Sq(Box<SqResult>, u32),
 }
 
 /// A file of several objects and their texts.
@@ -225,6 +245,7 @@ impl Session {
     }
 
     fn install(&mut self, r: Loaded, out: &mut dyn Outbox) {
+        self.last = None;
         out.send(FromWorker::Loaded(r.info.clone()), vec![]);
         let fields = r.geometry_fields();
         out.send(snapshot(StageId::Reference, 0, &fields), fields);
@@ -241,20 +262,39 @@ impl Session {
         let start = out.now_ms();
         let clock = self.clock;
         let mut sink = Messages(&mut *out);
+        // New moulds for the last result: exported again, in milliseconds.
+        if let Some(last) = self.last.as_mut().filter(|l| stage.same_result_as(&l.request)) {
+            let report = match (&last.result, &stage) {
+                (Computed::StAdapted(r), StageRequest::StAdapted(p)) => st_adapted::reexport(reference, r, p, clock, &mut sink),
+                (Computed::StSupport(r), StageRequest::StSupport(p)) => st_support::reexport(reference, r, p, clock, &mut sink),
+                (Computed::Sq(r, iteration), StageRequest::Sq(p)) => sq::reexport(reference, r, p, clock, &mut sink, *iteration),
+                _ => unreachable!("same_result_as compares requests of one method"),
+            };
+            if let Some(r) = last.summary.report_mut() {
+                *r = report;
+            }
+            last.request = stage;
+            let elapsed_ms = out.now_ms() - start;
+            out.send(FromWorker::Finished { stage: name, result: last.summary.clone(), elapsed_ms }, vec![]);
+            return;
+        }
         let result = match &stage {
-            StageRequest::Curvature(p) => curvature::run(reference, p, &mut sink).map(StageResult::Curvature),
-            StageRequest::StAdapted(p) => {
-                st_adapted::run(reference, p, clock, &mut sink).map(|s| StageResult::StAdapted(Box::new(s)))
+            StageRequest::Curvature(p) => curvature::run(reference, p, &mut sink).map(|s| (StageResult::Curvature(s), None)),
+            StageRequest::StAdapted(p) => st_adapted::run(reference, p, clock, &mut sink)
+                .map(|(s, r)| (StageResult::StAdapted(Box::new(s)), Some(Computed::StAdapted(Box::new(r))))),
+            StageRequest::StSupport(p) => st_support::run(reference, p, clock, &mut sink)
+                .map(|(s, r)| (StageResult::StSupport(Box::new(s)), Some(Computed::StSupport(Box::new(r))))),
+            StageRequest::Sq(p) => {
+                sq::run(reference, p, clock, &mut sink).map(|(s, r, i)| (StageResult::Sq(Box::new(s)), Some(Computed::Sq(Box::new(r), i))))
             }
-            StageRequest::StSupport(p) => {
-                st_support::run(reference, p, clock, &mut sink).map(|s| StageResult::StSupport(Box::new(s)))
-            }
-            StageRequest::Sq(p) => sq::run(reference, p, clock, &mut sink).map(|s| StageResult::Sq(Box::new(s))),
         };
         match result {
-            Ok(result) => {
+            Ok((summary, computed)) => {
+                if let Some(result) = computed {
+                    self.last = Some(LastMethod { request: stage.clone(), summary: summary.clone(), result });
+                }
                 let elapsed_ms = out.now_ms() - start;
-                out.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
+                out.send(FromWorker::Finished { stage: name, result: summary, elapsed_ms }, vec![]);
             }
             Err(StageError::Cancelled) => out.send(FromWorker::Cancelled { stage: name }, vec![]),
             Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: e.remesh_to() }, vec![]),

@@ -80,7 +80,7 @@ pub(crate) fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
 
 /// Runs the method on `reference`, streaming every stage to `sink`; returns the summary after
 /// sending the display fields and the files.
-pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<SqSummary, StageError> {
+pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<(SqSummary, SqResult, u32), StageError> {
     let mut stream = Stream::new(sink, params, reference.diagonal());
     let mut on_event = |e: SqEvent| stream.event(e);
     let result = match compute(reference, params, clock, &mut on_event) {
@@ -95,8 +95,17 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
         }
         Err(e) => return Err(e.into()),
     };
+    let (sink, planned) = (stream.sink, stream.planned as u32);
+    let report = reexport(reference, &result, params, clock, sink, planned);
+    Ok((SqSummary { report }, result, planned))
+}
+
+/// Sends a result's final display fields (the congruence, the quad mesh, the panels in their
+/// moulds' colours, the support structure) as the snapshot of `iteration`, and its files for
+/// `params`; returns the report. A new δ, K or unit needs only this, not the method again.
+pub fn reexport(reference: &Reference, result: &SqResult, params: &SqParams, clock: Clock, sink: &mut dyn Sink, iteration: u32) -> Report {
     let segments = CongruenceSegments::of(&result.congruence);
-    let (report, files, moulds) = exported(reference, &result, params, &segments, clock);
+    let (report, files, moulds) = exported(reference, result, params, &segments, clock);
     let mut fields = display_fields(&segments);
     if let Some(q) = &result.quad_mesh {
         let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
@@ -106,10 +115,9 @@ pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dy
         fields.extend(result_panel_fields(&f.mesh.panels, moulds));
         fields.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
     }
-    let (sink, planned) = (stream.sink, stream.planned);
-    sink.snapshot(STAGE, planned as u32, fields);
+    sink.snapshot(STAGE, iteration, fields);
     sink.files(STAGE, files);
-    Ok(SqSummary { report })
+    report
 }
 
 /// What the stage streams while the method runs, with one progress count across its steps:

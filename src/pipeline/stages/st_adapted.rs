@@ -44,8 +44,8 @@ pub struct StAdaptedSummary {
 }
 
 /// Runs the method on `reference`, streaming snapshots and progress to `sink`; returns the
-/// summary after sending the files.
-pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: &mut dyn Sink) -> Result<StAdaptedSummary, StageError> {
+/// summary and the result after sending the files.
+pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: &mut dyn Sink) -> Result<(StAdaptedSummary, StAdaptedResult), StageError> {
     let start = sink.now_ms();
     let diag = reference.diagonal();
     let mut last_snapshot = f64::NEG_INFINITY;
@@ -92,17 +92,25 @@ pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: 
         }
     };
     let result = compute(reference, params, clock, &mut on_event)?;
-    let (report, files, moulds) = exported(reference, &result, params, clock);
-    sink.snapshot(STAGE, result.iterations as u32, result_panel_fields(&result.panels, &moulds));
-    sink.files(STAGE, files);
-    Ok(StAdaptedSummary {
+    let report = reexport(reference, &result, params, clock, sink);
+    let summary = StAdaptedSummary {
         report,
         initial: result.initial_shape.clone(),
         metrics: result.metrics.clone(),
         iterations: result.iterations,
         sizing_range,
         remeshed_faces: result.remeshed.face_count(),
-    })
+    };
+    Ok((summary, result))
+}
+
+/// Sends a result's final panels (in their moulds' colours) and files for `params`; returns the
+/// report. A new δ, K or unit needs only this, not the method again.
+pub fn reexport(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedParams, clock: Clock, sink: &mut dyn Sink) -> Report {
+    let (report, files, moulds) = exported(reference, result, params, clock);
+    sink.snapshot(STAGE, result.iterations as u32, result_panel_fields(&result.panels, &moulds));
+    sink.files(STAGE, files);
+    report
 }
 
 /// A panel snapshot of the method's stage at `iteration`.

@@ -43,16 +43,15 @@ impl StSupportSummary {
     }
 }
 
-/// Runs the method on `reference`, sends its display fields and files; returns the summary.
-pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<StSupportSummary, StageError> {
+/// Runs the method on `reference`, sends its display fields and files; returns the summary and
+/// the result.
+pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<(StSupportSummary, StSupportResult), StageError> {
     let start = sink.now_ms();
     let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
-    let (report, files, moulds) = exported(reference, &result, params, clock);
-    sink.snapshot(STAGE, 1, display_fields(&result, &moulds));
-    sink.files(STAGE, files);
+    let report = reexport(reference, &result, params, clock, sink);
     let a = &result.absolute;
     let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
-    Ok(StSupportSummary {
+    let summary = StSupportSummary {
         distinct_radii: report.metrics.as_ref().map_or(0, |m| m.distinct_radii),
         report,
         omega: result.omega,
@@ -62,7 +61,17 @@ pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: 
         angles_m0: Histogram::new(&a.angles_m0_deg, 36),
         angles_m: Histogram::new(&a.angles_m_deg, 36),
         r2: Histogram::new(r2_values, 36),
-    })
+    };
+    Ok((summary, result))
+}
+
+/// Sends a result's display fields (panels in their moulds' colours) and files for `params`;
+/// returns the report. A new δ, K or unit needs only this, not the method again.
+pub fn reexport(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Report {
+    let (report, files, moulds) = exported(reference, result, params, clock);
+    sink.snapshot(STAGE, 1, display_fields(result, &moulds));
+    sink.files(STAGE, files);
+    report
 }
 
 /// The report (method "st-support") and the export files of a result; distances are measured to

@@ -31,7 +31,7 @@ use wasm_bindgen::prelude::*;
 
 use crate::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
 use crate::pipeline::fields::StageId;
-use crate::pipeline::protocol::ToWorker;
+use crate::pipeline::protocol::{StageRequest, ToWorker};
 use crate::samples::Sample;
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::ViewerResources;
@@ -71,6 +71,10 @@ pub struct App {
     downloads: Vec<Download>,
     /// Method parameters changed while a slider is held: rerun on release.
     params_dirty: bool,
+    /// Only the moulds (δ, K, units) changed: the worker exports its result again.
+    moulds_dirty: bool,
+    /// The method's request of the last run, to tell a change of moulds from a new run.
+    last_request: Option<StageRequest>,
     /// One view per method ([`views::views`]).
     views: Vec<Box<dyn MethodView>>,
     /// A fresh worker is being given the current design back: keep the view and the message.
@@ -162,6 +166,8 @@ impl App {
             last_run: None,
             downloads: Vec::new(),
             params_dirty: false,
+            moulds_dirty: false,
+            last_request: None,
             restoring: false,
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
@@ -258,9 +264,25 @@ impl App {
         self.downloads.clear();
         let last = stages.last().map_or(StageId::Curvature, |s| s.name());
         self.busy = Some(Busy::new(last));
+        self.last_request = stages.last().cloned();
         for stage in stages {
             self.send(&ToWorker::Run(Box::new(stage)), None);
         }
+    }
+
+    /// New moulds (δ, K or units) for the finished result: the worker exports it again and the
+    /// view keeps everything else. Anything more (no result yet, a run under way, a method that
+    /// optimizes for its moulds) runs the method again.
+    fn regroup(&mut self) {
+        let Some(request) = self.design.stage_requests().pop() else { return };
+        let finished = self.moulds.is_some() && self.busy.is_none();
+        if !finished || !self.last_request.as_ref().is_some_and(|l| request.same_result_as(l)) {
+            self.run_method();
+            return;
+        }
+        self.busy = Some(Busy::new(request.name()));
+        self.last_request = Some(request.clone());
+        self.send(&ToWorker::Run(Box::new(request)), None);
     }
 
     fn cancel(&mut self) {
@@ -414,11 +436,15 @@ impl App {
         self.params_dirty |= view.controls(ui, &mut self.design);
         if m != Method::Curvature {
             ui.separator();
-            self.params_dirty |= panels::moulds::controls(ui, &mut self.design.fabrication, self.moulds.as_ref());
+            self.moulds_dirty |= panels::moulds::controls(ui, &mut self.design.fabrication, self.moulds.as_ref());
         }
-        if self.params_dirty && !ui.input(|i| i.pointer.any_down()) {
-            self.params_dirty = false;
-            self.run_method();
+        if (self.params_dirty || self.moulds_dirty) && !ui.input(|i| i.pointer.any_down()) {
+            if self.params_dirty {
+                self.run_method();
+            } else {
+                self.regroup();
+            }
+            (self.params_dirty, self.moulds_dirty) = (false, false);
         }
     }
 
