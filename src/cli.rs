@@ -513,7 +513,7 @@ fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, o
         result.metrics.max_kink_angle_deg,
         report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
     );
-    Ok(with_refusal(with_moulds(summary, &report), refused))
+    verdict(with_refusal(with_moulds(summary, &report), refused), &report)
 }
 
 /// `summary`, then why no round toward fewer moulds was kept, if so.

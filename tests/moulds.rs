@@ -335,6 +335,7 @@ fn st_support_cmc1_moulds(scale: f64, max_moulds: usize) -> bool {
     assert!(m.max_vertex_sphere_residual <= 1e-9 && m.max_orthogonality_residual <= 1e-9 && m.max_center_plane_residual <= 1e-9, "{m:?}");
     assert!(m.max_node_axis_offset <= 1e-9, "{m:?}");
     assert!(m.degenerate_faces <= plain.metrics.degenerate_faces);
+    assert_eq!(report.meets_guarantees, Some(true), "{:?}", report.guarantees);
     assert!(distance(&report) <= 1.2 * distance(&plain_report), "{} vs {}", distance(&report), distance(&plain_report));
     let count = report.moulds.as_ref().unwrap().count;
     assert!(count <= max_moulds && count <= rounds.before, "{} → {count}", rounds.before);

@@ -21,7 +21,8 @@ use spherical_faces::st_support::absolute_sphere::{
     center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines,
     spherical_barycenter, AbsoluteSphereParams,
 };
-use spherical_faces::st_support::{compute, StSupportError, StSupportParams, StSupportResult};
+use spherical_faces::st_support::metrics::{metrics, Counts};
+use spherical_faces::st_support::{compute, guarantees, StSupportError, StSupportParams, StSupportResult};
 use spherical_faces::stats::{summary_stats, Histogram};
 
 const MESHES: [&str; 3] = ["tri_mesh", "botanic-garden-bubble-0", "cmc1"];
@@ -176,6 +177,10 @@ fn distant_centre_makes_omega_a_plane() {
     assert!(m.max_center_plane_residual < 1e-9, "{m:?}");
     assert!(m.max_vertex_sphere_residual < 1e-9);
     assert!(m.max_node_axis_offset < 1e-9, "{m:?}");
+    let verdict = guarantees::verdict(m, &r.omega);
+    let names: Vec<&str> = verdict.guarantees.iter().map(|g| g.name.as_str()).collect();
+    assert_eq!(names, ["max_vertex_sphere_residual", "max_center_plane_residual", "max_node_axis_offset"]);
+    assert!(verdict.holds(), "{}", verdict.failure_text());
     // Node axes are parallel to a, toward −a; the second points are the reflections.
     for (v, (p, dir)) in r.support.node_axes.axes.iter().enumerate() {
         assert!(dir.dot(-axis) > 1.0 - 1e-12);
@@ -240,6 +245,25 @@ fn reference_meshes_meet_the_bounds() {
         );
         assert!((opt.mean_kink_estimate_deg - plain.metrics.mean_kink_angle_deg).abs() < 1e-9);
     }
+}
+
+/// The verdict is measured on the panels, not taken from the method: a vertex moved off its
+/// spheres by 1e-6 of the diagonal misses the vertex–sphere guarantee by that much.
+#[test]
+fn a_vertex_off_its_spheres_misses_the_guarantee() {
+    let r = run(&load("cmc1"), false);
+    assert!(guarantees::verdict(&r.metrics, &r.omega).holds());
+    let mut moved = r.sphere_mesh.clone();
+    let n = r.absolute.normals[7];
+    moved.mesh.positions[7] += 1e-6 * r.diag * n;
+    let counts = Counts { degenerate_faces: r.metrics.degenerate_faces, edges_without_support: r.metrics.edges_without_support };
+    let m = metrics(&moved, &r.omega, &r.support.node_axes, &r.absolute.normals, r.diag, counts);
+    let verdict = guarantees::verdict(&m, &r.omega);
+    let missed: Vec<&str> = verdict.failures().map(|g| g.name.as_str()).collect();
+    assert_eq!(missed, ["max_vertex_sphere_residual"], "{}", verdict.failure_text());
+    let g = &verdict.guarantees[0];
+    assert!((g.measured - 1e-6).abs() < 1e-7, "{g}");
+    assert!(verdict.failure_text().contains("max_vertex_sphere_residual"));
 }
 
 fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {

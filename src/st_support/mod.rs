@@ -34,6 +34,7 @@
 
 pub mod absolute_sphere;
 pub mod face_spheres;
+pub mod guarantees;
 pub mod metrics;
 pub mod moulds;
 pub mod optimize_radius;

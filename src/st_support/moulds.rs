@@ -7,12 +7,13 @@
 //! underdetermined system that Gauss–Newton solves near the start, the vertices held near the
 //! reference first (point and tangent distance), then the equations alone. The spheres are then made again from the moved vertices and Ω (step 2), so
 //! the result is exact by construction and its node axes pass through m (Sec. 4). A round
-//! counts when it stays exact ([`EXACT`]) and its panels within [`DISTANCE_GROWTH`] × the
+//! counts when it stays exact ([`EXACT`], or no worse than the method's own) and its panels within [`DISTANCE_GROWTH`] × the
 //! method's distance to the reference.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use super::guarantees::EXACT;
 use super::metrics::StSupportMetrics;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::TriMesh;
@@ -27,9 +28,6 @@ use crate::solver::{
 
 /// The panels' largest distance to the reference may grow by this factor.
 pub const DISTANCE_GROWTH: f64 = 1.2;
-/// Exact: vertex–sphere, orthogonality and node-axis residuals at most this (relative to the
-/// diagonal), or no worse than the method's own.
-pub const EXACT: f64 = 1e-9;
 /// Weight of the damping against the equations in the first pass.
 const DAMPING_WEIGHT: f64 = 1e-3;
 /// Gauss–Newton iterations per pass.

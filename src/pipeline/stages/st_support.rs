@@ -84,6 +84,7 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
 /// [`export`] with the panels' moulds.
 fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let section = StSupportSection::of(result, params.remesh);
+    let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega);
     let export = PanelExport::new(
         STAGE.key(),
         &result.sphere_mesh,
@@ -97,6 +98,7 @@ fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportP
     .with_extras(crate::export::absolute_sphere_extras(&result.omega))
     .with_support(&result.support)
     .with_warnings(&result.warnings)
+    .with_verdict(&verdict)
     .with_moulds_before(result.moulds.as_ref().map(|m| &m.fits_before))
     .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
     let (report, mut files, moulds) = export_panels(reference, export, clock);

@@ -18,7 +18,7 @@ use crate::pipeline::stages::st_support::{StSupportSummary, STAGE};
 use crate::remeshing::Sizing;
 use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
-use crate::web::app::panels::{sizing_controls, warnings, SizingMemory};
+use crate::web::app::panels::{sizing_controls, verdict, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
@@ -212,6 +212,7 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
     };
     ui.separator();
     ui.strong("ST mesh with support structure");
+    verdict(ui, &sum.report);
     let omega = match sum.omega {
         AbsoluteSphere::Sphere { center, r2 } => {
             format!(
