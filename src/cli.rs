@@ -507,11 +507,11 @@ fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, o
     write_files(output, &files, &report)?;
     let refused = MouldOutcome::section(result.moulds.as_ref()).refused();
     let summary = format!(
-        "wrote {} panels to {} (max kink {:.3}°, max distance to reference {:.2e} of the diagonal)",
+        "wrote {} panels to {} (max kink {:.3}°, max distance to reference {})",
         result.panels.len(),
         output.out.display(),
         result.metrics.max_kink_angle_deg,
-        report.metrics.as_ref().map_or(f64::NAN, |m| m.max_distance_to_reference)
+        report.metrics.as_ref().map_or("–".into(), |m| m.max_distance_text())
     );
     verdict(with_refusal(with_moulds(summary, &report), refused), &report)
 }
@@ -558,12 +558,12 @@ fn st(input: &Input, mut params: StAdaptedParams, f: &FabricationArgs, output: &
     progress.clear();
     write_files(output, &files, &report)?;
     let summary = format!(
-        "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {:.2e} of the diagonal; {} folded faces)",
+        "wrote {} panels to {} (kink mean {:.3}°, max {:.3}°; max distance to reference {}; {} folded faces)",
         report.output.panels,
         output.out.display(),
         result.metrics.mean_kink_angle_deg,
         result.metrics.max_kink_angle_deg,
-        result.metrics.max_distance_to_reference,
+        report.metrics.as_ref().map_or("–".into(), |m| m.max_distance_text()),
         result.metrics.flipped_faces
     );
     verdict(with_moulds(summary, &report), &report)
@@ -606,7 +606,7 @@ fn sq(input: &Input, mut params: SqParams, f: &FabricationArgs, output: &Output,
             format!(
                 "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
                  planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
-                 ≥ {:.2}° (α = {}°); max distance to the reference {:.2e} of the diagonal; edges off the torsal directions by {:.2}° on \
+                 ≥ {:.2}° (α = {}°); max distance to the reference {}; edges off the torsal directions by {:.2}° on \
                  average; {} distinct radii; {:.0} ms.",
                 report.output.panels,
                 output.out.display(),
@@ -617,7 +617,7 @@ fn sq(input: &Input, mut params: SqParams, f: &FabricationArgs, output: &Output,
                 params.theta_deg,
                 f.min_torsal_plane_angle_deg,
                 params.alpha_deg,
-                panels.max_distance_to_reference,
+                panels.max_distance_text(),
                 quads.map_or(f64::NAN, |q| q.mean_edge_torsal_angle_deg),
                 panels.distinct_radii,
                 report.timings_ms.get("total").copied().unwrap_or(0.0),

@@ -57,6 +57,10 @@ fn check(name: &str, panels: &[Panel], report: &Report, files: &[ExportFile], de
         Some(given) => assert!(moulds.moulds.len() == given.moulds.len() && fewest <= given.moulds.len(), "{name}"),
     }
     assert_eq!(moulds.moulds.iter().map(|m| m.panels).sum::<usize>(), n, "{name}");
+    // Every mould is a sphere of positive radius or a plane, never a point.
+    for m in &moulds.moulds {
+        assert!(m.curvature.is_finite() && m.curvature >= 0.0 && m.radius.is_none_or(|r| r > 0.0 && r.is_finite()), "{name}: {m:?}");
+    }
     // Each panel fits its mould within δ, sampled densely and measured independently.
     let diag = report.metrics.as_ref().unwrap().diagonal;
     let mut worst: f64 = 0.0;
@@ -180,6 +184,26 @@ fn st_support_panels_fit_their_moulds() {
     let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
     check("st-support cmc1", &result.panels, &report, &files, delta, None);
     not_snapped_when_not_asked("st-support cmc1", &report);
+}
+
+/// A δ larger than the panels (cmc1 in millimetres, δ 2 mm): every panel fits every steeper mould
+/// by the fit rule, and the one mould is still a sphere of the panels' own size, with its real
+/// deviation, not a point of radius 0.
+#[test]
+fn a_tolerance_beyond_the_panels_still_gives_a_sphere() {
+    let reference = load_reference("cmc1");
+    let delta = 0.12 * reference.diagonal();
+    let params = StSupportParams { fabrication: fabrication(delta), ..Default::default() };
+    let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
+    check("st-support cmc1 at 0.12 of the diagonal", &result.panels, &report, &files, delta, None);
+    let m = report.moulds.as_ref().unwrap();
+    assert_eq!(m.count, 1);
+    let radius = m.moulds[0].radius.expect("a sphere");
+    let own: Vec<f64> = result.panels.iter().filter_map(|p| p.sphere.signed_radius()).map(f64::abs).collect();
+    let (lo, hi) = own.iter().fold((f64::MAX, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
+    assert!(radius >= 0.5 * lo && radius <= 2.0 * hi, "mould radius {radius}, panels {lo}..{hi}");
+    assert!(m.max_deviation > 0.0 && m.max_deviation <= delta);
 }
 
 #[test]

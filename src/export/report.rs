@@ -80,6 +80,19 @@ pub struct PanelMetrics {
     pub max_distance: f64,
 }
 
+impl PanelMetrics {
+    /// The panels' largest distance to the reference in model units, with its share of the
+    /// diagonal ("0.02083 m, 4.85e-4 of the diagonal").
+    pub fn max_distance_text(&self) -> String {
+        let relative = format!("{:.2e} of the diagonal", self.max_distance_to_reference);
+        if self.max_distance.is_finite() {
+            format!("{}, {relative}", crate::units::format_length(self.max_distance, self.units))
+        } else {
+            relative
+        }
+    }
+}
+
 /// The shared moulds section: the fewest moulds the panels need within the fit tolerance
 /// ([`crate::panels::moulds`]), lengths in model units.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

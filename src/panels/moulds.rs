@@ -12,7 +12,9 @@
 //!
 //! **Fewest moulds.** The fewest values hitting every interval: sorted by right end, each
 //! interval not yet hit takes its right end (the classic greedy, optimal). Each mould then takes
-//! the middle of the intersection of its panels' intervals, which every one of them fits.
+//! the middle of the intersection of its panels' intervals, which every one of them fits (an
+//! intersection unbounded above, of panels within δ of their centre: their mean curvature,
+//! clamped into it).
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -137,6 +139,7 @@ impl MouldFits {
         // Each panel to the mould nearest its own |κ| among those it fits.
         let mut panel_mould = Vec::with_capacity(intervals.len());
         let mut common: Vec<[f64; 2]> = vec![[f64::NEG_INFINITY, f64::INFINITY]; stabs.len()];
+        let mut own_sum = vec![(0.0, 0usize); stabs.len()];
         for (i, &[lo, hi]) in intervals.iter().enumerate() {
             let first = stabs.partition_point(|&s| s < lo);
             let last = stabs.partition_point(|&s| s <= hi);
@@ -145,9 +148,17 @@ impl MouldFits {
                 .min_by(|&a, &b| (stabs[a] - own).abs().total_cmp(&(stabs[b] - own).abs()))
                 .unwrap_or(first.min(stabs.len().saturating_sub(1)));
             common[j] = [common[j][0].max(lo), common[j][1].min(hi)];
+            own_sum[j] = (own_sum[j].0 + own, own_sum[j].1 + 1);
             panel_mould.push(j as u32);
         }
-        let values: Vec<f64> = common.iter().zip(&stabs).map(|(&[lo, hi], &s)| if lo <= hi { 0.5 * (lo + hi) } else { s }).collect();
+        let value = |(&[lo, hi], &s): (&[f64; 2], &f64), &(sum, n): &(f64, usize)| match (lo <= hi, hi.is_finite()) {
+            (true, true) => 0.5 * (lo + hi),
+            // Panels within δ of their centre fit every steeper mould: their mean curvature, as
+            // near as the others allow.
+            (true, false) => (sum / n.max(1) as f64).clamp(lo, f64::MAX),
+            (false, _) => s,
+        };
+        let values: Vec<f64> = common.iter().zip(&stabs).zip(&own_sum).map(|(c, o)| value(c, o)).collect();
         self.cut_from(tolerance, &values, panel_mould)
     }
 

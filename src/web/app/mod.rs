@@ -360,7 +360,7 @@ impl App {
             ui.separator();
             self.display_section(ui);
             ui.separator();
-            if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected) {
+            if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected, self.design.fabrication.units) {
                 self.send(&ToWorker::PickObject(k), None);
                 self.busy = Some(Busy::new(StageId::Import));
             }

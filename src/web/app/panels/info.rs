@@ -4,11 +4,13 @@ use egui::{Color32, RichText};
 
 use crate::geometry::sphere::Sphere;
 use crate::pipeline::fields::{field, find, Field};
+use crate::units::{format_length, Units};
 use crate::web::app::plots::key_values;
 use crate::web::app::state::{CurvatureView, Scene};
 
-/// The reference section; returns the object picked of a file holding several.
-pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) -> Option<usize> {
+/// The reference section (lengths in model units `units`); returns the object picked of a file
+/// holding several.
+pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>, units: Units) -> Option<usize> {
     ui.strong("Reference");
     let Some(l) = loaded else {
         ui.label("loading…");
@@ -36,7 +38,7 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) 
             ("faces", s.faces.to_string()),
             ("boundary loops", s.boundary_loops.to_string()),
             ("non-manifold edges", s.non_manifold_edges.to_string()),
-            ("bbox diagonal", format!("{:.4}", l.info.bbox_diagonal)),
+            ("bbox diagonal", format_length(l.info.bbox_diagonal, units)),
         ],
     );
     if let Some(sum) = l.curvature.as_ref().and_then(|c| c.summary.as_ref()) {
@@ -67,7 +69,7 @@ pub fn show(ui: &mut egui::Ui, loaded: Option<&Scene>, selected: Option<usize>) 
         (Some(v), Some(c)) => {
             ui.add_space(4.0);
             ui.strong(format!("Vertex {v}"));
-            if let Some(text) = vertex_text(c, v) {
+            if let Some(text) = vertex_text(c, v, units) {
                 ui.label(RichText::new(text).monospace().small());
             }
         }
@@ -92,11 +94,11 @@ pub fn center_radius(s: &Sphere) -> Option<(glam::DVec3, f64)> {
     Some((s.center()?, 0.5 / s.a))
 }
 
-fn vertex_text(c: &CurvatureView, v: usize) -> Option<String> {
+fn vertex_text(c: &CurvatureView, v: usize, units: Units) -> Option<String> {
     let val = |k| find(&c.fields, k).and_then(Field::as_f32).and_then(|x| x.get(v).copied());
     let (h, k1, k2) = (val(field::MEAN_CURVATURE)?, val(field::K1)?, val(field::K2)?);
     let desc = match center_radius(&central_sphere(c, v)?) {
-        Some((center, r)) => format!("centre ({:.3}, {:.3}, {:.3})\nradius {:.4}", center.x, center.y, center.z, r.abs()),
+        Some((center, r)) => format!("centre ({:.3}, {:.3}, {:.3})\nradius {}", center.x, center.y, center.z, format_length(r.abs(), units)),
         None => "central sphere is a plane (H ≈ 0)".into(),
     };
     let boundary = find(&c.fields, field::BOUNDARY).and_then(Field::as_u32).and_then(|b| b.get(v).copied()) == Some(1);

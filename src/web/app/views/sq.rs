@@ -492,7 +492,6 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
 fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
     let (sec, r) = (&sum.section, &sum.report);
     let panels = r.metrics.clone();
-    let g = |x: f64| format!("{x:.2e}");
     let ok = |good: bool| if good { "✔" } else { "✘" };
     if let Some(mf) = sec.sq_mesh.as_ref().map(|m| &m.figures) {
         let quads = sec.quad_mesh.as_ref();
@@ -524,7 +523,7 @@ fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
                     params.alpha_deg
                 ),
             ),
-            ("max distance to the reference / diag", panels.as_ref().map_or("–".into(), |p| g(p.max_distance_to_reference))),
+            ("max distance to the reference", panels.as_ref().map_or("–".into(), |p| p.max_distance_text())),
             (
                 "edges off the torsal directions",
                 format!(

@@ -236,7 +236,7 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
         ("kink mean, initial → final", format!("{:.3}° → {:.3}°", sum.initial.mean_kink_angle_deg, sum.metrics.mean_kink_angle_deg)),
         ("kink max, initial → final", format!("{:.3}° → {:.3}°", sum.initial.max_kink_angle_deg, sum.metrics.max_kink_angle_deg)),
         ("vertex–sphere residual", g(Some(sum.metrics.max_vertex_sphere_residual))),
-        ("distance to reference", g(Some(sum.metrics.max_distance_to_reference))),
+        ("distance to reference", sum.report.metrics.as_ref().map_or("–".into(), |m| m.max_distance_text())),
     ];
     if let Some(gap) = sum.metrics.max_gap {
         rows.push(("max gap (b)", format!("{gap:.3e}")));

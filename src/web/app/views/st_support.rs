@@ -240,7 +240,7 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
             ("vertex–sphere residual", g(s.max_vertex_sphere_residual)),
             ("orthogonality residual", g(s.max_orthogonality_residual)),
             ("node-axis offset", g(s.max_node_axis_offset)),
-            ("distance to reference", g(m.max_distance_to_reference)),
+            ("distance to reference", m.max_distance_text()),
     ];
     rows.extend(before_after(s.moulds.moulds_before, s.moulds.mould_rounds.len(), r.moulds.as_ref()));
     rows.extend(s.moulds.refused().map(|why| ("mould snap", why)));
