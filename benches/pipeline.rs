@@ -14,7 +14,7 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
-    phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES,
+    exact_step, exact_surfaces, phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, EXACT_PANELS,
     ANGLE_SAMPLES, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
 };
 use spherical_faces::panels::moulds::MouldFits;
@@ -149,5 +149,16 @@ fn moulds(bencher: Bencher) {
     bencher.bench_local(|| {
         timed("mould_fits_10k", || MouldFits::of(&m.panels));
         timed("mould_assign_10k", || m.fits.assign(m.tolerance));
+    });
+}
+
+#[divan::bench(sample_count = MOULD_SAMPLES as u32, sample_size = 1)]
+fn exact_surfaces_and_step(bencher: Bencher) {
+    let m = MouldWorkload::new(scale());
+    let panels = &m.panels[..EXACT_PANELS.min(m.panels.len())];
+    info("exact", format!("# step_2k: {} panels", panels.len()));
+    bencher.bench_local(|| {
+        let exact = timed("exact_surfaces_2k", || exact_surfaces(panels));
+        timed("step_2k", || exact_step(panels, &exact));
     });
 }

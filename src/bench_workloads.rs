@@ -461,4 +461,26 @@ where
     out(&format!("# mould_assign_10k: {} panels, {moulds} moulds within 2e-4 of the diagonal", m.panels.len()));
     out(&result_line("mould_fits_10k", &fits_ms));
     out(&result_line("mould_assign_10k", &assign_ms));
+    pause().await;
+    let panels = &m.panels[..EXACT_PANELS.min(m.panels.len())];
+    let exact_ms: Vec<f64> = (0..MOULD_SAMPLES).flat_map(|_| time_n(clock, 1, || drop(exact_surfaces(panels)))).collect();
+    let exact = exact_surfaces(panels);
+    let mut bytes = 0;
+    let step_ms: Vec<f64> = (0..MOULD_SAMPLES).flat_map(|_| time_n(clock, 1, || bytes = exact_step(panels, &exact).len())).collect();
+    out(&format!("# step_2k: {} panels, panels.step {bytes} bytes", panels.len()));
+    out(&result_line("exact_surfaces_2k", &exact_ms));
+    out(&result_line("step_2k", &step_ms));
+}
+
+/// Panels of the exact-surface benchmarks.
+pub const EXACT_PANELS: usize = 2000;
+
+/// The exact patches of `panels` ([`crate::panels::exact_surface`]).
+pub fn exact_surfaces(panels: &[crate::panels::panel::Panel]) -> crate::panels::exact_surface::ExactSurfaces {
+    crate::panels::exact_surface::ExactSurfaces::of(panels, &[])
+}
+
+/// `panels.step` of `panels` with their exact patches.
+pub fn exact_step(panels: &[crate::panels::panel::Panel], exact: &crate::panels::exact_surface::ExactSurfaces) -> String {
+    crate::export::step::write_exact_step("panels", panels, exact, crate::units::Units::M, 1.0)
 }

@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 
 use spherical_faces::congruence::central_spheres::JetParams;
+use spherical_faces::export::rhino::RHINO_MODEL_FILE;
 use spherical_faces::export::{ExportFile, Report};
 use spherical_faces::import::MAX_BYTES;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
@@ -224,6 +225,44 @@ struct Output {
     /// The folder to write into (created if missing; checked before any work).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// The files to write, comma-separated: glb (panels.glb), obj (panels.obj), schedule
+    /// (panels.csv, panels.json, moulds.csv, support.csv), step (panels.step) and 3dm
+    /// (panels.3dm, written by the rhino3dm package through Node), both with every panel and
+    /// support element an exact rational NURBS surface, or all; report.json is always written
+    #[arg(long, value_name = "LIST", value_enum, value_delimiter = ',', default_value = "all")]
+    formats: Vec<FileFormat>,
+}
+
+/// A kind of file the panel methods write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum FileFormat {
+    All,
+    Glb,
+    Obj,
+    Schedule,
+    Step,
+    #[value(name = "3dm")]
+    Rhino,
+}
+
+impl FileFormat {
+    /// The kind of an export file; None for those always written (report.json, the congruence).
+    fn of(name: &str) -> Option<FileFormat> {
+        match name {
+            "panels.glb" => Some(FileFormat::Glb),
+            "panels.obj" => Some(FileFormat::Obj),
+            "panels.step" => Some(FileFormat::Step),
+            RHINO_MODEL_FILE => Some(FileFormat::Rhino),
+            "panels.csv" | "panels.json" | "moulds.csv" | "support.csv" => Some(FileFormat::Schedule),
+            _ => None,
+        }
+    }
+}
+
+impl Output {
+    fn wants(&self, name: &str) -> bool {
+        FileFormat::of(name).is_none_or(|f| self.formats.iter().any(|&w| w == f || w == FileFormat::All))
+    }
 }
 
 /// Why a command failed: the message and the exit code.
@@ -471,9 +510,12 @@ fn check_output(output: &Output) -> Result<(), Failure> {
 
 /// Writes `files` into `dir` and prints the report's warnings.
 fn write_files(output: &Output, files: &[ExportFile], report: &Report) -> Result<(), Failure> {
-    for f in files {
+    for f in files.iter().filter(|f| output.wants(&f.name) && f.name != RHINO_MODEL_FILE) {
         let path = output.out.join(&f.name);
         std::fs::write(&path, &f.bytes).map_err(|e| Failure::output(format!("{}: {e}", path.display())))?;
+    }
+    if let Some(model) = files.iter().find(|f| f.name == RHINO_MODEL_FILE && output.wants(&f.name)) {
+        rhino::write(&output.out, &model.bytes)?;
     }
     for w in &report.warnings {
         eprintln!("warning: {}", printable(w));
@@ -524,8 +566,13 @@ fn with_refusal(summary: String, refused: Option<String>) -> String {
     }
 }
 
-/// `summary`, then the moulds of the report: how many, within what, in model units.
+/// `summary`, then the exact surfaces of `panels.step` and the moulds of the report: how many,
+/// within what, in model units.
 fn with_moulds(summary: String, report: &Report) -> String {
+    let summary = match &report.exact_surfaces {
+        Some(e) => format!("{summary}; panels.step: {}", e.describe()),
+        None => summary,
+    };
     match &report.moulds {
         Some(m) => format!(
             "{summary}; {} mould{} within {} (largest fit deviation {}; moulds.csv); {}",
@@ -723,6 +770,25 @@ mod rhino {
             return Err(Failure::input(format!("{first}{hint}")));
         }
         Ok(out.stdout)
+    }
+
+    /// Writes `panels.3dm` into `dir` from its model (`www/rhino3dm/write-cli.mjs`).
+    pub fn write(dir: &std::path::Path, model: &[u8]) -> Result<(), Failure> {
+        let writer = std::path::Path::new(&script()).with_file_name("write-cli.mjs");
+        let (json, out) = (dir.join(".panels.3dm.json"), dir.join("panels.3dm"));
+        std::fs::write(&json, model).map_err(|e| Failure::output(format!("{}: {e}", json.display())))?;
+        let done = Command::new("node").arg(&writer).arg(&json).arg(&out).output();
+        let _ = std::fs::remove_file(&json);
+        let why = match done {
+            Ok(o) if o.status.success() => return Ok(()),
+            Ok(o) => String::from_utf8_lossy(&o.stderr).lines().find(|l| !l.trim().is_empty()).unwrap_or("the writer failed").to_string(),
+            Err(e) => format!("node: {e}"),
+        };
+        Err(Failure::output(format!(
+            "{}: {why}; the other files are written (writing .3dm needs Node.js ≥ 20 and `npm ci` in {}; or leave it out with --formats)",
+            out.display(),
+            writer.parent().map_or(".".into(), |p| p.display().to_string())
+        )))
     }
 
     /// `info --list-objects`: the converter's object list, one JSON object per line.

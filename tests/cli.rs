@@ -54,14 +54,32 @@ fn unreadable_input_exits_2_with_one_line() {
     assert_eq!(run(&[]).status.code(), Some(2));
 }
 
+/// `--formats` writes only the files asked for, report.json always; an unknown one is refused.
+#[test]
+fn formats_choose_the_files() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-formats-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = run(&["st", "sample:dome", "-q", "--faces", "200", "--formats", "step,glb", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, ["panels.glb", "panels.step", "report.json"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("panels.step:") && stdout.contains("as rational NURBS surfaces"), "{stdout}");
+    let out = run(&["st", "sample:dome", "--formats", "stl", "--out", dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("stl"));
+}
+
 #[test]
 fn st_support_writes_panels_and_report() {
     let dir = std::env::temp_dir().join(format!("sf-cli-st-{}", std::process::id()));
     let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--optimize-radius", "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for f in ["panels.glb", "panels.obj", "panels.csv", "panels.json", "report.json"] {
+    for f in ["panels.glb", "panels.obj", "panels.csv", "panels.json", "panels.step", "panels.3dm", "report.json"] {
         assert!(dir.join(f).metadata().map(|m| m.len() > 0).unwrap_or(false), "{f}");
     }
+    assert!(!dir.join("panels.3dm.json").exists() && !dir.join(".panels.3dm.json").exists(), "the 3dm model is not left behind");
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["method"], "st-support");
     assert_eq!(r["input"]["vertices"], 272);

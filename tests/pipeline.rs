@@ -146,8 +146,8 @@ fn st_support_streams_panels_files_and_a_report() {
         panic!()
     };
     let names: Vec<_> = fields.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "support.csv", "report.json"]);
-    assert_eq!(mime.len(), 7);
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "panels.step", "panels.3dm.json", "support.csv", "report.json"]);
+    assert_eq!(mime.len(), 9);
     assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
     let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
     let m = &summary.section().expect("the report's section");
@@ -155,7 +155,7 @@ fn st_support_streams_panels_files_and_a_report() {
     assert!(m.max_orthogonality_residual <= 1e-9);
     assert!(m.max_node_axis_offset <= 1e-9);
     assert_eq!(summary.report.output.panels, summary.report.input.faces);
-    let report: serde_json::Value = serde_json::from_slice(bodies[6].as_bytes().unwrap()).unwrap();
+    let report: serde_json::Value = serde_json::from_slice(bodies[8].as_bytes().unwrap()).unwrap();
     assert_eq!(report["method"], "st-support");
 }
 
@@ -228,7 +228,7 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
     assert!(tri.len() / 3 >= rt.len() / 3);
     let files = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap();
     let names: Vec<&str> = files.1.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "report.json"]);
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "panels.step", "panels.3dm.json", "report.json"]);
     let Some((FromWorker::Finished { result: StageResult::StAdapted(summary), .. }, _)) = r.messages.last() else { panic!() };
     assert_eq!(summary.report.method, "st");
     assert_eq!(summary.iterations, 45);
@@ -375,6 +375,8 @@ fn sq_streams_lines_and_energies_then_files() {
             "panels.csv",
             "panels.json",
             "moulds.csv",
+            "panels.step",
+            "panels.3dm.json",
             "support.csv",
             "report.json"
         ]

@@ -398,7 +398,7 @@ fn report_has_the_st_schema() {
     }
     assert!(json["timings_ms"]["angle_iteration_median"].is_number());
     let names: Vec<&str> = files.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "report.json"]);
+    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "panels.step", "panels.3dm.json", "report.json"]);
     println!("{}", report.to_json());
 }
 

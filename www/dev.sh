@@ -100,8 +100,9 @@ setup_browser() {
   fi
 }
 
-# rhino3dm.js (npm, MIT: OpenNURBS in wasm) reads Rhino .3dm files: in the app's worker, loaded on
-# the first .3dm only, and in the CLI through Node (www/rhino3dm/cli.mjs).
+# rhino3dm.js (npm, MIT: OpenNURBS in wasm) reads and writes Rhino .3dm files: in the app's worker,
+# loaded on the first .3dm read or written, and in the CLI through Node (www/rhino3dm/cli.mjs reads,
+# write-cli.mjs writes panels.3dm).
 setup_rhino3dm() {
   if [ ! -d www/rhino3dm/node_modules/rhino3dm ] || [ www/rhino3dm/package-lock.json -nt www/rhino3dm/node_modules/.stamp ]; then
     have npm || apt_install nodejs npm
@@ -122,7 +123,7 @@ build_web() {
   cp target/pkg/spherical_faces.js target/pkg/spherical_faces_bg.wasm "$DIST/pkg/"
   setup_rhino3dm
   mkdir -p "$DIST/rhino3dm"
-  cp www/rhino3dm/convert.mjs www/rhino3dm/node_modules/rhino3dm/rhino3dm.module.js \
+  cp www/rhino3dm/convert.mjs www/rhino3dm/write.mjs www/rhino3dm/node_modules/rhino3dm/rhino3dm.module.js \
     www/rhino3dm/node_modules/rhino3dm/rhino3dm.wasm "$DIST/rhino3dm/"
   log "wasm: $(stat -c %s "$DIST/pkg/spherical_faces_bg.wasm") bytes"
   # .cargo/config.toml builds with +simd128: the module must hold SIMD instructions (faer's
@@ -146,8 +147,8 @@ cmd_test() {
   cmd_setup
   setup_browser
   setup_rhino3dm
-  log "rhino3dm converter tests (node)"
-  (cd www/rhino3dm && node --test convert.test.mjs)
+  log "rhino3dm reader and writer tests (node)"
+  (cd www/rhino3dm && node --test convert.test.mjs write.test.mjs)
   log "native tests"
   cargo test --all-targets
   log "doc tests (--all-targets leaves them out)"

@@ -12,11 +12,54 @@ let crashed = false;
 let queue = Promise.resolve();
 let rhino = null;
 
-async function convert3dm(file) {
-  const { loadRhino, read3dm } = await import('./rhino3dm/convert.mjs');
+// The pipeline's CAD model of panels.3dm (src/export/rhino.rs) is written as a .3dm here, with
+// rhino3dm.js, before its Files message goes out; every message passes through `sfPost`, in order.
+const RHINO_MODEL = 'panels.3dm.json';
+let outbox = Promise.resolve();
+self.sfPost = (obj, transfer) => {
+  outbox = outbox.then(() => postOut(obj, transfer));
+};
+
+async function rhinoModule() {
+  const { loadRhino } = await import('./rhino3dm/convert.mjs');
   rhino ??= await loadRhino(new URL('./rhino3dm/', import.meta.url).href);
+  return rhino;
+}
+
+async function postOut(obj, transfer) {
+  let notice = null;
+  try {
+    const msg = JSON.parse(obj.json);
+    const files = msg.Files;
+    const k = files ? files.fields.findIndex((f) => f.name === RHINO_MODEL) : -1;
+    if (k >= 0) {
+      try {
+        const model = JSON.parse(new TextDecoder().decode(new Uint8Array(obj.bodies[k])));
+        const { write3dm } = await import('./rhino3dm/write.mjs');
+        const bytes = write3dm(model, await rhinoModule());
+        files.fields[k] = { ...files.fields[k], name: 'panels.3dm', len: bytes.length };
+        files.mime[k] = 'application/x-3dm';
+        obj.bodies[k] = bytes.buffer;
+      } catch (err) {
+        files.fields.splice(k, 1);
+        files.mime.splice(k, 1);
+        obj.bodies.splice(k, 1);
+        notice = `panels.3dm could not be written: ${err && err.message ? err.message : err}`;
+      }
+      obj.json = JSON.stringify(msg);
+      transfer = obj.bodies.slice();
+    }
+  } catch (err) {
+    notice = `a message could not be read: ${err && err.message ? err.message : err}`;
+  }
+  self.postMessage(obj, transfer);
+  if (notice) self.postMessage({ json: JSON.stringify({ Error: { message: notice } }), bodies: [] });
+}
+
+async function convert3dm(file) {
+  const { read3dm } = await import('./rhino3dm/convert.mjs');
   const bytes = new Uint8Array(new FileReaderSync().readAsArrayBuffer(file));
-  return read3dm(bytes, rhino);
+  return read3dm(bytes, await rhinoModule());
 }
 
 async function handle(data) {

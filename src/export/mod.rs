@@ -1,5 +1,6 @@
 //! Writers of a panelled mesh: GLB ([`glb`]), OBJ ([`obj`]), the panel schedule as CSV and JSON
-//! ([`schedule`]) and the `report.json` every method shares ([`report`]).
+//! ([`schedule`]), the exact surfaces as STEP ([`step`]) and the `report.json` every method
+//! shares ([`report`]).
 //!
 //! The geometry written is exactly what [`crate::panels::build_panels`] tessellated, plus the
 //! support structure ([`crate::congruence::support_structure::SupportGeometry`]) and the node
@@ -8,7 +9,9 @@
 pub mod glb;
 pub mod obj;
 pub mod report;
+pub mod rhino;
 pub mod schedule;
+pub mod step;
 
 pub use glb::{absolute_sphere_extras, write_glb};
 pub use obj::{write_mesh_obj, write_obj};

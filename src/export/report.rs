@@ -148,6 +148,54 @@ pub struct SnapMisses {
     pub max_radius_miss: Option<f64>,
 }
 
+/// The exact surfaces written to `panels.step`: how many panels and support elements are exact
+/// patches, and those that are not, with why.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ExactSurfacesReport {
+    pub panels: usize,
+    pub support_elements: usize,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub refused: Vec<RefusedSurface>,
+}
+
+/// A panel ("panel") or support element ("support element") without an exact patch.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RefusedSurface {
+    pub kind: String,
+    pub id: usize,
+    pub reason: String,
+}
+
+impl ExactSurfacesReport {
+    pub fn of(exact: &crate::panels::exact_surface::ExactSurfaces) -> Self {
+        let refused = |kind: &str, list: &[Result<_, crate::panels::exact_surface::ExactSurfaceError>]| -> Vec<RefusedSurface> {
+            list.iter()
+                .enumerate()
+                .filter_map(|(id, r): (usize, &Result<crate::geometry::rational_bezier::RationalPatch, _>)| {
+                    r.as_ref().err().map(|e| RefusedSurface { kind: kind.into(), id, reason: e.to_string() })
+                })
+                .collect()
+        };
+        let mut all = refused("panel", &exact.panels);
+        all.extend(refused("support element", &exact.support));
+        Self {
+            panels: exact.panels.iter().filter(|p| p.is_ok()).count(),
+            support_elements: exact.support.iter().filter(|p| p.is_ok()).count(),
+            refused: all,
+        }
+    }
+
+    /// "240 panels and 449 support elements as rational NURBS surfaces …", and what is missing.
+    pub fn describe(&self) -> String {
+        let mut text = format!("{} panels and {} support elements as rational NURBS surfaces on their spheres and planes", self.panels, self.support_elements);
+        if !self.refused.is_empty() {
+            let ids: Vec<String> = self.refused.iter().take(5).map(|r| format!("{} {} ({})", r.kind, r.id, r.reason)).collect();
+            text += &format!("; {} without one: {}{}", self.refused.len(), ids.join(", "), if self.refused.len() > 5 { ", …" } else { "" });
+        }
+        text
+    }
+}
+
 /// The report of one run.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Report {
@@ -161,6 +209,8 @@ pub struct Report {
     pub metrics: Option<PanelMetrics>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub moulds: Option<MouldReport>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exact_surfaces: Option<ExactSurfacesReport>,
     /// The method's own section, under its name ([`Self::set_section`], [`Self::section`]).
     #[serde(flatten)]
     pub sections: BTreeMap<String, serde_json::Value>,

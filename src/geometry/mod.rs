@@ -10,4 +10,5 @@ pub mod dual;
 pub mod linalg;
 pub mod mesh;
 pub mod pencil;
+pub mod rational_bezier;
 pub mod sphere;

@@ -66,6 +66,7 @@
 pub mod arc;
 pub mod deviation;
 pub mod edge_arcs;
+pub mod exact_surface;
 pub mod gaps;
 pub mod panel;
 pub mod sphere_mesh;

@@ -7,7 +7,12 @@ use glam::DVec3;
 use super::fields::{field, Field};
 use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{SupportGeometry, SupportStructure};
-use crate::export::report::{InputCounts, OutputCounts};
+use crate::export::report::{ExactSurfacesReport, InputCounts, OutputCounts};
+use crate::export::rhino::{RhinoInput, RhinoModel, RHINO_MODEL_FILE, RHINO_MODEL_MIME};
+use crate::export::step::write_exact_step;
+use crate::export::absolute_sphere_extras;
+use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::panels::exact_surface::ExactSurfaces;
 use crate::export::schedule::SupportRecord;
 use crate::export::schedule::MouldRecord;
 use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, MouldReport, PanelMetrics, Report, SnapMisses, SnapReport};
@@ -137,6 +142,8 @@ pub struct PanelExport<'a> {
     /// The support structure: its strips and node axes for the GLB and OBJ, its elements for
     /// the schedule (`support.csv` and the JSON).
     pub support: Option<&'a SupportStructure>,
+    /// The absolute sphere Ω of ST with support structure, for `panels.3dm`.
+    pub omega: Option<&'a AbsoluteSphere>,
     /// The report's warnings.
     pub warnings: Vec<String>,
     /// Each panel's largest distance to the reference, when the method measured it already.
@@ -178,6 +185,7 @@ impl<'a> PanelExport<'a> {
             timings,
             extras,
             support: None,
+            omega: None,
             warnings: Vec::new(),
             deviations: None,
             verdict: None,
@@ -203,6 +211,15 @@ impl<'a> PanelExport<'a> {
 
     pub(crate) fn with_extras(self, extras: serde_json::Value) -> Self {
         Self { extras, ..self }
+    }
+
+    /// The absolute sphere Ω: in the GLB's extras and `panels.3dm`.
+    pub(crate) fn with_absolute_sphere(self, omega: &'a AbsoluteSphere) -> Self {
+        let mut extras = self.extras.clone();
+        if let (Some(e), serde_json::Value::Object(o)) = (extras.as_object_mut(), absolute_sphere_extras(omega)) {
+            e.extend(o);
+        }
+        Self { omega: Some(omega), extras, ..self }
     }
 
     /// The support structure (its strips and elements) and the node axes.
@@ -311,6 +328,10 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
     });
     report.moulds = Some(mould_report(&fits, &moulds, &snapped, &e));
     report.sections.insert(e.method.to_string(), e.section);
+    let exact = ExactSurfaces::of(e.panels, e.support.map_or(&[][..], |s| &s.elements[..]));
+    report.exact_surfaces = Some(ExactSurfacesReport::of(&exact));
+    let step = write_exact_step("panels", e.panels, &exact, units, e.diag);
+    let rhino = RhinoModel::of(&RhinoInput { panels: e.panels, exact: &exact, moulds: &moulds, support: e.support, omega: e.omega, units });
     report.add_timings(e.timings);
     report.add_timing("export", clock.now() - t0);
     report.warnings = e.warnings;
@@ -318,6 +339,8 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         report.set_verdict(v);
     }
     let mut files = panel_files(glb, obj, &schedule);
+    files.push(ExportFile::new("panels.step", "model/step", step.into_bytes()));
+    files.push(ExportFile::new(RHINO_MODEL_FILE, RHINO_MODEL_MIME, rhino.to_json().into_bytes()));
     if !schedule.support_elements.is_empty() {
         let csv = SupportRecord::to_csv(&schedule.support_elements);
         files.push(ExportFile::new("support.csv", "text/csv", csv.into_bytes()));

@@ -92,7 +92,14 @@ impl Outbox for WorkerOutbox {
                 let _ = Atomics::add(a, POSTED_SLOT, 1);
             }
         });
-        if let Err(e) = scope().post_message_with_transfer(&obj, &transfer) {
+        // worker.js's `sfPost` keeps the order of messages while it writes panels.3dm from its
+        // model (www/rhino3dm/write.mjs); without it, post directly.
+        let hook = Reflect::get(&scope(), &"sfPost".into()).ok().and_then(|f| f.dyn_into::<js_sys::Function>().ok());
+        let posted = match hook {
+            Some(f) => f.call2(&JsValue::UNDEFINED, &obj, &transfer).map(drop),
+            None => scope().post_message_with_transfer(&obj, &transfer),
+        };
+        if let Err(e) = posted {
             web_sys::console::error_2(&"postMessage failed".into(), &e);
         }
     }

@@ -566,6 +566,34 @@ for (const project of PROJECTS) {
         await download.saveAs(file);
         const v = spawnSync(process.execPath, [path.join(E2E_DIR, 'validate-gltf.mjs'), file], { encoding: 'utf8' });
         assert.equal(v.status, 0, `the Khronos validator accepts the SQ panels GLB: ${v.stdout}${v.stderr}`);
+        // The exact surfaces: OpenCascade reads one face per panel and support element.
+        assert.ok(s.downloads.includes('panels.step'), `panels.step offered (${s.downloads})`);
+        const [step] = await Promise.all([
+          app.page.waitForEvent('download', { timeout: 30_000 }),
+          app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'panels.step' }))),
+        ]);
+        const stepFile = path.join(ARTIFACTS_DIR, `${project.name}-sq-panels.step`);
+        await step.saveAs(stepFile);
+        const read = spawnSync(process.execPath, [path.join(E2E_DIR, 'read-step.mjs'), stepFile, '--unit', 'm'], { encoding: 'utf8', maxBuffer: 1 << 28 });
+        assert.equal(read.status, 0, `OpenCascade reads panels.step: ${read.stderr}`);
+        const faces = JSON.parse(read.stdout).faces;
+        assert.equal(faces.length, r.exact_surfaces.panels + r.exact_surfaces.support_elements, 'one face per exact surface');
+        assert.equal(r.exact_surfaces.panels, r.output.panels, `every panel exact: ${JSON.stringify(r.exact_surfaces)}`);
+        assert.ok(faces.every((f) => f.length >= 9), 'every face triangulated');
+        // panels.3dm, written in the worker with rhino3dm: every object valid, one surface per panel.
+        assert.ok(s.downloads.includes('panels.3dm') && !s.downloads.includes('panels.3dm.json'), `panels.3dm offered (${s.downloads})`);
+        const [rhinoFile] = await Promise.all([
+          app.page.waitForEvent('download', { timeout: 30_000 }),
+          app.page.evaluate(() => window.dispatchEvent(new CustomEvent('sf-download', { detail: 'panels.3dm' }))),
+        ]);
+        const file3dm = path.join(ARTIFACTS_DIR, `${project.name}-sq-panels.3dm`);
+        await rhinoFile.saveAs(file3dm);
+        const read3dm = spawnSync(process.execPath, [path.join(E2E_DIR, 'read-3dm.mjs'), file3dm, '--grid', '2'], { encoding: 'utf8', maxBuffer: 1 << 28 });
+        assert.equal(read3dm.status, 0, `rhino3dm reads panels.3dm: ${read3dm.stderr}`);
+        const doc = JSON.parse(read3dm.stdout);
+        assert.equal(doc.units, 'Meters');
+        assert.ok(doc.objects.every((o) => o.valid), 'every object valid');
+        assert.equal(doc.objects.filter((o) => o.layer.startsWith('panels::mould ')).length, r.output.panels, 'one surface per panel on its mould layer');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

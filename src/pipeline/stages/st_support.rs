@@ -95,7 +95,7 @@ fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportP
         &section,
         &result.timings_ms,
     )
-    .with_extras(crate::export::absolute_sphere_extras(&result.omega))
+    .with_absolute_sphere(&result.omega)
     .with_support(&result.support)
     .with_warnings(&result.warnings)
     .with_verdict(&verdict)

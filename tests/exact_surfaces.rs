@@ -1,0 +1,307 @@
+//! Panels as exact surfaces (`panels::exact_surface`): on the results of all three methods, every
+//! panel's patch, sampled on a 20 × 20 grid, lies on the panel's sphere within 1e-9 of the
+//! diagonal, its sides lie on the panel's arcs within 1e-9 and run between its corners, its
+//! weights are positive and its planar image does not fold; every support element's patch lies
+//! in its plane, bounded by its arcs and node-axis segments.
+#![cfg(not(target_arch = "wasm32"))] // native: reads ../shared
+
+mod common;
+
+use common::load_reference;
+use glam::DVec3;
+use spherical_faces::congruence::support_structure::SupportElement;
+use spherical_faces::geometry::circle::Circle;
+use spherical_faces::geometry::rational_bezier::{RationalCurve, RationalPatch, Side};
+use spherical_faces::import::{import_file, ImportedFile};
+use spherical_faces::panels::arc::Arc;
+use spherical_faces::panels::exact_surface::{panel_patch, support_patch};
+use spherical_faces::panels::panel::Panel;
+use spherical_faces::progress::Clock;
+use spherical_faces::reference::Reference;
+use spherical_faces::remeshing::Sizing;
+use spherical_faces::samples::Sample;
+use spherical_faces::sq::params::SqParams;
+use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_support::StSupportParams;
+
+const GRID: usize = 20;
+const EXACT: f64 = 1e-9;
+
+/// Distance from x to the circle (or, straight, the line) of `arc`.
+fn off_circle(arc: &Arc, x: DVec3) -> f64 {
+    let c: &Circle = &arc.circle;
+    if arc.is_straight() {
+        let e = (arc.to - arc.from).normalize();
+        let d = x - arc.from;
+        return (d - d.dot(e) * e).length();
+    }
+    let d = x - c.center;
+    let h = d.dot(c.normal);
+    let rho = (d - h * c.normal).length();
+    ((rho - c.radius).powi(2) + h * h).sqrt()
+}
+
+/// Distance from x to the arc itself (dense samples, refined to the circle).
+fn off_arc(arc: &Arc, x: DVec3) -> f64 {
+    let n = 2000;
+    (0..=n).map(|k| arc.point(k as f64 / n as f64).distance(x)).fold(f64::INFINITY, f64::min)
+}
+
+/// The sides of a patch in the panel's order: corner k → k + 1.
+fn sides(patch: &RationalPatch, corners: usize) -> Vec<RationalCurve> {
+    let mut s = vec![patch.side(Side::V0), patch.side(Side::U1), patch.side(Side::V1).reversed(), patch.side(Side::U0).reversed()];
+    if corners == 3 {
+        s.remove(2);
+    }
+    s
+}
+
+/// Every guarantee of the exact patches of `panels` (diagonal `diag`); returns the worst
+/// sphere and arc distances, relative.
+fn check_panels(name: &str, panels: &[Panel], diag: f64) -> (f64, f64) {
+    let (mut on_sphere, mut on_arcs) = (0.0f64, 0.0f64);
+    for p in panels {
+        let patch = panel_patch(p).unwrap_or_else(|e| panic!("{name}: panel {}: {e}", p.face));
+        assert!(patch.weights.iter().all(|&w| w > 0.0 && w.is_finite()), "{name}: panel {}: weights {:?}", p.face, patch.weights);
+        assert_eq!(patch.degree, if p.is_planar() { [2, 2] } else { [4, 4] });
+        for i in 0..=GRID {
+            for j in 0..=GRID {
+                let x = patch.evaluate(i as f64 / GRID as f64, j as f64 / GRID as f64);
+                on_sphere = on_sphere.max(p.sphere.distance(x) / diag);
+            }
+        }
+        let n = p.arcs.len();
+        // A triangle's sides start at one of its corners.
+        let first = (0..n).min_by(|&a, &b| p.arcs[a].from.distance(patch.evaluate(0.0, 0.0)).total_cmp(&p.arcs[b].from.distance(patch.evaluate(0.0, 0.0)))).unwrap();
+        assert!(n == 3 || first == 0, "{name}: a quad's sides start at corner 0");
+        for (s, side) in sides(&patch, n).iter().enumerate() {
+            let k = (s + first) % n;
+            let arc = &p.arcs[k];
+            assert!(side.evaluate(0.0).distance(arc.from) <= EXACT * diag, "{name}: panel {} side {k} starts off its corner", p.face);
+            assert!(side.evaluate(1.0).distance(p.arcs[(k + 1) % n].from) <= EXACT * diag, "{name}: panel {} side {k}", p.face);
+            for t in 0..=GRID {
+                on_arcs = on_arcs.max(off_circle(arc, side.evaluate(t as f64 / GRID as f64)) / diag);
+            }
+            // On the arc, not on the rest of its circle: its middle is near the arc's.
+            let mid = side.evaluate(0.5);
+            assert!(off_arc(arc, mid) <= 2e-3 * arc.length() + EXACT * diag, "{name}: panel {} side {k} leaves its arc", p.face);
+        }
+    }
+    eprintln!("{name}: {} panels, patches within {on_sphere:.1e} of their spheres, sides within {on_arcs:.1e} of their arcs", panels.len());
+    assert!(on_sphere <= EXACT, "{name}: {on_sphere:e}");
+    assert!(on_arcs <= EXACT, "{name}: {on_arcs:e}");
+    (on_sphere, on_arcs)
+}
+
+fn check_support(name: &str, elements: &[SupportElement], diag: f64) {
+    for (e, el) in elements.iter().enumerate() {
+        let patch = support_patch(el).unwrap_or_else(|err| panic!("{name}: element {e}: {err}"));
+        let n = el.circle.normal;
+        for i in 0..=GRID {
+            for j in 0..=GRID {
+                let x = patch.evaluate(i as f64 / GRID as f64, j as f64 / GRID as f64);
+                assert!((x - el.corners[0]).dot(n).abs() <= EXACT * diag, "{name}: element {e} leaves its plane");
+            }
+        }
+        let on = |c: &Circle, x: DVec3| {
+            let d = x - c.center;
+            ((d - d.dot(c.normal) * c.normal).length() - c.radius).abs()
+        };
+        for t in 0..=GRID {
+            let t = t as f64 / GRID as f64;
+            assert!(on(&el.circle, patch.side(Side::V0).evaluate(t)) <= EXACT * diag, "{name}: element {e}: edge arc");
+            if el.inner_circle.radius.is_finite() {
+                assert!(on(&el.inner_circle, patch.side(Side::V1).evaluate(t)) <= EXACT * diag, "{name}: element {e}: inner arc");
+            }
+        }
+        assert!(patch.evaluate(1.0, 1.0).distance(el.corners[2]) <= EXACT * diag && patch.evaluate(0.0, 1.0).distance(el.corners[3]) <= EXACT * diag);
+    }
+}
+
+#[test]
+fn st_adapted_panels_are_exact_patches() {
+    let reference = load_reference("tri_mesh");
+    let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
+    let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    check_panels("st tri_mesh", &result.panels, reference.diagonal());
+}
+
+#[test]
+fn st_support_panels_and_elements_are_exact_patches() {
+    let reference = load_reference("cmc1");
+    let result = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock::default(), &mut |_| Ok(())).unwrap();
+    check_panels("st-support cmc1", &result.panels, reference.diagonal());
+    check_support("st-support cmc1", &result.support.elements, reference.diagonal());
+}
+
+#[test]
+fn sq_panels_and_elements_are_exact_patches() {
+    let tunnel = match import_file(&common::shared_bytes("data/bsplines/tunnel_arch.json"), "tunnel_arch.json") {
+        Ok(ImportedFile::BSpline(b)) => b.surface,
+        other => panic!("{other:?}"),
+    };
+    for (name, surface) in [("sq vault", Sample::Vault.bspline().unwrap()), ("sq tunnel_arch", tunnel)] {
+        let reference = Reference::from_bspline(surface).unwrap();
+        let result = spherical_faces::sq::compute(&reference, &SqParams::default(), Clock::default(), &mut |_| Ok(())).unwrap();
+        let mesh = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh;
+        assert!(mesh.panels.iter().all(|p| p.arcs.len() == 4));
+        check_panels(name, &mesh.panels, reference.diagonal());
+        check_support(name, &mesh.support.elements, reference.diagonal());
+    }
+}
+
+/// A planar panel is a planar (2, 2) patch; a triangle's third side runs back to its first
+/// corner, its collapsed side is one point.
+#[test]
+fn planar_and_triangular_panels() {
+    let reference = Reference::from_triangles(Sample::SphereCap.mesh());
+    let result = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock::default(), &mut |_| Ok(())).unwrap();
+    let p = &result.panels[0];
+    let patch = panel_patch(p).unwrap();
+    let collapsed = patch.side(Side::V1);
+    assert!(collapsed.points.iter().all(|x| x.distance(collapsed.points[0]) <= 1e-12 * reference.diagonal()));
+    let mut flat = p.clone();
+    let n = (p.arcs[0].from - p.arcs[1].from).cross(p.arcs[2].from - p.arcs[1].from).normalize();
+    flat.sphere = spherical_faces::geometry::sphere::Sphere::plane(p.arcs[0].from, n);
+    flat.arcs = (0..3).map(|k| Arc::straight(p.arcs[k].from, p.arcs[(k + 1) % 3].from, n)).collect();
+    let patch = panel_patch(&flat).unwrap();
+    assert_eq!(patch.degree, [2, 2]);
+    check_panels("a flat triangle", &[flat], reference.diagonal());
+}
+
+/// Runs tests/e2e/read-step.mjs (OpenCascade through occt-import-js) on `file`: the vertices of
+/// each face's triangulation, in file order. Panics when the reader is not installed.
+fn read_step(file: &std::path::Path, unit: &str) -> Vec<Vec<DVec3>> {
+    let e2e = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/e2e");
+    assert!(e2e.join("node_modules/occt-import-js").is_dir(), "occt-import-js is not installed: run `npm ci` in tests/e2e");
+    let out = std::process::Command::new("node").arg(e2e.join("read-step.mjs")).arg(file).args(["--unit", unit]).output().expect("runs node");
+    assert!(out.status.success(), "read-step.mjs: {}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    json["faces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_array().unwrap().chunks(3).map(|c| DVec3::new(c[0].as_f64().unwrap(), c[1].as_f64().unwrap(), c[2].as_f64().unwrap())).collect())
+        .collect()
+}
+
+fn vec3(v: &serde_json::Value) -> DVec3 {
+    DVec3::new(v[0].as_f64().unwrap(), v[1].as_f64().unwrap(), v[2].as_f64().unwrap())
+}
+
+/// `panels.step` of every method, read by OpenCascade: one face per panel and support element,
+/// each triangulated with its vertices on the panel's scheduled sphere (or the element's
+/// plane) within 1e-6 of the diagonal; and `panels.3dm`, read by rhino3dm ([`check_3dm`]).
+#[test]
+fn cad_files_read_back_on_their_spheres() {
+    let shared = |p: &str| common::shared_path(p).to_str().unwrap().to_string();
+    let cases = [
+        ("sq", "sample:vault".to_string(), vec![]),
+        ("sq", shared("data/bsplines/tunnel_arch.json"), vec![]),
+        ("st", shared("data/meshes/tri_mesh.obj"), vec!["--epsilon", "2e-3"]),
+        ("st", shared("data/meshes/cmc1.obj"), vec![]),
+        ("st-support", shared("data/meshes/tri_mesh.obj"), vec![]),
+        ("st-support", shared("data/meshes/cmc1.obj"), vec!["--units", "mm"]),
+    ];
+    for (k, (method, input, extra)) in cases.iter().enumerate() {
+        let dir = std::env::temp_dir().join(format!("sf-step-{k}-{}", std::process::id()));
+        let mut args = vec![*method, input.as_str(), "-q", "--out", dir.to_str().unwrap()];
+        args.extend(extra.iter().copied());
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(&args).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let schedule: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("panels.json")).unwrap()).unwrap();
+        let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+        let unit = schedule["units"].as_str().unwrap();
+        let diag = schedule["reference_diagonal"].as_f64().unwrap();
+        let exact = &report["exact_surfaces"];
+        assert!(exact["refused"].as_array().is_none_or(|r| r.is_empty()), "{method} {input}: {exact}");
+        let faces = read_step(&dir.join("panels.step"), unit);
+        let panels = schedule["panels"].as_array().unwrap();
+        let elements = schedule["support_elements"].as_array().map_or(&[][..], |e| &e[..]);
+        assert_eq!(faces.len(), panels.len() + elements.len(), "{method} {input}: faces read back");
+        let mut worst: f64 = 0.0;
+        for (face, p) in faces.iter().zip(panels) {
+            let s = &p["sphere"];
+            assert!(face.len() >= 3);
+            for &x in face {
+                let d = if s["plane"].as_bool().unwrap() {
+                    (x - vec3(&p["vertices"][0])).dot(vec3(&s["normal"])).abs()
+                } else {
+                    ((x - vec3(&s["center"])).length() - s["radius"].as_f64().unwrap()).abs()
+                };
+                worst = worst.max(d / diag);
+            }
+        }
+        for (face, el) in faces[panels.len()..].iter().zip(elements) {
+            for &x in face {
+                worst = worst.max((x - vec3(&el["plane_point"])).dot(vec3(&el["plane_normal"])).abs() / diag);
+            }
+        }
+        let bytes = std::fs::metadata(dir.join("panels.step")).unwrap().len();
+        eprintln!("{method} {input}: {} faces read back by OpenCascade, within {worst:.1e} of the diagonal; panels.step {bytes} bytes", faces.len());
+        assert!(worst <= 1e-6, "{method} {input}: {worst:e}");
+        check_3dm(&format!("{method} {input}"), &dir, &schedule, &report);
+    }
+}
+
+/// `panels.3dm` read back by rhino3dm: every object valid, one surface per panel on its mould's
+/// layer with its user text, on its sphere (20 × 20 grid) within 1e-9 of the diagonal, its sides
+/// on its arcs' circles within 1e-9; the support elements and edges as surfaces and curves.
+fn check_3dm(name: &str, dir: &std::path::Path, schedule: &serde_json::Value, report: &serde_json::Value) {
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/e2e/read-3dm.mjs");
+    let out = std::process::Command::new("node").arg(script).arg(dir.join("panels.3dm")).output().expect("runs node");
+    assert!(out.status.success(), "read-3dm.mjs: {}", String::from_utf8_lossy(&out.stderr));
+    let model: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let unit = schedule["units"].as_str().unwrap();
+    let rhino_unit = match unit { "m" => "Meters", "cm" => "Centimeters", "mm" => "Millimeters", "ft" => "Feet", _ => "Inches" };
+    assert_eq!(model["units"], rhino_unit, "{name}");
+    let diag = schedule["reference_diagonal"].as_f64().unwrap();
+    let objects = model["objects"].as_array().unwrap();
+    assert!(objects.iter().all(|o| o["valid"] == true), "{name}: an invalid object");
+    let panels = schedule["panels"].as_array().unwrap();
+    let surfaces: Vec<&serde_json::Value> = objects.iter().filter(|o| o["name"].as_str().unwrap_or("").starts_with("panel ")).collect();
+    assert_eq!(surfaces.len(), panels.len(), "{name}: one surface per panel");
+    let (mut on_sphere, mut on_arcs) = (0.0f64, 0.0f64);
+    for (s, p) in surfaces.iter().zip(panels) {
+        assert_eq!(s["kind"], "NurbsSurface");
+        let id = p["id"].as_u64().unwrap();
+        assert_eq!(s["user_text"]["id"], id.to_string(), "{name}");
+        assert_eq!(s["user_text"]["mould"], p["mould"].as_u64().unwrap().to_string(), "{name}");
+        assert_eq!(s["layer"], format!("panels::mould {}", p["mould"]), "{name}");
+        let sphere = &p["sphere"];
+        let off = |x: DVec3| {
+            if sphere["plane"].as_bool().unwrap() {
+                (x - vec3(&p["vertices"][0])).dot(vec3(&sphere["normal"])).abs()
+            } else {
+                ((x - vec3(&sphere["center"])).length() - sphere["radius"].as_f64().unwrap()).abs()
+            }
+        };
+        for x in s["grid"].as_array().unwrap() {
+            on_sphere = on_sphere.max(off(vec3(x)) / diag);
+        }
+        let edges = p["edges"].as_array().unwrap();
+        let off_edge = |e: &serde_json::Value, x: DVec3| {
+            if e["straight"].as_bool().unwrap() {
+                return 0.0;
+            }
+            let (c, n) = (vec3(&e["center"]), vec3(&e["normal"]));
+            let d = x - c;
+            let h = d.dot(n);
+            (((d - h * n).length() - e["radius"].as_f64().unwrap()).powi(2) + h * h).sqrt()
+        };
+        for side in s["sides"].as_array().unwrap() {
+            let pts: Vec<DVec3> = side.as_array().unwrap().iter().map(vec3).collect();
+            if pts.iter().all(|x| x.distance(pts[0]) <= 1e-12 * diag) {
+                continue; // a triangle's collapsed side
+            }
+            let best = edges.iter().map(|e| pts.iter().map(|&x| off_edge(e, x)).fold(0.0, f64::max)).fold(f64::INFINITY, f64::min);
+            on_arcs = on_arcs.max(best / diag);
+        }
+    }
+    let support = objects.iter().filter(|o| o["layer"] == "support").count();
+    assert_eq!(support as u64, report["exact_surfaces"]["support_elements"].as_u64().unwrap(), "{name}");
+    assert!(objects.iter().any(|o| o["layer"] == "edges" && o["kind"] == "NurbsCurve"), "{name}: edge arcs");
+    let bytes = std::fs::metadata(dir.join("panels.3dm")).unwrap().len();
+    eprintln!("{name}: panels.3dm read back by rhino3dm, {} objects, panels within {on_sphere:.1e} of their spheres, sides within {on_arcs:.1e} of their arcs; {bytes} bytes", objects.len());
+    assert!(on_sphere <= EXACT && on_arcs <= EXACT, "{name}: {on_sphere:e}, {on_arcs:e}");
+}

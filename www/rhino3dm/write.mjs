@@ -1,0 +1,91 @@
+// Spherical Faces → Rhino .3dm, with rhino3dm.js (openNURBS compiled to WebAssembly): the exact
+// panels and support elements as rational NURBS surfaces, the edge arcs as rational curves, the
+// node axes as lines, Ω and m as points (Ω also as a sphere when it is real).
+//
+// Runs unchanged in the browser (worker) and in Node, like convert.mjs. The model is the JSON the
+// Rust side writes (src/export/rhino.rs):
+//   {units: "m"|"cm"|"mm"|"ft"|"in",
+//    layers: [{name, parent: index|null, color: [r, g, b]}],
+//    surfaces: [{layer, name, degree: [p, q], points: [[x, y, z], …] (i along u, v fastest),
+//                weights: […], user_text: {key: value}}],
+//    curves: [{layer, name, points, weights}], lines: [{layer, name, from, to}],
+//    points: [{layer, name, at}], spheres: [{layer, name, center, radius}]}
+// Every NURBS is one Bézier span: order = degree + 1, knots 0 (degree times) then 1 (degree times),
+// control points set homogeneous (x·w, y·w, z·w, w), as openNURBS stores them.
+
+const UNIT_SYSTEMS = { m: 'Meters', cm: 'Centimeters', mm: 'Millimeters', ft: 'Feet', in: 'Inches' };
+
+function bezierKnots(list, degree) {
+  for (let k = 0; k < 2 * degree; k++) list.set(k, k < degree ? 0 : 1);
+}
+
+function homogeneous(p, w) {
+  return [p[0] * w, p[1] * w, p[2] * w, w];
+}
+
+function fail(what, name) {
+  throw new Error(`${what} ${name}: openNURBS reports it invalid`);
+}
+
+/**
+ * The .3dm file of `model`.
+ * @param {object} model see above
+ * @param {object} rhino the initialized rhino3dm module
+ * @returns {Uint8Array}
+ */
+export function write3dm(model, rhino) {
+  if (!rhino || typeof rhino.File3dm !== 'function') throw new Error('write3dm: the second argument must be the initialized rhino3dm module');
+  const unit = UNIT_SYSTEMS[model.units];
+  if (!unit) throw new Error(`write3dm: unknown unit ${JSON.stringify(model.units)}`);
+  const doc = new rhino.File3dm();
+  doc.settings().modelUnitSystem = rhino.UnitSystem[unit];
+  const layerIndex = [];
+  for (const l of model.layers ?? []) {
+    const layer = new rhino.Layer();
+    layer.name = l.name;
+    const [r, g, b] = l.color ?? [0, 0, 0];
+    layer.color = { r, g, b, a: 255 };
+    if (l.parent !== null && l.parent !== undefined) layer.parentLayerId = doc.layers().get(layerIndex[l.parent]).id;
+    layerIndex.push(doc.layers().add(layer));
+  }
+  const attributes = (item) => {
+    const a = new rhino.ObjectAttributes();
+    a.layerIndex = layerIndex[item.layer] ?? 0;
+    if (item.name) a.name = item.name;
+    for (const [k, v] of Object.entries(item.user_text ?? {})) a.setUserString(k, String(v));
+    return a;
+  };
+  for (const s of model.surfaces ?? []) {
+    const [p, q] = s.degree;
+    const surface = rhino.NurbsSurface.create(3, true, p + 1, q + 1, p + 1, q + 1);
+    bezierKnots(surface.knotsU(), p);
+    bezierKnots(surface.knotsV(), q);
+    for (let i = 0; i <= p; i++) {
+      for (let j = 0; j <= q; j++) {
+        const k = i * (q + 1) + j;
+        surface.points().set(i, j, homogeneous(s.points[k], s.weights[k]));
+      }
+    }
+    if (!surface.isValid) fail('surface', s.name);
+    doc.objects().add(surface, attributes(s));
+  }
+  for (const c of model.curves ?? []) {
+    const n = c.points.length;
+    const curve = new rhino.NurbsCurve(3, true, n, n);
+    bezierKnots(curve.knots(), n - 1);
+    c.points.forEach((pt, k) => curve.points().set(k, homogeneous(pt, c.weights[k])));
+    if (!curve.isValid) fail('curve', c.name);
+    doc.objects().add(curve, attributes(c));
+  }
+  for (const l of model.lines ?? []) {
+    doc.objects().add(new rhino.LineCurve(l.from, l.to), attributes(l));
+  }
+  for (const p of model.points ?? []) {
+    doc.objects().add(new rhino.Point(p.at), attributes(p));
+  }
+  for (const s of model.spheres ?? []) {
+    const brep = new rhino.Sphere(s.center, s.radius).toBrep();
+    doc.objects().add(brep, attributes(s));
+  }
+  return doc.toByteArray();
+}
