@@ -70,6 +70,32 @@ pub fn bernstein(n: usize, t: f64) -> Vec<f64> {
     b
 }
 
+/// Bernstein polynomials of degree `n` ≤ 7 at t and their derivatives, on the stack:
+/// B'ᵢⁿ = n (Bᵢ₋₁ⁿ⁻¹ − Bᵢⁿ⁻¹).
+fn bernstein_with_derivative(n: usize, t: f64) -> ([f64; 8], [f64; 8]) {
+    assert!(n < 8, "degree {n} above 7");
+    let mut b = [0.0; 8];
+    b[0] = 1.0;
+    let mut d = [0.0; 8];
+    for k in 1..=n {
+        if k == n {
+            for i in 0..=n {
+                let left = if i > 0 { b[i - 1] } else { 0.0 };
+                let right = if i < n { b[i] } else { 0.0 };
+                d[i] = n as f64 * (left - right);
+            }
+        }
+        let mut saved = 0.0;
+        for j in 0..k {
+            let tmp = b[j];
+            b[j] = saved + (1.0 - t) * tmp;
+            saved = t * tmp;
+        }
+        b[k] = saved;
+    }
+    (b, d)
+}
+
 fn binomial(n: usize, k: usize) -> f64 {
     (0..k).fold(1.0, |acc, i| acc * (n - i) as f64 / (i + 1) as f64)
 }
@@ -165,6 +191,31 @@ impl RationalPatch {
     pub fn evaluate(&self, u: f64, v: f64) -> DVec3 {
         let (x, w) = self.homogeneous(u, v);
         x / w
+    }
+
+    /// The point and its first derivatives along u and v at (u, v), from the homogeneous form:
+    /// X = P/w, X_u = (P_u − X w_u)/w.
+    pub fn derivatives(&self, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+        let [p, q] = self.degree;
+        let (bu, du) = bernstein_with_derivative(p, u);
+        let (bv, dv) = bernstein_with_derivative(q, v);
+        let (mut x, mut xu, mut xv) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        let (mut w, mut wu, mut wv) = (0.0, 0.0, 0.0);
+        for i in 0..=p {
+            for j in 0..=q {
+                let k = self.index(i, j);
+                let (wk, pk) = (self.weights[k], self.points[k]);
+                let (b, bu_, bv_) = (bu[i] * bv[j] * wk, du[i] * bv[j] * wk, bu[i] * dv[j] * wk);
+                x += b * pk;
+                xu += bu_ * pk;
+                xv += bv_ * pk;
+                w += b;
+                wu += bu_;
+                wv += bv_;
+            }
+        }
+        let point = x / w;
+        (point, (xu - point * wu) / w, (xv - point * wv) / w)
     }
 
     /// The side `side` as a curve (its row or column of control points).
@@ -314,6 +365,13 @@ mod tests {
             assert!((patch.evaluate(0.0, t) - u0.evaluate(t)).length() < 1e-14);
             assert!((patch.evaluate(1.0, t) - u1.evaluate(t)).length() < 1e-14);
             assert!((patch.side(Side::V1).evaluate(t) - v1.evaluate(t)).length() < 1e-14);
+        }
+        for (u, v) in [(0.2, 0.3), (0.7, 0.9)] {
+            let (x, xu, xv) = patch.derivatives(u, v);
+            let h = 1e-6;
+            assert!((x - patch.evaluate(u, v)).length() < 1e-15);
+            assert!((xu - (patch.evaluate(u + h, v) - patch.evaluate(u - h, v)) / (2.0 * h)).length() < 1e-8);
+            assert!((xv - (patch.evaluate(u, v + h) - patch.evaluate(u, v - h)) / (2.0 * h)).length() < 1e-8);
         }
         let a = BernsteinPoly { degree: [2, 1], coefficients: vec![1.0, -2.0, 0.5, 3.0, 2.0, 1.5] };
         let b = BernsteinPoly { degree: [1, 2], coefficients: vec![0.3, 1.0, -1.0, 2.0, 0.7, 0.1] };

@@ -11,7 +11,7 @@
 //! exactly on the sphere, whose sides are exactly the arcs (the
 //! images of the planar sides). The pole is the antipode of a point of the panel, the one of a few
 //! whose planar patch is farthest from folding (the smallest ratio of its Jacobian over its
-//! largest); a patch that folds anyway is refused.
+//! largest; the first one above 0.2 is taken); a patch that folds anyway is refused.
 //!
 //! **Planar panel, support element.** The Coons patch of the arcs themselves, (2, 2), planar.
 //!
@@ -28,6 +28,8 @@ use crate::geometry::rational_bezier::{ArcError, BernsteinPoly, RationalCurve, R
 const FOLD_SAMPLES: usize = 9;
 /// A planar patch folds when its Jacobian somewhere is below this share of its largest.
 pub const FOLD_RATIO: f64 = 1e-6;
+/// A patch this far from folding is taken without trying other poles or corners.
+const GOOD_RATIO: f64 = 0.2;
 
 /// Why a panel has no exact patch.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,6 +95,9 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
             Err(e) => {
                 first_error.get_or_insert(e);
             }
+        }
+        if best.as_ref().is_some_and(|(b, _)| *b >= GOOD_RATIO) {
+            break;
         }
     }
     match best {
@@ -160,32 +165,37 @@ fn side_curve(arc: &Arc, to: DVec3, k: usize) -> Result<RationalCurve, ExactSurf
 fn coons_of(sides: &[RationalCurve], normal: DVec3) -> (f64, RationalPatch) {
     if sides.len() == 4 {
         let patch = RationalPatch::coons(&sides[0], &sides[1], &sides[2].reversed(), &sides[3].reversed());
-        return (jacobian_ratio(&patch, normal), patch);
+        return (jacobian_ratio(&patch, normal, false), patch);
     }
-    (0..3)
-        .map(|r| {
-            let [a, b, c] = [0, 1, 2].map(|k| &sides[(k + r) % 3]);
-            let patch = RationalPatch::coons(a, b, &RationalCurve::point(b.points[2]), &c.reversed());
-            (jacobian_ratio(&patch, normal), patch)
-        })
-        .max_by(|x, y| x.0.total_cmp(&y.0))
-        .expect("three rotations")
+    let mut best: Option<(f64, RationalPatch)> = None;
+    for r in 0..3 {
+        let [a, b, c] = [0, 1, 2].map(|k| &sides[(k + r) % 3]);
+        let patch = RationalPatch::coons(a, b, &RationalCurve::point(b.points[2]), &c.reversed());
+        let ratio = jacobian_ratio(&patch, normal, true);
+        if best.as_ref().is_none_or(|(b, _)| ratio > *b) {
+            best = Some((ratio, patch));
+        }
+        if ratio >= GOOD_RATIO {
+            break;
+        }
+    }
+    best.expect("three rotations")
 }
 
 /// The smallest Jacobian of a planar patch (along `normal`, signed like the patch's own
-/// orientation) over its largest, sampled inside: ≤ 0 where it folds.
-pub fn jacobian_ratio(patch: &RationalPatch, normal: DVec3) -> f64 {
-    let h = 1e-6;
+/// orientation) over its largest, sampled inside: ≤ 0 where it folds. `collapsed`: the side v = 1
+/// is a point, where the Jacobian vanishes like 1 − v; it is divided by that.
+pub fn jacobian_ratio(patch: &RationalPatch, normal: DVec3, collapsed: bool) -> f64 {
     let jacobian = |u: f64, v: f64| {
-        let du = patch.evaluate(u + h, v) - patch.evaluate(u - h, v);
-        let dv = patch.evaluate(u, v + h) - patch.evaluate(u, v - h);
-        du.cross(dv).dot(normal)
+        let (_, du, dv) = patch.derivatives(u, v);
+        let j = du.cross(dv).dot(normal);
+        if collapsed { j / (1.0 - v) } else { j }
     };
-    let mut values = Vec::with_capacity(FOLD_SAMPLES * FOLD_SAMPLES);
+    let mut values = [0.0; FOLD_SAMPLES * FOLD_SAMPLES];
     for i in 0..FOLD_SAMPLES {
         for j in 0..FOLD_SAMPLES {
-            // Inside, away from a triangle's collapsed side at v = 1.
-            values.push(jacobian((i as f64 + 0.5) / FOLD_SAMPLES as f64, 0.9 * (j as f64 + 0.5) / FOLD_SAMPLES as f64));
+            let (u, v) = ((i as f64 + 0.5) / FOLD_SAMPLES as f64, (j as f64 + 0.5) / FOLD_SAMPLES as f64);
+            values[i * FOLD_SAMPLES + j] = jacobian(u, v);
         }
     }
     let sign = jacobian(0.5, 0.4).signum();

@@ -48,44 +48,54 @@ export function write3dm(model, rhino) {
     if (l.parent !== null && l.parent !== undefined) layer.parentLayerId = doc.layers().get(layerIndex[l.parent]).id;
     layerIndex.push(doc.layers().add(layer));
   }
-  const attributes = (item) => {
-    const a = new rhino.ObjectAttributes();
+  // One attributes object per kind of item, changed per item (the document copies it); every
+  // item of a kind has the same user-text keys, so each overwrites the last.
+  const shared = new Map();
+  const attributes = (item, kind) => {
+    let a = shared.get(kind);
+    if (!a) shared.set(kind, (a = new rhino.ObjectAttributes()));
     a.layerIndex = layerIndex[item.layer] ?? 0;
-    if (item.name) a.name = item.name;
+    a.name = item.name ?? '';
     for (const [k, v] of Object.entries(item.user_text ?? {})) a.setUserString(k, String(v));
     return a;
+  };
+  const objects = doc.objects();
+  const add = (geometry, item, kind) => {
+    objects.add(geometry, attributes(item, kind));
+    geometry.delete();
   };
   for (const s of model.surfaces ?? []) {
     const [p, q] = s.degree;
     const surface = rhino.NurbsSurface.create(3, true, p + 1, q + 1, p + 1, q + 1);
-    bezierKnots(surface.knotsU(), p);
-    bezierKnots(surface.knotsV(), q);
+    const [ku, kv, points] = [surface.knotsU(), surface.knotsV(), surface.points()];
+    bezierKnots(ku, p);
+    bezierKnots(kv, q);
     for (let i = 0; i <= p; i++) {
       for (let j = 0; j <= q; j++) {
         const k = i * (q + 1) + j;
-        surface.points().set(i, j, homogeneous(s.points[k], s.weights[k]));
+        points.set(i, j, homogeneous(s.points[k], s.weights[k]));
       }
     }
+    for (const wrapper of [ku, kv, points]) wrapper.delete();
     if (!surface.isValid) fail('surface', s.name);
-    doc.objects().add(surface, attributes(s));
+    add(surface, s, s.user_text ? 'panel' : 'surface');
   }
   for (const c of model.curves ?? []) {
     const n = c.points.length;
     const curve = new rhino.NurbsCurve(3, true, n, n);
-    bezierKnots(curve.knots(), n - 1);
-    c.points.forEach((pt, k) => curve.points().set(k, homogeneous(pt, c.weights[k])));
+    const [knots, points] = [curve.knots(), curve.points()];
+    bezierKnots(knots, n - 1);
+    c.points.forEach((pt, k) => points.set(k, homogeneous(pt, c.weights[k])));
+    knots.delete();
+    points.delete();
     if (!curve.isValid) fail('curve', c.name);
-    doc.objects().add(curve, attributes(c));
+    add(curve, c, 'curve');
   }
-  for (const l of model.lines ?? []) {
-    doc.objects().add(new rhino.LineCurve(l.from, l.to), attributes(l));
-  }
-  for (const p of model.points ?? []) {
-    doc.objects().add(new rhino.Point(p.at), attributes(p));
-  }
-  for (const s of model.spheres ?? []) {
-    const brep = new rhino.Sphere(s.center, s.radius).toBrep();
-    doc.objects().add(brep, attributes(s));
-  }
-  return doc.toByteArray();
+  for (const l of model.lines ?? []) add(new rhino.LineCurve(l.from, l.to), l, 'line');
+  for (const p of model.points ?? []) add(new rhino.Point(p.at), p, 'point');
+  for (const s of model.spheres ?? []) add(new rhino.Sphere(s.center, s.radius).toBrep(), s, 'sphere');
+  for (const a of shared.values()) a.delete();
+  const bytes = doc.toByteArray();
+  doc.delete();
+  return bytes;
 }
