@@ -15,9 +15,17 @@ let rhino = null;
 // The pipeline's CAD model of panels.3dm (src/export/rhino.rs) is written as a .3dm here, with
 // rhino3dm.js, before its Files message goes out; every message passes through `sfPost`, in order.
 const RHINO_MODEL = 'panels.3dm.json';
+// The pipeline runs synchronously, so only a message holding the model, and those after it while
+// it is written, wait: progress and snapshots go out at once, and Cancel reaches a running method.
 let outbox = Promise.resolve();
+let waiting = 0;
 self.sfPost = (obj, transfer) => {
-  outbox = outbox.then(() => postOut(obj, transfer));
+  if (waiting === 0 && !obj.json.includes(RHINO_MODEL)) {
+    self.postMessage(obj, transfer);
+    return;
+  }
+  waiting++;
+  outbox = outbox.then(() => postOut(obj, transfer)).finally(() => waiting--);
 };
 
 async function rhinoModule() {
