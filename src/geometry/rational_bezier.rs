@@ -54,20 +54,9 @@ impl std::fmt::Display for ArcError {
 
 impl std::error::Error for ArcError {}
 
-/// Bernstein polynomials of degree `n` at t.
+/// Bernstein polynomials of degree `n` ≤ 7 at t.
 pub fn bernstein(n: usize, t: f64) -> Vec<f64> {
-    let mut b = vec![0.0; n + 1];
-    b[0] = 1.0;
-    for k in 1..=n {
-        let mut saved = 0.0;
-        for j in 0..k {
-            let tmp = b[j];
-            b[j] = saved + (1.0 - t) * tmp;
-            saved = t * tmp;
-        }
-        b[k] = saved;
-    }
-    b
+    bernstein_with_derivative(n, t).0[..=n].to_vec()
 }
 
 /// Bernstein polynomials of degree `n` ≤ 7 at t and their derivatives, on the stack:
@@ -260,11 +249,6 @@ impl RationalPatch {
             }
         }
         patch
-    }
-
-    /// The homogeneous control net as (w·x, w) pairs.
-    pub fn homogeneous_net(&self) -> Vec<[f64; 4]> {
-        self.points.iter().zip(&self.weights).map(|(p, &w)| [w * p.x, w * p.y, w * p.z, w]).collect()
     }
 }
 
