@@ -156,7 +156,7 @@ fn moulds(bencher: Bencher) {
 fn exact_surfaces_and_step(bencher: Bencher) {
     let m = MouldWorkload::new(scale());
     let panels = &m.panels[..EXACT_PANELS.min(m.panels.len())];
-    info("exact", format!("# step_2k: {} panels", panels.len()));
+    info("exact", format!("# step_2k: {} panels ({} without an exact patch)", panels.len(), exact_surfaces(panels).refused_panels().count()));
     bencher.bench_local(|| {
         let exact = timed("exact_surfaces_2k", || exact_surfaces(panels));
         timed("step_2k", || exact_step(panels, &exact));

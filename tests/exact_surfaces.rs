@@ -14,7 +14,7 @@ use spherical_faces::geometry::circle::Circle;
 use spherical_faces::geometry::rational_bezier::{RationalCurve, RationalPatch, Side};
 use spherical_faces::import::{import_file, ImportedFile};
 use spherical_faces::panels::arc::Arc;
-use spherical_faces::panels::exact_surface::{panel_patch, support_patch};
+use spherical_faces::panels::exact_surface::{panel_patch, support_patch, ExactSurfaceError};
 use spherical_faces::panels::panel::Panel;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
@@ -161,12 +161,20 @@ fn planar_and_triangular_panels() {
     let collapsed = patch.side(Side::V1);
     assert!(collapsed.points.iter().all(|x| x.distance(collapsed.points[0]) <= 1e-12 * reference.diagonal()));
     let mut flat = p.clone();
-    let n = (p.arcs[0].from - p.arcs[1].from).cross(p.arcs[2].from - p.arcs[1].from).normalize();
+    // The corners run counter-clockwise about the outward normal (b of a plane).
+    let n = (p.arcs[1].from - p.arcs[0].from).cross(p.arcs[2].from - p.arcs[0].from).normalize();
     flat.sphere = spherical_faces::geometry::sphere::Sphere::plane(p.arcs[0].from, n);
     flat.arcs = (0..3).map(|k| Arc::straight(p.arcs[k].from, p.arcs[(k + 1) % 3].from, n)).collect();
     let patch = panel_patch(&flat).unwrap();
     assert_eq!(patch.degree, [2, 2]);
-    check_panels("a flat triangle", &[flat], reference.diagonal());
+    check_panels("a flat triangle", &[flat.clone()], reference.diagonal());
+    // Turned inside out (its sphere's orientation negated), the panel is the rest of its sphere
+    // (or plane) beyond its arcs: no bounded patch has those sides running that way.
+    for mut outside in [p.clone(), flat] {
+        let s = outside.sphere;
+        outside.sphere = spherical_faces::geometry::sphere::Sphere { a: -s.a, b: -s.b, c: -s.c };
+        assert!(matches!(panel_patch(&outside), Err(ExactSurfaceError::Folds { .. })), "{:?}", panel_patch(&outside));
+    }
 }
 
 /// Runs tests/e2e/read-step.mjs (OpenCascade through occt-import-js) on `file`: the vertices of
@@ -195,11 +203,19 @@ fn vec3(v: &serde_json::Value) -> DVec3 {
 #[test]
 fn cad_files_read_back_on_their_spheres() {
     let shared = |p: &str| common::shared_path(p).to_str().unwrap().to_string();
+    // Every method on every one of the four inputs it takes (SQ needs a B-spline); ST with
+    // support structure on a B-spline remeshed to about 600 faces (its default, the tessellation,
+    // gives some 12,000 faces, whose files take a minute to read back).
+    let (vault, tunnel) = ("sample:vault".to_string(), shared("data/bsplines/tunnel_arch.json"));
     let cases = [
-        ("sq", "sample:vault".to_string(), vec![]),
-        ("sq", shared("data/bsplines/tunnel_arch.json"), vec![]),
+        ("sq", vault.clone(), vec![]),
+        ("sq", tunnel.clone(), vec![]),
+        ("st", vault.clone(), vec!["--units", "cm"]),
+        ("st", tunnel.clone(), vec![]),
         ("st", shared("data/meshes/tri_mesh.obj"), vec!["--epsilon", "2e-3"]),
         ("st", shared("data/meshes/cmc1.obj"), vec![]),
+        ("st-support", vault, vec!["--faces", "600"]),
+        ("st-support", tunnel, vec!["--faces", "600", "--units", "ft"]),
         ("st-support", shared("data/meshes/tri_mesh.obj"), vec![]),
         ("st-support", shared("data/meshes/cmc1.obj"), vec!["--units", "mm"]),
     ];
@@ -304,4 +320,42 @@ fn check_3dm(name: &str, dir: &std::path::Path, schedule: &serde_json::Value, re
     let bytes = std::fs::metadata(dir.join("panels.3dm")).unwrap().len();
     eprintln!("{name}: panels.3dm read back by rhino3dm, {} objects, panels within {on_sphere:.1e} of their spheres, sides within {on_arcs:.1e} of their arcs; {bytes} bytes", objects.len());
     assert!(on_sphere <= EXACT && on_arcs <= EXACT, "{name}: {on_sphere:e}, {on_arcs:e}");
+}
+
+/// Panels whose plain Coons patch folds, from ST on conical1 and flower_cmc1 (tests/data/exact):
+/// with the collapsed corner and the interior point chosen, each has an exact patch.
+#[test]
+fn panels_with_a_sharp_corner_are_exact_patches() {
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/exact/sharp_corner_panels.json")).unwrap();
+    let fixture: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for p in fixture["panels"].as_array().unwrap() {
+        let corners: Vec<DVec3> = p["corners"].as_array().unwrap().iter().map(vec3).collect();
+        let n = corners.len();
+        let arcs: Vec<Arc> = p["arcs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(k, a)| Arc {
+                circle: Circle { center: vec3(&a["center"]), normal: vec3(&a["normal"]), radius: a["radius"].as_f64().unwrap() },
+                from: corners[k],
+                to: corners[(k + 1) % n],
+            })
+            .collect();
+        for (arc, a) in arcs.iter().zip(p["arcs"].as_array().unwrap()) {
+            assert!((arc.sweep().to_degrees() - a["sweep_deg"].as_f64().unwrap()).abs() <= 1e-6, "the fixture's arcs as scheduled");
+        }
+        let s = &p["sphere"];
+        let panel = Panel {
+            face: p["id"].as_u64().unwrap() as usize,
+            sphere: spherical_faces::geometry::sphere::Sphere { a: s["a"].as_f64().unwrap(), b: vec3(&s["b"]), c: s["c"].as_f64().unwrap() },
+            corners: (0..n as u32).collect(),
+            arcs,
+            positions: corners.clone(),
+            triangles: Vec::new(),
+            area: 0.0,
+            arc_vertices: Vec::new(),
+        };
+        check_panels(&format!("{} panel {}", p["source"], p["id"]), &[panel], p["diagonal"].as_f64().unwrap());
+    }
 }

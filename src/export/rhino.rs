@@ -3,9 +3,10 @@
 //! .3dm file with rhino3dm (`www/rhino3dm/write.mjs`: the worker for the app, Node for the CLI).
 //!
 //! Layers: `panels` with one sub-layer `mould j` per mould (in its colour in the app), `support`,
-//! `node axes`, `edges`, `reference`. Every panel surface carries user text: its id, mould, sphere
+//! `node axes`, `edges`, `reference` (m and Ω: a sphere, or a plane as a patch). Every panel surface carries user text: its id, mould, sphere
 //! centre and radius (or "plane"), fit deviation and unit.
 
+use glam::{DVec2, DVec3};
 use serde::Serialize;
 
 use crate::congruence::support_structure::SupportStructure;
@@ -102,6 +103,31 @@ fn curve(layer: usize, name: String, c: &RationalCurve) -> Curve {
     Curve { layer, name, points: c.points.iter().map(|p| p.to_array()).collect(), weights: c.weights.clone() }
 }
 
+/// The plane ⟨x, axis⟩ = d of a plane Ω (Sec. 4, where m is at infinity) as a bilinear patch
+/// over the points projected into it, a tenth wider on every side.
+fn plane_patch(axis: DVec3, d: f64, points: impl Iterator<Item = DVec3>) -> Option<RationalPatch> {
+    let length = axis.length();
+    let n = axis.try_normalize()?;
+    let origin = n * (d / length);
+    let (e1, e2) = (n.any_orthonormal_vector(), n.cross(n.any_orthonormal_vector()));
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for x in points {
+        let q = DVec2::new((x - origin).dot(e1), (x - origin).dot(e2));
+        (lo, hi) = (lo.min(q), hi.max(q));
+    }
+    let pad = 0.1 * (hi - lo).max_element();
+    let (lo, hi) = (lo - DVec2::splat(pad), hi + DVec2::splat(pad));
+    if !(lo.is_finite() && hi.is_finite() && origin.is_finite()) {
+        return None;
+    }
+    let at = |u: f64, v: f64| origin + u * e1 + v * e2;
+    Some(RationalPatch {
+        degree: [1, 1],
+        points: vec![at(lo.x, lo.y), at(lo.x, hi.y), at(hi.x, lo.y), at(hi.x, hi.y)],
+        weights: vec![1.0; 4],
+    })
+}
+
 /// What goes into `panels.3dm`.
 pub struct RhinoInput<'a> {
     pub panels: &'a [Panel],
@@ -177,16 +203,52 @@ impl RhinoModel {
                 model.lines.push(Line { layer: NODE_AXES, name: format!("node axis {v}"), from: from.to_array(), to: to.to_array() });
             }
         }
-        if let Some(&AbsoluteSphere::Sphere { center, r2 }) = input.omega {
-            model.points.push(Point { layer: REFERENCE, name: "m".into(), at: center.to_array() });
-            if r2 > 0.0 {
-                model.spheres.push(SphereObject { layer: REFERENCE, name: "Ω".into(), center: center.to_array(), radius: r2.sqrt() });
+        match input.omega {
+            Some(&AbsoluteSphere::Sphere { center, r2 }) => {
+                model.points.push(Point { layer: REFERENCE, name: "m".into(), at: center.to_array() });
+                if r2 > 0.0 {
+                    model.spheres.push(SphereObject { layer: REFERENCE, name: "Ω".into(), center: center.to_array(), radius: r2.sqrt() });
+                }
             }
+            Some(&AbsoluteSphere::Plane { axis, d }) => {
+                if let Some(patch) = plane_patch(axis, d, input.panels.iter().flat_map(|p| p.arcs.iter().map(|a| a.from))) {
+                    model.surfaces.push(surface(REFERENCE, "Ω".into(), &patch));
+                }
+            }
+            None => {}
         }
         model
     }
 
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).expect("the model serializes")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plane_omega_is_a_patch_in_its_plane_over_the_points() {
+        let (axis, d) = (DVec3::new(0.0, 0.0, 2.0), 6.0); // z = 3
+        let points = [DVec3::new(-1.0, 0.0, 1.0), DVec3::new(2.0, 4.0, 5.0), DVec3::new(0.5, -3.0, 3.0)];
+        let patch = plane_patch(axis, d, points.into_iter()).unwrap();
+        for i in 0..=10 {
+            for j in 0..=10 {
+                let x = patch.evaluate(i as f64 / 10.0, j as f64 / 10.0);
+                assert!((x.z - 3.0).abs() <= 1e-12, "{x}");
+            }
+        }
+        // Every point's foot in the plane lies inside the patch (a parallelogram, here a rectangle).
+        let (p00, p01, p10) = (patch.point(0, 0), patch.point(0, 1), patch.point(1, 0));
+        let (du, dv) = (p10 - p00, p01 - p00);
+        assert!(du.dot(dv).abs() <= 1e-12);
+        for x in points {
+            let foot = DVec3::new(x.x, x.y, 3.0) - p00;
+            let (u, v) = (foot.dot(du) / du.length_squared(), foot.dot(dv) / dv.length_squared());
+            assert!((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v), "{u} {v}");
+        }
+        assert!(plane_patch(DVec3::ZERO, 1.0, points.into_iter()).is_none());
     }
 }

@@ -11,9 +11,15 @@
 //! exactly on the sphere, whose sides are exactly the arcs (the
 //! images of the planar sides). The pole is the antipode of a point of the panel, the one of a few
 //! whose planar patch is farthest from folding (the smallest ratio of its Jacobian over its
-//! largest; the first one above 0.2 is taken); a patch that folds anyway is refused.
+//! largest; the first one above 0.2 is taken), or, beside a side sweeping over 120°, the point of
+//! its circle opposite its middle. The projection keeps the panel's orientation about the outward
+//! radius, so a pole inside the panel shows as a patch running the wrong way and is not taken.
+//! Where the Coons patch folds (strongly curved arcs at a sharp corner), its one interior control
+//! point is moved to where it folds least; the sides stay. A patch that folds anyway is refused:
+//! its arcs cross, or a corner is wider than a tensor-product patch can turn.
 //!
-//! **Planar panel, support element.** The Coons patch of the arcs themselves, (2, 2), planar.
+//! **Planar panel, support element.** The Coons patch of the arcs themselves, (2, 2), planar,
+//! refused where it folds.
 //!
 //! A triangle is a quad with one side collapsed to a corner, the corner that folds it least.
 
@@ -30,6 +36,8 @@ const FOLD_SAMPLES: usize = 9;
 pub const FOLD_RATIO: f64 = 1e-6;
 /// A patch this far from folding is taken without trying other poles or corners.
 const GOOD_RATIO: f64 = 0.2;
+/// A side sweeping more than this (120°) adds a pole on its circle.
+const WIDE_SWEEP: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
 
 /// Why a panel has no exact patch.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,8 +76,12 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     if panel.is_planar() {
         let sides: Vec<RationalCurve> =
             (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
+        // The corners run counter-clockwise about the outward normal −∇ψ = b/|b|.
         let normal = panel.sphere.b.try_normalize().ok_or(ExactSurfaceError::Degenerate)?;
-        let (ratio, patch) = coons_of(&sides, normal);
+        let (mut ratio, mut patch) = coons_of(&sides, normal, false);
+        if ratio <= FOLD_RATIO {
+            (ratio, patch) = coons_of(&sides, normal, true);
+        }
         return if ratio > FOLD_RATIO { Ok(patch) } else { Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }) };
     }
     let (Some(c), Some(r)) = (panel.sphere.center(), panel.sphere.signed_radius()) else {
@@ -79,25 +91,49 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     if !(r.is_finite() && r > 0.0 && c.is_finite()) {
         return Err(ExactSurfaceError::Degenerate);
     }
-    // Candidate points of the panel whose antipodes are the poles: its middle, and halfway to
-    // each corner.
+    // The outward normal −∇ψ = −sign(a)·(x − C)/r: the corners run counter-clockwise about it.
+    let outward = -panel.sphere.a.signum();
+    // Candidate poles: the antipodes of the panel's middle and of the points halfway to each
+    // corner; then, for a side sweeping over 120°, the point of its circle opposite its middle
+    // (the side projects to a segment, the others to narrower arcs).
     let middle = panel.arcs.iter().map(|a| a.point(0.5)).sum::<DVec3>() / n as f64;
     let on_sphere = |x: DVec3| (x - c).try_normalize().map(|d| c + r * d);
-    let mut candidates: Vec<DVec3> = on_sphere(middle).into_iter().collect();
-    candidates.extend(panel.arcs.iter().filter_map(|a| on_sphere(0.5 * (middle + a.from))));
+    let antipode = |x: DVec3| on_sphere(x).map(|x| 2.0 * c - x);
+    let mut poles: Vec<DVec3> = antipode(middle).into_iter().collect();
+    poles.extend(panel.arcs.iter().filter_map(|a| antipode(0.5 * (middle + a.from))));
+    for arc in &panel.arcs {
+        if !arc.is_straight() && arc.sweep() > WIDE_SWEEP {
+            poles.extend(on_sphere(2.0 * arc.circle.center - arc.point(0.5)));
+        }
+    }
     let mut best: Option<(f64, RationalPatch)> = None;
     let mut first_error = None;
-    for point in candidates {
-        let a = (point - c) / r;
-        match spherical_patch(panel, c, r, a) {
-            Ok((ratio, patch)) if best.as_ref().is_none_or(|(b, _)| ratio > *b) => best = Some((ratio, patch)),
-            Ok(_) => {}
+    // The plain Coons patches first; only if every one folds, the unfolded one ([`unfolded`])
+    // of the pole that folds least.
+    let mut least_folded: Option<(f64, DVec3)> = None;
+    for &pole in &poles {
+        match spherical_patch(panel, c, r, outward, pole, false) {
+            Ok((ratio, patch)) => {
+                if least_folded.is_none_or(|(b, _)| ratio > b) {
+                    least_folded = Some((ratio, pole));
+                }
+                if best.as_ref().is_none_or(|(b, _)| ratio > *b) {
+                    best = Some((ratio, patch));
+                }
+            }
             Err(e) => {
                 first_error.get_or_insert(e);
             }
         }
         if best.as_ref().is_some_and(|(b, _)| *b >= GOOD_RATIO) {
             break;
+        }
+    }
+    if let Some((ratio, pole)) = least_folded.filter(|(ratio, _)| *ratio <= FOLD_RATIO) {
+        if let Ok(moved) = spherical_patch(panel, c, r, outward, pole, true) {
+            if moved.0 > ratio {
+                best = Some(moved);
+            }
         }
     }
     match best {
@@ -107,12 +143,14 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     }
 }
 
-/// The (4, 4) patch of a spherical panel projected from the pole c − r·a, with the Jacobian ratio
-/// of its planar patch.
-fn spherical_patch(panel: &Panel, c: DVec3, r: f64, a: DVec3) -> Result<(f64, RationalPatch), ExactSurfaceError> {
+/// The (4, 4) patch of a spherical panel (centre c, radius r) projected from `pole`, with the
+/// Jacobian ratio of its planar patch about `outward`·a, a = (c − pole)/r (`unfold`: where it
+/// folds, unfolded). The projection keeps the orientation about the outward radius, so a pole
+/// inside the panel, which turns it inside out, folds.
+fn spherical_patch(panel: &Panel, c: DVec3, r: f64, outward: f64, pole: DVec3, unfold: bool) -> Result<(f64, RationalPatch), ExactSurfaceError> {
+    let a = ((c - pole) / r).normalize();
     let e1 = a.any_orthonormal_vector();
     let e2 = a.cross(e1);
-    let pole = c - r * a;
     // σ(x)/r in the frame (e1, e2), as a point of the plane z = 0.
     let project = |x: DVec3| {
         let d = x - pole;
@@ -126,7 +164,7 @@ fn spherical_patch(panel: &Panel, c: DVec3, r: f64, a: DVec3) -> Result<(f64, Ra
         let curve = RationalCurve::circular_arc(from, project(arc.point(0.5)), to).map_err(|error| ExactSurfaceError::Side { side: k, error })?;
         sides.push(curve);
     }
-    let (ratio, planar) = coons_of(&sides, DVec3::Z);
+    let (ratio, planar) = coons_of(&sides, outward * DVec3::Z, unfold);
     let coefficients = |f: &dyn Fn(&DVec3, f64) -> f64| BernsteinPoly {
         degree: planar.degree,
         coefficients: planar.points.iter().zip(&planar.weights).map(|(p, &w)| f(p, w)).collect(),
@@ -161,47 +199,108 @@ fn side_curve(arc: &Arc, to: DVec3, k: usize) -> Result<RationalCurve, ExactSurf
 
 /// The Coons patch of 3 or 4 sides running corner k → k + 1, and its Jacobian ratio along
 /// `normal` ([`jacobian_ratio`]): a quad's corners 0, 1, 2, 3 at (0,0), (1,0), (1,1), (0,1); a
-/// triangle's sides from the corner that folds it least, its last corner at both (1,1) and (0,1).
-fn coons_of(sides: &[RationalCurve], normal: DVec3) -> (f64, RationalPatch) {
+/// triangle's sides from the corner that folds it least, its last corner at both (1,1) and (0,1);
+/// with `unfold`, a patch that folds with its interior point moved ([`unfolded`]).
+fn coons_of(sides: &[RationalCurve], normal: DVec3, unfold: bool) -> (f64, RationalPatch) {
     if sides.len() == 4 {
         let patch = RationalPatch::coons(&sides[0], &sides[1], &sides[2].reversed(), &sides[3].reversed());
-        return (jacobian_ratio(&patch, normal, false), patch);
+        let plain = (jacobian_ratio(&patch, normal, false), patch);
+        return if unfold { unfolded(plain, normal, false) } else { plain };
     }
-    let mut best: Option<(f64, RationalPatch)> = None;
+    let mut rotations: Vec<(f64, RationalPatch)> = Vec::with_capacity(3);
     for r in 0..3 {
         let [a, b, c] = [0, 1, 2].map(|k| &sides[(k + r) % 3]);
         let patch = RationalPatch::coons(a, b, &RationalCurve::point(b.points[2]), &c.reversed());
         let ratio = jacobian_ratio(&patch, normal, true);
-        if best.as_ref().is_none_or(|(b, _)| ratio > *b) {
-            best = Some((ratio, patch));
-        }
         if ratio >= GOOD_RATIO {
+            return (ratio, patch);
+        }
+        rotations.push((ratio, patch));
+    }
+    rotations.sort_by(|a, b| b.0.total_cmp(&a.0));
+    if !unfold || rotations[0].0 > FOLD_RATIO {
+        return rotations.swap_remove(0);
+    }
+    // A corner near a cusp, or wider than 180°, folds a patch that has it as a regular corner; as
+    // the collapsed corner, the interior point can turn the patch's sides around it the long way.
+    let mut best: Option<(f64, RationalPatch)> = None;
+    for rotation in rotations {
+        let moved = unfolded(rotation, normal, true);
+        if best.as_ref().is_none_or(|(b, _)| moved.0 > *b) {
+            best = Some(moved);
+        }
+        if best.as_ref().is_some_and(|(b, _)| *b >= GOOD_RATIO) {
             break;
         }
     }
     best.expect("three rotations")
 }
 
-/// The smallest Jacobian of a planar patch (along `normal`, signed like the patch's own
-/// orientation) over its largest, sampled inside: ≤ 0 where it folds. `collapsed`: the side v = 1
-/// is a point, where the Jacobian vanishes like 1 − v; it is divided by that.
+/// A Coons patch that folds (ratio below [`FOLD_RATIO`]) with its one interior control point moved
+/// in its plane to where it folds least: a pattern search from the Coons point, its step doubled
+/// on success (up to 4 sizes of the patch) and halved on failure, down to 1e-3 of the size. Its sides stay exactly what they are.
+fn unfolded(start: (f64, RationalPatch), normal: DVec3, collapsed: bool) -> (f64, RationalPatch) {
+    let mut best = start;
+    if best.0 > FOLD_RATIO || best.1.degree != [2, 2] {
+        return best;
+    }
+    const CENTRE: usize = 4; // (1, 1) of the 3 × 3 net
+    let e1 = normal.any_orthonormal_vector();
+    let e2 = normal.cross(e1);
+    let corners = [0, 2, 6, 8].map(|k| best.1.points[k]);
+    let size = corners.iter().flat_map(|a| corners.iter().map(move |b| a.distance(*b))).fold(0.0, f64::max);
+    let mut step = 0.25 * size;
+    for _ in 0..40 {
+        if step <= 1e-3 * size || best.0 >= GOOD_RATIO {
+            break;
+        }
+        let moved = [e1, -e1, e2, -e2, e1 + e2, e1 - e2, e2 - e1, -e1 - e2].into_iter().find_map(|d| {
+            let mut trial = best.1.clone();
+            trial.points[CENTRE] += step * d;
+            let ratio = jacobian_ratio(&trial, normal, collapsed);
+            (ratio > best.0).then_some((ratio, trial))
+        });
+        match moved {
+            Some(better) => {
+                best = better;
+                step = (2.0 * step).min(4.0 * size);
+            }
+            None => step *= 0.5,
+        }
+    }
+    best
+}
+
+/// The smallest Jacobian of a planar patch along `normal` (the side its boundary must run
+/// counter-clockwise about) over its largest, sampled inside: ≤ 0 where it folds or runs the
+/// other way. `collapsed`: the side v = 1 is a point, where the Jacobian vanishes like 1 − v; it
+/// is divided by that.
 pub fn jacobian_ratio(patch: &RationalPatch, normal: DVec3, collapsed: bool) -> f64 {
-    let jacobian = |u: f64, v: f64| {
-        let (_, du, dv) = patch.derivatives(u, v);
-        let j = du.cross(dv).dot(normal);
-        if collapsed { j / (1.0 - v) } else { j }
-    };
-    let mut values = [0.0; FOLD_SAMPLES * FOLD_SAMPLES];
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     for i in 0..FOLD_SAMPLES {
         for j in 0..FOLD_SAMPLES {
             let (u, v) = ((i as f64 + 0.5) / FOLD_SAMPLES as f64, (j as f64 + 0.5) / FOLD_SAMPLES as f64);
-            values[i * FOLD_SAMPLES + j] = jacobian(u, v);
+            let (_, du, dv) = patch.derivatives(u, v);
+            let jacobian = du.cross(dv).dot(normal) / if collapsed { 1.0 - v } else { 1.0 };
+            (lo, hi) = (lo.min(jacobian), hi.max(jacobian.abs()));
         }
     }
-    let sign = jacobian(0.5, 0.4).signum();
-    let lo = values.iter().map(|j| sign * j).fold(f64::INFINITY, f64::min);
-    let hi = values.iter().map(|j| j.abs()).fold(0.0, f64::max);
-    if hi > 0.0 && sign != 0.0 { lo / hi } else { 0.0 }
+    if hi > 0.0 { lo / hi } else { 0.0 }
+}
+
+/// `normal` or −`normal`: the one its boundary (0,0) → (1,0) → (1,1) → (0,1) runs
+/// counter-clockwise about, by the signed area it encloses.
+fn boundary_normal(patch: &RationalPatch, normal: DVec3) -> DVec3 {
+    const PER_SIDE: usize = 8;
+    let boundary: Vec<DVec3> = (0..4 * PER_SIDE)
+        .map(|k| {
+            let t = (k % PER_SIDE) as f64 / PER_SIDE as f64;
+            let (u, v) = [(t, 0.0), (1.0, t), (1.0 - t, 1.0), (0.0, 1.0 - t)][k / PER_SIDE];
+            patch.evaluate(u, v)
+        })
+        .collect();
+    let area: f64 = (0..boundary.len()).map(|k| boundary[k].cross(boundary[(k + 1) % boundary.len()]).dot(normal)).sum();
+    if area < 0.0 { -normal } else { normal }
 }
 
 /// The planar patch of a support element: its edge arc (corners 0 → 1, the shorter way), the
@@ -222,7 +321,9 @@ pub fn support_patch(element: &SupportElement) -> Result<RationalPatch, ExactSur
     };
     let outer = arc(&element.circle, c0, c1, 0)?;
     let inner = arc(&element.inner_circle, c3, c2, 2)?;
-    Ok(RationalPatch::coons(&outer, &RationalCurve::segment(c1, c2), &inner, &RationalCurve::segment(c0, c3)))
+    let patch = RationalPatch::coons(&outer, &RationalCurve::segment(c1, c2), &inner, &RationalCurve::segment(c0, c3));
+    let ratio = jacobian_ratio(&patch, boundary_normal(&patch, element.circle.normal), false);
+    if ratio > FOLD_RATIO { Ok(patch) } else { Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }) }
 }
 
 fn circle_is_finite(c: &crate::geometry::circle::Circle) -> bool {
@@ -255,3 +356,4 @@ impl ExactSurfaces {
         self.panels.iter().enumerate().filter_map(|(i, p)| p.as_ref().err().map(|e| (i, e)))
     }
 }
+

@@ -27,10 +27,16 @@ if (!doc) {
   process.exit(2);
 }
 const layers = [];
-for (let i = 0; i < doc.layers().count; i++) layers.push(doc.layers().get(i).fullPath);
+const layerTable = doc.layers();
+for (let i = 0; i < layerTable.count; i++) {
+  const layer = layerTable.get(i);
+  layers.push(layer.fullPath);
+  layer.delete();
+}
 const objects = [];
-for (let i = 0; i < doc.objects().count; i++) {
-  const o = doc.objects().get(i);
+const table = doc.objects();
+for (let i = 0; i < table.count; i++) {
+  const o = table.get(i);
   const g = o.geometry();
   const a = o.attributes();
   const item = { name: a.name, layer: layers[a.layerIndex], kind: g.constructor.name, valid: g.isValid, user_text: Object.fromEntries(a.getUserStrings()) };
@@ -47,6 +53,9 @@ for (let i = 0; i < doc.objects().count; i++) {
     item.points = Array.from({ length: n + 1 }, (_, k) => g.pointAt(t0 + (k / n) * (t1 - t0)));
   }
   objects.push(item);
+  // Each wrapper holds openNURBS memory in the wasm heap until deleted: a file of many thousand
+  // objects runs out of it otherwise (get() then answers null).
+  for (const w of [a, g, o]) w.delete();
 }
 const unitValue = doc.settings().modelUnitSystem.value;
 const units = Object.keys(rhino.UnitSystem).find((k) => rhino.UnitSystem[k]?.value === unitValue) ?? null;

@@ -1,6 +1,7 @@
 // Spherical Faces → Rhino .3dm, with rhino3dm.js (openNURBS compiled to WebAssembly): the exact
 // panels and support elements as rational NURBS surfaces, the edge arcs as rational curves, the
-// node axes as lines, Ω and m as points (Ω also as a sphere when it is real).
+// node axes as lines, m as a point and Ω as a sphere when it is real (a plane Ω as a planar
+// surface, in the model's surfaces).
 //
 // Runs unchanged in the browser (worker) and in Node, like convert.mjs. The model is the JSON the
 // Rust side writes (src/export/rhino.rs):
