@@ -14,7 +14,7 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
-    exact_step, exact_surfaces, phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, EXACT_PANELS,
+    exact_rhino_model, exact_step, exact_surfaces, phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, EXACT_PANELS,
     ANGLE_SAMPLES, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
 };
 use spherical_faces::panels::moulds::MouldFits;
@@ -157,8 +157,30 @@ fn exact_surfaces_and_step(bencher: Bencher) {
     let m = MouldWorkload::new(scale());
     let panels = &m.panels[..EXACT_PANELS.min(m.panels.len())];
     info("exact", format!("# step_2k: {} panels ({} without an exact patch)", panels.len(), exact_surfaces(panels).refused_panels().count()));
+    let moulds = m.fits.assign(m.tolerance);
+    // panels.3dm as the CLI writes it: the model's JSON to a file, then rhino3dm under Node
+    // (www/rhino3dm/write-cli.mjs, Node's start and rhino3dm's load included).
+    let writer = concat!(env!("CARGO_MANIFEST_DIR"), "/www/rhino3dm/write-cli.mjs");
+    let rhino3dm = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("www/rhino3dm/node_modules/rhino3dm").is_dir();
+    if !rhino3dm {
+        info("exact 3dm", "# panels_3dm_2k: skipped, rhino3dm is not installed (npm ci in www/rhino3dm)".into());
+    }
+    let dir = std::env::temp_dir().join(format!("sf-bench-3dm-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
     bencher.bench_local(|| {
+        let t = native_clock_ms();
         let exact = timed("exact_surfaces_2k", || exact_surfaces(panels));
-        timed("step_2k", || exact_step(panels, &exact));
+        let step = timed("step_2k", || exact_step(panels, &exact));
+        std::fs::write(dir.join("panels.step"), step).unwrap();
+        let model = timed("rhino_model_2k", || exact_rhino_model(panels, &exact, &moulds));
+        if rhino3dm {
+            std::fs::write(dir.join("model.json"), model).unwrap();
+            let out = timed("panels_3dm_2k", || std::process::Command::new("node").arg(writer).arg(dir.join("model.json")).arg(dir.join("panels.3dm")).output().unwrap());
+            assert!(out.status.success(), "write-cli.mjs: {}", String::from_utf8_lossy(&out.stderr));
+            record("cad_files_2k", [native_clock_ms() - t]);
+            let size = |f: &str| std::fs::metadata(dir.join(f)).map_or(0, |m| m.len());
+            info("exact 3dm", format!("# cad_files_2k: panels.step {} bytes, panels.3dm {} bytes", size("panels.step"), size("panels.3dm")));
+        }
     });
+    let _ = std::fs::remove_dir_all(&dir);
 }

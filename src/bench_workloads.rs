@@ -467,9 +467,15 @@ where
     let exact = exact_surfaces(panels);
     let mut bytes = 0;
     let step_ms: Vec<f64> = (0..MOULD_SAMPLES).flat_map(|_| time_n(clock, 1, || bytes = exact_step(panels, &exact).len())).collect();
+    let moulds = m.fits.assign(m.tolerance);
+    let mut model_bytes = 0;
+    let model_ms: Vec<f64> =
+        (0..MOULD_SAMPLES).flat_map(|_| time_n(clock, 1, || model_bytes = exact_rhino_model(panels, &exact, &moulds).len())).collect();
     out(&format!("# step_2k: {} panels ({} without an exact patch), panels.step {bytes} bytes", panels.len(), exact.refused_panels().count()));
+    out(&format!("# rhino_model_2k: the panels.3dm model, {model_bytes} bytes of JSON for rhino3dm"));
     out(&result_line("exact_surfaces_2k", &exact_ms));
     out(&result_line("step_2k", &step_ms));
+    out(&result_line("rhino_model_2k", &model_ms));
 }
 
 /// Panels of the exact-surface benchmarks.
@@ -478,6 +484,17 @@ pub const EXACT_PANELS: usize = 2000;
 /// The exact patches of `panels` ([`crate::panels::exact_surface`]).
 pub fn exact_surfaces(panels: &[crate::panels::panel::Panel]) -> crate::panels::exact_surface::ExactSurfaces {
     crate::panels::exact_surface::ExactSurfaces::of(panels, &[])
+}
+
+/// The model of `panels.3dm` ([`crate::export::rhino`]) of `panels` with their exact patches and
+/// moulds, as the JSON rhino3dm writes from.
+pub fn exact_rhino_model(
+    panels: &[crate::panels::panel::Panel],
+    exact: &crate::panels::exact_surface::ExactSurfaces,
+    moulds: &crate::panels::moulds::MouldAssignment,
+) -> String {
+    use crate::export::rhino::{RhinoInput, RhinoModel};
+    RhinoModel::of(&RhinoInput { panels, exact, moulds, support: None, omega: None, units: crate::units::Units::M }).to_json()
 }
 
 /// `panels.step` of `panels` with their exact patches.

@@ -15,15 +15,16 @@
 //! its circle opposite its middle. The projection keeps the panel's orientation about the outward
 //! radius, so a pole inside the panel shows as a patch running the wrong way and is not taken.
 //! Where the Coons patch folds (strongly curved arcs at a sharp corner), its one interior control
-//! point is moved to where it folds least; the sides stay. A patch that folds anyway is refused:
-//! its arcs cross, or a corner is wider than a tensor-product patch can turn.
+//! point is moved to where it folds least; the sides stay. A panel whose arcs cross (its boundary,
+//! sampled, crosses itself) is refused at once, since any surface they bound folds; a patch that
+//! folds anyway is refused too (a corner sharper or wider than the patch can turn).
 //!
 //! **Planar panel, support element.** The Coons patch of the arcs themselves, (2, 2), planar,
 //! refused where it folds.
 //!
 //! A triangle is a quad with one side collapsed to a corner, the corner that folds it least.
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use super::arc::Arc;
 use super::panel::Panel;
@@ -44,6 +45,8 @@ const WIDE_SWEEP: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
 pub enum ExactSurfaceError {
     /// A side is no rational quadratic (wider than half a circle, or degenerate).
     Side { side: usize, error: ArcError },
+    /// Its boundary crosses itself: no patch bounded by it keeps from folding.
+    ArcsCross,
     /// Every planar patch tried folds (Jacobian ratio below [`FOLD_RATIO`]).
     Folds { jacobian_ratio: f64 },
     /// Not 3 or 4 corners, or no finite sphere.
@@ -54,8 +57,9 @@ impl std::fmt::Display for ExactSurfaceError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ExactSurfaceError::Side { side, error } => write!(f, "side {side}: {error}"),
+            ExactSurfaceError::ArcsCross => f.write_str("its arcs cross, so any surface they bound folds"),
             ExactSurfaceError::Folds { jacobian_ratio } => {
-                write!(f, "its patch folds (smallest Jacobian {jacobian_ratio:.1e} of its largest): its arcs cross")
+                write!(f, "every patch tried folds (smallest Jacobian {jacobian_ratio:.1e} of its largest)")
             }
             ExactSurfaceError::Degenerate => f.write_str("it has no finite sphere or not 3 or 4 corners"),
         }
@@ -74,10 +78,14 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
         return Err(ExactSurfaceError::Degenerate);
     }
     if panel.is_planar() {
-        let sides: Vec<RationalCurve> =
-            (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
         // The corners run counter-clockwise about the outward normal −∇ψ = b/|b|.
         let normal = panel.sphere.b.try_normalize().ok_or(ExactSurfaceError::Degenerate)?;
+        let (e1, e2) = (normal.any_orthonormal_vector(), normal.cross(normal.any_orthonormal_vector()));
+        if boundary_crosses(&panel.arcs, |x| DVec2::new(x.dot(e1), x.dot(e2))) {
+            return Err(ExactSurfaceError::ArcsCross);
+        }
+        let sides: Vec<RationalCurve> =
+            (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
         let (mut ratio, mut patch) = coons_of(&sides, normal, false);
         if ratio <= FOLD_RATIO {
             (ratio, patch) = coons_of(&sides, normal, true);
@@ -104,6 +112,17 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     for arc in &panel.arcs {
         if !arc.is_straight() && arc.sweep() > WIDE_SWEEP {
             poles.extend(on_sphere(2.0 * arc.circle.center - arc.point(0.5)));
+        }
+    }
+    // Stereographic projection keeps crossings (from any pole off the boundary).
+    if let Some(&pole) = poles.first() {
+        let a = (c - pole) / r;
+        let (e1, e2) = (a.any_orthonormal_vector(), a.cross(a.any_orthonormal_vector()));
+        if boundary_crosses(&panel.arcs, |x| {
+            let d = x - pole;
+            DVec2::new(d.dot(e1), d.dot(e2)) / d.dot(a)
+        }) {
+            return Err(ExactSurfaceError::ArcsCross);
         }
     }
     let mut best: Option<(f64, RationalPatch)> = None;
@@ -186,6 +205,41 @@ fn spherical_patch(panel: &Panel, c: DVec3, r: f64, outward: f64, pole: DVec3, u
         })
         .collect();
     Ok((ratio, RationalPatch { degree: d.degree, points, weights: d.coefficients }))
+}
+
+/// Samples per arc of the crossing test, and per sample interval when a crossing is confirmed.
+const CROSSING_SAMPLES: usize = 24;
+const CROSSING_REFINE: usize = 32;
+
+/// Whether the boundary of `arcs`, mapped into a plane by `project`, crosses itself: two segments
+/// of its polygon (each arc sampled at [`CROSSING_SAMPLES`] points) that share no point cross
+/// strictly, and the arcs near them, sampled [`CROSSING_REFINE`] times finer, cross too (chords
+/// of two arcs leaving a sharp corner can cross where the arcs do not).
+fn boundary_crosses(arcs: &[Arc], project: impl Fn(DVec3) -> DVec2) -> bool {
+    let n = CROSSING_SAMPLES;
+    let at = |k: usize, t: f64| project(arcs[k].point(t));
+    let polygon: Vec<DVec2> = (0..arcs.len()).flat_map(|k| (0..n).map(move |i| (k, i as f64 / n as f64))).map(|(k, t)| at(k, t)).collect();
+    let m = polygon.len();
+    // Segment i runs over arc i / n from t = (i mod n)/n to t + 1/n.
+    let pieces = |i: usize| (i / n, (i % n) as f64 / n as f64, (i % n + 1) as f64 / n as f64);
+    (0..m).any(|i| {
+        (i + 2..m).filter(|&j| (j + 1) % m != i).any(|j| {
+            segments_cross(polygon[i], polygon[(i + 1) % m], polygon[j], polygon[(j + 1) % m]) && {
+                let ((ka, a0, a1), (kb, b0, b1)) = (pieces(i), pieces(j));
+                let fine = |k: usize, t0: f64, t1: f64| -> Vec<DVec2> {
+                    (0..=CROSSING_REFINE).map(|s| at(k, t0 + (t1 - t0) * s as f64 / CROSSING_REFINE as f64)).collect()
+                };
+                let (pa, pb) = (fine(ka, (a0 - 1.0 / n as f64).max(0.0), (a1 + 1.0 / n as f64).min(1.0)), fine(kb, (b0 - 1.0 / n as f64).max(0.0), (b1 + 1.0 / n as f64).min(1.0)));
+                pa.windows(2).any(|x| pb.windows(2).any(|y| !(x[0] == y[1] || x[1] == y[0] || x[0] == y[0] || x[1] == y[1]) && segments_cross(x[0], x[1], y[0], y[1])))
+            }
+        })
+    })
+}
+
+/// Whether the segments ab and cd cross at a point inside both.
+fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let side = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
+    side(a, b, c) * side(a, b, d) < 0.0 && side(c, d, a) * side(c, d, b) < 0.0
 }
 
 /// Side k of a planar panel: its arc from corner k to `to`, the next side's first corner (a
