@@ -566,11 +566,11 @@ fn with_refusal(summary: String, refused: Option<String>) -> String {
     }
 }
 
-/// `summary`, then the exact surfaces of `panels.step` and the moulds of the report: how many,
+/// `summary`, then the exact surfaces of `panels.step` and `panels.3dm` and the moulds of the report: how many,
 /// within what, in model units.
 fn with_moulds(summary: String, report: &Report) -> String {
     let summary = match &report.exact_surfaces {
-        Some(e) => format!("{summary}; panels.step: {}", e.describe()),
+        Some(e) => format!("{summary}; panels.step and panels.3dm: {}", e.describe()),
         None => summary,
     };
     match &report.moulds {

@@ -594,6 +594,7 @@ for (const project of PROJECTS) {
         assert.equal(doc.units, 'Meters');
         assert.ok(doc.objects.every((o) => o.valid), 'every object valid');
         assert.equal(doc.objects.filter((o) => o.layer.startsWith('panels::mould ')).length, r.output.panels, 'one surface per panel on its mould layer');
+        assert.deepEqual(s.exact_surfaces, [r.exact_surfaces.panels, r.exact_surfaces.support_elements, 0], 'the downloads say what the CAD files hold');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

@@ -14,6 +14,10 @@
 // Every NURBS is one Bézier span: order = degree + 1, knots 0 (degree times) then 1 (degree times),
 // control points set homogeneous (x·w, y·w, z·w, w), as openNURBS stores them.
 
+// Rhino 7's file version, which Rhino 7 and 8 both open (rhino3dm writes 8 by default, which
+// Rhino 7 refuses); nothing written here needs 8.
+export const FILE_VERSION = 7;
+
 const UNIT_SYSTEMS = { m: 'Meters', cm: 'Centimeters', mm: 'Millimeters', ft: 'Feet', in: 'Inches' };
 
 function bezierKnots(list, degree) {
@@ -96,7 +100,10 @@ export function write3dm(model, rhino) {
   for (const p of model.points ?? []) add(new rhino.Point(p.at), p, 'point');
   for (const s of model.spheres ?? []) add(new rhino.Sphere(s.center, s.radius).toBrep(), s, 'sphere');
   for (const a of shared.values()) a.delete();
-  const bytes = doc.toByteArray();
+  const options = new rhino.File3dmWriteOptions();
+  options.version = FILE_VERSION;
+  const bytes = doc.toByteArrayOptions(options);
+  options.delete();
   doc.delete();
   return bytes;
 }

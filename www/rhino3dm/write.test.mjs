@@ -1,7 +1,7 @@
 // node --test write.test.mjs: the .3dm writer (write.mjs) on a small model, read back by rhino3dm.
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
-import { write3dm } from './write.mjs';
+import { FILE_VERSION, write3dm } from './write.mjs';
 
 const rhino = await (await import(new URL('./node_modules/rhino3dm/rhino3dm.module.js', import.meta.url).href)).default();
 const w = Math.SQRT1_2;
@@ -17,6 +17,7 @@ test('a rational quarter cylinder, an arc, a line, a point and a sphere read bac
     spheres: [{ layer: 2, name: 'Ω', center: [0, 0, 0], radius: 2 }],
   };
   const doc = rhino.File3dm.fromByteArray(write3dm(model, rhino));
+  assert.equal(Math.floor(doc.archiveVersion / 10), FILE_VERSION, `a Rhino ${FILE_VERSION} file (archive version ${doc.archiveVersion})`);
   assert.equal(doc.settings().modelUnitSystem.value, rhino.UnitSystem.Feet.value);
   assert.equal(doc.objects().count, 5);
   const byName = {};

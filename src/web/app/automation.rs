@@ -44,6 +44,8 @@ struct AutomationState<'a> {
     /// The moulds of the last panel result: how many, within what (model units), and how many
     /// panels have exactly their mould's radius.
     moulds: Option<(usize, f64, usize)>,
+    /// The exact surfaces of the last panel result: panels, support elements, refused ones.
+    exact_surfaces: Option<(usize, usize, usize)>,
     notices: &'a [String],
     design_link: &'a str,
     clear_color: [u8; 3],
@@ -104,6 +106,7 @@ impl App {
             error: &self.error,
             missed_guarantees: &self.missed_guarantees,
             moulds: self.moulds.as_ref().map(|m| (m.count, m.tolerance, m.snap.snapped)),
+            exact_surfaces: self.exact_surfaces.as_ref().map(|e| (e.panels, e.support_elements, e.refused.len())),
             notices: &self.notices,
             design_link: &self.last_fragment,
             clear_color: [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],

@@ -159,6 +159,7 @@ impl App {
             if let Some(report) = v.finished(result) {
                 self.missed_guarantees = super::panels::missed_guarantees(&report);
                 self.moulds = report.moulds;
+                self.exact_surfaces = report.exact_surfaces;
             }
         }
     }

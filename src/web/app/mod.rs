@@ -56,6 +56,8 @@ pub struct App {
     /// The moulds of the last panel result, and whether the panels show them.
     moulds: Option<crate::export::MouldReport>,
     mould_colours: bool,
+    /// What `panels.step` and `panels.3dm` of the last panel result hold as exact surfaces.
+    exact_surfaces: Option<crate::export::report::ExactSurfacesReport>,
     /// The method refused its input's size: a remesh to about this many faces is offered.
     remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
@@ -156,6 +158,7 @@ impl App {
             error,
             missed_guarantees: None,
             moulds: None,
+            exact_surfaces: None,
             mould_colours: true,
             remesh_to: None,
             worker,
@@ -244,6 +247,7 @@ impl App {
         self.remesh_to = None;
         self.missed_guarantees = None;
         self.moulds = None;
+        self.exact_surfaces = None;
         if self.loaded.is_none() {
             return;
         }
@@ -481,6 +485,14 @@ impl App {
                 }
             }
         });
+        if let Some(e) = &self.exact_surfaces {
+            let text = RichText::new(format!("panels.step, panels.3dm: {}", e.describe())).small();
+            if e.refused.is_empty() {
+                ui.label(text);
+            } else {
+                ui.colored_label(Color32::from_rgb(240, 180, 80), text);
+            }
+        }
     }
 
     fn notices_section(&mut self, ui: &mut egui::Ui) {
