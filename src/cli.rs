@@ -570,7 +570,7 @@ fn with_refusal(summary: String, refused: Option<String>) -> String {
 /// within what, in model units.
 fn with_moulds(summary: String, report: &Report) -> String {
     let summary = match &report.exact_surfaces {
-        Some(e) => format!("{summary}; panels.step and panels.3dm: {}", e.describe()),
+        Some(e) => format!("{summary}; exact surfaces (panels.step, panels.3dm): {}", e.describe()),
         None => summary,
     };
     match &report.moulds {
