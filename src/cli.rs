@@ -570,7 +570,7 @@ fn with_refusal(summary: String, refused: Option<String>) -> String {
 /// within what, in model units.
 fn with_moulds(summary: String, report: &Report) -> String {
     let summary = match &report.exact_surfaces {
-        Some(e) => format!("{summary}; exact surfaces (panels.step, panels.3dm): {}", e.describe()),
+        Some(e) => format!("{summary}; CAD surfaces (panels.step, panels.3dm): {}", e.describe()),
         None => summary,
     };
     match &report.moulds {

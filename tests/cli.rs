@@ -65,7 +65,7 @@ fn formats_choose_the_files() {
     names.sort();
     assert_eq!(names, ["panels.glb", "panels.step", "report.json"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("exact surfaces (panels.step, panels.3dm):") && stdout.contains("as rational NURBS surfaces"), "{stdout}");
+    assert!(stdout.contains("CAD surfaces (panels.step, panels.3dm):") && stdout.contains("as rational NURBS surfaces"), "{stdout}");
     let out = run(&["st", "sample:dome", "--formats", "stl", "--out", dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("stl"));
