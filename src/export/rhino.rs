@@ -109,7 +109,8 @@ fn plane_patch(axis: DVec3, d: f64, points: impl Iterator<Item = DVec3>) -> Opti
     let length = axis.length();
     let n = axis.try_normalize()?;
     let origin = n * (d / length);
-    let (e1, e2) = (n.any_orthonormal_vector(), n.cross(n.any_orthonormal_vector()));
+    let e1 = n.any_orthonormal_vector();
+    let e2 = n.cross(e1);
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     for x in points {
         let q = DVec2::new((x - origin).dot(e1), (x - origin).dot(e2));

@@ -80,16 +80,14 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     if panel.is_planar() {
         // The corners run counter-clockwise about the outward normal −∇ψ = b/|b|.
         let normal = panel.sphere.b.try_normalize().ok_or(ExactSurfaceError::Degenerate)?;
-        let (e1, e2) = (normal.any_orthonormal_vector(), normal.cross(normal.any_orthonormal_vector()));
+        let e1 = normal.any_orthonormal_vector();
+        let e2 = normal.cross(e1);
         if boundary_crosses(&panel.arcs, |x| DVec2::new(x.dot(e1), x.dot(e2))) {
             return Err(ExactSurfaceError::ArcsCross);
         }
         let sides: Vec<RationalCurve> =
             (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
-        let (mut ratio, mut patch) = coons_of(&sides, normal, false);
-        if ratio <= FOLD_RATIO {
-            (ratio, patch) = coons_of(&sides, normal, true);
-        }
+        let (ratio, patch) = coons_of(&sides, normal, true);
         return if ratio > FOLD_RATIO { Ok(patch) } else { Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }) };
     }
     let (Some(c), Some(r)) = (panel.sphere.center(), panel.sphere.signed_radius()) else {
@@ -116,49 +114,58 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     }
     // Stereographic projection keeps crossings (from any pole off the boundary).
     if let Some(&pole) = poles.first() {
-        let a = (c - pole) / r;
-        let (e1, e2) = (a.any_orthonormal_vector(), a.cross(a.any_orthonormal_vector()));
-        if boundary_crosses(&panel.arcs, |x| {
-            let d = x - pole;
-            DVec2::new(d.dot(e1), d.dot(e2)) / d.dot(a)
-        }) {
+        let projection = Stereographic::new(c, r, pole);
+        if boundary_crosses(&panel.arcs, |x| projection.project(x)) {
             return Err(ExactSurfaceError::ArcsCross);
         }
     }
-    let mut best: Option<(f64, RationalPatch)> = None;
+    // The plain Coons patches first, (ratio, patch, pole) of the best; only if every one folds,
+    // the unfolded one ([`unfolded`]) of the pole that folds least.
+    let mut best: Option<(f64, RationalPatch, DVec3)> = None;
     let mut first_error = None;
-    // The plain Coons patches first; only if every one folds, the unfolded one ([`unfolded`])
-    // of the pole that folds least.
-    let mut least_folded: Option<(f64, DVec3)> = None;
     for &pole in &poles {
         match spherical_patch(panel, c, r, outward, pole, false) {
-            Ok((ratio, patch)) => {
-                if least_folded.is_none_or(|(b, _)| ratio > b) {
-                    least_folded = Some((ratio, pole));
-                }
-                if best.as_ref().is_none_or(|(b, _)| ratio > *b) {
-                    best = Some((ratio, patch));
-                }
-            }
+            Ok((ratio, patch)) if best.as_ref().is_none_or(|(b, ..)| ratio > *b) => best = Some((ratio, patch, pole)),
+            Ok(_) => {}
             Err(e) => {
                 first_error.get_or_insert(e);
             }
         }
-        if best.as_ref().is_some_and(|(b, _)| *b >= GOOD_RATIO) {
+        if best.as_ref().is_some_and(|(b, ..)| *b >= GOOD_RATIO) {
             break;
         }
     }
-    if let Some((ratio, pole)) = least_folded.filter(|(ratio, _)| *ratio <= FOLD_RATIO) {
-        if let Ok(moved) = spherical_patch(panel, c, r, outward, pole, true) {
-            if moved.0 > ratio {
-                best = Some(moved);
-            }
+    if let Some((ratio, _, pole)) = best.as_ref().filter(|(ratio, ..)| *ratio <= FOLD_RATIO) {
+        if let Some((moved, patch)) = spherical_patch(panel, c, r, outward, *pole, true).ok().filter(|(moved, _)| moved > ratio) {
+            best = Some((moved, patch, *pole));
         }
     }
     match best {
-        Some((ratio, patch)) if ratio > FOLD_RATIO => Ok(patch),
-        Some((ratio, _)) => Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }),
+        Some((ratio, patch, _)) if ratio > FOLD_RATIO => Ok(patch),
+        Some((ratio, ..)) => Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }),
         None => Err(first_error.unwrap_or(ExactSurfaceError::Degenerate)),
+    }
+}
+
+/// Stereographic projection from `pole` on the sphere (c, r) onto the plane through c normal to
+/// a = (c − pole)/r, scaled by 1/r: σ(x)/r in the frame (e1, e2), with e1 × e2 = a.
+struct Stereographic {
+    pole: DVec3,
+    a: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+}
+
+impl Stereographic {
+    fn new(c: DVec3, r: f64, pole: DVec3) -> Self {
+        let a = ((c - pole) / r).normalize();
+        let e1 = a.any_orthonormal_vector();
+        Self { pole, a, e1, e2: a.cross(e1) }
+    }
+
+    fn project(&self, x: DVec3) -> DVec2 {
+        let d = x - self.pole;
+        DVec2::new(d.dot(self.e1), d.dot(self.e2)) / d.dot(self.a)
     }
 }
 
@@ -167,15 +174,10 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
 /// folds, unfolded). The projection keeps the orientation about the outward radius, so a pole
 /// inside the panel, which turns it inside out, folds.
 fn spherical_patch(panel: &Panel, c: DVec3, r: f64, outward: f64, pole: DVec3, unfold: bool) -> Result<(f64, RationalPatch), ExactSurfaceError> {
-    let a = ((c - pole) / r).normalize();
-    let e1 = a.any_orthonormal_vector();
-    let e2 = a.cross(e1);
-    // σ(x)/r in the frame (e1, e2), as a point of the plane z = 0.
-    let project = |x: DVec3| {
-        let d = x - pole;
-        let h = d.dot(a);
-        DVec3::new(d.dot(e1) / h, d.dot(e2) / h, 0.0)
-    };
+    let projection = Stereographic::new(c, r, pole);
+    let Stereographic { a, e1, e2, .. } = projection;
+    // As a point of the plane z = 0.
+    let project = |x: DVec3| projection.project(x).extend(0.0);
     let n = panel.arcs.len();
     let mut sides = Vec::with_capacity(n);
     for (k, arc) in panel.arcs.iter().enumerate() {
@@ -220,20 +222,26 @@ fn boundary_crosses(arcs: &[Arc], project: impl Fn(DVec3) -> DVec2) -> bool {
     let at = |k: usize, t: f64| project(arcs[k].point(t));
     let polygon: Vec<DVec2> = (0..arcs.len()).flat_map(|k| (0..n).map(move |i| (k, i as f64 / n as f64))).map(|(k, t)| at(k, t)).collect();
     let m = polygon.len();
-    // Segment i runs over arc i / n from t = (i mod n)/n to t + 1/n.
-    let pieces = |i: usize| (i / n, (i % n) as f64 / n as f64, (i % n + 1) as f64 / n as f64);
+    // Segment i of the polygon, and the piece of its arc around it (one segment more each side),
+    // sampled finer: (arc, t from, t to).
+    let segment = |i: usize| (polygon[i], polygon[(i + 1) % m]);
+    let around = |i: usize| {
+        let h = 1.0 / n as f64;
+        let t = (i % n) as f64 * h;
+        let (t0, t1) = ((t - h).max(0.0), (t + 2.0 * h).min(1.0));
+        (0..=CROSSING_REFINE).map(|s| at(i / n, t0 + (t1 - t0) * s as f64 / CROSSING_REFINE as f64)).collect::<Vec<DVec2>>()
+    };
     (0..m).any(|i| {
         (i + 2..m).filter(|&j| (j + 1) % m != i).any(|j| {
-            segments_cross(polygon[i], polygon[(i + 1) % m], polygon[j], polygon[(j + 1) % m]) && {
-                let ((ka, a0, a1), (kb, b0, b1)) = (pieces(i), pieces(j));
-                let fine = |k: usize, t0: f64, t1: f64| -> Vec<DVec2> {
-                    (0..=CROSSING_REFINE).map(|s| at(k, t0 + (t1 - t0) * s as f64 / CROSSING_REFINE as f64)).collect()
-                };
-                let (pa, pb) = (fine(ka, (a0 - 1.0 / n as f64).max(0.0), (a1 + 1.0 / n as f64).min(1.0)), fine(kb, (b0 - 1.0 / n as f64).max(0.0), (b1 + 1.0 / n as f64).min(1.0)));
-                pa.windows(2).any(|x| pb.windows(2).any(|y| !(x[0] == y[1] || x[1] == y[0] || x[0] == y[0] || x[1] == y[1]) && segments_cross(x[0], x[1], y[0], y[1])))
-            }
+            let ((a, b), (c, d)) = (segment(i), segment(j));
+            segments_cross(a, b, c, d) && polylines_cross(&around(i), &around(j))
         })
     })
+}
+
+/// Whether two polylines cross, at segments that share no point.
+fn polylines_cross(p: &[DVec2], q: &[DVec2]) -> bool {
+    p.windows(2).any(|x| q.windows(2).any(|y| !(x.contains(&y[0]) || x.contains(&y[1])) && segments_cross(x[0], x[1], y[0], y[1])))
 }
 
 /// Whether the segments ab and cd cross at a point inside both.
@@ -410,4 +418,3 @@ impl ExactSurfaces {
         self.panels.iter().enumerate().filter_map(|(i, p)| p.as_ref().err().map(|e| (i, e)))
     }
 }
-
