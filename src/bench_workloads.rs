@@ -501,3 +501,63 @@ pub fn exact_rhino_model(
 pub fn exact_step(panels: &[crate::panels::panel::Panel], exact: &crate::panels::exact_surface::ExactSurfaces) -> String {
     crate::export::step::write_exact_step("panels", panels, exact, crate::units::Units::M, 1.0)
 }
+
+/// The verdict runs that native and wasm must agree on (`tests/verdicts.rs` records them,
+/// `tests/web.rs` runs them in the browser): ST with adapted face size on the free-form dome
+/// sample remeshed to about 300 faces, and SQ on the vault sample with a 12 × 12 grid and about
+/// 60 quads. Each gives its report's guarantees, measured on the delivered panels.
+pub fn verdict_runs() -> Vec<(&'static str, Vec<crate::guarantees::Guarantee>)> {
+    use crate::progress::Clock;
+    use crate::remeshing::Sizing;
+    let dome = Reference::from_triangles(samples::Sample::Dome.mesh());
+    let params = crate::st_adapted::params::StAdaptedParams { sizing: Sizing::UniformFaces(300), ..Default::default() };
+    let st = crate::st_adapted::compute(&dome, &params, Clock(None), &mut |_| Ok(())).expect("ST runs on the dome");
+    let (report, _) = crate::pipeline::stages::st_adapted::export(&dome, &st, &params, Clock(None));
+    let vault = Reference::from_bspline(samples::Sample::Vault.bspline().expect("the vault is a B-spline")).expect("a B-spline reference");
+    let params = sq::params::SqParams { grid: 12, faces: 60, ..Default::default() };
+    let sq = sq::compute(&vault, &params, Clock(None), &mut |_| Ok(())).expect("SQ runs on the vault");
+    vec![("st dome 300 faces", report.guarantees), ("sq vault grid 12, 60 quads", sq.verdict.guarantees)]
+}
+
+/// Whether two runs of [`verdict_runs`] reach the same verdict: the same guarantees, each holding
+/// alike, counts equal and figures within 1e-4 relative (1e-12 absolute: the optimizations sum in
+/// another order on wasm's SIMD); the differences, if any.
+pub fn verdict_differences(a: &[crate::guarantees::Guarantee], b: &[crate::guarantees::Guarantee]) -> Vec<String> {
+    let mut out = Vec::new();
+    if a.len() != b.len() {
+        out.push(format!("{} guarantees against {}", a.len(), b.len()));
+    }
+    for (x, y) in a.iter().zip(b) {
+        let tolerance = if x.unit.is_empty() { 0.0 } else { 1e-12 + 1e-4 * x.measured.abs().max(y.measured.abs()) };
+        let close = (x.measured - y.measured).abs() <= tolerance;
+        if x.name != y.name || x.holds != y.holds || x.limit != y.limit || !(close || (x.measured.is_nan() && y.measured.is_nan())) {
+            out.push(format!("{} {} ({}) against {} {} ({})", x.name, x.measured, x.holds, y.name, y.measured, y.holds));
+        }
+    }
+    out
+}
+
+/// The differences between `runs` and a recording of them (`tests/data/verdicts.json`: per run
+/// its name and guarantees), each as [`verdict_differences`] gives them, prefixed by the run.
+pub fn recorded_verdict_differences(recorded: &str, runs: &[(&str, Vec<crate::guarantees::Guarantee>)]) -> Vec<String> {
+    #[derive(serde::Deserialize)]
+    struct Recorded {
+        run: String,
+        guarantees: Vec<crate::guarantees::Guarantee>,
+    }
+    let recorded: Vec<Recorded> = match serde_json::from_str(recorded) {
+        Ok(r) => r,
+        Err(e) => return vec![format!("the recording does not read: {e}")],
+    };
+    if recorded.len() != runs.len() {
+        return vec![format!("{} runs recorded, {} run", recorded.len(), runs.len())];
+    }
+    let mut out = Vec::new();
+    for ((name, now), want) in runs.iter().zip(&recorded) {
+        if want.run != *name {
+            out.push(format!("{} recorded where {name} runs", want.run));
+        }
+        out.extend(verdict_differences(&want.guarantees, now).into_iter().map(|d| format!("{name}: {d}")));
+    }
+    out
+}

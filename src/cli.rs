@@ -127,6 +127,10 @@ enum Command {
         /// every face sphere still orthogonal to Ω (the schedule's `mould_snapped`).
         #[arg(long)]
         optimize_moulds: bool,
+        /// The panels' promised largest distance to the reference, relative to the diagonal (a
+        /// miss exits with 3).
+        #[arg(long, value_name = "D", default_value_t = spherical_faces::panels::buildability::DEFAULT_MAX_DISTANCE, value_parser = max_distance)]
+        max_distance: f64,
         #[command(flatten)]
         fabrication: FabricationArgs,
         #[command(flatten)]
@@ -168,6 +172,10 @@ enum Command {
         /// exactly, keeping exactness, θ and α (the schedule's `mould_snapped`).
         #[arg(long)]
         optimize_moulds: bool,
+        /// The panels' promised largest distance to the reference, relative to the diagonal (a
+        /// miss exits with 3).
+        #[arg(long, value_name = "D", default_value_t = spherical_faces::panels::buildability::DEFAULT_MAX_DISTANCE, value_parser = max_distance)]
+        max_distance: f64,
         #[command(flatten)]
         fabrication: FabricationArgs,
         #[command(flatten)]
@@ -347,6 +355,7 @@ pub fn main() -> ExitCode {
             epsilon,
             faces,
             optimize_moulds,
+            max_distance,
             fabrication,
             output,
         } => {
@@ -362,11 +371,12 @@ pub fn main() -> ExitCode {
                 radius_tolerance,
                 remesh,
                 optimize_moulds,
+                max_distance,
                 ..StSupportParams::default()
             };
             st_support(&input, params, &fabrication, &output, &mut progress)
         }
-        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, optimize_moulds, fabrication, output } => {
+        Command::Sq { input, theta, alpha, grid, rs, faces, until, start, depth, optimize_moulds, max_distance, fabrication, output } => {
             let params = SqParams {
                 theta_deg: theta,
                 alpha_deg: alpha,
@@ -377,6 +387,7 @@ pub fn main() -> ExitCode {
                 start,
                 support_depth: depth,
                 optimize_moulds,
+                max_distance,
                 ..SqParams::default()
             };
             sq(&input, params, &fabrication, &output, &mut progress)
@@ -879,6 +890,12 @@ fn radius_tolerance(s: &str) -> Result<f64, String> {
     } else {
         Err(format!("{x} is not in [1e-9, 1]"))
     }
+}
+
+/// A distance bound ([`spherical_faces::panels::buildability::check_max_distance`]).
+fn max_distance(s: &str) -> Result<f64, String> {
+    let x = number(s)?;
+    spherical_faces::panels::buildability::check_max_distance(x).map(|_| x)
 }
 
 /// A remesh's face count: [`MIN_FACES`] to [`MAX_FACES`], as in the design link and the app.

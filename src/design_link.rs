@@ -3,6 +3,7 @@
 //! only ever used as data (enums, numbers, a file name shown as text).
 
 use crate::congruence::central_spheres::JetParams;
+use crate::panels::buildability::{DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::moulds::{Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE};
 use crate::pipeline::protocol::StageRequest;
@@ -179,6 +180,15 @@ fn sizing_fragment(key: &str, sizing: Sizing) -> String {
     }
 }
 
+/// `&max_dist=…` when the distance bound is not its default, so older links stay as they were.
+fn max_distance_fragment(max_distance: f64) -> String {
+    if max_distance == DEFAULT_MAX_DISTANCE {
+        String::new()
+    } else {
+        format!("&max_dist={}", fmt_num(max_distance))
+    }
+}
+
 /// The reference surface of a design.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DesignSurface {
@@ -267,6 +277,7 @@ impl Design {
                 if st.optimize_moulds {
                     s += "&opt_moulds=1";
                 }
+                s += &max_distance_fragment(st.max_distance);
             }
             Method::Sq => {
                 let sq = &self.sq;
@@ -286,6 +297,7 @@ impl Design {
                 if sq.optimize_moulds {
                     s += "&opt_moulds=1";
                 }
+                s += &max_distance_fragment(sq.max_distance);
             }
         }
         // Units and moulds only when not the defaults, so older links stay as they were.
@@ -357,7 +369,7 @@ impl Design {
         }
         let mut file_name = None;
         let mut wants_file = false;
-        let (mut eps, mut faces, mut opt_moulds) = (None, None, None);
+        let (mut eps, mut faces, mut opt_moulds, mut max_distance) = (None, None, None, None);
         let (mut adapted_sizing, mut support_remesh) = (None, None);
         for (k, v) in &pairs {
             let ok = match k.as_str() {
@@ -390,6 +402,7 @@ impl Design {
                 "opt_r" => parse_flag(v).map(|x| d.st_support.optimize_radius = x).is_some(),
                 // The switch belongs to the method the link names (applied below).
                 "opt_moulds" => parse_flag(v).map(|x| opt_moulds = Some(x)).is_some(),
+                "max_dist" => parse_f64_in(v, *MAX_DISTANCE_RANGE.start(), *MAX_DISTANCE_RANGE.end()).map(|x| max_distance = Some(x)).is_some(),
                 "depth" => parse_f64_in(v, 0.0, 1.0).map(|x| d.st_support.support_depth = x).is_some(),
                 "axis" => parse_f64_in(v, 0.0, 10.0).map(|x| d.st_support.axis_length = x).is_some(),
                 "rtol" => parse_f64_in(v, 1e-9, 1.0).map(|x| d.st_support.radius_tolerance = x).is_some(),
@@ -443,6 +456,13 @@ impl Design {
         let mine = applies(Method::StSupport);
         if let Some(kind) = support_remesh.or(mine.then(|| SizingKind::of(d.st_support.remesh))) {
             d.st_support.remesh = sizing_of(kind, d.st_support.remesh, mine);
+        }
+        if let Some(x) = max_distance {
+            match d.method {
+                Method::StSupport => d.st_support.max_distance = x,
+                Method::Sq => d.sq.max_distance = x,
+                Method::Curvature | Method::StAdapted => {}
+            }
         }
         if let Some(x) = opt_moulds {
             match d.method {

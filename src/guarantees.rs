@@ -41,15 +41,42 @@ pub struct Guarantee {
     /// Its unit as shown to a user: "deg", "of the diagonal", "" for counts.
     pub unit: String,
     pub holds: bool,
+    /// Why the figure could not be measured (then `measured` is NaN and it does not hold).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unmeasured: Option<String>,
+    /// A length's figure and limit in model units ("0.105 m, limit 0.248 m"), beside its share
+    /// of the diagonal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub in_model_units: Option<String>,
 }
 
 impl Guarantee {
+    fn new(name: &str, measured: f64, bound: Bound, limit: f64, unit: &str) -> Self {
+        let holds = match bound {
+            Bound::AtMost => measured <= limit,
+            Bound::AtLeast => measured >= limit,
+        };
+        // A figure that is no number was not measured: it is a miss with a reason, never a NaN.
+        let unmeasured = measured.is_nan().then(|| "its figure could not be measured".to_string());
+        Self { name: name.into(), measured, bound, limit, unit: unit.into(), holds, unmeasured, in_model_units: None }
+    }
+
     pub(crate) fn at_most(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
-        Self { name: name.into(), measured, bound: Bound::AtMost, limit, unit: unit.into(), holds: measured <= limit }
+        Self::new(name, measured, Bound::AtMost, limit, unit)
     }
 
     pub(crate) fn at_least(name: &str, measured: f64, limit: f64, unit: &str) -> Self {
-        Self { name: name.into(), measured, bound: Bound::AtLeast, limit, unit: unit.into(), holds: measured >= limit }
+        Self::new(name, measured, Bound::AtLeast, limit, unit)
+    }
+
+    /// A guarantee whose figure could not be measured, and why: a miss.
+    pub(crate) fn unmeasured(self, reason: impl Into<String>) -> Self {
+        Self { measured: f64::NAN, holds: false, unmeasured: Some(reason.into()), ..self }
+    }
+
+    /// The figure and limit in model units, shown beside the share of the diagonal.
+    pub(crate) fn with_model_units(self, text: impl Into<String>) -> Self {
+        Self { in_model_units: Some(text.into()), ..self }
     }
 
     /// A count that must not exceed `limit`.
@@ -75,8 +102,12 @@ impl fmt::Display for Guarantee {
         };
         let fixed = self.unit.is_empty() || self.unit == "deg";
         let shown = |x: f64, d: usize| if fixed { format!("{x:.d$}") } else { format!("{x:.d$e}") };
+        if let Some(reason) = &self.unmeasured {
+            return write!(f, "{} not measured: {} (must be {op} {}{})", self.name, reason, number(self.limit, 2), unit);
+        }
         let digits = (2..9).find(|&d| shown(self.measured, d) != shown(self.limit, d)).unwrap_or(9);
-        write!(f, "{} {}{} (must be {op} {}{})", self.name, number(self.measured, digits), unit, number(self.limit, 2), unit)
+        let lengths = self.in_model_units.as_ref().map_or(String::new(), |t| format!("; {t}"));
+        write!(f, "{} {}{} (must be {op} {}{}{lengths})", self.name, number(self.measured, digits), unit, number(self.limit, 2), unit)
     }
 }
 
@@ -124,5 +155,11 @@ mod tests {
         assert!(!Guarantee::count_at_most("folded_faces", 2, 0).holds);
         let close = Guarantee::at_least("min_support_plane_angle_deg", 89.999_7, 90.0, "deg");
         assert_eq!(close.to_string(), "min_support_plane_angle_deg 89.9997 deg (must be ≥ 90 deg)");
+        let nan = Guarantee::at_least("min_support_plane_angle_deg", f64::NAN, 75.0, "deg");
+        assert!(!nan.holds && nan.unmeasured.is_some(), "a NaN is a miss with a reason");
+        let why = nan.unmeasured("the support planes at vertex 7 meet in no line");
+        assert_eq!(why.to_string(), "min_support_plane_angle_deg not measured: the support planes at vertex 7 meet in no line (must be ≥ 75 deg)");
+        let d = Guarantee::at_most("max_distance_to_reference", 0.0123, 0.01, "of the diagonal").with_model_units("0.123 m, limit 0.1 m");
+        assert_eq!(d.to_string(), "max_distance_to_reference 1.23e-2 of the diagonal (must be ≤ 1.00e-2 of the diagonal; 0.123 m, limit 0.1 m)");
     }
 }

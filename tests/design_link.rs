@@ -47,16 +47,19 @@ fn st_support_parameters_round_trip() {
             axis_length: 0.25,
             radius_tolerance: 0.002,
             remesh: Sizing::Adaptive { epsilon: 2.5e-4 },
+            max_distance: 0.004,
             ..StSupportParams::default()
         },
         ..Design::default()
     };
+    assert!(d.to_fragment().contains("&max_dist=4e-3"), "{}", d.to_fragment());
     let (back, notices) = Design::from_fragment(&d.to_fragment());
     assert!(notices.is_empty(), "{notices:?}");
     assert_eq!(back, d);
-    let (bad, notices) = Design::from_fragment("#v=1&method=st-support&depth=-1&opt_r=2&rtol=nan");
+    let (bad, notices) = Design::from_fragment("#v=1&method=st-support&depth=-1&opt_r=2&rtol=nan&max_dist=2");
     assert_eq!(bad.st_support, StSupportParams::default());
-    assert_eq!(notices.len(), 3);
+    assert_eq!(notices.len(), 4);
+    assert!(!Design::default().to_fragment().contains("max_dist"), "the default bound is left out");
 }
 
 #[test]
@@ -170,11 +173,12 @@ fn sq_parameters_round_trip() {
     let d = Design {
         reference: DesignSurface::Sample(Sample::Vault),
         method: Method::Sq,
-        sq: SqParams { theta_deg: 17.5, alpha_deg: 80.0, grid: 24, recompute_every: 5, ..SqParams::default() },
+        sq: SqParams { theta_deg: 17.5, alpha_deg: 80.0, grid: 24, recompute_every: 5, max_distance: 0.02, ..SqParams::default() },
         ..Design::default()
     };
     let fragment = d.to_fragment();
     assert!(fragment.contains("&method=sq&") && fragment.contains("&theta=17.5&alpha=80&grid=24&rs=5"), "{fragment}");
+    assert!(fragment.contains("&max_dist=0.02"), "{fragment}");
     let (back, notices) = Design::from_fragment(&fragment);
     assert!(notices.is_empty(), "{notices:?}");
     assert_eq!(back, d);

@@ -127,7 +127,7 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
         let faces = m.mesh.face_count();
         assert!((faces as f64) > 0.75 * n as f64 && (faces as f64) < 1.3 * n as f64, "{n} asked, {faces} made");
         assert_eq!(m.folded_triangles, 0);
-        assert!(coverage(surface, &m.mesh) >= 0.9);
+        assert!(coverage(surface, &m.mesh.faces, &m.uv) >= 0.9);
         // No flipped or degenerate face: every quad turns like f_u × f_v, with area.
         for (k, face) in m.mesh.faces.iter().enumerate() {
             let c = face.corners();

@@ -177,9 +177,20 @@ fn distant_centre_makes_omega_a_plane() {
     assert!(m.max_center_plane_residual < 1e-9, "{m:?}");
     assert!(m.max_vertex_sphere_residual < 1e-9);
     assert!(m.max_node_axis_offset < 1e-9, "{m:?}");
-    let verdict = guarantees::verdict(m, &r.omega);
+    let verdict = guarantees::verdict(m, &r.omega, &panels_of(&r), 1.0);
     let names: Vec<&str> = verdict.guarantees.iter().map(|g| g.name.as_str()).collect();
-    assert_eq!(names, ["max_vertex_sphere_residual", "max_center_plane_residual", "max_node_axis_offset"]);
+    assert_eq!(
+        names,
+        [
+            "max_vertex_sphere_residual",
+            "max_center_plane_residual",
+            "max_node_axis_offset",
+            "panels_with_crossing_arcs",
+            "panels_without_exact_surface",
+            "support_elements_that_fold",
+            "max_distance_to_reference"
+        ]
+    );
     assert!(verdict.holds(), "{}", verdict.failure_text());
     // Node axes are parallel to a, toward −a; the second points are the reflections.
     for (v, (p, dir)) in r.support.node_axes.axes.iter().enumerate() {
@@ -252,18 +263,24 @@ fn reference_meshes_meet_the_bounds() {
 #[test]
 fn a_vertex_off_its_spheres_misses_the_guarantee() {
     let r = run(&load("cmc1"), false);
-    assert!(guarantees::verdict(&r.metrics, &r.omega).holds());
+    assert!(guarantees::verdict(&r.metrics, &r.omega, &panels_of(&r), 1.0).holds());
     let mut moved = r.sphere_mesh.clone();
     let n = r.absolute.normals[7];
     moved.mesh.positions[7] += 1e-6 * r.diag * n;
     let counts = Counts { degenerate_faces: r.metrics.degenerate_faces, edges_without_support: r.metrics.edges_without_support };
     let m = metrics(&moved, &r.omega, &r.support.node_axes, &r.absolute.normals, r.diag, counts);
-    let verdict = guarantees::verdict(&m, &r.omega);
+    let verdict = guarantees::verdict(&m, &r.omega, &panels_of(&r), 1.0);
     let missed: Vec<&str> = verdict.failures().map(|g| g.name.as_str()).collect();
     assert_eq!(missed, ["max_vertex_sphere_residual"], "{}", verdict.failure_text());
     let g = &verdict.guarantees[0];
     assert!((g.measured - 1e-6).abs() < 1e-7, "{g}");
     assert!(verdict.failure_text().contains("max_vertex_sphere_residual"));
+}
+
+/// What stops the result's panels from being built, with no distance measured (0 for every panel).
+fn panels_of(r: &StSupportResult) -> spherical_faces::panels::buildability::Buildability {
+    let distances = vec![0.0; r.panels.len()];
+    spherical_faces::panels::buildability::Buildability::of_panels(&r.panels, Some(&r.support.elements), &distances, r.diag, Default::default())
 }
 
 fn check_result(name: &str, mesh: &TriMesh, r: &StSupportResult) {

@@ -234,3 +234,17 @@ fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
         }
     }
 }
+
+/// The verdicts of one ST and one SQ run in wasm equal the native ones recorded in
+/// `tests/data/verdicts.json` (`tests/verdicts.rs` checks the native runs against it): the same
+/// guarantees, each holding alike, counts equal and figures within 1e-4.
+#[wasm_bindgen_test]
+fn wasm_reaches_the_native_verdicts() {
+    use spherical_faces::bench_workloads::{recorded_verdict_differences, verdict_runs};
+    let runs = verdict_runs();
+    let diff = recorded_verdict_differences(include_str!("data/verdicts.json"), &runs);
+    assert!(diff.is_empty(), "{diff:?}");
+    for (name, now) in &runs {
+        console_log!("{name} in wasm: {} guarantees, as native", now.len());
+    }
+}

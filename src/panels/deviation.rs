@@ -11,11 +11,17 @@ use crate::geometry::closest::{closest_point_on_triangle, TriangleBvh};
 /// measure's work bounded.
 pub const MAX_SAMPLES: usize = 16384;
 
+/// Segments each arc is sampled at besides the tessellation: a nearly straight arc has few
+/// tessellation vertices, while the reference may curve away from it between them.
+pub const ARC_SEGMENTS: usize = 8;
+
 /// Points sampled on a panel: its tessellation vertices and its triangle centroids projected
-/// onto the panel's sphere (evenly thinned to at most about [`MAX_SAMPLES`]).
+/// onto the panel's sphere (evenly thinned to at most about [`MAX_SAMPLES`]), and every arc at
+/// [`ARC_SEGMENTS`] segments.
 pub fn panel_samples(panel: &Panel) -> Vec<DVec3> {
     let stride = (panel.positions.len() + panel.triangles.len()).div_ceil(MAX_SAMPLES).max(1);
-    let mut pts: Vec<DVec3> = panel.positions.iter().step_by(stride).copied().collect();
+    let mut pts: Vec<DVec3> = panel.arcs.iter().flat_map(|a| a.sample(ARC_SEGMENTS)).collect();
+    pts.extend(panel.positions.iter().step_by(stride).copied());
     let base = panel.positions[0];
     for t in panel.triangles.iter().step_by(stride) {
         let c = (panel.positions[t[0] as usize] + panel.positions[t[1] as usize] + panel.positions[t[2] as usize]) / 3.0;

@@ -29,6 +29,7 @@ use glam::{DVec2, DVec3};
 use super::arc::Arc;
 use super::panel::Panel;
 use crate::congruence::support_structure::SupportElement;
+use crate::geometry::sphere::Sphere;
 use crate::geometry::rational_bezier::{ArcError, BernsteinPoly, RationalCurve, RationalPatch};
 
 /// Jacobian samples per direction of the fold check.
@@ -77,14 +78,12 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     if !(n == 3 || n == 4) {
         return Err(ExactSurfaceError::Degenerate);
     }
+    if arcs_cross(&panel.sphere, &panel.arcs) {
+        return Err(ExactSurfaceError::ArcsCross);
+    }
     if panel.is_planar() {
         // The corners run counter-clockwise about the outward normal −∇ψ = b/|b|.
         let normal = panel.sphere.b.try_normalize().ok_or(ExactSurfaceError::Degenerate)?;
-        let e1 = normal.any_orthonormal_vector();
-        let e2 = normal.cross(e1);
-        if boundary_crosses(&panel.arcs, |x| DVec2::new(x.dot(e1), x.dot(e2))) {
-            return Err(ExactSurfaceError::ArcsCross);
-        }
         let sides: Vec<RationalCurve> =
             (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
         let (ratio, patch) = coons_of(&sides, normal, true);
@@ -102,7 +101,7 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     // Candidate poles: the antipodes of the panel's middle and of the points halfway to each
     // corner; then, for a side sweeping over 120°, the point of its circle opposite its middle
     // (the side projects to a segment, the others to narrower arcs).
-    let middle = panel.arcs.iter().map(|a| a.point(0.5)).sum::<DVec3>() / n as f64;
+    let middle = middle_of(&panel.arcs);
     let on_sphere = |x: DVec3| (x - c).try_normalize().map(|d| c + r * d);
     let antipode = |x: DVec3| on_sphere(x).map(|x| 2.0 * c - x);
     let mut poles: Vec<DVec3> = antipode(middle).into_iter().collect();
@@ -110,13 +109,6 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     for arc in &panel.arcs {
         if !arc.is_straight() && arc.sweep() > WIDE_SWEEP {
             poles.extend(on_sphere(2.0 * arc.circle.center - arc.point(0.5)));
-        }
-    }
-    // Stereographic projection keeps crossings (from any pole off the boundary).
-    if let Some(&pole) = poles.first() {
-        let projection = Stereographic::new(c, r, pole);
-        if boundary_crosses(&panel.arcs, |x| projection.project(x)) {
-            return Err(ExactSurfaceError::ArcsCross);
         }
     }
     // The plain Coons patches first, (ratio, patch, pole) of the best; only if every one folds,
@@ -145,6 +137,44 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
         Some((ratio, ..)) => Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }),
         None => Err(first_error.unwrap_or(ExactSurfaceError::Degenerate)),
     }
+}
+
+/// The mean of the arcs' middles.
+fn middle_of(arcs: &[Arc]) -> DVec3 {
+    arcs.iter().map(|a| a.point(0.5)).sum::<DVec3>() / arcs.len() as f64
+}
+
+/// Whether the arcs of a panel on `sphere` cross one another, so that any surface they bound
+/// folds: its boundary, mapped into a plane that keeps crossings (a plane's own frame; on a
+/// sphere, the stereographic projection from the antipode of the arcs' middle), crosses itself
+/// ([`boundary_crosses`]). A sphere with no finite centre, or fewer than three arcs: false (no
+/// patch is made of it anyway). The verdicts of every method count these panels
+/// ([`super::buildability`]); the ST method steers away from them while it optimizes.
+pub fn arcs_cross(sphere: &Sphere, arcs: &[Arc]) -> bool {
+    if arcs.len() < 3 {
+        return false;
+    }
+    if sphere.a == 0.0 {
+        let Some(normal) = sphere.b.try_normalize() else {
+            return false;
+        };
+        let e1 = normal.any_orthonormal_vector();
+        let e2 = normal.cross(e1);
+        return boundary_crosses(arcs, |x| DVec2::new(x.dot(e1), x.dot(e2)));
+    }
+    let (Some(c), Some(r)) = (sphere.center(), sphere.signed_radius()) else {
+        return false;
+    };
+    let r = r.abs();
+    let Some(d) = (middle_of(arcs) - c).try_normalize() else {
+        return false;
+    };
+    if !(r.is_finite() && r > 0.0 && c.is_finite()) {
+        return false;
+    }
+    // Stereographic projection keeps crossings (from any pole off the boundary).
+    let projection = Stereographic::new(c, r, c - r * d);
+    boundary_crosses(arcs, |x| projection.project(x))
 }
 
 /// Stereographic projection from `pole` on the sphere (c, r) onto the plane through c normal to

@@ -64,6 +64,7 @@
 //! spherical area by a relative amount of the order of tol/r (usually less).
 
 pub mod arc;
+pub mod buildability;
 pub mod deviation;
 pub mod edge_arcs;
 pub mod exact_surface;
@@ -120,77 +121,110 @@ pub(crate) fn build_live_panels(sm: &SphereMesh, chord_tolerance: f64, edge_arcs
     build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), LIVE_PANEL_TRIANGLE_BUDGET, 4))
 }
 
+/// Every face's arcs (Fig. 12), side k from corner k to corner k + 1, and the usable sphere each
+/// is cut from: what a panel is before it is tessellated.
+pub struct FaceArcs {
+    /// Per face: its sphere, or the plane of its first triangle where the sphere is unusable.
+    pub spheres: Vec<Sphere>,
+    /// Per face and side: the arc as computed along its edge (from the edge's lower vertex),
+    /// whether the side runs the other way, and whether the edge's arc is shared by its faces
+    /// (its samples are then capped by the subdivision level, as one sampling serves both).
+    sides: Vec<Vec<(Arc, bool, bool)>>,
+}
+
+impl FaceArcs {
+    /// The arcs of every face of `sm`, interior edges of the given variant.
+    pub fn of(sm: &SphereMesh, edge_arcs: EdgeArcs) -> Self {
+        let mesh = &sm.mesh;
+        let topo = sm.topology();
+        let diag = mesh.bbox_diagonal().max(f64::MIN_POSITIVE);
+        let faces = mesh.face_count();
+        let spheres: Vec<Sphere> = (0..faces)
+            .map(|f| {
+                let s = sm.face_spheres.get(f).copied().unwrap_or(Sphere { a: f64::NAN, b: DVec3::NAN, c: f64::NAN });
+                usable_sphere(&s, &mesh.face_points(f))
+            })
+            .collect();
+        let corner = |f: usize, k: usize| mesh.faces[f].corners()[k];
+        let mut sides: Vec<Vec<Option<(Arc, bool, bool)>>> = mesh.faces.iter().map(|f| vec![None; f.len()]).collect();
+        for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
+            let inc: Vec<(usize, usize)> = topo.edge_faces(e).iter().map(|&(f, k)| (f as usize, k as usize)).collect();
+            let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
+            if edge_arcs == EdgeArcs::BisectingPlanes && inc.len() == 2 {
+                // Variant (b), Fig. 12 bottom: every panel cuts its own sphere with the bisecting plane.
+                let [(f, kf), (g, kg)] = [inc[0], inc[1]];
+                let consistent = (corner(f, kf) == lo) != (corner(g, kg) == lo);
+                let plane = bisecting_plane_normal(p, q, mesh.face_area_vector(f), mesh.face_area_vector(g), consistent);
+                let tris = [face_triangles(mesh, f), face_triangles(mesh, g)];
+                for &(h, k) in &inc {
+                    let arc = match plane {
+                        Some(n) => cut_arc(p, q, n, &spheres[h], &tris, diag),
+                        None => edge_arc(p, q, &[h], &spheres, mesh, sm.boundary_arcs, diag),
+                    };
+                    sides[h][k] = Some((arc, corner(h, k) != lo, false));
+                }
+                continue;
+            }
+            if let (&[(f, k)], Some(&n)) = (inc.as_slice(), sm.boundary_planes.get(&[lo, hi])) {
+                let arc = cut_arc(p, q, n, &spheres[f], &[face_triangles(mesh, f)], diag);
+                sides[f][k] = Some((arc, corner(f, k) != lo, false));
+                continue;
+            }
+            let groups: Vec<Vec<usize>> = if inc.len() <= 2 {
+                vec![inc.iter().map(|&(f, _)| f).collect()]
+            } else {
+                // Non-manifold edge: every face gets its own boundary-rule arc.
+                inc.iter().map(|&(f, _)| vec![f]).collect()
+            };
+            for group in groups {
+                let arc = edge_arc(p, q, &group, &spheres, mesh, sm.boundary_arcs, diag);
+                for &(f, k) in inc.iter().filter(|(f, _)| group.contains(f)) {
+                    sides[f][k] = Some((arc, corner(f, k) != lo, true));
+                }
+            }
+        }
+        let sides = sides.into_iter().map(|f| f.into_iter().map(|s| s.expect("every face side has an arc")).collect()).collect();
+        Self { spheres, sides }
+    }
+
+    /// The arcs of face `f` in its corners' order.
+    pub fn arcs(&self, f: usize) -> Vec<Arc> {
+        self.sides[f].iter().map(|&(arc, reversed, _)| if reversed { arc.reversed() } else { arc }).collect()
+    }
+
+    /// Whether the arcs of face `f` cross one another ([`exact_surface::arcs_cross`]).
+    pub fn cross(&self, f: usize) -> bool {
+        exact_surface::arcs_cross(&self.spheres[f], &self.arcs(f))
+    }
+
+    /// The faces whose arcs cross one another.
+    pub fn crossing(&self) -> Vec<usize> {
+        (0..self.sides.len()).filter(|&f| self.cross(f)).collect()
+    }
+}
+
 /// [`build_panels_with`] with each panel's subdivision level at most `max_level`.
 fn build_panels_within(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs, max_level: usize) -> Vec<Panel> {
     let mesh = &sm.mesh;
-    let topo = sm.topology();
     let diag = mesh.bbox_diagonal().max(f64::MIN_POSITIVE);
     let tol = if chord_tolerance > 0.0 && chord_tolerance.is_finite() { chord_tolerance } else { 1e-4 * diag };
-    let faces = mesh.face_count();
-    let spheres: Vec<Sphere> = (0..faces)
-        .map(|f| {
-            let s = sm.face_spheres.get(f).copied().unwrap_or(Sphere { a: f64::NAN, b: DVec3::NAN, c: f64::NAN });
-            usable_sphere(&s, &mesh.face_points(f))
-        })
-        .collect();
-    let corner = |f: usize, k: usize| mesh.faces[f].corners()[k];
-
-    // Per (face, side): the arc in the panel's direction and its points.
-    type Side = Option<(Arc, Vec<DVec3>)>;
-    let mut side_arcs: Vec<Vec<Side>> = mesh.faces.iter().map(|f| vec![None; f.len()]).collect();
-    for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
-        let inc: Vec<(usize, usize)> = topo.edge_faces(e).iter().map(|&(f, k)| (f as usize, k as usize)).collect();
-        let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
-        if edge_arcs == EdgeArcs::BisectingPlanes && inc.len() == 2 {
-            // Variant (b), Fig. 12 bottom: every panel cuts its own sphere with the bisecting plane.
-            let [(f, kf), (g, kg)] = [inc[0], inc[1]];
-            let consistent = (corner(f, kf) == lo) != (corner(g, kg) == lo);
-            let plane = bisecting_plane_normal(p, q, mesh.face_area_vector(f), mesh.face_area_vector(g), consistent);
-            let tris = [face_triangles(mesh, f), face_triangles(mesh, g)];
-            for &(h, k) in &inc {
-                let arc = match plane {
-                    Some(n) => cut_arc(p, q, n, &spheres[h], &tris, diag),
-                    None => edge_arc(p, q, &[h], &spheres, mesh, sm.boundary_arcs, diag),
-                };
-                let pts = arc.sample(arc.segments_for(ARC_TOL_FACTOR * tol));
-                side_arcs[h][k] = Some(if corner(h, k) == lo {
-                    (arc, pts)
-                } else {
-                    (arc.reversed(), pts.into_iter().rev().collect())
-                });
-            }
-            continue;
-        }
-        if let (&[(f, k)], Some(&n)) = (inc.as_slice(), sm.boundary_planes.get(&[lo, hi])) {
-            let arc = cut_arc(p, q, n, &spheres[f], &[face_triangles(mesh, f)], diag);
-            let pts = arc.sample(arc.segments_for(ARC_TOL_FACTOR * tol));
-            side_arcs[f][k] = Some(if corner(f, k) == lo { (arc, pts) } else { (arc.reversed(), pts.into_iter().rev().collect()) });
-            continue;
-        }
-        let groups: Vec<Vec<usize>> = if inc.len() <= 2 {
-            vec![inc.iter().map(|&(f, _)| f).collect()]
-        } else {
-            // Non-manifold edge: every face gets its own boundary-rule arc.
-            inc.iter().map(|&(f, _)| vec![f]).collect()
-        };
-        for group in groups {
-            let arc = edge_arc(p, q, &group, &spheres, mesh, sm.boundary_arcs, diag);
-            let n = arc.segments_for(ARC_TOL_FACTOR * tol).min(4 * max_level);
-            let pts = arc.sample(n);
-            for &(f, k) in inc.iter().filter(|(f, _)| group.contains(f)) {
-                side_arcs[f][k] = Some(if corner(f, k) == lo {
-                    (arc, pts.clone())
-                } else {
-                    (arc.reversed(), pts.iter().rev().copied().collect())
-                });
-            }
-        }
-    }
-
-    (0..faces)
-        .map(|f| {
-            let sides: Vec<(Arc, Vec<DVec3>)> =
-                std::mem::take(&mut side_arcs[f]).into_iter().map(|s| s.expect("every face side has an arc")).collect();
+    let FaceArcs { spheres, sides } = FaceArcs::of(sm, edge_arcs);
+    sides
+        .into_iter()
+        .enumerate()
+        .map(|(f, face_sides)| {
+            let sides: Vec<(Arc, Vec<DVec3>)> = face_sides
+                .into_iter()
+                .map(|(arc, reversed, shared)| {
+                    let n = arc.segments_for(ARC_TOL_FACTOR * tol);
+                    let pts = arc.sample(if shared { n.min(4 * max_level) } else { n });
+                    if reversed {
+                        (arc.reversed(), pts.into_iter().rev().collect())
+                    } else {
+                        (arc, pts)
+                    }
+                })
+                .collect();
             let arcs = sides.iter().map(|s| s.0).collect();
             let t = tessellate(&spheres[f], sides, &mesh.face_points(f), tol, max_level);
             Panel {

@@ -154,6 +154,9 @@ pub struct PanelExport<'a> {
     pub moulds_before: Option<&'a MouldFits>,
     /// The moulds the method snapped its panels to, or why it did not.
     pub snapping: Snapping<'a>,
+    /// The panels' and support elements' exact surfaces, when the method's verdict measured
+    /// them already ([`crate::panels::buildability`]): the CAD files write these.
+    pub exact: Option<&'a ExactSurfaces>,
 }
 
 impl<'a> PanelExport<'a> {
@@ -191,7 +194,13 @@ impl<'a> PanelExport<'a> {
             verdict: None,
             moulds_before: None,
             snapping: Snapping::Not(SnapLimit::NotAsked),
+            exact: None,
         }
+    }
+
+    /// The exact surfaces the method's verdict measured: the CAD files hold these.
+    pub(crate) fn with_exact_surfaces(self, exact: &'a ExactSurfaces) -> Self {
+        Self { exact: Some(exact), ..self }
     }
 
     /// The moulds the method snapped its panels to ([`MouldSnap`]), or why it did not.
@@ -328,10 +337,17 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
     });
     report.moulds = Some(mould_report(&fits, &moulds, &snapped, &e));
     report.sections.insert(e.method.to_string(), e.section);
-    let exact = ExactSurfaces::of(e.panels, e.support.map_or(&[][..], |s| &s.elements[..]));
-    report.exact_surfaces = Some(ExactSurfacesReport::of(&exact));
-    let step = write_exact_step("panels", e.panels, &exact, units, e.diag);
-    let rhino = RhinoModel::of(&RhinoInput { panels: e.panels, exact: &exact, moulds: &moulds, support: e.support, omega: e.omega, units });
+    let measured;
+    let exact = match e.exact {
+        Some(exact) => exact,
+        None => {
+            measured = ExactSurfaces::of(e.panels, e.support.map_or(&[][..], |s| &s.elements[..]));
+            &measured
+        }
+    };
+    report.exact_surfaces = Some(ExactSurfacesReport::of(exact));
+    let step = write_exact_step("panels", e.panels, exact, units, e.diag);
+    let rhino = RhinoModel::of(&RhinoInput { panels: e.panels, exact, moulds: &moulds, support: e.support, omega: e.omega, units });
     report.add_timings(e.timings);
     report.add_timing("export", clock.now() - t0);
     report.warnings = e.warnings;

@@ -797,13 +797,71 @@ pub(crate) fn quad_remesh_prepared(surface: &BSplineSurface, field: &CrossField,
     extract(surface, &g, h, centred(h, shift), true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty)
 }
 
-/// The area of the patch covered by the mesh (sum of the quads' triangle areas) over the patch's
-/// area (a 64 × 64 tessellation).
-pub fn coverage(surface: &BSplineSurface, mesh: &PolyMesh) -> f64 {
-    let (reference, _) = surface.tessellate([64, 64]);
-    let total: f64 = (0..reference.face_count()).map(|f| reference.face_area_vector(f).length()).sum();
-    let covered: f64 = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).length()).sum();
-    covered / total
+/// Cells per direction of the parameter grid [`coverage`] measures on.
+const COVERAGE_CELLS: usize = 128;
+
+/// The share of the patch's area that the faces cover: each cell of a
+/// [`COVERAGE_CELLS`]² grid over the parameter domain, weighted by the surface's area element
+/// |f_u × f_v| at its centre, counts when its centre lies in the (u, v) polygon of some face
+/// (`uv` per vertex, the closest points). Faces that overlap or fold count their area once.
+pub fn coverage(surface: &BSplineSurface, faces: &[crate::geometry::mesh::Face], uv: &[[f64; 2]]) -> f64 {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let n = COVERAGE_CELLS;
+    let (du, dv) = ((u1 - u0) / n as f64, (v1 - v0) / n as f64);
+    if !(du > 0.0 && dv > 0.0) {
+        return 0.0;
+    }
+    let centre = |i: usize, j: usize| [u0 + (i as f64 + 0.5) * du, v0 + (j as f64 + 0.5) * dv];
+    let mut covered = vec![false; n * n];
+    for face in faces {
+        let poly: Vec<[f64; 2]> = face.corners().iter().map(|&c| uv[c as usize]).collect();
+        let (lo, hi) = poly.iter().fold(([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]), |(lo, hi), p| {
+            ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])
+        });
+        if !(lo[0].is_finite() && hi[0].is_finite() && lo[1].is_finite() && hi[1].is_finite()) {
+            continue;
+        }
+        let cell = |x: f64, x0: f64, d: f64| (((x - x0) / d - 0.5).max(0.0) as usize).min(n - 1);
+        for j in cell(lo[1], v0, dv)..=(cell(hi[1], v0, dv) + 1).min(n - 1) {
+            for i in cell(lo[0], u0, du)..=(cell(hi[0], u0, du) + 1).min(n - 1) {
+                if !covered[j * n + i] && inside(&poly, centre(i, j)) {
+                    covered[j * n + i] = true;
+                }
+            }
+        }
+    }
+    let (mut total, mut inside_area) = (0.0, 0.0);
+    for j in 0..n {
+        for i in 0..n {
+            let [u, v] = centre(i, j);
+            let d = surface.derivatives(u, v);
+            let w = d.su.cross(d.sv).length();
+            total += w;
+            if covered[j * n + i] {
+                inside_area += w;
+            }
+        }
+    }
+    if total > 0.0 {
+        inside_area / total
+    } else {
+        0.0
+    }
+}
+
+/// Whether `p` lies inside the polygon (even–odd rule).
+fn inside(poly: &[[f64; 2]], p: [f64; 2]) -> bool {
+    let mut odd = false;
+    for k in 0..poly.len() {
+        let (a, b) = (poly[k], poly[(k + 1) % poly.len()]);
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if p[0] < x {
+                odd = !odd;
+            }
+        }
+    }
+    odd
 }
 
 /// Per edge of `mesh` (vertex parameters `uv`) that does not run along the patch boundary (not

@@ -45,14 +45,18 @@ use glam::DVec3;
 
 use crate::congruence::torsal::{parameter_pair, TorsalPair};
 use crate::geometry::bspline::BSplineFunction;
+use crate::panels::buildability::Buildability;
+use crate::panels::deviation::max_deviation;
+use crate::panels::exact_surface::ExactSurfaces;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
+use crate::remeshing::quad_remeshing::coverage;
 use crate::reference::assumptions::Warning;
 use crate::reference::Reference;
 use crate::solver::TermStats;
 use crate::stats::median;
 
 pub use self::error::SqError;
-use self::guarantees::Delivered;
+pub use self::guarantees::Delivered;
 use self::metrics::{torsal_pairs, CongruenceFigures};
 use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
@@ -437,6 +441,48 @@ pub struct SqFinal {
     pub outcome: SphereOutcome,
     /// The rounds toward fewer moulds (`optimize_moulds` on a result that met its guarantees).
     pub moulds: Option<SqMouldOutcome>,
+    /// The panels' and support elements' exact surfaces (the CAD files hold these).
+    pub exact: ExactSurfaces,
+    /// What stops the panels from being built, measured on them.
+    pub buildability: Buildability,
+    /// The share of the patch's area the panels cover.
+    pub coverage: f64,
+}
+
+impl SqFinal {
+    /// The mesh, its panels and what was measured on them, for [`guarantees::verdict`].
+    pub fn delivered(&self, params: &SqParams) -> Delivered<'_> {
+        Delivered::SqMesh {
+            mesh: &self.mesh.sphere_mesh.mesh,
+            figures: &self.mesh.figures,
+            panels: &self.buildability,
+            max_distance: params.max_distance,
+            coverage: self.coverage,
+        }
+    }
+
+    /// The final mesh with its panels measured ([`measure_panels`]).
+    fn new(reference: &Reference, mesh: SqMesh, uv: Vec<[f64; 2]>, edge_angles_deg: Vec<f64>, outcome: SphereOutcome, params: &SqParams) -> Self {
+        let (exact, buildability, coverage) = measure_panels(reference, &mesh, &uv, params);
+        SqFinal { mesh, uv, edge_angles_deg, outcome, moulds: None, exact, buildability, coverage }
+    }
+
+    /// Measures the panels again after they changed (a test's broken result, say).
+    pub fn remeasure(&mut self, reference: &Reference, params: &SqParams) {
+        (self.exact, self.buildability, self.coverage) = measure_panels(reference, &self.mesh, &self.uv, params);
+    }
+}
+
+/// The exact surfaces of an SQ mesh's panels and support elements, what stops them from being
+/// built (with each panel's distance to the reference) and the share of the patch they cover
+/// (vertices at their closest points `uv`).
+pub fn measure_panels(reference: &Reference, mesh: &SqMesh, uv: &[[f64; 2]], params: &SqParams) -> (ExactSurfaces, Buildability, f64) {
+    let exact = ExactSurfaces::of(&mesh.panels, &mesh.support.elements);
+    let bvh = reference.bvh();
+    let distances: Vec<f64> = mesh.panels.iter().map(|p| if bvh.is_empty() { f64::NAN } else { max_deviation(p, bvh) }).collect();
+    let buildability = Buildability::measure(&exact, &distances, true, reference.diagonal(), params.fabrication.units);
+    let coverage = reference.spline().map_or(f64::NAN, |s| coverage(s, &mesh.sphere_mesh.mesh.faces, uv));
+    (exact, buildability, coverage)
 }
 
 /// What [`compute`] produced, as far as [`SqParams::until`] asked.
@@ -491,15 +537,14 @@ pub fn compute(
     timings.lap("remesh");
     warnings.extend(quad.warnings.iter().cloned());
     if params.until == Until::Remesh {
-        result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::QuadMesh(&quad.mesh), theta, alpha);
+        result.verdict = guarantees::verdict(&result.congruence.figures, Delivered::QuadMesh(&quad.mesh, quad.coverage), theta, alpha);
         result.quad_mesh = Some(quad);
         result.timings_ms = timings.laps;
         result.warnings = warnings;
         return Ok(result);
     }
     let done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
-    result.verdict =
-        guarantees::verdict(&result.congruence.figures, Delivered::SqMesh(&done.mesh.sphere_mesh.mesh, &done.mesh.figures), theta, alpha);
+    result.verdict = guarantees::verdict(&result.congruence.figures, done.delivered(params), theta, alpha);
     result.quad_mesh = Some(quad);
     result.sq_mesh = Some(done);
     result.timings_ms = timings.laps;
@@ -527,8 +572,9 @@ fn spherical_mesh(
     let mut out = sq_mesh(mesh, spheres, &normals, stars, diag, params.support_depth * diag, params.axis_length * diag);
     let distance = out.sphere_mesh.mesh.positions.iter().map(|p| (p.distance(centre) - r).abs()).fold(0.0, f64::max);
     out.figures.max_vertex_distance_to_reference = distance / diag;
+    let done = SqFinal::new(reference, out, quad.uv.clone(), quad.edge_angles_deg.clone(), SphereOutcome::default(), params);
     timings.lap("panels");
-    SqFinal { mesh: out, uv: quad.uv.clone(), edge_angles_deg: quad.edge_angles_deg.clone(), outcome: SphereOutcome::default(), moulds: None }
+    done
 }
 
 /// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
@@ -610,11 +656,11 @@ fn final_mesh(
         let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
         out.figures.max_vertex_distance_to_reference = distance / diag;
         on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
-        Ok(SqFinal { mesh: out, uv, edge_angles_deg, outcome, moulds: None })
+        Ok(SqFinal::new(reference, out, uv, edge_angles_deg, outcome, params))
     };
     let done = finish(&vertices, &spheres, outcome, on_event)?;
     timings.lap("panels");
-    let meets = |f: &SqFinal| guarantees::verdict(&congruence.figures, Delivered::SqMesh(&f.mesh.sphere_mesh.mesh, &f.mesh.figures), params.theta_deg, params.alpha_deg);
+    let meets = |f: &SqFinal| guarantees::verdict(&congruence.figures, f.delivered(params), params.theta_deg, params.alpha_deg);
     if !params.optimize_moulds || !meets(&done).holds() {
         return Ok(done);
     }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::panels::buildability::{check_max_distance, DEFAULT_MAX_DISTANCE};
 use crate::panels::moulds::Fabrication;
 
 /// How an inequality (∠(l, n) ≤ θ, torsal planes meeting at ≥ α) enters the energy. Measured on
@@ -112,6 +113,9 @@ pub struct SphereWeights {
     pub torsal_plane: f64,
     pub prox_f: f64,
     pub prox_c: f64,
+    /// The boundary vertices' distance to the patch's boundary curve, so that the panels keep
+    /// covering the patch ([`crate::reference::proximity::BoundaryProximity`]; not in Eq. 10).
+    pub prox_boundary: f64,
     /// ε of the point-distance part of E_prox.
     pub epsilon: f64,
     pub fair: f64,
@@ -133,6 +137,7 @@ impl Default for SphereWeights {
             torsal_plane: 0.01,
             prox_f: 1.0,
             prox_c: 0.1,
+            prox_boundary: 10.0,
             epsilon: 0.01,
             fair: 0.2,
             reg_sphere: 0.04,
@@ -226,6 +231,9 @@ pub struct SqParams {
     /// Move the exact mesh onto fewer moulds, its panels snapped to their radii
     /// ([`super::moulds`]).
     pub optimize_moulds: bool,
+    /// The panels' promised distance to the reference, relative to the diagonal
+    /// ([`crate::panels::buildability::DEFAULT_MAX_DISTANCE`]).
+    pub max_distance: f64,
 }
 
 impl Default for SqParams {
@@ -256,6 +264,7 @@ impl Default for SqParams {
             radius_tolerance: 1e-3,
             fabrication: Fabrication::default(),
             optimize_moulds: false,
+            max_distance: DEFAULT_MAX_DISTANCE,
         }
     }
 }
@@ -271,6 +280,7 @@ impl SqParams {
             return Err(ParamError::SupportDepth(self.support_depth));
         }
         RECOMPUTE_RANGE.check(self.recompute_every)?;
+        check_max_distance(self.max_distance).map_err(ParamError::MaxDistance)?;
         let b = self.radius_basis;
         if !(1..=15).contains(&b.degree) || b.controls <= b.degree || b.controls > 40 {
             return Err(ParamError::RadiusBasis {
@@ -342,6 +352,8 @@ pub enum ParamError {
     },
     /// The support depth, relative to the diagonal, is not in (0, 1).
     SupportDepth(f64),
+    /// The distance bound is out of its range (the message says which).
+    MaxDistance(String),
     RadiusBasis {
         degree: usize,
         controls: usize,
@@ -353,6 +365,7 @@ impl std::fmt::Display for ParamError {
         match self {
             ParamError::OutOfRange { name, value, lo, hi } => write!(f, "{name} {value} is outside [{lo}, {hi}]"),
             ParamError::SupportDepth(d) => write!(f, "support depth {d} is outside (0, 1) of the diagonal"),
+            ParamError::MaxDistance(why) => f.write_str(why),
             ParamError::RadiusBasis { degree, controls } => write!(
                 f,
                 "radius basis: degree {degree} with {controls} coefficients per direction (degree 1..=15, more coefficients than the degree, at most 40)"

@@ -64,6 +64,10 @@ pub struct SqMeshFigures {
     /// bound of [`super::sphere_terms::support_plane_bound_deg`].
     pub min_support_plane_angle_valence_3_deg: Option<f64>,
     pub min_support_plane_angle_valence_5_deg: Option<f64>,
+    /// The first inner vertex whose support planes cannot be measured (two consecutive face
+    /// spheres meet in no circle through their edge), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unmeasured_support_planes: Option<u32>,
     /// max distance of a vertex to the reference.
     #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_distance_to_reference: f64,
@@ -213,6 +217,9 @@ fn figures(sm: &SphereMesh, node_axes: &NodeAxes, normals: &[DVec3], stars: &Qua
         let worst = centres.iter().map(|c| (*c - mid).dot(n).abs()).fold(0.0, f64::max);
         out.max_centre_face_planarity = out.max_centre_face_planarity.max(worst / diag);
         let star_min = star_support_plane_angle_deg(sm, axes, *v, faces);
+        if star_min.is_nan() {
+            out.unmeasured_support_planes.get_or_insert(*v);
+        }
         if m == 4 {
             out.min_torsal_plane_angle_deg = nan_min(out.min_torsal_plane_angle_deg, star_min);
         } else {

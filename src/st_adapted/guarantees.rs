@@ -1,19 +1,24 @@
 //! What an ST mesh with adapted face size promises (Sec. 3), measured on the result
-//! ([`super::metrics`]): every vertex on the spheres of its faces (≤ [`EXACT`] of the diagonal:
-//! the spherical panels close up at the vertices) and no folded face (a face whose normal points
-//! against the reference's at its centroid).
+//! ([`super::metrics`] and the delivered panels, [`Buildability`]): every vertex on the spheres
+//! of its faces (≤ [`EXACT`] of the diagonal: the spherical panels close up at the vertices), no
+//! folded face (a face whose normal points against the reference's at its centroid), every panel
+//! bounded by arcs that do not cross and with its exact surface, and every panel within 2ε of
+//! the reference ([`super::params::StAdaptedParams::distance_bound`]).
 
 use crate::guarantees::{Guarantee, Verdict};
+use crate::panels::buildability::Buildability;
 
 use super::metrics::StAdaptedMetrics;
 
 /// Vertex–sphere residual, relative to the diagonal.
 pub const EXACT: f64 = 1e-8;
 
-/// The verdict of an ST result.
-pub fn verdict(m: &StAdaptedMetrics) -> Verdict {
-    Verdict::new(vec![
+/// The verdict of an ST result on its panels, `max_distance` relative to the diagonal.
+pub fn verdict(m: &StAdaptedMetrics, panels: &Buildability, max_distance: f64) -> Verdict {
+    let mut all = vec![
         Guarantee::at_most("max_vertex_sphere_residual", m.max_vertex_sphere_residual, EXACT, "of the diagonal"),
         Guarantee::count_at_most("folded_faces", m.flipped_faces, 0),
-    ])
+    ];
+    all.extend(panels.guarantees(max_distance));
+    Verdict::new(all)
 }

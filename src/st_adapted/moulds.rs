@@ -18,6 +18,7 @@ use super::terms::{FaceSpheres, vertex_offset};
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::exact_surface::arcs_cross;
 use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
@@ -87,8 +88,13 @@ impl MouldTargets {
         }
     }
 
-    pub fn hold(&self, m: &StAdaptedMetrics) -> bool {
-        m.max_kink_angle_deg <= self.max_kink_angle_deg && m.max_distance_to_reference <= self.max_distance_to_reference && m.flipped_faces == 0
+    /// Whether a result with metrics `m` and `panels` holds the targets, folds no face and has no
+    /// panel whose arcs cross ([`arcs_cross`]).
+    pub fn hold(&self, m: &StAdaptedMetrics, panels: &[Panel]) -> bool {
+        m.max_kink_angle_deg <= self.max_kink_angle_deg
+            && m.max_distance_to_reference <= self.max_distance_to_reference
+            && m.flipped_faces == 0
+            && !panels.iter().any(|p| arcs_cross(&p.sphere, &p.arcs))
     }
 }
 
@@ -172,7 +178,7 @@ pub fn fewer_moulds(
         on_event(StAdaptedEvent::MouldRound { round: k + 1, sphere_mesh: &moved })?;
         let (m, moved_panels, deviations) = metrics(&moved, reference, params.variant);
         let count = fabrication.assign(&MouldFits::of(&moved_panels), diag).moulds.len();
-        let holds = limits.hold(&m);
+        let holds = limits.hold(&m, &moved_panels);
         let kept = holds && count < best_count;
         rounds.push(MouldRound {
             coarsening: gamma,
@@ -274,7 +280,7 @@ fn snap_once(
     let planes = boundary_planes(&moved, reference);
     let moved = moved.with_boundary_planes(planes);
     let (m, moved_panels, deviations) = metrics(&moved, reference, variant);
-    if !targets.hold(&m) {
+    if !targets.hold(&m, &moved_panels) {
         let limits = vec![Some(SnapLimit::MethodTargets); panels.len()];
         return (None, MouldSnap { moulds, limits });
     }

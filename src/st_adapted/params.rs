@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::congruence::central_spheres::JetParams;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
 use crate::panels::moulds::Fabrication;
 use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
 
@@ -21,6 +22,11 @@ pub struct StAdaptedWeights {
     /// Variant (a): the sideways bulge of the edge circles' arcs (`terms::EdgeCircle`); not
     /// used by variant (b), whose arcs are cut by bisecting planes.
     pub edge_circle: f64,
+    /// Variant (a): the two arcs at a panel's corner turning into it by more than half the
+    /// corner's angle together (`terms::CornerTurn` under a `solver::Hinge`), where they would
+    /// cross; with `edge_circle`.
+    #[serde(default = "default_corner_turn")]
+    pub corner_turn: f64,
     /// Variant (a): adjacent panels whose sagittas over their common edge differ by more than
     /// the tolerance band's τ (`terms::SagittaMatch` in a `solver::Band`); not used by variant
     /// (b), nor without a tolerance ε.
@@ -42,11 +48,16 @@ impl Default for StAdaptedWeights {
             face_distance: 100.0,
             fairness: 1.0,
             edge_circle: 10.0,
+            corner_turn: default_corner_turn(),
             sagitta_match: 1e4,
             orientation: 1000.0,
             tolerance: 1e4,
         }
     }
+}
+
+fn default_corner_turn() -> f64 {
+    1e3
 }
 
 /// One optimization stage: proximity weights × `proximity_scale`, at most `iterations` solver
@@ -111,6 +122,15 @@ impl StAdaptedParams {
     /// ε/2; coarser than ε it is also warned about).
     pub fn tolerance_band(&self) -> Option<f64> {
         self.epsilon().map(|epsilon| 0.5 * epsilon)
+    }
+
+    /// How far the panels may lie from the reference, relative to the diagonal (Sec. 3): 2ε, the
+    /// band [`Self::tolerance_band`] allows between vertices and centroids and the bulge between
+    /// them; 4× the reference's `facet_sagitta` where that is larger, since the optimization's
+    /// band widens to it (no smooth panel comes closer to coarse facets). A face-count target,
+    /// which has no ε: [`DEFAULT_MAX_DISTANCE`].
+    pub fn distance_bound(&self, facet_sagitta: f64) -> f64 {
+        self.tolerance_band().map_or(DEFAULT_MAX_DISTANCE, |band| 4.0 * band.max(facet_sagitta))
     }
 
     /// The tolerance ε of an adaptive sizing, relative to the diagonal (None for a face-count

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::absolute_sphere::AbsoluteSphereParams;
 use crate::congruence::central_spheres::JetParams;
+use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
 use crate::panels::moulds::Fabrication;
 use crate::remeshing::Sizing;
 
@@ -34,6 +35,9 @@ pub struct StSupportParams {
     /// Move the vertices so that the panels have the radii of fewer moulds exactly, every face
     /// sphere still orthogonal to Ω ([`super::moulds`]).
     pub optimize_moulds: bool,
+    /// The panels' promised distance to the reference, relative to the diagonal
+    /// ([`crate::panels::buildability::DEFAULT_MAX_DISTANCE`]).
+    pub max_distance: f64,
 }
 
 impl Default for StSupportParams {
@@ -48,6 +52,7 @@ impl Default for StSupportParams {
             jet: JetParams::default(),
             absolute: AbsoluteSphereParams::default(),
             optimize_moulds: false,
+            max_distance: DEFAULT_MAX_DISTANCE,
         }
     }
 }

@@ -354,6 +354,9 @@ fn exported(
             )
             .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
             .with_support(&f.mesh.support)
+            .with_verdict(&result.verdict)
+            .with_exact_surfaces(&f.exact)
+            .with_deviations(&f.buildability.panel_distances)
             .with_moulds_before(f.moulds.as_ref().map(|m| &m.fits_before))
             .with_snapping(Snapping::of(f.moulds.as_ref().map(|m| &m.snap)));
             let (report, panel_files, assigned) = export_panels(reference, export, clock);

@@ -8,6 +8,8 @@ use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
+use crate::panels::buildability::Buildability;
+use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
@@ -131,7 +133,9 @@ fn exported(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedP
     let m = &result.metrics;
     let variant = result.variant.key();
     let section = StAdaptedSection::of(result);
-    let verdict = crate::st_adapted::guarantees::verdict(m);
+    let exact = ExactSurfaces::of(&result.panels, &[]);
+    let buildability = Buildability::measure(&exact, &result.panel_deviations, false, result.diag, params.fabrication.units);
+    let verdict = crate::st_adapted::guarantees::verdict(m, &buildability, params.distance_bound(reference.facet_sagitta()));
     let mut timings = result.timings_ms.clone();
     if let Some(med) = result.angle_iteration_median_ms {
         timings.push(("angle_iteration_median".into(), med));
@@ -143,6 +147,7 @@ fn exported(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedP
             .with_moulds_before(result.fits_before.as_ref())
             .with_warnings(&result.warnings)
             .with_verdict(&verdict)
+            .with_exact_surfaces(&exact)
             .with_snapping(result.mould_snap.as_ref().map_or(Snapping::Not(SnapLimit::NotAsked), Snapping::Snapped));
     let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));

@@ -10,6 +10,9 @@ use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::pipeline::fields::{field, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
+use crate::panels::buildability::Buildability;
+use crate::panels::deviation::max_deviation;
+use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::moulds::MouldAssignment;
 use crate::progress::Clock;
 use crate::reference::Reference;
@@ -84,7 +87,11 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
 /// [`export`] with the panels' moulds.
 fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let section = StSupportSection::of(result, params.remesh);
-    let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega);
+    let exact = ExactSurfaces::of(&result.panels, &result.support.elements);
+    let bvh = reference.bvh();
+    let deviations: Vec<f64> = result.panels.iter().map(|p| if bvh.is_empty() { f64::NAN } else { max_deviation(p, bvh) }).collect();
+    let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), params.fabrication.units);
+    let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega, &buildability, params.max_distance);
     let export = PanelExport::new(
         STAGE.key(),
         &result.sphere_mesh,
@@ -99,6 +106,8 @@ fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportP
     .with_support(&result.support)
     .with_warnings(&result.warnings)
     .with_verdict(&verdict)
+    .with_exact_surfaces(&exact)
+    .with_deviations(&deviations)
     .with_moulds_before(result.moulds.as_ref().map(|m| &m.fits_before))
     .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
     let (report, mut files, moulds) = export_panels(reference, export, clock);

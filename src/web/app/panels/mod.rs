@@ -57,6 +57,14 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
     memory.remember(*sizing);
 }
 
+/// The panels' promised largest distance to the reference, relative to the bbox diagonal
+/// ([`crate::panels::buildability::MAX_DISTANCE_RANGE`]): a result farther away misses it.
+pub fn max_distance_slider(ui: &mut egui::Ui, max_distance: &mut f64) {
+    let range = crate::panels::buildability::MAX_DISTANCE_RANGE;
+    ui.add(egui::Slider::new(max_distance, 1e-4..=range.end().min(0.1)).logarithmic(true).text("max distance").custom_formatter(|x, _| format!("{x:.2e}")))
+        .on_hover_text("The panels' promised largest distance to the reference, relative to the bbox diagonal: a result farther away misses its guarantees");
+}
+
 /// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
 /// The colour of a result that misses its guarantees.
 pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);

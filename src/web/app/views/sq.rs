@@ -19,7 +19,7 @@ use crate::pipeline::stages::sq::{REFUSED_STAGE, STAGE};
 use crate::sq::report::SqSection;
 use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
 use crate::sq::sq_mesh::SqMeshFigures;
-use crate::web::app::panels::{verdict, warnings};
+use crate::web::app::panels::{max_distance_slider, verdict, warnings};
 use crate::web::app::plots::{key_values, term_plot};
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
@@ -351,6 +351,7 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
         .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
     ui.add(egui::Slider::new(&mut params.support_depth, 0.002..=0.1).logarithmic(true).text("support depth"))
         .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
+    max_distance_slider(ui, &mut params.max_distance);
     optimize_moulds_checkbox(ui, &mut params.optimize_moulds, "Projections to exactness with every panel's curvature held at its mould's, coarser each round while exactness, θ and α hold and the vertices stay within 1.2× of their distance to the reference; every kept panel has its mould's radius exactly");
     egui::ComboBox::from_label("run until").selected_text(params.until.key()).show_ui(ui, |ui| {
         for u in Until::ALL {

@@ -18,7 +18,7 @@ use crate::pipeline::stages::st_support::{StSupportSummary, STAGE};
 use crate::remeshing::Sizing;
 use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
-use crate::web::app::panels::{sizing_controls, verdict, warnings, SizingMemory};
+use crate::web::app::panels::{max_distance_slider, sizing_controls, verdict, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
@@ -199,6 +199,7 @@ fn controls(
     ui.label(RichText::new("lengths relative to the bbox diagonal").small());
     ui.label(RichText::new("Remesh first (Fig. 16, bottom)").small());
     sizing_controls(ui, "st-remesh", &mut params.remesh, memory, &[SizingKind::None, SizingKind::Adaptive, SizingKind::Faces]);
+    max_distance_slider(ui, &mut params.max_distance);
     optimize_moulds_checkbox(ui, &mut params.optimize_moulds, "Rounds that move the vertices so that every panel has its mould's radius exactly, coarser each round, every sphere still orthogonal to Ω and the panels within 1.2× of their distance to the reference");
     ui.checkbox(show_reference, "show reference surface");
     ui.checkbox(show_envelope, "show second envelope");
