@@ -183,9 +183,12 @@ fn every_term_has_a_correct_jacobian() {
     let weights = StAdaptedWeights { edge_circle: 1.0, ..Default::default() };
     // A band narrower than the patch's jitter (1e-3): most of its rows are active.
     let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &weights, Some(1e-4), &x);
+    // The corner turns are off until arcs cross: switched on at every face, strongly enough that
+    // some corners are over their share (their rows active).
+    ids.corner_scales.borrow_mut().iter_mut().for_each(|s| *s = 1.0);
     problem.prepare(&x);
     let stats = problem.term_stats(&x);
-    for id in ids.tolerance.expect("a tolerance band").into_iter().chain(ids.sagitta_match) {
+    for id in ids.tolerance.expect("a tolerance band").into_iter().chain(ids.sagitta_match).chain(ids.corner_turn) {
         assert!(stats[id.0].active > 0, "{}: no row outside the band", stats[id.0].name);
     }
     assert!(ids.sagitta_match.is_some(), "variant (a) with a tolerance matches the sagittas");
@@ -194,7 +197,7 @@ fn every_term_has_a_correct_jacobian() {
         // The edge circle's curvature varies fast between nearly tangent spheres, and the
         // tolerance band's wall bends on the scale of τ: their central differences need a smaller
         // step (the error falls as h²: edge circle 6.5e-6 at 1e-6, 1.8e-7 at 1e-7).
-        let h = if matches!(term.name(), "edge_circle" | "vertex_tolerance" | "face_tolerance" | "sagitta_match") { 1e-7 } else { 1e-6 };
+        let h = if matches!(term.name(), "edge_circle" | "corner_turn" | "vertex_tolerance" | "face_tolerance" | "sagitta_match") { 1e-7 } else { 1e-6 };
         let err = check_jacobian(term, &x, h);
         println!("{:>20}: FD error {err:.2e}", term.name());
         assert!(err < 1e-6, "{}: {err}", term.name());
@@ -651,7 +654,9 @@ fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
     use spherical_faces::geometry::mesh::PolyMesh;
     use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
     use spherical_faces::samples::Sample;
+    use spherical_faces::panels::buildability::Buildability;
     use spherical_faces::st_adapted::guarantees::verdict;
+    use spherical_faces::units::Units;
     let reference = Reference::from_triangles(Sample::Dome.mesh());
     let tri = reference.mesh().clone();
     let topo = reference.topology();
@@ -665,18 +670,22 @@ fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
     };
     let smooth = PolyMesh::from(&tri);
     let sm = SphereMesh::new(smooth.clone(), spheres_of(&smooth), BoundaryArcRule::Parallel(DVec3::ZERO));
-    let (m, _, _) = metrics(&sm, &reference, EdgeArcs::Intersection);
+    let diag = reference.diagonal();
+    let verdict = |m, panels: &[spherical_faces::panels::panel::Panel], d: &[f64]| {
+        verdict(m, &Buildability::of_panels(panels, None, d, diag, Units::M), 1.0)
+    };
+    let (m, panels, d) = metrics(&sm, &reference, EdgeArcs::Intersection);
     assert_eq!(m.flipped_faces, 0);
-    assert!(verdict(&m).holds(), "{}", verdict(&m).failure_text());
+    assert!(verdict(&m, &panels, &d).holds(), "{}", verdict(&m, &panels, &d).failure_text());
 
     let boundary_face = (0..tri.triangles.len()).find(|&f| tri.triangles[f].iter().any(|&v| topo.is_boundary_vertex(v as usize))).unwrap();
     let mut folded = tri.clone();
     folded.triangles[boundary_face].swap(1, 2);
     let folded = PolyMesh::from(&folded);
     let sm = SphereMesh::new(folded.clone(), spheres_of(&folded), BoundaryArcRule::Parallel(DVec3::ZERO));
-    let (m, _, _) = metrics(&sm, &reference, EdgeArcs::Intersection);
+    let (m, panels, d) = metrics(&sm, &reference, EdgeArcs::Intersection);
     assert_eq!(m.flipped_faces, 1);
-    let v = verdict(&m);
+    let v = verdict(&m, &panels, &d);
     assert!(!v.holds() && v.failure_text().contains("folded_faces 1"), "{}", v.failure_text());
 }
 
@@ -690,7 +699,13 @@ fn the_optimization_folds_no_face_on_a_coarse_uniform_remesh() {
     let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
     assert_eq!(r.initial_shape.flipped_faces, 0);
     assert_eq!(r.metrics.flipped_faces, 0, "{:?}", r.metrics);
-    assert!(spherical_faces::st_adapted::guarantees::verdict(&r.metrics).holds());
+    let panels = spherical_faces::panels::buildability::Buildability::of_panels(&r.panels, None, &r.panel_deviations, r.diag, Default::default());
+    let verdict = spherical_faces::st_adapted::guarantees::verdict(&r.metrics, &panels, params.distance_bound(reference.facet_sagitta()));
+    let holds = |name: &str| verdict.guarantees.iter().find(|g| g.name == name).unwrap().holds;
+    assert!(holds("folded_faces") && holds("max_vertex_sphere_residual"), "{}", verdict.failure_text());
+    // The thin faces this remesh leaves at the boundary may keep arcs that cross: counted, with
+    // their number, never passed.
+    assert_eq!(holds("panels_with_crossing_arcs"), panels.panels_with_crossing_arcs.is_empty());
 }
 
 /// E_mould ([`spherical_faces::st_adapted::moulds::MouldCurvature`]) against finite differences,

@@ -38,6 +38,12 @@ impl<const N: usize> Dual<N> {
         self.chain(r, 0.5 / r)
     }
 
+    /// The angle of the point (x, y) = (`x`, self), as f64::atan2.
+    pub fn atan2(self, x: Self) -> Self {
+        let (y, r2) = (self, x.v * x.v + self.v * self.v);
+        Self { v: y.v.atan2(x.v), d: std::array::from_fn(|k| (x.v * y.d[k] - y.v * x.d[k]) / r2) }
+    }
+
     pub(crate) fn recip(self) -> Self {
         let r = 1.0 / self.v;
         self.chain(r, -r * r)
