@@ -149,6 +149,11 @@ fn final_optimization_terms_match_finite_differences() {
             assert_fd(&AxisNormalAngle { axes: vec![(v(4), 0), (v(5), 1)], normals: normals.clone(), cos2 }, &x);
             assert_fd(&FanAxisAngle { fans: vec![([s(0), s(1), s(2)], 0), ([s(3), s(4), s(5)], 1)], normals, cos2 }, &x);
         }
+        // The boundary vertices' distance to the patch's boundary curve, the targets looked up
+        // at x (fixed within an iteration), and none of its residuals zero there.
+        let boundary = spherical_faces::reference::proximity::BoundaryProximity::new(&loaded.surface, vec![v(0), v(1), v(2)], &x);
+        assert_fd(&boundary, &x);
+        assert!(residuals(&boundary, &x).chunks(3).all(|d| d.iter().any(|r| r.abs() > 1e-6)));
         let sep = CentreSeparation { pairs: vec![(s(0), s(1), 0.3), (s(2), s(5), 2.0)], share: 0.25 };
         assert_fd(&sep, &x);
         assert!(residuals(&sep, &x).iter().all(|r| r.is_finite()));

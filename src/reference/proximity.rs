@@ -217,3 +217,51 @@ impl<'a> CentroidTargets<'a> {
 pub(crate) fn value_gradient(p: DVec3) -> [f64; 5] {
     [p.length_squared(), -p.x, -p.y, -p.z, 1.0]
 }
+
+/// Proximity of the boundary vertices to the reference's boundary curve: v − b per vertex, b the
+/// boundary point closest to v, refreshed in [`Term::prepare`] (fixed within an iteration), so a
+/// boundary vertex slides along the boundary but does not leave it and the mesh keeps covering
+/// the reference up to its boundary.
+pub struct BoundaryProximity<'a> {
+    reference: &'a Reference,
+    /// Vertex block offsets.
+    offsets: Vec<usize>,
+    targets: Vec<DVec3>,
+}
+
+impl<'a> BoundaryProximity<'a> {
+    /// The vertices at `offsets`, their targets looked up at `x`.
+    pub fn new(reference: &'a Reference, offsets: Vec<usize>, x: &[f64]) -> Self {
+        let targets = vec![DVec3::ZERO; offsets.len()];
+        let mut term = Self { reference, offsets, targets };
+        term.prepare(x);
+        term
+    }
+}
+
+impl Term for BoundaryProximity<'_> {
+    fn name(&self) -> &str {
+        "boundary_proximity"
+    }
+    fn residual_count(&self) -> usize {
+        3 * self.offsets.len()
+    }
+    fn prepare(&mut self, x: &[f64]) {
+        let boundary = self.reference.boundary_bvh();
+        for (k, &o) in self.offsets.iter().enumerate() {
+            let v = v3(x, o);
+            if let Some(hit) = v.is_finite().then(|| boundary.closest_point(v)).flatten() {
+                self.targets[k] = hit.point;
+            }
+        }
+    }
+    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
+        for (k, &o) in self.offsets.iter().enumerate() {
+            let d = v3(x, o) - self.targets[k];
+            for i in 0..3 {
+                r[3 * k + i] = d[i];
+                jac.add(3 * k + i, o + i, 1.0);
+            }
+        }
+    }
+}

@@ -128,7 +128,8 @@ pub fn quad_mesh(
     if remesh.folded_triangles > 0 {
         warnings.push(Warning::FoldedFieldTriangles { triangles: remesh.folded_triangles });
     }
-    let QuadRemesh { mesh: remesh, uv, polylines, on_boundary, dropped, singular, folded_triangles, .. } = remesh;
+    let QuadRemesh { mesh: mut remesh, mut uv, polylines, mut on_boundary, dropped, singular, folded_triangles, .. } = remesh;
+    reach_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary);
     let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
 
     // Q′ in the frame of the bounding box.
@@ -173,7 +174,7 @@ pub fn quad_mesh(
     }
     let mesh = PolyMesh::new(positions, remesh.faces.clone());
     let edge_angles_deg = edge_field_angles(surface, &torsal, &mesh, &q_uv, &on_boundary);
-    let coverage = coverage(surface, &mesh);
+    let coverage = coverage(surface, &mesh.faces, &q_uv);
     if coverage < 0.9 {
         warnings.push(Warning::PartialCoverage { coverage });
     }
@@ -194,4 +195,52 @@ pub fn quad_mesh(
         fairing_iterations: report.iterations,
         warnings,
     })
+}
+
+/// How near the patch boundary, × the mean length of its edges in (u, v), a vertex on the
+/// mesh's boundary is moved onto it ([`reach_the_boundary`]): farther ones would stretch their
+/// quads enough to cost the support planes their angle α.
+const BOUNDARY_REACH: f64 = 0.3;
+
+/// The vertices on the mesh's boundary that the lattice left short of the patch boundary, less
+/// than [`BOUNDARY_REACH`] of their edges' length away in (u, v), moved onto it (onto a corner of the domain
+/// when near two sides) and held there as boundary vertices: the panels then cover the patch up
+/// to its boundary instead of leaving a strip along it.
+fn reach_the_boundary(surface: &crate::geometry::bspline::BSplineSurface, mesh: &mut PolyMesh, uv: &mut [[f64; 2]], on_boundary: &mut [bool]) {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let topology = crate::geometry::mesh::topology::Topology::new(&*mesh);
+    let mut reach = vec![(0.0f64, 0usize); uv.len()];
+    let mut outer = vec![false; uv.len()];
+    for (e, &[a, b]) in topology.edges().iter().enumerate() {
+        let (a, b) = (a as usize, b as usize);
+        let l = ((uv[a][0] - uv[b][0]) / (u1 - u0)).hypot((uv[a][1] - uv[b][1]) / (v1 - v0));
+        for v in [a, b] {
+            reach[v].0 += l;
+            reach[v].1 += 1;
+        }
+        if topology.edge_faces(e).len() == 1 {
+            outer[a] = true;
+            outer[b] = true;
+        }
+    }
+    for v in 0..uv.len() {
+        if !outer[v] || on_boundary[v] || reach[v].1 == 0 {
+            continue;
+        }
+        let near = BOUNDARY_REACH * reach[v].0 / reach[v].1 as f64;
+        let [u, w] = uv[v];
+        let (du, dw) = ((u - u0).min(u1 - u) / (u1 - u0), (w - v0).min(v1 - w) / (v1 - v0));
+        let mut moved = [u, w];
+        if du < near {
+            moved[0] = if u - u0 < u1 - u { u0 } else { u1 };
+        }
+        if dw < near {
+            moved[1] = if w - v0 < v1 - w { v0 } else { v1 };
+        }
+        if moved != [u, w] {
+            uv[v] = moved;
+            mesh.positions[v] = surface.point(moved[0], moved[1]);
+            on_boundary[v] = true;
+        }
+    }
 }

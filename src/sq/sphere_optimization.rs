@@ -38,7 +38,7 @@ use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, Clock};
-use crate::reference::proximity::ReferenceProximity;
+use crate::reference::proximity::{BoundaryProximity, ReferenceProximity};
 use crate::reference::Reference;
 use crate::solver::terms::v3;
 use crate::solver::{
@@ -241,6 +241,7 @@ struct SphereTerms {
     edge_unit: TermId,
     tangent: TermId,
     point: TermId,
+    boundary: TermId,
     centre: TermId,
     fair: TermId,
     reg_sphere: TermId,
@@ -255,8 +256,9 @@ struct SphereTerms {
 }
 
 impl SphereTerms {
-    fn all(&self) -> [TermId; 19] {
+    fn all(&self) -> [TermId; 20] {
         [
+            self.boundary,
             self.sphere,
             self.unit,
             self.supp,
@@ -296,8 +298,8 @@ impl SphereTerms {
 
     /// Proximity to the reference (Sec. 5.2): tangent and point distance of the vertices, and of
     /// the centres.
-    fn proximity(&self, w: &SphereWeights) -> [(TermId, f64); 3] {
-        [(self.tangent, w.prox_f), (self.point, w.prox_f), (self.centre, w.prox_c)]
+    fn proximity(&self, w: &SphereWeights) -> [(TermId, f64); 4] {
+        [(self.tangent, w.prox_f), (self.point, w.prox_f), (self.centre, w.prox_c), (self.boundary, w.prox_boundary)]
     }
 
     /// Every term at weight 0 but `weights`.
@@ -375,6 +377,8 @@ fn sphere_problem<'a>(
     let lookups = tangent.lookups();
     let tangent_id = problem.add_term(tangent.with_name("vertex_proximity"), w.prox_f);
     let point_id = problem.add_term(point.with_name("vertex_proximity_point"), w.prox_f);
+    let boundary_offsets: Vec<usize> = (0..layout.vertices).filter(|&v| input.on_boundary[v]).map(|v| layout.vertex(v)).collect();
+    let boundary_id = problem.add_term(BoundaryProximity::new(input.reference, boundary_offsets, &x), w.prox_boundary);
     let centre_faces: Vec<(usize, DVec3, DVec3)> = mesh
         .faces
         .iter()
@@ -447,6 +451,7 @@ fn sphere_problem<'a>(
         edge_unit: edge_unit_id,
         tangent: tangent_id,
         point: point_id,
+        boundary: boundary_id,
         centre: centre_id,
         fair: fair_id,
         reg_sphere: reg_sphere_id,
