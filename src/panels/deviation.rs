@@ -38,6 +38,11 @@ pub fn max_deviation(panel: &Panel, reference: &TriangleBvh) -> f64 {
     max_deviation_above(panel, reference, 0.0)
 }
 
+/// Each panel's [`max_deviation`]; NaN for every panel of an empty reference (not measured).
+pub fn panel_distances(panels: &[Panel], reference: &TriangleBvh) -> Vec<f64> {
+    panels.iter().map(|p| if reference.is_empty() { f64::NAN } else { max_deviation(p, reference) }).collect()
+}
+
 /// max(`floor`, [`max_deviation`]): samples no farther than `floor` are not searched.
 fn max_deviation_above(panel: &Panel, reference: &TriangleBvh, floor: f64) -> f64 {
     let mut max = floor;

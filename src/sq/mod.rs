@@ -46,7 +46,7 @@ use glam::DVec3;
 use crate::congruence::torsal::{parameter_pair, TorsalPair};
 use crate::geometry::bspline::BSplineFunction;
 use crate::panels::buildability::Buildability;
-use crate::panels::deviation::max_deviation;
+use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::remeshing::quad_remeshing::coverage;
@@ -466,11 +466,6 @@ impl SqFinal {
         let (exact, buildability, coverage) = measure_panels(reference, &mesh, &uv, params);
         SqFinal { mesh, uv, edge_angles_deg, outcome, moulds: None, exact, buildability, coverage }
     }
-
-    /// Measures the panels again after they changed (a test's broken result, say).
-    pub fn remeasure(&mut self, reference: &Reference, params: &SqParams) {
-        (self.exact, self.buildability, self.coverage) = measure_panels(reference, &self.mesh, &self.uv, params);
-    }
 }
 
 /// The exact surfaces of an SQ mesh's panels and support elements, what stops them from being
@@ -478,8 +473,7 @@ impl SqFinal {
 /// (vertices at their closest points `uv`).
 pub fn measure_panels(reference: &Reference, mesh: &SqMesh, uv: &[[f64; 2]], params: &SqParams) -> (ExactSurfaces, Buildability, f64) {
     let exact = ExactSurfaces::of(&mesh.panels, &mesh.support.elements);
-    let bvh = reference.bvh();
-    let distances: Vec<f64> = mesh.panels.iter().map(|p| if bvh.is_empty() { f64::NAN } else { max_deviation(p, bvh) }).collect();
+    let distances = panel_distances(&mesh.panels, reference.bvh());
     let buildability = Buildability::measure(&exact, &distances, true, reference.diagonal(), params.fabrication.units);
     let coverage = reference.spline().map_or(f64::NAN, |s| coverage(s, &mesh.sphere_mesh.mesh.faces, uv));
     (exact, buildability, coverage)

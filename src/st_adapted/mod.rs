@@ -248,9 +248,10 @@ pub fn compute(
         let bound = params.distance_bound(reference.facet_sagitta());
         let crossing = |panels: &[Panel]| panels.iter().filter(|p| arcs_cross(&p.sphere, &p.arcs)).count();
         let too_far = final_metrics.max_distance_to_reference > bound.max(m.max_distance_to_reference);
-        if too_far || crossing(&panels) >= crossing(&p) {
+        let before_crossing = crossing(&p);
+        if too_far || crossing(&panels) >= before_crossing {
             if too_far {
-                uncross_warning = Some(Warning::ArcsNotUncrossed { panels: crossing(&p), distance: final_metrics.max_distance_to_reference, bound });
+                uncross_warning = Some(Warning::ArcsNotUncrossed { panels: before_crossing, distance: final_metrics.max_distance_to_reference, bound });
             }
             (sphere_mesh, final_metrics, panels, panel_deviations) = (before, m, p, d);
         }

@@ -11,7 +11,7 @@ use crate::pipeline::fields::{field, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
 use crate::panels::buildability::Buildability;
-use crate::panels::deviation::max_deviation;
+use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::moulds::MouldAssignment;
 use crate::progress::Clock;
@@ -88,8 +88,7 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
 fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let section = StSupportSection::of(result, params.remesh);
     let exact = ExactSurfaces::of(&result.panels, &result.support.elements);
-    let bvh = reference.bvh();
-    let deviations: Vec<f64> = result.panels.iter().map(|p| if bvh.is_empty() { f64::NAN } else { max_deviation(p, bvh) }).collect();
+    let deviations = panel_distances(&result.panels, reference.bvh());
     let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), params.fabrication.units);
     let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega, &buildability, params.max_distance);
     let export = PanelExport::new(
