@@ -1,7 +1,9 @@
 //! Where ST panels with crossing arcs come from (Sec. 3): per shared mesh and ε, the panels whose
-//! arcs cross at the start (central spheres on the remesh) and after the optimization, and for
-//! each crossing panel after it: on the boundary or not, its smallest corner angle, its largest
-//! kink and the smallest radius of its edge circles against its sphere's.
+//! intersection arcs cross at the start (central spheres on the remesh) and after the
+//! optimization, before their edges are bisected, and for each such panel: on the boundary or
+//! not, its smallest corner angle, its largest kink and the smallest radius of its edge circles
+//! against its sphere's; then the edges the delivered panels cut by bisecting planes and the
+//! panels that still cross.
 //!
 //!     cargo run --release --example st_crossings [-- EPSILON [MESH ...]]
 
@@ -37,8 +39,13 @@ fn main() {
         let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
         let tol = 1e-4 * r.diag;
         let initial = crossing(&build_panels_with(&r.initial_sphere_mesh, tol, params.variant));
-        let fin = crossing(&r.panels);
+        let mut intersection = r.sphere_mesh.clone();
+        intersection.bisected_edges.clear();
+        let intersection_panels = build_panels_with(&intersection, tol, params.variant);
+        let fin = crossing(&intersection_panels);
+        let delivered = format!("  delivered: {} edges bisected, {} panels whose arcs cross, gap {:?}", r.sphere_mesh.bisected_edges.len(), crossing(&r.panels).len(), r.metrics.max_gap);
         println!("{name} ε {epsilon}: {} faces, crossing at start {}, after {}; kink max {:.2}°, vertex distance {:.2e}, panel distance {:.2e}", r.panels.len(), initial.len(), fin.len(), r.metrics.max_kink_angle_deg, r.metrics.max_vertex_distance_to_reference, r.metrics.max_distance_to_reference);
+        println!("{delivered}");
         if std::env::var("TERMS").is_ok() {
             for t in &r.terms {
                 println!("    term {:>20} w {:.1e} active {} mean {:.2e} max {:.2e} E {:.2e}", t.name, t.weight, t.active, t.mean_abs, t.max_abs, t.energy);
@@ -51,7 +58,7 @@ fn main() {
         ));
         let boundary = boundary_vertices(&topo);
         for &f in fin.iter().take(12) {
-            let p = &r.panels[f];
+            let p = &intersection_panels[f];
             let c = m.faces[f].corners();
             let pts: Vec<_> = c.iter().map(|&v| m.positions[v as usize]).collect();
             let min_angle = (0..3)

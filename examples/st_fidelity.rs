@@ -58,7 +58,7 @@ fn main() {
             let diag = r.diag;
             let topo = Topology::new(&r.sphere_mesh.mesh);
             let boundary = boundary_vertices(&topo);
-            let distances: Vec<f64> = r.panels.iter().map(|p| max_deviation(p, reference.bvh()) / diag).collect();
+            let distances: Vec<f64> = r.panels.iter().map(|p| max_deviation(p, &reference) / diag).collect();
             let boundary_max = r
                 .sphere_mesh
                 .mesh
@@ -128,7 +128,7 @@ fn detail(reference: &Reference, r: &spherical_faces::st_adapted::StAdaptedResul
     let mut order: Vec<usize> = (0..distances.len()).collect();
     order.sort_by(|&a, &b| distances[b].total_cmp(&distances[a]));
     let initial_panels = spherical_faces::panels::build_panels_with(&r.initial_sphere_mesh, 1e-4 * r.diag, r.variant);
-    let initial: Vec<f64> = initial_panels.iter().map(|p| max_deviation(p, reference.bvh()) / r.diag).collect();
+    let initial: Vec<f64> = initial_panels.iter().map(|p| max_deviation(p, reference) / r.diag).collect();
     println!(
         "  initial sphere mesh: panel distance median {:.4} / p99 {:.4} / max {:.4}",
         median(&initial).unwrap_or(0.0),

@@ -81,8 +81,8 @@ enum Command {
         /// Remesh uniformly to about N faces instead.
         #[arg(long, value_name = "N", value_parser = face_count)]
         faces: Option<usize>,
-        /// Panel edges: (a) intersection circles of adjacent spheres, (b) spheres cut by the
-        /// bisecting face planes.
+        /// Panel edges: (a) intersection circles of adjacent spheres (the bisecting plane where
+        /// one would cross a panel's other arcs), (b) spheres cut by the bisecting face planes.
         #[arg(long, value_name = "a|b", default_value = "a", value_parser = variant)]
         variant: EdgeArcs,
         /// After optimizing, move the panels onto fewer moulds (keeping the largest kink within

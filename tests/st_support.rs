@@ -401,7 +401,7 @@ fn remeshed_runs_measure_distances_to_the_original_reference() {
     let result = compute(&reference, &params, Clock::default(), &mut ignore).unwrap();
     assert_ne!(result.sphere_mesh.mesh.face_count(), reference.mesh().face_count(), "remeshed");
     let (report, files) = export(&reference, &result, &params, Clock::default());
-    let to_original = result.panels.iter().map(|p| max_deviation(p, reference.bvh())).fold(0.0, f64::max);
+    let to_original = result.panels.iter().map(|p| max_deviation(p, &reference)).fold(0.0, f64::max);
     let remesh = Reference::from_triangles(result.sphere_mesh.mesh.triangulated());
     let to_remesh = result.panels.iter().map(|p| max_deviation(p, remesh.bvh())).fold(0.0, f64::max);
     assert_eq!(report.metrics.map(|m| m.max_distance_to_reference), Some(to_original / result.diag));

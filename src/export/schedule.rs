@@ -289,7 +289,6 @@ pub fn build_schedule(panels: &[Panel], reference: &Reference, radius_tolerance:
 /// method measured them already; one per panel).
 pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_tolerance: f64, deviations: Option<&[f64]>) -> PanelSchedule {
     let deviations = deviations.filter(|d| d.len() == panels.len());
-    let bvh = reference.bvh();
     let diag = reference.diagonal();
     let records: Vec<PanelRecord> = panels
         .iter()
@@ -306,8 +305,8 @@ pub fn build_schedule_with(panels: &[Panel], reference: &Reference, radius_toler
                 area: p.area,
                 max_deviation: match deviations {
                     Some(d) => d[i],
-                    None if bvh.is_empty() => f64::NAN,
-                    None => max_deviation(p, bvh),
+                    None if reference.bvh().is_empty() => f64::NAN,
+                    None => max_deviation(p, reference),
                 },
                 triangles: p.triangles.len(),
                 mould: 0,

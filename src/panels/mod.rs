@@ -28,6 +28,10 @@
 //! if that fails too, each face gets its boundary-rule arc. Boundary and non-manifold edges are
 //! treated as in variant (a).
 //!
+//! **Variant (a) where it bounds** ([`bisect_unbuildable_arcs`]): the interior edges listed in
+//! [`SphereMesh::bisected_edges`] are cut as in variant (b) also in variant (a), where the
+//! intersection circle would make a panel's arcs cross or sweep too wide.
+//!
 //! A plane cut with a plane is a straight edge ([`Arc::is_straight`]). Of the two arcs of the
 //! circle between the vertices, the one whose midpoint is nearer the adjacent face triangle(s)
 //! (sum of the distances to the planar triangles) is taken: the panel-side arc, normally the
@@ -150,7 +154,7 @@ impl FaceArcs {
         for (e, &[lo, hi]) in topo.edges().iter().enumerate() {
             let inc: Vec<(usize, usize)> = topo.edge_faces(e).iter().map(|&(f, k)| (f as usize, k as usize)).collect();
             let (p, q) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
-            if edge_arcs == EdgeArcs::BisectingPlanes && inc.len() == 2 {
+            if inc.len() == 2 && (edge_arcs == EdgeArcs::BisectingPlanes || sm.bisected_edges.contains(&[lo, hi])) {
                 // Variant (b), Fig. 12 bottom: every panel cuts its own sphere with the bisecting plane.
                 let [(f, kf), (g, kg)] = [inc[0], inc[1]];
                 let consistent = (corner(f, kf) == lo) != (corner(g, kg) == lo);
@@ -200,6 +204,60 @@ impl FaceArcs {
     /// The faces whose arcs cross one another.
     pub fn crossing(&self) -> Vec<usize> {
         (0..self.sides.len()).filter(|&f| self.cross(f)).collect()
+    }
+}
+
+/// The widest an arc may sweep in variant (a) before its edge is bisected, and the widest a
+/// bisecting plane's arc may sweep for its edge to be bisected: well under the half circle that
+/// one rational quadratic holds (the CAD files, [`exact_surface`]).
+pub const MAX_SWEEP_DEG: f64 = 150.0;
+
+/// Variant (a) where its arcs bound panels: every interior edge of a face whose arcs cross, and
+/// every interior edge whose intersection arc sweeps more than [`MAX_SWEEP_DEG`], is cut by its
+/// bisecting plane instead, as in variant (b), and again for the faces whose arcs then cross,
+/// until no edge is left to bisect. Two nearly tangent spheres of different radii meet in a
+/// small circle whose arc leaves the face sideways (Sec. 6.1, Fig. 12); the bisecting plane cuts
+/// each sphere nearly along the normal, with a small gap between the two panels
+/// ([`gaps::arc_gaps`]). An edge whose bisecting plane would cut an arc wider than
+/// [`MAX_SWEEP_DEG`] keeps its intersection arc.
+pub fn bisect_unbuildable_arcs(mut sm: SphereMesh) -> SphereMesh {
+    let max_sweep = MAX_SWEEP_DEG.to_radians();
+    let mut kept = std::collections::BTreeSet::new();
+    loop {
+        let arcs = FaceArcs::of(&sm, EdgeArcs::Intersection);
+        let crossing: std::collections::BTreeSet<usize> = arcs.crossing().into_iter().collect();
+        let topo = sm.topology();
+        let mut candidates = Vec::new();
+        for (f, face) in sm.mesh.faces.iter().enumerate() {
+            let c = face.corners();
+            for (k, &(arc, _, _)) in arcs.sides[f].iter().enumerate() {
+                let (a, b) = (c[k], c[(k + 1) % c.len()]);
+                let edge = [a.min(b), a.max(b)];
+                let interior = topo.edge_index(a, b).is_some_and(|e| topo.edge_faces(e).len() == 2);
+                if interior && !sm.bisected_edges.contains(&edge) && !kept.contains(&edge) && (crossing.contains(&f) || arc.sweep() > max_sweep) {
+                    candidates.push(edge);
+                }
+            }
+        }
+        candidates.sort_unstable();
+        candidates.dedup();
+        if candidates.is_empty() {
+            return sm;
+        }
+        sm.bisected_edges.extend(candidates.iter().copied());
+        // The bisecting plane's arcs of the candidates: too wide ones keep their intersection arc.
+        let bisected = FaceArcs::of(&sm, EdgeArcs::Intersection);
+        for (f, face) in sm.mesh.faces.iter().enumerate() {
+            let c = face.corners();
+            for (k, &(arc, _, _)) in bisected.sides[f].iter().enumerate() {
+                let (a, b) = (c[k], c[(k + 1) % c.len()]);
+                let edge = [a.min(b), a.max(b)];
+                if arc.sweep() > max_sweep && candidates.binary_search(&edge).is_ok() {
+                    kept.insert(edge);
+                }
+            }
+        }
+        sm.bisected_edges.retain(|e| !kept.contains(e));
     }
 }
 

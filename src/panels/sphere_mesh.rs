@@ -2,7 +2,7 @@
 //! face sphere through its corners. Panels, support structures and exports are derived from it.
 
 use std::cell::OnceCell;
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -34,13 +34,17 @@ pub struct SphereMesh {
     /// `boundary_arcs` (the SQ method cuts along its support planes, Sec. 5.2; the ST method
     /// along the reference boundary).
     pub boundary_planes: HashMap<[u32; 2], DVec3>,
+    /// Interior edges (lo, hi) that variant (a) cuts by their bisecting plane, as variant (b)
+    /// does, because their intersection circle would make a panel's arcs cross or sweep too wide
+    /// ([`super::bisect_unbuildable_arcs`]).
+    pub bisected_edges: BTreeSet<[u32; 2]>,
     /// Connectivity of `mesh`, computed on first use ([`Self::topology`]).
     topology: OnceCell<Topology>,
 }
 
 impl SphereMesh {
     pub fn new(mesh: impl Into<PolyMesh>, face_spheres: Vec<Sphere>, boundary_arcs: BoundaryArcRule) -> Self {
-        Self { mesh: mesh.into(), face_spheres, boundary_arcs, boundary_planes: HashMap::new(), topology: OnceCell::new() }
+        Self { mesh: mesh.into(), face_spheres, boundary_arcs, boundary_planes: HashMap::new(), bisected_edges: BTreeSet::new(), topology: OnceCell::new() }
     }
 
     /// The same mesh with its boundary edges cut by the planes with these normals.
@@ -78,5 +82,6 @@ impl SphereMesh {
 impl PartialEq for SphereMesh {
     fn eq(&self, other: &Self) -> bool {
         self.mesh == other.mesh && self.face_spheres == other.face_spheres && self.boundary_arcs == other.boundary_arcs && self.boundary_planes == other.boundary_planes
+            && self.bisected_edges == other.bisected_edges
     }
 }

@@ -83,10 +83,6 @@ pub enum Warning {
     FoldedFieldTriangles { triangles: usize },
     /// SQ (Sec. 5.2): the quad mesh covers only this share of the patch.
     PartialCoverage { coverage: f64 },
-    /// ST (Sec. 3, 6.1): the arcs of `panels` panels cross, and the rounds that uncross them took
-    /// the panels `distance` from the reference, beyond the method's `bound` (both relative to
-    /// the diagonal), so the closer panels are delivered.
-    ArcsNotUncrossed { panels: usize, distance: f64, bound: f64 },
 }
 
 impl fmt::Display for Warning {
@@ -166,11 +162,6 @@ impl fmt::Display for Warning {
                 "integrating the torsal field folded {triangles} fine triangles: the quad mesh leaves the torsal directions there"
             ),
             Warning::PartialCoverage { coverage } => write!(f, "the quad mesh covers {:.1} % of the patch", 100.0 * coverage),
-            Warning::ArcsNotUncrossed { panels, distance, bound } => write!(
-                f,
-                "the arcs of {panels} panels cross (where H changes sign or faces are thin): uncrossing them took the panels {distance:.2e} of the \
-                 diagonal from the reference, beyond the bound {bound:.2e}, so the closer panels are delivered; a smaller ε or H of one sign helps"
-            ),
         }
     }
 }

@@ -19,6 +19,10 @@ use std::rc::Rc;
 use glam::DVec3;
 
 use self::bspline::{SplineReference, SplineReferenceError};
+
+/// The factor on the largest sampled distance between the facets and the B-spline
+/// ([`Reference::tessellation_error`]) that covers the facets' points between the samples.
+pub const TESSELLATION_ERROR_MARGIN: f64 = 1.5;
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
@@ -71,6 +75,7 @@ pub struct Reference {
     bvh: OnceCell<TriangleBvh>,
     boundary_bvh: OnceCell<TriangleBvh>,
     facet_sagitta: OnceCell<f64>,
+    tessellation_error: OnceCell<f64>,
     max_dihedral_angle_deg: OnceCell<f64>,
     curvature: RefCell<Option<(JetParams, Rc<CurvatureField>)>>,
     spline: Option<SplineReference>,
@@ -106,6 +111,7 @@ impl Reference {
             bvh: OnceCell::new(),
             boundary_bvh: OnceCell::new(),
             facet_sagitta: OnceCell::new(),
+            tessellation_error: OnceCell::new(),
             max_dihedral_angle_deg: OnceCell::new(),
             curvature: RefCell::new(None),
             spline: None,
@@ -177,6 +183,36 @@ impl Reference {
             Some(_) => 0.0,
             None => facet_sagitta(&self.mesh, self.vertex_normals()),
         })
+    }
+
+    /// How far the triangulation's facets lie from the B-spline, absolute (0 for a mesh
+    /// reference, which is its facets): the largest distance to the spline of the facets'
+    /// centroids and edge midpoints, × [`TESSELLATION_ERROR_MARGIN`] for the points between them.
+    /// A point's distance to the spline exceeds its distance to the facets by at most this.
+    pub fn tessellation_error(&self) -> f64 {
+        *self.tessellation_error.get_or_init(|| {
+            let Some(spline) = &self.spline else { return 0.0 };
+            let p = &self.mesh.positions;
+            let mut error = 0.0f64;
+            for t in &self.mesh.triangles {
+                let [a, b, c] = t.map(|v| v as usize);
+                for w in [[1.0 / 3.0; 3], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]] {
+                    let x = w[0] * p[a] + w[1] * p[b] + w[2] * p[c];
+                    let start = [0, 1].map(|k| w[0] * spline.uv[a][k] + w[1] * spline.uv[b][k] + w[2] * spline.uv[c][k]);
+                    error = error.max(spline.closest_point(x, start).1.distance(x));
+                }
+            }
+            TESSELLATION_ERROR_MARGIN * error
+        })
+    }
+
+    /// The distance from `p` to the surface, given the closest point `hit` of the triangulation:
+    /// on a B-spline, to its exact closest point from there; on a mesh, the hit's.
+    pub fn distance_from_hit(&self, p: DVec3, hit: ClosestHit) -> f64 {
+        match &self.spline {
+            Some(_) => self.surface_point_of(p, hit).point.distance(p),
+            None => hit.distance,
+        }
     }
 
     /// The largest angle (degrees) between the normals of two facets sharing an interior edge of

@@ -473,7 +473,7 @@ impl SqFinal {
 /// (vertices at their closest points `uv`).
 pub fn measure_panels(reference: &Reference, mesh: &SqMesh, uv: &[[f64; 2]], params: &SqParams) -> (ExactSurfaces, Buildability, f64) {
     let exact = ExactSurfaces::of(&mesh.panels, &mesh.support.elements);
-    let distances = panel_distances(&mesh.panels, reference.bvh());
+    let distances = panel_distances(&mesh.panels, reference);
     let buildability = Buildability::measure(&exact, &distances, true, reference.diagonal(), params.fabrication.units);
     let coverage = reference.spline().map_or(f64::NAN, |s| coverage(s, &mesh.sphere_mesh.mesh.faces, uv));
     (exact, buildability, coverage)

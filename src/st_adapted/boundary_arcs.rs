@@ -1,4 +1,4 @@
-//! The arcs of the boundary edges (one face each): cut from the face sphere by the plane through
+//! The arcs the method delivers ([`delivered_arcs`]). Those of the boundary edges (one face each): cut from the face sphere by the plane through
 //! the edge whose circle passes nearest the reference boundary, so the panels follow the
 //! boundary instead of overhanging it.
 //!
@@ -14,7 +14,8 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
-use crate::panels::edge_arcs::cuts_straight;
+use crate::panels::bisect_unbuildable_arcs;
+use crate::panels::edge_arcs::{cuts_straight, EdgeArcs};
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::reference::Reference;
 
@@ -54,4 +55,16 @@ pub fn boundary_planes(sphere_mesh: &SphereMesh, reference: &Reference) -> HashM
         }
     }
     planes
+}
+
+/// `sphere_mesh` with the arcs the method delivers: its boundary edges cut along the reference
+/// boundary ([`boundary_planes`]) and, in variant (a), the interior edges whose intersection arc
+/// would cross another or sweep too wide cut by bisecting planes ([`bisect_unbuildable_arcs`]).
+pub fn delivered_arcs(sphere_mesh: SphereMesh, reference: &Reference, variant: EdgeArcs) -> SphereMesh {
+    let planes = boundary_planes(&sphere_mesh, reference);
+    let sphere_mesh = sphere_mesh.with_boundary_planes(planes);
+    match variant {
+        EdgeArcs::Intersection => bisect_unbuildable_arcs(sphere_mesh),
+        EdgeArcs::BisectingPlanes => sphere_mesh,
+    }
 }

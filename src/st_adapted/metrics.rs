@@ -31,7 +31,8 @@ pub struct StAdaptedMetrics {
     /// Max vertex distance to the reference, relative.
     #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_vertex_distance_to_reference: f64,
-    /// Variant (b): the largest gap between the two arcs of an edge ([`max_arc_gap`]), relative.
+    /// Variant (b), and variant (a) with bisected edges: the largest gap between the two arcs of
+    /// an edge ([`max_arc_gap`]), relative.
     pub max_gap: Option<f64>,
     pub faces: usize,
     pub interior_edges: usize,
@@ -40,6 +41,10 @@ pub struct StAdaptedMetrics {
     pub flipped_faces: usize,
     /// Variant (b): the gap of `max_gap` divided by its edge's length.
     pub max_gap_over_edge_length: Option<f64>,
+    /// Variant (a): the interior edges cut by bisecting planes, where the intersection circle
+    /// would make a panel's arcs cross ([`SphereMesh::bisected_edges`]); they have the gaps.
+    #[serde(default)]
+    pub bisected_edges: usize,
 }
 
 /// The shape of a sphere mesh before it has panels (lengths relative to the reference
@@ -81,7 +86,7 @@ pub fn shape(sm: &SphereMesh, reference: &Reference) -> StAdaptedShape {
         max_vertex_sphere_residual: sm.max_vertex_sphere_residual() / diag,
         mean_kink_angle_deg: mean(&kinks),
         max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),
-        max_vertex_distance_to_reference: mesh.positions.iter().map(|&p| reference.bvh().distance(p)).fold(0.0, f64::max) / diag,
+        max_vertex_distance_to_reference: mesh.positions.iter().map(|&p| reference.closest_point(p).map_or(f64::INFINITY, |h| h.point.distance(p))).fold(0.0, f64::max) / diag,
         faces: mesh.face_count(),
         interior_edges: kinks.len(),
         flipped_faces,
@@ -95,9 +100,10 @@ pub fn metrics(sm: &SphereMesh, reference: &Reference, variant: EdgeArcs) -> (St
     let diag = reference.diagonal().max(f64::MIN_POSITIVE);
     let s = shape(sm, reference);
     let panels = build_panels_with(sm, DEFAULT_CHORD_TOLERANCE * diag, variant);
-    let deviations: Vec<f64> = panels.iter().map(|p| max_deviation(p, reference.bvh())).collect();
+    let deviations: Vec<f64> = panels.iter().map(|p| max_deviation(p, reference)).collect();
     let dist = deviations.iter().copied().fold(0.0, f64::max) / diag;
-    let gap = (variant == EdgeArcs::BisectingPlanes).then(|| max_arc_gap(&panels, sm.topology(), GAP_SAMPLES));
+    let gaps = variant == EdgeArcs::BisectingPlanes || !sm.bisected_edges.is_empty();
+    let gap = gaps.then(|| max_arc_gap(&panels, sm.topology(), GAP_SAMPLES));
     let metrics = StAdaptedMetrics {
         max_vertex_sphere_residual: s.max_vertex_sphere_residual,
         mean_kink_angle_deg: s.mean_kink_angle_deg,
@@ -109,6 +115,7 @@ pub fn metrics(sm: &SphereMesh, reference: &Reference, variant: EdgeArcs) -> (St
         faces: s.faces,
         interior_edges: s.interior_edges,
         flipped_faces: s.flipped_faces,
+        bisected_edges: sm.bisected_edges.len(),
     };
     (metrics, panels, deviations)
 }

@@ -85,7 +85,6 @@ use crate::congruence::central_spheres::{CurvatureField, UnusableCentralSpheres}
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::exact_surface::arcs_cross;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
@@ -96,7 +95,7 @@ use crate::solver::{IterationReport, Solver, SolverOptions, TermStats};
 use crate::stats::median;
 use initialization::initial_spheres;
 use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
-use optimization::{run_stages, uncross_arcs, OptimizationFrame};
+use optimization::{run_stages, OptimizationFrame};
 use crate::panels::moulds::{MouldFits, MouldSnap};
 use moulds::{fewer_moulds, snap_to_moulds, MouldRound, MouldTargets};
 use params::StAdaptedParams;
@@ -239,23 +238,6 @@ pub fn compute(
     let initial_shape = shape(&initial_sphere_mesh, reference);
     let mut sphere_mesh = optimized.sphere_mesh;
     let (mut final_metrics, mut panels, mut panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
-    let mut uncross_warning = None;
-    if let Some(before) = optimized.before_uncross {
-        // Arcs that cross nowhere are kept only with the panels within the method's distance
-        // bound (or no farther than before): otherwise the closer panels are delivered, and the
-        // verdict counts their crossing arcs.
-        let (m, p, d) = metrics(&before, reference, params.variant);
-        let bound = params.distance_bound(reference.facet_sagitta());
-        let crossing = |panels: &[Panel]| panels.iter().filter(|p| arcs_cross(&p.sphere, &p.arcs)).count();
-        let too_far = final_metrics.max_distance_to_reference > bound.max(m.max_distance_to_reference);
-        let before_crossing = crossing(&p);
-        if too_far || crossing(&panels) >= before_crossing {
-            if too_far {
-                uncross_warning = Some(Warning::ArcsNotUncrossed { panels: before_crossing, distance: final_metrics.max_distance_to_reference, bound });
-            }
-            (sphere_mesh, final_metrics, panels, panel_deviations) = (before, m, p, d);
-        }
-    }
     timings.lap("metrics");
     let (mut mould_rounds, mut moulds_before, mut fits_before, mut mould_snap) = (Vec::new(), None, None, None);
     if params.optimize_moulds {
@@ -280,7 +262,6 @@ pub fn compute(
     }
     let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
-    warnings.extend(uncross_warning);
     if let Some(epsilon) = params.epsilon() {
         warnings.extend(coarseness_warning(reference, epsilon));
     }
@@ -341,9 +322,6 @@ fn remesh(
 /// What the optimization made.
 struct Optimized {
     sphere_mesh: SphereMesh,
-    /// The mesh before [`uncross_arcs`], when it ran: kept instead where uncrossing the arcs
-    /// took the panels farther from the reference than the method's bound.
-    before_uncross: Option<SphereMesh>,
     terms: Vec<TermStats>,
     iterations: usize,
     iteration_ms: Vec<f64>,
@@ -381,16 +359,12 @@ fn optimize(
     let model = |x: &[f64]| {
         let (verts, sph) = frame.to_model(x);
         let sphere_mesh = SphereMesh::new(TriMesh::new(verts, remeshed.triangles.clone()), sph, BoundaryArcRule::Parallel(DVec3::ZERO));
-        let planes = boundary_arcs::boundary_planes(&sphere_mesh, reference);
-        sphere_mesh.with_boundary_planes(planes)
+        boundary_arcs::delivered_arcs(sphere_mesh, reference, params.variant)
     };
-    let before = x.clone();
-    let uncrossed = uncross_arcs(&frame, &mut problem, &ids, &mut x, params, &mut solver, &mut hook).map_err(|Cancelled| StAdaptedError::Cancelled)?;
     problem.prepare(&x);
     let terms = problem.term_stats(&x);
     Ok(Optimized {
         sphere_mesh: model(&x),
-        before_uncross: uncrossed.ran.then(|| model(&before)),
         terms,
         iterations: iteration,
         supernodal: run.last.as_ref().is_some_and(|r| r.supernodal),

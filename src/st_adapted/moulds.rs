@@ -10,7 +10,7 @@
 
 use std::cell::RefCell;
 
-use super::boundary_arcs::boundary_planes;
+use super::boundary_arcs::delivered_arcs;
 use super::metrics::{metrics, StAdaptedMetrics};
 use super::optimization::{run_stages, OptimizationFrame};
 use super::params::{OptimizationStage, StAdaptedParams};
@@ -173,8 +173,7 @@ pub fn fewer_moulds(
         iterations += run.into_inner();
         let (verts, spheres) = frame.to_model(&x);
         let moved = SphereMesh::new(TriMesh::new(verts, mesh.triangles.clone()), spheres, current.boundary_arcs);
-        let planes = boundary_planes(&moved, reference);
-        let moved = moved.with_boundary_planes(planes);
+        let moved = delivered_arcs(moved, reference, params.variant);
         on_event(StAdaptedEvent::MouldRound { round: k + 1, sphere_mesh: &moved })?;
         let (m, moved_panels, deviations) = metrics(&moved, reference, params.variant);
         let count = fabrication.assign(&MouldFits::of(&moved_panels), diag).moulds.len();
@@ -277,8 +276,7 @@ fn snap_once(
         }
     }
     let moved = SphereMesh::new(sphere_mesh.mesh.clone(), spheres, sphere_mesh.boundary_arcs);
-    let planes = boundary_planes(&moved, reference);
-    let moved = moved.with_boundary_planes(planes);
+    let moved = delivered_arcs(moved, reference, variant);
     let (m, moved_panels, deviations) = metrics(&moved, reference, variant);
     if !targets.hold(&m, &moved_panels) {
         let limits = vec![Some(SnapLimit::MethodTargets); panels.len()];

@@ -2,16 +2,12 @@
 
 use glam::DVec3;
 
-use super::boundary_arcs::boundary_planes;
 use super::params::StAdaptedParams;
 use super::params::StAdaptedWeights;
 use super::terms::{boundary_vertices, build_problem, pack, unpack, vertex_offset, StAdaptedTerms};
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::sphere::Sphere;
-use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
-use crate::panels::FaceArcs;
 use crate::progress::Cancelled;
 use crate::reference::Reference;
 use crate::solver::{IterationReport, PhaseTimes, Problem, SolveReport, Solver, Termination};
@@ -70,76 +66,6 @@ pub fn run_stages(
         run.last = Some(report);
     }
     Ok(run)
-}
-
-/// Rounds of [`uncross_arcs`] at most, solver iterations per round, the factor by which a round
-/// raises the corner-turn residuals of a panel whose arcs still cross, and the factor on the
-/// proximity weights meanwhile.
-const UNCROSS_ROUNDS: usize = 10;
-const UNCROSS_ITERATIONS: usize = 8;
-const UNCROSS_FACTOR: f64 = 3.0;
-const UNCROSS_PROXIMITY: f64 = 10.0;
-/// Rounds in a row that uncross no panel before the rounds stop.
-const UNCROSS_STALLS: usize = 3;
-
-/// Panels whose arcs still cross after the stages, a fold at the level of the arcs: two spheres
-/// nearly tangent at an edge with different radii (where H changes sign, say) meet in a small
-/// circle whose arc leaves the panel sideways (Sec. 6.1). Each round switches on the
-/// corner-turn residuals ([`super::terms::CornerTurn`], variant (a)) of every such panel, or
-/// raises them by [`UNCROSS_FACTOR`] where they are on already, and optimizes again with the
-/// proximity weights × [`UNCROSS_PROXIMITY`], so that the panels keep to the reference while
-/// their spheres and vertices move. Only those panels pay: the residual of a panel whose
-/// spheres nearly coincide turns fast with them, and on every panel at once it would trade the
-/// reference for arcs that cross nowhere.
-pub fn uncross_arcs(
-    frame: &OptimizationFrame,
-    problem: &mut Problem,
-    ids: &StAdaptedTerms,
-    x: &mut [f64],
-    params: &StAdaptedParams,
-    solver: &mut Solver,
-    hook: &mut StageHook,
-) -> Result<Uncrossed, Cancelled> {
-    let mut crossing = frame.crossing_faces(x, params.variant);
-    if crossing.is_empty() || ids.corner_turn.is_none() {
-        return Ok(Uncrossed { ran: false, crossing });
-    }
-    let w = &params.weights;
-    problem.set_weight(ids.tangent_distance, w.tangent_distance * UNCROSS_PROXIMITY);
-    problem.set_weight(ids.point_distance, w.point_distance * UNCROSS_PROXIMITY);
-    problem.set_weight(ids.face_distance, w.face_distance * UNCROSS_PROXIMITY);
-    for id in ids.tolerance.into_iter().flatten() {
-        problem.set_weight(id, w.tolerance * UNCROSS_PROXIMITY);
-    }
-    let mut stalled = 0;
-    for _ in 0..UNCROSS_ROUNDS {
-        {
-            let mut scales = ids.corner_scales.borrow_mut();
-            for &f in &crossing {
-                scales[f] = (scales[f] * UNCROSS_FACTOR).max(1.0);
-            }
-        }
-        solver.options.max_iterations = UNCROSS_ITERATIONS;
-        let report = solver.solve(problem, x, |rep| hook("uncross arcs", rep));
-        if report.termination == Termination::Cancelled {
-            return Err(Cancelled);
-        }
-        let before = crossing.len();
-        crossing = frame.crossing_faces(x, params.variant);
-        // Done, or stuck: rounds in a row that uncross none end them.
-        stalled = if crossing.len() < before { 0 } else { stalled + 1 };
-        if crossing.is_empty() || stalled == UNCROSS_STALLS {
-            break;
-        }
-    }
-    Ok(Uncrossed { ran: true, crossing })
-}
-
-/// What [`uncross_arcs`] did: whether it ran (some panel's arcs crossed after the stages), and
-/// the faces whose arcs still cross.
-pub struct Uncrossed {
-    pub ran: bool,
-    pub crossing: Vec<usize>,
 }
 
 /// The optimization in its normalized frame: the reference and the remeshed mesh moved by the
@@ -206,15 +132,6 @@ impl OptimizationFrame {
             problem.fix_range(o..o + 3);
         }
         (problem, ids)
-    }
-
-    /// The faces of `x` whose arcs cross one another ([`FaceArcs::crossing`]), in the frame, with
-    /// the boundary arcs the result will have ([`boundary_planes`]).
-    pub fn crossing_faces(&self, x: &[f64], variant: EdgeArcs) -> Vec<usize> {
-        let (verts, spheres) = unpack(x, &self.mesh.triangles, self.mesh.vertex_count());
-        let sm = SphereMesh::new(TriMesh::new(verts, self.mesh.triangles.clone()), spheres, BoundaryArcRule::Parallel(DVec3::ZERO));
-        let planes = boundary_planes(&sm, &self.reference);
-        FaceArcs::of(&sm.with_boundary_planes(planes), variant).crossing()
     }
 
     /// Vertices and face spheres of `x`, in model coordinates.

@@ -22,11 +22,6 @@ pub struct StAdaptedWeights {
     /// Variant (a): the sideways bulge of the edge circles' arcs (`terms::EdgeCircle`); not
     /// used by variant (b), whose arcs are cut by bisecting planes.
     pub edge_circle: f64,
-    /// Variant (a): the two arcs at a panel's corner turning into it by more than half the
-    /// corner's angle together (`terms::CornerTurn` under a `solver::Hinge`), where they would
-    /// cross; with `edge_circle`.
-    #[serde(default = "default_corner_turn")]
-    pub corner_turn: f64,
     /// Variant (a): adjacent panels whose sagittas over their common edge differ by more than
     /// the tolerance band's τ (`terms::SagittaMatch` in a `solver::Band`); not used by variant
     /// (b), nor without a tolerance ε.
@@ -48,16 +43,11 @@ impl Default for StAdaptedWeights {
             face_distance: 100.0,
             fairness: 1.0,
             edge_circle: 10.0,
-            corner_turn: default_corner_turn(),
             sagitta_match: 1e4,
             orientation: 1000.0,
             tolerance: 1e4,
         }
     }
-}
-
-fn default_corner_turn() -> f64 {
-    1e3
 }
 
 /// One optimization stage: proximity weights × `proximity_scale`, at most `iterations` solver

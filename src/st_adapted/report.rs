@@ -28,10 +28,14 @@ pub struct StAdaptedSection {
     pub initial_mean_kink_angle_deg: f64,
     #[serde(deserialize_with = "f64_or_nan")]
     pub initial_max_kink_angle_deg: f64,
-    /// Variant (b): the largest gap between the two arcs of an edge, measured on the panels' own
-    /// arcs ([`crate::panels::gaps`]), relative.
+    /// Variant (b), and variant (a) at its bisected edges: the largest gap between the two arcs
+    /// of an edge, measured on the panels' own arcs ([`crate::panels::gaps`]), relative.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_gap: Option<f64>,
+    /// Variant (a): the interior edges cut by bisecting planes instead of the intersection
+    /// circle, which would make a panel's arcs cross ([`crate::panels::bisect_where_arcs_cross`]).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub bisected_edges: usize,
     /// With `--optimize-moulds`: each round toward fewer moulds (coarsening, moulds at δ, largest
     /// kink, distance, kept).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -53,8 +57,13 @@ impl StAdaptedSection {
             initial_mean_kink_angle_deg: i.mean_kink_angle_deg,
             initial_max_kink_angle_deg: i.max_kink_angle_deg,
             max_gap: m.max_gap,
+            bisected_edges: m.bisected_edges,
             mould_rounds: result.mould_rounds.clone(),
             moulds_before: result.moulds_before,
         }
     }
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }

@@ -321,127 +321,6 @@ impl Term for EdgeCircle {
     }
 }
 
-/// Variant (a): at every corner p of a panel, its two arcs turn into the panel by less than
-/// [`CORNER_TURN`] of the corner's angle together, so that they cannot meet (Sec. 6.1): each
-/// circular arc stays in the wedge between its chord and its tangent at p, and the two wedges
-/// at p are apart while their angles add up to less than the corner's. Residual per corner
-/// p (next corner q, previous s): δ_q + δ_s − [`CORNER_TURN`]·θ, under a [`Hinge`], with θ the
-/// corner's angle and δ the angle by which an arc's tangent at p turns from its chord into the
-/// face, about the face normal N = (q − p) × (s − p). An arc's tangent at p is m × ∇ψ_f(p),
-/// m = a_g b_f − a_f b_g the normal of its circle's plane (the radical plane of s_f and s_g),
-/// toward its other end; a boundary side (no circle of two spheres) counts as its chord.
-pub struct CornerTurn {
-    spheres: FaceSpheres,
-    /// Per corner: (face f, offsets of p, q, s, the faces across pq and across ps).
-    corners: Vec<(usize, [usize; 3], [Option<usize>; 2])>,
-    scales: FaceScales,
-}
-
-/// A factor per face on the residuals of its corners' [`CornerTurn`] (0, off, until the driver
-/// switches it on and raises it at a panel whose arcs cross,
-/// [`super::optimization::uncross_arcs`]).
-pub type FaceScales = Rc<RefCell<Vec<f64>>>;
-
-/// The share of a corner's angle that its two arcs may turn into the panel together.
-pub const CORNER_TURN: f64 = 0.5;
-
-impl CornerTurn {
-    /// Every corner of every face of `triangles` (corner offsets), with the faces across its sides.
-    fn new(spheres: FaceSpheres, corners: &[[usize; 3]], topology: &Topology, scales: FaceScales) -> Self {
-        let mut across = std::collections::HashMap::new();
-        for (e, f, g) in topology.interior_edges() {
-            let [a, b] = topology.edges()[e];
-            across.insert((a.min(b), a.max(b)), (f as usize, g as usize));
-        }
-        let nf = corners.len();
-        let vertex = |o: usize| ((o - vertex_offset(nf, 0)) / 3) as u32;
-        let other = |f: usize, a: usize, b: usize| {
-            let (va, vb) = (vertex(a), vertex(b));
-            across.get(&(va.min(vb), va.max(vb))).map(|&(g, h)| if g == f { h } else { g })
-        };
-        let mut all = Vec::with_capacity(3 * nf);
-        for (f, c) in corners.iter().enumerate() {
-            for i in 0..3 {
-                let (p, q, s) = (c[i], c[(i + 1) % 3], c[(i + 2) % 3]);
-                all.push((f, [p, q, s], [other(f, p, q), other(f, p, s)]));
-            }
-        }
-        Self { spheres, corners: all, scales }
-    }
-}
-
-/// δ_q + δ_s − [`CORNER_TURN`]·θ at a corner (see [`CornerTurn`]) and its gradient by
-/// (s_f, s_q, s_s, p, q, s): s_q, s_s the spheres across pq and ps (None: a boundary side).
-fn corner_turn(sf: &[f64; 5], sq: Option<&[f64; 5]>, ss: Option<&[f64; 5]>, [p, q, s]: [DVec3; 3]) -> Option<(f64, [f64; 24])> {
-    type D = Dual<24>;
-    let sphere = |x: &[f64; 5], at: usize| -> [D; 5] { std::array::from_fn(|k| D::variable(x[k], at + k)) };
-    let f = sphere(sf, 0);
-    let (p, q, s) = (D3::<24>::variable(p, 15), D3::<24>::variable(q, 18), D3::<24>::variable(s, 21));
-    let b = |x: &[D; 5]| D3 { x: x[1], y: x[2], z: x[3] };
-    let (u, v) = (q - p, s - p);
-    let n = u.cross(v);
-    let nn = n.dot(n);
-    if !(nn.v > 0.0) {
-        return None;
-    }
-    let n_hat = n * nn.sqrt().recip();
-    let theta = nn.sqrt().atan2(u.dot(v));
-    let grad_f = p * (f[0] * 2.0) - b(&f);
-    // The angle from `chord` to the arc's tangent at p, about N (positive: counter-clockwise).
-    let turn = |g: &[D; 5], chord: D3<24>| -> Option<D> {
-        let m = b(&f) * g[0] - b(g) * f[0];
-        let t = m.cross(grad_f);
-        let t = if t.dot(chord).v < 0.0 { t * D::constant(-1.0) } else { t };
-        let (y, x) = (chord.cross(t).dot(n_hat), chord.dot(t));
-        (x.v != 0.0 || y.v != 0.0).then(|| y.atan2(x))
-    };
-    let zero = D::constant(0.0);
-    let delta_q = match sq {
-        Some(g) => turn(&sphere(g, 5), u)?,
-        None => zero,
-    };
-    // The side to s runs clockwise into the face.
-    let delta_s = match ss {
-        Some(g) => -turn(&sphere(g, 10), v)?,
-        None => zero,
-    };
-    let r = delta_q + delta_s - theta * CORNER_TURN;
-    (r.v.is_finite()).then_some((r.v, r.d))
-}
-
-impl Term for CornerTurn {
-    fn name(&self) -> &str {
-        "corner_turn"
-    }
-    fn residual_count(&self) -> usize {
-        self.corners.len()
-    }
-    fn eval(&self, x: &[f64], r: &mut [f64], jac: &mut JacobianSink) {
-        let scales = self.scales.borrow();
-        self.spheres.with(x, |m| {
-            for (k, &(f, offsets, [gq, gs])) in self.corners.iter().enumerate() {
-                let points = offsets.map(|o| v3(x, o));
-                let (value, grad) = corner_turn(&m[f].sphere, gq.map(|g| &m[g].sphere), gs.map(|g| &m[g].sphere), points).unwrap_or((0.0, [0.0; 24]));
-                let grad = grad.map(|g| scales[f] * g);
-                r[k] = scales[f] * value;
-                // Every sphere and corner in the pattern, also where the residual is 0, so the
-                // solver keeps its symbolic factorization.
-                let block = |i: usize| -> [f64; 5] { std::array::from_fn(|j| grad[i + j]) };
-                self.spheres.add_chain(jac, k, f, &m[f], &block(0));
-                if let Some(g) = gq {
-                    self.spheres.add_chain(jac, k, g, &m[g], &block(5));
-                }
-                if let Some(g) = gs {
-                    self.spheres.add_chain(jac, k, g, &m[g], &block(10));
-                }
-                for (i, &o) in offsets.iter().enumerate() {
-                    jac.add_block(k, o, &grad[15 + 3 * i..18 + 3 * i]);
-                }
-            }
-        });
-    }
-}
-
 /// Variant (a): the two panels of an interior edge pq bulge alike over it. A normalized sphere
 /// (curvature 2a) rises (L²/8)·2a over a chord of length L = |p − q|, so the panels' sagittas
 /// over pq differ by (L²/4)(a_f − a_g), the residual. Where that exceeds τ (in a [`Band`]), the
@@ -487,15 +366,11 @@ pub struct StAdaptedTerms {
     pub face_distance: TermId,
     pub fairness: TermId,
     pub edge_circle: Option<TermId>,
-    /// The arcs' turn into the panel at its corners under a hinge (variant (a)).
-    pub corner_turn: Option<TermId>,
     /// The sagitta match band (variant (a), with a tolerance).
     pub sagitta_match: Option<TermId>,
     /// The tolerance band (vertices, face centroids), when the problem has a tolerance.
     pub tolerance: Option<[TermId; 2]>,
     pub orientation: TermId,
-    /// The factors per face on its corners' [`CornerTurn`] residuals ([`FaceScales`]).
-    pub corner_scales: FaceScales,
 }
 
 /// Vertices on an edge without exactly two faces (boundary or non-manifold): they keep their
@@ -630,12 +505,6 @@ pub fn build_problem<'a>(
             .collect();
         problem.add_term(EdgeCircle { spheres: spheres.clone(), edges: edge_faces.clone(), ends, lookups: lookups.clone(), normals }, weights.edge_circle)
     });
-    // Off until a panel's arcs cross ([`super::optimization::uncross_arcs`]).
-    let corner_scales: FaceScales = Rc::new(RefCell::new(vec![0.0; nf]));
-    let corner_turn = (weights.edge_circle > 0.0 && weights.corner_turn > 0.0).then(|| {
-        let term = CornerTurn::new(spheres.clone(), &corners, topology, corner_scales.clone());
-        problem.add_term(Hinge::new(term).with_name("corner_turn"), weights.corner_turn)
-    });
     let sagitta_match = tolerance.filter(|_| weights.sagitta_match > 0.0).map(|tau| {
         problem.add_term(Band::new(SagittaMatch { spheres: spheres.clone(), edges: edge_faces }, tau).with_name("sagitta_match"), weights.sagitta_match)
     });
@@ -646,11 +515,9 @@ pub fn build_problem<'a>(
         face_distance,
         fairness,
         edge_circle,
-        corner_turn,
         sagitta_match,
         orientation,
         tolerance: tolerance_terms,
-        corner_scales,
     };
     (problem, terms)
 }

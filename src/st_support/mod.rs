@@ -231,7 +231,7 @@ fn fewer_moulds(
     progress: &mut OnProgress,
 ) -> Result<StSupportResult, StSupportError> {
     let diag = reference.diagonal();
-    let distance = |panels: &[Panel]| max_distance_to_reference(panels, reference.bvh(), diag);
+    let distance = |panels: &[Panel]| max_distance_to_reference(panels, reference, diag);
     let start_distance = distance(&start.panels);
     let progress = RefCell::new(progress);
     let faces = start.sphere_mesh.mesh.face_count();

@@ -88,7 +88,7 @@ pub fn export(reference: &Reference, result: &StSupportResult, params: &StSuppor
 fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
     let section = StSupportSection::of(result, params.remesh);
     let exact = ExactSurfaces::of(&result.panels, &result.support.elements);
-    let deviations = panel_distances(&result.panels, reference.bvh());
+    let deviations = panel_distances(&result.panels, reference);
     let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), params.fabrication.units);
     let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega, &buildability, params.max_distance);
     let export = PanelExport::new(

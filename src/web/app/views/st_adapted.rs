@@ -206,7 +206,7 @@ fn controls(
     ui.horizontal(|ui| {
         ui.label("edges");
         ui.radio_value(&mut params.variant, EdgeArcs::Intersection, "(a) sphere intersections")
-            .on_hover_text("Fig. 12 (a): edges are the intersection circles of adjacent face spheres");
+            .on_hover_text("Fig. 12 (a): edges are the intersection circles of adjacent face spheres; where one would cross the panel's other arcs, the edge is cut by the bisecting plane instead, with a small gap");
         ui.radio_value(&mut params.variant, EdgeArcs::BisectingPlanes, "(b) bisecting planes")
             .on_hover_text("Fig. 12 (b): each sphere is cut by the bisecting face planes; small gaps remain");
     });
@@ -238,8 +238,11 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
         ("vertex–sphere residual", g(Some(sum.metrics.max_vertex_sphere_residual))),
         ("distance to reference", sum.report.metrics.as_ref().map_or("–".into(), |m| m.max_distance_text())),
     ];
+    if sum.metrics.bisected_edges > 0 {
+        rows.push(("edges cut by bisecting planes", sum.metrics.bisected_edges.to_string()));
+    }
     if let Some(gap) = sum.metrics.max_gap {
-        rows.push(("max gap (b)", format!("{gap:.3e}")));
+        rows.push(("max gap", format!("{gap:.3e} of the diagonal")));
     }
     if let Some((lo, hi)) = sum.sizing_range {
         rows.push(("sizing g min / max", format!("{lo:.4} / {hi:.4}")));
