@@ -230,6 +230,13 @@ fn sq_writes_the_congruence_and_its_report() {
     assert_eq!(m["quads_without_real_torsal_directions"], 0);
     assert!(c["lc_residual"].as_f64().unwrap().is_finite());
     assert!(c["radius_fit_error"].as_f64().unwrap() < 0.1);
+    // The start kept, and every start tried: the central one meets θ and α here.
+    assert_eq!(c["start"], "central");
+    let attempts = c["attempts"].as_array().unwrap();
+    assert_eq!(attempts.len(), 1, "{attempts:?}");
+    assert_eq!(attempts[0]["start"], "central");
+    assert_eq!(attempts[0]["misses"], 0);
+    assert_eq!(attempts[0]["figures"], c["figures"]);
     for k in ["lc_iteration_median", "torsal_iteration_median", "total"] {
         assert!(r["timings_ms"][k].as_f64().unwrap() > 0.0, "timings_ms.{k}");
     }
@@ -261,6 +268,26 @@ fn sq_writes_the_congruence_and_its_report() {
     let json = spherical_faces::export::glb::glb_json(&glb).expect("a GLB");
     let names: Vec<&str> = json["nodes"].as_array().unwrap().iter().map(|n| n["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["surface", "lines", "initial_lines", "cross_field"]);
+}
+
+/// The report says which start the congruence was kept from (Sec. 5.1, 6.3): on the bulged
+/// tunnel the central congruence misses θ or α and the constant radii meet both, so the run
+/// tried both, kept the constant one and warns that the central one was replaced.
+#[test]
+fn sq_reports_the_start_it_kept() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-sq-start-{}", std::process::id()));
+    let out = run(&["sq", "../shared/data/bsplines/hard/tunnel_bulged.json", "--until", "congruence", "-q", "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let c = &r["sq"]["congruence"];
+    assert_eq!(c["start"], "constant", "{c}");
+    let attempts = c["attempts"].as_array().unwrap();
+    assert_eq!(attempts.iter().map(|a| a["start"].as_str().unwrap()).collect::<Vec<_>>(), ["central", "constant"]);
+    assert!(attempts[0]["misses"].as_u64().unwrap() > 0 && attempts[1]["misses"] == 0, "{attempts:?}");
+    assert_eq!(attempts[1]["figures"], c["figures"]);
+    let warnings = r["warnings"].as_array().unwrap();
+    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("starts from constant radii instead")), "{warnings:?}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -178,7 +178,7 @@ pub fn validate(params: &SqParams) -> Result<(), SqError> {
 }
 
 /// One start of the congruence optimization and what it reached.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CongruenceAttempt {
     pub start: RadiusStart,
     /// Of the start's congruence, and of the optimized one (measured on the lines of r).

@@ -5,9 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use super::metrics::CongruenceFigures;
 use super::moulds::SqMouldRound;
-use super::params::{RadiusBasis, SqParams};
+use super::params::{RadiusBasis, RadiusStart, SqParams};
 use super::sq_mesh::SqMeshFigures;
-use super::{SqCongruence, SqResult};
+use super::{CongruenceAttempt, SqCongruence, SqResult};
 use crate::panels::moulds::{MouldOutcome, MouldRoundsSection};
 use crate::stats::mean;
 
@@ -35,6 +35,13 @@ pub struct SqSection {
 /// fitted r, or constant radii) and optimized.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CongruenceSection {
+    /// The start the congruence was kept from (Sec. 5.1, 6.3): "central" or "constant".
+    #[serde(default)]
+    pub start: RadiusStart,
+    /// Every start tried, in order: its figures at the start and optimized, and its misses of θ
+    /// and α on G (the kept one is the first without, else the first with the fewest).
+    #[serde(default)]
+    pub attempts: Vec<CongruenceAttempt>,
     pub initial: CongruenceFigures,
     pub figures: CongruenceFigures,
     /// E_LC per term (dimensionless, c_u and c_v normalized) after both steps, and after step 1.
@@ -79,6 +86,8 @@ pub struct SqMeshSection {
 impl CongruenceSection {
     pub fn of(c: &SqCongruence) -> Self {
         Self {
+            start: c.start,
+            attempts: c.attempts.clone(),
             initial: c.initial_figures.clone(),
             figures: c.figures.clone(),
             lc_residual: c.lc_residual,

@@ -454,7 +454,9 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
     let r = &sum.report;
     let g = |x: f64| format!("{x:.2e}");
     let ok = |good: bool| if good { "✔" } else { "✘" };
+    let tried: Vec<String> = c.attempts.iter().map(|a| format!("{} ({} misses)", a.start.key(), a.misses)).collect();
     let mut rows = vec![
+        ("start kept", format!("{} of {}", c.start.key(), tried.join(", then "))),
         (
             "max ∠(l, n), central → final",
             format!(
