@@ -2,7 +2,8 @@
 //! iterations and where the final optimization's time goes:
 //! `cargo run --release --example sq_mesh -- FILE.json|sample:vault ...`.
 //! Environment: FULL / PROJ (iterations of the full optimization / the projection), FAIRIT /
-//! FAIRW (Q′ fairing iterations / weight), V (print the terms during the final optimization).
+//! FAIRW (Q′ fairing iterations / weight), V (print the terms during the final optimization),
+//! DUMP (each face's worst vertex distance to its sphere, and its radius).
 
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
@@ -76,6 +77,18 @@ fn main() {
             r.timings_ms
         );
         println!("  congruence: {:?}", r.congruence.figures);
+        let rr = &r.congruence.radii; println!("  radii min {:.3} max {:.3} start {:?} diag-rel faces", rr.iter().cloned().fold(f64::INFINITY, f64::min), rr.iter().cloned().fold(f64::NEG_INFINITY, f64::max), r.congruence.start);
         println!("  phases {:?}", f.outcome.phase_ms);
+        if std::env::var("DUMP").is_ok() { dump(&f.mesh); }
+    }
+}
+
+/// DUMP: per face, its worst vertex distance to its sphere and its signed radius (model units).
+#[allow(dead_code)]
+pub fn dump(f: &spherical_faces::sq::sq_mesh::SqMesh) {
+    let sm = &f.sphere_mesh;
+    for (i, (face, s)) in sm.mesh.faces.iter().zip(&sm.face_spheres).enumerate() {
+        let d = face.corners().iter().map(|&v| s.distance(sm.mesh.positions[v as usize]).abs()).fold(0.0, f64::max);
+        println!("face {i} res {d:.3e} r {:?} corners {:?}", s.signed_radius(), face.corners());
     }
 }

@@ -271,8 +271,9 @@ fn sq_writes_the_congruence_and_its_report() {
 }
 
 /// The report says which start the congruence was kept from (Sec. 5.1, 6.3): on the bulged
-/// tunnel the central congruence misses θ or α and the constant radii meet both, so the run
-/// tried both, kept the constant one and warns that the central one was replaced.
+/// tunnel the central congruence misses θ or α on more points of G than the constant radii
+/// (whose offset collapses at some), so the run tried both, kept the constant one, which is the
+/// normal congruence as it is (no iterations), and warns that the central one was replaced.
 #[test]
 fn sq_reports_the_start_it_kept() {
     let dir = std::env::temp_dir().join(format!("sf-cli-sq-start-{}", std::process::id()));
@@ -283,17 +284,39 @@ fn sq_reports_the_start_it_kept() {
     assert_eq!(c["start"], "constant", "{c}");
     let attempts = c["attempts"].as_array().unwrap();
     assert_eq!(attempts.iter().map(|a| a["start"].as_str().unwrap()).collect::<Vec<_>>(), ["central", "constant"]);
-    assert!(attempts[0]["misses"].as_u64().unwrap() > 0 && attempts[1]["misses"] == 0, "{attempts:?}");
+    assert!(attempts[1]["misses"].as_u64().unwrap() < attempts[0]["misses"].as_u64().unwrap(), "{attempts:?}");
     assert_eq!(attempts[1]["figures"], c["figures"]);
+    // The normal congruence: lines along the normals, orthogonal torsal planes, not optimized.
+    assert!(c["figures"]["max_line_normal_angle_deg"].as_f64().unwrap() < 1e-4, "{c}");
+    assert!(c["figures"]["min_torsal_plane_angle_deg"].as_f64().unwrap() > 85.0, "{c}");
+    assert_eq!((c["line_congruence_iterations"].as_u64(), c["torsal_iterations"].as_u64()), (Some(0), Some(0)));
     let warnings = r["warnings"].as_array().unwrap();
     assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("starts from constant radii instead")), "{warnings:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Where H changes sign (Sec. 6.3), SQ runs from constant radii alone and says so: the lines are
+/// the normals, and the verdict it writes is the one its exit code gives.
+#[test]
+fn sq_runs_where_the_mean_curvature_changes_sign() {
+    let dir = std::env::temp_dir().join(format!("sf-cli-sq-sign-{}", std::process::id()));
+    let out = run(&["sq", "../shared/data/bsplines/hard/bezier_blob.json", "-q", "--formats", "glb", "--out", dir.to_str().unwrap()]);
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let c = &r["sq"]["congruence"];
+    assert_eq!(c["start"], "constant", "{c}");
+    assert_eq!(c["attempts"].as_array().unwrap().len(), 1);
+    assert!(c["figures"]["max_line_normal_angle_deg"].as_f64().unwrap() < 1e-4, "{c}");
+    let warnings = r["warnings"].as_array().unwrap();
+    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("H changes sign or vanishes inside the patch")), "{warnings:?}");
+    let meets = r["meets_guarantees"].as_bool().unwrap();
+    assert_eq!(out.status.code(), Some(if meets { 0 } else { 3 }), "{}", String::from_utf8_lossy(&out.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn sq_refuses_bad_input_with_one_line() {
     for (args, needle) in [
-        (vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--out", "/tmp/sf-sq-x"], "mean curvature of one sign"),
+        (vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--start", "central", "--out", "/tmp/sf-sq-x"], "start from constant radii"),
         (vec!["sq", "../shared/data/meshes/tri_dome.obj", "--out", "/tmp/sf-sq-x"], "B-spline reference"),
         (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "'95' for '--theta <DEG>'"),
         (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "'panels' for '--until <STAGE>'"),

@@ -383,12 +383,12 @@ fn sq_streams_lines_and_energies_then_files() {
     );
 }
 
-/// SQ refuses a sign change of H and sends H at the vertices first; on a mesh it says that it
+/// SQ's central start refuses a sign change of H and sends H at the vertices first; on a mesh it
 /// needs a B-spline.
 #[test]
 fn sq_refusals_reach_the_app() {
     use spherical_faces::pipeline::stages::sq;
-    use spherical_faces::sq::params::SqParams;
+    use spherical_faces::sq::params::{RadiusStart, SqParams};
     let bytes = std::fs::read("../shared/data/bsplines/saddle_sign_change.json").unwrap();
     let mut s = Session::new();
     let mut r = Recorder::default();
@@ -396,7 +396,7 @@ fn sq_refusals_reach_the_app() {
     let FromWorker::Loaded(info) = &r.messages[0].0 else { panic!() };
     let vertices = info.stats.vertices;
     r.messages.clear();
-    send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::Sq(SqParams { start: RadiusStart::Central, ..SqParams::default() })), None);
     let n = r.messages.len();
     let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[n - 2] else { panic!("{:?}", r.messages[n - 2].0) };
     assert_eq!(*stage, sq::REFUSED_STAGE);
@@ -404,7 +404,7 @@ fn sq_refusals_reach_the_app() {
     assert_eq!(h.len(), vertices);
     assert!(h.iter().any(|&x| x > 0.0) && h.iter().any(|&x| x < 0.0));
     let FromWorker::Error { message, .. } = &r.messages[n - 1].0 else { panic!() };
-    assert!(message.contains("mean curvature of one sign") && message.contains("ST method"), "{message}");
+    assert!(message.contains("central start needs a mean curvature of one sign") && message.contains("constant radii"), "{message}");
 
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);

@@ -15,7 +15,7 @@ use spherical_faces::reference::Reference;
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::metrics::torsal_pairs;
 use spherical_faces::sq::optimization::CongruenceProblem;
-use spherical_faces::sq::params::{Inequality, SqParams};
+use spherical_faces::sq::params::{Inequality, RadiusStart, SqParams};
 use spherical_faces::sq::radius::{check_mean_curvature, SamplingGrid};
 use spherical_faces::sq::{compute_congruence as compute, SqCongruence, SqError, SqEvent};
 
@@ -66,15 +66,21 @@ fn problem_coefficients(problem: &CongruenceProblem, r0: f64) -> Vec<f64> {
     vec![r0; problem.layout.radius.len()]
 }
 
+/// The central start is refused where H changes sign (Sec. 6.3); the automatic start runs from
+/// constant radii alone there, whose lines are the normals.
 #[test]
 fn a_sign_change_of_the_mean_curvature_is_refused_with_the_shares() {
     let r = Reference::from_bspline(spline("saddle_sign_change")).unwrap();
-    let err = run(&r, &SqParams::default()).unwrap_err();
+    let congruence = run(&r, &SqParams::default()).unwrap();
+    assert_eq!((congruence.start, congruence.attempts.len()), (RadiusStart::Constant, 1));
+    assert!(congruence.figures.max_line_normal_angle_deg < 1e-4, "{:?}", congruence.figures);
+    assert!(congruence.warnings.iter().any(|w| matches!(w, Warning::CentralCongruenceUnbounded { .. })), "{:?}", congruence.warnings);
+    let err = run(&r, &SqParams { start: RadiusStart::Central, ..SqParams::default() }).unwrap_err();
     let SqError::MeanCurvatureSignChange { positive_share, negative_share, .. } = err else { panic!("{err:?}") };
     // README: H > 0 on 69.16 % of the area, H < 0 on 30.84 %.
     assert!((positive_share - 0.6916).abs() < 0.005 && (negative_share - 0.3084).abs() < 0.005, "{positive_share} {negative_share}");
     let message = err.to_string();
-    for part in ["one sign", "69.", "30.", "planes", "ST method"] {
+    for part in ["one sign", "69.", "30.", "planes", "constant radii"] {
         assert!(message.contains(part), "{part} in: {message}");
     }
 }

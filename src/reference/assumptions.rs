@@ -75,6 +75,9 @@ pub enum Warning {
         min_torsal_plane_angle_deg: f64,
         alpha_deg: f64,
     },
+    /// SQ (Sec. 6.3): H changes sign or vanishes inside the patch, so the central spheres r = 1/H
+    /// pass through planes there and the congruence starts from constant radii alone.
+    CentralCongruenceUnbounded { positive_share: f64, negative_share: f64 },
     /// SQ (Sec. 5.2): the torsal field turns about an umbilic; a quad mesh along it needs
     /// singular vertices, whose support planes cannot meet at more than `bound_deg` (valence 3,
     /// valence 5), so the quad mesh follows the parameter lines.
@@ -151,6 +154,14 @@ impl fmt::Display for Warning {
                 "the central congruence (r = 1/H) ended with lines up to {max_line_normal_angle_deg:.1}° off the normals (θ = {theta_deg}°), \
                  {quads_without_real_torsal_directions} grid quads without real torsal directions and torsal planes at ≥ \
                  {min_torsal_plane_angle_deg:.1}° (α = {alpha_deg}°); the congruence starts from constant radii instead (Sec. 6.3)"
+            ),
+            Warning::CentralCongruenceUnbounded { positive_share, negative_share } => write!(
+                f,
+                "H changes sign or vanishes inside the patch (H > 0 on {:.1} % of its area, H < 0 on {:.1} %): the central spheres \
+                 r = 1/H pass through planes there, so the congruence is the normal congruence of constant radii (Sec. 6.3), \
+                 whose torsal directions are the principal directions",
+                100.0 * positive_share,
+                100.0 * negative_share
             ),
             Warning::SingularTorsalField { valence_3, valence_5, bound_deg } => write!(
                 f,

@@ -48,9 +48,9 @@ impl fmt::Display for SqError {
             }
             SqError::MeanCurvatureSignChange { positive_share, negative_share, at } => write!(
                 f,
-                "SQ meshes need a mean curvature of one sign (Sec. 6.3), but H > 0 on {:.1} % of the area and H < 0 on \
+                "the central start needs a mean curvature of one sign (Sec. 6.3), but H > 0 on {:.1} % of the area and H < 0 on \
                  {:.1} %{}. Where H = 0 the central spheres become planes (radius 1/H unbounded), so the sphere congruence \
-                 cannot start there. Use an ST method (st, st-support), or trim the patch to one side of the curve H = 0.",
+                 cannot start from them there; start from constant radii (the constant or the automatic start) instead.",
                 100.0 * positive_share,
                 100.0 * negative_share,
                 at.map_or(String::new(), |[u, v]| format!(", the other sign strongest at (u, v) = ({u:.3}, {v:.3})"))
@@ -58,7 +58,7 @@ impl fmt::Display for SqError {
             SqError::MeanCurvatureNearZero { uv, h_diag } => write!(
                 f,
                 "the mean curvature nearly vanishes at (u, v) = ({:.4}, {:.4}) (|H| · diagonal = {:.2e}): the central sphere \
-                 there is almost a plane (Sec. 6.3). Use an ST method (st, st-support), or trim the patch.",
+                 there is almost a plane (Sec. 6.3); start from constant radii (the constant or the automatic start) instead.",
                 uv[0],
                 uv[1],
                 h_diag.abs()

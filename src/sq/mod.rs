@@ -4,8 +4,9 @@
 //! The reference is a B-spline surface f(u, v) ([`crate::reference::bspline`]). The sphere
 //! congruence has centres c = f + r n (Eq. 1) and radius r(u, v), a B-spline function (Eq. 8).
 //!
-//! 1. **Radius** ([`radius`]): sample f on the grid G; refuse where H changes sign or nearly
-//!    vanishes (Sec. 6.3); fit r to the central radii 1/H.
+//! 1. **Radius** ([`radius`]): sample f on the grid G; fit r to the central radii 1/H. Where H
+//!    changes sign or nearly vanishes (Sec. 6.3) the central spheres do not exist, and the
+//!    congruence is the constant start alone ([`start`]: the normal congruence, not optimized).
 //! 2. **Line congruence** ([`optimization`], step 1): the lines l ∥ c_u × c_v (Sec. 2.1) become
 //!    variables with the radius coefficients; E_LC keeps them in the congruence of r, E_LC_orth
 //!    keeps them within θ of the normals.
@@ -61,11 +62,11 @@ use self::metrics::{torsal_pairs, CongruenceFigures};
 use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
-use self::radius::{check_mean_curvature, fit_radius, SamplingGrid};
+use self::radius::{check_mean_curvature, constant_radius_fit, fit_radius, mean_curvature_shares, SamplingGrid};
 use self::moulds::{fewer_moulds, SqMouldOutcome};
 use self::sphere_optimization::{on_grid, optimize_spheres, project_to_curvatures, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
-use self::start::{constant_function, constant_radius, spherical_reference};
+use self::start::{collapsed_offset_points, constant_function, constant_radius, spherical_reference};
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::guarantees::Verdict;
@@ -229,24 +230,37 @@ pub fn compute_congruence(
         let sphere = (t + s * centre, s * radius);
         return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
     }
-    let signs = check_mean_curvature(&surface, &grid, (hi - lo).length() / s, params.faces)?;
-    let fit = fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?;
+    // Where H changes sign or vanishes, the central spheres pass through planes: only the
+    // constant start exists (Sec. 6.3).
+    let (sign, fit, mut warnings, starts) = match check_mean_curvature(&surface, &grid, (hi - lo).length() / s, params.faces) {
+        Ok(signs) => (signs.sign, fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?, signs.warnings, params.start.starts()),
+        Err(refusal @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
+            let [positive_share, negative_share] = mean_curvature_shares(&surface);
+            let sign = if positive_share >= negative_share { 1.0 } else { -1.0 };
+            let r = match (params.start, constant_radius(&grid, sign, params.faces)) {
+                (RadiusStart::Auto | RadiusStart::Constant, Some(r)) => r,
+                _ => return Err(refusal),
+            };
+            let warning = Warning::CentralCongruenceUnbounded { positive_share, negative_share };
+            (sign, constant_radius_fit(&surface, params.radius_basis, r)?, vec![warning], &[RadiusStart::Constant][..])
+        }
+        Err(e) => return Err(e),
+    };
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
     let grid = &problem.grid;
     timings.lap("radius");
 
-    let (attempts, kept) = optimize_starts(&problem, &fit.function, signs.sign, &model_points, params, clock, on_event)?;
+    let (attempts, kept) = optimize_starts(&problem, &fit.function, sign, starts, &model_points, params, clock, on_event)?;
     timings.lap("congruence");
     let Kept { chosen, optimized, initial_lines, lines, pairs } = kept;
     let figures = attempts[chosen].figures.clone();
     let x = optimized.x;
     let lc_residual = problem.lc_residual(&x);
     let coefficients: Vec<f64> = x[problem.layout.radius.clone()].iter().map(|c| c * s).collect();
-    let torsal_uv = pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, [du, dv])))).collect();
+    let torsal_uv = torsal_directions(&pairs, spline, n);
     let radius = BSplineFunction { coefficients, ..fit.function.clone() };
     let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
     timings.lap("metrics");
-    let mut warnings = signs.warnings;
     if chosen > 0 {
         let a = &attempts[0].figures;
         warnings.push(Warning::CentralCongruenceReplaced {
@@ -297,30 +311,31 @@ struct Kept {
     pairs: Vec<Option<TorsalPair>>,
 }
 
-/// Optimizes the congruence from each start `params.start` asks for (H of sign `sign`); keeps
-/// the first that meets θ and α, else the first with the fewest misses.
+/// Optimizes the congruence from each of `starts` in turn (H of sign `sign`); keeps the first
+/// that meets θ and α, else the first with the fewest misses. The constant start is not
+/// optimized, and its misses count the points of G where its offset collapses ([`start`]).
+#[allow(clippy::too_many_arguments)]
 fn optimize_starts(
     problem: &CongruenceProblem,
     fitted: &BSplineFunction,
     sign: f64,
+    starts: &[RadiusStart],
     model_points: &[DVec3],
     params: &SqParams,
     clock: Clock,
     on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
 ) -> Result<(Vec<CongruenceAttempt>, Kept), SqError> {
     let grid = &problem.grid;
-    let starts: &[RadiusStart] = match params.start {
-        RadiusStart::Auto => &[RadiusStart::Central, RadiusStart::Constant],
-        RadiusStart::Central => &[RadiusStart::Central],
-        RadiusStart::Constant => &[RadiusStart::Constant],
-    };
     let mut attempts: Vec<CongruenceAttempt> = Vec::new();
     // The kept start: the first that meets θ and α, else the first with the fewest misses.
     let mut best: Option<Kept> = None;
     for (k, &start) in starts.iter().enumerate() {
-        let function = match start {
-            RadiusStart::Constant => constant_function(fitted, constant_radius(grid, sign)),
-            _ => fitted.clone(),
+        let (function, collapsed) = match start {
+            RadiusStart::Constant => {
+                let r = constant_radius(grid, sign, params.faces).ok_or(SqError::MeanCurvatureNearZero { uv: grid.uv[0], h_diag: 0.0 })?;
+                (constant_function(fitted, r), collapsed_offset_points(grid, r))
+            }
+            _ => (fitted.clone(), 0),
         };
         let initial_lines = match start {
             // The offset's lines are the normals (module docs of `start`).
@@ -333,11 +348,14 @@ fn optimize_starts(
         } else {
             on_event(SqEvent::Restarted { start, lines: &initial_lines })?;
         }
-        let optimized = optimize(problem, &function.coefficients, &initial_lines, params, clock, on_event)?;
+        let optimized = match start {
+            RadiusStart::Constant => Optimized::unchanged(problem, &function.coefficients, &initial_lines, params),
+            _ => optimize(problem, &function.coefficients, &initial_lines, params, clock, on_event)?,
+        };
         let lines = problem.measured_lines(&optimized.x);
         let pairs = torsal_pairs(grid, &lines);
         let figures = CongruenceFigures::of(grid, &lines, &pairs);
-        let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
+        let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg) + collapsed;
         attempts.push(CongruenceAttempt { start, initial_figures, figures, misses });
         if best.as_ref().is_none_or(|b| misses < attempts[b.chosen].misses) {
             best = Some(Kept { chosen: k, optimized, initial_lines, lines, pairs });
@@ -355,6 +373,22 @@ fn parameter_direction([m0, m1]: [f64; 2], [du, dv]: [f64; 2]) -> [f64; 2] {
     let (a, b) = ((m0 + m1) * du, (m0 - m1) * dv);
     let len = a.hypot(b);
     [a / len, b / len]
+}
+
+impl Optimized {
+    /// The start itself, as the optimization's state (no iterations).
+    fn unchanged(problem: &CongruenceProblem, coefficients: &[f64], lines: &[DVec3], params: &SqParams) -> Self {
+        let x = problem.extend_for_torsal(&problem.initial_point(coefficients, lines, params));
+        let lc_residual_step1 = problem.lc_residual(&x);
+        Self { x, lc_residual_step1, lc: Default::default(), torsal: Default::default() }
+    }
+}
+
+/// The torsal directions of `pairs` as unit (du, dv) in the domain's units.
+fn torsal_directions(pairs: &[Option<TorsalPair>], surface: &crate::geometry::bspline::BSplineSurface, n: usize) -> Vec<Option<[[f64; 2]; 2]>> {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let spacing = [(u1 - u0) / (n - 1) as f64, (v1 - v0) / (n - 1) as f64];
+    pairs.iter().map(|p| p.map(|p| p.mu.map(|m| parameter_direction(m, spacing)))).collect()
 }
 
 /// Steps 1 and 2 from radius coefficients and lines.

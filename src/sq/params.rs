@@ -23,7 +23,7 @@ pub enum Inequality {
 #[serde(rename_all = "snake_case")]
 pub enum RadiusStart {
     /// The central congruence r = 1/H (Sec. 5.1); when its optimized congruence misses θ or α,
-    /// start again from constant radii.
+    /// start again from constant radii. Where H changes sign or vanishes, constant radii alone.
     #[default]
     Auto,
     /// The central congruence only.
@@ -36,6 +36,15 @@ pub enum RadiusStart {
 
 impl RadiusStart {
     pub const ALL: [RadiusStart; 3] = [RadiusStart::Auto, RadiusStart::Central, RadiusStart::Constant];
+
+    /// The starts tried, in order.
+    pub fn starts(self) -> &'static [RadiusStart] {
+        match self {
+            RadiusStart::Auto => &[RadiusStart::Central, RadiusStart::Constant],
+            RadiusStart::Central => &[RadiusStart::Central],
+            RadiusStart::Constant => &[RadiusStart::Constant],
+        }
+    }
 
     pub fn key(self) -> &'static str {
         match self {

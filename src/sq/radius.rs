@@ -10,7 +10,8 @@
 //!   grid points are left out of the fit. So is a *speck* of the other sign inside: at most
 //!   [`MAX_SPECK_SHARE`] of the area, bending a panel the wrong way by at most
 //!   [`SPECK_TOLERANCE`] of the diagonal, so that spheres of the dominant sign still approximate
-//!   it. Anything more is a refusal that says where.
+//!   it. Anything more refuses the central start and says where; the method then starts from
+//!   constant radii alone ([`crate::sq::start`]), which exist whatever the sign of H.
 //! - **Radius**: r_ij = 1/H at the points of G, fitted by least squares with a clamped uniform
 //!   B-spline basis ([`crate::sq::params::RadiusBasis`]; Eq. 8 puts r on f's basis, which would
 //!   have as many coefficients as G has points; the authors' code fits 36).
@@ -107,14 +108,10 @@ pub const SPECK_TOLERANCE: f64 = 1e-3;
 /// At most this share of G's points inside the patch may be left out of the radius fit.
 pub(crate) const MAX_EXCLUDED_SHARE: f64 = 0.25;
 
-/// The sign check of the module docs; `diag` is the bounding-box diagonal and `faces` the
-/// number of panels asked for (the panel size of the speck test).
-pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64, faces: usize) -> Result<MeanCurvatureSigns, SqError> {
+/// The cells of the fine grid as (u, v, H, area element), the area shares of H > 0 and H < 0,
+/// and the total of the area elements with a sign.
+fn sign_cells(surface: &BSplineSurface) -> (Vec<(f64, f64, f64, f64)>, [f64; 2], f64) {
     let ((u0, u1), (v0, v1)) = surface.domain();
-    let n = grid.n;
-    // The strip between the boundary and G's second row, in parameters.
-    let (su, sv) = ((u1 - u0) / (n - 1) as f64, (v1 - v0) / (n - 1) as f64);
-    let in_strip = |u: f64, v: f64| u < u0 + su || u > u1 - su || v < v0 + sv || v > v1 - sv;
     let (mut pos, mut neg) = (0.0, 0.0);
     let mut cells = Vec::with_capacity(SIGN_GRID * SIGN_GRID);
     for j in 0..SIGN_GRID {
@@ -132,8 +129,24 @@ pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag:
         }
     }
     let total = (pos + neg).max(f64::MIN_POSITIVE);
-    let (positive_share, negative_share) = (pos / total, neg / total);
-    let sign = if pos >= neg { 1.0 } else { -1.0 };
+    (cells, [pos / total, neg / total], total)
+}
+
+/// The area shares of H > 0 and H < 0 over the patch (fine grid).
+pub fn mean_curvature_shares(surface: &BSplineSurface) -> [f64; 2] {
+    sign_cells(surface).1
+}
+
+/// The sign check of the module docs; `diag` is the bounding-box diagonal and `faces` the
+/// number of panels asked for (the panel size of the speck test).
+pub fn check_mean_curvature(surface: &BSplineSurface, grid: &SamplingGrid, diag: f64, faces: usize) -> Result<MeanCurvatureSigns, SqError> {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let n = grid.n;
+    // The strip between the boundary and G's second row, in parameters.
+    let (su, sv) = ((u1 - u0) / (n - 1) as f64, (v1 - v0) / (n - 1) as f64);
+    let in_strip = |u: f64, v: f64| u < u0 + su || u > u1 - su || v < v0 + sv || v > v1 - sv;
+    let (cells, [positive_share, negative_share], total) = sign_cells(surface);
+    let sign = if positive_share >= negative_share { 1.0 } else { -1.0 };
     let wrong = |h: f64| !(h * sign * diag >= MIN_MEAN_CURVATURE);
     // The speck: cells of the other sign inside the patch.
     let (mut speck_area, mut worst, mut worst_uv) = (0.0, 0.0f64, [u0, v0]);
@@ -212,11 +225,24 @@ pub struct RadiusFit {
     pub samples: usize,
 }
 
-/// Fits r = 1/H over G (minus `excluded`) with the basis `basis` on the surface's domain.
-pub fn fit_radius(surface: &BSplineSurface, grid: &SamplingGrid, basis: RadiusBasis, excluded: &[usize]) -> Result<RadiusFit, SqError> {
+/// The radius basis `basis` on the surface's domain, in U and V.
+fn radius_bases(surface: &BSplineSurface, basis: RadiusBasis) -> Result<(BSplineBasis, BSplineBasis), SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let make = |lo: f64, hi: f64| BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi)).map_err(|e| SqError::RadiusBasis(e.to_string()));
-    let (bu, bv) = (make(u0, u1)?, make(v0, v1)?);
+    Ok((make(u0, u1)?, make(v0, v1)?))
+}
+
+/// r ≡ `r` on the basis `basis` (where the central radii 1/H do not exist: no fit, no error).
+pub fn constant_radius_fit(surface: &BSplineSurface, basis: RadiusBasis, r: f64) -> Result<RadiusFit, SqError> {
+    let (u, v) = radius_bases(surface, basis)?;
+    let coefficients = vec![r; u.count() * v.count()];
+    let error = FitError { rms: 0.0, max: 0.0 };
+    Ok(RadiusFit { function: BSplineFunction { u, v, coefficients }, error, relative_error: 0.0, samples: 0 })
+}
+
+/// Fits r = 1/H over G (minus `excluded`) with the basis `basis` on the surface's domain.
+pub fn fit_radius(surface: &BSplineSurface, grid: &SamplingGrid, basis: RadiusBasis, excluded: &[usize]) -> Result<RadiusFit, SqError> {
+    let (bu, bv) = radius_bases(surface, basis)?;
     let samples: Vec<([f64; 2], f64)> =
         (0..grid.point_count()).filter(|p| !excluded.contains(p)).map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean)).collect();
     let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit { samples: samples.len(), coefficients: basis.controls * basis.controls })?;

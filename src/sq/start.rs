@@ -1,11 +1,14 @@
 //! The starting sphere congruence of Sec. 5.1: the central congruence r = 1/H, or constant radii.
 //!
-//! With a constant radius r the centres c = f + r n form an offset of f, so c_u × c_v ∥ n: the
-//! lines are the normals (θ = 0), the torsal directions the principal directions and the torsal
-//! planes orthogonal (Sec. 2.5, the remark after (c)). It meets (b) and (c) at the start, at the
-//! cost of (a), which the final optimization (Eq. 10) restores by fitting every face sphere to its
-//! quad. The offset is singular where r is a principal radius 1/κ (a focal point), so r is
-//! chosen away from every 1/κ on G.
+//! With a constant radius r the centres c = f + r n form an offset of f, so c_u × c_v =
+//! (1 − rκ1)(1 − rκ2) f_u × f_v ∥ n: the lines are the normals (θ = 0), the torsal directions the
+//! principal directions and the torsal planes orthogonal (Sec. 2.5, the remark after (c)). It meets
+//! (b) and (c) at the start, at the cost of (a), which the final optimization (Eq. 10) restores by
+//! fitting every face sphere to its quad. It exists whatever the sign of H (Sec. 6.3), and the
+//! congruence optimization leaves it as it is (nothing in (b) or (c) to mend, and E_LC would only
+//! drift its lines off the normals), so r need not keep the offset regular: it is the radius of
+//! the mean |H|, the sphere that fits the panels best on average (Fig. 24 starts each face sphere
+//! from it).
 //!
 //! A sphere patch is the trivial case: every central sphere is the surface itself
 //! ([`spherical_reference`]), the lines are the normals through its centre, every direction is
@@ -17,23 +20,49 @@ use crate::geometry::bspline::BSplineFunction;
 
 use super::radius::SamplingGrid;
 
-/// Least |(1 − r κ1)(1 − r κ2)| over G for a constant radius r: the offset's area element
-/// relative to the surface's.
+/// The constant radius of the constant start (frame units), with the sign `sign` of the dominant
+/// H, for about `faces` panels: of the radii from 1 / mean |H| over G (the sphere that fits the
+/// panels best on average) down to the panel size (a face sphere must hold its panel), in steps
+/// of 2^(−1/2), the one where the offset collapses at the fewest points of G
+/// ([`collapsed_offset_points`]), the largest among equals. None when H vanishes on all of G.
+pub fn constant_radius(grid: &SamplingGrid, sign: f64, faces: usize) -> Option<f64> {
+    let frames = &grid.frames;
+    let mean = frames.iter().map(|f| f.mean.abs()).sum::<f64>() / frames.len().max(1) as f64;
+    if !(mean > 0.0 && mean.is_finite()) {
+        return None;
+    }
+    let area: f64 = (0..grid.quad_count())
+        .map(|q| {
+            let c = grid.quad(q).map(|p| frames[p].point);
+            0.5 * ((c[1] - c[0]).cross(c[3] - c[0]).length() + (c[1] - c[2]).cross(c[3] - c[2]).length())
+        })
+        .sum();
+    let panel = (area / faces.max(1) as f64).sqrt();
+    let mut best = (usize::MAX, 1.0 / mean);
+    let mut r = 1.0 / mean;
+    loop {
+        let collapsed = collapsed_offset_points(grid, sign * r);
+        if collapsed < best.0 {
+            best = (collapsed, r);
+        }
+        r *= std::f64::consts::FRAC_1_SQRT_2;
+        if collapsed == 0 || r < panel {
+            break;
+        }
+    }
+    Some(sign * best.1)
+}
+
+/// Least |(1 − rκ1)(1 − rκ2)| at a point of G, the offset's area element relative to the
+/// surface's, below which the constant start counts the point as a miss: the centres of
+/// neighbouring face spheres nearly coincide there (near a focal point; everywhere on a nearly
+/// spherical patch), and the node axes, normal to their plane, are lost.
 pub(crate) const MIN_OFFSET_AREA: f64 = 0.25;
 
-/// The constant radius of the constant start (frame units), with the sign of H: the harmonic
-/// mean of the central radii when the offset stays regular there, else half the smallest
-/// principal radius on G.
-pub fn constant_radius(grid: &SamplingGrid, sign: f64) -> f64 {
-    let frames = &grid.frames;
-    let mean_h = frames.iter().map(|f| f.mean * sign).sum::<f64>() / frames.len().max(1) as f64;
-    let max_k = frames.iter().map(|f| f.k1.abs().max(f.k2.abs())).fold(0.0, f64::max);
-    let area = |r: f64| frames.iter().map(|f| ((1.0 - r * f.k1) * (1.0 - r * f.k2)).abs()).fold(f64::INFINITY, f64::min);
-    let harmonic = sign / mean_h;
-    if mean_h > 0.0 && area(harmonic) >= MIN_OFFSET_AREA {
-        return harmonic;
-    }
-    sign * 0.5 / max_k.max(f64::MIN_POSITIVE)
+/// The points of G where the offset of constant radius `r` (frame units) nearly collapses (see
+/// [`MIN_OFFSET_AREA`]).
+pub fn collapsed_offset_points(grid: &SamplingGrid, r: f64) -> usize {
+    grid.frames.iter().filter(|f| !(((1.0 - r * f.k1) * (1.0 - r * f.k2)).abs() >= MIN_OFFSET_AREA)).count()
 }
 
 /// The radius function r ≡ `r` on the basis of `function` (a B-spline basis sums to one).

@@ -632,15 +632,15 @@ for (const project of PROJECTS) {
       });
     });
 
-    test(`[${project.name}] m. SQ refuses a B-spline whose mean curvature changes sign and shows the sign of H`, { timeout: T.test }, async (t) => {
+    test(`[${project.name}] m. SQ's central start refuses a B-spline whose mean curvature changes sign and shows the sign of H`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
-      await withApp(t, browser, server, project, { name: 'm-sq-refusal', fragment: 'v=1&sample=vault&method=sq' }, async (app) => {
+      await withApp(t, browser, server, project, { name: 'm-sq-refusal', fragment: 'v=1&sample=vault&method=sq&start=central' }, async (app) => {
         await waitForState(app, 'vault settled', (s) => s.source === 'sample:vault' && s.sq && !s.busy, { timeout: T.load });
         await dropFile(app, 'saddle_sign_change.json', fs.readFileSync(SADDLE), 'application/json');
         const s = await waitForState(app, 'the refusal', (s) => s.source === 'file:saddle_sign_change.json' && s.sq && s.sq.refused && !s.busy, { timeout: T.load });
         t.diagnostic(`error: ${s.error}`);
-        assert.match(String(s.error), /mean curvature of one sign/);
-        assert.match(String(s.error), /ST method/);
+        assert.match(String(s.error), /central start needs a mean curvature of one sign/);
+        assert.match(String(s.error), /constant radii/);
         assert.equal(s.sq.ready, false);
         assertDrawn(await measureViewport(app, s, 'sq-refused'), 'the surface coloured by the sign of H');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
