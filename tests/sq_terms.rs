@@ -105,8 +105,8 @@ fn the_regularizer_damps_without_energy() {
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::sphere_terms::{
-    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane,
-    VertexNormals,
+    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, PanelProximity,
+    TorsalPlane, VertexNormals,
 };
 
 /// Six spheres (5 blocks with a in ±[0.2, 0.5]), four vertices and four unit-ish normals.
@@ -154,6 +154,16 @@ fn final_optimization_terms_match_finite_differences() {
         let boundary = spherical_faces::reference::proximity::BoundaryProximity::new(&loaded.surface, vec![v(0), v(1), v(2)], &x);
         assert_fd(&boundary, &x);
         assert!(residuals(&boundary, &x).chunks(3).all(|d| d.iter().any(|r| r.abs() > 1e-6)));
+        // Each panel's value at the reference point closest to its face's centroid (looked up at x).
+        let groups = vec![vec![v(0), v(1), v(2)], vec![v(1), v(2), v(3)]];
+        let targets = spherical_faces::reference::proximity::CentroidTargets::new(&loaded.surface, groups, &x);
+        let (t0, t1) = (targets.target(0), targets.target(1));
+        let panel = PanelProximity { spheres: vec![s(0), s(3)], targets };
+        assert_fd(&panel, &x);
+        let psi = |o: usize, p: glam::DVec3| x[o] * p.length_squared() - glam::DVec3::new(x[o + 1], x[o + 2], x[o + 3]).dot(p) + x[o + 4];
+        for (r, want) in residuals(&panel, &x).into_iter().zip([psi(s(0), t0), psi(s(3), t1)]) {
+            assert!((r - want).abs() <= 1e-12 * want.abs().max(1.0), "{r} {want}");
+        }
         let sep = CentreSeparation { pairs: vec![(s(0), s(1), 0.3), (s(2), s(5), 2.0)], share: 0.25 };
         assert_fd(&sep, &x);
         assert!(residuals(&sep, &x).iter().all(|r| r.is_finite()));

@@ -122,6 +122,9 @@ pub struct SphereWeights {
     pub torsal_plane: f64,
     pub prox_f: f64,
     pub prox_c: f64,
+    /// Each panel through the reference at its face's centre
+    /// ([`crate::sq::sphere_terms::PanelProximity`]; not in Eq. 10).
+    pub prox_panel: f64,
     /// The boundary vertices' distance to the patch's boundary curve, so that the panels keep
     /// covering the patch ([`crate::reference::proximity::BoundaryProximity`]; not in Eq. 10).
     pub prox_boundary: f64,
@@ -146,6 +149,7 @@ impl Default for SphereWeights {
             torsal_plane: 0.01,
             prox_f: 1.0,
             prox_c: 0.1,
+            prox_panel: 1.0,
             prox_boundary: 10.0,
             epsilon: 0.01,
             fair: 0.2,

@@ -38,7 +38,7 @@ use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, Clock};
-use crate::reference::proximity::{BoundaryProximity, ReferenceProximity};
+use crate::reference::proximity::{BoundaryProximity, CentroidTargets, ReferenceProximity};
 use crate::reference::Reference;
 use crate::solver::terms::v3;
 use crate::solver::{
@@ -48,7 +48,7 @@ use crate::solver::{
 use super::params::{SphereWeights, SqParams};
 use super::quad_mesh::polyline_fairness;
 use super::sphere_terms::{
-    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, TorsalPlane,
+    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, PanelProximity, TorsalPlane,
     VertexNormals,
 };
 
@@ -243,6 +243,7 @@ struct SphereTerms {
     point: TermId,
     boundary: TermId,
     centre: TermId,
+    panel: TermId,
     fair: TermId,
     reg_sphere: TermId,
     reg_normal: TermId,
@@ -256,9 +257,10 @@ struct SphereTerms {
 }
 
 impl SphereTerms {
-    fn all(&self) -> [TermId; 20] {
+    fn all(&self) -> [TermId; 21] {
         [
             self.boundary,
+            self.panel,
             self.sphere,
             self.unit,
             self.supp,
@@ -298,8 +300,8 @@ impl SphereTerms {
 
     /// Proximity to the reference (Sec. 5.2): tangent and point distance of the vertices, and of
     /// the centres.
-    fn proximity(&self, w: &SphereWeights) -> [(TermId, f64); 4] {
-        [(self.tangent, w.prox_f), (self.point, w.prox_f), (self.centre, w.prox_c), (self.boundary, w.prox_boundary)]
+    fn proximity(&self, w: &SphereWeights) -> [(TermId, f64); 5] {
+        [(self.tangent, w.prox_f), (self.point, w.prox_f), (self.centre, w.prox_c), (self.panel, w.prox_panel), (self.boundary, w.prox_boundary)]
     }
 
     /// Every term at weight 0 but `weights`.
@@ -389,6 +391,9 @@ fn sphere_problem<'a>(
         })
         .collect();
     let centre_id = problem.add_term(CentreProximity { faces: centre_faces, epsilon: w.epsilon }, w.prox_c);
+    let corners: Vec<Vec<usize>> = mesh.faces.iter().map(|face| face.corners().iter().map(|&v| layout.vertex(v as usize)).collect()).collect();
+    let targets = CentroidTargets::new(input.reference, corners, &x);
+    let panel_id = problem.add_term(PanelProximity { spheres: (0..layout.faces).map(|f| layout.sphere(f)).collect(), targets }, w.prox_panel);
     let fair_id = problem.add_term(polyline_fairness(input.polylines, input.on_boundary, &stars.edges, |v| layout.vertex(v)), w.fair);
     let quads: Vec<Vec<usize>> = stars.stars.iter().map(|(_, faces)| faces.iter().map(|&f| layout.sphere(f as usize)).collect()).collect();
     let axes: Vec<(usize, usize)> = stars.stars.iter().enumerate().map(|(s, &(v, _))| (layout.star_normal(s), v as usize)).collect();
@@ -453,6 +458,7 @@ fn sphere_problem<'a>(
         point: point_id,
         boundary: boundary_id,
         centre: centre_id,
+        panel: panel_id,
         fair: fair_id,
         reg_sphere: reg_sphere_id,
         reg_normal: reg_normal_id,
