@@ -66,7 +66,7 @@ use self::radius::{check_mean_curvature, constant_radius_fit, fit_radius, mean_c
 use self::moulds::{fewer_moulds, SqMouldOutcome};
 use self::sphere_optimization::{on_grid, optimize_spheres, project_to_curvatures, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
-use self::start::{collapsed_offset_points, constant_function, constant_radius, spherical_reference};
+use self::start::{constant_function, constant_radius, spherical_reference};
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
 use crate::guarantees::Verdict;
@@ -237,8 +237,8 @@ pub fn compute_congruence(
         Err(refusal @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
             let [positive_share, negative_share] = mean_curvature_shares(&surface);
             let sign = if positive_share >= negative_share { 1.0 } else { -1.0 };
-            let r = match (params.start, constant_radius(&grid, sign, params.faces)) {
-                (RadiusStart::Auto | RadiusStart::Constant, Some(r)) => r,
+            let r = match (params.start, constant_radius(&grid, sign, params.faces, params.max_distance)) {
+                (RadiusStart::Auto | RadiusStart::Constant, Some((r, _))) => r,
                 _ => return Err(refusal),
             };
             let warning = Warning::CentralCongruenceUnbounded { positive_share, negative_share };
@@ -313,7 +313,8 @@ struct Kept {
 
 /// Optimizes the congruence from each of `starts` in turn (H of sign `sign`); keeps the first
 /// that meets θ and α, else the first with the fewest misses. The constant start is not
-/// optimized, and its misses count the points of G where its offset collapses ([`start`]).
+/// optimized, and its misses count the points of G where its radius cannot meet the guarantees
+/// ([`start::constant_start_misses`]).
 #[allow(clippy::too_many_arguments)]
 fn optimize_starts(
     problem: &CongruenceProblem,
@@ -332,8 +333,8 @@ fn optimize_starts(
     for (k, &start) in starts.iter().enumerate() {
         let (function, collapsed) = match start {
             RadiusStart::Constant => {
-                let r = constant_radius(grid, sign, params.faces).ok_or(SqError::MeanCurvatureNearZero { uv: grid.uv[0], h_diag: 0.0 })?;
-                (constant_function(fitted, r), collapsed_offset_points(grid, r))
+                let (r, misses) = constant_radius(grid, sign, params.faces, params.max_distance).ok_or(SqError::MeanCurvatureNearZero { uv: grid.uv[0], h_diag: 0.0 })?;
+                (constant_function(fitted, r), misses)
             }
             _ => (fitted.clone(), 0),
         };

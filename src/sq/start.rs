@@ -6,9 +6,9 @@
 //! (b) and (c) at the start, at the cost of (a), which the final optimization (Eq. 10) restores by
 //! fitting every face sphere to its quad. It exists whatever the sign of H (Sec. 6.3), and the
 //! congruence optimization leaves it as it is (nothing in (b) or (c) to mend, and E_LC would only
-//! drift its lines off the normals), so r need not keep the offset regular: it is the radius of
-//! the mean |H|, the sphere that fits the panels best on average (Fig. 24 starts each face sphere
-//! from it).
+//! drift its lines off the normals). Fig. 24 starts each face sphere from r, so r is chosen for
+//! the panels ([`constant_radius`]): near 1 / mean |H|, the sphere that fits them best on average,
+//! where its offset stays regular and its panels within the promised distance.
 //!
 //! A sphere patch is the trivial case: every central sphere is the surface itself
 //! ([`spherical_reference`]), the lines are the normals through its centre, every direction is
@@ -21,11 +21,12 @@ use crate::geometry::bspline::BSplineFunction;
 use super::radius::SamplingGrid;
 
 /// The constant radius of the constant start (frame units), with the sign `sign` of the dominant
-/// H, for about `faces` panels: of the radii from 1 / mean |H| over G (the sphere that fits the
-/// panels best on average) down to the panel size (a face sphere must hold its panel), in steps
-/// of 2^(−1/2), the one where the offset collapses at the fewest points of G
-/// ([`collapsed_offset_points`]), the largest among equals. None when H vanishes on all of G.
-pub fn constant_radius(grid: &SamplingGrid, sign: f64, faces: usize) -> Option<f64> {
+/// H, for about `faces` panels and the promised distance `max_distance` (frame units): of the
+/// radii from 1 / mean |H| over G (the sphere that fits the panels best on average) down to the
+/// panel size (a face sphere must hold its panel), in steps of 2^(−1/2), the one with the fewest
+/// misses on G ([`constant_start_misses`]), the largest among equals; and those misses. None
+/// when H vanishes on all of G.
+pub fn constant_radius(grid: &SamplingGrid, sign: f64, faces: usize, max_distance: f64) -> Option<(f64, usize)> {
     let frames = &grid.frames;
     let mean = frames.iter().map(|f| f.mean.abs()).sum::<f64>() / frames.len().max(1) as f64;
     if !(mean > 0.0 && mean.is_finite()) {
@@ -38,19 +39,36 @@ pub fn constant_radius(grid: &SamplingGrid, sign: f64, faces: usize) -> Option<f
         })
         .sum();
     let panel = (area / faces.max(1) as f64).sqrt();
-    let mut best = (usize::MAX, 1.0 / mean);
+    let mut best = (1.0 / mean, usize::MAX);
     let mut r = 1.0 / mean;
     loop {
-        let collapsed = collapsed_offset_points(grid, sign * r);
-        if collapsed < best.0 {
-            best = (collapsed, r);
+        let misses = constant_start_misses(grid, sign * r, panel, max_distance);
+        if misses < best.1 {
+            best = (r, misses);
         }
         r *= std::f64::consts::FRAC_1_SQRT_2;
-        if collapsed == 0 || r < panel {
+        if misses == 0 || r < panel {
             break;
         }
     }
-    Some(sign * best.1)
+    Some((sign * best.0, best.1))
+}
+
+/// The points of G where the constant start of radius `r` cannot meet the guarantees, for
+/// panels of side `panel` and the promised distance `max_distance` (all frame units): where its
+/// offset nearly collapses ([`MIN_OFFSET_AREA`]), or where a sphere of radius r through a
+/// panel's corners stands off the surface by more than the promised distance, max |κ_i − 1/r| ·
+/// ρ² / 2 over the principal curvatures, ρ² = panel² / 2 the panel's half diagonal squared.
+pub fn constant_start_misses(grid: &SamplingGrid, r: f64, panel: f64, max_distance: f64) -> usize {
+    let rho2 = 0.5 * panel * panel;
+    grid.frames
+        .iter()
+        .filter(|f| {
+            let collapsed = !(((1.0 - r * f.k1) * (1.0 - r * f.k2)).abs() >= MIN_OFFSET_AREA);
+            let far = !((f.k1 - 1.0 / r).abs().max((f.k2 - 1.0 / r).abs()) * rho2 / 2.0 <= max_distance);
+            collapsed || far
+        })
+        .count()
 }
 
 /// Least |(1 − rκ1)(1 − rκ2)| at a point of G, the offset's area element relative to the
@@ -58,12 +76,6 @@ pub fn constant_radius(grid: &SamplingGrid, sign: f64, faces: usize) -> Option<f
 /// neighbouring face spheres nearly coincide there (near a focal point; everywhere on a nearly
 /// spherical patch), and the node axes, normal to their plane, are lost.
 pub(crate) const MIN_OFFSET_AREA: f64 = 0.25;
-
-/// The points of G where the offset of constant radius `r` (frame units) nearly collapses (see
-/// [`MIN_OFFSET_AREA`]).
-pub fn collapsed_offset_points(grid: &SamplingGrid, r: f64) -> usize {
-    grid.frames.iter().filter(|f| !(((1.0 - r * f.k1) * (1.0 - r * f.k2)).abs() >= MIN_OFFSET_AREA)).count()
-}
 
 /// The radius function r ≡ `r` on the basis of `function` (a B-spline basis sums to one).
 pub(crate) fn constant_function(function: &BSplineFunction, r: f64) -> BSplineFunction {
