@@ -519,6 +519,25 @@ pub fn verdict_runs() -> Vec<(&'static str, Vec<crate::guarantees::Guarantee>)> 
     vec![("st dome 300 faces", report.guarantees), ("sq vault grid 12, 60 quads", sq.verdict.guarantees)]
 }
 
+/// The hard SQ verdict runs that native and wasm must agree on: each B-spline file (name, bytes)
+/// at the paper's Fig. 19 settings (θ 15°, α 45°) with a 16 × 16 grid and about 120 quads
+/// (`tests/verdicts.rs` records them, `tests/web.rs` runs them in the browser, each within the
+/// page's time); the guarantees of each report.
+pub fn hard_verdict_runs(files: &[(&'static str, &[u8])]) -> Vec<(&'static str, Vec<crate::guarantees::Guarantee>)> {
+    use crate::import::{import_file, ImportedFile};
+    use crate::progress::Clock;
+    let params = sq::params::SqParams { grid: 16, faces: 120, theta_deg: 15.0, alpha_deg: 45.0, ..Default::default() };
+    files
+        .iter()
+        .map(|&(name, bytes)| {
+            let Ok(ImportedFile::BSpline(b)) = import_file(bytes, name) else { panic!("{name} is a B-spline") };
+            let reference = Reference::from_bspline(b.surface).expect("a B-spline reference");
+            let result = sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
+            (name, result.verdict.guarantees)
+        })
+        .collect()
+}
+
 /// Whether two runs of [`verdict_runs`] reach the same verdict: the same guarantees, each holding
 /// alike, counts equal and figures within 1 % (1e-12 absolute): the optimizations sum in another
 /// order on wasm's SIMD, and after 45 iterations the ST dome's panels lie 0.3 % nearer or

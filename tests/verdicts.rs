@@ -208,3 +208,28 @@ fn native_verdicts_match_the_recording_the_browser_checks() {
     assert!(names(0).contains(&"panels_with_crossing_arcs".into()) && names(0).contains(&"max_distance_to_reference".into()));
     assert!(names(1).contains(&"coverage".into()) && names(1).contains(&"support_elements_that_fold".into()));
 }
+
+/// The hard surfaces the browser repeats ([`hard_verdict_runs`]: the revolved bell, whose mean
+/// curvature changes sign, and the umbilic dome) against their recording
+/// `tests/data/verdicts_hard.json` (`SF_GOLDEN=write` records it anew): SQ runs on both from
+/// constant radii and, at 120 quads, both meet every guarantee.
+#[test]
+fn native_hard_verdicts_match_the_recording_the_browser_checks() {
+    use spherical_faces::bench_workloads::{hard_verdict_runs, recorded_verdict_differences};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/verdicts_hard.json");
+    let files: [(&str, &[u8]); 2] = [
+        ("revolved_bell.json", include_bytes!("../../shared/data/bsplines/hard/revolved_bell.json")),
+        ("umbilic_dome.json", include_bytes!("../../shared/data/bsplines/hard/umbilic_dome.json")),
+    ];
+    let runs = hard_verdict_runs(&files);
+    if std::env::var("SF_GOLDEN").as_deref() == Ok("write") {
+        let json: Vec<Value> = runs.iter().map(|(name, g)| serde_json::json!({ "run": name, "guarantees": g })).collect();
+        std::fs::write(&path, serde_json::to_string_pretty(&json).unwrap() + "\n").unwrap();
+        return;
+    }
+    let diff = recorded_verdict_differences(&std::fs::read_to_string(&path).unwrap(), &runs);
+    assert!(diff.is_empty(), "{diff:?}");
+    for (name, g) in &runs {
+        assert!(g.iter().all(|g| g.holds), "{name}: {g:?}");
+    }
+}

@@ -248,3 +248,21 @@ fn wasm_reaches_the_native_verdicts() {
         console_log!("{name} in wasm: {} guarantees, as native", now.len());
     }
 }
+
+/// SQ on two hard surfaces in wasm (the revolved bell, whose mean curvature changes sign, and the
+/// umbilic dome) reaches the native verdicts recorded in `tests/data/verdicts_hard.json`
+/// (`tests/verdicts.rs`), each run a few seconds of page time.
+#[wasm_bindgen_test]
+fn wasm_reaches_the_native_hard_verdicts() {
+    use spherical_faces::bench_workloads::{hard_verdict_runs, recorded_verdict_differences};
+    let files: [(&str, &[u8]); 2] = [
+        ("revolved_bell.json", include_bytes!("../../shared/data/bsplines/hard/revolved_bell.json")),
+        ("umbilic_dome.json", include_bytes!("../../shared/data/bsplines/hard/umbilic_dome.json")),
+    ];
+    let runs = hard_verdict_runs(&files);
+    let diff = recorded_verdict_differences(include_str!("data/verdicts_hard.json"), &runs);
+    assert!(diff.is_empty(), "{diff:?}");
+    for (name, now) in &runs {
+        console_log!("{name} in wasm: {} guarantees, as native", now.len());
+    }
+}
