@@ -237,19 +237,25 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
     assert!(exact >= 11 && buildable >= 7 && met >= 1, "{exact} exact, {buildable} buildable, {met} meet:\n{}", rows.join("\n"));
 }
 
+/// The vault's SQ mesh at the defaults, which meets every guarantee: the exact mesh the broken
+/// meshes below start from.
+fn exact_vault() -> (Reference, SqParams, spherical_faces::sq::SqResult) {
+    let reference = Reference::from_bspline(spherical_faces::samples::Sample::Vault.bspline().unwrap()).unwrap();
+    let params = SqParams::default();
+    let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
+    (reference, params, result)
+}
+
 /// The final check on a deliberately broken SQ mesh: one vertex of the vault's exact mesh moved
 /// off its spheres by 1e-4 of the diagonal fails the vertex–sphere guarantee, and the report of
 /// such a result says `meets_guarantees: false` with the figure.
 #[test]
 fn a_broken_sq_mesh_fails_its_final_check() {
     use spherical_faces::geometry::mesh::PolyMesh;
-    use spherical_faces::samples::Sample;
     use spherical_faces::sq::guarantees::{verdict, Delivered};
     use spherical_faces::sq::sq_mesh::sq_mesh;
-    let reference = Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap();
-    let params = SqParams::default();
-    let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
-    assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
+    let (reference, params, result) = exact_vault();
     let f = result.sq_mesh.as_ref().unwrap();
     let (diag, sm) = (reference.diagonal(), &f.mesh.sphere_mesh);
     let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
@@ -282,13 +288,9 @@ fn a_broken_sq_mesh_fails_its_final_check() {
 #[test]
 fn an_sq_mesh_with_a_hole_misses_its_coverage() {
     use spherical_faces::geometry::mesh::PolyMesh;
-    use spherical_faces::samples::Sample;
     use spherical_faces::sq::guarantees::{verdict, Delivered, MIN_COVERAGE};
     use spherical_faces::sq::sq_mesh::sq_mesh;
-    let reference = Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap();
-    let params = SqParams::default();
-    let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
-    assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
+    let (reference, params, result) = exact_vault();
     let f = result.sq_mesh.as_ref().unwrap();
     assert!(f.coverage >= MIN_COVERAGE, "{}", f.coverage);
     let (diag, sm) = (reference.diagonal(), &f.mesh.sphere_mesh);
