@@ -188,21 +188,30 @@ fn verdicts_agree_with_the_written_files() {
     check(&["sq", "../shared/data/bsplines/tunnel_arch.json"]);
 }
 
+/// `runs` against their recording at `path` (in the crate): asserts they agree and returns true;
+/// with `SF_GOLDEN=write` records them anew and returns false (nothing more to check).
+fn matches_recording(path: &str, runs: &[(&str, Vec<spherical_faces::guarantees::Guarantee>)]) -> bool {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+    if std::env::var("SF_GOLDEN").as_deref() == Ok("write") {
+        let json: Vec<Value> = runs.iter().map(|(name, g)| serde_json::json!({ "run": name, "guarantees": g })).collect();
+        std::fs::write(&path, serde_json::to_string_pretty(&json).unwrap() + "\n").unwrap();
+        return false;
+    }
+    let diff = spherical_faces::bench_workloads::recorded_verdict_differences(&std::fs::read_to_string(&path).unwrap(), runs);
+    assert!(diff.is_empty(), "{diff:?}");
+    true
+}
+
 /// The native verdicts of the runs the browser repeats ([`verdict_runs`]) against their recording
 /// `tests/data/verdicts.json`, which `tests/web.rs` compares the wasm verdicts with:
 /// `SF_GOLDEN=write cargo test --test verdicts` records it anew.
 #[test]
 fn native_verdicts_match_the_recording_the_browser_checks() {
-    use spherical_faces::bench_workloads::{recorded_verdict_differences, verdict_runs};
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/verdicts.json");
+    use spherical_faces::bench_workloads::verdict_runs;
     let runs = verdict_runs();
-    if std::env::var("SF_GOLDEN").as_deref() == Ok("write") {
-        let json: Vec<Value> = runs.iter().map(|(name, g)| serde_json::json!({ "run": name, "guarantees": g })).collect();
-        std::fs::write(&path, serde_json::to_string_pretty(&json).unwrap() + "\n").unwrap();
+    if !matches_recording("tests/data/verdicts.json", &runs) {
         return;
     }
-    let diff = recorded_verdict_differences(&std::fs::read_to_string(&path).unwrap(), &runs);
-    assert!(diff.is_empty(), "{diff:?}");
     // The ST run counts what cannot be made, the SQ run its coverage too.
     let names = |k: usize| runs[k].1.iter().map(|g| g.name.clone()).collect::<Vec<_>>();
     assert!(names(0).contains(&"panels_with_crossing_arcs".into()) && names(0).contains(&"max_distance_to_reference".into()));
@@ -215,20 +224,15 @@ fn native_verdicts_match_the_recording_the_browser_checks() {
 /// constant radii and, at 120 quads, both meet every guarantee.
 #[test]
 fn native_hard_verdicts_match_the_recording_the_browser_checks() {
-    use spherical_faces::bench_workloads::{hard_verdict_runs, recorded_verdict_differences};
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/verdicts_hard.json");
+    use spherical_faces::bench_workloads::hard_verdict_runs;
     let files: [(&str, &[u8]); 2] = [
         ("revolved_bell.json", include_bytes!("../../shared/data/bsplines/hard/revolved_bell.json")),
         ("umbilic_dome.json", include_bytes!("../../shared/data/bsplines/hard/umbilic_dome.json")),
     ];
     let runs = hard_verdict_runs(&files);
-    if std::env::var("SF_GOLDEN").as_deref() == Ok("write") {
-        let json: Vec<Value> = runs.iter().map(|(name, g)| serde_json::json!({ "run": name, "guarantees": g })).collect();
-        std::fs::write(&path, serde_json::to_string_pretty(&json).unwrap() + "\n").unwrap();
+    if !matches_recording("tests/data/verdicts_hard.json", &runs) {
         return;
     }
-    let diff = recorded_verdict_differences(&std::fs::read_to_string(&path).unwrap(), &runs);
-    assert!(diff.is_empty(), "{diff:?}");
     for (name, g) in &runs {
         assert!(g.iter().all(|g| g.holds), "{name}: {g:?}");
     }
