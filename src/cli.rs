@@ -161,9 +161,10 @@ enum Command {
         /// Stop after this stage.
         #[arg(long, value_name = "STAGE", default_value = "final", value_parser = until)]
         until: Until,
-        /// The starting sphere congruence: auto (central, then constant radii when it misses θ or
-        /// α; constant radii alone where H changes sign), central (r = 1/H) or constant (the
-        /// normal congruence, whose torsal directions are the principal directions).
+        /// The starting sphere congruence: auto (constant radii, then the central congruence
+        /// when that SQ mesh misses a guarantee, keeping the result that misses fewer; constant
+        /// radii alone where H changes sign), central (r = 1/H) or constant (the normal
+        /// congruence, whose torsal directions are the principal directions).
         #[arg(long, value_name = "START", default_value = "auto", value_parser = radius_start)]
         start: RadiusStart,
         /// Depth of the support elements, relative to the diagonal.

@@ -144,8 +144,9 @@ fn a_sign_change_in_the_boundary_strip_is_a_warning() {
     assert_eq!(result.warnings.first().map(ToString::to_string), Some(warning.to_string()), "{:?}", result.warnings);
 }
 
+/// The central congruence's optimization (Sec. 5.1, steps 1 and 2) meets θ and α on G.
 fn check_acceptance(name: &str, reference: &Reference) -> SqCongruence {
-    let params = SqParams::default();
+    let params = SqParams { start: RadiusStart::Central, ..SqParams::default() };
     let mut iterations = [0usize; 2];
     let r = compute(reference, &params, Clock::native(), &mut |e| {
         if let SqEvent::Iteration { step, iteration, terms, lines } = e {

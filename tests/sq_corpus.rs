@@ -11,7 +11,7 @@ use spherical_faces::geometry::bspline::{BSplineBasis, BSplineSurface};
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::rng::Rng;
-use spherical_faces::sq::params::SqParams;
+use spherical_faces::sq::params::{RadiusStart, SqParams};
 use spherical_faces::sq::radius::{check_mean_curvature, SamplingGrid};
 use spherical_faces::sq::sphere_optimization::QuadStars;
 use spherical_faces::sq::{compute, SqError};
@@ -230,11 +230,23 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
             exact += usize::from(holds("max_vertex_sphere_residual") && holds("max_centre_face_planarity"));
             buildable += usize::from(holds("panels_with_crossing_arcs") && holds("panels_without_exact_surface"));
             met += usize::from(result.verdict.holds());
+            // Constant radii first; the central start only after a miss, and the result kept
+            // misses no more guarantees than the other.
+            let attempts = &result.congruence.attempts;
+            assert_eq!(attempts[0].start, RadiusStart::Constant, "{name}");
+            let weighed: Vec<usize> = attempts.iter().filter_map(|a| a.final_misses.as_ref().map(Vec::len)).collect();
+            let missed = result.verdict.failures().count();
+            assert!(weighed.iter().all(|&m| missed <= m), "{name} θ {theta}: kept {missed} misses of {weighed:?}");
+            if name == "revolved_bell" {
+                // H changes sign: flatter spheres than the first constant radius fit it within
+                // the promised distance.
+                assert!(result.verdict.holds(), "{name} θ {theta}: {}", result.verdict.failure_text());
+            }
             rows.push(format!("{name} θ {theta} α {alpha}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
         }
     }
     println!("{}\n{exact} of 14 exact, {buildable} buildable, {met} meet every guarantee", rows.join("\n"));
-    assert!(exact >= 11 && buildable >= 7 && met >= 1, "{exact} exact, {buildable} buildable, {met} meet:\n{}", rows.join("\n"));
+    assert!(exact >= 11 && buildable >= 7 && met >= 4, "{exact} exact, {buildable} buildable, {met} meet:\n{}", rows.join("\n"));
 }
 
 /// The vault's SQ mesh at the defaults, which meets every guarantee: the exact mesh the broken

@@ -10,6 +10,9 @@ use super::exact_surface::{ExactSurfaceError, ExactSurfaces};
 use super::panel::Panel;
 use crate::congruence::support_structure::SupportElement;
 
+/// The name of the guarantee on the panels' distance to the reference.
+pub const MAX_DISTANCE: &str = "max_distance_to_reference";
+
 /// The default bound on the panels' distance to the reference of the methods with support
 /// structure, relative to the bounding-box diagonal.
 pub const DEFAULT_MAX_DISTANCE: f64 = 0.01;
@@ -109,7 +112,7 @@ impl Buildability {
     /// Every panel within `max_distance` × the diagonal of the reference, in model units beside.
     pub fn distance_guarantee(&self, max_distance: f64) -> Guarantee {
         let diag = self.diagonal.max(f64::MIN_POSITIVE);
-        let name = "max_distance_to_reference";
+        let name = MAX_DISTANCE;
         let limit = format_length(max_distance * diag, self.units);
         match self.max_distance() {
             _ if self.panel_distances.is_empty() => Guarantee::at_most(name, f64::NAN, max_distance, "of the diagonal").unmeasured("there are no panels"),

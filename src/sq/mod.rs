@@ -21,6 +21,10 @@
 //!    the figures of exactness.
 //!
 //! [`compute`] runs as far as [`SqParams::until`] asks; [`compute_congruence`] runs steps 1–3.
+//! With the `auto` start, [`compute`] runs from constant radii first and from the central
+//! congruence only when that SQ mesh misses a guarantee, keeping the result that misses fewer;
+//! from constant radii, a mesh that misses only the distance is optimized again with larger
+//! radii on the same quad mesh.
 //!
 //! Everything is computed in the frame y = (x − t)/s of the bounding box (centre t, diagonal s),
 //! so the weights are dimensionless; results are returned in model units.
@@ -187,6 +191,10 @@ pub struct CongruenceAttempt {
     pub figures: CongruenceFigures,
     /// Grid points beyond θ, quads without real torsal directions and quads below α.
     pub misses: usize,
+    /// The guarantees the SQ mesh from this start missed, when it was run to the end and
+    /// another start's result was weighed against it ([`compute`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_misses: Option<Vec<String>>,
 }
 
 impl CongruenceAttempt {
@@ -261,8 +269,8 @@ pub fn compute_congruence(
     let radius = BSplineFunction { coefficients, ..fit.function.clone() };
     let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
     timings.lap("metrics");
-    if chosen > 0 {
-        let a = &attempts[0].figures;
+    if let Some(central) = attempts.iter().find(|a| a.start == RadiusStart::Central && a.start != attempts[chosen].start) {
+        let a = &central.figures;
         warnings.push(Warning::CentralCongruenceReplaced {
             max_line_normal_angle_deg: a.max_line_normal_angle_deg,
             theta_deg: params.theta_deg,
@@ -357,7 +365,7 @@ fn optimize_starts(
         let pairs = torsal_pairs(grid, &lines);
         let figures = CongruenceFigures::of(grid, &lines, &pairs);
         let misses = metrics::misses(grid, &lines, &pairs, params.theta_deg, params.alpha_deg) + collapsed;
-        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses });
+        attempts.push(CongruenceAttempt { start, initial_figures, figures, misses, final_misses: None });
         if best.as_ref().is_none_or(|b| misses < attempts[b.chosen].misses) {
             best = Some(Kept { chosen: k, optimized, initial_lines, lines, pairs });
         }
@@ -435,7 +443,7 @@ fn spherical_congruence(
     let function = BSplineFunction::constant(sphere.1, domain);
     timings.lap("radius");
     let misses = metrics::misses(&grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses };
+    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses, final_misses: None };
     SqCongruence {
         grid: params.grid,
         uv: grid.uv.clone(),
@@ -534,8 +542,75 @@ impl SqResult {
     }
 }
 
-/// Runs the SQ method as far as `params.until` (see the module docs).
+/// Runs the SQ method as far as `params.until` (see the module docs). With
+/// [`RadiusStart::Auto`] to the final mesh: from constant radii, and when that SQ mesh misses a
+/// guarantee, again from the central congruence where it exists; the result that misses fewer
+/// guarantees is kept (constant radii among equals), with both starts among its attempts.
 pub fn compute(
+    reference: &Reference,
+    params: &SqParams,
+    clock: Clock,
+    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+) -> Result<SqResult, SqError> {
+    if params.start != RadiusStart::Auto || params.until != Until::Final {
+        return compute_from(reference, params, clock, on_event);
+    }
+    let mut constant = compute_from(reference, &SqParams { start: RadiusStart::Constant, ..params.clone() }, clock, on_event)?;
+    if constant.verdict.holds() {
+        return Ok(constant);
+    }
+    // The second start's first event is a restart.
+    let mut restarted = |e: SqEvent| match e {
+        SqEvent::Started { lines, .. } => on_event(SqEvent::Restarted { start: RadiusStart::Central, lines }),
+        e => on_event(e),
+    };
+    let mut central = match compute_from(reference, &SqParams { start: RadiusStart::Central, ..params.clone() }, clock, &mut restarted) {
+        Ok(central) => central,
+        Err(SqError::Cancelled) => return Err(SqError::Cancelled),
+        // No central congruence (H changes sign or vanishes), or none that runs to the end.
+        Err(_) => return Ok(constant),
+    };
+    let missed = |r: &SqResult| r.verdict.failures().map(|g| g.name.clone()).collect::<Vec<_>>();
+    let (c, k) = (missed(&constant), missed(&central));
+    let keep_central = k.len() < c.len();
+    for (result, misses) in [(&mut constant, c), (&mut central, k)] {
+        let chosen = result.congruence.start;
+        if let Some(a) = result.congruence.attempts.iter_mut().rev().find(|a| a.start == chosen) {
+            a.final_misses = Some(misses);
+        }
+    }
+    let (mut kept, other) = if keep_central { (central, constant) } else { (constant, central) };
+    let other_ms = other.congruence.timings_ms.iter().chain(&other.timings_ms).map(|(_, ms)| ms).sum();
+    kept.timings_ms.push(("start_not_kept".into(), other_ms));
+    let mut attempts = other.congruence.attempts;
+    attempts.retain(|a| a.final_misses.is_some());
+    if keep_central {
+        attempts.append(&mut kept.congruence.attempts);
+        kept.congruence.attempts = attempts;
+    } else {
+        kept.congruence.attempts.append(&mut attempts);
+    }
+    Ok(kept)
+}
+
+/// The largest factor the constant start's radius grows by when its SQ mesh misses only the
+/// distance to the reference.
+const MAX_RADIUS_SCALE: f64 = 4.0;
+
+/// The verdict misses the distance to the reference and nothing else.
+fn only_distance_missed(verdict: &Verdict) -> bool {
+    let missed: Vec<&str> = verdict.failures().map(|g| g.name.as_str()).collect();
+    missed == [crate::panels::buildability::MAX_DISTANCE]
+}
+
+/// `tried` meets every guarantee, or misses only the distance, by less than `before` does.
+fn closer(tried: &Verdict, before: &Verdict) -> bool {
+    let distance = |v: &Verdict| v.guarantees.iter().find(|g| g.name == crate::panels::buildability::MAX_DISTANCE).map_or(f64::INFINITY, |g| g.measured);
+    tried.holds() || (only_distance_missed(tried) && distance(tried) < distance(before))
+}
+
+/// [`compute`] from `params.start`'s starts, the one kept by their congruences' misses.
+fn compute_from(
     reference: &Reference,
     params: &SqParams,
     clock: Clock,
@@ -572,8 +647,25 @@ pub fn compute(
         result.warnings = warnings;
         return Ok(result);
     }
-    let done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
-    result.verdict = guarantees::verdict(&result.congruence.figures, done.delivered(params), theta, alpha);
+    let mut done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
+    let verdict = |f: &SqFinal| guarantees::verdict(&result.congruence.figures, f.delivered(params), theta, alpha);
+    result.verdict = verdict(&done);
+    if result.congruence.start == RadiusStart::Constant && result.congruence.sphere.is_none() {
+        // Larger constant radii, when the mesh misses only the distance (see `start`).
+        let (mut scale, mut kept_scale) = (1.0, 1.0);
+        let first = result.verdict.clone();
+        while scale < MAX_RADIUS_SCALE && only_distance_missed(&first) && !result.verdict.holds() {
+            scale *= 2.0;
+            let wider = SqCongruence { radius: result.congruence.radius.scaled(scale), ..result.congruence.clone() };
+            let tried = final_mesh(reference, &wider, &quad, params, clock, &mut timings, on_event)?;
+            let v = verdict(&tried);
+            if closer(&v, &result.verdict) {
+                (done, result.verdict, kept_scale) = (tried, v, scale);
+            }
+        }
+        result.congruence.radii.iter_mut().for_each(|r| *r *= kept_scale);
+        result.congruence.radius = result.congruence.radius.scaled(kept_scale);
+    }
     result.quad_mesh = Some(quad);
     result.sq_mesh = Some(done);
     result.timings_ms = timings.laps;

@@ -22,8 +22,11 @@ pub enum Inequality {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RadiusStart {
-    /// The central congruence r = 1/H (Sec. 5.1); when its optimized congruence misses θ or α,
-    /// start again from constant radii. Where H changes sign or vanishes, constant radii alone.
+    /// Constant radii first; when the SQ mesh from them misses a guarantee, the central
+    /// congruence r = 1/H (Sec. 5.1), whose spheres fit the surface best (Sec. 2.6), and the
+    /// result that misses fewer guarantees. Where H changes sign or vanishes, constant radii
+    /// alone. Run only as far as the congruence or the quad mesh, the start whose congruence
+    /// misses θ and α on fewer points of G.
     #[default]
     Auto,
     /// The central congruence only.
@@ -40,7 +43,7 @@ impl RadiusStart {
     /// The starts tried, in order.
     pub fn starts(self) -> &'static [RadiusStart] {
         match self {
-            RadiusStart::Auto => &[RadiusStart::Central, RadiusStart::Constant],
+            RadiusStart::Auto => &[RadiusStart::Constant, RadiusStart::Central],
             RadiusStart::Central => &[RadiusStart::Central],
             RadiusStart::Constant => &[RadiusStart::Constant],
         }

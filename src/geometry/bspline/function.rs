@@ -54,6 +54,11 @@ impl BSplineFunction {
         Self { u: basis(u), v: basis(v), coefficients: vec![value; 4] }
     }
 
+    /// The function times `factor`.
+    pub fn scaled(&self, factor: f64) -> Self {
+        Self { coefficients: self.coefficients.iter().map(|c| c * factor).collect(), ..self.clone() }
+    }
+
     /// The row of parameter (u, v) (clamped to the domain).
     pub fn row(u: &BSplineBasis, v: &BSplineBasis, s: f64, t: f64) -> FunctionRow {
         Self::row_with(u.count(), &u.evaluate(s), &v.evaluate(t))

@@ -454,7 +454,15 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
     let r = &sum.report;
     let g = |x: f64| format!("{x:.2e}");
     let ok = |good: bool| if good { "✔" } else { "✘" };
-    let tried: Vec<String> = c.attempts.iter().map(|a| format!("{} ({} misses)", a.start.key(), a.misses)).collect();
+    let tried: Vec<String> = c
+        .attempts
+        .iter()
+        .map(|a| match &a.final_misses {
+            Some(m) if m.is_empty() => format!("{} (meets every guarantee)", a.start.key()),
+            Some(m) => format!("{} (missed {})", a.start.key(), m.join(", ")),
+            None => format!("{} ({} misses on G)", a.start.key(), a.misses),
+        })
+        .collect();
     let mut rows = vec![
         ("start kept", format!("{} of {}", c.start.key(), tried.join(", then "))),
         (
