@@ -128,8 +128,9 @@ pub fn quad_mesh(
     if remesh.folded_triangles > 0 {
         warnings.push(Warning::FoldedFieldTriangles { triangles: remesh.folded_triangles });
     }
-    let QuadRemesh { mesh: mut remesh, mut uv, polylines, mut on_boundary, dropped, singular, folded_triangles, .. } = remesh;
+    let QuadRemesh { mesh: mut remesh, mut uv, mut polylines, mut on_boundary, dropped, singular, folded_triangles, .. } = remesh;
     reach_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary);
+    extend_to_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary, &mut polylines);
     let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
 
     // Q′ in the frame of the bounding box.
@@ -208,7 +209,34 @@ const BOUNDARY_REACH: f64 = 0.3;
 /// to its boundary instead of leaving a strip along it.
 fn reach_the_boundary(surface: &crate::geometry::bspline::BSplineSurface, mesh: &mut PolyMesh, uv: &mut [[f64; 2]], on_boundary: &mut [bool]) {
     let ((u0, u1), (v0, v1)) = surface.domain();
-    let topology = crate::geometry::mesh::topology::Topology::new(&*mesh);
+    let (length, outer) = outer_vertices(surface, mesh, uv);
+    for v in 0..uv.len() {
+        if !outer[v] || on_boundary[v] || !length[v].is_finite() {
+            continue;
+        }
+        let near = BOUNDARY_REACH * length[v];
+        let [u, w] = uv[v];
+        let (du, dw) = ((u - u0).min(u1 - u) / (u1 - u0), (w - v0).min(v1 - w) / (v1 - v0));
+        let mut moved = [u, w];
+        if du < near {
+            moved[0] = if u - u0 < u1 - u { u0 } else { u1 };
+        }
+        if dw < near {
+            moved[1] = if w - v0 < v1 - w { v0 } else { v1 };
+        }
+        if moved != [u, w] {
+            uv[v] = moved;
+            mesh.positions[v] = surface.point(moved[0], moved[1]);
+            on_boundary[v] = true;
+        }
+    }
+}
+
+/// Per vertex, the mean length of its edges in (u, v) over the domain's sides (NaN without
+/// edges), and whether it is on the mesh's boundary.
+fn outer_vertices(surface: &crate::geometry::bspline::BSplineSurface, mesh: &PolyMesh, uv: &[[f64; 2]]) -> (Vec<f64>, Vec<bool>) {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let topology = crate::geometry::mesh::topology::Topology::new(mesh);
     let mut reach = vec![(0.0f64, 0usize); uv.len()];
     let mut outer = vec![false; uv.len()];
     for (e, &[a, b]) in topology.edges().iter().enumerate() {
@@ -223,24 +251,163 @@ fn reach_the_boundary(surface: &crate::geometry::bspline::BSplineSurface, mesh: 
             outer[b] = true;
         }
     }
-    for v in 0..uv.len() {
-        if !outer[v] || on_boundary[v] || reach[v].1 == 0 {
+    (reach.iter().map(|&(l, k)| if k == 0 { f64::NAN } else { l / k as f64 }).collect(), outer)
+}
+
+/// The farthest the mesh's boundary may stand from a side of the patch, × the mean length of
+/// its edges in (u, v), for a row of quads to be added out to that side ([`extend_to_the_boundary`]).
+const BOUNDARY_ROW: f64 = 2.0;
+
+/// A boundary edge gets a quad out to a side only when it runs along the side: its shadow on
+/// the side is at least this share of its length in (u, v).
+const EDGE_ALONG_SIDE: f64 = 0.7;
+
+/// Where an edge of the mesh's boundary stands short of one side of the patch, beyond what
+/// [`reach_the_boundary`] moves and within [`BOUNDARY_ROW`] edges, one quad out to that side:
+/// its new corners are the edge's ends moved across onto the side, held there as boundary
+/// vertices. The strip the lattice left along the side is then covered by panels.
+fn extend_to_the_boundary(
+    surface: &crate::geometry::bspline::BSplineSurface,
+    mesh: &mut PolyMesh,
+    uv: &mut Vec<[f64; 2]>,
+    on_boundary: &mut Vec<bool>,
+    polylines: &mut Vec<[u32; 3]>,
+) {
+    let ((u0, u1), (v0, v1)) = surface.domain();
+    let (length, outer) = outer_vertices(surface, mesh, uv);
+    let scaled = |p: [f64; 2]| [(p[0] - u0) / (u1 - u0), (p[1] - v0) / (v1 - v0)];
+    let area = |p: &[[f64; 2]]| (0..p.len()).map(|i| p[i][0] * p[(i + 1) % p.len()][1] - p[(i + 1) % p.len()][0] * p[i][1]).sum::<f64>();
+    // A vertex's place on side k (0: u0, 1: u1, 2: v0, 3: v1), when its gap to the side is
+    // beyond the reach and within a row.
+    let across = |v: usize, k: usize| -> Option<[f64; 2]> {
+        if !outer[v] || on_boundary[v] || !length[v].is_finite() {
+            return None;
+        }
+        let [u, w] = scaled(uv[v]);
+        let gap = [u, 1.0 - u, w, 1.0 - w][k];
+        let within = gap > BOUNDARY_REACH * length[v] && gap <= BOUNDARY_ROW * length[v];
+        within.then_some([[u0, uv[v][1]], [u1, uv[v][1]], [uv[v][0], v0], [uv[v][0], v1]][k])
+    };
+    let topology = crate::geometry::mesh::topology::Topology::new(&*mesh);
+    let mut planned = Vec::new();
+    for (e, &[a, b]) in topology.edges().iter().enumerate() {
+        let &[(f, k)] = topology.edge_faces(e) else { continue };
+        // The edge as its face runs it, a → b: the new quad runs it b → a.
+        let c = mesh.faces[f as usize].corners();
+        let (a, b) = if c[k as usize] == a { (a, b) } else { (b, a) };
+        // The side the edge faces: its outward normal in (u, v), to the right of a → b in a
+        // face that turns counter-clockwise.
+        let face_uv: Vec<[f64; 2]> = c.iter().map(|&v| scaled(uv[v as usize])).collect();
+        let (qa, qb) = (scaled(uv[a as usize]), scaled(uv[b as usize]));
+        let turn = area(&face_uv).signum();
+        let out = [turn * (qb[1] - qa[1]), -turn * (qb[0] - qa[0])];
+        let side = if out[0].abs() > out[1].abs() { usize::from(out[0] > 0.0) } else { 2 + usize::from(out[1] > 0.0) };
+        let (Some(pa), Some(pb)) = (across(a as usize, side), across(b as usize, side)) else { continue };
+        // Only an edge along the side, whose quad turns the way its face does.
+        let (qa2, qb2) = (scaled(pa), scaled(pb));
+        if (qa2[0] - qb2[0]).hypot(qa2[1] - qb2[1]) < EDGE_ALONG_SIDE * (qa[0] - qb[0]).hypot(qa[1] - qb[1]) {
             continue;
         }
-        let near = BOUNDARY_REACH * reach[v].0 / reach[v].1 as f64;
-        let [u, w] = uv[v];
-        let (du, dw) = ((u - u0).min(u1 - u) / (u1 - u0), (w - v0).min(v1 - w) / (v1 - v0));
-        let mut moved = [u, w];
-        if du < near {
-            moved[0] = if u - u0 < u1 - u { u0 } else { u1 };
+        if area(&[qb, qa, qa2, qb2]) * turn <= 0.0 {
+            continue;
         }
-        if dw < near {
-            moved[1] = if w - v0 < v1 - w { v0 } else { v1 };
+        planned.push((a, b, side, pa, pb));
+    }
+    // New vertices by (vertex, side): at a corner of the lattice the two rows part.
+    let mut moved: std::collections::HashMap<(u32, usize), u32> = std::collections::HashMap::new();
+    let mut faces = Vec::new();
+    for (a, b, side, pa, pb) in planned {
+        let mut corner = |v: u32, p: [f64; 2]| -> u32 {
+            *moved.entry((v, side)).or_insert_with(|| {
+                uv.push(p);
+                on_boundary.push(true);
+                mesh.positions.push(surface.point(p[0], p[1]));
+                (uv.len() - 1) as u32
+            })
+        };
+        let (a2, b2) = (corner(a, pa), corner(b, pb));
+        faces.push(crate::geometry::mesh::Face::quad([b, a, a2, b2]));
+    }
+    // The mesh line through each moved vertex goes on across the new row: fairing spaces the
+    // row and the one inside it evenly.
+    let mut moved: Vec<(u32, u32)> = moved.into_iter().map(|((v, _), new)| (v, new)).collect();
+    moved.sort_unstable();
+    for (v, new) in moved {
+        let inner: Vec<u32> = topology
+            .vertex_faces(v as usize)
+            .iter()
+            .flat_map(|&f| mesh.faces[f as usize].corners().to_vec())
+            .filter(|&w| w != v)
+            .filter(|&w| topology.edge_index(v, w).is_some_and(|e| topology.edge_faces(e).len() == 2))
+            .collect();
+        if let [w, ..] = inner[..] {
+            if inner.iter().all(|&x| x == w) {
+                polylines.push([new, v, w]);
+            }
         }
-        if moved != [u, w] {
-            uv[v] = moved;
-            mesh.positions[v] = surface.point(moved[0], moved[1]);
-            on_boundary[v] = true;
+    }
+    mesh.faces.extend(faces);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::bspline::{BSplineBasis, BSplineSurface};
+    use crate::geometry::mesh::topology::Topology;
+    use crate::geometry::mesh::Face;
+
+    /// The unit square z = 0 as a bilinear patch.
+    fn square() -> BSplineSurface {
+        let basis = || BSplineBasis::clamped_uniform(1, 2, (0.0, 1.0)).unwrap();
+        let control = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0)];
+        BSplineSurface::new(basis(), basis(), control, vec![1.0; 4]).unwrap()
+    }
+
+    /// A 4 × 3 lattice of quads 0.2 by 0.22 over u in [0.1, 0.9], v in [0, 0.66], its lower row
+    /// on the side v = 0, counter-clockwise; the side v = 1 is about 1.6 edges away, u = 0 and
+    /// u = 1 half an edge.
+    fn lattice() -> (PolyMesh, Vec<[f64; 2]>, Vec<bool>) {
+        let (nu, nv) = (5, 4);
+        let uv: Vec<[f64; 2]> = (0..nv).flat_map(|j| (0..nu).map(move |i| [0.1 + 0.2 * i as f64, 0.22 * j as f64])).collect();
+        let id = |i: usize, j: usize| (i + nu * j) as u32;
+        let faces = (0..nv - 1).flat_map(|j| (0..nu - 1).map(move |i| Face::quad([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))).collect();
+        let positions = uv.iter().map(|p| DVec3::new(p[0], p[1], 0.0)).collect();
+        let on_boundary = uv.iter().map(|p| p[1] == 0.0).collect();
+        (PolyMesh::new(positions, faces), uv, on_boundary)
+    }
+
+    #[test]
+    fn a_strip_along_a_side_gets_a_row_of_quads_out_to_it() {
+        let surface = square();
+        let (mut mesh, mut uv, mut on_boundary) = lattice();
+        let mut polylines = Vec::new();
+        let before = mesh.face_count();
+        reach_the_boundary(&surface, &mut mesh, &mut uv, &mut on_boundary);
+        // u = 0.1 and u = 0.9 are half an edge from their sides: beyond the reach, within a row.
+        assert!(uv.iter().all(|p| p[0] >= 0.1 - 1e-12 && p[0] <= 0.9 + 1e-12));
+        extend_to_the_boundary(&surface, &mut mesh, &mut uv, &mut on_boundary, &mut polylines);
+        // A quad out to u = 0 and u = 1 on each side edge of the lattice but the lowest, whose
+        // lower vertex is on v = 0 already, and out to v = 1 on every top edge; the top corners
+        // of the lattice move to both their sides, so only the patch's corners stay open.
+        assert_eq!(mesh.face_count() - before, 2 + 2 + 4);
+        let new: Vec<usize> = (20..uv.len()).collect();
+        assert_eq!(new.len(), 3 + 3 + 5);
+        assert!(new.iter().all(|&v| on_boundary[v]));
+        assert!(new.iter().all(|&v| uv[v].iter().any(|&c| c == 0.0 || c == 1.0)), "{uv:?}");
+        // Every new quad turns the way the lattice does, and the mesh stays manifold.
+        let area = |f: &Face| {
+            let c = f.corners();
+            (0..4).map(|k| uv[c[k] as usize][0] * uv[c[(k + 1) % 4] as usize][1] - uv[c[(k + 1) % 4] as usize][0] * uv[c[k] as usize][1]).sum::<f64>()
+        };
+        assert!(mesh.faces.iter().all(|f| area(f) > 0.0));
+        assert!(Topology::new(&mesh).edge_face_counts().iter().all(|&k| k <= 2));
+        // The mesh lines go on across the new rows (not at the lattice's corners, where none
+        // comes in).
+        assert_eq!(polylines.len(), new.len() - 4);
+        for [a, v, b] in &polylines {
+            let (pa, pv, pb) = (uv[*a as usize], uv[*v as usize], uv[*b as usize]);
+            let cross = (pv[0] - pa[0]) * (pb[1] - pv[1]) - (pv[1] - pa[1]) * (pb[0] - pv[0]);
+            assert!(cross.abs() < 1e-12, "{a} {v} {b} not on one line");
         }
     }
 }
