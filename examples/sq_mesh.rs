@@ -80,6 +80,21 @@ fn main() {
         let rr = &r.congruence.radii; println!("  radii min {:.3} max {:.3} start {:?} diag-rel faces", rr.iter().cloned().fold(f64::INFINITY, f64::min), rr.iter().cloned().fold(f64::NEG_INFINITY, f64::max), r.congruence.start);
         println!("  phases {:?}", f.outcome.phase_ms);
         if std::env::var("DUMP").is_ok() { dump(&f.mesh); }
+        if std::env::var("FAR").is_ok() {
+            // The vertices farthest from the reference, with (u, v), boundary flag and valence.
+            let spline = loaded.surface.spline_reference().unwrap();
+            let diag = loaded.surface.diagonal();
+            let mesh = &f.mesh.sphere_mesh.mesh;
+            let mut far: Vec<(f64, usize)> = mesh.positions.iter().enumerate().map(|(v, p)| (spline.closest_point(*p, f.uv[v]).1.distance(*p) / diag, v)).collect();
+            let signed: Vec<f64> = mesh.positions.iter().enumerate().map(|(v, p)| { let (_, q, n) = spline.closest_point(*p, f.uv[v]); (*p - q).dot(n.unwrap_or(glam::DVec3::Z)) / diag }).collect();
+            let pos = signed.iter().filter(|&&x| x > 0.0).count();
+            println!("  vertex distance: mean {:.2e}, signed mean {:.2e}, {} of {} on the normal's side", far.iter().map(|x| x.0).sum::<f64>() / far.len() as f64, signed.iter().sum::<f64>() / signed.len() as f64, pos, signed.len());
+            far.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let valence = |v: usize| mesh.faces.iter().filter(|fc| fc.corners().contains(&(v as u32))).count();
+            for &(d, v) in far.iter().take(6) {
+                println!("  far vertex {v}: {d:.2e} of the diagonal at uv {:?}, boundary {}, faces {}", f.uv[v], q.on_boundary[v], valence(v));
+            }
+        }
     }
 }
 

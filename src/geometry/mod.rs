@@ -11,4 +11,5 @@ pub mod linalg;
 pub mod mesh;
 pub mod pencil;
 pub mod rational_bezier;
+pub mod rigid_alignment;
 pub mod sphere;

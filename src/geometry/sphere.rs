@@ -217,6 +217,13 @@ impl Sphere {
         Self { a: self.a * sigma * sigma, b: sigma * (self.b - 2.0 * self.a * t), c: self.eval(t) }
     }
 
+    /// The sphere moved by the rigid motion x ↦ R x + t: with x = Rᵀ(y − t), ψ(x) =
+    /// a|y|² − ⟨2a t + R b, y⟩ + c + a|t|² + ⟨R b, t⟩ (planes included).
+    pub fn moved(&self, rotation: glam::DMat3, t: DVec3) -> Self {
+        let rb = rotation * self.b;
+        Self { a: self.a, b: 2.0 * self.a * t + rb, c: self.c + self.a * t.length_squared() + rb.dot(t) }
+    }
+
     /// Inverse of [`Self::in_frame`]: coefficients given in the frame y = (x − t)/σ, back in x.
     pub fn from_frame(&self, t: DVec3, sigma: f64) -> Self {
         let a = self.a / (sigma * sigma);
@@ -347,6 +354,26 @@ fn combine_orthogonal(s0: &Sphere, s1: &Sphere, o: &Sphere) -> Option<Sphere> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// ψ of a moved sphere (or plane) at a moved point is ψ at the point: what lies on the
+    /// sphere lies on its image.
+    #[test]
+    fn a_rigid_motion_moves_spheres_and_planes_onto_their_images() {
+        let rotation = glam::DMat3::from_quat(glam::DQuat::from_scaled_axis(DVec3::new(0.3, -0.2, 0.5)));
+        let t = DVec3::new(1.0, -2.0, 0.5);
+        let sphere = Sphere::from_center_radius(DVec3::new(0.2, 0.1, -0.3), 1.7);
+        let plane = Sphere { a: 0.0, b: DVec3::new(0.0, 0.6, 0.8), c: 0.25 };
+        for (x, points) in [
+            (sphere, (0..20).map(|k| DVec3::new(0.2, 0.1, -0.3) + 1.7 * DVec3::new((k as f64).cos(), (k as f64).sin() * 0.6, (k as f64).sin() * 0.8)).collect::<Vec<_>>()),
+            (plane, (0..20).map(|k| DVec3::new(k as f64, (k as f64 * 0.3).sin(), 0.1 * k as f64)).collect()),
+        ] {
+            let moved = x.moved(rotation, t);
+            for p in points {
+                let before = x.eval(p);
+                assert!((moved.eval(rotation * p + t) - before).abs() < 1e-12, "{before} → {}", moved.eval(rotation * p + t));
+            }
+        }
+    }
 
     const EPS: f64 = 1e-12;
 

@@ -17,8 +17,9 @@
 //!    with about N faces, faired into Q′ by gliding over the reference.
 //! 5. **Final optimization** ([`sphere_optimization`], Eq. 10): face spheres, vertices, node
 //!    axes and torsal planes, then the projection to an exact SQ mesh with support structure.
-//! 6. **Panels out** ([`sq_mesh`]): spherical quad panels, node axes and support elements, with
-//!    the figures of exactness.
+//! 6. **Panels out** ([`sq_mesh`]): the exact mesh moved rigidly closest to the reference
+//!    ([`crate::geometry::rigid_alignment`]; a rigid motion keeps it exact), then spherical quad
+//!    panels, node axes and support elements, with the figures of exactness.
 //!
 //! [`compute`] runs as far as [`SqParams::until`] asks; [`compute_congruence`] runs steps 1–3.
 //! With the `auto` start, [`compute`] runs from constant radii first and from the central
@@ -49,6 +50,7 @@ pub mod terms;
 use glam::DVec3;
 
 use crate::congruence::torsal::{parameter_pair, TorsalPair};
+use crate::geometry::rigid_alignment::point_to_plane_motion;
 use crate::geometry::bspline::BSplineFunction;
 use crate::panels::buildability::Buildability;
 use crate::panels::deviation::panel_distances;
@@ -593,6 +595,9 @@ pub fn compute(
     Ok(kept)
 }
 
+/// Rounds of the rigid alignment of the final mesh onto the reference.
+const ALIGNMENT_ROUNDS: usize = 3;
+
 /// The largest factor the constant start's radius grows by when its SQ mesh misses only the
 /// distance to the reference.
 const MAX_RADIUS_SCALE: f64 = 4.0;
@@ -761,6 +766,44 @@ fn final_mesh(
             return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
         }
         on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
+        // The rigid motion that brings the panels closest to the reference (their corners and
+        // the points of their spheres over their centres) keeps the mesh exact; it is kept when
+        // it brings the farthest of those points closer.
+        let faces = &quad.mesh.faces;
+        let centre_uv: Vec<[f64; 2]> = faces
+            .iter()
+            .map(|f| {
+                let k = f.corners().len() as f64;
+                f.corners().iter().fold([0.0, 0.0], |a, &v| [a[0] + quad.uv[v as usize][0] / k, a[1] + quad.uv[v as usize][1] / k])
+            })
+            .collect();
+        let samples = |positions: &[DVec3], spheres: &[Sphere]| -> Vec<DVec3> {
+            let centres = faces.iter().zip(spheres).map(|(f, x)| {
+                let m = f.corners().iter().map(|&v| positions[v as usize]).sum::<DVec3>() / f.corners().len() as f64;
+                x.closest_point(m)
+            });
+            positions.iter().copied().chain(centres).collect()
+        };
+        let start_uv = |i: usize| if i < quad.uv.len() { quad.uv[i] } else { centre_uv[i - quad.uv.len()] };
+        let farthest = |points: &[DVec3]| points.iter().enumerate().map(|(i, p)| spline.closest_point(*p, start_uv(i)).1.distance(*p)).fold(0.0, f64::max);
+        let before = samples(&positions, &spheres);
+        let (rotation, shift) = point_to_plane_motion(&before, ALIGNMENT_ROUNDS, &mut |i, p| {
+            let (_, q, n) = spline.closest_point(p, start_uv(i));
+            Some((q, n?))
+        });
+        let after: Vec<DVec3> = before.iter().map(|p| rotation * *p + shift).collect();
+        // Nor may the motion slide the panels off the patch: below what they covered, or
+        // below the guarantee.
+        let covered = |points: &[DVec3]| {
+            let uv: Vec<[f64; 2]> = points.iter().zip(&quad.uv).map(|(p, uv)| spline.closest_point(*p, *uv).0).collect();
+            coverage(surface, faces, &uv)
+        };
+        let nv = positions.len();
+        let (positions, spheres) = if farthest(&after) < farthest(&before) && covered(&after[..nv]) >= covered(&before[..nv]).min(guarantees::MIN_COVERAGE) {
+            (positions.iter().map(|p| rotation * *p + shift).collect(), spheres.iter().map(|x| x.moved(rotation, shift)).collect())
+        } else {
+            (positions, spheres)
+        };
         // The reference's closest points: (u, v), normals and the vertices' distance.
         let mut uv = Vec::with_capacity(positions.len());
         let mut final_normals = Vec::with_capacity(positions.len());
