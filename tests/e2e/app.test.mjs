@@ -440,7 +440,8 @@ for (const project of PROJECTS) {
 
     test(`[${project.name}] l. SQ (Sec. 5.1) on the vault sample streams lines and term energies, meets θ and α, and its congruence GLB validates`, { timeout: T.test }, async (t) => {
       const { server, browser } = await env();
-      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&until=congruence';
+      // The central congruence (its optimization streams; the auto start takes constant radii here).
+      const fragment = 'v=1&sample=vault&method=sq&theta=20&alpha=75&grid=20&rs=10&until=congruence&start=central';
       await withApp(t, browser, server, project, { name: 'l-sq', fragment }, async (app) => {
         const s = await waitForState(
           app,
@@ -456,11 +457,12 @@ for (const project of PROJECTS) {
         assert.equal(r.schema, 3);
         assert.ok(!s.error, `error: ${s.error}`);
         assert.equal(s.source, 'sample:vault');
-        for (const part of ['method=sq&', 'theta=20&alpha=75&grid=20&rs=10']) {
+        for (const part of ['method=sq&', 'theta=20&alpha=75&grid=20&rs=10', 'start=central']) {
           assert.ok(s.design_link.includes(part), `${part} in ${s.design_link}`);
         }
         assert.equal(sq.grid, 20);
         assert.equal(sq.stopped_after, 'congruence');
+        assert.equal(c.start, 'central');
         assert.ok(c.figures.max_line_normal_angle_deg <= 20, `max ∠(l, n) ${c.figures.max_line_normal_angle_deg}° ≤ θ`);
         assert.ok(c.figures.min_torsal_plane_angle_deg >= 75, `min torsal-plane angle ${c.figures.min_torsal_plane_angle_deg}° ≥ α`);
         assert.equal(c.figures.quads_without_real_torsal_directions, 0);
@@ -550,9 +552,15 @@ for (const project of PROJECTS) {
           assert.ok(r.timings_ms[k] > 0, `timings_ms.${k}`);
         }
         assert.ok(s.sq.quad_mesh_edges > 0 && s.sq.panel_triangles > 0 && s.sq.support_triangles > 0 && s.sq.axes > 0, 'quad mesh, panels, support and axes shown');
-        for (const step of ['line_congruence', 'torsal', 'fairing', 'warm_up', 'spheres', 'projection']) {
+        // The auto start: the SQ mesh from constant radii meets every guarantee, so the central
+        // congruence never runs, and the constant one is taken as it is (no congruence iterations).
+        const c = r.sq.congruence;
+        assert.equal(c.start, 'constant');
+        assert.deepEqual(c.attempts.map((a) => a.start), ['constant']);
+        for (const step of ['fairing', 'warm_up', 'spheres', 'projection']) {
           assert.ok(s.sq.energy_steps.includes(step), `energies of ${step} plotted (${s.sq.energy_steps})`);
         }
+        assert.ok(!s.sq.energy_steps.includes('line_congruence'), `no congruence iterations (${s.sq.energy_steps})`);
         for (const f of ['panels.glb', 'panels.obj', 'panels.csv', 'panels.json', 'moulds.csv', 'support.csv', 'mesh.obj', 'report.json', 'congruence.glb']) {
           assert.ok(s.downloads.includes(f), `${f} offered (${s.downloads})`);
         }
