@@ -658,8 +658,8 @@ fn compute_from(
     if result.congruence.start == RadiusStart::Constant && result.congruence.sphere.is_none() {
         // Larger constant radii, when the mesh misses only the distance (see `start`).
         let (mut scale, mut kept_scale) = (1.0, 1.0);
-        let first = result.verdict.clone();
-        while scale < MAX_RADIUS_SCALE && only_distance_missed(&first) && !result.verdict.holds() {
+        let retry = only_distance_missed(&result.verdict);
+        while retry && scale < MAX_RADIUS_SCALE && !result.verdict.holds() {
             scale *= 2.0;
             let wider = SqCongruence { radius: result.congruence.radius.scaled(scale), ..result.congruence.clone() };
             let tried = final_mesh(reference, &wider, &quad, params, clock, &mut timings, on_event)?;
@@ -767,8 +767,7 @@ fn final_mesh(
         }
         on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
         // The rigid motion that brings the panels closest to the reference (their corners and
-        // the points of their spheres over their centres) keeps the mesh exact; it is kept when
-        // it brings the farthest of those points closer.
+        // the points of their spheres over their centres) keeps the mesh exact.
         let faces = &quad.mesh.faces;
         let centre_uv: Vec<[f64; 2]> = faces
             .iter()
@@ -785,22 +784,26 @@ fn final_mesh(
             positions.iter().copied().chain(centres).collect()
         };
         let start_uv = |i: usize| if i < quad.uv.len() { quad.uv[i] } else { centre_uv[i - quad.uv.len()] };
-        let farthest = |points: &[DVec3]| points.iter().enumerate().map(|(i, p)| spline.closest_point(*p, start_uv(i)).1.distance(*p)).fold(0.0, f64::max);
+        // One closest-point pass per set of points: the farthest of them, and the share of the
+        // patch the panels cover with their corners at the closest points.
+        let nv = positions.len();
+        let measure = |points: &[DVec3]| -> (f64, f64) {
+            let closest: Vec<([f64; 2], DVec3)> = points.iter().enumerate().map(|(i, p)| { let (w, q, _) = spline.closest_point(*p, start_uv(i)); (w, q) }).collect();
+            let farthest = closest.iter().zip(points).map(|((_, q), p)| q.distance(*p)).fold(0.0, f64::max);
+            let uv: Vec<[f64; 2]> = closest[..nv].iter().map(|c| c.0).collect();
+            (farthest, coverage(surface, faces, &uv))
+        };
         let before = samples(&positions, &spheres);
         let (rotation, shift) = point_to_plane_motion(&before, ALIGNMENT_ROUNDS, &mut |i, p| {
             let (_, q, n) = spline.closest_point(p, start_uv(i));
             Some((q, n?))
         });
         let after: Vec<DVec3> = before.iter().map(|p| rotation * *p + shift).collect();
-        // Nor may the motion slide the panels off the patch: below what they covered, or
-        // below the guarantee.
-        let covered = |points: &[DVec3]| {
-            let uv: Vec<[f64; 2]> = points.iter().zip(&quad.uv).map(|(p, uv)| spline.closest_point(*p, *uv).0).collect();
-            coverage(surface, faces, &uv)
-        };
-        let nv = positions.len();
-        let (positions, spheres) = if farthest(&after) < farthest(&before) && covered(&after[..nv]) >= covered(&before[..nv]).min(guarantees::MIN_COVERAGE) {
-            (positions.iter().map(|p| rotation * *p + shift).collect(), spheres.iter().map(|x| x.moved(rotation, shift)).collect())
+        let ((far_before, covered_before), (far_after, covered_after)) = (measure(&before), measure(&after));
+        // Kept when it brings the farthest point closer without sliding the panels off the
+        // patch: below what they covered, or below the guarantee.
+        let (positions, spheres) = if far_after < far_before && covered_after >= covered_before.min(guarantees::MIN_COVERAGE) {
+            (after[..nv].to_vec(), spheres.iter().map(|x| x.moved(rotation, shift)).collect())
         } else {
             (positions, spheres)
         };
