@@ -270,7 +270,7 @@ fn cad_files_read_back_on_their_spheres() {
         ("st-support", shared("data/meshes/cmc1.obj"), vec!["--units", "mm"]),
     ];
     for (k, (method, input, extra)) in cases.iter().enumerate() {
-        let dir = std::env::temp_dir().join(format!("sf-step-{k}-{}", std::process::id()));
+        let dir = common::temp_dir(&format!("sf-step-{k}"));
         let mut args = vec![*method, input.as_str(), "-q", "--out", dir.to_str().unwrap()];
         args.extend(extra.iter().copied());
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(&args).output().unwrap();

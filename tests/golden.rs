@@ -38,7 +38,7 @@ fn sphere_in_frame(s: [f64; 5], t: [f64; 3], sigma: f64) -> [f64; 5] {
 
 /// What one run gives: its error, or the report (without timings) and the panel geometry.
 fn record(input: &str, args: &[&str]) -> Value {
-    let dir = std::env::temp_dir().join(format!("sf-golden-{}-{}-{}", std::process::id(), input, args.join("_")));
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("sf-golden-{}-{}", input, args.join("_")));
     let _ = std::fs::remove_dir_all(&dir);
     let path = input_path(input);
     let mut cmd_args: Vec<&str> = vec![args[0], &path];

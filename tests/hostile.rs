@@ -36,7 +36,7 @@ fn cli(args: &[&str]) -> std::process::Output {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sf-hostile-{}-{name}", std::process::id()));
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("sf-hostile-{name}"));
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }

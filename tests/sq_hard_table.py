@@ -24,7 +24,11 @@ def fmt(x, spec):
 
 
 def row(binary, path, extra):
-    out = tempfile.mkdtemp(prefix='sqhard')
+    with tempfile.TemporaryDirectory(prefix='sqhard') as out:
+        return run_in(binary, path, extra, out)
+
+
+def run_in(binary, path, extra, out):
     t0 = time.time()
     p = subprocess.run([binary, 'sq', path, '--out', out, '-q', '--formats', 'glb'] + extra, capture_output=True, text=True)
     dt = time.time() - t0

@@ -46,7 +46,11 @@ def guarantee(report, name):
 
 
 def row(binary, input_name, label, args, timeout):
-    out = tempfile.mkdtemp(prefix="sf-verdict-")
+    with tempfile.TemporaryDirectory(prefix="sf-verdict-") as out:
+        return run_in(binary, input_name, label, args, timeout, out)
+
+
+def run_in(binary, input_name, label, args, timeout, out):
     t0 = time.time()
     try:
         p = subprocess.run([binary, *args, "-q", "--formats", "schedule", "--out", out], capture_output=True, text=True, timeout=timeout)

@@ -52,9 +52,10 @@ pub fn khronos_validate(file: &Path) -> (bool, Value) {
     (out.status.success(), json)
 }
 
-/// A fresh temporary folder for one test.
+/// A fresh temporary folder for one test, under cargo's target/tmp (reused by the next run, so
+/// runs leave nothing behind in the system's temporary folder).
 pub fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sf-test-{}-{name}", std::process::id()));
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("sf-test-{name}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
