@@ -13,7 +13,7 @@ use spherical_faces::progress::Clock;
 use spherical_faces::reference::assumptions::Warning;
 use spherical_faces::remeshing::quad_remeshing::{coverage, edge_field_angles, quad_remesh, CrossField, QuadRemeshParams};
 use spherical_faces::samples::Sample;
-use spherical_faces::sq::params::{SqParams, Until};
+use spherical_faces::sq::params::{RadiusStart, SqParams, Until};
 use spherical_faces::sq::{compute, compute_congruence, SqResult};
 
 fn load(name: &str) -> Loaded {
@@ -172,4 +172,23 @@ fn a_singular_torsal_field_falls_back_to_the_parameter_lines_and_says_so() {
         r.warnings
     );
     assert!(r.sq_mesh.is_none());
+}
+
+/// A torsal field with several singular points (the wavy canopy's principal directions, from
+/// constant radii: umbilics on a mixed-sign surface): the seamless remesh corrects its spacing for
+/// the face count without moving the singular points, and the lattice closes up across the cuts
+/// (no seams: most of the patch covered).
+#[test]
+fn a_field_with_singular_points_remeshes_to_about_n_quads_without_seams() {
+    let loaded = load("hard/wavy_canopy.json");
+    let params = SqParams { until: Until::Congruence, start: RadiusStart::Constant, ..SqParams::default() };
+    let c = compute_congruence(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    let surface = loaded.surface.spline().unwrap();
+    let field = CrossField::new(surface, c.grid, &c.torsal_uv).unwrap();
+    let m = quad_remesh(surface, &field, &QuadRemeshParams::default()).unwrap();
+    assert!(!m.singular.is_empty(), "the canopy's principal field has umbilics");
+    let faces = m.mesh.face_count() as f64;
+    assert!(faces > 0.75 * 237.0 && faces < 1.3 * 237.0, "237 asked, {faces} made");
+    let covered = coverage(surface, &m.mesh.faces, &m.uv);
+    assert!(covered >= 0.85, "coverage {covered}");
 }

@@ -741,21 +741,24 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
 
 /// Remeshes the patch along `field` (see the module docs) for about `params.target_faces` quads.
 pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
-    quad_remesh_prepared(surface, field, prepare(surface, field, params)?, params)
+    quad_remesh_prepared(surface, prepare(surface, field, params)?, params)
 }
 
 /// [`quad_remesh`] from its [`prepare`]d field.
-pub(crate) fn quad_remesh_prepared(surface: &BSplineSurface, field: &CrossField, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
+pub(crate) fn quad_remesh_prepared(surface: &BSplineSurface, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
     let target = params.target_faces;
-    let Prepared { patch_area, spacing: mut h, reach, field: fg } = prepared;
+    let Prepared { patch_area, spacing: mut h, field: fg, .. } = prepared;
     let mut g = integrate(&fg, params.direction_weight, h)?;
     if !g.singular.is_empty() {
-        // The singular points sit on the lattice of spacing h, offset 0: one correction of h
-        // for the face count, then the mesh.
-        let count = extract(surface, &g, h, [0.0; 2], false).map_or(0, |(m, _)| m.mesh.face_count());
-        if count > 0 && (count as f64 - target as f64).abs() > 0.1 * target as f64 {
+        // The singular points sit on the lattice of spacing h, offset 0: a few corrections of h
+        // for the face count, then the mesh. The field and its singular points stay as
+        // prepared; only their lattice points change with h.
+        for _ in 0..3 {
+            let count = extract(surface, &g, h, [0.0; 2], false).map_or(0, |(m, _)| m.mesh.face_count());
+            if count == 0 || (count as f64 - target as f64).abs() <= 0.1 * target as f64 {
+                break;
+            }
             h *= (count as f64 / target as f64).sqrt();
-            let fg = FieldGrid::new(surface, field, fg.cells, fg.margin, h, reach);
             g = integrate(&fg, params.direction_weight, h)?;
         }
         return extract(surface, &g, h, [0.0; 2], true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty);

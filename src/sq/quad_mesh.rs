@@ -113,7 +113,7 @@ pub fn quad_mesh(
     let prepared = prepare(surface, &torsal, &remesh_params)?;
     let singular_points = prepared.field.singular.clone();
     let remesh = if singular_points.is_empty() {
-        quad_remesh_prepared(surface, &torsal, prepared, &remesh_params)?
+        quad_remesh_prepared(surface, prepared, &remesh_params)?
     } else {
         let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); (grid - 1).pow(2)];
         let field = CrossField::new(surface, grid, &lines).ok_or(SqError::NoTorsalField)?;
