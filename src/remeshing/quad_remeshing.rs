@@ -501,12 +501,23 @@ fn quad_area_vector(pts: &[DVec3], f: &[u32]) -> DVec3 {
     0.5 * (p(2) - p(0)).cross(p(3) - p(1))
 }
 
+/// Which quads the outline's re-entrant corners may take ([`drop_reentrant_corners`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Outline {
+    /// Any: the outline ends without re-entrant corners.
+    AnyQuad,
+    /// Only quads with a corner on the patch boundary: a notch at the boundary is not carried on
+    /// into the patch, a column at a time.
+    BoundaryQuads,
+}
+
 /// Re-entrant corners: at a vertex with three quads that do not close around it (a missing cell
-/// beside it, not a singular vertex), the smaller of its two outer quads is dropped. With
-/// `repeat`, until no such corner is left (an outline without re-entrant corners, for a lattice
-/// that runs along the patch boundary); otherwise once, so that a lattice running across the
-/// boundary does not lose its outline cell by cell. Returns how many were dropped.
-fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], repeat: bool) -> usize {
+/// beside it, not a singular vertex), the smaller of its two outer quads that `outline` allows
+/// (`boundary`: the vertices on the patch boundary) is dropped. With `repeat`, until no such
+/// corner is left (an outline without re-entrant corners, for a lattice that runs along the patch
+/// boundary); otherwise once, so that a lattice running across the boundary does not lose its
+/// outline cell by cell. Returns how many were dropped.
+fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], outline: Outline, boundary: &[bool], repeat: bool) -> usize {
     let mut dropped = 0;
     loop {
         let mut incident: HashMap<u32, Vec<usize>> = HashMap::new();
@@ -523,7 +534,11 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], repeat: bool
             .iter()
             .filter_map(|v| {
                 let fs = &incident[v];
-                let outer = fs.iter().copied().filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1);
+                let outer = fs
+                    .iter()
+                    .copied()
+                    .filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1)
+                    .filter(|&a| outline == Outline::AnyQuad || faces[a].iter().any(|&x| boundary[x as usize]));
                 outer.min_by(|&a, &b| quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b])))
             })
             .collect();
@@ -546,7 +561,23 @@ fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], repeat: bool
     dropped
 }
 
-/// A candidate mesh at spacing h and offsets.
+/// The vertices on the patch boundary (`boundary`) and those one edge of `faces` from it.
+fn near_the_boundary(faces: &[Vec<u32>], boundary: &[bool]) -> Vec<bool> {
+    let mut near = boundary.to_vec();
+    for f in faces {
+        for k in 0..f.len() {
+            let (a, b) = (f[k] as usize, f[(k + 1) % f.len()] as usize);
+            if boundary[a] || boundary[b] {
+                near[a] = true;
+                near[b] = true;
+            }
+        }
+    }
+    near
+}
+
+/// A candidate mesh at spacing h and offsets; `final_pass`: the mesh itself, with its outline's
+/// re-entrant corners resolved (not only a count).
 fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], final_pass: bool) -> Option<(QuadRemesh, f64)> {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let rect = Rect { lo: DVec2::new(u0, v0), hi: DVec2::new(u1, v1) };
@@ -674,7 +705,20 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
         }
     }
     if final_pass {
-        dropped += drop_reentrant_corners(&mut faces, &pts, g.cuts.cuts.is_empty());
+        // An outline without re-entrant corners, unless reaching it drops a quad more than one
+        // edge in from the boundary: then its notches ran on into the patch, and only quads on
+        // the boundary go.
+        let repeat = g.cuts.cuts.is_empty();
+        let mut convex = faces.clone();
+        let n = drop_reentrant_corners(&mut convex, &pts, Outline::AnyQuad, &boundary, repeat);
+        let near = near_the_boundary(&faces, &boundary);
+        let kept: HashSet<&Vec<u32>> = convex.iter().collect();
+        if faces.iter().filter(|f| !kept.contains(f)).all(|f| f.iter().any(|&v| near[v as usize])) {
+            faces = convex;
+            dropped += n;
+        } else {
+            dropped += drop_reentrant_corners(&mut faces, &pts, Outline::BoundaryQuads, &boundary, repeat);
+        }
         area = faces.iter().map(|f| quad_area(&pts, f)).sum();
     }
     if faces.is_empty() {
@@ -786,18 +830,17 @@ pub(crate) fn quad_remesh_prepared(surface: &BSplineSurface, prepared: Prepared,
         h *= (faces / target as f64).sqrt();
     }
     // Offsets: quarter steps, the largest covered area among face counts within 10 % of the best.
-    let mut best: Option<([f64; 2], f64)> = None;
+    let mut best: Option<(QuadRemesh, f64)> = None;
     for s0 in [0.0, 0.25, 0.5, 0.75] {
         for s1 in [0.0, 0.25, 0.5, 0.75] {
             let Some((m, area)) = extract(surface, &g, h, centred(h, [s0, s1]), true) else { continue };
             let score = area - 0.02 * patch_area * (m.mesh.face_count() as f64 - target as f64).abs() / target as f64;
-            if best.is_none_or(|(_, b)| score > b) {
-                best = Some(([s0, s1], score));
+            if best.as_ref().is_none_or(|b| score > b.1) {
+                best = Some((m, score));
             }
         }
     }
-    let (shift, _) = best.ok_or(QuadRemeshError::Empty)?;
-    extract(surface, &g, h, centred(h, shift), true).map(|(m, _)| m).ok_or(QuadRemeshError::Empty)
+    best.map(|b| b.0).ok_or(QuadRemeshError::Empty)
 }
 
 /// Cells per direction of the parameter grid [`coverage`] measures on.
@@ -892,4 +935,39 @@ pub fn edge_field_angles(surface: &BSplineSurface, field: &CrossField, mesh: &Po
                 .fold(f64::INFINITY, f64::min)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 6 × 5 grid of quads with a notch in its bottom row, whose quads are twice as tall as the
+    /// rest: the outline loses boundary quads until no corner is re-entrant, and no quad off the
+    /// boundary goes with them, although those are the smaller ones.
+    #[test]
+    fn a_notch_at_the_boundary_drops_boundary_quads_only() {
+        let (nx, ny) = (6u32, 5u32);
+        let id = |i: u32, j: u32| i + (nx + 1) * j;
+        let pts: Vec<DVec3> = (0..=ny).flat_map(|j| (0..=nx).map(move |i| DVec3::new(i as f64, if j == 0 { 0.0 } else { 0.5 + 0.5 * j as f64 }, 0.0))).collect();
+        let boundary: Vec<bool> = (0..=ny).flat_map(|j| (0..=nx).map(move |i| i == 0 || i == nx || j == 0 || j == ny)).collect();
+        let mut faces: Vec<Vec<u32>> = (0..ny)
+            .flat_map(|j| (0..nx).map(move |i| (i, j)))
+            .filter(|&(i, j)| (i, j) != (3, 0))
+            .map(|(i, j)| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+            .collect();
+        let inner: Vec<Vec<u32>> = faces.iter().filter(|f| f.iter().all(|&v| !boundary[v as usize])).cloned().collect();
+        let dropped = drop_reentrant_corners(&mut faces, &pts, Outline::BoundaryQuads, &boundary, true);
+        assert!(dropped >= 1 && dropped <= 5, "{dropped} dropped");
+        for f in &inner {
+            assert!(faces.contains(f), "inner quad {f:?} dropped");
+        }
+        // No re-entrant corner is left.
+        let mut count = HashMap::new();
+        for f in &faces {
+            for &v in f {
+                *count.entry(v).or_insert(0) += 1;
+            }
+        }
+        assert!(count.values().all(|&n| n != 3), "{count:?}");
+    }
 }
