@@ -25,9 +25,11 @@
 //!    iso-line meets the patch boundary (a root of the other φ along the boundary); the faces are
 //!    the lattice cells whose four corners exist. Cells that come out degenerate (an edge < 0.15 h,
 //!    area < 0.15 h², a fold or a corner angle over 170°) are dropped, and so is the smaller outer
-//!    quad at a vertex with three that is not singular (no re-entrant corners in the outline). h is
-//!    chosen for the target face count and, without singular points, the lattice offsets for the
-//!    largest covered area.
+//!    quad at a vertex with three that is not singular (no re-entrant corners in the outline), as
+//!    long as that takes quads within one edge of the boundary; deeper, only boundary quads go. h
+//!    is chosen for the target face count (with singular points: on the field as prepared, whose
+//!    singular points stay) and, without singular points, the lattice offsets for the largest
+//!    covered area.
 //!
 //! The result is quads only: valence 4 inside, 3 at a point of index +1/4 and 5 at −1/4
 //! ([`QuadRemesh::singular`]).
