@@ -1,6 +1,8 @@
 //! The `info` command: one JSON object on stdout, exit code 2 and one line on stderr on bad input.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
+mod common;
+
 use std::process::Command;
 
 fn run(args: &[&str]) -> std::process::Output {
@@ -40,7 +42,7 @@ fn info_counts_triangles_after_welding() {
 
 #[test]
 fn unreadable_input_exits_2_with_one_line() {
-    let dir = scratch("sf-cli");
+    let dir = common::temp_dir("sf-cli");
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("broken.obj");
     std::fs::write(&bad, "v 1 2\nf 1 2 9\n").unwrap();
@@ -57,7 +59,7 @@ fn unreadable_input_exits_2_with_one_line() {
 /// `--formats` writes only the files asked for, report.json always; an unknown one is refused.
 #[test]
 fn formats_choose_the_files() {
-    let dir = scratch("sf-cli-formats");
+    let dir = common::temp_dir("sf-cli-formats");
     let _ = std::fs::remove_dir_all(&dir);
     let out = run(&["st", "sample:dome", "-q", "--faces", "200", "--formats", "step,glb", "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -73,7 +75,7 @@ fn formats_choose_the_files() {
 
 #[test]
 fn st_support_writes_panels_and_report() {
-    let dir = scratch("sf-cli-st");
+    let dir = common::temp_dir("sf-cli-st");
     let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--optimize-radius", "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     for f in ["panels.glb", "panels.obj", "panels.csv", "panels.json", "panels.step", "panels.3dm", "report.json"] {
@@ -103,7 +105,7 @@ fn st_support_writes_panels_and_report() {
 
 #[test]
 fn st_support_refuses_a_minimal_surface() {
-    let dir = scratch("sf-cli-enneper");
+    let dir = common::temp_dir("sf-cli-enneper");
     let out = run(&["st-support", "../shared/data/meshes/enneper2.obj", "--out", dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
@@ -115,7 +117,7 @@ fn st_support_refuses_a_minimal_surface() {
 
 #[test]
 fn st_writes_panels_and_report_or_refuses() {
-    let dir = scratch("sf-cli-stangle");
+    let dir = common::temp_dir("sf-cli-stangle");
     let out = run(&["st", "../shared/data/meshes/cmc1.obj", "--faces", "120", "--out", dir.to_str().unwrap()]);
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     // Written either way; exit 3 exactly when the verdict misses (this coarse remesh leaves thin
@@ -135,7 +137,7 @@ fn st_writes_panels_and_report_or_refuses() {
 /// sizing uses the local spheres orthogonal to Ω; the report keeps the reference's counts.
 #[test]
 fn st_support_remeshes_first() {
-    let base = scratch("sf-cli-st-remesh");
+    let base = common::temp_dir("sf-cli-st-remesh");
     let report =
         |dir: &std::path::Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap() };
     let mesh = "../shared/data/meshes/botanic-garden-bubble-0.obj";
@@ -197,7 +199,7 @@ fn built_in_samples_are_inputs() {
 /// congruence.glb with its nodes; θ and α are met.
 #[test]
 fn sq_writes_the_congruence_and_its_report() {
-    let dir = scratch("sf-cli-sq");
+    let dir = common::temp_dir("sf-cli-sq");
     let out = run(&[
         "sq",
         "../shared/data/bsplines/tunnel_arch.json",
@@ -279,7 +281,7 @@ fn sq_writes_the_congruence_and_its_report() {
 /// congruence as it is (no iterations), and warns that the central one was not kept.
 #[test]
 fn sq_reports_the_start_it_kept() {
-    let dir = scratch("sf-cli-sq-start");
+    let dir = common::temp_dir("sf-cli-sq-start");
     let out = run(&["sq", "../shared/data/bsplines/hard/roof_rough.json", "--until", "congruence", "-q", "--out", dir.to_str().unwrap()]);
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     // The principal net of the rough roof has a quad without real torsal directions: a miss
@@ -308,7 +310,7 @@ fn sq_reports_the_start_it_kept() {
 /// the normals, and the verdict it writes is the one its exit code gives.
 #[test]
 fn sq_runs_where_the_mean_curvature_changes_sign() {
-    let dir = scratch("sf-cli-sq-sign");
+    let dir = common::temp_dir("sf-cli-sq-sign");
     let out = run(&["sq", "../shared/data/bsplines/hard/bezier_blob.json", "-q", "--formats", "glb", "--out", dir.to_str().unwrap()]);
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     let c = &r["sq"]["congruence"];
@@ -346,7 +348,7 @@ fn sq_refuses_bad_input_with_one_line() {
 #[test]
 fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
     let roof = "../shared/data/bsplines/saddle_roof.json";
-    let dir = scratch("sf-cli-sq-roof");
+    let dir = common::temp_dir("sf-cli-sq-roof");
     let out = run(&["sq", roof, "--theta", "15", "--alpha", "45", "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
@@ -356,7 +358,7 @@ fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
     assert!(m["max_axis_normal_angle_deg"].as_f64().unwrap() <= 15.0 && m["min_torsal_plane_angle_deg"].as_f64().unwrap() >= 45.0, "{m}");
 
     let missing = |args: &[&str], name: &str, limit: &str| {
-        let dir = scratch(format!("sf-cli-sq-miss-{name}"));
+        let dir = common::temp_dir(&format!("sf-cli-sq-miss-{name}"));
         let mut all = args.to_vec();
         all.extend(["--out", dir.to_str().unwrap()]);
         let out = run(&all);
@@ -398,7 +400,7 @@ fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
 /// table in the design's units; a bad unit is a one-line refusal.
 #[test]
 fn units_and_moulds_from_the_command_line() {
-    let dir = scratch("sf-cli-moulds");
+    let dir = common::temp_dir("sf-cli-moulds");
     let d = dir.to_str().unwrap();
     let out = run(&["st-support", "../shared/data/meshes/cmc1.obj", "--units", "cm", "--mould-tolerance", "20mm", "--out", d, "-q"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -431,7 +433,7 @@ fn units_and_moulds_from_the_command_line() {
 /// both runs.
 #[test]
 fn sq_auto_weighs_both_starts_by_their_verdicts() {
-    let dir = scratch("sf-cli-sq-auto");
+    let dir = common::temp_dir("sf-cli-sq-auto");
     let out = run(&["sq", "../shared/data/bsplines/saddle_roof.json", "-q", "--formats", "glb", "--out", dir.to_str().unwrap()]);
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     let meets = r["meets_guarantees"].as_bool().unwrap();
@@ -448,11 +450,4 @@ fn sq_auto_weighs_both_starts_by_their_verdicts() {
     let t = &r["timings_ms"];
     assert!(t["start_not_kept"].as_f64().unwrap() > 0.0 && t["total"].as_f64().unwrap() > t["start_not_kept"].as_f64().unwrap(), "{t}");
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// A fresh folder for one test under cargo's target/tmp (the next run reuses it, so nothing piles up).
-fn scratch(name: impl AsRef<str>) -> std::path::PathBuf {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name.as_ref());
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
 }

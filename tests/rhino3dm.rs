@@ -4,6 +4,8 @@
 //! and `npm ci` in `www/rhino3dm` (done by `bash www/dev.sh test`).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
 use std::process::Command;
 
 use spherical_faces::geometry::bspline::BSplineSurface;
@@ -82,7 +84,7 @@ fn the_cli_opens_3dm_lists_its_objects_and_runs_sq() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a readable Rhino .3dm file"));
     // SQ on the arch from Rhino, up to the quad mesh.
-    let dir = scratch("sf-3dm-sq");
+    let dir = common::temp_dir("sf-3dm-sq");
     let out = cli(&["sq", "tests/data/3dm/tunnel_arch.3dm", "--until", "remesh", "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
@@ -93,7 +95,7 @@ fn the_cli_opens_3dm_lists_its_objects_and_runs_sq() {
 /// `--units` overrides it.
 #[test]
 fn a_3dm_file_brings_its_model_units() {
-    let dir = scratch("sf-3dm-units");
+    let dir = common::temp_dir("sf-3dm-units");
     let d = dir.to_str().unwrap();
     let report = |extra: &[&str]| {
         let mut args = vec!["st-support", "tests/data/3dm/mixed.3dm", "--object", "1", "--out", d, "-q"];
@@ -109,11 +111,4 @@ fn a_3dm_file_brings_its_model_units() {
     assert_eq!(r["moulds"]["units"], "m");
     assert_eq!(r["moulds"]["tolerance"], 0.002);
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// A fresh folder for one test under cargo's target/tmp (the next run reuses it, so nothing piles up).
-fn scratch(name: impl AsRef<str>) -> std::path::PathBuf {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name.as_ref());
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
 }

@@ -170,8 +170,6 @@ pub struct Prepared {
     /// The patch's area (a 32 × 32 tessellation) and the first lattice spacing h.
     pub patch_area: f64,
     pub spacing: f64,
-    /// Singular points within this distance of each other are one cluster (an umbilic's noise).
-    pub reach: f64,
     pub field: FieldGrid,
 }
 
@@ -187,8 +185,9 @@ pub fn prepare(surface: &BSplineSurface, field: &CrossField, params: &QuadRemesh
     let cells = ((params.resolution.max(2) as f64) * per_side).ceil() as usize;
     let margin = (cells as f64 * 2.5 / per_side).ceil() as usize + 2;
     let spacing = (patch_area / target as f64).sqrt();
+    // Singular points within this distance of each other are one cluster (an umbilic's noise).
     let reach = 4.0 * spacing;
-    Ok(Prepared { patch_area, spacing, reach, field: FieldGrid::new(surface, field, cells, margin, spacing, reach) })
+    Ok(Prepared { patch_area, spacing, field: FieldGrid::new(surface, field, cells, margin, spacing, reach) })
 }
 
 /// Integrates the field on its fine grid (step 2 of the module docs), with lattice spacing
@@ -793,7 +792,7 @@ pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRe
 /// [`quad_remesh`] from its [`prepare`]d field.
 pub(crate) fn quad_remesh_prepared(surface: &BSplineSurface, prepared: Prepared, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
     let target = params.target_faces;
-    let Prepared { patch_area, spacing: mut h, field: fg, .. } = prepared;
+    let Prepared { patch_area, spacing: mut h, field: fg } = prepared;
     let mut g = integrate(&fg, params.direction_weight, h)?;
     if !g.singular.is_empty() {
         // The singular points sit on the lattice of spacing h, offset 0: a few corrections of h
