@@ -3,7 +3,8 @@
 //! `cargo run --release --example sq_mesh -- FILE.json|sample:vault ...`.
 //! Environment: FULL / PROJ (iterations of the full optimization / the projection), FAIRIT /
 //! FAIRW (Q′ fairing iterations / weight), V (print the terms during the final optimization),
-//! DUMP (each face's worst vertex distance to its sphere, and its radius).
+//! DUMP (each face's worst vertex distance to its sphere, and its radius), FAR (the vertices
+//! farthest from the reference), PHASES (the farthest vertex after each phase).
 
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
@@ -32,15 +33,30 @@ fn main() {
             params.fairing_weight = n;
         }
         let verbose = std::env::var("V").is_ok();
+        // PHASES: the farthest vertex from the reference (of the diagonal) after each phase.
+        let phases = std::env::var("PHASES").is_ok();
+        let diag = loaded.surface.diagonal();
+        let mut last_phase: Option<(spherical_faces::sq::sphere_optimization::SpherePhase, f64)> = None;
+        let mut phase_log: Vec<String> = Vec::new();
         let t0 = std::time::Instant::now();
         let r = spherical_faces::sq::compute(&loaded.surface, &params, Clock::native(), &mut |e| {
             if let SqEvent::Spheres {
                 phase,
                 iteration,
                 terms,
+                positions,
                 ..
             } = e
             {
+                if phases {
+                    {
+                        let far = positions.iter().map(|p| loaded.surface.closest_point(*p).map_or(0.0, |q| q.point.distance(*p))).fold(0.0, f64::max) / diag;
+                        if let Some((ph, d)) = last_phase {
+                            if ph != phase || iteration == 1 { phase_log.push(format!("{ph:?} {d:.2e}")); }
+                        }
+                        last_phase = Some((phase, far));
+                    }
+                }
                 if verbose
                     && (iteration % 10 == 1
                         || phase != spherical_faces::sq::sphere_optimization::SpherePhase::Full)
@@ -56,6 +72,8 @@ fn main() {
             Ok(())
         })
         .unwrap();
+        if let Some((ph, d)) = last_phase { phase_log.push(format!("{ph:?} {d:.2e}")); }
+        if phases { println!("  farthest vertex after each phase: {}", phase_log.join(", ")); }
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         let q = r.quad_mesh.as_ref().unwrap();
         let f = r.sq_mesh.as_ref().unwrap();
