@@ -166,7 +166,7 @@ fn no_generated_roof_misses_a_guarantee_silently() {
     // The method is meant to hold on such roofs: most runs meet its guarantees of exactness, θ
     // and α; each run's panels are measured too, and every miss is named (above).
     println!("{met} of 21 meet exactness, θ and α; {buildable} of 21 every guarantee");
-    assert!(met >= 15, "{met} of 21 meet exactness, θ and α:\n{}", rows.join("\n"));
+    assert!(met >= 20 && buildable >= 19, "{met} of 21 meet exactness, θ and α, {buildable} every guarantee:\n{}", rows.join("\n"));
 }
 
 /// The shared surfaces at their settings: the verdict equals the guarantees recomputed from the
@@ -237,13 +237,11 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
             let weighed: Vec<usize> = attempts.iter().filter_map(|a| a.final_misses.as_ref().map(Vec::len)).collect();
             let missed = result.verdict.failures().count();
             assert!(weighed.iter().all(|&m| missed <= m), "{name} θ {theta}: kept {missed} misses of {weighed:?}");
-            if ["revolved_bell", "umbilic_dome", "roof_rough"].contains(&name) || (name == "tunnel_bulged" && theta == 15.0) {
-                // The bell's H changes sign: flatter spheres than the first constant radius fit
-                // it within the promised distance. The tunnel's and the roof's lattices stop
-                // short of sides of their patches: a row of quads out to them covers them. The
-                // roof's mesh comes within the distance once moved rigidly onto its reference.
-                // At the defaults the tunnel's stars next to its springings miss α by a few
-                // degrees.
+            if ["tunnel_bulged", "umbilic_dome", "roof_rough"].contains(&name) || (name == "revolved_bell" && theta == 15.0) {
+                // The tunnel's and the roof's lattices stop short of sides of their patches: a
+                // row of quads out to them covers them. The roof's mesh comes within the distance
+                // once moved rigidly onto its reference. The bell's H changes sign; at the
+                // defaults its panels by the far side stand 1.5 % of the diagonal off.
                 assert!(result.verdict.holds(), "{name} θ {theta}: {}", result.verdict.failure_text());
             }
             rows.push(format!("{name} θ {theta} α {alpha}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));

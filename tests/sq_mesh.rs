@@ -192,3 +192,33 @@ fn a_field_with_singular_points_remeshes_to_about_n_quads_without_seams() {
     let covered = coverage(surface, &m.mesh.faces, &m.uv);
     assert!(covered >= 0.85, "coverage {covered}");
 }
+
+/// Along the parameter lines of domes and saddles, at face counts that leave every kind of row
+/// along the sides: no cell with two corners on the boundary is a sliver (both its edges inward
+/// from them under 0.3 h), whose panel's arcs cross as soon as the vertices glide; and the cells
+/// still reach the boundary (most of the patch covered).
+#[test]
+fn the_remesh_leaves_no_sliver_along_the_boundary() {
+    let mut slivers = Vec::new();
+    for name in ["paraboloid_dome.json", "saddle_roof.json", "hard/umbilic_dome.json"] {
+        let loaded = load(name);
+        let surface = loaded.surface.spline().unwrap();
+        let lines = vec![Some([[1.0, 0.0], [0.0, 1.0]]); 19 * 19];
+        let field = CrossField::new(surface, 20, &lines).unwrap();
+        for target_faces in (100..=260).step_by(20) {
+            let m = quad_remesh(surface, &field, &QuadRemeshParams { target_faces, ..QuadRemeshParams::default() }).unwrap();
+            let p = &m.mesh.positions;
+            for face in &m.mesh.faces {
+                let c = face.corners();
+                let on = |k: usize| m.on_boundary[c[k % 4] as usize];
+                let inward: Vec<f64> = (0..4).filter(|&k| on(k) != on(k + 1)).map(|k| p[c[k] as usize].distance(p[c[(k + 1) % 4] as usize])).collect();
+                if (0..4).filter(|&k| on(k)).count() == 2 && inward.len() == 2 && inward.iter().all(|&l| l < 0.3 * m.spacing) {
+                    slivers.push(format!("{name} N {target_faces}: {:?} of h {:.3}", inward, m.spacing));
+                }
+            }
+            let covered = coverage(surface, &m.mesh.faces, &m.uv);
+            assert!(covered >= 0.9, "{name} N {target_faces}: coverage {covered}");
+        }
+    }
+    assert!(slivers.is_empty(), "{}", slivers.join("\n"));
+}

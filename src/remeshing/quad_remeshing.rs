@@ -24,7 +24,8 @@
 //!    up (libQEx's idea, on a grid). Lattice points outside the patch are moved to where their
 //!    iso-line meets the patch boundary (a root of the other φ along the boundary); the faces are
 //!    the lattice cells whose four corners exist. Cells that come out degenerate (an edge < 0.15 h,
-//!    area < 0.15 h², a fold or a corner angle over 170°) are dropped, and so is the smaller outer
+//!    area < 0.15 h², a fold or a corner angle over 170°) are dropped, so are slivers along the
+//!    boundary (two corners on it, both edges inward from them < 0.3 h), and so is the smaller outer
 //!    quad at a vertex with three that is not singular (no re-entrant corners in the outline), as
 //!    long as that takes quads within one edge of the boundary; deeper, only boundary quads go. h
 //!    is chosen for the target face count (with singular points: on the field as prepared, whose
@@ -690,6 +691,10 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
             let normal = dv.su.cross(dv.sv).normalize_or_zero();
             let a = quad_area_vector(&pts, &ids);
             let short = (0..4).any(|c| p[c].distance(p[(c + 1) % 4]) < min_edge);
+            // A sliver along the boundary: two corners on it, and both edges from them inward short.
+            let on = |c: usize| boundary[ids[c % 4] as usize];
+            let inward: Vec<f64> = (0..4).filter(|&c| on(c) != on(c + 1)).map(|c| p[c].distance(p[(c + 1) % 4])).collect();
+            let sliver = (0..4).filter(|&c| on(c)).count() == 2 && inward.len() == 2 && inward.iter().all(|&l| l < BOUNDARY_SLIVER * h);
             // Corner angle over 170° or a corner turning the wrong way (both sides of the normal).
             let bad_corner = (0..4).any(|c| {
                 let (prev, next) = (p[(c + 3) % 4] - p[c], p[(c + 1) % 4] - p[c]);
@@ -697,7 +702,7 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
                 prev.normalize_or_zero().dot(next.normalize_or_zero()) < (170f64).to_radians().cos() || turn.abs() < 1e-12 * h * h
             });
             let signed = a.dot(normal);
-            if short || bad_corner || signed.abs() < 0.15 * h * h {
+            if short || sliver || bad_corner || signed.abs() < 0.15 * h * h {
                 dropped += 1;
                 continue;
             }
@@ -783,6 +788,11 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
     };
     Some((remesh, area))
 }
+
+/// A cell with two corners on the patch boundary whose both edges inward from them are shorter
+/// than this × h is a sliver and dropped: its panel's arcs would cross as soon as the vertices
+/// glide, and the cells inside reach the boundary instead (h is a cell's side).
+const BOUNDARY_SLIVER: f64 = 0.3;
 
 /// Remeshes the patch along `field` (see the module docs) for about `params.target_faces` quads.
 pub fn quad_remesh(surface: &BSplineSurface, field: &CrossField, params: &QuadRemeshParams) -> Result<QuadRemesh, QuadRemeshError> {
