@@ -693,8 +693,10 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
             let short = (0..4).any(|c| p[c].distance(p[(c + 1) % 4]) < min_edge);
             // A sliver along the boundary: two corners on it, and both edges from them inward short.
             let on = |c: usize| boundary[ids[c % 4] as usize];
-            let inward: Vec<f64> = (0..4).filter(|&c| on(c) != on(c + 1)).map(|c| p[c].distance(p[(c + 1) % 4])).collect();
-            let sliver = (0..4).filter(|&c| on(c)).count() == 2 && inward.len() == 2 && inward.iter().all(|&l| l < BOUNDARY_SLIVER * h);
+            let inward = (0..4).filter(|&c| on(c) != on(c + 1));
+            let sliver = (0..4).filter(|&c| on(c)).count() == 2
+                && inward.clone().count() == 2
+                && inward.clone().all(|c| p[c].distance(p[(c + 1) % 4]) < BOUNDARY_SLIVER * h);
             // Corner angle over 170° or a corner turning the wrong way (both sides of the normal).
             let bad_corner = (0..4).any(|c| {
                 let (prev, next) = (p[(c + 3) % 4] - p[c], p[(c + 1) % 4] - p[c]);

@@ -536,16 +536,15 @@ fn project(
     // The quadratic penalty toward exactness: the equations at growing weights against the
     // hinges and the proximity to the reference, so that the passes after start near the exact
     // mesh closest to the reference and move the vertices little.
+    problem.fix_range(layout.edge_normal(0)..layout.len());
     let mut penalty = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
     let mut iterations = 0;
     for scale in PENALTY_WEIGHTS {
         let exact: Vec<(TermId, f64)> = terms.exact().iter().chain(&held).map(|&(id, wt)| (id, wt * scale)).collect();
         terms.set(problem, &[&exact[..], &terms.hinged(w)[..], &terms.proximity(w)[..]].concat());
-        problem.fix_range(layout.edge_normal(0)..layout.len());
         iterations += run_phase(problem, x, layout, phase, PENALTY_ITERATIONS.min(max), &mut penalty, outcome, hook)?;
     }
     terms.set(problem, &[&terms.exact()[..], &terms.hinged(w)[..], &held[..]].concat());
-    problem.fix_range(layout.edge_normal(0)..layout.len());
     let mut projection = Solver::new(SolverOptions {
         clock,
         min_epsilon: 1e-7,
