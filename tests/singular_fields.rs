@@ -84,7 +84,7 @@ fn a_radial_field_turns_once_about_its_centre_and_a_quarter_field_a_quarter() {
 fn a_full_turn_splits_into_four_quarter_turns_and_a_dipole_vanishes() {
     let g = grid();
     let mut radial = turning(&g, DVec2::new(0.03, 0.07), 4.0);
-    let placed = split_singularities(&g, &mut radial, 1.0, 0.8, DVec2::ONE);
+    let placed = split_singularities(&g, &mut radial, 1.0, 0.3, DVec2::ONE);
     assert_eq!(placed.len(), 4, "{placed:?}");
     assert!(placed.iter().all(|s| s.quarters == 1));
     // Far from the cluster the field is the radial one still.
@@ -169,6 +169,28 @@ fn quads_only_with_valence_three_or_five_exactly_at_the_singular_points() {
                 assert_eq!(n, 4, "vertex {v} at {p}");
             }
         }
+    }
+}
+
+/// A half turn (an umbilic of a generic surface, a lemon) becomes two valence-3 vertices that
+/// share no quad: on one quad they would leave its other two corners 60° together, so no support
+/// planes there could meet at α.
+#[test]
+fn the_two_vertices_of_a_half_turn_share_no_quad() {
+    let surface = plane();
+    for (centre, q) in [(DVec2::new(0.13, -0.08), 2.0), (DVec2::new(-0.21, 0.17), -2.0)] {
+        let field = turning_field(&surface, centre, q);
+        let m = quad_remesh(&surface, &field, &QuadRemeshParams { target_faces: 150, ..QuadRemeshParams::default() }).unwrap();
+        let cones: Vec<u32> = m.singular.iter().map(|&(v, _)| v).collect();
+        assert_eq!(cones.len(), 2, "{:?}", m.singular);
+        assert!(m.singular.iter().all(|&(_, k)| k as f64 == q / 2.0), "{:?}", m.singular);
+        let shared: Vec<usize> = (0..m.mesh.face_count())
+            .filter(|&f| cones.iter().all(|c| m.mesh.faces[f].corners().contains(c)))
+            .collect();
+        let h = (16.0 / m.mesh.face_count() as f64).sqrt();
+        let apart = DVec2::from(m.uv[cones[0] as usize]).distance(DVec2::from(m.uv[cones[1] as usize]));
+        assert!(shared.is_empty(), "quads {shared:?} hold both singular vertices ({apart:.2} apart, h ≈ {h:.2})");
+        assert!(apart >= 1.8 * h, "{apart:.2} apart, h ≈ {h:.2}");
     }
 }
 

@@ -13,7 +13,7 @@
 //! turns (valence 3 at +1/4, 5 at −1/4), so [`split_singularities`] replaces each cluster of
 //! singular points by quarter-turn points around it, changing the field only near the cluster.
 
-use std::f64::consts::{FRAC_PI_2, PI};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 use glam::{DVec2, DVec3};
 
@@ -272,11 +272,17 @@ pub fn singular_points(grid: &FineGrid, crosses: &[Cross]) -> Vec<SingularPoint>
     out
 }
 
+/// How far apart (in lattice spacings) the quarter-turn points of a cluster are placed. Two
+/// singular vertices on one quad leave its other corners too little room: three edges at each of
+/// two corners leave 60° for the other two, five 108°, so the support planes there cannot meet
+/// at 75°. Two spacings keep them off a common quad; the half more allows for the rounding to
+/// lattice points.
+const SINGULAR_SPREAD: f64 = 4.0;
+
 /// Replaces the singular points of `crosses` (one per triangle of `grid`) by quarter-turn points
 /// (see the module docs): singular points closer than `reach` (parameter units, through chains)
-/// form a cluster; a cluster of total index K becomes |K| points of index sign(K) on a circle of
-/// radius `spacing` / √2 (K = 4: the corners of one square cell) or K points `spacing` apart on a
-/// line, centred where the cluster's index is; a lone quarter-turn point stays. `scale` turns
+/// form a cluster; a cluster of total index K becomes |K| points of index sign(K), neighbours
+/// [`SINGULAR_SPREAD`] spacings apart, on a circle (K ≥ 3) or on a line (K = 2), centred where the cluster's index is; a lone quarter-turn point stays. `scale` turns
 /// parameters into lengths (|f_u|, |f_v|). The field changes by the turning of
 /// Π (x − p_j)^{±1} / Π (x − s_i)^{k_i}, which tends to 1 away from the cluster. Inside a disk
 /// about each cluster (its points plus 1.5 spacings), where the directions are the noise of an
@@ -350,11 +356,17 @@ pub fn split_singularities(grid: &FineGrid, crosses: &mut [Cross], reach: f64, s
         // Laid out along the field's mean direction near the cluster (after the removal below).
         let along = nearby_angle(grid, crosses, centre, metric, &removed, 2.0 * spacing);
         let dir = |t: f64| DVec2::new(t.cos(), t.sin());
+        let apart = SINGULAR_SPREAD * spacing;
         for k in 0..count {
             let p = if count >= 3 {
-                centre + spacing / (2.0 * (PI / count as f64).sin()) * dir(along + PI / 4.0 + 2.0 * PI * k as f64 / count as f64)
+                centre + apart / (2.0 * (PI / count as f64).sin()) * dir(along + PI / 4.0 + 2.0 * PI * k as f64 / count as f64)
             } else {
-                centre + spacing * (k as f64 - 0.5 * (count as f64 - 1.0)) * dir(along)
+                // Two points on a line through the centre at φ add 0.25 (2φ + π) to the field
+                // between them (index +1 each; −0.25 (2φ + π) at −1): the line follows the field,
+                // so that the two vertices are steps apart along one family, when
+                // φ ≡ along + that (mod π/2).
+                let axis = if sign > 0 { 2.0 * along + FRAC_PI_2 } else { 2.0 / 3.0 * (along - FRAC_PI_4) };
+                centre + apart * (k as f64 - 0.5 * (count as f64 - 1.0)) * dir(axis)
             };
             placed.push((p, sign));
         }
