@@ -1049,9 +1049,17 @@ fn sections_read_back_with_unmeasurable_figures() {
     let mesh = SqMeshFigures { min_torsal_plane_angle_deg: f64::NAN, ..SqMeshFigures::default() };
     let back: SqMeshFigures = serde_json::from_str(&serde_json::to_string(&mesh).unwrap()).unwrap();
     assert!(back.min_torsal_plane_angle_deg.is_nan());
-    let quads = QuadMeshSection { coverage: 0.5, mean_edge_torsal_angle_deg: f64::NAN, max_edge_torsal_angle_deg: f64::NAN };
+    let quads = QuadMeshSection {
+        coverage: 0.5,
+        mean_edge_torsal_angle_deg: f64::NAN,
+        max_edge_torsal_angle_deg: f64::NAN,
+        follows: Default::default(),
+        singular_points_by_valence: [(3, 2)].into(),
+        singular_vertices_by_valence: Default::default(),
+    };
     let back: QuadMeshSection = serde_json::from_str(&serde_json::to_string(&quads).unwrap()).unwrap();
     assert!(back.mean_edge_torsal_angle_deg.is_nan() && back.coverage == 0.5);
+    assert_eq!(back.singular_points_by_valence, quads.singular_points_by_valence);
     let c = CongruenceFigures { max_line_normal_angle_deg: f64::NAN, ..CongruenceFigures::default() };
     let back: CongruenceFigures = serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
     assert!(back.max_line_normal_angle_deg.is_nan());

@@ -1,6 +1,8 @@
 //! The section `"sq"` of `report.json` (Sec. 5): the run's parameters, the congruence on G
 //! (5.1), the quad mesh along its torsal field and the SQ mesh (5.2), each where the run got to.
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use super::metrics::CongruenceFigures;
@@ -69,6 +71,34 @@ pub struct QuadMeshSection {
     pub mean_edge_torsal_angle_deg: f64,
     #[serde(deserialize_with = "crate::guarantees::f64_or_nan")]
     pub max_edge_torsal_angle_deg: f64,
+    /// What the mesh follows: the torsal field, or the parameter lines where the field has
+    /// singular points.
+    #[serde(default)]
+    pub follows: QuadMeshLines,
+    /// The torsal field's singular points (quarter turns, as the remesh placed them) and the mesh's
+    /// singular vertices, each by the valence they ask for (3 or 5) and count.
+    #[serde(default)]
+    pub singular_points_by_valence: BTreeMap<u32, usize>,
+    #[serde(default)]
+    pub singular_vertices_by_valence: BTreeMap<u32, usize>,
+}
+
+/// The lines a quad mesh follows (Sec. 5.2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QuadMeshLines {
+    #[default]
+    TorsalField,
+    ParameterLines,
+}
+
+/// Counts per valence 4 − quarters.
+fn by_valence(quarters: impl Iterator<Item = i32>) -> BTreeMap<u32, usize> {
+    let mut out = BTreeMap::new();
+    for q in quarters {
+        *out.entry((4 - q) as u32).or_default() += 1;
+    }
+    out
 }
 
 /// The SQ mesh out of the final optimization (Sec. 5.2, Eq. 10).
@@ -108,6 +138,9 @@ impl SqSection {
                 coverage: q.coverage,
                 mean_edge_torsal_angle_deg: mean(angles),
                 max_edge_torsal_angle_deg: angles.iter().copied().fold(0.0, f64::max),
+                follows: if q.parameter_lines() { QuadMeshLines::ParameterLines } else { QuadMeshLines::TorsalField },
+                singular_points_by_valence: by_valence(q.singular_points.iter().map(|s| s.quarters)),
+                singular_vertices_by_valence: by_valence(q.singular.iter().map(|&(_, q)| q)),
             }
         });
         let sq_mesh = result.sq_mesh.as_ref().map(|f| SqMeshSection {
