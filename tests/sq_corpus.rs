@@ -208,7 +208,8 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
 /// both signs on four of them) at the defaults and at the paper's Fig. 19 settings (θ 15°,
 /// α 45°): none is refused, every verdict equals the guarantees recomputed from the delivered
 /// mesh, and the figures that hold today do not slip: the exact SQ meshes (vertices on their
-/// spheres, coplanar centres: 11 of 14) and the runs whose panels are all buildable (7).
+/// spheres, coplanar centres: 11 of 14), the runs whose panels are all buildable (8) and those
+/// that meet every guarantee (8).
 #[test]
 fn the_hard_surfaces_run_and_say_what_they_miss() {
     use spherical_faces::import::{import_file, ImportedFile};
@@ -237,18 +238,17 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
             let weighed: Vec<usize> = attempts.iter().filter_map(|a| a.final_misses.as_ref().map(Vec::len)).collect();
             let missed = result.verdict.failures().count();
             assert!(weighed.iter().all(|&m| missed <= m), "{name} θ {theta}: kept {missed} misses of {weighed:?}");
-            if ["tunnel_bulged", "umbilic_dome", "roof_rough"].contains(&name) || (name == "revolved_bell" && theta == 15.0) {
+            if ["tunnel_bulged", "umbilic_dome", "roof_rough", "revolved_bell"].contains(&name) {
                 // The tunnel's and the roof's lattices stop short of sides of their patches: a
                 // row of quads out to them covers them. The roof's mesh comes within the distance
-                // once moved rigidly onto its reference. The bell's H changes sign; at the
-                // defaults its panels by the far side stand 1.5 % of the diagonal off.
+                // once moved rigidly onto its reference. The bell's H changes sign.
                 assert!(result.verdict.holds(), "{name} θ {theta}: {}", result.verdict.failure_text());
             }
             rows.push(format!("{name} θ {theta} α {alpha}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
         }
     }
     println!("{}\n{exact} of 14 exact, {buildable} buildable, {met} meet every guarantee", rows.join("\n"));
-    assert!(exact >= 11 && buildable >= 7 && met >= 7, "{exact} exact, {buildable} buildable, {met} meet:\n{}", rows.join("\n"));
+    assert!(exact >= 11 && buildable >= 8 && met >= 8, "{exact} exact, {buildable} buildable, {met} meet:\n{}", rows.join("\n"));
 }
 
 /// The vault's SQ mesh at the defaults, which meets every guarantee: the exact mesh the broken
@@ -343,7 +343,7 @@ fn an_sq_mesh_with_a_hole_misses_its_coverage() {
 /// A corpus of our own (`tests/data/corpus40`: `make_hard.py corpus 40 24`; towers, canopies,
 /// blobs, bells, domes, tunnels and roofs, H of both signs on most) at the defaults: none is
 /// refused, not for a sign change of H either, every verdict equals the guarantees recomputed
-/// from the delivered mesh, and the runs that meet every guarantee today (12 of 24) do not slip.
+/// from the delivered mesh, and the runs that meet every guarantee today (13 of 24) do not slip.
 #[test]
 fn our_hard_corpus_runs_and_says_what_it_misses() {
     use spherical_faces::import::{import_file, ImportedFile};
@@ -367,5 +367,5 @@ fn our_hard_corpus_runs_and_says_what_it_misses() {
         rows.push(format!("{name}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
     }
     println!("{}\n{met} of 24 meet every guarantee", rows.join("\n"));
-    assert!(met >= 12, "{met} of 24 meet:\n{}", rows.join("\n"));
+    assert!(met >= 13, "{met} of 24 meet:\n{}", rows.join("\n"));
 }
