@@ -274,15 +274,17 @@ pub fn singular_points(grid: &FineGrid, crosses: &[Cross]) -> Vec<SingularPoint>
 
 /// How far apart (in lattice spacings) the quarter-turn points of a cluster are placed. Two
 /// singular vertices on one quad leave its other corners too little room: three edges at each of
-/// two corners leave 60° for the other two, five 108°, so the support planes there cannot meet
-/// at 75°. Two spacings keep them off a common quad; the half more allows for the rounding to
-/// lattice points.
+/// two corners leave 60° for the other two, five 108° each, so the support planes there cannot
+/// meet at 75°. Two spacings would keep them off a common quad on an even lattice; the
+/// integration stretches the lattice about them and rounds them to lattice points, and at 2.5 a
+/// pair still shared a quad (`tests/singular_fields.rs`).
 const SINGULAR_SPREAD: f64 = 4.0;
 
 /// Replaces the singular points of `crosses` (one per triangle of `grid`) by quarter-turn points
 /// (see the module docs): singular points closer than `reach` (parameter units, through chains)
 /// form a cluster; a cluster of total index K becomes |K| points of index sign(K), neighbours
-/// [`SINGULAR_SPREAD`] spacings apart, on a circle (K ≥ 3) or on a line (K = 2), centred where the cluster's index is; a lone quarter-turn point stays. `scale` turns
+/// [`SINGULAR_SPREAD`] spacings apart, on a circle (K ≥ 3) or on a line along the field (K = 2),
+/// centred where the cluster's index is; a lone quarter-turn point stays. `scale` turns
 /// parameters into lengths (|f_u|, |f_v|). The field changes by the turning of
 /// Π (x − p_j)^{±1} / Π (x − s_i)^{k_i}, which tends to 1 away from the cluster. Inside a disk
 /// about each cluster (its points plus 1.5 spacings), where the directions are the noise of an

@@ -32,8 +32,8 @@
 //! hinges and the proximity to the reference), then solves the equations (with the unit
 //! normalizations) by Gauss–Newton with a tiny damping, first with the hinges at θ and α, then
 //! with the hinges faint (they steer within the exact family, the equations win), then alone: it
-//! converges quadratically to a nearby exact solution (an underdetermined system: 4F + 4S equations,
-//! 5F + 3V + 3S unknowns).
+//! converges quadratically to a nearby exact solution (an underdetermined system: 4F + 4S
+//! equations, 5F + 3V + 3S unknowns).
 
 use glam::DVec3;
 
@@ -523,7 +523,8 @@ fn run_phase(
 /// family: land on one that keeps them), then with the hinges at [`FAINT_HINGES`] (where they
 /// pull against the equations the pass before stalls short of exactness, and the equations
 /// alone would then drift off α: corpus 40_10 ended at 74.92°), then the equations alone, so
-/// that nothing pulls against exactness; `equations` are further equations held in every pass (the moulds' curvatures).
+/// that nothing pulls against exactness; `equations` are further equations held in every pass
+/// (the moulds' curvatures).
 /// Returns the iterations.
 #[allow(clippy::too_many_arguments)]
 fn project(
