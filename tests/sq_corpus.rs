@@ -117,10 +117,18 @@ fn recheck_panels(reference: &Reference, f: &spherical_faces::sq::SqFinal, param
     misses
 }
 
+/// The guarantees the delivered SQ mesh misses, recomputed here ([`recheck`], [`recheck_panels`]).
+fn delivered_misses(reference: &Reference, result: &spherical_faces::sq::SqResult, params: &SqParams) -> Vec<String> {
+    let f = result.sq_mesh.as_ref().expect("the SQ mesh");
+    let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
+    let mut misses = recheck(&f.mesh, &normals, reference.diagonal(), params.theta_deg, params.alpha_deg);
+    misses.extend(recheck_panels(reference, f, params));
+    misses
+}
+
 #[test]
 fn no_generated_roof_misses_a_guarantee_silently() {
     let params = SqParams { grid: 14, faces: 120, ..SqParams::default() };
-    let (theta, alpha) = (params.theta_deg, params.alpha_deg);
     let mut rows = Vec::new();
     let (mut met, mut buildable) = (0, 0);
     let mut seed = 0u64;
@@ -141,10 +149,7 @@ fn no_generated_roof_misses_a_guarantee_silently() {
             Err(e @ SqError::MeanCurvatureNearZero { .. }) => panic!("{kind:?} {k}: {e}"),
             Err(e) => panic!("{kind:?} {k}: {e}"),
         };
-        let f = result.sq_mesh.as_ref().expect("the SQ mesh");
-        let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
-        let mut misses = recheck(&f.mesh, &normals, reference.diagonal(), theta, alpha);
-        misses.extend(recheck_panels(&reference, f, &params));
+        let misses = delivered_misses(&reference, &result, &params);
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{kind:?} {k}: verdict {} against {misses:?}", result.verdict.failure_text());
         if !result.verdict.holds() {
             assert!(!result.verdict.failure_text().is_empty());
@@ -195,10 +200,7 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
         let reference = Reference::from_bspline(surface).unwrap();
         let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
         let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
-        let f = result.sq_mesh.as_ref().expect("the SQ mesh");
-        let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
-        let mut misses = recheck(&f.mesh, &normals, reference.diagonal(), theta, alpha);
-        misses.extend(recheck_panels(&reference, f, &params));
+        let misses = delivered_misses(&reference, &result, &params);
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
         assert!(!must_meet || result.verdict.holds(), "{name}: {}", result.verdict.failure_text());
     }
@@ -222,10 +224,7 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
         for (theta, alpha) in [(20.0, 75.0), (15.0, 45.0)] {
             let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
             let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: refused: {e}"));
-            let f = result.sq_mesh.as_ref().expect("the SQ mesh");
-            let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
-            let mut misses = recheck(&f.mesh, &normals, reference.diagonal(), theta, alpha);
-            misses.extend(recheck_panels(&reference, f, &params));
+            let misses = delivered_misses(&reference, &result, &params);
             assert_eq!(result.verdict.holds(), misses.is_empty(), "{name} θ {theta}: verdict {} against {misses:?}", result.verdict.failure_text());
             let holds = |g: &str| result.verdict.guarantees.iter().any(|x| x.name == g && x.holds);
             exact += usize::from(holds("max_vertex_sphere_residual") && holds("max_centre_face_planarity"));
@@ -358,10 +357,7 @@ fn our_hard_corpus_runs_and_says_what_it_misses() {
         let Ok(ImportedFile::BSpline(b)) = import_file(&std::fs::read(&path).unwrap(), &name) else { panic!("{name}") };
         let reference = Reference::from_bspline(b.surface).unwrap();
         let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: refused: {e}"));
-        let f = result.sq_mesh.as_ref().expect("the SQ mesh");
-        let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
-        let mut misses = recheck(&f.mesh, &normals, reference.diagonal(), params.theta_deg, params.alpha_deg);
-        misses.extend(recheck_panels(&reference, f, &params));
+        let misses = delivered_misses(&reference, &result, &params);
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
         met += usize::from(result.verdict.holds());
         rows.push(format!("{name}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
