@@ -503,39 +503,63 @@ pub fn exact_step(panels: &[crate::panels::panel::Panel], exact: &crate::panels:
 }
 
 /// The verdict runs that native and wasm must agree on (`tests/verdicts.rs` records them,
-/// `tests/web.rs` runs them in the browser): ST with adapted face size on the free-form dome
-/// sample remeshed to about 300 faces, and SQ on the vault sample with a 12 × 12 grid and about
-/// 60 quads. Each gives its report's guarantees, measured on the delivered panels.
-pub fn verdict_runs() -> Vec<(&'static str, Vec<crate::guarantees::Guarantee>)> {
-    use crate::progress::Clock;
-    use crate::remeshing::Sizing;
-    let dome = Reference::from_triangles(samples::Sample::Dome.mesh());
-    let params = crate::st_adapted::params::StAdaptedParams { sizing: Sizing::UniformFaces(300), ..Default::default() };
-    let st = crate::st_adapted::compute(&dome, &params, Clock(None), &mut |_| Ok(())).expect("ST runs on the dome");
-    let (report, _) = crate::pipeline::stages::st_adapted::export(&dome, &st, &params, Clock(None));
-    let vault = Reference::from_bspline(samples::Sample::Vault.bspline().expect("the vault is a B-spline")).expect("a B-spline reference");
-    let params = sq::params::SqParams { grid: 12, faces: 60, ..Default::default() };
-    let sq = sq::compute(&vault, &params, Clock(None), &mut |_| Ok(())).expect("SQ runs on the vault");
-    vec![("st dome 300 faces", report.guarantees), ("sq vault grid 12, 60 quads", sq.verdict.guarantees)]
+/// `tests/web.rs` runs them in the browser, one page task each): ST with adapted face size on the
+/// free-form dome sample remeshed to about 300 faces, and SQ on the vault sample with a 12 × 12
+/// grid and about 60 quads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VerdictRun {
+    StDome,
+    SqVault,
 }
 
-/// The hard SQ verdict runs that native and wasm must agree on: each B-spline file (name, bytes)
-/// at the paper's Fig. 19 settings (θ 15°, α 45°) with a 16 × 16 grid and about 120 quads
-/// (`tests/verdicts.rs` records them, `tests/web.rs` runs them in the browser, each within the
-/// page's time); the guarantees of each report.
-pub fn hard_verdict_runs(files: &[(&'static str, &[u8])]) -> Vec<(&'static str, Vec<crate::guarantees::Guarantee>)> {
+impl VerdictRun {
+    pub const ALL: [VerdictRun; 2] = [VerdictRun::StDome, VerdictRun::SqVault];
+
+    /// The run's name in the recording (`tests/data/verdicts.json`).
+    pub fn name(self) -> &'static str {
+        match self {
+            VerdictRun::StDome => "st dome 300 faces",
+            VerdictRun::SqVault => "sq vault grid 12, 60 quads",
+        }
+    }
+
+    /// The run's report guarantees, measured on the delivered panels.
+    pub fn run(self) -> Vec<crate::guarantees::Guarantee> {
+        use crate::progress::Clock;
+        use crate::remeshing::Sizing;
+        match self {
+            VerdictRun::StDome => {
+                let dome = Reference::from_triangles(samples::Sample::Dome.mesh());
+                let params = crate::st_adapted::params::StAdaptedParams { sizing: Sizing::UniformFaces(300), ..Default::default() };
+                let st = crate::st_adapted::compute(&dome, &params, Clock(None), &mut |_| Ok(())).expect("ST runs on the dome");
+                crate::pipeline::stages::st_adapted::export(&dome, &st, &params, Clock(None)).0.guarantees
+            }
+            VerdictRun::SqVault => {
+                let vault = samples::Sample::Vault.bspline().expect("the vault is a B-spline");
+                let vault = Reference::from_bspline(vault).expect("a B-spline reference");
+                let params = sq::params::SqParams { grid: 12, faces: 60, ..Default::default() };
+                sq::compute(&vault, &params, Clock(None), &mut |_| Ok(())).expect("SQ runs on the vault").verdict.guarantees
+            }
+        }
+    }
+}
+
+/// Every [`VerdictRun`] in turn: (name, guarantees).
+pub fn verdict_runs() -> Vec<(&'static str, Vec<crate::guarantees::Guarantee>)> {
+    VerdictRun::ALL.into_iter().map(|r| (r.name(), r.run())).collect()
+}
+
+/// The hard SQ verdict run that native and wasm must agree on: the B-spline file `bytes` (named
+/// `name`) at the paper's Fig. 19 settings (θ 15°, α 45°) with a 16 × 16 grid and about 120 quads
+/// (`tests/verdicts.rs` records it, `tests/web.rs` runs it in the browser, one page task per
+/// file); the report's guarantees.
+pub fn hard_verdict_run(name: &str, bytes: &[u8]) -> Vec<crate::guarantees::Guarantee> {
     use crate::import::{import_file, ImportedFile};
     use crate::progress::Clock;
     let params = sq::params::SqParams { grid: 16, faces: 120, theta_deg: 15.0, alpha_deg: 45.0, ..Default::default() };
-    files
-        .iter()
-        .map(|&(name, bytes)| {
-            let Ok(ImportedFile::BSpline(b)) = import_file(bytes, name) else { panic!("{name} is a B-spline") };
-            let reference = Reference::from_bspline(b.surface).expect("a B-spline reference");
-            let result = sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
-            (name, result.verdict.guarantees)
-        })
-        .collect()
+    let Ok(ImportedFile::BSpline(b)) = import_file(bytes, name) else { panic!("{name} is a B-spline") };
+    let reference = Reference::from_bspline(b.surface).expect("a B-spline reference");
+    sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}")).verdict.guarantees
 }
 
 /// Whether two runs of [`verdict_runs`] reach the same verdict: the same guarantees, each holding

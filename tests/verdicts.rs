@@ -218,18 +218,18 @@ fn native_verdicts_match_the_recording_the_browser_checks() {
     assert!(names(1).contains(&"coverage".into()) && names(1).contains(&"support_elements_that_fold".into()));
 }
 
-/// The hard surfaces the browser repeats ([`hard_verdict_runs`]: the revolved bell, whose mean
+/// The hard surfaces the browser repeats ([`hard_verdict_run`]: the revolved bell, whose mean
 /// curvature changes sign, and the umbilic dome) against their recording
 /// `tests/data/verdicts_hard.json` (`SF_GOLDEN=write` records it anew): SQ runs on both from
 /// constant radii and, at 120 quads, both meet every guarantee.
 #[test]
 fn native_hard_verdicts_match_the_recording_the_browser_checks() {
-    use spherical_faces::bench_workloads::hard_verdict_runs;
+    use spherical_faces::bench_workloads::hard_verdict_run;
     let files: [(&str, &[u8]); 2] = [
         ("revolved_bell.json", include_bytes!("../../shared/data/bsplines/hard/revolved_bell.json")),
         ("umbilic_dome.json", include_bytes!("../../shared/data/bsplines/hard/umbilic_dome.json")),
     ];
-    let runs = hard_verdict_runs(&files);
+    let runs: Vec<_> = files.into_iter().map(|(name, bytes)| (name, hard_verdict_run(name, bytes))).collect();
     if !matches_recording("tests/data/verdicts_hard.json", &runs) {
         return;
     }

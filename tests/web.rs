@@ -31,6 +31,23 @@ async fn through_channel(value: &JsValue, transfer: &JsValue) -> JsValue {
     JsFuture::from(promise).await.unwrap()
 }
 
+/// Gives the page back to its event loop for one task. The runner runs synchronous tests back to
+/// back in one task, and chromedriver gives up on a page that does not answer for 30 s: each long
+/// test awaits this before every run, so the page answers between runs and no task holds it for
+/// more than one run.
+async fn next_page_task() {
+    through_channel(&JsValue::NULL, &js_sys::Array::new()).await;
+}
+
+/// Runs `work` in a page task of its own and logs how long it held the page.
+async fn in_own_task<T>(what: &str, work: impl FnOnce() -> T) -> T {
+    next_page_task().await;
+    let start = js_sys::Date::now();
+    let out = work();
+    console_log!("{what}: {:.1} s of page time", (js_sys::Date::now() - start) / 1e3);
+    out
+}
+
 #[wasm_bindgen_test]
 async fn protocol_round_trip_across_a_message_channel() {
     let fields = vec![
@@ -162,11 +179,14 @@ impl Outbox for Recorder {
 }
 
 #[wasm_bindgen_test]
-fn session_runs_curvature_in_wasm() {
+async fn session_runs_curvature_in_wasm() {
     let mut s = Session::new();
     let mut r = Recorder(Vec::new());
-    s.handle(ToWorker::LoadSample(Sample::SphereCap), None, &mut r);
-    s.handle(ToWorker::Run(Box::new(StageRequest::Curvature(JetParams::default()))), None, &mut r);
+    in_own_task("curvature of the sphere cap", || {
+        s.handle(ToWorker::LoadSample(Sample::SphereCap), None, &mut r);
+        s.handle(ToWorker::Run(Box::new(StageRequest::Curvature(JetParams::default()))), None, &mut r);
+    })
+    .await;
     let Some(FromWorker::Finished { result: StageResult::Curvature(summary), .. }) = r.0.last() else { panic!("{:?}", r.0.last()) };
     assert!(summary.min_h.is_finite() && summary.max_h.is_finite());
     assert!(!summary.h_changes_sign);
@@ -186,7 +206,7 @@ fn field_lengths_do_not_wrap_on_wasm32() {
 /// real torsal directions with planes at ≥ α, recomputed here from the congruence's own points
 /// and lines, and the SQ mesh meets every guarantee.
 #[wasm_bindgen_test]
-fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
+async fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
     use spherical_faces::congruence::torsal::torsal_pair;
     use spherical_faces::import::{import_file, ImportedFile};
     use spherical_faces::progress::Clock;
@@ -206,7 +226,8 @@ fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
     for (name, surface, theta, alpha) in surfaces {
         let reference = Reference::from_bspline(surface).unwrap();
         let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
-        let result = spherical_faces::sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap();
+        let run = || spherical_faces::sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap();
+        let result = in_own_task(&format!("SQ on {name}"), run).await;
         let c = &result.congruence;
         let n = c.grid;
         for (p, (l, normal)) in c.lines.iter().zip(&c.normals).enumerate() {
@@ -239,9 +260,12 @@ fn sq_meets_its_guarantees_in_wasm_on_the_shared_roofs() {
 /// `tests/data/verdicts.json` (`tests/verdicts.rs` checks the native runs against it): the same
 /// guarantees, each holding alike, counts equal and figures within 1 %.
 #[wasm_bindgen_test]
-fn wasm_reaches_the_native_verdicts() {
-    use spherical_faces::bench_workloads::{recorded_verdict_differences, verdict_runs};
-    let runs = verdict_runs();
+async fn wasm_reaches_the_native_verdicts() {
+    use spherical_faces::bench_workloads::{recorded_verdict_differences, VerdictRun};
+    let mut runs = Vec::new();
+    for run in VerdictRun::ALL {
+        runs.push((run.name(), in_own_task(run.name(), || run.run()).await));
+    }
     let diff = recorded_verdict_differences(include_str!("data/verdicts.json"), &runs);
     assert!(diff.is_empty(), "{diff:?}");
     for (name, now) in &runs {
@@ -253,13 +277,16 @@ fn wasm_reaches_the_native_verdicts() {
 /// umbilic dome) reaches the native verdicts recorded in `tests/data/verdicts_hard.json`
 /// (`tests/verdicts.rs`), each run a few seconds of page time.
 #[wasm_bindgen_test]
-fn wasm_reaches_the_native_hard_verdicts() {
-    use spherical_faces::bench_workloads::{hard_verdict_runs, recorded_verdict_differences};
+async fn wasm_reaches_the_native_hard_verdicts() {
+    use spherical_faces::bench_workloads::{hard_verdict_run, recorded_verdict_differences};
     let files: [(&str, &[u8]); 2] = [
         ("revolved_bell.json", include_bytes!("../../shared/data/bsplines/hard/revolved_bell.json")),
         ("umbilic_dome.json", include_bytes!("../../shared/data/bsplines/hard/umbilic_dome.json")),
     ];
-    let runs = hard_verdict_runs(&files);
+    let mut runs = Vec::new();
+    for (name, bytes) in files {
+        runs.push((name, in_own_task(name, || hard_verdict_run(name, bytes)).await));
+    }
     let diff = recorded_verdict_differences(include_str!("data/verdicts_hard.json"), &runs);
     assert!(diff.is_empty(), "{diff:?}");
     for (name, now) in &runs {
