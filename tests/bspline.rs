@@ -260,3 +260,32 @@ fn a_spline_function_reproduces_its_space_and_fits_samples() {
     let (bu, bv) = (BSplineBasis::clamped_uniform(5, 6, (0.0, 1.0)).unwrap(), BSplineBasis::clamped_uniform(5, 6, (0.0, 1.0)).unwrap());
     assert!(BSplineFunction::fit(bu, bv, &samples[..30]).is_none());
 }
+
+/// A rescaled domain moves only the knots: the same points at the mapped parameters (to 1e-12 of
+/// the diagonal), and after the isotropic scale both parameters run at one mean speed in space.
+#[test]
+fn a_rescaled_domain_keeps_the_surface_and_evens_the_parameter_speeds() {
+    let given = surface_from(include_bytes!("data/corpus40/corpus_40_15_dome.json"), "corpus_40_15_dome.json");
+    let ((u0, u1), (v0, v1)) = given.domain();
+    let scale = given.isotropic_scale(16);
+    let iso = given.rescaled(scale);
+    let diag = given.tessellate([8, 8]).0.bbox_diagonal();
+    for [u, v] in grid(&given, 9) {
+        let (p, q) = (given.point(u, v), iso.point(u0 + (u - u0) * scale[0], v0 + (v - v0) * scale[1]));
+        assert!(p.distance(q) <= 1e-12 * diag, "({u}, {v}): {p} against {q}");
+    }
+    let ((a0, a1), (b0, b1)) = iso.domain();
+    assert!((a1 - a0 - (u1 - u0) * scale[0]).abs() < 1e-12 && (b1 - b0 - (v1 - v0) * scale[1]).abs() < 1e-12);
+    // This patch's knots run over [0, 13.3] × [0, 1] for sides 6.4 and 5.1 long: u is the slow one.
+    assert!(scale[0] < 0.2 && scale[1] == 1.0, "{scale:?}");
+    let mean_speeds = |s: &BSplineSurface| {
+        let g = grid(s, 16);
+        let sum = g.iter().fold([0.0, 0.0], |m, &[u, v]| {
+            let d = s.derivatives(u, v);
+            [m[0] + d.su.length(), m[1] + d.sv.length()]
+        });
+        sum[0] / sum[1]
+    };
+    assert!(mean_speeds(&given) < 0.2, "{}", mean_speeds(&given));
+    assert!((mean_speeds(&iso) - 1.0).abs() < 0.05, "{}", mean_speeds(&iso));
+}

@@ -21,6 +21,7 @@ use std::collections::HashSet;
 
 use glam::DVec3;
 
+use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::PolyMesh;
 use crate::progress::{Cancelled, Clock};
 use crate::reference::assumptions::Warning;
@@ -71,6 +72,23 @@ impl SqQuadMesh {
     }
 }
 
+/// The patch `given` over a domain rescaled so that both parameters run at the same mean speed in
+/// space ([`BSplineSurface::isotropic_scale`]), the scale, and `torsal_uv` in its parameters. The
+/// cross field measures its angles, its singular points and the turns across its cuts in the
+/// parameter plane: on a patch whose parameters run at speeds 10 : 1 (a knot vector over
+/// [0, 13] against [0, 1]) the two torsal directions there lie a few degrees apart, and a dome
+/// with two umbilics showed one singular point and a seamless map that collapsed over half the
+/// patch (Sec. 5.2).
+pub fn isotropic(given: &BSplineSurface, torsal_uv: &[Option<[[f64; 2]; 2]>]) -> (BSplineSurface, [f64; 2], Vec<Option<[[f64; 2]; 2]>>) {
+    let scale = given.isotropic_scale(ISOTROPY_SAMPLES);
+    let scaled = |d: [f64; 2]| [d[0] * scale[0], d[1] * scale[1]];
+    let directions = torsal_uv.iter().map(|d| d.map(|[a, b]| [scaled(a), scaled(b)])).collect();
+    (given.rescaled(scale), scale, directions)
+}
+
+/// Samples per parameter of the mean speeds in [`isotropic`].
+const ISOTROPY_SAMPLES: usize = 16;
+
 /// Called after every fairing iteration with the iteration, the term statistics and the
 /// vertices (model units); false cancels.
 pub type FairingHook<'h> = dyn FnMut(usize, &[TermStats], &[DVec3]) -> Result<(), Cancelled> + 'h;
@@ -106,11 +124,16 @@ pub fn quad_mesh(
     clock: Clock,
     hook: &mut FairingHook,
 ) -> Result<SqQuadMesh, SqError> {
-    let surface = reference.spline().ok_or(SqError::NotBSpline)?;
-    let torsal = CrossField::new(surface, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
+    let given = reference.spline().ok_or(SqError::NotBSpline)?;
+    let torsal = CrossField::new(given, grid, torsal_uv).ok_or(SqError::NoTorsalField)?;
     let remesh_params = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
     let mut warnings = Vec::new();
-    let prepared = prepare(surface, &torsal, &remesh_params)?;
+    // The remesh runs on the patch with its parameters at one speed (see `isotropic`) and gives
+    // its (u, v) back in the given ones.
+    let (surface, scale, iso_torsal_uv) = isotropic(given, torsal_uv);
+    let surface = &surface;
+    let field = CrossField::new(surface, grid, &iso_torsal_uv).ok_or(SqError::NoTorsalField)?;
+    let prepared = prepare(surface, &field, &remesh_params)?;
     let singular_points = prepared.field.singular.clone();
     let remesh = if singular_points.is_empty() {
         quad_remesh_prepared(surface, prepared, &remesh_params)?
@@ -131,7 +154,12 @@ pub fn quad_mesh(
     let QuadRemesh { mesh: mut remesh, mut uv, mut polylines, mut on_boundary, dropped, singular, folded_triangles, .. } = remesh;
     reach_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary);
     extend_to_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary, &mut polylines);
-    let remesh_edge_angles_deg = edge_field_angles(surface, &torsal, &remesh, &uv, &on_boundary);
+    let remesh_edge_angles_deg = edge_field_angles(surface, &field, &remesh, &uv, &on_boundary);
+    let ((u0, _), (v0, _)) = given.domain();
+    for w in &mut uv {
+        *w = [u0 + (w[0] - u0) / scale[0], v0 + (w[1] - v0) / scale[1]];
+    }
+    let surface = given;
 
     // Q′ in the frame of the bounding box.
     let (lo, hi) = reference.mesh().bbox();

@@ -152,6 +152,36 @@ impl BSplineSurface {
         Self { control, ..self.clone() }
     }
 
+    /// The same surface over a rescaled domain: parameter k runs from its start at `scale[k]`
+    /// times its speed, t′ = t₀ + (t − t₀)·scale[k] (exact: only the knots move).
+    pub fn rescaled(&self, scale: [f64; 2]) -> Self {
+        let stretch = |b: &BSplineBasis, s: f64| {
+            let t0 = b.domain().0;
+            BSplineBasis::new(b.degree(), b.knots().iter().map(|&k| t0 + (k - t0) * s).collect()).expect("a scaled knot vector is a knot vector")
+        };
+        Self { u: stretch(&self.u, scale[0]), v: stretch(&self.v, scale[1]), ..self.clone() }
+    }
+
+    /// The scale per parameter ([`Self::rescaled`]) after which both run at the same mean speed
+    /// in space, |S_u| and |S_v| averaged over a `samples` × `samples` grid; the faster one keeps
+    /// its own. The angles between parameter directions are then about those in space.
+    pub fn isotropic_scale(&self, samples: usize) -> [f64; 2] {
+        let ((u0, u1), (v0, v1)) = self.domain();
+        let (mut speed_u, mut speed_v) = (0.0, 0.0);
+        for j in 0..samples {
+            for i in 0..samples {
+                let t = |k: usize, lo: f64, hi: f64| lo + (hi - lo) * (k as f64 + 0.5) / samples as f64;
+                let d = self.derivatives(t(i, u0, u1), t(j, v0, v1));
+                (speed_u, speed_v) = (speed_u + d.su.length(), speed_v + d.sv.length());
+            }
+        }
+        let fastest = speed_u.max(speed_v);
+        if !(fastest > 0.0 && speed_u > 0.0 && speed_v > 0.0) {
+            return [1.0, 1.0];
+        }
+        [speed_u / fastest, speed_v / fastest]
+    }
+
     /// S(u, v).
     pub fn point(&self, u: f64, v: f64) -> DVec3 {
         self.derivatives(u, v).s
