@@ -15,8 +15,8 @@ fn main() {
         let c = spherical_faces::sq::compute_congruence(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).expect("congruence");
         // As SQ remeshes: on the patch with its parameters at one speed.
         let given = loaded.surface.spline().expect("a B-spline");
-        let (surface, scale, torsal_uv) = spherical_faces::sq::quad_mesh::isotropic(given, &c.torsal_uv);
-        let surface = &surface;
+        let (patch, torsal_uv) = spherical_faces::sq::quad_mesh::isotropic(given, &c.torsal_uv);
+        let surface = &patch.surface;
         let field = CrossField::new(surface, c.grid, &torsal_uv).expect("a field");
         let rp = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
         let prepared = prepare(surface, &field, &rp).expect("prepared");
@@ -33,9 +33,9 @@ fn main() {
             println!("  singular vertices {:?}, dropped {}", q.singular, q.dropped);
             let name = std::path::Path::new(&a).file_stem().unwrap().to_string_lossy().to_string();
             let mut out = String::new();
-            let ((u0, _), (v0, _)) = given.domain();
             for w in &q.uv {
-                out += &format!("v {} {} 0\n", u0 + (w[0] - u0) / scale[0], v0 + (w[1] - v0) / scale[1]);
+                let [u, v] = patch.to_given(*w);
+                out += &format!("v {u} {v} 0\n");
             }
             for f in &q.mesh.faces {
                 out += &format!("f {}\n", f.corners().iter().map(|c| (c + 1).to_string()).collect::<Vec<_>>().join(" "));

@@ -30,7 +30,7 @@ use spherical_faces::geometry::closest::{closest_point_brute_force, TriangleBvh}
 use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::import::import_mesh;
-use spherical_faces::panels::deviation::{max_deviation, max_distance_to_reference, panel_samples};
+use spherical_faces::panels::deviation::{max_deviation, max_distance_to_reference, panel_samples, ARC_SEGMENTS, MAX_SAMPLES};
 use spherical_faces::panels::panel::Panel;
 use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use spherical_faces::panels::tessellate::triangle_chord_error;
@@ -973,6 +973,26 @@ fn schedule_csv_and_json() {
             .fold(0.0, f64::max);
         assert_eq!(max_deviation(p, &bvh), brute, "panel {k}");
         assert_eq!(sched.panels[k].max_deviation, brute, "panel {k}");
+    }
+}
+
+#[test]
+fn a_panel_past_the_sample_cap_is_measured_on_an_even_subset() {
+    // The cap's panels at a chord tolerance of 1e-7 of the diagonal: tessellations of several
+    // thousand points, as a degenerate panel has at the default tolerance.
+    let sm = cap();
+    let diag = sm.mesh.bbox_diagonal();
+    let panels = build_panels(&sm, 1e-7 * diag);
+    let bvh = TriangleBvh::new(&sm.mesh.triangulated());
+    let dense: Vec<&Panel> = panels.iter().filter(|p| p.positions.len() + p.triangles.len() > 2 * MAX_SAMPLES).collect();
+    assert!(!dense.is_empty(), "{:?}", panels.iter().map(|p| p.positions.len()).collect::<Vec<_>>());
+    for p in dense {
+        let samples = panel_samples(p);
+        assert!(samples.len() <= MAX_SAMPLES + 2 + p.arcs.len() * (ARC_SEGMENTS + 1), "{} samples", samples.len());
+        // Every tessellation vertex against the thinned measure: the face's sagitta either way.
+        let every = p.positions.iter().map(|x| bvh.closest_point(*x).unwrap().distance).fold(0.0, f64::max);
+        let thinned = max_deviation(p, &bvh);
+        assert!((thinned - every).abs() <= 0.02 * every, "thinned {thinned:e}, every vertex {every:e}");
     }
 }
 

@@ -248,10 +248,11 @@ fn the_torsal_remesh_does_not_depend_on_the_parameter_speeds() {
         singular.sort();
         // The remesh along the field itself (SQ follows the parameter lines while it has
         // singular points).
-        let (iso, _, torsal_uv) = isotropic(&surface, &r.congruence.torsal_uv);
-        let field = CrossField::new(&iso, r.congruence.grid, &torsal_uv).unwrap();
-        let q = quad_remesh(&iso, &field, &remesh_params).unwrap();
-        let covered = coverage(&iso, &q.mesh.faces, &q.uv);
+        let (patch, torsal_uv) = isotropic(&surface, &r.congruence.torsal_uv);
+        let iso = &patch.surface;
+        let field = CrossField::new(iso, r.congruence.grid, &torsal_uv).unwrap();
+        let q = quad_remesh(iso, &field, &remesh_params).unwrap();
+        let covered = coverage(iso, &q.mesh.faces, &q.uv);
         found.push((singular, q.singular.len(), covered));
     }
     assert!(found[0].0 == [1, 1, 1, 1] && found[0].0 == found[1].0, "{found:?}");

@@ -72,18 +72,42 @@ impl SqQuadMesh {
     }
 }
 
-/// The patch `given` over a domain rescaled so that both parameters run at the same mean speed in
-/// space ([`BSplineSurface::isotropic_scale`]), the scale, and `torsal_uv` in its parameters. The
-/// cross field measures its angles, its singular points and the turns across its cuts in the
-/// parameter plane: on a patch whose parameters run at speeds 10 : 1 (a knot vector over
-/// [0, 13] against [0, 1]) the two torsal directions there lie a few degrees apart, and a dome
-/// with two umbilics showed one singular point and a seamless map that collapsed over half the
-/// patch (Sec. 5.2).
-pub fn isotropic(given: &BSplineSurface, torsal_uv: &[Option<[[f64; 2]; 2]>]) -> (BSplineSurface, [f64; 2], Vec<Option<[[f64; 2]; 2]>>) {
-    let scale = given.isotropic_scale(ISOTROPY_SAMPLES);
-    let scaled = |d: [f64; 2]| [d[0] * scale[0], d[1] * scale[1]];
-    let directions = torsal_uv.iter().map(|d| d.map(|[a, b]| [scaled(a), scaled(b)])).collect();
-    (given.rescaled(scale), scale, directions)
+/// A patch over a domain rescaled so that both parameters run at the same mean speed in space
+/// ([`BSplineSurface::isotropic_scale`]): the cross field measures its angles, its singular
+/// points and the turns across its cuts in the parameter plane, and on a patch whose parameters
+/// run at speeds 10 : 1 (a knot vector over [0, 13] against [0, 1]) the two torsal directions
+/// there lie a few degrees apart: a dome with two umbilics showed one singular point and a
+/// seamless map that collapsed over half the patch (Sec. 5.2).
+pub struct IsotropicPatch {
+    pub surface: BSplineSurface,
+    /// Per parameter, its speed relative to the given patch's ([`BSplineSurface::rescaled`]).
+    pub scale: [f64; 2],
+}
+
+impl IsotropicPatch {
+    /// The patch `given` at one speed.
+    pub fn of(given: &BSplineSurface) -> Self {
+        let scale = given.isotropic_scale(ISOTROPY_SAMPLES);
+        Self { surface: given.rescaled(scale), scale }
+    }
+
+    /// A unit (du, dv) of the given patch as a direction here (not unit).
+    pub fn direction(&self, d: [f64; 2]) -> [f64; 2] {
+        [d[0] * self.scale[0], d[1] * self.scale[1]]
+    }
+
+    /// A point (u, v) here in the given patch's parameters (the domains start alike).
+    pub fn to_given(&self, w: [f64; 2]) -> [f64; 2] {
+        let ((u0, _), (v0, _)) = self.surface.domain();
+        [u0 + (w[0] - u0) / self.scale[0], v0 + (w[1] - v0) / self.scale[1]]
+    }
+}
+
+/// The patch `given` at one speed ([`IsotropicPatch`]) and `torsal_uv` in its parameters.
+pub fn isotropic(given: &BSplineSurface, torsal_uv: &[Option<[[f64; 2]; 2]>]) -> (IsotropicPatch, Vec<Option<[[f64; 2]; 2]>>) {
+    let patch = IsotropicPatch::of(given);
+    let directions = torsal_uv.iter().map(|d| d.map(|[a, b]| [patch.direction(a), patch.direction(b)])).collect();
+    (patch, directions)
 }
 
 /// Samples per parameter of the mean speeds in [`isotropic`].
@@ -130,8 +154,8 @@ pub fn quad_mesh(
     let mut warnings = Vec::new();
     // The remesh runs on the patch with its parameters at one speed (see `isotropic`) and gives
     // its (u, v) back in the given ones.
-    let (surface, scale, iso_torsal_uv) = isotropic(given, torsal_uv);
-    let surface = &surface;
+    let (patch, iso_torsal_uv) = isotropic(given, torsal_uv);
+    let surface = &patch.surface;
     let field = CrossField::new(surface, grid, &iso_torsal_uv).ok_or(SqError::NoTorsalField)?;
     let prepared = prepare(surface, &field, &remesh_params)?;
     let singular_points = prepared.field.singular.clone();
@@ -155,9 +179,8 @@ pub fn quad_mesh(
     reach_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary);
     extend_to_the_boundary(surface, &mut remesh, &mut uv, &mut on_boundary, &mut polylines);
     let remesh_edge_angles_deg = edge_field_angles(surface, &field, &remesh, &uv, &on_boundary);
-    let ((u0, _), (v0, _)) = given.domain();
     for w in &mut uv {
-        *w = [u0 + (w[0] - u0) / scale[0], v0 + (w[1] - v0) / scale[1]];
+        *w = patch.to_given(*w);
     }
     let surface = given;
 
@@ -402,6 +425,23 @@ mod tests {
         let positions = uv.iter().map(|p| DVec3::new(p[0], p[1], 0.0)).collect();
         let on_boundary = uv.iter().map(|p| p[1] == 0.0).collect();
         (PolyMesh::new(positions, faces), uv, on_boundary)
+    }
+
+    #[test]
+    fn the_isotropic_patch_maps_points_and_directions_back_to_the_given_one() {
+        // u over [0, 10] runs ten times slower than v over [0, 1] on the unit square.
+        let given = square().rescaled([10.0, 1.0]);
+        let patch = IsotropicPatch::of(&given);
+        assert!((patch.scale[0] - 0.1).abs() < 1e-9 && (patch.scale[1] - 1.0).abs() < 1e-9, "{:?}", patch.scale);
+        for w in [[0.0, 0.0], [0.3, 0.7], [1.0, 0.25]] {
+            let back = patch.to_given(w);
+            assert!(patch.surface.point(w[0], w[1]).distance(given.point(back[0], back[1])) < 1e-12);
+            // The same tangent vector through both parameter planes.
+            let d = [0.6, 0.8];
+            let (a, b) = (patch.surface.derivatives(w[0], w[1]), given.derivatives(back[0], back[1]));
+            let e = patch.direction(d);
+            assert!((a.su * e[0] + a.sv * e[1]).distance(b.su * d[0] + b.sv * d[1]) < 1e-12);
+        }
     }
 
     #[test]
