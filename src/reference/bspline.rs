@@ -53,6 +53,11 @@ pub struct BSplineInfo {
     pub gauss_curvature: [f64; 2],
 }
 
+/// A Newton step of the closest-point search that moves the point by less than this (relative to
+/// 1 + |S|) is its last: the error after a step of length h is O(h²) (quadratic convergence), so
+/// below about √ε the point is exact to rounding.
+const CONVERGED_STEP: f64 = 1e-9;
+
 /// The surface with its tessellation's parameters.
 #[derive(Clone, Debug)]
 pub struct SplineReference {
@@ -77,6 +82,11 @@ impl SplineReference {
 
     /// The closest point of the surface to `p`, from the parameters `start` (Newton on
     /// ½|S − p|², box-constrained to the domain): (u, v), the point and its unit normal.
+    ///
+    /// Newton converges quadratically: once a Newton step moves the point by less than
+    /// [`CONVERGED_STEP`] × (1 + |S|), the point after it is exact to rounding, and the loop ends
+    /// there, without another step that could only confirm it (whose halvings, at rounding
+    /// level, would each cost an evaluation of the surface).
     pub fn closest_point(&self, p: DVec3, start: [f64; 2]) -> ([f64; 2], DVec3, Option<DVec3>) {
         let s = &self.surface;
         let ((u0, u1), (v0, v1)) = s.domain();
@@ -89,7 +99,8 @@ impl SplineReference {
             let (e, f, gg) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
             // Newton's Hessian when positive definite, else Gauss–Newton's [[E, F], [F, G]].
             let (a, b, c) = (e + d.suu.dot(r), f + d.suv.dot(r), gg + d.svv.dot(r));
-            let (a, b, c) = if a > 0.0 && a * c - b * b > 1e-12 * (e * gg).max(1e-300) { (a, b, c) } else { (e, f, gg) };
+            let newton = a > 0.0 && a * c - b * b > 1e-12 * (e * gg).max(1e-300);
+            let (a, b, c) = if newton { (a, b, c) } else { (e, f, gg) };
             // Active bounds: a coordinate at its bound whose descent direction leaves the domain
             // stays there.
             let at_bound = |x: f64, lo: f64, hi: f64, grad: f64| (x <= lo && grad > 0.0) || (x >= hi && grad < 0.0);
@@ -104,6 +115,26 @@ impl SplineReference {
                 }
             };
             if !(step[0].is_finite() && step[1].is_finite()) {
+                break;
+            }
+            let scale = 1.0 + d.s.length();
+            // The step's displacement to first order; at rounding level there is nothing to take.
+            let predicted = (d.su * step[0] + d.sv * step[1]).length();
+            if predicted <= 1e-15 * scale {
+                break;
+            }
+            if newton && predicted <= CONVERGED_STEP * scale {
+                // Quadratic convergence: this step is the last. The distance cannot tell it
+                // apart from the current point any more (|S − p|² carries p's offset from the
+                // surface, whose rounding swamps the tangential error squared), the gradient
+                // (S_u · r, S_v · r) can: take the step unless it grows.
+                let trial = s.clamp([uv[0] + step[0], uv[1] + step[1]]);
+                let dt = s.derivatives(trial[0], trial[1]);
+                let rt = dt.s - p;
+                if dt.su.dot(rt).powi(2) + dt.sv.dot(rt).powi(2) <= g[0] * g[0] + g[1] * g[1] {
+                    uv = trial;
+                    d = dt;
+                }
                 break;
             }
             // Halve until the distance does not grow.
@@ -124,7 +155,7 @@ impl SplineReference {
             uv = trial;
             d = dt;
             dist2 = d2;
-            if moved <= 1e-15 * (1.0 + d.s.length()) {
+            if moved <= 1e-15 * scale {
                 break;
             }
         }

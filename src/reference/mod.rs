@@ -45,6 +45,23 @@ pub struct SurfacePoint {
     pub uv: Option<[f64; 2]>,
 }
 
+impl SurfacePoint {
+    /// Where a search for a point near this one starts ([`Reference::closest_point_near`]).
+    pub fn search_start(&self) -> SearchStart {
+        SearchStart { triangle: self.triangle, uv: self.uv }
+    }
+}
+
+/// Where a point's last closest-point search ended: the next search for it, after it moved,
+/// starts there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SearchStart {
+    /// The triangle of [`Reference::mesh`] nearest to it.
+    pub triangle: usize,
+    /// Its parameters on a B-spline.
+    pub uv: Option<[f64; 2]>,
+}
+
 /// Why a reference surface cannot be used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ReferenceError {
@@ -210,7 +227,7 @@ impl Reference {
     /// on a B-spline, to its exact closest point from there; on a mesh, the hit's.
     pub fn distance_from_hit(&self, p: DVec3, hit: ClosestHit) -> f64 {
         match &self.spline {
-            Some(_) => self.surface_point_of(p, hit).point.distance(p),
+            Some(_) => self.surface_point_of(p, hit, None).point.distance(p),
             None => hit.distance,
         }
     }
@@ -274,28 +291,33 @@ impl Reference {
 
     /// The closest point of the surface to `p` (None for an empty surface).
     pub fn closest_point(&self, p: DVec3) -> Option<SurfacePoint> {
-        self.bvh().closest_point(p).map(|hit| self.surface_point_of(p, hit))
+        self.bvh().closest_point(p).map(|hit| self.surface_point_of(p, hit, None))
     }
 
     /// [`Self::closest_point`], started from triangle `previous` of [`Self::mesh`] (e.g. the
     /// triangle of a moving point's last closest point): the same point as an unstarted search,
     /// visiting a small part of the hierarchy.
-    pub(crate) fn closest_point_near(&self, p: DVec3, previous: Option<usize>) -> Option<SurfacePoint> {
+    pub(crate) fn closest_point_near(&self, p: DVec3, previous: Option<SearchStart>) -> Option<SurfacePoint> {
         let bvh = self.bvh();
         match previous {
-            Some(t) => bvh.closest_point_from(p, t),
+            Some(s) => bvh.closest_point_from(p, s.triangle),
             None => bvh.closest_point(p),
         }
-        .map(|hit| self.surface_point_of(p, hit))
+        .map(|hit| self.surface_point_of(p, hit, previous))
     }
 
     /// [`Self::closest_point`] on the B-spline, started from a hit on the tessellation (the
-    /// point `p` it was the closest to).
-    fn surface_point_of(&self, p: DVec3, hit: ClosestHit) -> SurfacePoint {
+    /// point `p` it was the closest to): from where this point's `previous` search ended when it
+    /// ended on the same triangle (a point that moved a little is a Newton step or two from
+    /// there), else from the hit's parameters.
+    fn surface_point_of(&self, p: DVec3, hit: ClosestHit, previous: Option<SearchStart>) -> SurfacePoint {
         let Some(spline) = &self.spline else { return self.surface_point(hit) };
         let t = self.mesh.triangles[hit.triangle];
         let w = hit.barycentric;
-        let start = [0, 1].map(|k| (0..3).map(|c| w[c] * spline.uv[t[c] as usize][k]).sum::<f64>());
+        let start = previous
+            .filter(|s| s.triangle == hit.triangle)
+            .and_then(|s| s.uv)
+            .unwrap_or_else(|| [0, 1].map(|k| (0..3).map(|c| w[c] * spline.uv[t[c] as usize][k]).sum::<f64>()));
         let (uv, point, normal) = spline.closest_point(p, start);
         SurfacePoint { point, normal, triangle: hit.triangle, barycentric: w, uv: Some(uv) }
     }

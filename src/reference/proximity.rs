@@ -7,7 +7,7 @@ use std::rc::Rc;
 
 use glam::DVec3;
 
-use super::Reference;
+use super::{Reference, SearchStart};
 use crate::solver::{JacobianSink, Term};
 use crate::solver::terms::v3;
 
@@ -19,8 +19,8 @@ struct ClosestCache {
     pos: Vec<DVec3>,
     /// (closest point, interpolated unit normal).
     hits: Vec<(DVec3, DVec3)>,
-    /// The triangle of each closest point, where the next search starts.
-    triangles: Vec<usize>,
+    /// Where each search ended, where the next one starts.
+    starts: Vec<Option<SearchStart>>,
 }
 
 /// Read access to a [`ReferenceProximity`]'s closest points (see [`ReferenceProximity::lookups`]).
@@ -66,7 +66,7 @@ impl<'a> ReferenceProximity<'a> {
 
     fn new(name: &str, reference: &'a Reference, offsets: Vec<usize>, scales: Option<Vec<f64>>, point: bool) -> Self {
         let n = offsets.len();
-        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n], triangles: vec![0; n] };
+        let cache = ClosestCache { pos: vec![DVec3::NAN; n], hits: vec![(DVec3::ZERO, DVec3::Z); n], starts: vec![None; n] };
         Self {
             name: name.into(),
             reference,
@@ -124,10 +124,9 @@ impl Term for ReferenceProximity<'_> {
                 continue;
             }
             if cache.pos[k] != v {
-                let previous = cache.pos[k].is_finite().then_some(cache.triangles[k]);
-                if let Some(hit) = self.reference.closest_point_near(v, previous) {
+                if let Some(hit) = self.reference.closest_point_near(v, cache.starts[k]) {
                     cache.hits[k] = (hit.point, hit.normal.unwrap_or(cache.hits[k].1));
-                    cache.triangles[k] = hit.triangle;
+                    cache.starts[k] = Some(hit.search_start());
                     cache.pos[k] = v;
                 }
             }
@@ -163,8 +162,8 @@ pub struct CentroidTargets<'a> {
     /// The offsets of each group's vertices.
     groups: Vec<Vec<usize>>,
     targets: Vec<DVec3>,
-    /// The triangle of each target, where the next search starts.
-    triangles: Vec<usize>,
+    /// Where each target's search ended, where the next one starts.
+    starts: Vec<Option<SearchStart>>,
     /// Centroid each target was computed for (NaN: never).
     centroids: Vec<DVec3>,
 }
@@ -176,7 +175,7 @@ impl<'a> CentroidTargets<'a> {
             reference,
             groups,
             targets: vec![DVec3::ZERO; n],
-            triangles: vec![0; n],
+            starts: vec![None; n],
             centroids: vec![DVec3::NAN; n],
         };
         t.update(x);
@@ -190,10 +189,9 @@ impl<'a> CentroidTargets<'a> {
             if !c.is_finite() || c == self.centroids[k] {
                 continue;
             }
-            let previous = self.centroids[k].is_finite().then_some(self.triangles[k]);
-            if let Some(hit) = self.reference.closest_point_near(c, previous) {
+            if let Some(hit) = self.reference.closest_point_near(c, self.starts[k]) {
                 self.targets[k] = hit.point;
-                self.triangles[k] = hit.triangle;
+                self.starts[k] = Some(hit.search_start());
                 self.centroids[k] = c;
             }
         }

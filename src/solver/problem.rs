@@ -210,8 +210,18 @@ impl<'a> Problem<'a> {
         &self.fixed
     }
 
-    /// Calls [`Term::prepare`] on every term.
+    /// Calls [`Term::prepare`] on every term that is switched on (weight > 0): a term switched
+    /// off adds nothing to the energy, and its preparation (a closest-point search per vertex
+    /// for the proximity terms) would be wasted.
     pub fn prepare(&mut self, x: &[f64]) {
+        for t in self.terms.iter_mut().filter(|t| t.weight > 0.0) {
+            t.term.prepare(x);
+        }
+    }
+
+    /// Calls [`Term::prepare`] on every term, switched off or not (before [`Self::term_stats`]
+    /// reports every term's residuals).
+    pub fn prepare_all(&mut self, x: &[f64]) {
         for t in &mut self.terms {
             t.term.prepare(x);
         }

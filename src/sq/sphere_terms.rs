@@ -43,7 +43,7 @@ use glam::DVec3;
 
 use super::params::SINGULAR_MARGIN_DEG;
 use crate::reference::proximity::{value_gradient, CentroidTargets, ClosestLookups};
-use crate::reference::Reference;
+use crate::reference::{Reference, SearchStart};
 use crate::solver::terms::v3;
 use crate::solver::{JacobianSink, Term};
 
@@ -258,8 +258,8 @@ struct NormalTable {
     normals: Vec<DVec3>,
     /// Position each normal was found for.
     at: Vec<DVec3>,
-    /// The triangle of the closest point found last, where the next search starts.
-    hits: Vec<Option<usize>>,
+    /// Where the search found it last ended, where the next search starts.
+    hits: Vec<Option<SearchStart>>,
 }
 
 impl<'a> VertexNormals<'a> {
@@ -289,7 +289,7 @@ impl<'a> VertexNormals<'a> {
                 continue;
             }
             let hit = self.reference.closest_point_near(p, t.hits[k]);
-            t.hits[k] = hit.as_ref().map(|h| h.triangle);
+            t.hits[k] = hit.as_ref().map(|h| h.search_start());
             if let Some(n) = hit.and_then(|h| h.normal) {
                 // Keep the side: the normals only enter squared, but stay comparable.
                 t.normals[k] = if n.dot(t.normals[k]) < 0.0 { -n } else { n };

@@ -361,7 +361,7 @@ fn optimize(
         let sphere_mesh = SphereMesh::new(TriMesh::new(verts, remeshed.triangles.clone()), sph, BoundaryArcRule::Parallel(DVec3::ZERO));
         boundary_arcs::delivered_arcs(sphere_mesh, reference, params.variant)
     };
-    problem.prepare(&x);
+    problem.prepare_all(&x);
     let terms = problem.term_stats(&x);
     Ok(Optimized {
         sphere_mesh: model(&x),
