@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::congruence::central_spheres::{CurvatureField, VertexCurvature};
 use crate::geometry::bspline::surface::TESSELLATION_TOLERANCE;
-use crate::geometry::bspline::BSplineSurface;
+use crate::geometry::bspline::{BSplineSurface, SurfaceDerivatives};
 use crate::geometry::mesh::PolyMesh;
 
 
@@ -123,28 +123,33 @@ impl SplineReference {
             if predicted <= 1e-15 * scale {
                 break;
             }
+            // Where p is off the surface by D, |S − p|² = D² + e² with e the tangential error:
+            // below e ≈ 1e-8 D the distance's rounding hides e², the gradient (S_u · r, S_v · r)
+            // still sees it. A trial is taken when the distance falls, or stays within rounding
+            // while the gradient falls.
+            let gradient2 = |d: &SurfaceDerivatives| {
+                let r = d.s - p;
+                d.su.dot(r).powi(2) + d.sv.dot(r).powi(2)
+            };
+            let takes = |dt: &SurfaceDerivatives, d2: f64| d2 < dist2 || (d2 <= dist2 * (1.0 + 1e-13) && gradient2(dt) < g[0] * g[0] + g[1] * g[1]);
             if newton && predicted <= CONVERGED_STEP * scale {
-                // Quadratic convergence: this step is the last. The distance cannot tell it
-                // apart from the current point any more (|S − p|² carries p's offset from the
-                // surface, whose rounding swamps the tangential error squared), the gradient
-                // (S_u · r, S_v · r) can: take the step unless it grows.
+                // Quadratic convergence: this step is the last.
                 let trial = s.clamp([uv[0] + step[0], uv[1] + step[1]]);
                 let dt = s.derivatives(trial[0], trial[1]);
-                let rt = dt.s - p;
-                if dt.su.dot(rt).powi(2) + dt.sv.dot(rt).powi(2) <= g[0] * g[0] + g[1] * g[1] {
+                if takes(&dt, (dt.s - p).length_squared()) {
                     uv = trial;
                     d = dt;
                 }
                 break;
             }
-            // Halve until the distance does not grow.
+            // Halve until the step is taken.
             let mut t = 1.0;
             let mut accepted = None;
             for _ in 0..12 {
                 let trial = s.clamp([uv[0] + t * step[0], uv[1] + t * step[1]]);
                 let dt = s.derivatives(trial[0], trial[1]);
                 let d2 = (dt.s - p).length_squared();
-                if d2 <= dist2 {
+                if takes(&dt, d2) {
                     accepted = Some((trial, dt, d2));
                     break;
                 }
