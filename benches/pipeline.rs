@@ -15,7 +15,7 @@ use std::sync::{Mutex, OnceLock};
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
     exact_rhino_model, exact_step, exact_surfaces, phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, EXACT_PANELS,
-    ANGLE_SAMPLES, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_SAMPLES,
+    ANGLE_SAMPLES, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_HARD, SQ_HARD_SAMPLES, SQ_SAMPLES,
 };
 use spherical_faces::panels::moulds::MouldFits;
 use spherical_faces::progress::{native_clock_ms, Clock};
@@ -140,6 +140,17 @@ fn sq_iterations(bencher: Bencher) {
         record("sq_final_iteration", s.final_ms);
         record("sq_pipeline", vec![s.total_ms]);
     });
+}
+
+/// One whole SQ run per sample on each hard surface of `SQ_HARD` (`sq_pipeline_<surface>`).
+#[divan::bench(args = [0, 1], sample_count = SQ_HARD_SAMPLES as u32, sample_size = 1)]
+fn sq_hard(bencher: Bencher, k: usize) {
+    let (name, json) = SQ_HARD[k];
+    let w = SqWorkload::on(json, scale());
+    let clock = Clock(Some(native_clock_ms));
+    let faces = w.sample(clock).faces; // warm-up
+    info(name, format!("# {name}: one whole SQ run (defaults), {faces} panels"));
+    bencher.bench_local(|| record(name, [w.sample(clock).total_ms]));
 }
 
 #[divan::bench(sample_count = MOULD_SAMPLES as u32, sample_size = 1)]

@@ -19,6 +19,9 @@
 //!   237 quads) on `tunnel_arch`; one sample is one whole run. The solver's per-iteration times
 //!   of the two congruence steps (Sec. 5.1) and of the full final optimization (Eq. 10) are
 //!   measured, and the whole run from the B-spline to the panels and support structure.
+//! - `sq_pipeline_roof_rough` / `sq_pipeline_tunnel_bulged`: one whole SQ run with default
+//!   parameters on two surfaces with real roofs' dimensionless curvature ([`SQ_HARD`]: a degree-10
+//!   rough roof, a tunnel with K of both signs).
 //!
 //! - `mould_fits_10k` / `mould_assign_10k`: the fit data of about 10 000 panels (the dome
 //!   remeshed uniformly, each face's sphere the pencil member nearest its central sphere,
@@ -262,23 +265,39 @@ pub fn phase_line(name: &str, phases: &PhaseTimes, iterations: usize) -> String 
 /// `tunnel_arch.json` (benches/data, a copy of ../shared/data/bsplines).
 pub(crate) const TUNNEL_ARCH: &str = include_str!("../benches/data/tunnel_arch.json");
 
-/// The SQ method on `tunnel_arch` (grid 20 and about 237 quads, or a 6 × 6 grid and 16 quads
-/// when tiny).
+/// The SQ method on `tunnel_arch` or another surface ([`Self::on`]): default parameters (on
+/// `tunnel_arch` a 20 × 20 grid and about 237 quads), or an 8 × 8 grid and 16 quads when tiny.
 pub struct SqWorkload {
     pub reference: Reference,
     pub params: SqParams,
 }
 
+/// The hard surfaces whole SQ runs are timed on (benches/data, copies of
+/// ../shared/data/bsplines/hard): (benchmark name, file).
+pub const SQ_HARD: [(&str, &str); 2] = [
+    ("sq_pipeline_roof_rough", include_str!("../benches/data/roof_rough.json")),
+    ("sq_pipeline_tunnel_bulged", include_str!("../benches/data/tunnel_bulged.json")),
+];
+
+/// Whole SQ runs per hard surface.
+pub const SQ_HARD_SAMPLES: usize = 3;
+
 impl SqWorkload {
+    /// On `tunnel_arch`.
     pub fn new(scale: Scale) -> Self {
-        let ImportedFile::BSpline(b) = import_file(TUNNEL_ARCH.as_bytes(), "tunnel_arch.json").expect("tunnel_arch imports") else {
-            unreachable!("tunnel_arch.json is a B-spline")
+        Self::on(TUNNEL_ARCH, scale)
+    }
+
+    /// On the surface of a B-spline JSON file.
+    pub fn on(json: &str, scale: Scale) -> Self {
+        let ImportedFile::BSpline(b) = import_file(json.as_bytes(), "surface.json").expect("the surface imports") else {
+            unreachable!("a B-spline JSON file")
         };
-        let reference = Reference::from_bspline(b.surface).expect("tunnel_arch is regular");
+        let reference = Reference::from_bspline(b.surface).expect("the surface is regular");
         let params = match scale {
             Scale::Full => SqParams::default(),
             Scale::Tiny => SqParams {
-                grid: 6,
+                grid: 8,
                 lc_iterations: 3,
                 torsal_iterations: 3,
                 final_iterations: 1,
@@ -295,7 +314,7 @@ impl SqWorkload {
     /// final optimization, and the run's total (ms).
     pub fn sample(&self, clock: Clock) -> SqSample {
         let t0 = clock.now();
-        let r = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("tunnel_arch runs");
+        let r = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("SQ runs");
         let total_ms = clock.now() - t0;
         let faces = r.sq_mesh.as_ref().map_or(0, |f| f.mesh.panels.len());
         let c = r.congruence;
@@ -452,6 +471,20 @@ where
     out(&result_line("sq_final_iteration", &all.final_ms));
     out(&result_line("sq_pipeline", &totals));
     drop(sq);
+    for (name, json) in SQ_HARD {
+        let w = SqWorkload::on(json, scale);
+        w.sample(clock); // warm-up
+        pause().await;
+        let mut totals = Vec::new();
+        let mut faces = 0;
+        for _ in 0..SQ_HARD_SAMPLES {
+            let s = w.sample(clock);
+            (faces, totals) = (s.faces, [totals, vec![s.total_ms]].concat());
+            pause().await;
+        }
+        out(&format!("# {name}: one whole SQ run (defaults), {faces} panels"));
+        out(&result_line(name, &totals));
+    }
 
     let m = MouldWorkload::new(scale);
     pause().await;

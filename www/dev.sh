@@ -185,13 +185,13 @@ cmd_bench() {
     2>&1 | tee "$out/wasm.txt"
   local pat='bench [A-Za-z0-9_]+: [0-9.]+ ms/iter'
   {
-    printf '%-24s %14s %14s %8s\n' benchmark "native ms/iter" "wasm ms/iter" wasm/nat
+    printf '%-28s %14s %14s %8s\n' benchmark "native ms/iter" "wasm ms/iter" wasm/nat
     grep -oE "$pat" "$out/native.txt" | while read -r _ name ms _; do
       name="${name%:}"
       local w
       w="$(grep -oE "bench $name: [0-9.]+ ms/iter" "$out/wasm.txt" | awk '{print $3}' | tail -1 || true)"
       awk -v n="$name" -v a="$ms" -v b="${w:-nan}" \
-        'BEGIN { r = (b == "nan" || a == 0) ? "-" : sprintf("%.2f", b / a); printf "%-24s %14.3f %14s %8s\n", n, a, b, r }'
+        'BEGIN { r = (b == "nan" || a == 0) ? "-" : sprintf("%.2f", b / a); printf "%-28s %14.3f %14s %8s\n", n, a, b, r }'
     done
     echo "load: $(uptime | sed 's/.*load average/load average/')  ($(nproc) cores)"
   } | tee "$out/table.txt"
