@@ -272,7 +272,7 @@ impl Default for SqParams {
             faces: 237,
             fairing_iterations: 10,
             fairing_weight: 0.002,
-            sphere_iterations: [5, 100, 30],
+            sphere_iterations: [5, 100, 60],
             sphere_decrease_tolerance: 1e-5,
             sphere_weights: SphereWeights::default(),
             support_depth: 0.02,
