@@ -210,7 +210,7 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
 /// both signs on four of them) at the defaults and at the paper's Fig. 19 settings (θ 15°,
 /// α 45°): none is refused, every verdict equals the guarantees recomputed from the delivered
 /// mesh, and the figures that hold today do not slip: the exact SQ meshes (vertices on their
-/// spheres, coplanar centres: 11 of 14), the runs whose panels are all buildable (8) and those
+/// spheres, coplanar centres: 12 of 14), the runs whose panels are all buildable (8) and those
 /// that meet every guarantee (8).
 #[test]
 fn the_hard_surfaces_run_and_say_what_they_miss() {
