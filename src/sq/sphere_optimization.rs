@@ -487,7 +487,8 @@ fn sphere_problem<'a>(
 }
 
 /// One phase: the solver on `problem` from `x` for at most `max` iterations, each reported to
-/// `hook`; the full optimization's iteration times and terms kept in `outcome`.
+/// `hook`; the full optimization's iteration times and terms kept in `outcome`. Returns the
+/// iterations and the damping ε it ended with.
 #[allow(clippy::too_many_arguments)]
 fn run_phase(
     problem: &mut Problem,
@@ -498,7 +499,7 @@ fn run_phase(
     solver: &mut Solver,
     outcome: &mut SphereOutcome,
     hook: &mut SphereHook,
-) -> Result<usize, Cancelled> {
+) -> Result<(usize, f64), Cancelled> {
     solver.options.max_iterations = max;
     let report = solver.solve(problem, x, |it| {
         let (v, s) = unpack(layout, it.x);
@@ -512,7 +513,7 @@ fn run_phase(
     if report.termination == Termination::Cancelled {
         return Err(Cancelled);
     }
-    Ok(report.iterations)
+    Ok((report.iterations, report.epsilon))
 }
 
 /// The projection to exactness (see the module docs): a quadratic penalty first (the equations
@@ -546,10 +547,18 @@ fn project(
     problem.fix_range(layout.edge_normal(0)..layout.len());
     let mut penalty = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
     let mut iterations = 0;
+    let mut last: Option<(f64, f64)> = None;
     for scale in PENALTY_WEIGHTS {
         let exact: Vec<(TermId, f64)> = terms.exact().iter().chain(&held).map(|&(id, wt)| (id, wt * scale)).collect();
         terms.set(problem, &[&exact[..], &terms.hinged(w)[..], &terms.proximity(w)[..]].concat());
-        iterations += run_phase(problem, x, layout, phase, PENALTY_ITERATIONS.min(max), &mut penalty, outcome, hook)?;
+        // A pass starts at the damping the last one ended with, grown as the normal matrix grows
+        // with the weights (μ = ε² scales with them), instead of finding it again by rejected steps.
+        if let Some((last_scale, epsilon)) = last {
+            penalty.options.initial_epsilon = epsilon * (scale / last_scale).sqrt();
+        }
+        let (n, epsilon) = run_phase(problem, x, layout, phase, PENALTY_ITERATIONS.min(max), &mut penalty, outcome, hook)?;
+        iterations += n;
+        last = Some((scale, epsilon));
     }
     terms.set(problem, &[&terms.exact()[..], &terms.hinged(w)[..], &held[..]].concat());
     let mut projection = Solver::new(SolverOptions {
@@ -560,14 +569,14 @@ fn project(
         step_tolerance: 1e-16,
         ..SolverOptions::default()
     });
-    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
+    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?.0;
     // Where the hinges and the equations pull apart, that pass stalls short of exactness; with
     // the hinges faint the equations win, while the hinges still steer within the exact family.
     let faint: Vec<(TermId, f64)> = terms.hinged(w).iter().map(|&(id, wt)| (id, wt * FAINT_HINGES)).collect();
     terms.set(problem, &[&terms.exact()[..], &faint[..], &held[..]].concat());
-    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
+    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?.0;
     terms.set(problem, &[&terms.exact()[..], &held[..]].concat());
-    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?;
+    iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?.0;
     Ok(iterations)
 }
 
@@ -594,7 +603,7 @@ pub(crate) fn optimize_spheres(
     terms.set(&mut problem, &[&terms.sphericity(w, w.warm_up_supp)[..], &regularization[..]].concat());
     problem.fix_range(layout.vertex(0)..layout.star_normal(0));
     problem.fix_range(layout.edge_normal(0)..layout.len());
-    outcome.warm_up_iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome, hook)?;
+    outcome.warm_up_iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::WarmUp, iterations[0], &mut solver, &mut outcome, hook)?.0;
 
     // The full optimization (Eq. 10).
     let support = [
@@ -610,7 +619,7 @@ pub(crate) fn optimize_spheres(
         problem.unfix(i);
     }
     solver.options.relative_decrease_tolerance = params.sphere_decrease_tolerance;
-    outcome.iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Full, iterations[1], &mut solver, &mut outcome, hook)?;
+    outcome.iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Full, iterations[1], &mut solver, &mut outcome, hook)?.0;
 
     outcome.projection_iterations =
         project(&mut problem, &terms, &layout, w, &mut x, &[], (SpherePhase::Projection, iterations[2]), clock, &mut outcome, hook)?;
@@ -652,7 +661,7 @@ pub(crate) fn project_to_curvatures(
     problem.fix_range(layout.edge_normal(0)..layout.len());
     let max = params.sphere_iterations[2];
     let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
-    let mut iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Moulds, max, &mut solver, &mut outcome, hook)?;
+    let mut iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Moulds, max, &mut solver, &mut outcome, hook)?.0;
     iterations += project(&mut problem, &terms, &layout, w, &mut x, &[mould], (SpherePhase::Moulds, max), clock, &mut outcome, hook)?;
     let (v, s) = unpack(&layout, &x);
     Ok((v, s.into_iter().map(|s| s.normalized()).collect(), iterations))

@@ -195,22 +195,41 @@ impl BSplineSurface {
     /// [`Self::derivatives`] from basis values evaluated beforehand (a fixed grid).
     pub(crate) fn derivatives_with(&self, bu: &BasisValues, bv: &BasisValues) -> SurfaceDerivatives {
         let nu = self.u.count();
-        // Homogeneous sums A_kl = Σ ∂^k N ∂^l M w P and w_kl = Σ ∂^k N ∂^l M w, k + l ≤ 2.
+        // Homogeneous sums A_kl = Σ_j ∂^l M_j Σ_i ∂^k N_i w P_ij and w_kl likewise, k + l ≤ 2: each
+        // row of the control net summed along U first (a tensor product).
         let mut a = [[DVec3::ZERO; 3]; 3];
         let mut w = [[0.0; 3]; 3];
         for jb in 0..bv.count {
-            let j = bv.first + jb;
-            for ib in 0..bu.count {
-                let idx = bu.first + ib + nu * j;
-                let (p, wt) = (self.control[idx], self.weights[idx]);
-                for k in 0..3 {
-                    for l in 0..3 - k {
-                        let c = bu.values[k][ib] * bv.values[l][jb] * wt;
-                        a[k][l] += c * p;
-                        w[k][l] += c;
+            let row = bu.first + nu * (bv.first + jb);
+            let (mut h, mut hw) = ([DVec3::ZERO; 3], [0.0; 3]);
+            if self.rational {
+                for ib in 0..bu.count {
+                    let wt = self.weights[row + ib];
+                    let p = self.control[row + ib] * wt;
+                    for k in 0..3 {
+                        h[k] += bu.values[k][ib] * p;
+                        hw[k] += bu.values[k][ib] * wt;
+                    }
+                }
+            } else {
+                for ib in 0..bu.count {
+                    let p = self.control[row + ib];
+                    for k in 0..3 {
+                        h[k] += bu.values[k][ib] * p;
                     }
                 }
             }
+            for k in 0..3 {
+                for l in 0..3 - k {
+                    let m = bv.values[l][jb];
+                    a[k][l] += m * h[k];
+                    w[k][l] += m * hw[k];
+                }
+            }
+        }
+        if !self.rational {
+            // w ≡ 1: the basis sums to 1, its derivatives to 0.
+            return SurfaceDerivatives { s: a[0][0], su: a[1][0], sv: a[0][1], suu: a[2][0], suv: a[1][1], svv: a[0][2] };
         }
         // Quotient rule (A4.4) for k + l ≤ 2.
         let w0 = w[0][0];
