@@ -401,6 +401,33 @@ fn fixed_variables_stay_bit_identical() {
     assert!(rep.energy < 1e-3 * rep.initial_energy);
 }
 
+/// With a decrease window of k iterations the solver stops at the first iteration where the
+/// last k together lowered the energy by at most the tolerance's fraction, and not before.
+#[test]
+fn a_decrease_window_stops_where_k_iterations_together_barely_descend() {
+    let (k, tolerance) = (4, 0.5);
+    let mut p = planarization(8);
+    p.problem.set_weight(p.closeness, 1e-3);
+    let mut solver = Solver::new(SolverOptions {
+        relative_decrease_tolerance: tolerance,
+        decrease_window: k,
+        step_tolerance: 0.0,
+        ..Default::default()
+    });
+    let mut energies = vec![];
+    let rep = solver.solve(&mut p.problem, &mut p.x, |it| {
+        energies.push(it.energy);
+        Ok(())
+    });
+    energies.insert(0, rep.initial_energy);
+    assert_eq!(rep.termination, Termination::RelativeDecrease, "{energies:?}");
+    let flat = |i: usize| i >= k && energies[i - k] - energies[i] <= tolerance * energies[i - k];
+    let n = rep.iterations;
+    assert!(flat(n), "{energies:?}");
+    assert!((1..n).all(|i| !flat(i)), "stopped late: {energies:?}");
+    assert!(n > k, "{energies:?}");
+}
+
 #[test]
 fn symbolic_factorization_is_reused() {
     let mut p = planarization(8);

@@ -24,8 +24,12 @@ pub struct SolverOptions {
     pub energy_tolerance: f64,
     /// Stop when |JᵀWr|∞ ≤ this.
     pub gradient_tolerance: f64,
-    /// Stop when an accepted step lowers the energy by ≤ this fraction of it.
+    /// Stop when an accepted step lowers the energy by ≤ this fraction of it, or with a
+    /// `decrease_window` above 1, when that many iterations together do.
     pub relative_decrease_tolerance: f64,
+    /// The iterations over which `relative_decrease_tolerance` is measured (1: each accepted
+    /// step alone). A slow, steady descent whose every step counts stops on a window.
+    pub decrease_window: usize,
     /// The caller's clock (e.g. `performance.now()` in the browser); with one, every iteration
     /// is timed (`IterationReport::ms`, `SolveReport::iteration_ms`).
     #[serde(skip)]
@@ -50,6 +54,7 @@ impl Default for SolverOptions {
             energy_tolerance: 0.0,
             gradient_tolerance: 0.0,
             relative_decrease_tolerance: 1e-14,
+            decrease_window: 1,
             clock: Clock::default(),
             ordering: Ordering::BlockAmd,
             supernodal: false,
@@ -352,6 +357,8 @@ impl Solver {
             return finish(report, self, energy, mu, phase, Termination::GradientTolerance);
         }
 
+        // The energy after each iteration, for a decrease measured over `decrease_window`.
+        let mut energies: Vec<f64> = vec![energy];
         for it in 1..=opts.max_iterations {
             let t0 = clock.map(|c| c());
             let sys = self.system.as_mut().unwrap();
@@ -381,7 +388,7 @@ impl Solver {
                 if e_trial.is_finite() && e_trial < energy && problem.is_admissible(&self.x_trial) {
                     accepted = true;
                     let rho = if pred > 0.0 { (energy - e_trial) / pred } else { 1.0 };
-                    small_decrease = energy - e_trial <= opts.relative_decrease_tolerance * energy;
+                    small_decrease = opts.decrease_window <= 1 && energy - e_trial <= opts.relative_decrease_tolerance * energy;
                     energy = e_trial;
                     x.copy_from_slice(&self.x_trial);
                     std::mem::swap(&mut self.cur, &mut self.trial);
@@ -406,6 +413,11 @@ impl Solver {
             if !accepted {
                 mu *= nu;
                 nu *= 2.0;
+            }
+            energies.push(energy);
+            if opts.decrease_window > 1 && it >= opts.decrease_window {
+                let before = energies[it - opts.decrease_window];
+                small_decrease = before - energy <= opts.relative_decrease_tolerance * before;
             }
             let hit_max = !accepted && mu >= mu_max;
             mu = mu.clamp(mu_min, mu_max);

@@ -582,8 +582,8 @@ fn project(
 
 /// Runs the warm-up, the full optimization and the projection (see the module docs) with
 /// `params`' sphere weights, iterations and decrease tolerance (the full optimization stops early
-/// when an accepted step lowers its energy by at most that fraction); returns the vertices, the
-/// spheres (normalized) and what happened.
+/// when its decrease window of iterations lowers its energy by at most that fraction); returns
+/// the vertices, the spheres (normalized) and what happened.
 pub(crate) fn optimize_spheres(
     input: &SphereInput,
     stars: &QuadStars,
@@ -619,6 +619,7 @@ pub(crate) fn optimize_spheres(
         problem.unfix(i);
     }
     solver.options.relative_decrease_tolerance = params.sphere_decrease_tolerance;
+    solver.options.decrease_window = params.sphere_decrease_window;
     outcome.iterations = run_phase(&mut problem, &mut x, &layout, SpherePhase::Full, iterations[1], &mut solver, &mut outcome, hook)?.0;
 
     outcome.projection_iterations =
