@@ -156,33 +156,49 @@ impl BSplineBasis {
     /// The non-vanishing basis functions at `t` (clamped to the domain) with their first and
     /// second derivatives (A2.3).
     pub fn evaluate(&self, t: f64) -> BasisValues {
-        let p = self.degree;
+        // Tables sized p + 1 at compile time: nothing larger to clear, loops of known length.
+        macro_rules! sized {
+            ($($n:literal)*) => {
+                match self.degree + 1 {
+                    $($n => self.evaluate_sized::<$n>(t),)*
+                    _ => unreachable!("degree checked in BSplineBasis::new"),
+                }
+            };
+        }
+        sized!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    }
+
+    /// [`Self::evaluate`] with N = p + 1. The table holds A2.3's `ndu`, with the knot differences
+    /// below its diagonal stored as their reciprocals (each one divides several times).
+    fn evaluate_sized<const N: usize>(&self, t: f64) -> BasisValues {
+        let p = N - 1;
         let (lo, hi) = self.domain();
         let t = if t.is_nan() { lo } else { t.clamp(lo, hi) };
         let span = self.span(t);
         let u = &self.knots;
-        const M: usize = MAX_DEGREE + 1;
-        let mut ndu = [[0.0; M]; M];
-        let (mut left, mut right) = ([0.0; M], [0.0; M]);
+        let mut ndu = [[0.0; N]; N];
+        let (mut left, mut right) = ([0.0; N], [0.0; N]);
         ndu[0][0] = 1.0;
         for j in 1..=p {
             left[j] = t - u[span + 1 - j];
             right[j] = u[span + j] - t;
             let mut saved = 0.0;
             for r in 0..j {
-                ndu[j][r] = right[r + 1] + left[j - r];
-                let temp = ndu[r][j - 1] / ndu[j][r];
+                let inverse = 1.0 / (right[r + 1] + left[j - r]);
+                ndu[j][r] = inverse;
+                let temp = ndu[r][j - 1] * inverse;
                 ndu[r][j] = saved + right[r + 1] * temp;
                 saved = left[j - r] * temp;
             }
             ndu[j][j] = saved;
         }
-        let mut out = BasisValues { first: span - p, count: p + 1, values: [[0.0; M]; DERIVATIVES + 1] };
+        const M: usize = MAX_DEGREE + 1;
+        let mut out = BasisValues { first: span - p, count: N, values: [[0.0; M]; DERIVATIVES + 1] };
         for j in 0..=p {
             out.values[0][j] = ndu[j][p];
         }
         let n = DERIVATIVES.min(p);
-        let mut a = [[0.0; M]; 2];
+        let mut a = [[0.0; N]; 2];
         for r in 0..=p {
             let (mut s1, mut s2) = (0, 1);
             a[0][0] = 1.0;
@@ -191,18 +207,18 @@ impl BSplineBasis {
                 let rk = r as isize - k as isize;
                 let pk = p - k;
                 if rk >= 0 {
-                    a[s2][0] = a[s1][0] / ndu[pk + 1][rk as usize];
+                    a[s2][0] = a[s1][0] * ndu[pk + 1][rk as usize];
                     d = a[s2][0] * ndu[rk as usize][pk];
                 }
                 let j1 = if rk >= -1 { 1 } else { (-rk) as usize };
                 let j2 = if r as isize - 1 <= pk as isize { k - 1 } else { p - r };
                 for j in j1..=j2 {
                     let idx = (rk + j as isize) as usize;
-                    a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][idx];
+                    a[s2][j] = (a[s1][j] - a[s1][j - 1]) * ndu[pk + 1][idx];
                     d += a[s2][j] * ndu[idx][pk];
                 }
                 if r <= pk {
-                    a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+                    a[s2][k] = -a[s1][k - 1] * ndu[pk + 1][r];
                     d += a[s2][k] * ndu[r][pk];
                 }
                 out.values[k][r] = d;
