@@ -67,6 +67,10 @@ const PENALTY_ITERATIONS: usize = 10;
 
 /// The hinges' weight in the projection's third pass, against the equations of exactness at 1.
 const FAINT_HINGES: f64 = 1e-3;
+/// A projection pass with hinges has stalled when [`STALL_WINDOW`] iterations together lower its
+/// energy by at most this fraction (less than an order of magnitude).
+const STALL_DECREASE: f64 = 0.9;
+const STALL_WINDOW: usize = 10;
 
 /// The phases, as reported to the hook.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -569,12 +573,18 @@ fn project(
         step_tolerance: 1e-16,
         ..SolverOptions::default()
     });
+    // The passes with hinges stop where they stall (10 iterations that do not gain an order of
+    // magnitude): they only steer within the exact family, and the last pass reaches exactness.
+    projection.options.decrease_window = STALL_WINDOW;
+    projection.options.relative_decrease_tolerance = STALL_DECREASE;
     iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?.0;
     // Where the hinges and the equations pull apart, that pass stalls short of exactness; with
     // the hinges faint the equations win, while the hinges still steer within the exact family.
     let faint: Vec<(TermId, f64)> = terms.hinged(w).iter().map(|&(id, wt)| (id, wt * FAINT_HINGES)).collect();
     terms.set(problem, &[&terms.exact()[..], &faint[..], &held[..]].concat());
     iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?.0;
+    projection.options.decrease_window = 1;
+    projection.options.relative_decrease_tolerance = 0.0;
     terms.set(problem, &[&terms.exact()[..], &held[..]].concat());
     iterations += run_phase(problem, x, layout, phase, max, &mut projection, outcome, hook)?.0;
     Ok(iterations)
