@@ -18,9 +18,10 @@
 //! ([`CentreQuadAngle`], [`AxisNormalAngle`]).
 //!
 //! **Phases**: a warm-up moves only the spheres (and n_cq) under E_sphere, E_unit and a small
-//! E_supp; then the full optimization. Per-edge and per-star normals couple only to their own
-//! edge or star, so the block ordering eliminates them first (a Schur complement inside the
-//! sparse Cholesky factorization).
+//! E_supp; then the full optimization, until [`SqParams::sphere_decrease_window`] iterations
+//! together lower its energy by at most [`SqParams::sphere_decrease_tolerance`]. Per-edge and
+//! per-star normals couple only to their own edge or star, so the block ordering eliminates them
+//! first (a Schur complement inside the sparse Cholesky factorization).
 //!
 //! **Projection to exactness.** At an inner vertex four spheres meet; when their centres are
 //! coplanar, the reflection of the vertex in that plane lies on all four, so the spheres share a
@@ -31,9 +32,9 @@
 //! phase walks there by a quadratic penalty (these equations at growing weights against the
 //! hinges and the proximity to the reference), then solves the equations (with the unit
 //! normalizations) by Gauss–Newton with a tiny damping, first with the hinges at θ and α, then
-//! with the hinges faint (they steer within the exact family, the equations win), then alone: it
-//! converges quadratically to a nearby exact solution (an underdetermined system: 4F + 4S
-//! equations, 5F + 3V + 3S unknowns).
+//! with the hinges faint (they steer within the exact family, the equations win; each of these
+//! two passes ends where it stalls), then alone: it converges quadratically to a nearby exact
+//! solution (an underdetermined system: 4F + 4S equations, 5F + 3V + 3S unknowns).
 
 use glam::DVec3;
 
