@@ -545,8 +545,23 @@ pub enum VerdictRun {
     SqVault,
 }
 
+/// How far a figure of a recorded verdict may move on another platform, relative to the larger.
+pub const FIGURE_TOLERANCE: f64 = 1e-2;
+
 impl VerdictRun {
     pub const ALL: [VerdictRun; 2] = [VerdictRun::StDome, VerdictRun::SqVault];
+
+    /// How far the run's figures may move on another platform (its holds and counts may not).
+    /// SQ on the vault follows rounding: its control points scaled by 1 + k·1e-15 (k = 0..5) gave
+    /// node axes 11.4–15.2°, support planes 75–86° and distances 6.6e-3–7.6e-3 of the diagonal
+    /// (the full optimization stopping after 20 to 100 iterations, with either of its stopping
+    /// rules); wasm's SIMD sums in another order.
+    pub fn figure_tolerance(self) -> f64 {
+        match self {
+            VerdictRun::StDome => FIGURE_TOLERANCE,
+            VerdictRun::SqVault => 0.25,
+        }
+    }
 
     /// The run's name in the recording (`tests/data/verdicts.json`).
     pub fn name(self) -> &'static str {
@@ -596,16 +611,16 @@ pub fn hard_verdict_run(name: &str, bytes: &[u8]) -> Vec<crate::guarantees::Guar
 }
 
 /// Whether two runs of [`verdict_runs`] reach the same verdict: the same guarantees, each holding
-/// alike, counts equal and figures within 1 % (1e-12 absolute): the optimizations sum in another
-/// order on wasm's SIMD, and after 45 iterations the ST dome's panels lie 0.3 % nearer or
-/// farther; the differences, if any.
-pub fn verdict_differences(a: &[crate::guarantees::Guarantee], b: &[crate::guarantees::Guarantee]) -> Vec<String> {
+/// alike, counts equal and figures within `tolerance` of the larger (1e-12 absolute): the
+/// optimizations sum in another order on wasm's SIMD, and after 45 iterations the ST dome's
+/// panels lie 0.3 % nearer or farther; the differences, if any.
+pub fn verdict_differences(a: &[crate::guarantees::Guarantee], b: &[crate::guarantees::Guarantee], tolerance: f64) -> Vec<String> {
     let mut out = Vec::new();
     if a.len() != b.len() {
         out.push(format!("{} guarantees against {}", a.len(), b.len()));
     }
     for (x, y) in a.iter().zip(b) {
-        let tolerance = if x.unit.is_empty() { 0.0 } else { 1e-12 + 1e-2 * x.measured.abs().max(y.measured.abs()) };
+        let tolerance = if x.unit.is_empty() { 0.0 } else { 1e-12 + tolerance * x.measured.abs().max(y.measured.abs()) };
         let close = (x.measured - y.measured).abs() <= tolerance;
         if x.name != y.name || x.holds != y.holds || x.limit != y.limit || !(close || (x.measured.is_nan() && y.measured.is_nan())) {
             out.push(format!("{} {} ({}) against {} {} ({})", x.name, x.measured, x.holds, y.name, y.measured, y.holds));
@@ -634,7 +649,8 @@ pub fn recorded_verdict_differences(recorded: &str, runs: &[(&str, Vec<crate::gu
         if want.run != *name {
             out.push(format!("{} recorded where {name} runs", want.run));
         }
-        out.extend(verdict_differences(&want.guarantees, now).into_iter().map(|d| format!("{name}: {d}")));
+        let tolerance = VerdictRun::ALL.into_iter().find(|r| r.name() == *name).map_or(FIGURE_TOLERANCE, VerdictRun::figure_tolerance);
+        out.extend(verdict_differences(&want.guarantees, now, tolerance).into_iter().map(|d| format!("{name}: {d}")));
     }
     out
 }

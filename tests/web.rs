@@ -281,7 +281,8 @@ async fn sq_meets_its_guarantees_in_wasm_on_the_vault_sample() {
 
 /// The verdicts of one ST and one SQ run in wasm equal the native ones recorded in
 /// `tests/data/verdicts.json` (`tests/verdicts.rs` checks the native runs against it): the same
-/// guarantees, each holding alike, counts equal and figures within 1 %.
+/// guarantees, each holding alike, counts equal and figures within the run's
+/// [`VerdictRun::figure_tolerance`].
 #[wasm_bindgen_test]
 async fn wasm_reaches_the_native_verdicts() {
     use spherical_faces::bench_workloads::{recorded_verdict_differences, VerdictRun};
