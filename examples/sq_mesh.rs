@@ -1,7 +1,7 @@
 //! Runs the whole SQ method (Sec. 5) and prints the quad mesh, the figures of exactness, the
 //! iterations and where the final optimization's time goes:
 //! `cargo run --release --example sq_mesh -- FILE.json|sample:vault ...`.
-//! Environment: FULL / PROJ (iterations of the full optimization / the projection), FAIRIT /
+//! Environment: FACES (the number of quads N), FULL / PROJ (iterations of the full optimization / the projection), FAIRIT /
 //! FAIRW (Q′ fairing iterations / weight), V (print the terms during the final optimization),
 //! DUMP (each face's worst vertex distance to its sphere, and its radius), FAR (the vertices
 //! farthest from the reference), PHASES (the farthest vertex after each phase).
@@ -25,6 +25,9 @@ fn main() {
         }
         if let Some(n) = std::env::var("PROJ").ok().and_then(|v| v.parse().ok()) {
             params.sphere_iterations[2] = n;
+        }
+        if let Some(n) = std::env::var("FACES").ok().and_then(|v| v.parse().ok()) {
+            params.faces = n;
         }
         if let Some(n) = std::env::var("FAIRIT").ok().and_then(|v| v.parse().ok()) {
             params.fairing_iterations = n;

@@ -520,45 +520,52 @@ enum Outline {
 /// boundary); otherwise once, so that a lattice running across the boundary does not lose its
 /// outline cell by cell. Returns how many were dropped.
 fn drop_reentrant_corners(faces: &mut Vec<Vec<u32>>, pts: &[DVec3], outline: Outline, boundary: &[bool], repeat: bool) -> usize {
-    let mut dropped = 0;
-    loop {
-        let mut incident: HashMap<u32, Vec<usize>> = HashMap::new();
-        for (f, ids) in faces.iter().enumerate() {
-            for &v in ids {
-                incident.entry(v).or_default().push(f);
-            }
+    // The quads around each vertex, ascending; kept up to date as quads are dropped, so that a
+    // repeated drop costs the quads it touches, not a new pass over the mesh.
+    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); pts.len()];
+    for (f, ids) in faces.iter().enumerate() {
+        for &v in ids {
+            incident[v as usize].push(f);
         }
-        let mut keys: Vec<u32> = incident.iter().filter(|(_, fs)| fs.len() == 3).map(|(v, _)| *v).collect();
-        keys.sort_unstable();
+    }
+    // The quad dropped at vertex v, if v is a re-entrant corner: three quads, of which the outer
+    // two share an edge with one other quad only.
+    let corner_quad = |faces: &[Vec<u32>], incident: &[Vec<usize>], v: usize| -> Option<usize> {
+        let fs = &incident[v];
+        if fs.len() != 3 {
+            return None;
+        }
         let shares = |a: usize, b: usize| faces[a].iter().filter(|x| faces[b].contains(x)).count() >= 2;
-        // The outer two of the three share an edge with one other quad only.
-        let mut drop: Vec<usize> = keys
-            .iter()
-            .filter_map(|v| {
-                let fs = &incident[v];
-                let outer = fs
-                    .iter()
-                    .copied()
-                    .filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1)
-                    .filter(|&a| outline == Outline::AnyQuad || faces[a].iter().any(|&x| boundary[x as usize]));
-                outer.min_by(|&a, &b| quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b])))
-            })
-            .collect();
-        if drop.is_empty() {
-            break;
-        }
-        if repeat {
-            faces.swap_remove(drop[0]);
-            dropped += 1;
-            continue;
-        }
+        fs.iter()
+            .copied()
+            .filter(|&a| fs.iter().filter(|&&b| b != a && shares(a, b)).count() == 1)
+            .filter(|&a| outline == Outline::AnyQuad || faces[a].iter().any(|&x| boundary[x as usize]))
+            .min_by(|&a, &b| quad_area(pts, &faces[a]).total_cmp(&quad_area(pts, &faces[b])))
+    };
+    if !repeat {
+        let mut drop: Vec<usize> = (0..pts.len()).filter_map(|v| corner_quad(faces, &incident, v)).collect();
         drop.sort_unstable();
         drop.dedup();
         for &f in drop.iter().rev() {
             faces.remove(f);
         }
-        dropped += drop.len();
-        break;
+        return drop.len();
+    }
+    let mut dropped = 0;
+    while let Some(f) = (0..pts.len()).find_map(|v| corner_quad(faces, &incident, v)) {
+        for &v in &faces[f] {
+            incident[v as usize].retain(|&g| g != f);
+        }
+        let last = faces.len() - 1;
+        if f != last {
+            for &v in &faces[last] {
+                let fs = &mut incident[v as usize];
+                fs.iter_mut().filter(|g| **g == last).for_each(|g| *g = f);
+                fs.sort_unstable();
+            }
+        }
+        faces.swap_remove(f);
+        dropped += 1;
     }
     dropped
 }
