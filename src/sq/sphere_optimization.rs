@@ -66,6 +66,12 @@ const PENALTY_WEIGHTS: [f64; 4] = [1e1, 1e2, 1e3, 1e4];
 /// Iterations per penalty stage (at most the projection's own).
 const PENALTY_ITERATIONS: usize = 10;
 
+/// The projection has reached exactness where its energy is at most this per equation of
+/// exactness: a root mean square residual of 1e-14 (frame units), the rounding floor of the
+/// sphere equations, so that no pass spends iterations on rounding however many faces there
+/// are (the largest residual is then below 1e-12 even on 10⁴ equations).
+const EXACT_ENERGY_PER_EQUATION: f64 = 1e-28;
+
 /// The hinges' weight in the projection's third pass, against the equations of exactness at 1.
 const FAINT_HINGES: f64 = 1e-3;
 /// A projection pass with hinges has stalled when [`STALL_WINDOW`] iterations together lower its
@@ -566,10 +572,11 @@ fn project(
         last = Some((scale, epsilon));
     }
     terms.set(problem, &[&terms.exact()[..], &terms.hinged(w)[..], &held[..]].concat());
+    let equations: usize = terms.exact().iter().chain(&held).map(|&(id, _)| problem.term(id).residual_count()).sum();
     let mut projection = Solver::new(SolverOptions {
         clock,
         min_epsilon: 1e-7,
-        energy_tolerance: 1e-27,
+        energy_tolerance: EXACT_ENERGY_PER_EQUATION * equations as f64,
         relative_decrease_tolerance: 0.0,
         step_tolerance: 1e-16,
         ..SolverOptions::default()
