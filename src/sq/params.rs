@@ -405,9 +405,10 @@ pub const GRID_RANGE: ParamRange<usize> = ParamRange::new("grid", 4, 100);
 pub const THETA_RANGE: ParamRange<f64> = ParamRange::new("θ", 1.0, 89.0);
 pub const ALPHA_RANGE: ParamRange<f64> = ParamRange::new("α", 1.0, 90.0);
 pub const RECOMPUTE_RANGE: ParamRange<usize> = ParamRange::new("RS", 1, 1000);
-/// Quads: at most what finishes within a minute and 1 GB natively on 2 cores. Measured with
-/// --faces 5000: `tunnel_arch` 23 s and 0.52 GB, the saddle roof 24 s, `paraboloid_dome` 77 s and
-/// 0.72 GB (the remesh and the final optimization both grow faster than linearly).
+/// Quads: about what finishes within a minute and 1 GB natively on 2 cores. Measured at 3000
+/// on the degree-10 `hard/roof_rough`: 2964 quads, exact, 61 s and 0.55 GB (the sparse
+/// factorization of the final optimization is 80 % of it and grows as N^1.8); with --faces 5000
+/// `tunnel_arch` took 23 s and 0.52 GB, `paraboloid_dome` 77 s and 0.72 GB.
 pub const FACES_RANGE: ParamRange<usize> = ParamRange::new("faces", 4, 3_000);
 
 /// How far below the bound of a singular vertex its support planes may meet (degrees).
