@@ -14,8 +14,8 @@ use std::sync::{Mutex, OnceLock};
 
 use divan::Bencher;
 use spherical_faces::bench_workloads::{
-    exact_rhino_model, exact_step, exact_surfaces, phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing, Scale, SqWorkload, ANGLE_FACES, EXACT_PANELS,
-    ANGLE_SAMPLES, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_HARD, SQ_HARD_SAMPLES, SQ_SAMPLES,
+    exact_rhino_model, exact_step, exact_surfaces, phase_line, result_line, AngleWorkload, JetWorkload, MouldWorkload, RemeshWorkload, RoundSizing,
+    Scale, SqWorkload, ANGLE_FACES, ANGLE_SAMPLES, EXACT_PANELS, JET_SAMPLES, MOULD_SAMPLES, REMESH_SAMPLES, SQ_HARD, SQ_HARD_SAMPLES, SQ_SAMPLES,
 };
 use spherical_faces::panels::moulds::MouldFits;
 use spherical_faces::progress::{native_clock_ms, Clock};
@@ -186,7 +186,9 @@ fn exact_surfaces_and_step(bencher: Bencher) {
         let model = timed("rhino_model_2k", || exact_rhino_model(panels, &exact, &moulds));
         if rhino3dm {
             std::fs::write(dir.join("model.json"), model).unwrap();
-            let out = timed("panels_3dm_2k", || std::process::Command::new("node").arg(writer).arg(dir.join("model.json")).arg(dir.join("panels.3dm")).output().unwrap());
+            let out = timed("panels_3dm_2k", || {
+                std::process::Command::new("node").arg(writer).arg(dir.join("model.json")).arg(dir.join("panels.3dm")).output().unwrap()
+            });
             assert!(out.status.success(), "write-cli.mjs: {}", String::from_utf8_lossy(&out.stderr));
             record("cad_files_2k", [native_clock_ms() - t]);
             let size = |f: &str| std::fs::metadata(dir.join(f)).map_or(0, |m| m.len());

@@ -23,7 +23,9 @@ fn main() {
         let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
         let before = fabrication.assign(&MouldFits::of(&result.panels), diag).moulds.len();
         let t = std::time::Instant::now();
-        let fewer = fewer_moulds(&reference, &result.sphere_mesh, &result.metrics, &result.panels, &fabrication, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+        let fewer =
+            fewer_moulds(&reference, &result.sphere_mesh, &result.metrics, &result.panels, &fabrication, &params, Clock::default(), &mut |_| Ok(()))
+                .unwrap();
         println!(
             "{path}: {} panels, moulds {before}, kink max {:.2}°, distance {:.2e}; rounds in {:.0} ms:",
             result.panels.len(),

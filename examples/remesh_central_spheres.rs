@@ -82,7 +82,14 @@ fn main() {
             println!(
                 "{name} {} | {:.1e}/{:.1e}, {:.1e}/{:.1e} | {:.1e}/{:.1e}, {:.1e}/{:.1e}",
                 remeshed.face_count(),
-                bc[0], bc[1], bh[0], bh[1], rc[0], rc[1], rh[0], rh[1]
+                bc[0],
+                bc[1],
+                bh[0],
+                bh[1],
+                rc[0],
+                rc[1],
+                rh[0],
+                rh[1]
             );
         }
     }

@@ -13,14 +13,30 @@ fn main() {
         let grid = SamplingGrid::new(s, 60).expect("grid");
         let f = &grid.frames;
         let (mut lo, mut hi) = (glam::DVec3::splat(f64::MAX), glam::DVec3::splat(f64::MIN));
-        for p in f { lo = lo.min(p.point); hi = hi.max(p.point); }
+        for p in f {
+            lo = lo.min(p.point);
+            hi = hi.max(p.point);
+        }
         let diag = (hi - lo).length();
-        let area: f64 = (0..(grid.n - 1) * (grid.n - 1)).map(|q| { let c = grid.quad(q).map(|p| f[p].point); 0.5 * ((c[1] - c[0]).cross(c[3] - c[0]).length() + (c[1] - c[2]).cross(c[3] - c[2]).length()) }).sum();
+        let area: f64 = (0..(grid.n - 1) * (grid.n - 1))
+            .map(|q| {
+                let c = grid.quad(q).map(|p| f[p].point);
+                0.5 * ((c[1] - c[0]).cross(c[3] - c[0]).length() + (c[1] - c[2]).cross(c[3] - c[2]).length())
+            })
+            .sum();
         let h2 = area / faces;
         let mut dev: Vec<f64> = f.iter().map(|p| (p.k1 - p.k2).abs() * h2 / 16.0 / diag).collect();
         dev.sort_by(|a, b| a.partial_cmp(b).unwrap());
         let over = dev.iter().filter(|&&d| d > 1e-2).count() as f64 / dev.len() as f64;
         let n_needed = faces * (dev[dev.len() - 1] / 1e-2).max(dev[(dev.len() as f64 * 0.99) as usize] / 1e-2);
-        println!("{:<40} max {:.2e} p99 {:.2e} p50 {:.2e} over 1e-2 on {:.1}% ; N for max {:.0}", a.rsplit('/').next().unwrap(), dev[dev.len()-1], dev[(dev.len() as f64*0.99) as usize], dev[dev.len()/2], 100.0*over, n_needed);
+        println!(
+            "{:<40} max {:.2e} p99 {:.2e} p50 {:.2e} over 1e-2 on {:.1}% ; N for max {:.0}",
+            a.rsplit('/').next().unwrap(),
+            dev[dev.len() - 1],
+            dev[(dev.len() as f64 * 0.99) as usize],
+            dev[dev.len() / 2],
+            100.0 * over,
+            n_needed
+        );
     }
 }

@@ -43,51 +43,49 @@ fn main() {
         let mut phase_log: Vec<String> = Vec::new();
         let t0 = std::time::Instant::now();
         let r = spherical_faces::sq::compute(&loaded.surface, &params, Clock::native(), &mut |e| {
-            if let SqEvent::Spheres {
-                phase,
-                iteration,
-                terms,
-                positions,
-                ..
-            } = e
-            {
+            if let SqEvent::Spheres { phase, iteration, terms, positions, .. } = e {
                 if phases {
                     {
-                        let far = positions.iter().map(|p| loaded.surface.closest_point(*p).map_or(0.0, |q| q.point.distance(*p))).fold(0.0, f64::max) / diag;
+                        let far =
+                            positions.iter().map(|p| loaded.surface.closest_point(*p).map_or(0.0, |q| q.point.distance(*p))).fold(0.0, f64::max)
+                                / diag;
                         if let Some((ph, d)) = last_phase {
-                            if ph != phase || iteration == 1 { phase_log.push(format!("{ph:?} {d:.2e}")); }
+                            if ph != phase || iteration == 1 {
+                                phase_log.push(format!("{ph:?} {d:.2e}"));
+                            }
                         }
                         last_phase = Some((phase, far));
                     }
                 }
-                if verbose
-                    && (iteration % 10 == 1
-                        || phase != spherical_faces::sq::sphere_optimization::SpherePhase::Full)
-                {
-                    let t: Vec<String> = terms
-                        .iter()
-                        .filter(|t| t.weight > 0.0)
-                        .map(|t| format!("{}={:.2e}/{:.1e}", t.name, t.energy, t.max_abs))
-                        .collect();
+                if verbose && (iteration % 10 == 1 || phase != spherical_faces::sq::sphere_optimization::SpherePhase::Full) {
+                    let t: Vec<String> =
+                        terms.iter().filter(|t| t.weight > 0.0).map(|t| format!("{}={:.2e}/{:.1e}", t.name, t.energy, t.max_abs)).collect();
                     println!("  {:?} {iteration}: {}", phase, t.join(" "));
                 }
             }
             Ok(())
         })
         .unwrap();
-        if let Some((ph, d)) = last_phase { phase_log.push(format!("{ph:?} {d:.2e}")); }
-        if phases { println!("  farthest vertex after each phase: {}", phase_log.join(", ")); }
+        if let Some((ph, d)) = last_phase {
+            phase_log.push(format!("{ph:?} {d:.2e}"));
+        }
+        if phases {
+            println!("  farthest vertex after each phase: {}", phase_log.join(", "));
+        }
         let ms = t0.elapsed().as_secs_f64() * 1e3;
         let q = r.quad_mesh.as_ref().unwrap();
         let f = r.sq_mesh.as_ref().unwrap();
-        let stat = |v: &[f64]| {
-            (
-                v.iter().sum::<f64>() / v.len() as f64,
-                v.iter().cloned().fold(0.0, f64::max),
-            )
-        };
-        println!("{a}: {ms:.0} ms, faces {} coverage {:.3} dropped {} singular vertices {} remesh angles {:?} Q' angles {:?} final angles {:?}",
-            q.mesh.face_count(), q.coverage, q.dropped, q.singular.len(), stat(&q.remesh_edge_angles_deg), stat(&q.edge_angles_deg), stat(&f.edge_angles_deg));
+        let stat = |v: &[f64]| (v.iter().sum::<f64>() / v.len() as f64, v.iter().cloned().fold(0.0, f64::max));
+        println!(
+            "{a}: {ms:.0} ms, faces {} coverage {:.3} dropped {} singular vertices {} remesh angles {:?} Q' angles {:?} final angles {:?}",
+            q.mesh.face_count(),
+            q.coverage,
+            q.dropped,
+            q.singular.len(),
+            stat(&q.remesh_edge_angles_deg),
+            stat(&q.edge_angles_deg),
+            stat(&f.edge_angles_deg)
+        );
         println!("  {:?}", f.mesh.figures);
         println!(
             "  iterations {} {} {} final it median {:?} timings {:?}",
@@ -98,18 +96,41 @@ fn main() {
             r.timings_ms
         );
         println!("  congruence: {:?}", r.congruence.figures);
-        let rr = &r.congruence.radii; println!("  radii min {:.3} max {:.3} start {:?} diag-rel faces", rr.iter().cloned().fold(f64::INFINITY, f64::min), rr.iter().cloned().fold(f64::NEG_INFINITY, f64::max), r.congruence.start);
+        let rr = &r.congruence.radii;
+        println!(
+            "  radii min {:.3} max {:.3} start {:?} diag-rel faces",
+            rr.iter().cloned().fold(f64::INFINITY, f64::min),
+            rr.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+            r.congruence.start
+        );
         println!("  phases {:?}", f.outcome.phase_ms);
-        if std::env::var("DUMP").is_ok() { dump(&f.mesh); }
+        if std::env::var("DUMP").is_ok() {
+            dump(&f.mesh);
+        }
         if std::env::var("FAR").is_ok() {
             // The vertices farthest from the reference, with (u, v), boundary flag and valence.
             let spline = loaded.surface.spline_reference().unwrap();
             let diag = loaded.surface.diagonal();
             let mesh = &f.mesh.sphere_mesh.mesh;
-            let mut far: Vec<(f64, usize)> = mesh.positions.iter().enumerate().map(|(v, p)| (spline.closest_point(*p, f.uv[v]).1.distance(*p) / diag, v)).collect();
-            let signed: Vec<f64> = mesh.positions.iter().enumerate().map(|(v, p)| { let (_, q, n) = spline.closest_point(*p, f.uv[v]); (*p - q).dot(n.unwrap_or(glam::DVec3::Z)) / diag }).collect();
+            let mut far: Vec<(f64, usize)> =
+                mesh.positions.iter().enumerate().map(|(v, p)| (spline.closest_point(*p, f.uv[v]).1.distance(*p) / diag, v)).collect();
+            let signed: Vec<f64> = mesh
+                .positions
+                .iter()
+                .enumerate()
+                .map(|(v, p)| {
+                    let (_, q, n) = spline.closest_point(*p, f.uv[v]);
+                    (*p - q).dot(n.unwrap_or(glam::DVec3::Z)) / diag
+                })
+                .collect();
             let pos = signed.iter().filter(|&&x| x > 0.0).count();
-            println!("  vertex distance: mean {:.2e}, signed mean {:.2e}, {} of {} on the normal's side", far.iter().map(|x| x.0).sum::<f64>() / far.len() as f64, signed.iter().sum::<f64>() / signed.len() as f64, pos, signed.len());
+            println!(
+                "  vertex distance: mean {:.2e}, signed mean {:.2e}, {} of {} on the normal's side",
+                far.iter().map(|x| x.0).sum::<f64>() / far.len() as f64,
+                signed.iter().sum::<f64>() / signed.len() as f64,
+                pos,
+                signed.len()
+            );
             far.sort_by(|a, b| b.0.total_cmp(&a.0));
             let valence = |v: usize| mesh.faces.iter().filter(|fc| fc.corners().contains(&(v as u32))).count();
             for &(d, v) in far.iter().take(6) {

@@ -20,13 +20,9 @@ fn main() {
     let clock = Clock::native();
     for _ in 0..3 {
         let mut x = problem.initial_point(&fit.function.coefficients, &lines, &params);
-        let lc = problem
-            .line_congruence_step(&mut x, &params, clock, &mut |_, _, _, _| Ok(()))
-            .unwrap();
+        let lc = problem.line_congruence_step(&mut x, &params, clock, &mut |_, _, _, _| Ok(())).unwrap();
         let mut x = problem.extend_for_torsal(&x);
-        let t = problem
-            .torsal_step(&mut x, &params, clock, &mut |_, _, _, _| Ok(()))
-            .unwrap();
+        let t = problem.torsal_step(&mut x, &params, clock, &mut |_, _, _, _| Ok(())).unwrap();
         print("lc", &lc);
         print("torsal", &t);
     }

@@ -20,7 +20,10 @@ fn main() {
         let field = CrossField::new(surface, c.grid, &torsal_uv).expect("a field");
         let rp = QuadRemeshParams { target_faces: params.faces, ..QuadRemeshParams::default() };
         let prepared = prepare(surface, &field, &rp).expect("prepared");
-        println!("{a}: start {:?}, grid {}, fine {}x{}, spacing {:.3}", c.start, c.grid, prepared.field.grid.nu, prepared.field.grid.nv, prepared.spacing);
+        println!(
+            "{a}: start {:?}, grid {}, fine {}x{}, spacing {:.3}",
+            c.start, c.grid, prepared.field.grid.nu, prepared.field.grid.nv, prepared.spacing
+        );
         for s in &prepared.field.singular {
             let uv = prepared.field.grid.uv(s.node);
             let p = surface.point(uv.x, uv.y);

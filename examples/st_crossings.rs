@@ -29,7 +29,10 @@ fn main() {
         Some(s) => Sizing::Adaptive { epsilon: s.parse().expect("EPSILON") },
         None => Sizing::Adaptive { epsilon: 2e-3 },
     };
-    let epsilon = match sizing { Sizing::Adaptive { epsilon } => epsilon, _ => f64::NAN };
+    let epsilon = match sizing {
+        Sizing::Adaptive { epsilon } => epsilon,
+        _ => f64::NAN,
+    };
     let names: Vec<String> = if args.len() > 1 { args[1..].to_vec() } else { vec!["botanic-garden-bubble-0".into()] };
     for name in &names {
         let path = format!("{}/../shared/data/meshes/{name}.obj", env!("CARGO_MANIFEST_DIR"));
@@ -43,12 +46,28 @@ fn main() {
         intersection.bisected_edges.clear();
         let intersection_panels = build_panels_with(&intersection, tol, params.variant);
         let fin = crossing(&intersection_panels);
-        let delivered = format!("  delivered: {} edges bisected, {} panels whose arcs cross, gap {:?}", r.sphere_mesh.bisected_edges.len(), crossing(&r.panels).len(), r.metrics.max_gap);
-        println!("{name} ε {epsilon}: {} faces, crossing at start {}, after {}; kink max {:.2}°, vertex distance {:.2e}, panel distance {:.2e}", r.panels.len(), initial.len(), fin.len(), r.metrics.max_kink_angle_deg, r.metrics.max_vertex_distance_to_reference, r.metrics.max_distance_to_reference);
+        let delivered = format!(
+            "  delivered: {} edges bisected, {} panels whose arcs cross, gap {:?}",
+            r.sphere_mesh.bisected_edges.len(),
+            crossing(&r.panels).len(),
+            r.metrics.max_gap
+        );
+        println!(
+            "{name} ε {epsilon}: {} faces, crossing at start {}, after {}; kink max {:.2}°, vertex distance {:.2e}, panel distance {:.2e}",
+            r.panels.len(),
+            initial.len(),
+            fin.len(),
+            r.metrics.max_kink_angle_deg,
+            r.metrics.max_vertex_distance_to_reference,
+            r.metrics.max_distance_to_reference
+        );
         println!("{delivered}");
         if std::env::var("TERMS").is_ok() {
             for t in &r.terms {
-                println!("    term {:>20} w {:.1e} active {} mean {:.2e} max {:.2e} E {:.2e}", t.name, t.weight, t.active, t.mean_abs, t.max_abs, t.energy);
+                println!(
+                    "    term {:>20} w {:.1e} active {} mean {:.2e} max {:.2e} E {:.2e}",
+                    t.name, t.weight, t.active, t.mean_abs, t.max_abs, t.energy
+                );
             }
         }
         let m = &r.sphere_mesh.mesh;

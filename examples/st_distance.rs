@@ -37,21 +37,38 @@ fn main() {
             reference.facet_sagitta(),
             r.metrics.max_vertex_distance_to_reference
         );
-        let far: Vec<(usize, f64)> = sm.mesh.positions.iter().enumerate().map(|(v, &x)| (v, reference.closest_point(x).map_or(f64::NAN, |h| h.point.distance(x)) / diag)).filter(|&(_, d)| d > 0.5 * bound).collect();
+        let far: Vec<(usize, f64)> = sm
+            .mesh
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(v, &x)| (v, reference.closest_point(x).map_or(f64::NAN, |h| h.point.distance(x)) / diag))
+            .filter(|&(_, d)| d > 0.5 * bound)
+            .collect();
         for (v, d) in far.iter().take(6) {
             let before = r.remeshed.positions[*v];
             let d0 = reference.closest_point(before).map_or(f64::NAN, |h| h.point.distance(before)) / diag;
             let x = sm.mesh.positions[*v];
             let hit = reference.closest_point(x).unwrap();
             let normal_part = hit.normal.map_or(f64::NAN, |n| n.dot(x - hit.point).abs()) / diag;
-            println!("  vertex {v}: {d:.2e} (along the normal {normal_part:.2e}; in the remesh {d0:.2e}), boundary {}, barycentric {:?}", topo.is_boundary_vertex(*v), hit.barycentric);
+            println!(
+                "  vertex {v}: {d:.2e} (along the normal {normal_part:.2e}; in the remesh {d0:.2e}), boundary {}, barycentric {:?}",
+                topo.is_boundary_vertex(*v),
+                hit.barycentric
+            );
         }
         for p in &r.panels {
             for (k, a) in p.arcs.iter().enumerate() {
                 if a.sweep().to_degrees() > 150.0 {
                     let (u, v) = (p.corners[k], p.corners[(k + 1) % p.corners.len()]);
                     let faces = topo.edge_index(u, v).map_or(0, |e| topo.edge_faces(e).len());
-                    println!("  panel {} side {k}: sweeps {:.1}°, edge with {faces} faces, bisected {}, sphere radius / edge {:.3}", p.face, a.sweep().to_degrees(), sm.bisected_edges.contains(&[u.min(v), u.max(v)]), 0.5 / p.sphere.a.abs() / a.from.distance(a.to));
+                    println!(
+                        "  panel {} side {k}: sweeps {:.1}°, edge with {faces} faces, bisected {}, sphere radius / edge {:.3}",
+                        p.face,
+                        a.sweep().to_degrees(),
+                        sm.bisected_edges.contains(&[u.min(v), u.max(v)]),
+                        0.5 / p.sphere.a.abs() / a.from.distance(a.to)
+                    );
                 }
             }
         }

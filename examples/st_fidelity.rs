@@ -16,13 +16,12 @@ use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
-use spherical_faces::st_adapted::terms::boundary_vertices;
 use spherical_faces::st_adapted::compute;
 use spherical_faces::st_adapted::params::StAdaptedParams;
+use spherical_faces::st_adapted::terms::boundary_vertices;
 use spherical_faces::stats::{median, percentile};
 
-const MESHES: [&str; 8] =
-    ["tri_dome", "tri_mesh", "botanic-garden-bubble-0", "cmc1", "flower_cmc1", "chebyshev_sphere", "conical1", "enneper2"];
+const MESHES: [&str; 8] = ["tri_dome", "tri_mesh", "botanic-garden-bubble-0", "cmc1", "flower_cmc1", "chebyshev_sphere", "conical1", "enneper2"];
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -93,7 +92,13 @@ fn main() {
                     let n = mesh.face_area_vector(f);
                     if n.dot(hit.normal.unwrap()) < 0.0 {
                         let corners = mesh.faces[f].corners();
-                        println!("<!--   face {f}: corners on boundary {:?}, area {:.2e}, reference triangle {} bary {:?} -->", corners.iter().map(|&v| boundary[v as usize]).collect::<Vec<_>>(), n.length() / (r.diag * r.diag), hit.triangle, hit.barycentric);
+                        println!(
+                            "<!--   face {f}: corners on boundary {:?}, area {:.2e}, reference triangle {} bary {:?} -->",
+                            corners.iter().map(|&v| boundary[v as usize]).collect::<Vec<_>>(),
+                            n.length() / (r.diag * r.diag),
+                            hit.triangle,
+                            hit.barycentric
+                        );
                     }
                 }
             }

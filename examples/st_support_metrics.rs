@@ -44,7 +44,10 @@ fn main() {
                 est.e_center_infinity,
                 est.lm_iterations
             );
-            println!("   R_i²: mean {r2mean:.4}, median {r2med:.4} over {} usable central spheres ({} skipped)", est.usable_spheres, est.skipped_spheres);
+            println!(
+                "   R_i²: mean {r2mean:.4}, median {r2med:.4} over {} usable central spheres ({} skipped)",
+                est.usable_spheres, est.skipped_spheres
+            );
             println!(
                 "   metrics: vertex_sphere {:.2e}, orthogonality {:.2e}, node_axis_offset {:.2e}, axis–normal mean/max {:.3}/{:.3}°, kink mean/max {:.3}/{:.3}° ({} interior edges; estimate's mean kink {:.3}°), axes from stars {}",
                 m.max_vertex_sphere_residual,

@@ -7,11 +7,9 @@
 #![allow(dead_code)]
 
 use spherical_faces::design_link::{Design, DesignSurface};
-use spherical_faces::import::{import_file, ImportedBSpline, ImportedFile, Imported};
+use spherical_faces::import::{import_file, Imported, ImportedBSpline, ImportedFile};
 use spherical_faces::pipeline::fields::Field;
-use spherical_faces::pipeline::protocol::{
-    decode_from_worker, decode_to_worker, encode_from_worker, encode_to_worker, Envelope,
-};
+use spherical_faces::pipeline::protocol::{decode_from_worker, decode_to_worker, encode_from_worker, encode_to_worker, Envelope};
 
 /// The fuzz targets, by name (the binaries in fuzz/Cargo.toml, the folders in fuzz/corpus/).
 pub const TARGETS: [&str; 5] = ["obj", "gltf", "bspline", "design_link", "protocol"];
@@ -122,8 +120,7 @@ pub fn design_link(data: &[u8]) {
     let first = d.to_fragment();
     let (d2, notices) = Design::from_fragment(&first);
     let own_file = matches!(d2.reference, DesignSurface::OwnFile(_));
-    let notices: Vec<&String> =
-        notices.iter().filter(|n| !(own_file && n.starts_with("this design uses the file"))).collect();
+    let notices: Vec<&String> = notices.iter().filter(|n| !(own_file && n.starts_with("this design uses the file"))).collect();
     assert!(notices.is_empty(), "the app-written link {first:?} reads back with notices {notices:?}");
     let second = d2.to_fragment();
     assert_eq!(second, first, "the app-written link is not a fixed point of read-then-write");
@@ -174,8 +171,7 @@ pub fn protocol(data: &[u8]) {
 
     if let Ok((msg, body)) = decode_to_worker(&env) {
         let env2 = encode_to_worker(&msg, body.map(<[u8]>::to_vec));
-        let (msg2, body2) = decode_to_worker(&env2)
-            .unwrap_or_else(|e| panic!("re-encoded ToWorker {:?} does not decode: {e}", env2.json));
+        let (msg2, body2) = decode_to_worker(&env2).unwrap_or_else(|e| panic!("re-encoded ToWorker {:?} does not decode: {e}", env2.json));
         assert_eq!(format!("{msg2:?}"), format!("{msg:?}"), "ToWorker changed in a round trip through {:?}", env2.json);
         assert_eq!(body2, body, "the ToWorker body changed in a round trip");
         let env3 = encode_to_worker(&msg2, body2.map(<[u8]>::to_vec));
@@ -184,8 +180,7 @@ pub fn protocol(data: &[u8]) {
 
     if let Ok((msg, fields)) = decode_from_worker(&env) {
         let env2 = encode_from_worker(&msg, &fields);
-        let (msg2, fields2) = decode_from_worker(&env2)
-            .unwrap_or_else(|e| panic!("re-encoded FromWorker {:?} does not decode: {e}", env2.json));
+        let (msg2, fields2) = decode_from_worker(&env2).unwrap_or_else(|e| panic!("re-encoded FromWorker {:?} does not decode: {e}", env2.json));
         assert_eq!(format!("{msg2:?}"), format!("{msg:?}"), "FromWorker changed in a round trip through {:?}", env2.json);
         assert_eq!(format!("{fields2:?}"), format!("{fields:?}"), "fields changed in a round trip");
         let env3 = encode_from_worker(&msg2, &fields2);

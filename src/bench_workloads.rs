@@ -30,26 +30,25 @@
 //!
 //! No `std::time` here (it panics on wasm32): timing takes a clock, in milliseconds.
 
-
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
-use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
-use crate::progress::ignore;
-use crate::reference::Reference;
-use crate::remeshing::pliant::Remesher;
-use crate::remeshing::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
+use crate::geometry::mesh::TriMesh;
 use crate::import::{import_file, ImportedFile};
-use crate::samples;
-use crate::sq;
-use crate::sq::params::SqParams;
-use crate::solver::{PhaseTimes, Problem, Solver, SolverOptions};
-use crate::st_adapted::initialization::initial_spheres;
-use crate::st_adapted::optimization::OptimizationFrame;
-use crate::st_adapted::params::StAdaptedParams;
 use crate::panels::build_panels;
 use crate::panels::moulds::MouldFits;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+use crate::progress::ignore;
 use crate::progress::Clock;
+use crate::reference::Reference;
+use crate::remeshing::pliant::Remesher;
+use crate::remeshing::{mean_edge_length, pliant_remesh, RemeshParams, RoundStats, SizingField};
+use crate::samples;
+use crate::solver::{PhaseTimes, Problem, Solver, SolverOptions};
+use crate::sq;
+use crate::sq::params::SqParams;
+use crate::st_adapted::initialization::initial_spheres;
+use crate::st_adapted::optimization::OptimizationFrame;
+use crate::st_adapted::params::StAdaptedParams;
 use crate::stats;
 
 /// Workload size: `Full` for benchmarking, `Tiny` to exercise the code quickly (`cargo test`).

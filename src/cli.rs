@@ -22,9 +22,7 @@ use spherical_faces::pipeline::stages;
 use spherical_faces::progress::{Clock, Progress};
 use spherical_faces::remeshing::{Sizing, DEFAULT_EPSILON, MAX_FACES, MIN_FACES};
 use spherical_faces::samples::Sample;
-use spherical_faces::sq::params::{
-    ParamRange, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE,
-};
+use spherical_faces::sq::params::{ParamRange, RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, RECOMPUTE_RANGE, THETA_RANGE};
 use spherical_faces::sq::report::SqSection;
 use spherical_faces::sq::SqEvent;
 use spherical_faces::st_adapted::params::StAdaptedParams;
@@ -537,7 +535,13 @@ fn write_files(output: &Output, files: &[ExportFile], report: &Report) -> Result
 }
 
 /// `st-support SURFACE [options] --out DIR`.
-fn st_support(input: &Input, mut params: StSupportParams, f: &FabricationArgs, output: &Output, progress: &mut ProgressLine) -> Result<String, Failure> {
+fn st_support(
+    input: &Input,
+    mut params: StSupportParams,
+    f: &FabricationArgs,
+    output: &Output,
+    progress: &mut ProgressLine,
+) -> Result<String, Failure> {
     check_output(output)?;
     let clock = Clock::native();
     let t0 = clock.now();
@@ -828,11 +832,7 @@ mod rhino {
         };
         let index = pick["index"].as_u64().unwrap_or(0).to_string();
         if object.is_none() && objects.len() > 1 {
-            eprintln!(
-                "note: {path} holds {} objects ({}); using object {index}, pick another with --object K",
-                objects.len(),
-                summary(&objects)
-            );
+            eprintln!("note: {path} holds {} objects ({}); using object {index}, pick another with --object K", objects.len(), summary(&objects));
         }
         let text = String::from_utf8(node(&[path, "--object", &index])?).map_err(|e| Failure::input(format!("{path}: {e}")))?;
         let name = pick["name"].as_str().filter(|n| !n.is_empty()).map_or(format!("object {index}"), str::to_string);
@@ -843,9 +843,7 @@ mod rhino {
     fn summary(objects: &[serde_json::Value]) -> String {
         objects
             .iter()
-            .map(|o| {
-                format!("{}: {} {}", o["index"], o["kind"].as_str().unwrap_or("?"), o["name"].as_str().unwrap_or("")).trim_end().to_string()
-            })
+            .map(|o| format!("{}: {} {}", o["index"], o["kind"].as_str().unwrap_or("?"), o["name"].as_str().unwrap_or("")).trim_end().to_string())
             .collect::<Vec<_>>()
             .join(", ")
     }

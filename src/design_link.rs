@@ -414,9 +414,7 @@ impl Design {
                 "theta" => parse_f64_in(v, THETA_RANGE.lo, THETA_RANGE.hi).map(|x| d.sq.theta_deg = x).is_some(),
                 "alpha" => parse_f64_in(v, ALPHA_RANGE.lo, ALPHA_RANGE.hi).map(|x| d.sq.alpha_deg = x).is_some(),
                 "grid" => parse_in(v, GRID_RANGE.lo as i64, GRID_RANGE.hi as i64).map(|x| d.sq.grid = x as usize).is_some(),
-                "rs" => {
-                    parse_in(v, RECOMPUTE_RANGE.lo as i64, RECOMPUTE_RANGE.hi as i64).map(|x| d.sq.recompute_every = x as usize).is_some()
-                }
+                "rs" => parse_in(v, RECOMPUTE_RANGE.lo as i64, RECOMPUTE_RANGE.hi as i64).map(|x| d.sq.recompute_every = x as usize).is_some(),
                 "until" => Until::from_key(v).map(|u| d.sq.until = u).is_some(),
                 "start" => RadiusStart::from_key(v).map(|r| d.sq.start = r).is_some(),
                 "variant" => EdgeArcs::from_key(v).map(|x| d.st_adapted.variant = x).is_some(),

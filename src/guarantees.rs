@@ -95,7 +95,11 @@ impl fmt::Display for Guarantee {
         // Enough digits that a miss does not print as its limit.
         let number = |x: f64, digits: usize| {
             if self.unit.is_empty() || self.unit == "deg" {
-                if x.fract() == 0.0 && x.abs() < 1e15 { format!("{x:.0}") } else { format!("{x:.digits$}") }
+                if x.fract() == 0.0 && x.abs() < 1e15 {
+                    format!("{x:.0}")
+                } else {
+                    format!("{x:.digits$}")
+                }
             } else {
                 format!("{x:.digits$e}")
             }

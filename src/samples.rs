@@ -188,8 +188,7 @@ pub fn sphere_cap(radius: f64, base_radius: f64, rings: usize) -> TriMesh {
 pub(crate) fn wave_roof(nx: usize, ny: usize) -> TriMesh {
     grid_mesh(nx, ny, false, false, |s, t| {
         let (x, y) = (-16.0 + 32.0 * s, -10.0 + 20.0 * t);
-        let z = 6.0 + 0.9 * (TAU * x / 16.0 + 0.4 * y / 10.0).cos() * (1.0 - 0.3 * (y / 10.0).powi(2))
-            - 1.5 * (y / 10.0).powi(2);
+        let z = 6.0 + 0.9 * (TAU * x / 16.0 + 0.4 * y / 10.0).cos() * (1.0 - 0.3 * (y / 10.0).powi(2)) - 1.5 * (y / 10.0).powi(2);
         DVec3::new(x, y, z)
     })
 }
@@ -198,14 +197,7 @@ pub(crate) fn wave_roof(nx: usize, ny: usize) -> TriMesh {
 
 /// Torus patch (R + r cos v) (cos u, sin u, 0) + r sin v (0, 0, 1) over `u_range` × `v_range` with
 /// `nu` × `nv` grid cells, outward normals. A range spanning 2π (or more) closes up (no seam).
-pub fn torus_patch(
-    big_r: f64,
-    small_r: f64,
-    u_range: (f64, f64),
-    v_range: (f64, f64),
-    nu: usize,
-    nv: usize,
-) -> TriMesh {
+pub fn torus_patch(big_r: f64, small_r: f64, u_range: (f64, f64), v_range: (f64, f64), nu: usize, nv: usize) -> TriMesh {
     let wrap_u = (u_range.1 - u_range.0).abs() >= TAU - 1e-9;
     let wrap_v = (v_range.1 - v_range.0).abs() >= TAU - 1e-9;
     grid_mesh(nu, nv, wrap_u, wrap_v, |s, t| {

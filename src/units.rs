@@ -187,7 +187,14 @@ mod tests {
         assert_eq!(format_length(5e-5, Units::M), "0.00005000 m");
         assert_eq!(format_length(4.2e-15, Units::M), "4.2e-15 m");
         assert_eq!(format_length(1234.5, Units::In), "1234 in");
-        for (name, u) in [("Millimeters", Units::Mm), ("Meters", Units::M), ("centimetres", Units::Cm), ("Feet", Units::Ft), ("Inches", Units::In), ("inch", Units::In)] {
+        for (name, u) in [
+            ("Millimeters", Units::Mm),
+            ("Meters", Units::M),
+            ("centimetres", Units::Cm),
+            ("Feet", Units::Ft),
+            ("Inches", Units::In),
+            ("inch", Units::In),
+        ] {
             assert_eq!(Units::from_name(name), Some(u), "{name}");
         }
         assert_eq!(Units::from_name("Microns"), None);

@@ -110,7 +110,13 @@ fn without_comments_and_strings(text: &str) -> String {
             // A char literal ('x', '\n', '"'), not a lifetime.
             '\'' => {
                 let rest: String = chars.clone().take(3).collect();
-                let len = if rest.starts_with('\\') { rest.find('\'').map_or(0, |i| i + 1) } else if rest.chars().nth(1) == Some('\'') { 2 } else { 0 };
+                let len = if rest.starts_with('\\') {
+                    rest.find('\'').map_or(0, |i| i + 1)
+                } else if rest.chars().nth(1) == Some('\'') {
+                    2
+                } else {
+                    0
+                };
                 for _ in 0..len {
                     chars.next();
                 }
@@ -290,12 +296,8 @@ fn graph(files: &Files) -> (BTreeMap<String, BTreeSet<String>>, Vec<String>) {
                 }
                 Some(_) => {}
                 None if root == Root::Relative => {}
-                None if path.is_empty() => {
-                    unfollowed.push(format!("{file}: a glob or `self` of `crate` hides the paths it names from this check"))
-                }
-                None => {
-                    unfollowed.push(format!("{file}: `crate::{}` names no module file (an item or re-export of lib.rs?)", path.join("::")))
-                }
+                None if path.is_empty() => unfollowed.push(format!("{file}: a glob or `self` of `crate` hides the paths it names from this check")),
+                None => unfollowed.push(format!("{file}: `crate::{}` names no module file (an item or re-export of lib.rs?)", path.join("::"))),
             }
         }
     }
@@ -334,7 +336,13 @@ fn violations(files: &Files, layers: &BTreeMap<String, usize>) -> Vec<String> {
     }
     // Cycles: a depth-first search that reports every back edge.
     let mut state: BTreeMap<&str, u8> = BTreeMap::new();
-    fn visit<'a>(n: &'a str, g: &'a BTreeMap<String, BTreeSet<String>>, state: &mut BTreeMap<&'a str, u8>, stack: &mut Vec<&'a str>, out: &mut Vec<String>) {
+    fn visit<'a>(
+        n: &'a str,
+        g: &'a BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<&'a str, u8>,
+        stack: &mut Vec<&'a str>,
+        out: &mut Vec<String>,
+    ) {
         state.insert(n, 1);
         stack.push(n);
         for m in g.get(n).into_iter().flatten() {
@@ -402,7 +410,13 @@ fn every_method_follows_the_recipe() {
     assert_eq!(methods.len(), 3, "the three methods of the paper: {methods:?}");
     let views = &files["web/app/views/mod.rs"];
     for m in methods {
-        for part in [format!("{m}/mod.rs"), format!("{m}/params.rs"), format!("{m}/report.rs"), format!("pipeline/stages/{m}.rs"), format!("web/app/views/{m}.rs")] {
+        for part in [
+            format!("{m}/mod.rs"),
+            format!("{m}/params.rs"),
+            format!("{m}/report.rs"),
+            format!("pipeline/stages/{m}.rs"),
+            format!("web/app/views/{m}.rs"),
+        ] {
             assert!(files.contains_key(&part), "{m}: src/{part} is missing (ARCHITECTURE.md, How to add a method)");
         }
         assert!(views.contains(&format!("{m}::")), "{m}: no line in views::views");
@@ -420,7 +434,10 @@ fn the_checker_catches_forbidden_imports() {
         file("geometry/sphere.rs", "pub struct Sphere;\n"),
         file("panels/mod.rs", "pub mod arc;\nuse crate::geometry::sphere::Sphere;\n// use crate::st_adapted::X; (a comment)\n"),
         file("panels/arc.rs", "use super::mod_item;\nfn f() -> &'static str { \"crate::st_adapted::x\" }\n"),
-        file("st_adapted/mod.rs", "use crate::{geometry::sphere::Sphere, panels::arc};\n#[cfg(test)]\nmod tests {\n    use crate::st_adapted::x;\n}\n"),
+        file(
+            "st_adapted/mod.rs",
+            "use crate::{geometry::sphere::Sphere, panels::arc};\n#[cfg(test)]\nmod tests {\n    use crate::st_adapted::x;\n}\n",
+        ),
     ]
     .into_iter()
     .collect();
@@ -448,8 +465,7 @@ fn the_checker_catches_forbidden_imports() {
 /// and an import after a raw string ending in a backslash.
 #[test]
 fn the_checker_cannot_be_fooled() {
-    let layers: BTreeMap<String, usize> =
-        [("geometry", 0), ("panels", 1), ("st_adapted", 2)].map(|(m, l)| (m.to_string(), l)).into_iter().collect();
+    let layers: BTreeMap<String, usize> = [("geometry", 0), ("panels", 1), ("st_adapted", 2)].map(|(m, l)| (m.to_string(), l)).into_iter().collect();
     let base: Files = [
         ("geometry/mod.rs", "pub struct Sphere;\n"),
         ("panels/mod.rs", "use crate::geometry::Sphere;\n"),

@@ -10,15 +10,8 @@ use serde_json::{json, Value};
 use spherical_faces::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface};
 use spherical_faces::import::{import_file, ImportedFile};
 
-const FILES: [&str; 7] = [
-    "paraboloid_dome",
-    "paraboloid_dome_deg5",
-    "torus_patch",
-    "sphere_patch",
-    "cylinder_patch",
-    "tunnel_arch",
-    "saddle_sign_change",
-];
+const FILES: [&str; 7] =
+    ["paraboloid_dome", "paraboloid_dome_deg5", "torus_patch", "sphere_patch", "cylinder_patch", "tunnel_arch", "saddle_sign_change"];
 
 fn surface_from(bytes: &[u8], name: &str) -> BSplineSurface {
     match import_file(bytes, name) {
@@ -164,7 +157,10 @@ fn derivatives_match_finite_differences() {
                 worst = worst.max(err);
             }
             let f = s.frame(u, v).unwrap();
-            let (fu, fv) = (s.frame(u + hu, v).unwrap().normal - s.frame(u - hu, v).unwrap().normal, s.frame(u, v + hv).unwrap().normal - s.frame(u, v - hv).unwrap().normal);
+            let (fu, fv) = (
+                s.frame(u + hu, v).unwrap().normal - s.frame(u - hu, v).unwrap().normal,
+                s.frame(u, v + hv).unwrap().normal - s.frame(u, v - hv).unwrap().normal,
+            );
             assert!((f.nu - fu / (2.0 * hu)).length() * hu < 1e-9, "{name}: ∂n/∂u");
             assert!((f.nv - fv / (2.0 * hv)).length() * hv < 1e-9, "{name}: ∂n/∂v");
         }

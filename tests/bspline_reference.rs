@@ -13,8 +13,8 @@ use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::ignore;
 use spherical_faces::reference::proximity::ReferenceProximity;
 use spherical_faces::reference::Reference;
-use spherical_faces::solver::Term;
 use spherical_faces::samples::Sample;
+use spherical_faces::solver::Term;
 
 fn spline(name: &str) -> BSplineSurface {
     match import_file(&common::shared_bytes(&format!("data/bsplines/{name}.json")), name) {

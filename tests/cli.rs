@@ -138,15 +138,12 @@ fn st_writes_panels_and_report_or_refuses() {
 #[test]
 fn st_support_remeshes_first() {
     let base = common::temp_dir("sf-cli-st-remesh");
-    let report =
-        |dir: &std::path::Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap() };
+    let report = |dir: &std::path::Path| -> serde_json::Value { serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap() };
     let mesh = "../shared/data/meshes/botanic-garden-bubble-0.obj";
     let (fine, coarse, uniform) = (base.join("fine"), base.join("coarse"), base.join("uniform"));
-    for (dir, args) in [
-        (&fine, vec!["--adaptive", "--epsilon", "2e-4"]),
-        (&coarse, vec!["--adaptive", "--epsilon", "2e-3"]),
-        (&uniform, vec!["--faces", "300"]),
-    ] {
+    for (dir, args) in
+        [(&fine, vec!["--adaptive", "--epsilon", "2e-4"]), (&coarse, vec!["--adaptive", "--epsilon", "2e-3"]), (&uniform, vec!["--faces", "300"])]
+    {
         let mut a = vec!["st-support", mesh];
         a.extend(args);
         a.extend(["--out", dir.to_str().unwrap()]);
@@ -244,10 +241,7 @@ fn sq_writes_the_congruence_and_its_report() {
     for k in ["lc_iteration_median", "torsal_iteration_median", "total"] {
         assert!(r["timings_ms"][k].as_f64().unwrap() > 0.0, "timings_ms.{k}");
     }
-    assert_eq!(
-        sq["iterations"].as_u64().unwrap(),
-        c["line_congruence_iterations"].as_u64().unwrap() + c["torsal_iterations"].as_u64().unwrap()
-    );
+    assert_eq!(sq["iterations"].as_u64().unwrap(), c["line_congruence_iterations"].as_u64().unwrap() + c["torsal_iterations"].as_u64().unwrap());
     let c: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("congruence.json")).unwrap()).unwrap();
     let points = c["points"].as_array().unwrap();
     assert_eq!(points.len(), 144);
@@ -377,11 +371,7 @@ fn sq_meets_its_guarantees_or_exits_3_with_the_figures() {
         assert_eq!(v["exit_code"], 3);
         dir
     };
-    missing(
-        &["sq", roof, "--theta", "15", "--alpha", "45", "--start", "central", "--until", "congruence"],
-        "min_torsal_plane_angle_deg",
-        "≥ 45",
-    );
+    missing(&["sq", roof, "--theta", "15", "--alpha", "45", "--start", "central", "--until", "congruence"], "min_torsal_plane_angle_deg", "≥ 45");
     let dir = missing(
         &["sq", "../shared/data/bsplines/tunnel_arch.json", "--alpha", "90", "--grid", "12", "--faces", "60"],
         "min_support_plane_angle_deg",
@@ -436,6 +426,7 @@ fn units_and_moulds_from_the_command_line() {
 /// - on a canopy of the hard corpus (the mesh follows the parameter lines) the mesh from constant
 ///   radii misses the distance, and the central congruence misses θ or α at 69 grid points where
 ///   the constant one misses at 9: it stops there, listed with its misses on G.
+///
 /// Either way the run's time counts both starts.
 #[test]
 fn sq_auto_weighs_both_starts_by_their_verdicts() {
@@ -449,7 +440,8 @@ fn sq_auto_weighs_both_starts_by_their_verdicts() {
         assert!(t["start_not_kept"].as_f64().unwrap() > 0.0 && t["total"].as_f64().unwrap() > t["start_not_kept"].as_f64().unwrap(), "{t}");
         r
     };
-    let starts = |c: &serde_json::Value| c["attempts"].as_array().unwrap().iter().map(|a| a["start"].as_str().unwrap().to_string()).collect::<Vec<_>>();
+    let starts =
+        |c: &serde_json::Value| c["attempts"].as_array().unwrap().iter().map(|a| a["start"].as_str().unwrap().to_string()).collect::<Vec<_>>();
     let missed = |a: &serde_json::Value| a["final_misses"].as_array().map(Vec::len);
 
     let r = report("sample:vault", &["--max-distance", "1e-3"]);

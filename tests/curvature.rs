@@ -5,10 +5,10 @@
 mod common;
 
 use glam::DVec3;
-use spherical_faces::progress::Cancelled;
 use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams, PLANAR_TOLERANCE, SIGN_CHANGE_THRESHOLD};
-use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::progress::Cancelled;
 use spherical_faces::samples::{cylinder_patch, plane_patch, sphere_patch, torus_closed_form, torus_patch};
 
 fn fit(mesh: &TriMesh) -> CurvatureField {
@@ -95,15 +95,7 @@ fn torus_errors(big_r: f64, r: f64, nu: usize, nv: usize, u_range: (f64, f64), v
     torus_errors_with(big_r, r, nu, nv, u_range, v_range, &JetParams::default())
 }
 
-fn torus_errors_with(
-    big_r: f64,
-    r: f64,
-    nu: usize,
-    nv: usize,
-    u_range: (f64, f64),
-    v_range: (f64, f64),
-    params: &JetParams,
-) -> TorusErrors {
+fn torus_errors_with(big_r: f64, r: f64, nu: usize, nv: usize, u_range: (f64, f64), v_range: (f64, f64), params: &JetParams) -> TorusErrors {
     let mesh = torus_patch(big_r, r, u_range, v_range, nu, nv);
     let field = fit_with(&mesh, params);
     assert_eq!(field.summary.failed_fits, 0);
@@ -226,14 +218,10 @@ fn plane_is_flat() {
 /// Distance from `p` to Enneper's surface s (u − u³/3 + uv², v − v³/3 + u²v, u² − v²) by Gauss–Newton
 /// on (u, v) from a few starts.
 fn distance_to_enneper(p: DVec3, s: f64) -> f64 {
-    let point = |u: f64, v: f64| {
-        s * DVec3::new(u - u * u * u / 3.0 + u * v * v, v - v * v * v / 3.0 + u * u * v, u * u - v * v)
-    };
+    let point = |u: f64, v: f64| s * DVec3::new(u - u * u * u / 3.0 + u * v * v, v - v * v * v / 3.0 + u * u * v, u * u - v * v);
     let mut best = f64::INFINITY;
     let root = |t: f64| (t.abs() / s).sqrt();
-    for (mut u, mut v) in
-        [(p.x / s, p.y / s), (0.5 * p.x / s, 0.5 * p.y / s), (root(p.z).copysign(p.x), root(-p.z).copysign(p.y))]
-    {
+    for (mut u, mut v) in [(p.x / s, p.y / s), (0.5 * p.x / s, 0.5 * p.y / s), (root(p.z).copysign(p.x), root(-p.z).copysign(p.y))] {
         for _ in 0..60 {
             let r = point(u, v) - p;
             let ju = s * DVec3::new(1.0 - u * u + v * v, 2.0 * u * v, 2.0 * u);
@@ -286,11 +274,7 @@ fn enneper_minimal_surface_has_small_mean_curvature() {
     // off Enneper's surface (scale 3), which is what the jet reads as mean curvature.
     let off = mesh.positions.iter().map(|&p| distance_to_enneper(p, 3.0)).fold(0.0, f64::max);
     let beyond = |sign: f64| field.vertices.iter().filter(|c| sign * c.mean * diag > SIGN_CHANGE_THRESHOLD).count();
-    println!(
-        "enneper: {} vertices above +{SIGN_CHANGE_THRESHOLD}, {} below −{SIGN_CHANGE_THRESHOLD}",
-        beyond(1.0),
-        beyond(-1.0)
-    );
+    println!("enneper: {} vertices above +{SIGN_CHANGE_THRESHOLD}, {} below −{SIGN_CHANGE_THRESHOLD}", beyond(1.0), beyond(-1.0));
     println!(
         "enneper: {} vertices, diag {diag:.2}, vertices up to {:.1e}·diag off the smooth surface; |H|·diag: interior max {max_int:.3} (rms {:.3}), ≥ 2 rings from the boundary {max_deep:.3}, all {max_all:.3}; max |k|·diag {max_k:.1}; {:?}",
         mesh.vertex_count(),
@@ -327,10 +311,7 @@ fn degenerate_input_stays_finite() {
     assert_eq!(field.vertices[0].mean, 0.0);
     assert!((field.vertices[0].normal - DVec3::Z).length() < 1e-12);
     // Collinear and coincident points, zero-area triangles.
-    let m = TriMesh::new(
-        vec![DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X, DVec3::X],
-        vec![[0, 1, 2], [1, 2, 3], [2, 3, 4], [0, 4, 1]],
-    );
+    let m = TriMesh::new(vec![DVec3::ZERO, DVec3::X, 2.0 * DVec3::X, 3.0 * DVec3::X, DVec3::X], vec![[0, 1, 2], [1, 2, 3], [2, 3, 4], [0, 4, 1]]);
     fit(&m);
     // NaN and infinite positions.
     let mut bad = sphere_patch(1.0, 0.5, 6);

@@ -4,9 +4,9 @@
 use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::design_link::*;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::pipeline::protocol::StageRequest;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
-use spherical_faces::pipeline::protocol::StageRequest;
 use spherical_faces::sq::params::{RadiusStart, SqParams};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;

@@ -72,7 +72,9 @@ fn check_panels(name: &str, panels: &[Panel], diag: f64) -> (f64, f64) {
         }
         let n = p.arcs.len();
         // A triangle's sides start at one of its corners.
-        let first = (0..n).min_by(|&a, &b| p.arcs[a].from.distance(patch.evaluate(0.0, 0.0)).total_cmp(&p.arcs[b].from.distance(patch.evaluate(0.0, 0.0)))).unwrap();
+        let first = (0..n)
+            .min_by(|&a, &b| p.arcs[a].from.distance(patch.evaluate(0.0, 0.0)).total_cmp(&p.arcs[b].from.distance(patch.evaluate(0.0, 0.0))))
+            .unwrap();
         assert!(n == 3 || first == 0, "{name}: a quad's sides start at corner 0");
         for (s, side) in sides(&patch, n).iter().enumerate() {
             let k = (s + first) % n;
@@ -239,7 +241,9 @@ fn read_step(file: &std::path::Path, unit: &str) -> Vec<Vec<DVec3>> {
         .as_array()
         .unwrap()
         .iter()
-        .map(|f| f.as_array().unwrap().chunks(3).map(|c| DVec3::new(c[0].as_f64().unwrap(), c[1].as_f64().unwrap(), c[2].as_f64().unwrap())).collect())
+        .map(|f| {
+            f.as_array().unwrap().chunks(3).map(|c| DVec3::new(c[0].as_f64().unwrap(), c[1].as_f64().unwrap(), c[2].as_f64().unwrap())).collect()
+        })
         .collect()
 }
 
@@ -319,7 +323,13 @@ fn check_3dm(name: &str, dir: &std::path::Path, schedule: &serde_json::Value, re
     assert!(out.status.success(), "read-3dm.mjs: {}", String::from_utf8_lossy(&out.stderr));
     let model: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let unit = schedule["units"].as_str().unwrap();
-    let rhino_unit = match unit { "m" => "Meters", "cm" => "Centimeters", "mm" => "Millimeters", "ft" => "Feet", _ => "Inches" };
+    let rhino_unit = match unit {
+        "m" => "Meters",
+        "cm" => "Centimeters",
+        "mm" => "Millimeters",
+        "ft" => "Feet",
+        _ => "Inches",
+    };
     assert_eq!(model["units"], rhino_unit, "{name}");
     let diag = schedule["reference_diagonal"].as_f64().unwrap();
     let objects = model["objects"].as_array().unwrap();

@@ -9,7 +9,6 @@
 //! - `flat`: a planar grid with plane "spheres";
 //! - `mixed`: an Ω mesh with one vertex moved so that one face sphere degenerates to a plane.
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
-#![allow(clippy::needless_range_loop)]
 
 mod common;
 
@@ -18,9 +17,7 @@ use std::collections::HashMap;
 use common::{khronos_validate, temp_dir};
 use glam::DVec3;
 use serde_json::Value;
-use spherical_faces::congruence::support_structure::{
-    support_element, support_strips, NodeAxes, SupportElement, SupportGeometry, SupportStructure,
-};
+use spherical_faces::congruence::support_structure::{support_element, support_strips, NodeAxes, SupportElement, SupportGeometry, SupportStructure};
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::report::{InputCounts, OutputCounts};
 use spherical_faces::export::schedule::PanelSchedule;
@@ -216,8 +213,7 @@ fn mixed() -> SphereMesh {
     let (d0, d1) = (det(0.0), det(1.0));
     mesh.positions[8].z = -d0 / (d1 - d0);
     let omega = AbsoluteSphere::Sphere { center: M_IMAG, r2: -3.2 };
-    let mut face_spheres: Vec<Sphere> =
-        (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
+    let mut face_spheres: Vec<Sphere> = (0..mesh.face_count()).map(|f| orient(sphere_orthogonal(mesh.face_points(f), &omega), &mesh, f)).collect();
     assert!(face_spheres[PLANAR_FACE].a.abs() < 1e-9, "{:?}", face_spheres[PLANAR_FACE]);
     let p = mesh.face_points(PLANAR_FACE);
     face_spheres[PLANAR_FACE] = Sphere::plane(p[0], face_normal(&mesh, PLANAR_FACE));
@@ -907,18 +903,9 @@ fn schedule_csv_and_json() {
     assert_eq!(rows.len(), panels.len() + 1);
     assert_eq!(rows[0], PanelSchedule::csv_header(3));
     let header: Vec<&str> = rows[0].split(',').collect();
-    for col in [
-        "id",
-        "v0_id",
-        "v2_z",
-        "sphere_center_x",
-        "sphere_radius",
-        "plane_normal_z",
-        "edge0_radius",
-        "edge2_normal_z",
-        "area",
-        "max_deviation",
-    ] {
+    for col in
+        ["id", "v0_id", "v2_z", "sphere_center_x", "sphere_radius", "plane_normal_z", "edge0_radius", "edge2_normal_z", "area", "max_deviation"]
+    {
         assert!(header.contains(&col), "{col}");
     }
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
@@ -967,10 +954,7 @@ fn schedule_csv_and_json() {
     // nothing.
     let bvh = TriangleBvh::new(&sm.mesh.triangulated());
     for (k, p) in panels.iter().enumerate() {
-        let brute = panel_samples(p)
-            .into_iter()
-            .map(|x| closest_point_brute_force(&sm.mesh.triangulated(), x).unwrap().distance)
-            .fold(0.0, f64::max);
+        let brute = panel_samples(p).into_iter().map(|x| closest_point_brute_force(&sm.mesh.triangulated(), x).unwrap().distance).fold(0.0, f64::max);
         assert_eq!(max_deviation(p, &bvh), brute, "panel {k}");
         assert_eq!(sched.panels[k].max_deviation, brute, "panel {k}");
     }
@@ -1090,8 +1074,13 @@ fn report_schema() {
     let mut r = Report::new("st-support");
     r.input = InputCounts { vertices: 49, faces: 72 };
     r.output = OutputCounts { vertices: 49, faces: 72, panels: 72 };
-    r.metrics =
-        Some(PanelMetrics { mean_kink_angle_deg: 1.25, max_kink_angle_deg: 3.5, max_distance_to_reference: 2e-3, distinct_radii: 15, ..Default::default() });
+    r.metrics = Some(PanelMetrics {
+        mean_kink_angle_deg: 1.25,
+        max_kink_angle_deg: 3.5,
+        max_distance_to_reference: 2e-3,
+        distinct_radii: 15,
+        ..Default::default()
+    });
     let omega: AbsoluteSphereSection = (&AbsoluteSphere::Sphere { center: M_STRESS, r2: 2.0 }).into();
     r.set_section(&serde_json::json!({ "absolute_sphere": omega, "max_node_axis_offset": 1e-13 }));
     r.add_timing("absolute_sphere", 1.5);

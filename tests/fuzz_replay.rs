@@ -87,7 +87,7 @@ fn every_target_is_replayed() {
 
 mod seeds {
     use super::{fuzz_dir, oracles};
-    use spherical_faces::design_link::{CameraState, ColorBy, Design, Method, DesignSurface, Shading};
+    use spherical_faces::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
     use spherical_faces::pipeline::fields::{Field, FieldData};
     use spherical_faces::pipeline::protocol::*;
     use spherical_faces::pipeline::{Outbox, Session};

@@ -53,9 +53,7 @@ fn record(input: &str, args: &[&str]) -> Value {
         assert_eq!(out.status.code(), Some(2), "{err}");
         return json!({ "error": err });
     }
-    let read = |name: &str| -> Value {
-        serde_json::from_slice(&std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))).unwrap()
-    };
+    let read = |name: &str| -> Value { serde_json::from_slice(&std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))).unwrap() };
     let mut report = read("report.json");
     report.as_object_mut().unwrap().remove("timings_ms");
     let schedule = read("panels.json");

@@ -15,8 +15,8 @@ use spherical_faces::export::Report;
 use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::import::import_mesh;
-use spherical_faces::panels::tessellate::MAX_PANEL_TRIANGLES;
 use spherical_faces::panels::panel::Panel;
+use spherical_faces::panels::tessellate::MAX_PANEL_TRIANGLES;
 use spherical_faces::panels::{level_cap, PANEL_TRIANGLE_BUDGET};
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::pipeline::stages;
@@ -280,7 +280,10 @@ fn st_support_warns_where_h_changes_sign() {
     // exits with 3 naming what cannot be built.
     assert_eq!(out.status.code(), Some(3), "{err}");
     let line = err.lines().last().unwrap();
-    assert!(line.contains("misses its guarantees") && line.contains("support_elements_that_fold") && line.contains("max_distance_to_reference"), "{line}");
+    assert!(
+        line.contains("misses its guarantees") && line.contains("support_elements_that_fold") && line.contains("max_distance_to_reference"),
+        "{line}"
+    );
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     let warnings = report["warnings"].as_array().unwrap();
     assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("H changes sign")), "{warnings:?}");

@@ -5,9 +5,9 @@
 mod common;
 
 use glam::DVec3;
-use spherical_faces::import::*;
 use spherical_faces::geometry::mesh::weld::{weld, WeldReport};
 use spherical_faces::geometry::mesh::TriMesh;
+use spherical_faces::import::*;
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
@@ -85,8 +85,7 @@ fn b64(data: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut s = String::new();
     for c in data.chunks(3) {
-        let n =
-            (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
+        let n = (u32::from(c[0]) << 16) | (u32::from(*c.get(1).unwrap_or(&0)) << 8) | u32::from(*c.get(2).unwrap_or(&0));
         for k in 0..4 {
             if k <= c.len() {
                 s.push(A[(n >> (18 - 6 * k)) as usize & 63] as char);
@@ -194,10 +193,7 @@ fn obj_non_convex_polygons_are_ear_clipped() {
         .collect();
     check_polygon("star.obj", &star);
     // Comb with collinear corners along the bottom edge.
-    check_polygon(
-        "comb.obj",
-        &[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0), (3.0, 2.0), (2.5, 0.5), (2.0, 2.0), (1.0, 0.5), (0.0, 2.0)],
-    );
+    check_polygon("comb.obj", &[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0), (3.0, 2.0), (2.5, 0.5), (2.0, 2.0), (1.0, 0.5), (0.0, 2.0)]);
 }
 
 #[test]
@@ -342,10 +338,7 @@ fn obj_over_limit_is_rejected_before_parsing() {
     s += &"f 1 2 3\n".repeat(MAX_TRIANGLES + 1);
     let e = import_err(s.as_bytes(), "big.obj");
     assert_eq!(e.to_string(), "big.obj: 2000001 triangles exceed the limit of 2000000");
-    assert_eq!(
-        e,
-        ImportError::TooLarge { file: "big.obj".into(), what: "triangles".into(), count: 2_000_001, limit: 2_000_000 }
-    );
+    assert_eq!(e, ImportError::TooLarge { file: "big.obj".into(), what: "triangles".into(), count: 2_000_001, limit: 2_000_000 });
     // One huge polygon counts as its triangulation.
     let mut s = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nf");
     s += &" -1".repeat(MAX_TRIANGLES + 3);
@@ -377,8 +370,7 @@ fn square_json(buffer: &str, extra_nodes: &str) -> String {
 #[test]
 fn gltf_with_embedded_data_uri() {
     let bin = square_buffer();
-    let buffer =
-        format!(r#"{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}"#, bin.len(), b64(&bin));
+    let buffer = format!(r#"{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}"#, bin.len(), b64(&bin));
     let json = square_json(&buffer, r#","nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0"#);
     let m = import_ok(&json, "model.gltf");
     assert_eq!(m.format, Format::Gltf);
@@ -400,10 +392,7 @@ fn gltf_with_embedded_data_uri() {
     // External buffers are refused with an actionable message.
     let json = square_json(r#"{"byteLength":60,"uri":"a.bin"}"#, "");
     let e = import_err(json.as_bytes(), "model.gltf");
-    assert_eq!(
-        e.to_string(),
-        "model.gltf: buffer 0 uses external file 'a.bin'; embed it as a data: URI or export as .glb"
-    );
+    assert_eq!(e.to_string(), "model.gltf: buffer 0 uses external file 'a.bin'; embed it as a data: URI or export as .glb");
     assert!(matches!(e, ImportError::Unsupported { .. }));
 }
 
@@ -521,10 +510,7 @@ fn glb_and_gltf_errors() {
     assert!(import_mesh(&good, "ok.glb").is_ok());
 
     let e = import_err(&good[..1200.min(good.len() - 1)], "x.glb");
-    assert_eq!(
-        e.to_string(),
-        format!("x.glb: truncated GLB (header says {} bytes, file has {})", good.len(), good.len() - 1)
-    );
+    assert_eq!(e.to_string(), format!("x.glb: truncated GLB (header says {} bytes, file has {})", good.len(), good.len() - 1));
     let e = import_err(&good[..7], "x.glb");
     assert!(e.to_string().contains("truncated GLB"), "{e}");
     let e = import_err(b"not a glb at all", "x.glb");
@@ -562,10 +548,7 @@ fn glb_and_gltf_errors() {
     let j = square_json(r#"{"byteLength":60}"#, r#","nodes":[{"mesh":0,"children":[0]}],"scenes":[{"nodes":[0,5]}]"#);
     assert!(import_err(&glb(&j, &bin), "x.glb").to_string().contains("node 5 does not exist"));
     // A cycle in the node graph is not followed forever.
-    let j = square_json(
-        r#"{"byteLength":60}"#,
-        r#","nodes":[{"mesh":0,"children":[1]},{"children":[0]}],"scenes":[{"nodes":[0]}]"#,
-    );
+    let j = square_json(r#"{"byteLength":60}"#, r#","nodes":[{"mesh":0,"children":[1]},{"children":[0]}],"scenes":[{"nodes":[0]}]"#);
     let m = import_mesh(&glb(&j, &bin), "x.glb").unwrap();
     assert_eq!(m.mesh.face_count(), 2);
     assert!(m.notes.iter().any(|n| n.contains("repeated node")), "{:?}", m.notes);
@@ -587,16 +570,12 @@ fn gltf_huge_declared_counts_are_rejected_cheaply() {
     // 1000 triangles per instance, 2001 instances).
     let nodes: Vec<String> = (0..2001).map(|_| r#"{"mesh":0}"#.to_string()).collect();
     let roots: Vec<String> = (0..2001).map(|i| i.to_string()).collect();
-    let j = square_json(
-        r#"{"byteLength":60}"#,
-        &format!(r#","nodes":[{}],"scenes":[{{"nodes":[{}]}}]"#, nodes.join(","), roots.join(",")),
-    )
-    .replace(r#""count":6"#, r#""count":3000"#);
+    let j = square_json(r#"{"byteLength":60}"#, &format!(r#","nodes":[{}],"scenes":[{{"nodes":[{}]}}]"#, nodes.join(","), roots.join(",")))
+        .replace(r#""count":6"#, r#""count":3000"#);
     let e = import_err(&glb(&j, &bin), "inst.glb");
     assert!(matches!(e, ImportError::TooLarge { count: 2_001_000, .. }), "{e}");
     // Zero-count accessors with absurd offsets, and absurd strides, are handled without overflow.
-    let j =
-        json.replace(r#""count":6,"type":"SCALAR""#, r#""count":0,"byteOffset":18446744073709551615,"type":"SCALAR""#);
+    let j = json.replace(r#""count":6,"type":"SCALAR""#, r#""count":0,"byteOffset":18446744073709551615,"type":"SCALAR""#);
     assert!(matches!(import_err(&glb(&j, &bin), "x.glb"), ImportError::Empty { .. }));
     let j = json.replace(r#""byteLength":48}"#, r#""byteLength":48,"byteStride":4000000000}"#);
     assert!(matches!(import_err(&glb(&j, &bin), "x.glb"), ImportError::Malformed { .. }));
@@ -654,8 +633,7 @@ fn corrupt_inputs_never_panic() {
     }
     // Random bytes behind plausible prefixes.
     let mut rng = Lcg(0x5eed);
-    let prefixes: [&[u8]; 6] =
-        [b"", b"glTF\x02\x00\x00\x00", b"{", b"v 1 2 3\nf ", b"f 1 2 3\nv ", b"{\"asset\":{\"version\":\"2.0\"},"];
+    let prefixes: [&[u8]; 6] = [b"", b"glTF\x02\x00\x00\x00", b"{", b"v 1 2 3\nf ", b"f 1 2 3\nv ", b"{\"asset\":{\"version\":\"2.0\"},"];
     for round in 0..600 {
         let len = (rng.next() % 200) as usize;
         let mut data = prefixes[round % prefixes.len()].to_vec();
@@ -725,10 +703,7 @@ fn weld_merges_within_tolerance_and_cleans_faces() {
     let mesh = TriMesh::new(positions, triangles);
     let (out, report) = weld(&mesh, 1e-7);
     assert_eq!(report, WeldReport { merged_vertices: 1, dropped_faces: 5, removed_unreferenced: 2 });
-    assert_eq!(
-        out.positions,
-        vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 1e-6)]
-    );
+    assert_eq!(out.positions, vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 1e-6)]);
     assert_eq!(out.triangles, vec![[0, 1, 2], [0, 3, 1], [1, 3, 4]]);
 
     // Zero tolerance: only exact duplicates merge (-0.0 == 0.0).
@@ -767,10 +742,7 @@ fn weld_handles_cell_boundaries_and_chains() {
 
     // Greedy representatives do not chain: a, a+0.9t, a+1.8t -> the third stays separate.
     let a = DVec3::new(0.1, 0.2, 0.3);
-    let m = TriMesh::new(
-        vec![a, a + DVec3::X * 0.9 * tol, a + DVec3::X * 1.8 * tol, DVec3::ONE, DVec3::Y],
-        vec![[0, 3, 4], [1, 3, 4], [2, 4, 3]],
-    );
+    let m = TriMesh::new(vec![a, a + DVec3::X * 0.9 * tol, a + DVec3::X * 1.8 * tol, DVec3::ONE, DVec3::Y], vec![[0, 3, 4], [1, 3, 4], [2, 4, 3]]);
     let (out, report) = weld(&m, tol);
     assert_eq!(report.merged_vertices, 1);
     assert_eq!(out.face_count(), 2);
@@ -842,8 +814,7 @@ fn shared_meshes_import() {
         assert_eq!((m.merged_vertices, m.dropped_faces), (0, 0), "{name}");
         // The sources are consistently oriented; triangulation must keep that: no directed
         // edge occurs twice.
-        let mut directed: Vec<(u32, u32)> =
-            m.mesh.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
+        let mut directed: Vec<(u32, u32)> = m.mesh.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
         directed.sort_unstable();
         assert!(directed.windows(2).all(|w| w[0] != w[1]), "{name}: inconsistent orientation");
     }
@@ -883,15 +854,7 @@ fn gltf_interleaved_quantized_and_sparse_accessors() {
     let m = import_mesh(&glb(&json, &bin), "q.glb").unwrap();
     assert_eq!(
         m.mesh.positions,
-        vec![
-            DVec3::ZERO,
-            DVec3::X,
-            DVec3::new(1.0, 1.0, 0.0),
-            DVec3::Y,
-            DVec3::Z,
-            DVec3::new(1.0, 0.0, 1.0),
-            DVec3::new(0.0, 1.0, 1.0)
-        ]
+        vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y, DVec3::Z, DVec3::new(1.0, 0.0, 1.0), DVec3::new(0.0, 1.0, 1.0)]
     );
     assert_eq!(m.mesh.triangles, vec![[0, 1, 2], [0, 2, 3], [4, 5, 6]]);
     assert!(m.notes.is_empty(), "{:?}", m.notes);
@@ -982,35 +945,12 @@ fn fuzz_mutations_long() {
             ),
             "f.glb",
         ),
-        (
-            square_json(
-                &buffer,
-                r#","nodes":[{"mesh":0,"matrix":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}],"scenes":[{"nodes":[0]}]"#,
-            )
-            .into_bytes(),
-            "f.gltf",
-        ),
-        (
-            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 3 3 0\nf 1 2 3 4\nf 2 5 6 3\nf -1 -2 -3 -4 -5 -6\n"
-                .to_vec(),
-            "f.obj",
-        ),
+        (square_json(&buffer, r#","nodes":[{"mesh":0,"matrix":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}],"scenes":[{"nodes":[0]}]"#).into_bytes(), "f.gltf"),
+        (b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 3 3 0\nf 1 2 3 4\nf 2 5 6 3\nf -1 -2 -3 -4 -5 -6\n".to_vec(), "f.obj"),
     ];
     let mut rng = Lcg(12345);
-    let digits = [
-        b"0".as_slice(),
-        b"4294967295",
-        b"-1",
-        b"1e308",
-        b"99999999999",
-        b"65535",
-        b"2147483648",
-        b"3",
-        b"5125",
-        b"5126",
-        b"\"a\"",
-        b"null",
-    ];
+    let digits =
+        [b"0".as_slice(), b"4294967295", b"-1", b"1e308", b"99999999999", b"65535", b"2147483648", b"3", b"5125", b"5126", b"\"a\"", b"null"];
     let mut oks = 0;
     for iter in 0..300_000 {
         let (seed, name) = &seeds[iter % seeds.len()];

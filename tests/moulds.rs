@@ -150,7 +150,14 @@ fn snapped_panels_have_their_moulds_radius(report: &Report, files: &[ExportFile]
 
 /// A refused snap, reported honestly: no round was kept, the outcome says why in words, the panels
 /// are on the sweep's moulds, and the schedule calls none snapped, each for the method's targets.
-fn refused_honestly<R: MouldRoundFigures + Clone>(name: &str, outcome: &MouldOutcome<R>, panels: &[Panel], report: &Report, files: &[ExportFile], delta: f64) {
+fn refused_honestly<R: MouldRoundFigures + Clone>(
+    name: &str,
+    outcome: &MouldOutcome<R>,
+    panels: &[Panel],
+    report: &Report,
+    files: &[ExportFile],
+    delta: f64,
+) {
     assert_eq!(outcome.snap.as_ref().err(), Some(&SnapLimit::MethodTargets), "{name}");
     assert!(outcome.rounds.iter().all(|r| !r.kept()), "{name}");
     let why = MouldOutcome::section(Some(outcome)).refused().expect("the refusal in words");
@@ -335,7 +342,6 @@ fn sq_keeps_its_guarantees_on_the_vaults_moulds() {
     sq_vault_moulds(1.0, 8);
     sq_vault_moulds(1.0 / 16.0, usize::MAX);
 }
-
 
 /// ST with support structure, its rounds toward fewer moulds on cmc1 at 2 mm on a 30 m diagonal
 /// times `scale`: every face sphere still passes through its vertices and is orthogonal to Ω

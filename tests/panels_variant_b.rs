@@ -9,8 +9,6 @@
 //! - `mixed`: `perturbed` with every fifth face a plane (a = 0 exactly);
 //! - `flat`: a planar grid with plane "spheres" (straight edges only).
 
-#![allow(clippy::needless_range_loop)]
-
 mod common;
 
 use std::collections::HashMap;
@@ -18,8 +16,8 @@ use std::collections::HashMap;
 use glam::DVec3;
 use serde_json::Value;
 use spherical_faces::export::{build_schedule, write_glb, write_obj};
-use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::import::import_mesh;
 use spherical_faces::panels::arc::Arc;
@@ -282,8 +280,7 @@ fn plane_faces_give_straight_edges() {
     }
     // A spherical panel next to a plane one keeps its curved arc: the edge has a gap.
     let gaps = gaps_of(&sm, &panels, GAP_SAMPLES);
-    let plane_sphere: Vec<f64> =
-        gaps.iter().filter(|g| panels[g.faces[0]].is_planar() != panels[g.faces[1]].is_planar()).map(|g| g.gap).collect();
+    let plane_sphere: Vec<f64> = gaps.iter().filter(|g| panels[g.faces[0]].is_planar() != panels[g.faces[1]].is_planar()).map(|g| g.gap).collect();
     assert!(plane_sphere.len() >= 10, "{}", plane_sphere.len());
     let plane_sphere = plane_sphere.into_iter().fold(f64::INFINITY, f64::min);
     println!("mixed: smallest plane/sphere edge gap = {:.3e} · diag", plane_sphere / diag(&sm));
@@ -453,10 +450,8 @@ fn exports_accept_variant_b_panels() {
         assert_eq!(im.dropped_faces, 0, "{name}");
         // Nothing but identical (f32) points welds: the gaps keep the arc points of adjacent
         // panels apart, so every interior edge is a seam of two boundary curves.
-        let mut distinct: Vec<[u32; 3]> = panels
-            .iter()
-            .flat_map(|p| p.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32].map(f32::to_bits)))
-            .collect();
+        let mut distinct: Vec<[u32; 3]> =
+            panels.iter().flat_map(|p| p.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32].map(f32::to_bits))).collect();
         distinct.sort_unstable();
         distinct.dedup();
         assert_eq!(im.mesh.vertex_count(), distinct.len(), "{name}");

@@ -141,12 +141,14 @@ fn st_support_streams_panels_files_and_a_report() {
     let pos = find(&snap.1, field::PANEL_POSITIONS).unwrap().as_f32().unwrap();
     assert!(!tri.is_empty() && tri.iter().all(|&i| (i as usize) < pos.len() / 3));
     assert!(!find(&snap.1, field::AXES_LINES).unwrap().as_u32().unwrap().is_empty());
-    let (FromWorker::Files { fields, mime, .. }, bodies) = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap()
-    else {
+    let (FromWorker::Files { fields, mime, .. }, bodies) = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap() else {
         panic!()
     };
     let names: Vec<_> = fields.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "panels.step", "panels.3dm.json", "support.csv", "report.json"]);
+    assert_eq!(
+        names,
+        ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "panels.step", "panels.3dm.json", "support.csv", "report.json"]
+    );
     assert_eq!(mime.len(), 9);
     assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
     let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
@@ -254,14 +256,9 @@ fn st_stage_cancels_within_one_iteration() {
     r.cancel_after = Some(25);
     r.progress_seen = 0;
     send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
-    assert!(
-        matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "st"),
-        "{:?}",
-        r.messages.last().unwrap().0
-    );
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "st"), "{:?}", r.messages.last().unwrap().0);
     // The cancel was requested once 25 progress messages had been sent: the 25th is the last.
-    let progress: Vec<usize> =
-        r.messages.iter().enumerate().filter(|(_, m)| matches!(m.0, FromWorker::Progress(_))).map(|(i, _)| i).collect();
+    let progress: Vec<usize> = r.messages.iter().enumerate().filter(|(_, m)| matches!(m.0, FromWorker::Progress(_))).map(|(i, _)| i).collect();
     assert_eq!(progress.len(), 25, "progress after the cancel request");
     let after = &r.messages[progress[24] + 1..];
     assert_eq!(after.len(), 1, "only Cancelled follows: {:?}", after.iter().map(|m| &m.0).collect::<Vec<_>>());
@@ -328,18 +325,13 @@ fn sq_streams_lines_and_energies_then_files() {
     let params = SqParams { grid: 12, ..SqParams::default() };
     send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
     let energies = r.messages.iter().filter(|(m, _)| matches!(m, FromWorker::Progress(p) if !p.energies.is_empty())).count();
-    let Some((FromWorker::Finished { result: StageResult::Sq(summary), .. }, _)) = r.messages.last() else {
-        panic!("{:?}", r.messages.last())
-    };
+    let Some((FromWorker::Finished { result: StageResult::Sq(summary), .. }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
     let section = summary.section().expect("the report's section");
     assert_eq!(energies, section.iterations, "one energy report per iteration");
     let figures = &section.congruence.figures;
     assert!(figures.max_line_normal_angle_deg <= 20.0 && figures.min_torsal_plane_angle_deg >= 75.0, "{figures:?}");
-    let snapshots: Vec<&Vec<Field>> = r
-        .messages
-        .iter()
-        .filter_map(|(m, f)| matches!(m, FromWorker::Snapshot { stage, .. } if *stage == sq::STAGE).then_some(f))
-        .collect();
+    let snapshots: Vec<&Vec<Field>> =
+        r.messages.iter().filter_map(|(m, f)| matches!(m, FromWorker::Snapshot { stage, .. } if *stage == sq::STAGE).then_some(f)).collect();
     let first = snapshots.first().unwrap();
     assert_eq!(find(first, field::SQ_INITIAL_LINES).and_then(Field::as_f32).unwrap().len(), 144 * 6, "two points per line");
     let last = snapshots.last().unwrap();
@@ -425,11 +417,7 @@ fn sq_stage_cancels_within_one_iteration() {
     r.cancel_after = Some(60);
     r.progress_seen = 0;
     send(&mut s, &mut r, run(StageRequest::Sq(params.clone())), None);
-    assert!(
-        matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "sq"),
-        "{:?}",
-        r.messages.last().unwrap().0
-    );
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "sq"), "{:?}", r.messages.last().unwrap().0);
     let progress = r.messages.iter().filter(|m| matches!(m.0, FromWorker::Progress(_))).count();
     assert_eq!(progress, 60, "no progress after the cancel request");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));

@@ -14,8 +14,8 @@ use std::f64::consts::TAU;
 use glam::DVec3;
 use spherical_faces::export::glb::glb_json;
 use spherical_faces::export::{build_schedule, write_glb, write_obj};
-use spherical_faces::geometry::mesh::{Face, PolyMesh};
 use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::{Face, PolyMesh};
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::panels::build_panels;
 use spherical_faces::panels::panel::Panel;
@@ -182,7 +182,13 @@ fn quad_panels_tile_the_spherical_zones() {
     let heights: Vec<f64> = heights.collect();
     let exact: f64 = (0..RINGS + 2)
         .map(|k| {
-            let face = if k == 0 { QUADS } else if k == RINGS + 1 { QUADS + MERIDIANS } else { (k - 1) * MERIDIANS };
+            let face = if k == 0 {
+                QUADS
+            } else if k == RINGS + 1 {
+                QUADS + MERIDIANS
+            } else {
+                (k - 1) * MERIDIANS
+            };
             let s = sm.face_spheres[face];
             TAU * s.signed_radius().unwrap().abs() * (heights[k + 1] - heights[k])
         })

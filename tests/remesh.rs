@@ -7,20 +7,19 @@ mod common;
 use common::load;
 use glam::DVec3;
 use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
+use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
 use spherical_faces::geometry::closest::TriangleBvh;
-use spherical_faces::geometry::mesh::TriMesh;
-use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::halfedge::{HalfedgeMesh, Stamp};
-use spherical_faces::remeshing::{
-    influence_zone, local_spheres_orthogonal, mean_edge_length, pliant_remesh, pliant_remesh_with_stats, RemeshParams,
-    SizingBounds, SizingField, DEFAULT_EPSILON,
-};
-use spherical_faces::remeshing::influence_zones::{limit_gradation, GRADATION};
-use spherical_faces::samples::{cylinder_patch, sphere_patch, Sample};
+use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::progress::Cancelled;
-use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
-
+use spherical_faces::remeshing::influence_zones::{limit_gradation, GRADATION};
+use spherical_faces::remeshing::{
+    influence_zone, local_spheres_orthogonal, mean_edge_length, pliant_remesh, pliant_remesh_with_stats, RemeshParams, SizingBounds, SizingField,
+    DEFAULT_EPSILON,
+};
+use spherical_faces::samples::{cylinder_patch, sphere_patch, Sample};
 
 fn fit(mesh: &TriMesh, topo: &Topology) -> CurvatureField {
     jet_fit(mesh, topo, &JetParams::default(), &mut spherical_faces::progress::ignore).expect("not cancelled")
@@ -70,8 +69,7 @@ fn assert_valid(name: &str, reference: &TriMesh, out: &TriMesh) -> f64 {
         assert!(!topo.vertex_faces(v).is_empty(), "{name}: isolated vertex {v}");
     }
     // Consistent orientation: every directed edge occurs once.
-    let mut directed: Vec<(u32, u32)> =
-        out.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
+    let mut directed: Vec<(u32, u32)> = out.triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
     directed.sort_unstable();
     let before = directed.len();
     directed.dedup();
@@ -89,12 +87,10 @@ fn assert_valid(name: &str, reference: &TriMesh, out: &TriMesh) -> f64 {
     // Faces are oriented like the reference at their corners (the corners lie on the reference;
     // the sum of the reference normals at their closest points).
     let bvh = TriangleBvh::new(reference);
-    let ref_normals: Vec<DVec3> =
-        (0..reference.face_count()).map(|f| reference.face_area_vector(f).normalize()).collect();
+    let ref_normals: Vec<DVec3> = (0..reference.face_count()).map(|f| reference.face_area_vector(f).normalize()).collect();
     let mut against = 0;
     for f in 0..out.face_count() {
-        let below: DVec3 =
-            out.face_points(f).iter().map(|&p| ref_normals[bvh.closest_point(p).unwrap().triangle]).sum();
+        let below: DVec3 = out.face_points(f).iter().map(|&p| ref_normals[bvh.closest_point(p).unwrap().triangle]).sum();
         if out.face_area_vector(f).dot(below) < 0.0 {
             against += 1;
         }
@@ -156,10 +152,7 @@ fn adaptive_sizing_on_tri_mesh_gives_a_valid_manifold() {
         let (lo, mean, hi) = sizing.summary();
         let out = remesh(&reference, &sizing, 10);
         let min_angle = assert_valid("tri_mesh adaptive", &reference, &out);
-        println!(
-            "tri_mesh, ε = {eps:e}·diag: g ∈ [{lo:.3}, {hi:.3}] (mean {mean:.3}), {} faces, min angle {min_angle:.1}°",
-            out.face_count()
-        );
+        println!("tri_mesh, ε = {eps:e}·diag: g ∈ [{lo:.3}, {hi:.3}] (mean {mean:.3}), {} faces, min angle {min_angle:.1}°", out.face_count());
     }
 }
 
@@ -174,10 +167,7 @@ fn dome_face_counts_for_a_few_epsilons() {
         let out = remesh(&reference, &sizing, 10);
         let (lo, mean, hi) = sizing.summary();
         let min_angle = assert_valid("dome", &reference, &out);
-        println!(
-            "Dome, ε = {eps:e}·diag: g ∈ [{lo:.2}, {hi:.2}] m (mean {mean:.2}), {} faces, min angle {min_angle:.1}°",
-            out.face_count()
-        );
+        println!("Dome, ε = {eps:e}·diag: g ∈ [{lo:.2}, {hi:.2}] m (mean {mean:.2}), {} faces, min angle {min_angle:.1}°", out.face_count());
         counts.push(out.face_count());
     }
     assert!(counts[0] < counts[1] && counts[1] < counts[2], "face counts not increasing as ε shrinks: {counts:?}");
@@ -283,9 +273,10 @@ fn a_turning_boundary_caps_the_sizing() {
 /// distance (the sphere fits everywhere, so only the boundary cap and the gradation lower g).
 fn assert_g_max_or_graded(mesh: &TriMesh, topo: &Topology, g: &[f64], g_max: f64) {
     for v in (0..mesh.vertex_count()).filter(|&v| !topo.is_boundary_vertex(v) && g[v] != g_max) {
-        let graded = topo.vertex_neighbors(v).iter().any(|&u| {
-            (g[v] - g[u as usize] - GRADATION * mesh.positions[v].distance(mesh.positions[u as usize])).abs() < 1e-12 * g_max
-        });
+        let graded = topo
+            .vertex_neighbors(v)
+            .iter()
+            .any(|&u| (g[v] - g[u as usize] - GRADATION * mesh.positions[v].distance(mesh.positions[u as usize])).abs() < 1e-12 * g_max);
         assert!(g[v] < g_max && graded, "interior vertex {v}: g {} neither g_max nor graded", g[v]);
     }
 }
@@ -306,23 +297,16 @@ fn local_spheres_orthogonal_to_omega_reproduce_a_sphere_orthogonal_to_it() {
     }
     let diag = mesh.bbox_diagonal();
     let bounds = SizingBounds::for_mesh(&mesh, &topo);
-    let sizing =
-        SizingField::from_sphere_fn(&mesh, &topo, &|i| spheres[i], 1e-4 * diag, bounds, &mut spherical_faces::progress::ignore).unwrap();
+    let sizing = SizingField::from_sphere_fn(&mesh, &topo, &|i| spheres[i], 1e-4 * diag, bounds, &mut spherical_faces::progress::ignore).unwrap();
     // g_max inside, but for the gradation away from the capped boundary (see the sphere patch
     // test).
     assert_g_max_or_graded(&mesh, &topo, sizing.values(), bounds.g_max);
     // And on a surface that is not spherical the zones are finite.
     let cyl = cylinder_patch(2.0, 1.5, 8.0, 24, 48);
     let ctopo = Topology::new(&cyl);
-    let cs = local_spheres_orthogonal(
-        &cyl,
-        &ctopo,
-        &AbsoluteSphere::Sphere { center: DVec3::new(0.0, 0.0, -30.0), r2: 900.0 },
-        16,
-    );
+    let cs = local_spheres_orthogonal(&cyl, &ctopo, &AbsoluteSphere::Sphere { center: DVec3::new(0.0, 0.0, -30.0), r2: 900.0 }, 16);
     let cb = SizingBounds::for_mesh(&cyl, &ctopo);
-    let cz = SizingField::from_sphere_fn(&cyl, &ctopo, &|i| cs[i], 1e-3 * cyl.bbox_diagonal(), cb, &mut spherical_faces::progress::ignore)
-        .unwrap();
+    let cz = SizingField::from_sphere_fn(&cyl, &ctopo, &|i| cs[i], 1e-3 * cyl.bbox_diagonal(), cb, &mut spherical_faces::progress::ignore).unwrap();
     let (lo, mean, hi) = cz.summary();
     println!("cylinder, spheres ⟂ Ω: g ∈ [{lo:.3}, {hi:.3}], mean {mean:.3}, bounds {cb:?}");
     assert!(mean < cb.g_max);
@@ -406,9 +390,7 @@ fn plane_central_spheres_are_handled() {
     let out = remesh(&mesh, &sizing, 4);
     assert_valid("plane", &mesh, &out);
     // The four corners are kept.
-    for c in
-        [DVec3::new(-2.0, -1.5, 0.0), DVec3::new(2.0, -1.5, 0.0), DVec3::new(2.0, 1.5, 0.0), DVec3::new(-2.0, 1.5, 0.0)]
-    {
+    for c in [DVec3::new(-2.0, -1.5, 0.0), DVec3::new(2.0, -1.5, 0.0), DVec3::new(2.0, 1.5, 0.0), DVec3::new(-2.0, 1.5, 0.0)] {
         assert!(out.positions.iter().any(|p| p.distance(c) < 1e-12), "corner {c} lost");
     }
 }
@@ -441,9 +423,7 @@ fn sharp_creases_are_kept() {
 fn other_references_remesh_validly() {
     // A quad-dominant roof (triangulated on import) and a surface whose H changes sign (central
     // planes), adaptive at the default ε.
-    for (name, mesh) in
-        [("botanic-garden-bubble-0", load("botanic-garden-bubble-0")), ("wave roof", Sample::WaveRoof.mesh())]
-    {
+    for (name, mesh) in [("botanic-garden-bubble-0", load("botanic-garden-bubble-0")), ("wave roof", Sample::WaveRoof.mesh())] {
         let sizing = adaptive(&mesh, DEFAULT_EPSILON);
         let out = remesh(&mesh, &sizing, 10);
         let min_angle = assert_valid(name, &mesh, &out);
@@ -594,12 +574,7 @@ fn one_round_at_100k_triangles() {
         let params = RemeshParams { rounds: 1, ..Default::default() };
         let t = now();
         let out = pliant_remesh_with_stats(&reference, &sizing, &params, &mut spherical_faces::progress::ignore).unwrap();
-        println!(
-            "{label}: one round {:.0} ms, {} faces, {:?}",
-            t.elapsed().as_secs_f64() * 1e3,
-            out.mesh.face_count(),
-            out.rounds[0]
-        );
+        println!("{label}: one round {:.0} ms, {} faces, {:?}", t.elapsed().as_secs_f64() * 1e3, out.mesh.face_count(), out.rounds[0]);
     }
     // (b) Adaptive: sizing field then one round.
     let t = now();

@@ -4,8 +4,8 @@
 
 use glam::DVec3;
 use spherical_faces::congruence::central_spheres::{jet_fit, CurvatureField, JetParams, SIGN_CHANGE_THRESHOLD};
-use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::samples::{dome_height, torus_closed_form, Sample};
 use std::collections::HashMap;
 
@@ -36,12 +36,7 @@ fn meshes_are_clean_and_oriented() {
     for s in Sample::ALL {
         let mesh = s.mesh();
         let (nv, nf) = (mesh.vertex_count(), mesh.face_count());
-        println!(
-            "{}: {nv} vertices, {nf} triangles, bbox {:?}, diag {:.1}",
-            s.key(),
-            mesh.bbox(),
-            mesh.bbox_diagonal()
-        );
+        println!("{}: {nv} vertices, {nf} triangles, bbox {:?}, diag {:.1}", s.key(), mesh.bbox(), mesh.bbox_diagonal());
         assert!((1000..=5000).contains(&nv), "{}: {nv} vertices", s.key());
         assert!(s.description().contains(&format!("{nv} vertices")), "{}: description out of date", s.key());
         assert!(s.description().contains(&format!("{nf} triangles")), "{}: description out of date", s.key());
@@ -157,12 +152,7 @@ fn wave_roof_changes_sign() {
     let mesh = Sample::WaveRoof.mesh();
     let field = fit(&mesh);
     let diag = mesh.bbox_diagonal();
-    println!(
-        "wave roof: H·diag in [{:.2}, {:.2}]; {:?}",
-        field.summary.min_h * diag,
-        field.summary.max_h * diag,
-        field.summary
-    );
+    println!("wave roof: H·diag in [{:.2}, {:.2}]; {:?}", field.summary.min_h * diag, field.summary.max_h * diag, field.summary);
     assert!(field.summary.h_changes_sign);
     assert_eq!(field.summary.failed_fits, 0);
 }
@@ -183,12 +173,7 @@ fn torus_sample_matches_closed_form() {
         e1 = e1.max((c.k1 - k1).abs() * r);
         e2 = e2.max((c.k2 - k2).abs() / k2.abs());
     }
-    println!(
-        "torus sample: max rel err H {:.2}%, k2 (meridian) {:.2}%, |k1 err|·r {:.2}% (interior)",
-        100.0 * eh,
-        100.0 * e2,
-        100.0 * e1
-    );
+    println!("torus sample: max rel err H {:.2}%, k2 (meridian) {:.2}%, |k1 err|·r {:.2}% (interior)", 100.0 * eh, 100.0 * e2, 100.0 * e1);
     assert!(eh < 0.03 && e2 < 0.02 && e1 < 0.02);
     assert!(!field.summary.h_changes_sign);
     assert!(field.summary.max_h < 0.0);

@@ -184,9 +184,7 @@ fn the_two_vertices_of_a_half_turn_share_no_quad() {
         let cones: Vec<u32> = m.singular.iter().map(|&(v, _)| v).collect();
         assert_eq!(cones.len(), 2, "{:?}", m.singular);
         assert!(m.singular.iter().all(|&(_, k)| k as f64 == q / 2.0), "{:?}", m.singular);
-        let shared: Vec<usize> = (0..m.mesh.face_count())
-            .filter(|&f| cones.iter().all(|c| m.mesh.faces[f].corners().contains(c)))
-            .collect();
+        let shared: Vec<usize> = (0..m.mesh.face_count()).filter(|&f| cones.iter().all(|c| m.mesh.faces[f].corners().contains(c))).collect();
         let h = (16.0 / m.mesh.face_count() as f64).sqrt();
         let apart = DVec2::from(m.uv[cones[0] as usize]).distance(DVec2::from(m.uv[cones[1] as usize]));
         assert!(shared.is_empty(), "quads {shared:?} hold both singular vertices ({apart:.2} apart, h ≈ {h:.2})");

@@ -21,11 +21,7 @@ impl Rng {
     }
     fn unit_vector(&mut self) -> DVec3 {
         loop {
-            let v = DVec3::new(
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-                self.uniform(-1.0, 1.0),
-            );
+            let v = DVec3::new(self.uniform(-1.0, 1.0), self.uniform(-1.0, 1.0), self.uniform(-1.0, 1.0));
             let l = v.length();
             if l > 0.1 && l <= 1.0 {
                 return v / l;
@@ -49,12 +45,7 @@ const FD_TOL: f64 = 1e-6;
 
 fn assert_fd(term: &dyn Term, x: &[f64]) {
     let rep = check_jacobian_report(term, x, FD_H);
-    assert!(
-        rep.max_error < FD_TOL,
-        "term '{}': Jacobian mismatch {:?}",
-        term.name(),
-        rep
-    );
+    assert!(rep.max_error < FD_TOL, "term '{}': Jacobian mismatch {:?}", term.name(), rep);
     assert_eq!(check_jacobian(term, x, FD_H), rep.max_error);
 }
 
@@ -207,9 +198,7 @@ fn sphere_fit_to_noisy_points() {
     let center = DVec3::new(0.3, -1.2, 2.0);
     let radius = 1.7;
     let noise = 1e-3;
-    let pts: Vec<DVec3> = (0..400)
-        .map(|_| center + rng.unit_vector() * (radius + rng.uniform(-noise, noise)))
-        .collect();
+    let pts: Vec<DVec3> = (0..400).map(|_| center + rng.unit_vector() * (radius + rng.uniform(-noise, noise))).collect();
     let mut problem = Problem::new(5);
     problem.add_term(SphereFit::new(0, pts.clone()), 1.0);
     problem.add_term(UnitLength::spheres(vec![0]), 100.0);
@@ -246,11 +235,7 @@ fn quad_mesh(n: usize, seed: u64) -> (Vec<DVec3>, Vec<[usize; 4]>) {
         for i in 0..=n {
             let u = -1.0 + 2.0 * i as f64 / n as f64;
             let v = -1.0 + 2.0 * j as f64 / n as f64;
-            verts.push(DVec3::new(
-                u + rng.uniform(-0.02, 0.02),
-                v + rng.uniform(-0.02, 0.02),
-                0.3 * (u * u - v * v) + rng.uniform(-0.02, 0.02),
-            ));
+            verts.push(DVec3::new(u + rng.uniform(-0.02, 0.02), v + rng.uniform(-0.02, 0.02), 0.3 * (u * u - v * v) + rng.uniform(-0.02, 0.02)));
         }
     }
     let mut faces = Vec::new();
@@ -296,8 +281,7 @@ fn planarization(n: usize) -> Planarization<'static> {
     let mut problem = Problem::new(n_vars);
     problem.add_term(PointOnPlane::new(items).with_name("planarity"), 1.0);
     problem.add_term(UnitLength::vectors((0..nf).map(normal).collect()), 1.0);
-    let closeness = problem
-        .add_term(Anchor::at_current((0..3 * nv).collect(), &x).with_name("closeness"), 1e-2);
+    let closeness = problem.add_term(Anchor::at_current((0..3 * nv).collect(), &x).with_name("closeness"), 1e-2);
     Planarization { problem, x, closeness, n_verts: nv, faces }
 }
 
@@ -408,12 +392,8 @@ fn a_decrease_window_stops_where_k_iterations_together_barely_descend() {
     let (k, tolerance) = (4, 0.5);
     let mut p = planarization(8);
     p.problem.set_weight(p.closeness, 1e-3);
-    let mut solver = Solver::new(SolverOptions {
-        relative_decrease_tolerance: tolerance,
-        decrease_window: k,
-        step_tolerance: 0.0,
-        ..Default::default()
-    });
+    let mut solver =
+        Solver::new(SolverOptions { relative_decrease_tolerance: tolerance, decrease_window: k, step_tolerance: 0.0, ..Default::default() });
     let mut energies = vec![];
     let rep = solver.solve(&mut p.problem, &mut p.x, |it| {
         energies.push(it.energy);
@@ -431,12 +411,7 @@ fn a_decrease_window_stops_where_k_iterations_together_barely_descend() {
 #[test]
 fn symbolic_factorization_is_reused() {
     let mut p = planarization(8);
-    let mut solver = Solver::new(SolverOptions {
-        max_iterations: 20,
-        step_tolerance: 0.0,
-        relative_decrease_tolerance: 0.0,
-        ..Default::default()
-    });
+    let mut solver = Solver::new(SolverOptions { max_iterations: 20, step_tolerance: 0.0, relative_decrease_tolerance: 0.0, ..Default::default() });
     for w in [1e-1, 1e-2, 1e-3, 1e-4] {
         p.problem.set_weight(p.closeness, w);
         solver.solve(&mut p.problem, &mut p.x, |_| Ok(()));
@@ -650,7 +625,6 @@ fn st_like(n: usize, fairness: bool) -> (Problem<'static>, Vec<f64>) {
     }
     (problem, x)
 }
-
 
 #[test]
 fn st_like_problem_converges_small() {

@@ -4,12 +4,12 @@
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use glam::DVec3;
-use spherical_faces::rng::Rng;
-use spherical_faces::geometry::linalg::Svd;
 use spherical_faces::congruence::support_structure::{second_common_point, star_axis, STAR_AXIS_MIN_CONDITION};
-use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
 use spherical_faces::geometry::circle::Circle;
+use spherical_faces::geometry::linalg::Svd;
+use spherical_faces::geometry::sphere::Sphere;
+use spherical_faces::rng::Rng;
 
 fn assert_normalized(s: &Sphere) {
     assert!((s.discriminant() - 1.0).abs() < 1e-12, "not normalized: {s:?} ({})", s.discriminant());
@@ -33,17 +33,8 @@ fn tri_normal(p: &[DVec3; 3]) -> DVec3 {
 fn svd_gives_orthonormal_right_vectors_and_null_space() {
     let mut rng = Rng(7);
     for m in [3usize, 4, 6] {
-        let rows: Vec<[f64; 5]> = (0..m)
-            .map(|_| {
-                [
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                    rng.range(-1.0, 1.0),
-                ]
-            })
-            .collect();
+        let rows: Vec<[f64; 5]> =
+            (0..m).map(|_| [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)]).collect();
         let svd = Svd::new(&rows);
         for i in 0..5 {
             for j in 0..5 {
@@ -51,8 +42,7 @@ fn svd_gives_orthonormal_right_vectors_and_null_space() {
                 assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
             }
             // ‖A v_i‖ = σ_i.
-            let n: f64 =
-                rows.iter().map(|r| (0..5).map(|k| r[k] * svd.v[i][k]).sum::<f64>().powi(2)).sum::<f64>().sqrt();
+            let n: f64 = rows.iter().map(|r| (0..5).map(|k| r[k] * svd.v[i][k]).sum::<f64>().powi(2)).sum::<f64>().sqrt();
             assert!((n - svd.sigma[i]).abs() < 1e-14, "{n} vs {}", svd.sigma[i]);
         }
         assert!(svd.sigma.windows(2).all(|w| w[0] >= w[1]));
@@ -66,8 +56,7 @@ fn svd_gives_orthonormal_right_vectors_and_null_space() {
 fn frame_round_trip_and_distance() {
     let mut rng = Rng(11);
     for _ in 0..50 {
-        let s =
-            Sphere::from_center_radius(rng.vec(5.0), rng.range(0.3, 4.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 });
+        let s = Sphere::from_center_radius(rng.vec(5.0), rng.range(0.3, 4.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 });
         let (t, sigma) = (rng.vec(3.0), rng.range(0.1, 10.0));
         let local = s.in_frame(t, sigma);
         // Same set, same orientation.
@@ -388,8 +377,7 @@ fn inversion_and_power() {
     assert!((omega.power(y) + omega.power(x)).abs() < 1e-14);
     assert!((y - x).cross(axis).length() < 1e-14);
     // Coefficients: eval = power; the row is proportional to the inversive row.
-    for omega in [AbsoluteSphere::Sphere { center: m, r2: 3.0 }, AbsoluteSphere::Sphere { center: m, r2: -3.0 }, omega]
-    {
+    for omega in [AbsoluteSphere::Sphere { center: m, r2: 3.0 }, AbsoluteSphere::Sphere { center: m, r2: -3.0 }, omega] {
         let k = omega.coefficients();
         assert!((k.eval(x) - omega.power(x)).abs() < 1e-12);
         let (a, b) = (omega.row(), k.inversive_row());

@@ -128,7 +128,8 @@ fn a_sign_change_in_the_boundary_strip_is_a_warning() {
     let (bu, bv) = (BSplineBasis::clamped_uniform(p, nu, (0.0, 1.0)).unwrap(), BSplineBasis::clamped_uniform(p, nv, (0.0, 1.0)).unwrap());
     let (gu, gv) = (bu.greville(), bv.greville());
     let height = |x: f64, y: f64| -0.5 * (x * x + y * y) + 30.0 * (0.04 - x).max(0.0).powi(3);
-    let control: Vec<DVec3> = (0..nv).flat_map(|j| (0..nu).map(move |i| (i, j))).map(|(i, j)| DVec3::new(gu[i], gv[j], height(gu[i], gv[j]))).collect();
+    let control: Vec<DVec3> =
+        (0..nv).flat_map(|j| (0..nu).map(move |i| (i, j))).map(|(i, j)| DVec3::new(gu[i], gv[j], height(gu[i], gv[j]))).collect();
     let s = BSplineSurface::new(bu, bv, control, vec![1.0; nu * nv]).unwrap();
     let grid = SamplingGrid::new(&s, 20).unwrap();
     let signs = check_mean_curvature(&s, &grid, 1.5, 237).unwrap();
@@ -210,8 +211,7 @@ fn a_speck_of_the_other_sign_runs_with_a_warning_and_a_pit_is_refused_where_it_i
     assert!(positive > 0.0 && positive < 0.01 && negative > 0.99, "{positive} {negative}");
     let [warning] = signs.warnings.clone().try_into().expect("one warning");
     assert!(
-        matches!(warning, Warning::MeanCurvatureSpeck { uv, .. } if (0.6..0.7).contains(&uv[0]))
-            && warning.to_string().contains("(u, v) = (0.6"),
+        matches!(warning, Warning::MeanCurvatureSpeck { uv, .. } if (0.6..0.7).contains(&uv[0])) && warning.to_string().contains("(u, v) = (0.6"),
         "{warning}"
     );
     let r = Reference::from_bspline(speck).unwrap();

@@ -156,7 +156,8 @@ fn no_generated_roof_misses_a_guarantee_silently() {
         }
         // The method's own guarantees (exactness, θ, α, quads); the delivered panels' distance
         // and coverage are counted apart: these roofs are remeshed to 120 quads only.
-        let panels_only = ["panels_with_crossing_arcs", "panels_without_exact_surface", "support_elements_that_fold", "max_distance_to_reference", "coverage"];
+        let panels_only =
+            ["panels_with_crossing_arcs", "panels_without_exact_surface", "support_elements_that_fold", "max_distance_to_reference", "coverage"];
         met += usize::from(result.verdict.failures().all(|g| panels_only.contains(&g.name.as_str())));
         buildable += usize::from(result.verdict.holds());
         let singular = result.quad_mesh.as_ref().filter(|q| q.parameter_lines()).map_or(0, |q| q.singular_points.len());
@@ -243,7 +244,11 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
                 // once moved rigidly onto its reference. The bell's H changes sign.
                 assert!(result.verdict.holds(), "{name} θ {theta}: {}", result.verdict.failure_text());
             }
-            rows.push(format!("{name} θ {theta} α {alpha}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
+            rows.push(format!(
+                "{name} θ {theta} α {alpha}: start {:?}, {}",
+                result.congruence.start,
+                if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }
+            ));
         }
     }
     println!("{}\n{exact} of 14 exact, {buildable} buildable, {met} meet every guarantee", rows.join("\n"));
@@ -279,7 +284,8 @@ fn a_broken_sq_mesh_fails_its_final_check() {
     let stars = QuadStars::new(&broken);
     let out = sq_mesh(broken, sm.face_spheres.clone(), &normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
     let (_, panels, coverage) = spherical_faces::sq::measure_panels(&reference, &out, &f.uv, &params);
-    let delivered = Delivered::SqMesh { mesh: &out.sphere_mesh.mesh, figures: &out.figures, panels: &panels, max_distance: params.max_distance, coverage };
+    let delivered =
+        Delivered::SqMesh { mesh: &out.sphere_mesh.mesh, figures: &out.figures, panels: &panels, max_distance: params.max_distance, coverage };
     let check = verdict(&result.congruence.figures, delivered, params.theta_deg, params.alpha_deg);
     assert!(!check.holds());
     let missed: Vec<&str> = check.failures().map(|g| g.name.as_str()).collect();
@@ -324,7 +330,8 @@ fn an_sq_mesh_with_a_hole_misses_its_coverage() {
     let out = sq_mesh(holed, spheres, &normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
     let (_, panels, coverage) = spherical_faces::sq::measure_panels(&reference, &out, &f.uv, &params);
     assert!(coverage < f.coverage - 0.05 && coverage < MIN_COVERAGE, "the hole shows: {coverage} of {}", f.coverage);
-    let delivered = Delivered::SqMesh { mesh: &out.sphere_mesh.mesh, figures: &out.figures, panels: &panels, max_distance: params.max_distance, coverage };
+    let delivered =
+        Delivered::SqMesh { mesh: &out.sphere_mesh.mesh, figures: &out.figures, panels: &panels, max_distance: params.max_distance, coverage };
     let check = verdict(&result.congruence.figures, delivered, params.theta_deg, params.alpha_deg);
     let missed: Vec<&str> = check.failures().map(|g| g.name.as_str()).collect();
     assert!(missed.contains(&"coverage"), "{missed:?}");
@@ -347,7 +354,8 @@ fn an_sq_mesh_with_a_hole_misses_its_coverage() {
 fn our_hard_corpus_runs_and_says_what_it_misses() {
     use spherical_faces::import::{import_file, ImportedFile};
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/corpus40");
-    let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "json")).collect();
+    let mut files: Vec<_> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "json")).collect();
     files.sort();
     assert_eq!(files.len(), 24);
     let params = SqParams::default();
@@ -360,7 +368,11 @@ fn our_hard_corpus_runs_and_says_what_it_misses() {
         let misses = delivered_misses(&reference, &result, &params);
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
         met += usize::from(result.verdict.holds());
-        rows.push(format!("{name}: start {:?}, {}", result.congruence.start, if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }));
+        rows.push(format!(
+            "{name}: start {:?}, {}",
+            result.congruence.start,
+            if misses.is_empty() { "meets".into() } else { result.verdict.failure_text() }
+        ));
     }
     println!("{}\n{met} of 24 meet every guarantee", rows.join("\n"));
     assert!(met >= 13, "{met} of 24 meet:\n{}", rows.join("\n"));

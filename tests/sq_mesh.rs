@@ -165,9 +165,7 @@ fn a_singular_torsal_field_falls_back_to_the_parameter_lines_and_says_so() {
     assert!(q.singular_points.iter().all(|s| s.quarters.abs() == 1), "{:?}", q.singular_points);
     assert!(q.singular.is_empty());
     assert!(
-        r.warnings
-            .iter()
-            .any(|w| matches!(w, Warning::SingularTorsalField { valence_5, .. } if *valence_5 > 0) && w.to_string().contains("umbilic")),
+        r.warnings.iter().any(|w| matches!(w, Warning::SingularTorsalField { valence_5, .. } if *valence_5 > 0) && w.to_string().contains("umbilic")),
         "{:?}",
         r.warnings
     );
@@ -211,7 +209,8 @@ fn the_remesh_leaves_no_sliver_along_the_boundary() {
             for face in &m.mesh.faces {
                 let c = face.corners();
                 let on = |k: usize| m.on_boundary[c[k % 4] as usize];
-                let inward: Vec<f64> = (0..4).filter(|&k| on(k) != on(k + 1)).map(|k| p[c[k] as usize].distance(p[c[(k + 1) % 4] as usize])).collect();
+                let inward: Vec<f64> =
+                    (0..4).filter(|&k| on(k) != on(k + 1)).map(|k| p[c[k] as usize].distance(p[c[(k + 1) % 4] as usize])).collect();
                 if (0..4).filter(|&k| on(k)).count() == 2 && inward.len() == 2 && inward.iter().all(|&l| l < 0.3 * m.spacing) {
                     slivers.push(format!("{name} N {target_faces}: {:?} of h {:.3}", inward, m.spacing));
                 }

@@ -105,8 +105,8 @@ fn the_regularizer_damps_without_energy() {
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::samples::Sample;
 use spherical_faces::sq::sphere_terms::{
-    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, PanelProximity,
-    TorsalPlane, VertexNormals,
+    AxisNormalAngle, CentrePlanarity, CentreProximity, CentreQuadAngle, CentreSeparation, FanAxisAngle, NodeAxis, PanelProximity, TorsalPlane,
+    VertexNormals,
 };
 
 /// Six spheres (5 blocks with a in ±[0.2, 0.5]), four vertices and four unit-ish normals.
@@ -131,7 +131,12 @@ fn final_optimization_terms_match_finite_differences() {
         let s = |k: usize| 5 * k;
         let v = |k: usize| 30 + 3 * k;
         // Stars of four faces, and of three and five at singular vertices (Sec. 5.2).
-        let stars = vec![(vec![s(0), s(1), s(2), s(3)], v(4)), (vec![s(2), s(3), s(4), s(5)], v(5)), (vec![s(0), s(2), s(4)], v(6)), (vec![s(1), s(2), s(3), s(4), s(5)], v(7))];
+        let stars = vec![
+            (vec![s(0), s(1), s(2), s(3)], v(4)),
+            (vec![s(2), s(3), s(4), s(5)], v(5)),
+            (vec![s(0), s(2), s(4)], v(6)),
+            (vec![s(1), s(2), s(3), s(4), s(5)], v(7)),
+        ];
         assert_fd(&CentrePlanarity { stars }, &x);
         let edges = vec![
             (v(0), v(1), NodeAxis::Variable(v(4)), NodeAxis::Variable(v(5)), v(6)),
@@ -142,7 +147,12 @@ fn final_optimization_terms_match_finite_differences() {
         assert_fd(&CentreProximity { faces: vec![(s(0), glam::DVec3::new(0.5, 0.1, -0.3), n), (s(5), glam::DVec3::ZERO, n)], epsilon: 0.01 }, &x);
         // Hinges active and inactive: wide and narrow angles.
         for cos2 in [0.0, 0.3, 0.95] {
-            let stars = vec![(vec![s(0), s(1), s(2), s(3)], cos2), (vec![s(5), s(4), s(3), s(2)], cos2), (vec![s(0), s(3), s(5)], 0.5 * cos2), (vec![s(0), s(1), s(2), s(4), s(5)], cos2)];
+            let stars = vec![
+                (vec![s(0), s(1), s(2), s(3)], cos2),
+                (vec![s(5), s(4), s(3), s(2)], cos2),
+                (vec![s(0), s(3), s(5)], 0.5 * cos2),
+                (vec![s(0), s(1), s(2), s(4), s(5)], cos2),
+            ];
             assert_fd(&CentreQuadAngle { stars: stars.clone() }, &x);
             assert_fd(&Hinge::new(CentreQuadAngle { stars }), &x);
             let normals = VertexNormals::new(&loaded.surface, vec![v(0), v(1)], vec![n, glam::DVec3::Z], &x);

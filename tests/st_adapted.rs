@@ -222,13 +222,11 @@ fn glide_terms_follow_their_moving_targets() {
     used.sort_unstable();
     used.dedup();
     let mut rng = spherical_faces::rng::Rng(99);
-    let positions: Vec<DVec3> =
-        used.iter().map(|&v| tilted.positions[v as usize] + rng.range(-1e-3, 1e-3) * normal + rng.vec(5e-3)).collect();
+    let positions: Vec<DVec3> = used.iter().map(|&v| tilted.positions[v as usize] + rng.range(-1e-3, 1e-3) * normal + rng.vec(5e-3)).collect();
     let remap = |v: u32| used.binary_search(&v).unwrap() as u32;
     let mesh = TriMesh::new(positions, inner.iter().map(|t| t.map(remap)).collect());
-    let spheres: Vec<Sphere> = (0..mesh.face_count())
-        .map(|f| closest_family_member(mesh.face_points(f), &Sphere::from_center_radius(-3.0 * normal, 3.0)))
-        .collect();
+    let spheres: Vec<Sphere> =
+        (0..mesh.face_count()).map(|f| closest_family_member(mesh.face_points(f), &Sphere::from_center_radius(-3.0 * normal, 3.0))).collect();
     let x = pack(&mesh, &spheres);
     let topo = Topology::new(&mesh);
     let (mut problem, ids) = build_problem(&mesh, &topo, &reference, &StAdaptedWeights::default(), None, &x);
@@ -339,8 +337,7 @@ fn adaptive_vs_uniform_distance_at_equal_face_count() {
     let ru = run(name, &pu);
     // The initial meshes get no panels in the method; measure theirs here.
     let reference = load_reference(name);
-    let initial_distance =
-        |r: &StAdaptedResult| metrics(&r.initial_sphere_mesh, &reference, EdgeArcs::Intersection).0.max_distance_to_reference;
+    let initial_distance = |r: &StAdaptedResult| metrics(&r.initial_sphere_mesh, &reference, EdgeArcs::Intersection).0.max_distance_to_reference;
     let (ia, iu) = (initial_distance(&ra), initial_distance(&ru));
     println!(
         "adaptive ε={eps}: {} faces, dist {:.3e} (init {:.3e}); uniform: {} faces, dist {:.3e} (init {:.3e})",
@@ -453,8 +450,7 @@ fn profile_optimization() {
         all_ms.sort_by(|a, b| a.total_cmp(b));
         let it = run.iterations as f64;
         let (_, proj) = unpack(&x, &mesh.triangles, nv);
-        let kinks: Vec<f64> =
-            topology.interior_edges().map(|(_, f, g)| proj[f as usize].kink_angle(&proj[g as usize]).to_degrees()).collect();
+        let kinks: Vec<f64> = topology.interior_edges().map(|(_, f, g)| proj[f as usize].kink_angle(&proj[g as usize]).to_degrees()).collect();
         let mean_kink = kinks.iter().sum::<f64>() / kinks.len() as f64;
         let max_kink = kinks.iter().copied().fold(0.0, f64::max);
         println!(
@@ -584,8 +580,7 @@ fn boundary_arcs_follow_the_reference_boundary() {
         worst / r.diag
     };
     let followed = worst(&r.sphere_mesh);
-    let great_circles =
-        worst(&SphereMesh::new(r.sphere_mesh.mesh.clone(), r.sphere_mesh.face_spheres.clone(), r.sphere_mesh.boundary_arcs));
+    let great_circles = worst(&SphereMesh::new(r.sphere_mesh.mesh.clone(), r.sphere_mesh.face_spheres.clone(), r.sphere_mesh.boundary_arcs));
     println!("boundary arcs off the boundary circle: {followed:.2e} (great circles {great_circles:.2e}) of the diagonal");
     assert!(followed <= 2e-4, "{followed}");
     assert!(great_circles > 10.0 * followed, "{great_circles} vs {followed}");
@@ -603,8 +598,7 @@ fn a_reference_coarser_than_epsilon_is_named() {
     for rings in [6, 12, 36] {
         let mesh = sphere_cap(20.0, 12.0, rings);
         let center = DVec3::new(0.0, 0.0, -16.0);
-        let heights: Vec<f64> =
-            (0..mesh.face_count()).map(|f| 20.0 - (mesh.face_points(f).iter().sum::<DVec3>() / 3.0 - center).length()).collect();
+        let heights: Vec<f64> = (0..mesh.face_count()).map(|f| 20.0 - (mesh.face_points(f).iter().sum::<DVec3>() / 3.0 - center).length()).collect();
         let exact = median(&heights).unwrap() / mesh.bbox_diagonal();
         let estimate = Reference::from_triangles(mesh.clone()).facet_sagitta();
         println!("{rings} rings: sagitta {estimate:.3e}, centroids {exact:.3e}");
@@ -649,9 +643,9 @@ fn a_sphere_stays_trivial_at_the_default_tolerance() {
 #[test]
 fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
     use spherical_faces::geometry::mesh::PolyMesh;
+    use spherical_faces::panels::buildability::Buildability;
     use spherical_faces::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
     use spherical_faces::samples::Sample;
-    use spherical_faces::panels::buildability::Buildability;
     use spherical_faces::st_adapted::guarantees::verdict;
     use spherical_faces::units::Units;
     let reference = Reference::from_triangles(Sample::Dome.mesh());
@@ -668,9 +662,8 @@ fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
     let smooth = PolyMesh::from(&tri);
     let sm = SphereMesh::new(smooth.clone(), spheres_of(&smooth), BoundaryArcRule::Parallel(DVec3::ZERO));
     let diag = reference.diagonal();
-    let verdict = |m, panels: &[spherical_faces::panels::panel::Panel], d: &[f64]| {
-        verdict(m, &Buildability::of_panels(panels, None, d, diag, Units::M), 1.0)
-    };
+    let verdict =
+        |m, panels: &[spherical_faces::panels::panel::Panel], d: &[f64]| verdict(m, &Buildability::of_panels(panels, None, d, diag, Units::M), 1.0);
     let (m, panels, d) = metrics(&sm, &reference, EdgeArcs::Intersection);
     assert_eq!(m.flipped_faces, 0);
     assert!(verdict(&m, &panels, &d).holds(), "{}", verdict(&m, &panels, &d).failure_text());
@@ -746,7 +739,11 @@ fn crossing_intersection_arcs_are_cut_by_bisecting_planes() {
         plain.bisected_edges.clear();
         let crossing_before = FaceArcs::of(&plain, EdgeArcs::Intersection).crossing().len();
         let crossing = r.panels.iter().filter(|p| arcs_cross(&p.sphere, &p.arcs)).count();
-        println!("{name}: intersection arcs cross at {crossing_before} panels; {} edges bisected, {crossing} panels cross, gap {:?}", sm.bisected_edges.len(), r.metrics.max_gap);
+        println!(
+            "{name}: intersection arcs cross at {crossing_before} panels; {} edges bisected, {crossing} panels cross, gap {:?}",
+            sm.bisected_edges.len(),
+            r.metrics.max_gap
+        );
         assert!(crossing_before > 0, "{name}: the intersection arcs alone cross somewhere");
         assert_eq!(crossing, 0, "{name}");
         assert_eq!(r.metrics.bisected_edges, sm.bisected_edges.len());
@@ -758,7 +755,8 @@ fn crossing_intersection_arcs_are_cut_by_bisecting_planes() {
             let (pl, ph) = (mesh.positions[lo as usize], mesh.positions[hi as usize]);
             let (nf, ng) = (mesh.face_area_vector(f as usize).normalize(), mesh.face_area_vector(g as usize).normalize());
             // Consistently oriented faces run the edge in opposite directions.
-            let consistent = (mesh.faces[f as usize].corners()[kf as usize] == lo) != (mesh.faces[g as usize].corners()[topo.edge_faces(e)[1].1 as usize] == lo);
+            let consistent =
+                (mesh.faces[f as usize].corners()[kf as usize] == lo) != (mesh.faces[g as usize].corners()[topo.edge_faces(e)[1].1 as usize] == lo);
             let normal = (ph - pl).cross(if consistent { nf + ng } else { nf - ng }).normalize();
             for (face, k) in topo.edge_faces(e) {
                 let panel = &r.panels[*face as usize];

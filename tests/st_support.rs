@@ -10,16 +10,15 @@ use common::load;
 use glam::DVec3;
 use spherical_faces::congruence::central_spheres::{jet_fit, JetParams};
 use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
-use spherical_faces::geometry::mesh::{PolyMesh, TriMesh};
 use spherical_faces::geometry::mesh::topology::Topology;
+use spherical_faces::geometry::mesh::{PolyMesh, TriMesh};
 use spherical_faces::panels::sphere_mesh::BoundaryArcRule;
 use spherical_faces::progress::{ignore, Cancelled, Clock, OnProgress};
 use spherical_faces::reference::Reference;
 use spherical_faces::rng::Rng;
 use spherical_faces::samples::{sphere_cap, Sample};
 use spherical_faces::st_support::absolute_sphere::{
-    center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines,
-    spherical_barycenter, AbsoluteSphereParams,
+    center_from_normals, e_center, e_center_residuals, estimate_absolute_sphere, m0_from_normal_lines, spherical_barycenter, AbsoluteSphereParams,
 };
 use spherical_faces::st_support::metrics::{metrics, Counts};
 use spherical_faces::st_support::{compute, guarantees, StSupportError, StSupportParams, StSupportResult};
@@ -207,10 +206,7 @@ fn distant_centre_makes_omega_a_plane() {
 fn minimal_surface_is_refused_with_a_clear_message() {
     let mesh = load("enneper2");
     let err = st_support(&mesh, &StSupportParams::default(), &mut ignore).unwrap_err().to_string();
-    assert!(
-        err.contains("no usable central spheres") && err.contains("H ≈ 0 on") && err.contains("minimal surface"),
-        "{err}"
-    );
+    assert!(err.contains("no usable central spheres") && err.contains("H ≈ 0 on") && err.contains("minimal surface"), "{err}");
     // The same from the estimate itself, with the counts.
     let topo = Topology::new(&mesh);
     let field = jet_fit(&mesh, &topo, &JetParams::default(), &mut spherical_faces::progress::ignore).unwrap();
@@ -373,14 +369,9 @@ fn samples_run() {
         for opt in [false, true] {
             let r = run(&mesh, opt);
             let m = &r.metrics;
-            println!(
-                "{:?} opt={opt}: Ω {:?} inf {} flipped {} {m:?}",
-                sample, r.omega, r.absolute.at_infinity, r.absolute.flipped
-            );
+            println!("{:?} opt={opt}: Ω {:?} inf {} flipped {} {m:?}", sample, r.omega, r.absolute.at_infinity, r.absolute.flipped);
             assert!(
-                m.max_vertex_sphere_residual <= 1e-9
-                    && m.max_orthogonality_residual <= 1e-9
-                    && m.max_center_plane_residual <= 1e-9,
+                m.max_vertex_sphere_residual <= 1e-9 && m.max_orthogonality_residual <= 1e-9 && m.max_center_plane_residual <= 1e-9,
                 "{sample:?}: {m:?}"
             );
             assert!(m.max_node_axis_offset <= 1e-9, "{sample:?}: {m:?}");

@@ -106,12 +106,15 @@ fn closest_uv(reference: &Reference, p: DVec3) -> [f64; 2] {
 fn check(args: &[&str]) -> Value {
     let name: String = args.join("-").chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
     let dir = common::temp_dir(&format!("verdicts-{name}"));
-    let out = Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(args).args(["-q", "--formats", "schedule", "--out"]).arg(&dir).output().unwrap();
-    let read = |name: &str| -> Value { serde_json::from_slice(&std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{args:?} {name}: {e}"))).unwrap() };
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_spherical-faces")).args(args).args(["-q", "--formats", "schedule", "--out"]).arg(&dir).output().unwrap();
+    let read =
+        |name: &str| -> Value { serde_json::from_slice(&std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{args:?} {name}: {e}"))).unwrap() };
     let (report, schedule) = (read("report.json"), read("panels.json"));
     let stderr = String::from_utf8_lossy(&out.stderr);
     let meets = report["meets_guarantees"].as_bool().unwrap();
-    let missed: Vec<&str> = report["guarantees"].as_array().unwrap().iter().filter(|g| g["holds"] == false).map(|g| g["name"].as_str().unwrap()).collect();
+    let missed: Vec<&str> =
+        report["guarantees"].as_array().unwrap().iter().filter(|g| g["holds"] == false).map(|g| g["name"].as_str().unwrap()).collect();
     assert_eq!(meets, missed.is_empty(), "{args:?}");
     if meets {
         assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");

@@ -116,7 +116,11 @@ fn small_dense_products_match_a_triple_loop() {
                     let dot: f64 = (0..k).map(|p| lhs[(i, p)] * rhs[(p, j)]).sum();
                     let base = if accum == Accum::Add { start[(i, j)] } else { 0.0 };
                     let want = base - 0.5 * dot;
-                    assert!((dst[(i, j)] - want).abs() <= 1e-12, "{m}×{k}·{k}×{n} ({accum:?}, transposed {transposed}) at ({i}, {j}): {} vs {want}", dst[(i, j)]);
+                    assert!(
+                        (dst[(i, j)] - want).abs() <= 1e-12,
+                        "{m}×{k}·{k}×{n} ({accum:?}, transposed {transposed}) at ({i}, {j}): {} vs {want}",
+                        dst[(i, j)]
+                    );
                 }
             }
         }

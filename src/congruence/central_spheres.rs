@@ -37,8 +37,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::jet::{coefficient_count, tangent_basis, JetFitter};
-use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, OnProgress, Progress};
 
@@ -162,11 +162,7 @@ pub struct UnusableCentralSpheres {
 
 impl std::fmt::Display for UnusableCentralSpheres {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "the reference has no usable central spheres: H ≈ 0 on {} of {} vertices (minimal surface?)",
-            self.unusable, self.vertices
-        )
+        write!(f, "the reference has no usable central spheres: H ≈ 0 on {} of {} vertices (minimal surface?)", self.unusable, self.vertices)
     }
 }
 
@@ -204,12 +200,7 @@ impl CurvatureField {
 
 /// Jet-fitted curvature of every vertex. Reports step "jet_fit" every 1024 vertices and at the
 /// end.
-pub fn jet_fit(
-    mesh: &TriMesh,
-    topo: &Topology,
-    params: &JetParams,
-    progress: &mut OnProgress,
-) -> Result<CurvatureField, Cancelled> {
+pub fn jet_fit(mesh: &TriMesh, topo: &Topology, params: &JetParams, progress: &mut OnProgress) -> Result<CurvatureField, Cancelled> {
     let nv = mesh.vertex_count().min(topo.vertex_count());
     let degree = params.degree.clamp(2, 4);
     let min_points = params.min_points.max(min_points_for_degree(degree));
@@ -277,7 +268,11 @@ impl CurvatureField {
             .zip(&vertices)
             .map(|(&f, c)| {
                 let s = Sphere::from_point_normal_curvature(f, c.normal, c.mean);
-                if s.is_finite() { s } else { Sphere::plane(DVec3::ZERO, c.normal) }
+                if s.is_finite() {
+                    s
+                } else {
+                    Sphere::plane(DVec3::ZERO, c.normal)
+                }
             })
             .collect();
         let planar: Vec<bool> = vertices.iter().map(|c| c.mean.abs() * diag < PLANAR_TOLERANCE).collect();

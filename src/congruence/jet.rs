@@ -5,7 +5,6 @@
 //! The fitter owns every buffer it needs, so fitting a whole mesh allocates nothing per vertex.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::geometry::linalg::{lstsq_householder, sym2_eigen, sym3_eigen, MAX_COLS};
 use glam::DVec3;
@@ -58,13 +57,7 @@ impl JetFitter {
     /// points), with `normal` the approximate unit normal that fixes the frame and the curvature
     /// sign. None when the neighbourhood is degenerate (too few points, all collinear, coincident,
     /// or non-finite).
-    pub fn fit(
-        &mut self,
-        origin: DVec3,
-        normal: DVec3,
-        points: impl Iterator<Item = DVec3> + Clone,
-        degree: u8,
-    ) -> Option<JetGeometry> {
+    pub fn fit(&mut self, origin: DVec3, normal: DVec3, points: impl Iterator<Item = DVec3> + Clone, degree: u8) -> Option<JetGeometry> {
         let n0 = normal.try_normalize()?;
         let first = self.fit_in_frame(origin, n0, points.clone(), degree)?;
         if first.1 > REFIT_SLOPE {
@@ -110,13 +103,7 @@ impl JetFitter {
     }
 
     /// One fit in the frame with normal `n0`. Returns the geometry and the slope |∇J(0,0)|.
-    fn fit_in_frame(
-        &mut self,
-        origin: DVec3,
-        n0: DVec3,
-        points: impl Iterator<Item = DVec3>,
-        degree: u8,
-    ) -> Option<(JetGeometry, f64)> {
+    fn fit_in_frame(&mut self, origin: DVec3, n0: DVec3, points: impl Iterator<Item = DVec3>, degree: u8) -> Option<(JetGeometry, f64)> {
         let (t1, t2) = tangent_basis(n0);
         self.local.clear();
         let mut dist_sum = 0.0;
@@ -207,18 +194,7 @@ pub(crate) fn tangent_basis(n: DVec3) -> (DVec3, DVec3) {
 /// (0, 0), from its first and second derivatives. Exact (the gradient is not assumed zero):
 /// first fundamental form E, F, G and second L, M, N w.r.t. the graph normal (−hx, −hy, 1)/W; the
 /// generalized eigenproblem II v = κ I v is made symmetric with the Cholesky factor of I.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn shape_operator(
-    t1: DVec3,
-    t2: DVec3,
-    n0: DVec3,
-    hx: f64,
-    hy: f64,
-    hxx: f64,
-    hxy: f64,
-    hyy: f64,
-    degree: u8,
-) -> Option<JetGeometry> {
+pub(crate) fn shape_operator(t1: DVec3, t2: DVec3, n0: DVec3, hx: f64, hy: f64, hxx: f64, hxy: f64, hyy: f64, degree: u8) -> Option<JetGeometry> {
     let (e, f, g) = (1.0 + hx * hx, hx * hy, 1.0 + hy * hy);
     let w = (1.0 + hx * hx + hy * hy).sqrt();
     let (l, m, n) = (hxx / w, hxy / w, hyy / w);

@@ -4,7 +4,6 @@
 //! c_u = f_u + r_u n + r n_u and c_v = f_v + r_v n + r n_v.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 

@@ -18,7 +18,6 @@
 //! axes, the elements and their strips: the one result shape of every method with support.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -114,19 +113,12 @@ pub struct NodeAxes {
 impl NodeAxes {
     /// The axes as display segments (v, v + length · direction), toward the support side.
     pub fn segments(&self, length: f64) -> Vec<(DVec3, DVec3)> {
-        self.axes
-            .iter()
-            .filter_map(|&(v, d)| Some((v, v + length * d.try_normalize()?)))
-            .collect()
+        self.axes.iter().filter_map(|&(v, d)| Some((v, v + length * d.try_normalize()?))).collect()
     }
 
     /// Per vertex: the angle (deg) between its node axis, as a line, and `normals[v]`.
     pub(crate) fn normal_angles_deg(&self, normals: &[DVec3]) -> Vec<f64> {
-        self.axes
-            .iter()
-            .zip(normals)
-            .map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees())
-            .collect()
+        self.axes.iter().zip(normals).map(|(&(_, d), n)| d.cross(*n).length().atan2(d.dot(*n).abs()).to_degrees()).collect()
     }
 
     /// Vertices whose axis comes from their star's spheres.
@@ -160,11 +152,7 @@ pub fn node_axes(
             }
         }
     }
-    let mut out = NodeAxes {
-        axes: Vec::with_capacity(nv),
-        second_points: vec![None; nv],
-        from_spheres: vec![false; nv],
-    };
+    let mut out = NodeAxes { axes: Vec::with_capacity(nv), second_points: vec![None; nv], from_spheres: vec![false; nv] };
     let mut star = Vec::new();
     for v in 0..nv {
         if v % 1024 == 0 {
@@ -174,8 +162,7 @@ pub fn node_axes(
         let side = toward(v);
         star.clear();
         star.extend(topo.vertex_faces(v).iter().map(|&f| spheres[f as usize]));
-        let direction = match star_axis(&star, p).filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION)
-        {
+        let direction = match star_axis(&star, p).filter(|a| a.condition >= STAR_AXIS_MIN_CONDITION) {
             Some(axis) => {
                 out.second_points[v] = axis.second_point;
                 out.from_spheres[v] = true;
@@ -183,30 +170,16 @@ pub fn node_axes(
             }
             None => match interior[v] {
                 (1, Some(e)) => {
-                    let [(f, _), (g, _)] = topo.edge_faces(e) else {
-                        unreachable!("an interior edge has two faces")
-                    };
+                    let [(f, _), (g, _)] = topo.edge_faces(e) else { unreachable!("an interior edge has two faces") };
                     let ends = topo.edges()[e].map(|i| positions[i as usize]);
-                    edge_circle(
-                        &spheres[*f as usize],
-                        Some(&spheres[*g as usize]),
-                        ends,
-                        plane(ends),
-                    )
-                    .and_then(|c| (side - side.dot(c.normal) * c.normal).try_normalize())
-                    .unwrap_or(side)
+                    edge_circle(&spheres[*f as usize], Some(&spheres[*g as usize]), ends, plane(ends))
+                        .and_then(|c| (side - side.dot(c.normal) * c.normal).try_normalize())
+                        .unwrap_or(side)
                 }
                 _ => side,
             },
         };
-        out.axes.push((
-            p,
-            if direction.dot(side) < 0.0 {
-                -direction
-            } else {
-                direction
-            },
-        ));
+        out.axes.push((p, if direction.dot(side) < 0.0 { -direction } else { direction }));
     }
     progress(Progress::new("node_axes", nv, nv))?;
     Ok(out)
@@ -243,12 +216,7 @@ pub enum EdgePlane {
 ///
 /// None when no real circle results (e.g. both spheres planes, or coincident spheres without a
 /// plane).
-pub fn edge_circle(
-    s1: &Sphere,
-    s2: Option<&Sphere>,
-    [u, w]: [DVec3; 2],
-    plane: EdgePlane,
-) -> Option<Circle> {
+pub fn edge_circle(s1: &Sphere, s2: Option<&Sphere>, [u, w]: [DVec3; 2], plane: EdgePlane) -> Option<Circle> {
     let e = w - u;
     let cut = |s: &Sphere, n: DVec3| Circle::plane_cut(s, u, n);
     let (n, q_plane) = match plane {
@@ -276,11 +244,7 @@ pub fn edge_circle(
             }
         }
     }
-    let plane_circle = if s1.a != 0.0 {
-        cut(s1, n)
-    } else {
-        s2.and_then(|s| cut(s, n))
-    };
+    let plane_circle = if s1.a != 0.0 { cut(s1, n) } else { s2.and_then(|s| cut(s, n)) };
     match plane_circle {
         Some(mut c) => {
             if let (Some(c1), Some(c2)) = (s1.center(), s2.and_then(|s| s.center())) {
@@ -296,13 +260,8 @@ pub fn edge_circle(
 
 /// Two spheres that are one: centres and radii within 1e-9 of the radius.
 fn coincide(s1: &Sphere, s2: &Sphere) -> bool {
-    match (
-        s1.center().zip(s1.signed_radius()),
-        s2.center().zip(s2.signed_radius()),
-    ) {
-        (Some((c1, r1)), Some((c2, r2))) => {
-            c1.distance(c2) + (r1 - r2).abs() <= 1e-9 * r1.abs().max(r2.abs())
-        }
+    match (s1.center().zip(s1.signed_radius()), s2.center().zip(s2.signed_radius())) {
+        (Some((c1, r1)), Some((c2, r2))) => c1.distance(c2) + (r1 - r2).abs() <= 1e-9 * r1.abs().max(r2.abs()),
         _ => false,
     }
 }
@@ -439,13 +398,7 @@ pub fn support_strips(elements: &[SupportElement], outer: impl Fn(&SupportElemen
 /// radius ρ ∓ depth (toward the side the node axes point to), corners where the node axes (projected
 /// into the plane) meet it. Falls back to the corners v + depth·d and the circle through them and
 /// the offset arc midpoint when an axis does not reach the concentric circle.
-pub fn support_element(
-    edge: [u32; 2],
-    circle: Circle,
-    p: [DVec3; 2],
-    dirs: [DVec3; 2],
-    depth: f64,
-) -> Option<SupportElement> {
+pub fn support_element(edge: [u32; 2], circle: Circle, p: [DVec3; 2], dirs: [DVec3; 2], depth: f64) -> Option<SupportElement> {
     if !(depth > 0.0 && depth.is_finite()) {
         return None;
     }

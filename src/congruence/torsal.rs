@@ -12,7 +12,6 @@
 //! and t. In parameters, d⁺ is (Δu, Δv) and d⁻ is (Δu, −Δv).
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 

@@ -24,10 +24,10 @@ use serde_json::{json, Map, Value};
 
 use crate::congruence::support_structure::SupportGeometry;
 use crate::export::schedule::MouldRecord;
-use crate::panels::moulds::{mould_colour, MouldAssignment};
-use crate::panels::panel::Panel;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::TriMesh;
+use crate::panels::moulds::{mould_colour, MouldAssignment};
+use crate::panels::panel::Panel;
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -335,7 +335,6 @@ pub fn write_glb(
 
     b.finish(nodes, extras)
 }
-
 
 /// The JSON chunk of a GLB (for tests and tools); None if `glb` is not a GLB.
 pub fn glb_json(glb: &[u8]) -> Option<Value> {

@@ -187,7 +187,8 @@ impl ExactSurfacesReport {
 
     /// "240 panels and 449 support elements as rational NURBS surfaces …", and what is missing.
     pub fn describe(&self) -> String {
-        let mut text = format!("{} panels and {} support elements as rational NURBS surfaces on their spheres and planes", self.panels, self.support_elements);
+        let mut text =
+            format!("{} panels and {} support elements as rational NURBS surfaces on their spheres and planes", self.panels, self.support_elements);
         if !self.refused.is_empty() {
             let ids: Vec<String> = self.refused.iter().take(5).map(|r| format!("{} {} ({})", r.kind, r.id, r.reason)).collect();
             text += &format!("; {} without one: {}{}", self.refused.len(), ids.join(", "), if self.refused.len() > 5 { ", …" } else { "" });

@@ -122,11 +122,7 @@ fn plane_patch(axis: DVec3, d: f64, points: impl Iterator<Item = DVec3>) -> Opti
         return None;
     }
     let at = |u: f64, v: f64| origin + u * e1 + v * e2;
-    Some(RationalPatch {
-        degree: [1, 1],
-        points: vec![at(lo.x, lo.y), at(lo.x, hi.y), at(hi.x, lo.y), at(hi.x, hi.y)],
-        weights: vec![1.0; 4],
-    })
+    Some(RationalPatch { degree: [1, 1], points: vec![at(lo.x, lo.y), at(lo.x, hi.y), at(hi.x, lo.y), at(hi.x, hi.y)], weights: vec![1.0; 4] })
 }
 
 /// What goes into `panels.3dm`.

@@ -429,11 +429,7 @@ impl PanelSchedule {
             for k in 0..corners {
                 match r.edges.get(k) {
                     Some(e) => {
-                        let _ = write!(
-                            out,
-                            ",{},{},{},{},{},{},",
-                            e.center[0], e.center[1], e.center[2], e.normal[0], e.normal[1], e.normal[2]
-                        );
+                        let _ = write!(out, ",{},{},{},{},{},{},", e.center[0], e.center[1], e.center[2], e.normal[0], e.normal[1], e.normal[2]);
                         opt(&mut out, e.radius);
                     }
                     None => out.push_str(",,,,,,,"),

@@ -78,8 +78,7 @@ impl Writer {
     fn surface(&mut self, s: &RationalPatch, ids: &[Vec<usize>]) -> usize {
         let [p, q] = s.degree;
         let rows: Vec<String> = ids.iter().map(|row| format!("({})", Self::refs(row))).collect();
-        let weights: Vec<String> =
-            (0..=p).map(|i| format!("({})", Self::reals(&(0..=q).map(|j| s.weight(i, j)).collect::<Vec<_>>()))).collect();
+        let weights: Vec<String> = (0..=p).map(|i| format!("({})", Self::reals(&(0..=q).map(|j| s.weight(i, j)).collect::<Vec<_>>()))).collect();
         self.add(&format!(
             "(BOUNDED_SURFACE() B_SPLINE_SURFACE({p},{q},({}),.UNSPECIFIED.,.F.,.F.,.F.) B_SPLINE_SURFACE_WITH_KNOTS(({mp},{mp}),({mq},{mq}),\
              (0.,1.),(0.,1.),.UNSPECIFIED.) GEOMETRIC_REPRESENTATION_ITEM() RATIONAL_B_SPLINE_SURFACE(({})) REPRESENTATION_ITEM('') SURFACE())",
@@ -155,8 +154,8 @@ pub fn write_step(name: &str, faces: &[StepFace], units: Units, precision: f64) 
     let length = w.length_unit(units);
     let angle = w.add("(NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.))");
     let solid = w.add("(NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT())");
-    let uncertainty =
-        w.add(&format!("UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE({}),#{length},'distance_accuracy_value','confusion accuracy')", real(precision)));
+    let uncertainty = w
+        .add(&format!("UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE({}),#{length},'distance_accuracy_value','confusion accuracy')", real(precision)));
     let context = w.add(&format!(
         "(GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#{uncertainty})) \
          GLOBAL_UNIT_ASSIGNED_CONTEXT((#{length},#{angle},#{solid})) REPRESENTATION_CONTEXT('',''))"

@@ -3,7 +3,6 @@
 //! power, inversion and the orthogonality condition (`notes/sphere-geometry.md`).
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -24,9 +23,7 @@ impl AbsoluteSphere {
     /// (0, −a, −d) for the plane ⟨x, a⟩ = d, so that `eval(x)` = ⟨x, a⟩ − d.
     pub fn coefficients(&self) -> Sphere {
         match *self {
-            AbsoluteSphere::Sphere { center, r2 } => {
-                Sphere { a: 1.0, b: 2.0 * center, c: center.length_squared() - r2 }
-            }
+            AbsoluteSphere::Sphere { center, r2 } => Sphere { a: 1.0, b: 2.0 * center, c: center.length_squared() - r2 },
             AbsoluteSphere::Plane { axis, d } => Sphere { a: 0.0, b: -axis, c: -d },
         }
     }
@@ -37,9 +34,7 @@ impl AbsoluteSphere {
     /// Proportional to the inversive row of [`Self::coefficients`].
     pub fn row(&self) -> [f64; 5] {
         match *self {
-            AbsoluteSphere::Sphere { center, r2 } => {
-                [center.length_squared() - r2, -center.x, -center.y, -center.z, 1.0]
-            }
+            AbsoluteSphere::Sphere { center, r2 } => [center.length_squared() - r2, -center.x, -center.y, -center.z, 1.0],
             AbsoluteSphere::Plane { axis, d } => [-2.0 * d, axis.x, axis.y, axis.z, 0.0],
         }
     }

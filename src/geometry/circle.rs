@@ -2,7 +2,6 @@
 //! plane, and the circle through three points.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -31,7 +30,13 @@ impl Circle {
             return None;
         }
         // Orient as c₁ − c₂ = (b₁/a₁ − b₂/a₂)/2, i.e. N times sign(a₁a₂); with a plane, along its b.
-        let orient = if s1.a != 0.0 && s2.a != 0.0 { (s1.a * s2.a).signum() } else if s2.a == 0.0 { -s1.a.signum() } else { s2.a.signum() };
+        let orient = if s1.a != 0.0 && s2.a != 0.0 {
+            (s1.a * s2.a).signum()
+        } else if s2.a == 0.0 {
+            -s1.a.signum()
+        } else {
+            s2.a.signum()
+        };
         let normal = n / len * orient;
         Self::cut(sphere, n / len, k / len).map(|c| Circle { normal, ..c })
     }

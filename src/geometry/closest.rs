@@ -66,10 +66,7 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVe
         let (q1, u1) = seg(b, c);
         let (q2, u2) = seg(c, a);
         let cands = [(q0, [1.0 - u0, u0, 0.0]), (q1, [0.0, 1.0 - u1, u1]), (q2, [u2, 0.0, 1.0 - u2])];
-        return cands
-            .into_iter()
-            .min_by(|x, y| x.0.distance_squared(p).total_cmp(&y.0.distance_squared(p)))
-            .unwrap_or((a, [1.0, 0.0, 0.0]));
+        return cands.into_iter().min_by(|x, y| x.0.distance_squared(p).total_cmp(&y.0.distance_squared(p))).unwrap_or((a, [1.0, 0.0, 0.0]));
     }
     let denom = 1.0 / sum;
     let v = vb * denom;
@@ -118,21 +115,14 @@ impl TriangleBvh {
         let tris = mesh
             .triangles
             .iter()
-            .map(|t| {
-                if t.iter().all(|&v| (v as usize) < n) {
-                    mesh_face(mesh, t)
-                } else {
-                    [DVec3::splat(f64::NAN); 3]
-                }
-            })
+            .map(|t| if t.iter().all(|&v| (v as usize) < n) { mesh_face(mesh, t) } else { [DVec3::splat(f64::NAN); 3] })
             .collect();
         Self::from_triangles(tris)
     }
 
     /// The BVH of explicit triangles. Triangles with non-finite corners are never hit.
     pub fn from_triangles(tris: Vec<[DVec3; 3]>) -> Self {
-        let mut order: Vec<u32> =
-            (0..tris.len() as u32).filter(|&i| tris[i as usize].iter().all(|p| p.is_finite())).collect();
+        let mut order: Vec<u32> = (0..tris.len() as u32).filter(|&i| tris[i as usize].iter().all(|p| p.is_finite())).collect();
         let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
         let mut nodes = Vec::with_capacity(2 * order.len() / LEAF_SIZE + 1);
         if !order.is_empty() {
@@ -152,9 +142,7 @@ impl TriangleBvh {
                 let (clo, chi) = order[start..end]
                     .iter()
                     .map(|&i| centroids[i as usize])
-                    .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(l, h), c| {
-                        (l.min(c), h.max(c))
-                    });
+                    .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(l, h), c| (l.min(c), h.max(c)));
                 let ext = chi - clo;
                 let axis = if ext.x >= ext.y && ext.x >= ext.z {
                     0
@@ -164,9 +152,7 @@ impl TriangleBvh {
                     2
                 };
                 let mid = (start + end) / 2;
-                order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
-                    centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-                });
+                order[start..end].select_nth_unstable_by(mid - start, |&a, &b| centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]));
                 let left = nodes.len();
                 nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });
                 nodes.push(Node { lo: DVec3::ZERO, hi: DVec3::ZERO, first: 0, count: 0 });

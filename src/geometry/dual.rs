@@ -3,7 +3,6 @@
 //! spheres) that terms hand to the solver. Checked against finite differences where it is used.
 
 // The product and quotient rules use the other operators on purpose.
-#![allow(clippy::suspicious_arithmetic_impl)]
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 

@@ -5,7 +5,6 @@
 //! accuracy.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 
@@ -104,7 +103,6 @@ pub(crate) fn sym2_eigen(p: f64, q: f64, r: f64) -> (f64, f64, (f64, f64)) {
 
 /// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations: eigenvalues ascending
 /// and the matching orthonormal eigenvectors.
-#[allow(clippy::needless_range_loop)]
 pub(crate) fn sym3_eigen(m: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
     let mut a = m;
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -182,10 +180,7 @@ impl<const N: usize> Svd<N> {
                         beta += r[q] * r[q];
                         gamma += r[p] * r[q];
                     }
-                    if gamma == 0.0
-                        || gamma.abs() <= 8.0 * f64::EPSILON * (alpha * beta).sqrt()
-                        || alpha.min(beta) <= negligible
-                    {
+                    if gamma == 0.0 || gamma.abs() <= 8.0 * f64::EPSILON * (alpha * beta).sqrt() || alpha.min(beta) <= negligible {
                         continue;
                     }
                     rotated = true;

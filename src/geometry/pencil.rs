@@ -91,13 +91,7 @@ fn pencil_basis_dual(p: [DVec3; 3]) -> [[Dual<9>; 5]; 2] {
     let rho = e.dot(e).sqrt();
     let inv_rho = rho.recip();
     let s0 = [Dual::constant(0.0), n_hat.x, n_hat.y, n_hat.z, n_hat.dot(q[0])];
-    let s1 = [
-        inv_rho * 0.5,
-        m.x * inv_rho,
-        m.y * inv_rho,
-        m.z * inv_rho,
-        (m.dot(m) - rho * rho) * inv_rho * 0.5,
-    ];
+    let s1 = [inv_rho * 0.5, m.x * inv_rho, m.y * inv_rho, m.z * inv_rho, (m.dot(m) - rho * rho) * inv_rho * 0.5];
     [s0, s1]
 }
 

@@ -72,7 +72,10 @@ mod tests {
     #[test]
     fn a_moved_patch_comes_back_onto_its_surface() {
         let f = |x: f64, y: f64| (x * x + 2.0 * y * y) / 4.0;
-        let on: Vec<DVec3> = (0..49).map(|k| DVec3::new((k % 7) as f64 / 3.0 - 1.0, (k / 7) as f64 / 3.0 - 1.0, 0.0)).map(|p| DVec3::new(p.x, p.y, f(p.x, p.y))).collect();
+        let on: Vec<DVec3> = (0..49)
+            .map(|k| DVec3::new((k % 7) as f64 / 3.0 - 1.0, (k / 7) as f64 / 3.0 - 1.0, 0.0))
+            .map(|p| DVec3::new(p.x, p.y, f(p.x, p.y)))
+            .collect();
         let r = DMat3::from_quat(DQuat::from_scaled_axis(DVec3::new(0.02, -0.03, 0.01)));
         let t = DVec3::new(0.01, 0.02, 0.05);
         let moved: Vec<DVec3> = on.iter().map(|p| r * *p + t).collect();
@@ -94,7 +97,14 @@ mod tests {
         };
         let before = moved.iter().enumerate().map(|(i, p)| closest(i, *p).unwrap().0.distance(*p)).fold(0.0, f64::max);
         let (rot, tr) = point_to_plane_motion(&moved, 8, &mut closest);
-        let after = moved.iter().enumerate().map(|(i, p)| { let p = rot * *p + tr; closest(i, p).unwrap().0.distance(p) }).fold(0.0, f64::max);
+        let after = moved
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let p = rot * *p + tr;
+                closest(i, p).unwrap().0.distance(p)
+            })
+            .fold(0.0, f64::max);
         assert!(before > 1e-2 && after < 1e-9, "{before:e} → {after:e}");
         // A rotation.
         assert!((rot.determinant() - 1.0).abs() < 1e-12 && (rot.transpose() * rot).abs_diff_eq(DMat3::IDENTITY, 1e-12));

@@ -11,7 +11,6 @@
 //! along `n`, for every h including the plane.
 
 // Negated float comparisons are deliberate in the toolkit: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -158,7 +157,11 @@ impl Sphere {
             }
         }
         let sum = Sphere::from_array(sum);
-        if sum.discriminant() > 0.0 { sum.normalized() } else { sum }
+        if sum.discriminant() > 0.0 {
+            sum.normalized()
+        } else {
+            sum
+        }
     }
 
     /// The oriented normal b − 2a x. Unit at points of a normalized sphere; for r > 0 it points to
@@ -364,7 +367,12 @@ mod tests {
         let sphere = Sphere::from_center_radius(DVec3::new(0.2, 0.1, -0.3), 1.7);
         let plane = Sphere { a: 0.0, b: DVec3::new(0.0, 0.6, 0.8), c: 0.25 };
         for (x, points) in [
-            (sphere, (0..20).map(|k| DVec3::new(0.2, 0.1, -0.3) + 1.7 * DVec3::new((k as f64).cos(), (k as f64).sin() * 0.6, (k as f64).sin() * 0.8)).collect::<Vec<_>>()),
+            (
+                sphere,
+                (0..20)
+                    .map(|k| DVec3::new(0.2, 0.1, -0.3) + 1.7 * DVec3::new((k as f64).cos(), (k as f64).sin() * 0.6, (k as f64).sin() * 0.8))
+                    .collect::<Vec<_>>(),
+            ),
             (plane, (0..20).map(|k| DVec3::new(k as f64, (k as f64 * 0.3).sin(), 0.1 * k as f64)).collect()),
         ] {
             let moved = x.moved(rotation, t);

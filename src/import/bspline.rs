@@ -10,7 +10,6 @@
 //! - (x, y, z) is the Euclidean point and w its weight: S = Σ N_i M_j w P / Σ N_i M_j w.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde_json::Value;
@@ -35,7 +34,9 @@ pub(crate) fn looks_like_bspline(bytes: &[u8]) -> bool {
 pub(crate) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<(BSplineSurface, Vec<String>), ImportError> {
     let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let json: Value = serde_json::from_slice(text).map_err(|e| ctx.malformed(Some(e.line()), format!("invalid JSON: {e}")))?;
-    let obj = json.as_object().ok_or_else(|| ctx.malformed(None, "expected a JSON object with the keys degreeU, degreeV, knotsU, knotsV, controlPoints"))?;
+    let obj = json
+        .as_object()
+        .ok_or_else(|| ctx.malformed(None, "expected a JSON object with the keys degreeU, degreeV, knotsU, knotsV, controlPoints"))?;
     let mut notes = Vec::new();
     let unknown: Vec<&str> = obj.keys().map(String::as_str).filter(|k| !KEYS.contains(k)).collect();
     if !unknown.is_empty() {
@@ -143,10 +144,10 @@ fn knot_forms(lu: usize, pu: usize, lv: usize, pv: usize, points: usize) -> Opti
         KnotForm::Textbook => len.checked_sub(p + 1),
     };
     use KnotForm::*;
-    [(OpenNurbs, OpenNurbs), (Textbook, Textbook), (OpenNurbs, Textbook), (Textbook, OpenNurbs)]
-        .into_iter()
-        .find(|&(fu, fv)| match (count(lu, pu, fu), count(lv, pv, fv)) {
+    [(OpenNurbs, OpenNurbs), (Textbook, Textbook), (OpenNurbs, Textbook), (Textbook, OpenNurbs)].into_iter().find(|&(fu, fv)| {
+        match (count(lu, pu, fu), count(lv, pv, fv)) {
             (Some(nu), Some(nv)) => nu > 0 && nv > 0 && nu.checked_mul(nv) == Some(points),
             _ => false,
-        })
+        }
+    })
 }

@@ -26,23 +26,17 @@ fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
 /// Parses a binary glTF (GLB) container.
 pub(super) fn parse_glb(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
     if !bytes.starts_with(b"glTF") {
-        return Err(
-            ctx.malformed(None, "not a GLB file (it does not start with 'glTF'); export as binary glTF 2.0 (.glb)")
-        );
+        return Err(ctx.malformed(None, "not a GLB file (it does not start with 'glTF'); export as binary glTF 2.0 (.glb)"));
     }
     let (Some(version), Some(length)) = (u32_at(bytes, 4), u32_at(bytes, 8)) else {
-        return Err(
-            ctx.malformed(None, format!("truncated GLB (file has {} bytes, the header alone needs 12)", bytes.len()))
-        );
+        return Err(ctx.malformed(None, format!("truncated GLB (file has {} bytes, the header alone needs 12)", bytes.len())));
     };
     if version != 2 {
         return Err(ctx.unsupported(format!("GLB version {version} is not supported; re-export as glTF 2.0")));
     }
     let length = length as usize;
     if length > bytes.len() {
-        return Err(
-            ctx.malformed(None, format!("truncated GLB (header says {length} bytes, file has {})", bytes.len()))
-        );
+        return Err(ctx.malformed(None, format!("truncated GLB (header says {length} bytes, file has {})", bytes.len())));
     }
     if length < 12 {
         return Err(ctx.malformed(None, format!("invalid GLB header: total length {length} is below 12")));
@@ -57,10 +51,7 @@ pub(super) fn parse_glb(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError>
         };
         let start = pos + 8;
         let end = start.checked_add(len as usize).filter(|&e| e <= data.len()).ok_or_else(|| {
-            ctx.malformed(
-                None,
-                format!("truncated GLB: chunk {index} declares {len} bytes but only {} remain", data.len() - start),
-            )
+            ctx.malformed(None, format!("truncated GLB: chunk {index} declares {len} bytes but only {} remain", data.len() - start))
         })?;
         let chunk = &data[start..end];
         match ty {
@@ -103,11 +94,7 @@ fn json_error(e: serde_json::Error, text: &[u8], is_glb: bool, ctx: &Ctx) -> Imp
         _ => full.as_str(),
     };
     if is_glb || e.line() == 0 {
-        let loc = if e.line() > 0 {
-            format!(" (JSON chunk line {}, column {})", e.line(), e.column())
-        } else {
-            String::new()
-        };
+        let loc = if e.line() > 0 { format!(" (JSON chunk line {}, column {})", e.line(), e.column()) } else { String::new() };
         ctx.malformed(None, format!("invalid glTF JSON{loc}: {msg}"))
     } else {
         ctx.malformed(Some(e.line()), format!("invalid glTF JSON (column {}): {msg}", e.column()))
@@ -125,44 +112,32 @@ impl<'a> Buffers<'a> {
         if self.data.get(i).is_some_and(|d| d.is_some()) {
             return Ok(());
         }
-        let b = root.buffers.get(i).ok_or_else(|| {
-            ctx.malformed(None, format!("buffer {i} does not exist ({} buffers)", root.buffers.len()))
-        })?;
+        let b = root.buffers.get(i).ok_or_else(|| ctx.malformed(None, format!("buffer {i} does not exist ({} buffers)", root.buffers.len())))?;
         let bytes: Cow<'a, [u8]> = match &b.uri {
             None => match self.bin {
                 Some(bin) if i == 0 => Cow::Borrowed(bin),
-                _ => {
-                    return Err(
-                        ctx.malformed(None, format!("buffer {i} has no uri and there is no GLB binary chunk for it"))
-                    )
-                }
+                _ => return Err(ctx.malformed(None, format!("buffer {i} has no uri and there is no GLB binary chunk for it"))),
             },
             Some(uri) if uri.get(..5).is_some_and(|p| p.eq_ignore_ascii_case("data:")) => {
-                let comma = uri
-                    .find(',')
-                    .ok_or_else(|| ctx.malformed(None, format!("buffer {i} has a malformed data: URI (no comma)")))?;
+                let comma = uri.find(',').ok_or_else(|| ctx.malformed(None, format!("buffer {i} has a malformed data: URI (no comma)")))?;
                 let header = &uri[5..comma];
                 if !header.to_ascii_lowercase().ends_with(";base64") {
                     return Err(ctx.unsupported(format!(
                         "buffer {i} uses a data: URI that is not base64-encoded; re-export with embedded base64 buffers or as .glb"
                     )));
                 }
-                let decoded = base64::decode(&uri.as_bytes()[comma + 1..])
-                    .map_err(|e| ctx.malformed(None, format!("buffer {i}: {e} in its data: URI")))?;
+                let decoded =
+                    base64::decode(&uri.as_bytes()[comma + 1..]).map_err(|e| ctx.malformed(None, format!("buffer {i}: {e} in its data: URI")))?;
                 Cow::Owned(decoded)
             }
             Some(uri) => {
                 let shown: String = uri.chars().take(80).collect();
-                return Err(ctx.unsupported(format!(
-                    "buffer {i} uses external file '{shown}'; embed it as a data: URI or export as .glb"
-                )));
+                return Err(ctx.unsupported(format!("buffer {i} uses external file '{shown}'; embed it as a data: URI or export as .glb")));
             }
         };
         let declared = b.byte_length.0;
         if (bytes.len() as u64) < declared {
-            return Err(
-                ctx.malformed(None, format!("buffer {i} declares {declared} bytes but contains only {}", bytes.len()))
-            );
+            return Err(ctx.malformed(None, format!("buffer {i} declares {declared} bytes but contains only {}", bytes.len())));
         }
         if self.data.len() <= i {
             self.data.resize(i + 1, None);
@@ -193,15 +168,11 @@ impl<'a> Buffers<'a> {
 }
 
 fn accessor<'r>(root: &'r json::Root, ai: usize, ctx: &Ctx) -> Result<&'r json::Accessor, ImportError> {
-    root.accessors.get(ai).ok_or_else(|| {
-        ctx.malformed(None, format!("accessor {ai} does not exist ({} accessors)", root.accessors.len()))
-    })
+    root.accessors.get(ai).ok_or_else(|| ctx.malformed(None, format!("accessor {ai} does not exist ({} accessors)", root.accessors.len())))
 }
 
 fn view<'r>(root: &'r json::Root, vi: usize, ctx: &Ctx) -> Result<&'r json::buffer::View, ImportError> {
-    root.buffer_views.get(vi).ok_or_else(|| {
-        ctx.malformed(None, format!("bufferView {vi} does not exist ({} bufferViews)", root.buffer_views.len()))
-    })
+    root.buffer_views.get(vi).ok_or_else(|| ctx.malformed(None, format!("bufferView {vi} does not exist ({} bufferViews)", root.buffer_views.len())))
 }
 
 fn component_size(ct: ComponentType) -> u64 {
@@ -236,13 +207,7 @@ fn view_range(root: &json::Root, bufs: &Buffers, vi: usize, ctx: &Ctx) -> Result
     let len = bufs.get(b).len() as u64;
     match end {
         Some(end) if end <= len => Ok((start, end, b)),
-        _ => Err(ctx.malformed(
-            None,
-            format!(
-                "bufferView {vi} (offset {start}, length {}) lies outside buffer {b} ({len} bytes)",
-                v.byte_length.0
-            ),
-        )),
+        _ => Err(ctx.malformed(None, format!("bufferView {vi} (offset {start}, length {}) lies outside buffer {b} ({len} bytes)", v.byte_length.0))),
     }
 }
 
@@ -254,13 +219,7 @@ struct AccessorData {
 
 /// Reads accessor `ai` (scalar or vector, any component type) with full bounds checks.
 /// `max_count` bounds the allocation; callers pass limits already checked against the file.
-fn read_accessor(
-    root: &json::Root,
-    bufs: &Buffers,
-    ai: usize,
-    max_count: u64,
-    ctx: &Ctx,
-) -> Result<AccessorData, ImportError> {
+fn read_accessor(root: &json::Root, bufs: &Buffers, ai: usize, max_count: u64, ctx: &Ctx) -> Result<AccessorData, ImportError> {
     let acc = accessor(root, ai, ctx)?;
     let ct = match acc.component_type {
         Checked::Valid(g) => g.0,
@@ -271,9 +230,7 @@ fn read_accessor(
         Checked::Valid(Type::Vec2) => 2,
         Checked::Valid(Type::Vec3) => 3,
         Checked::Valid(Type::Vec4) => 4,
-        Checked::Valid(_) => {
-            return Err(ctx.malformed(None, format!("accessor {ai} is a matrix; expected positions or indices")))
-        }
+        Checked::Valid(_) => return Err(ctx.malformed(None, format!("accessor {ai} is a matrix; expected positions or indices"))),
         Checked::Invalid => return Err(ctx.malformed(None, format!("accessor {ai} has an invalid type"))),
     };
     let count = acc.count.0;
@@ -294,21 +251,18 @@ fn read_accessor(
             None => elem,
         };
         if stride < elem {
-            return Err(out_of_range(format!(
-                "accessor {ai}: byteStride {stride} is smaller than one element ({elem} bytes)"
-            )));
+            return Err(out_of_range(format!("accessor {ai}: byteStride {stride} is smaller than one element ({elem} bytes)")));
         }
         let offset = acc.byte_offset.map_or(0, |o| o.0);
         if count > 0 {
-            let need =
-                stride.checked_mul(count - 1).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(offset));
+            let need = stride.checked_mul(count - 1).and_then(|x| x.checked_add(elem)).and_then(|x| x.checked_add(offset));
             match need {
                 Some(need) if need <= vend - vstart => {}
                 _ => {
                     return Err(out_of_range(format!(
-                        "accessor {ai} ({count} elements of {elem} bytes, stride {stride}, offset {offset}) does not fit in bufferView {vi} ({} bytes)",
-                        vend - vstart
-                    )))
+                    "accessor {ai} ({count} elements of {elem} bytes, stride {stride}, offset {offset}) does not fit in bufferView {vi} ({} bytes)",
+                    vend - vstart
+                )))
                 }
             }
         }
@@ -361,14 +315,11 @@ fn read_accessor(
             let bad = || out_of_range(format!("accessor {ai}: invalid sparse entry {k}"));
             let target = read_component(idata, ioff + k * isize, ict, false).ok_or_else(bad)?;
             if target >= count as f64 {
-                return Err(out_of_range(format!(
-                    "accessor {ai}: sparse index {target} is out of range ({count} elements)"
-                )));
+                return Err(out_of_range(format!("accessor {ai}: sparse index {target} is out of range ({count} elements)")));
             }
             let row = target as usize * dims;
             for c in 0..dims {
-                let v =
-                    read_component(vdata, voff + k * elem + c as u64 * csize, ct, acc.normalized).ok_or_else(bad)?;
+                let v = read_component(vdata, voff + k * elem + c as u64 * csize, ct, acc.normalized).ok_or_else(bad)?;
                 if let Some(slot) = values.get_mut(row + c) {
                     *slot = v;
                 }
@@ -413,18 +364,14 @@ fn instances(root: &json::Root, notes: &mut Vec<String>, ctx: &Ctx) -> Result<Ve
         return Ok((0..root.meshes.len()).map(|m| (m, DMat4::IDENTITY)).collect());
     }
     let si = root.scene.map_or(0, |s| s.value());
-    let scene = root.scenes.get(si).ok_or_else(|| {
-        ctx.malformed(None, format!("default scene {si} does not exist ({} scenes)", root.scenes.len()))
-    })?;
+    let scene =
+        root.scenes.get(si).ok_or_else(|| ctx.malformed(None, format!("default scene {si} does not exist ({} scenes)", root.scenes.len())))?;
     let mut visited = vec![false; root.nodes.len()];
     let mut repeated = 0usize;
     let mut out = Vec::new();
     let mut stack: Vec<(usize, DMat4)> = scene.nodes.iter().rev().map(|n| (n.value(), DMat4::IDENTITY)).collect();
     while let Some((ni, parent)) = stack.pop() {
-        let node = root
-            .nodes
-            .get(ni)
-            .ok_or_else(|| ctx.malformed(None, format!("node {ni} does not exist ({} nodes)", root.nodes.len())))?;
+        let node = root.nodes.get(ni).ok_or_else(|| ctx.malformed(None, format!("node {ni} does not exist ({} nodes)", root.nodes.len())))?;
         if std::mem::replace(&mut visited[ni], true) {
             repeated += 1;
             continue;
@@ -433,10 +380,7 @@ fn instances(root: &json::Root, notes: &mut Vec<String>, ctx: &Ctx) -> Result<Ve
         if let Some(m) = node.mesh {
             let m = m.value();
             if m >= root.meshes.len() {
-                return Err(ctx.malformed(
-                    None,
-                    format!("node {ni} refers to mesh {m}, which does not exist ({} meshes)", root.meshes.len()),
-                ));
+                return Err(ctx.malformed(None, format!("node {ni} refers to mesh {m}, which does not exist ({} meshes)", root.meshes.len())));
             }
             out.push((m, world));
         }
@@ -465,17 +409,13 @@ fn triangles_for(mode: Mode, n: u64) -> u64 {
 fn parse_document(text: &[u8], bin: Option<&[u8]>, is_glb: bool, ctx: &Ctx) -> Result<RawMesh, ImportError> {
     let root: json::Root = serde_json::from_slice(text).map_err(|e| json_error(e, text, is_glb, ctx))?;
     if !root.asset.version.starts_with('2') {
-        return Err(
-            ctx.unsupported(format!("glTF version {} is not supported; re-export as glTF 2.0", root.asset.version))
-        );
+        return Err(ctx.unsupported(format!("glTF version {} is not supported; re-export as glTF 2.0", root.asset.version)));
     }
     let mut raw = RawMesh::default();
     for ext in &root.extensions_required {
         match ext.as_str() {
             "KHR_draco_mesh_compression" | "EXT_meshopt_compression" => {
-                return Err(ctx.unsupported(format!(
-                    "the file requires {ext}, which is not supported; re-export without mesh compression"
-                )))
+                return Err(ctx.unsupported(format!("the file requires {ext}, which is not supported; re-export without mesh compression")))
             }
             "KHR_mesh_quantization" => {}
             other => raw.notes.push(format!("ignored required extension {other}")),
@@ -533,19 +473,14 @@ fn parse_document(text: &[u8], bin: Option<&[u8]>, is_glb: bool, ctx: &Ctx) -> R
             bufs.ensure_for_accessor(&root, pa, ctx)?;
             let pos = read_accessor(&root, &bufs, pa, MAX_VERTICES as u64, ctx)?;
             if pos.dims != 3 {
-                return Err(
-                    ctx.malformed(None, format!("mesh {m} primitive {pi}: POSITION accessor {pa} must be VEC3"))
-                );
+                return Err(ctx.malformed(None, format!("mesh {m} primitive {pi}: POSITION accessor {pa} must be VEC3")));
             }
             let nv = pos.values.len() / 3;
             let base = raw.positions.len();
             for c in pos.values.chunks_exact(3) {
                 let q = world.transform_point3(DVec3::new(c[0], c[1], c[2]));
                 if !q.is_finite() {
-                    return Err(ctx.malformed(
-                        None,
-                        format!("mesh {m} primitive {pi}: a vertex position is not a finite number"),
-                    ));
+                    return Err(ctx.malformed(None, format!("mesh {m} primitive {pi}: a vertex position is not a finite number")));
                 }
                 raw.positions.push(q);
             }
@@ -557,31 +492,21 @@ fn parse_document(text: &[u8], bin: Option<&[u8]>, is_glb: bool, ctx: &Ctx) -> R
                     let ct = accessor(&root, ia, ctx)?.component_type;
                     if !matches!(
                         ct,
-                        Checked::Valid(json::accessor::GenericComponentType(
-                            ComponentType::U8 | ComponentType::U16 | ComponentType::U32
-                        ))
+                        Checked::Valid(json::accessor::GenericComponentType(ComponentType::U8 | ComponentType::U16 | ComponentType::U32))
                     ) {
-                        return Err(ctx.malformed(
-                            None,
-                            format!("mesh {m} primitive {pi}: index accessor {ia} must use unsigned integers"),
-                        ));
+                        return Err(ctx.malformed(None, format!("mesh {m} primitive {pi}: index accessor {ia} must use unsigned integers")));
                     }
                     let idx = read_accessor(&root, &bufs, ia, 3 * MAX_TRIANGLES as u64 + 2, ctx)?;
                     if idx.dims != 1 {
-                        return Err(
-                            ctx.malformed(None, format!("mesh {m} primitive {pi}: index accessor {ia} must be SCALAR"))
-                        );
+                        return Err(ctx.malformed(None, format!("mesh {m} primitive {pi}: index accessor {ia} must be SCALAR")));
                     }
                     let mut out = Vec::with_capacity(idx.values.len());
                     for &v in &idx.values {
                         // Unnormalized unsigned integers: exact in f64.
                         if !(v >= 0.0 && v < nv as f64) {
-                            return Err(ctx.malformed(
-                                None,
-                                format!(
-                                    "mesh {m} primitive {pi}: index {v} is out of range (the primitive has {nv} vertices)"
-                                ),
-                            ));
+                            return Err(
+                                ctx.malformed(None, format!("mesh {m} primitive {pi}: index {v} is out of range (the primitive has {nv} vertices)"))
+                            );
                         }
                         out.push((base + v as usize) as u32);
                     }
@@ -598,13 +523,15 @@ fn parse_document(text: &[u8], bin: Option<&[u8]>, is_glb: bool, ctx: &Ctx) -> R
                     }
                 }
                 Mode::TriangleStrip => {
-                    raw.triangles.extend(indices.windows(3).enumerate().map(|(i, w)| {
-                        if i % 2 == 0 {
-                            [w[0], w[1], w[2]]
-                        } else {
-                            [w[1], w[0], w[2]]
-                        }
-                    }));
+                    raw.triangles.extend(indices.windows(3).enumerate().map(
+                        |(i, w)| {
+                            if i % 2 == 0 {
+                                [w[0], w[1], w[2]]
+                            } else {
+                                [w[1], w[0], w[2]]
+                            }
+                        },
+                    ));
                 }
                 Mode::TriangleFan => {
                     if let Some((&first, rest)) = indices.split_first() {
@@ -635,9 +562,7 @@ fn parse_document(text: &[u8], bin: Option<&[u8]>, is_glb: bool, ctx: &Ctx) -> R
         raw.notes.push(plural(no_position, "position-less"));
     }
     if leftover > 0 {
-        raw.notes.push(format!(
-            "{leftover} primitives had an index count not divisible by 3; the extra indices were ignored"
-        ));
+        raw.notes.push(format!("{leftover} primitives had an index count not divisible by 3; the extra indices were ignored"));
     }
     Ok(raw)
 }

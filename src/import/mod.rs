@@ -13,15 +13,14 @@ mod gltf;
 mod obj;
 mod raw;
 
-
 use crate::geometry::bspline::BSplineSurface;
+use crate::geometry::mesh::topology::{MeshStats, Topology};
 use crate::geometry::mesh::weld::weld_with_face_map;
 use crate::geometry::mesh::{Face, PolyMesh, TriMesh};
-use crate::geometry::mesh::topology::{MeshStats, Topology};
 use serde::{Deserialize, Serialize};
 
-pub use raw::{ImportError, MAX_BYTES, MAX_COORDINATE, MAX_TRIANGLES, MAX_VERTICES, MIN_DIAGONAL};
 use raw::{check_scale, Ctx, RawMesh};
+pub use raw::{ImportError, MAX_BYTES, MAX_COORDINATE, MAX_TRIANGLES, MAX_VERTICES, MIN_DIAGONAL};
 
 /// Vertices closer than this fraction of the bounding-box diagonal are merged.
 pub(crate) const WELD_TOLERANCE: f64 = 1e-7;
@@ -156,9 +155,8 @@ fn file_format(bytes: &[u8], file_name: &str, ctx: &Ctx) -> Result<Format, Impor
         None => {
             let ext = extension(file_name);
             let what = if ext.is_empty() { "this file".to_string() } else { format!("'.{ext}' files") };
-            Err(ctx.unsupported(format!(
-                "cannot import {what}; expected a Wavefront .obj, a glTF 2.0 .gltf, a .glb or a B-spline surface .json file"
-            )))
+            Err(ctx
+                .unsupported(format!("cannot import {what}; expected a Wavefront .obj, a glTF 2.0 .gltf, a .glb or a B-spline surface .json file")))
         }
     }
 }
@@ -221,7 +219,6 @@ fn finish(raw: RawMesh, format: Format, ctx: &Ctx) -> Result<Imported, ImportErr
         notes,
     })
 }
-
 
 /// The faces of the welded `mesh`: a quad where both triangles of an input quad survived
 /// next to each other and still form a quad (4 distinct corners, split from corner 0), else

@@ -118,17 +118,10 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
             b"v" => {
                 let mut c = [0.0f64; 3];
                 for (k, slot) in c.iter_mut().enumerate() {
-                    let tok = it.next().ok_or_else(|| {
-                        ctx.malformed(Some(ln), format!("vertex needs 3 coordinates (x y z), found {k}"))
-                    })?;
-                    let x = parse_f64(tok).ok_or_else(|| {
-                        ctx.malformed(Some(ln), format!("invalid number '{}' in vertex", excerpt(tok)))
-                    })?;
+                    let tok = it.next().ok_or_else(|| ctx.malformed(Some(ln), format!("vertex needs 3 coordinates (x y z), found {k}")))?;
+                    let x = parse_f64(tok).ok_or_else(|| ctx.malformed(Some(ln), format!("invalid number '{}' in vertex", excerpt(tok))))?;
                     if !x.is_finite() {
-                        return Err(ctx.malformed(
-                            Some(ln),
-                            format!("vertex coordinate '{}' is not a finite number", excerpt(tok)),
-                        ));
+                        return Err(ctx.malformed(Some(ln), format!("vertex coordinate '{}' is not a finite number", excerpt(tok))));
                     }
                     *slot = x;
                 }
@@ -138,21 +131,12 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
                 let first = corners.len();
                 for tok in it {
                     let v = tok.split(|&b| b == b'/').next().unwrap_or(tok);
-                    let i = parse_i64(v).ok_or_else(|| {
-                        ctx.malformed(Some(ln), format!("invalid vertex index '{}' in face", excerpt(tok)))
-                    })?;
+                    let i = parse_i64(v).ok_or_else(|| ctx.malformed(Some(ln), format!("invalid vertex index '{}' in face", excerpt(tok))))?;
                     let idx = match i {
-                        0 => {
-                            return Err(
-                                ctx.malformed(Some(ln), "face refers to vertex 0, but OBJ vertex numbers start at 1")
-                            )
-                        }
+                        0 => return Err(ctx.malformed(Some(ln), "face refers to vertex 0, but OBJ vertex numbers start at 1")),
                         i if i > 0 => {
                             if i as u64 > n_vertices as u64 {
-                                return Err(ctx.malformed(
-                                    Some(ln),
-                                    format!("face refers to vertex {i}, but only {n_vertices} vertices are defined"),
-                                ));
+                                return Err(ctx.malformed(Some(ln), format!("face refers to vertex {i}, but only {n_vertices} vertices are defined")));
                             }
                             i - 1
                         }
@@ -161,9 +145,7 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
                             if i.checked_neg().is_none_or(|m| m > defined) {
                                 return Err(ctx.malformed(
                                     Some(ln),
-                                    format!(
-                                        "face refers to vertex {i} (counting back), but only {defined} vertices are defined before this line"
-                                    ),
+                                    format!("face refers to vertex {i} (counting back), but only {defined} vertices are defined before this line"),
                                 ));
                             }
                             defined + i
@@ -181,8 +163,8 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
                 }
             }
             b"l" | b"p" => lines_points += 1,
-            b"vt" | b"vn" | b"vp" | b"g" | b"o" | b"s" | b"usemtl" | b"mtllib" | b"usemap" | b"maplib" | b"lod"
-            | b"shadow_obj" | b"trace_obj" | b"bevel" | b"c_interp" | b"d_interp" => {}
+            b"vt" | b"vn" | b"vp" | b"g" | b"o" | b"s" | b"usemtl" | b"mtllib" | b"usemap" | b"maplib" | b"lod" | b"shadow_obj" | b"trace_obj"
+            | b"bevel" | b"c_interp" | b"d_interp" => {}
             other => {
                 let key = excerpt(other);
                 if ignored.len() < 8 || ignored.contains_key(&key) {
@@ -231,14 +213,11 @@ pub(super) fn parse(bytes: &[u8], ctx: &Ctx) -> Result<RawMesh, ImportError> {
         raw.notes.push(format!("skipped {short} faces with fewer than 3 distinct vertices"));
     }
     if fans > 0 {
-        raw.notes.push(format!(
-            "{fans} polygons could not be ear-clipped (self-intersecting or strongly non-planar); fan-triangulated"
-        ));
+        raw.notes.push(format!("{fans} polygons could not be ear-clipped (self-intersecting or strongly non-planar); fan-triangulated"));
     }
     if big > 0 {
-        raw.notes.push(format!(
-            "{big} polygons with more than {EAR_CLIP_MAX} corners were triangulated as a zigzag strip (exact for convex polygons)"
-        ));
+        raw.notes
+            .push(format!("{big} polygons with more than {EAR_CLIP_MAX} corners were triangulated as a zigzag strip (exact for convex polygons)"));
     }
     if lines_points > 0 {
         raw.notes.push(format!("skipped {lines_points} line/point elements (l, p)"));
@@ -346,8 +325,7 @@ impl Triangulator {
     /// Ear clipping in the plane orthogonal to the Newell normal.
     fn ear_clip(&mut self, positions: &[DVec3], poly: &[u32], out: &mut Vec<[u32; 3]>) -> bool {
         let n = poly.len();
-        let pts3: Vec<DVec3> =
-            poly.iter().map(|&v| positions.get(v as usize).copied().unwrap_or(DVec3::ZERO)).collect();
+        let pts3: Vec<DVec3> = poly.iter().map(|&v| positions.get(v as usize).copied().unwrap_or(DVec3::ZERO)).collect();
         let Some(normal) = newell_normal(&pts3).try_normalize() else {
             return false;
         };
@@ -356,10 +334,7 @@ impl Triangulator {
         // (u, w, normal) is right-handed, so the polygon is counter-clockwise in (u, w).
         self.pts.clear();
         self.pts.extend(pts3.iter().map(|q| DVec2::new(q.dot(u), q.dot(w))));
-        let (lo, hi) = self
-            .pts
-            .iter()
-            .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(l, h), q| (l.min(*q), h.max(*q)));
+        let (lo, hi) = self.pts.iter().fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(l, h), q| (l.min(*q), h.max(*q)));
         let scale = (hi - lo).max_element();
         if !(scale.is_finite() && scale > 0.0) {
             return false;
@@ -412,9 +387,7 @@ impl Triangulator {
         while j != a {
             let q = pts[j];
             if q != pa && q != pb && q != pc {
-                let inside = cross2(pb - pa, q - pa) >= -eps
-                    && cross2(pc - pb, q - pb) >= -eps
-                    && cross2(pa - pc, q - pc) >= -eps;
+                let inside = cross2(pb - pa, q - pa) >= -eps && cross2(pc - pb, q - pb) >= -eps && cross2(pa - pc, q - pc) >= -eps;
                 if inside {
                     return false;
                 }

@@ -24,11 +24,7 @@ pub fn check_max_distance(d: f64) -> Result<(), String> {
     if d.is_finite() && MAX_DISTANCE_RANGE.contains(&d) {
         Ok(())
     } else {
-        Err(format!(
-            "the distance bound must be in [{:e}, {}] of the diagonal, got {d}",
-            MAX_DISTANCE_RANGE.start(),
-            MAX_DISTANCE_RANGE.end()
-        ))
+        Err(format!("the distance bound must be in [{:e}, {}] of the diagonal, got {d}", MAX_DISTANCE_RANGE.start(), MAX_DISTANCE_RANGE.end()))
     }
 }
 
@@ -115,7 +111,9 @@ impl Buildability {
         let name = MAX_DISTANCE;
         let limit = format_length(max_distance * diag, self.units);
         match self.max_distance() {
-            _ if self.panel_distances.is_empty() => Guarantee::at_most(name, f64::NAN, max_distance, "of the diagonal").unmeasured("there are no panels"),
+            _ if self.panel_distances.is_empty() => {
+                Guarantee::at_most(name, f64::NAN, max_distance, "of the diagonal").unmeasured("there are no panels")
+            }
             Ok(d) => Guarantee::at_most(name, d / diag, max_distance, "of the diagonal")
                 .with_model_units(format!("{}, limit {limit}", format_length(d, self.units))),
             Err(panel) => Guarantee::at_most(name, f64::NAN, max_distance, "of the diagonal")
@@ -133,7 +131,12 @@ mod tests {
         use crate::geometry::rational_bezier::RationalCurve;
         use glam::DVec3;
         let (a, b, c, d) = (DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y);
-        RationalPatch::coons(&RationalCurve::segment(a, b), &RationalCurve::segment(b, c), &RationalCurve::segment(d, c), &RationalCurve::segment(a, d))
+        RationalPatch::coons(
+            &RationalCurve::segment(a, b),
+            &RationalCurve::segment(b, c),
+            &RationalCurve::segment(d, c),
+            &RationalCurve::segment(a, d),
+        )
     }
 
     #[test]

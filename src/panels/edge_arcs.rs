@@ -3,7 +3,6 @@
 //! the boundary rule's plane. See the [`super`] module docs.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -61,15 +60,7 @@ pub(crate) fn face_triangles(mesh: &PolyMesh, f: usize) -> Vec<[DVec3; 3]> {
 }
 
 /// The arc of edge p→q shared by `faces` (one or two faces).
-pub(crate) fn edge_arc(
-    p: DVec3,
-    q: DVec3,
-    faces: &[usize],
-    spheres: &[Sphere],
-    mesh: &PolyMesh,
-    rule: BoundaryArcRule,
-    diag: f64,
-) -> Arc {
+pub(crate) fn edge_arc(p: DVec3, q: DVec3, faces: &[usize], spheres: &[Sphere], mesh: &PolyMesh, rule: BoundaryArcRule, diag: f64) -> Arc {
     let e = q - p;
     let l = e.length();
     let tris: Vec<Vec<[DVec3; 3]>> = faces.iter().map(|&f| face_triangles(mesh, f)).collect();
@@ -144,12 +135,7 @@ pub(crate) fn cut_arc(p: DVec3, q: DVec3, n: DVec3, s: &Sphere, faces: &[Vec<[DV
     let m_far = mid + sign_h * (r + h.abs()) * w;
     // Sum over the faces of the distance to the face (its nearest triangle).
     let score = |x: DVec3| -> f64 {
-        faces
-            .iter()
-            .map(|tris| {
-                tris.iter().map(|t| closest_point_on_triangle(x, t[0], t[1], t[2]).0.distance(x)).fold(f64::INFINITY, f64::min)
-            })
-            .sum()
+        faces.iter().map(|tris| tris.iter().map(|t| closest_point_on_triangle(x, t[0], t[1], t[2]).0.distance(x)).fold(f64::INFINITY, f64::min)).sum()
     };
     let chosen = if score(m_far) < score(m_near) { m_far } else { m_near };
     // p → chosen → q is counter-clockwise about ±n.

@@ -29,8 +29,8 @@ use glam::{DVec2, DVec3};
 use super::arc::Arc;
 use super::panel::Panel;
 use crate::congruence::support_structure::SupportElement;
-use crate::geometry::sphere::Sphere;
 use crate::geometry::rational_bezier::{ArcError, BernsteinPoly, RationalCurve, RationalPatch};
+use crate::geometry::sphere::Sphere;
 
 /// Jacobian samples per direction of the fold check.
 const FOLD_SAMPLES: usize = 9;
@@ -84,8 +84,7 @@ pub fn panel_patch(panel: &Panel) -> Result<RationalPatch, ExactSurfaceError> {
     if panel.is_planar() {
         // The corners run counter-clockwise about the outward normal −∇ψ = b/|b|.
         let normal = panel.sphere.b.try_normalize().ok_or(ExactSurfaceError::Degenerate)?;
-        let sides: Vec<RationalCurve> =
-            (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
+        let sides: Vec<RationalCurve> = (0..n).map(|k| side_curve(&panel.arcs[k], panel.arcs[(k + 1) % n].from, k)).collect::<Result<_, _>>()?;
         let (ratio, patch) = coons_of(&sides, normal, true);
         return if ratio > FOLD_RATIO { Ok(patch) } else { Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }) };
     }
@@ -377,7 +376,11 @@ pub fn jacobian_ratio(patch: &RationalPatch, normal: DVec3, collapsed: bool) -> 
             (lo, hi) = (lo.min(jacobian), hi.max(jacobian.abs()));
         }
     }
-    if hi > 0.0 { lo / hi } else { 0.0 }
+    if hi > 0.0 {
+        lo / hi
+    } else {
+        0.0
+    }
 }
 
 /// `normal` or −`normal`: the one its boundary (0,0) → (1,0) → (1,1) → (0,1) runs
@@ -392,7 +395,11 @@ fn boundary_normal(patch: &RationalPatch, normal: DVec3) -> DVec3 {
         })
         .collect();
     let area: f64 = (0..boundary.len()).map(|k| boundary[k].cross(boundary[(k + 1) % boundary.len()]).dot(normal)).sum();
-    if area < 0.0 { -normal } else { normal }
+    if area < 0.0 {
+        -normal
+    } else {
+        normal
+    }
 }
 
 /// The planar patch of a support element: its edge arc (corners 0 → 1, the shorter way), the
@@ -415,7 +422,11 @@ pub fn support_patch(element: &SupportElement) -> Result<RationalPatch, ExactSur
     let inner = arc(&element.inner_circle, c3, c2, 2)?;
     let patch = RationalPatch::coons(&outer, &RationalCurve::segment(c1, c2), &inner, &RationalCurve::segment(c0, c3));
     let ratio = jacobian_ratio(&patch, boundary_normal(&patch, element.circle.normal), false);
-    if ratio > FOLD_RATIO { Ok(patch) } else { Err(ExactSurfaceError::Folds { jacobian_ratio: ratio }) }
+    if ratio > FOLD_RATIO {
+        Ok(patch)
+    } else {
+        Err(ExactSurfaceError::Folds { jacobian_ratio: ratio })
+    }
 }
 
 fn circle_is_finite(c: &crate::geometry::circle::Circle) -> bool {

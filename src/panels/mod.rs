@@ -73,9 +73,9 @@ pub mod deviation;
 pub mod edge_arcs;
 pub mod exact_surface;
 pub mod gaps;
+pub mod moulds;
 pub mod panel;
 pub mod sphere_mesh;
-pub mod moulds;
 pub mod tessellate;
 
 use glam::DVec3;

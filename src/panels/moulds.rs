@@ -164,10 +164,8 @@ impl MouldFits {
 
     /// Each panel cut from the mould `panel_mould` of `curvatures`, its deviation measured.
     fn cut_from(&self, tolerance: f64, curvatures: &[f64], panel_mould: Vec<u32>) -> MouldAssignment {
-        let mut moulds: Vec<Mould> = curvatures
-            .iter()
-            .map(|&k| Mould { curvature: k, radius: (k > 0.0).then(|| 1.0 / k), panels: 0, max_deviation: 0.0 })
-            .collect();
+        let mut moulds: Vec<Mould> =
+            curvatures.iter().map(|&k| Mould { curvature: k, radius: (k > 0.0).then(|| 1.0 / k), panels: 0, max_deviation: 0.0 }).collect();
         let panel_deviation: Vec<f64> = panel_mould
             .iter()
             .enumerate()
@@ -349,7 +347,9 @@ impl<Round: MouldRoundFigures> MouldRoundsSection<Round> {
         let (moulds, distance) = (first.moulds(), first.distance_to_reference());
         let moulds = format!("{moulds} mould{}", if moulds == 1 { "" } else { "s" });
         Some(if distance > limit {
-            format!("not snapped: on {moulds} exactly the panels would be {distance:.2e} of the diagonal from the reference, over the limit {limit:.2e}")
+            format!(
+                "not snapped: on {moulds} exactly the panels would be {distance:.2e} of the diagonal from the reference, over the limit {limit:.2e}"
+            )
         } else {
             format!("not snapped: on {moulds} exactly the method's guarantees would not hold")
         })
@@ -385,13 +385,16 @@ pub struct SnappedRounds<R> {
 /// hold and the moulds at δ fell; the rounds end at the first that breaks them. A kept round's
 /// panels have their moulds' radii (measured: [`MouldFits::has_mould_radius`]), so the last is
 /// the snap. `on_round` sees every round's result with its count.
-#[allow(clippy::type_complexity)]
+/// A method's projection of a result to exactness with every face at the curvature given: the
+/// projected result and whether it is exact, or None where it cannot be.
+pub type Projection<'a, R, E> = dyn FnMut(&R, &[f64]) -> Result<Option<(R, bool)>, E> + 'a;
+
 pub fn snapped_rounds<R, E: From<Cancelled>>(
     start: &R,
     panels: &dyn Fn(&R) -> &[Panel],
     diag: f64,
     fabrication: &Fabrication,
-    project: &mut dyn FnMut(&R, &[f64]) -> Result<Option<(R, bool)>, E>,
+    project: &mut Projection<R, E>,
     on_round: &mut dyn FnMut(&R, RoundCount),
     progress: &mut dyn FnMut(Progress) -> Result<(), Cancelled>,
 ) -> Result<SnappedRounds<R>, E> {
@@ -542,9 +545,9 @@ mod tests {
         let n = ends.len();
         (0..=n)
             .find(|&k| {
-                (0u32..1 << n).filter(|m| m.count_ones() as usize == k).any(|m| {
-                    intervals.iter().all(|&[lo, hi]| (0..n).any(|j| m & (1 << j) != 0 && ends[j] >= lo && ends[j] <= hi))
-                })
+                (0u32..1 << n)
+                    .filter(|m| m.count_ones() as usize == k)
+                    .any(|m| intervals.iter().all(|&[lo, hi]| (0..n).any(|j| m & (1 << j) != 0 && ends[j] >= lo && ends[j] <= hi)))
             })
             .unwrap()
     }

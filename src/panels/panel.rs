@@ -36,14 +36,7 @@ impl Panel {
         let s = self.sphere;
         self.triangles
             .iter()
-            .map(|t| {
-                triangle_chord_error(
-                    &s,
-                    self.positions[t[0] as usize],
-                    self.positions[t[1] as usize],
-                    self.positions[t[2] as usize],
-                )
-            })
+            .map(|t| triangle_chord_error(&s, self.positions[t[0] as usize], self.positions[t[1] as usize], self.positions[t[2] as usize]))
             .fold(0.0, f64::max)
     }
 

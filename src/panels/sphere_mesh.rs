@@ -44,7 +44,14 @@ pub struct SphereMesh {
 
 impl SphereMesh {
     pub fn new(mesh: impl Into<PolyMesh>, face_spheres: Vec<Sphere>, boundary_arcs: BoundaryArcRule) -> Self {
-        Self { mesh: mesh.into(), face_spheres, boundary_arcs, boundary_planes: HashMap::new(), bisected_edges: BTreeSet::new(), topology: OnceCell::new() }
+        Self {
+            mesh: mesh.into(),
+            face_spheres,
+            boundary_arcs,
+            boundary_planes: HashMap::new(),
+            bisected_edges: BTreeSet::new(),
+            topology: OnceCell::new(),
+        }
     }
 
     /// The same mesh with its boundary edges cut by the planes with these normals.
@@ -81,7 +88,10 @@ impl SphereMesh {
 
 impl PartialEq for SphereMesh {
     fn eq(&self, other: &Self) -> bool {
-        self.mesh == other.mesh && self.face_spheres == other.face_spheres && self.boundary_arcs == other.boundary_arcs && self.boundary_planes == other.boundary_planes
+        self.mesh == other.mesh
+            && self.face_spheres == other.face_spheres
+            && self.boundary_arcs == other.boundary_arcs
+            && self.boundary_planes == other.boundary_planes
             && self.bisected_edges == other.bisected_edges
     }
 }

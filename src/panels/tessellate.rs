@@ -2,7 +2,6 @@
 //! its boundary, a grid inside, zippers between them. See the [`super`] module docs.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 
@@ -62,10 +61,7 @@ pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVe
     // Grid levels: one for a triangle; along sides 0/2 and 1/3 for a quad.
     let mut levels = match nc {
         3 => [n_side.iter().copied().max().unwrap_or(1).max(estimate).clamp(1, max_level); 2],
-        _ => [
-            n_side[0].max(n_side[2]).max(estimate).clamp(1, max_level),
-            n_side[1].max(n_side[3]).max(estimate).clamp(1, max_level),
-        ],
+        _ => [n_side[0].max(n_side[2]).max(estimate).clamp(1, max_level), n_side[1].max(n_side[3]).max(estimate).clamp(1, max_level)],
     };
     let (mut best_err, mut stalled) = (f64::INFINITY, 0);
     loop {
@@ -79,14 +75,7 @@ pub fn tessellate(sphere: &Sphere, sides: Vec<(Arc, Vec<DVec3>)>, corners: &[DVe
         };
         let err = triangles
             .iter()
-            .map(|t| {
-                triangle_chord_error(
-                    sphere,
-                    positions[t[0] as usize],
-                    positions[t[1] as usize],
-                    positions[t[2] as usize],
-                )
-            })
+            .map(|t| triangle_chord_error(sphere, positions[t[0] as usize], positions[t[1] as usize], positions[t[2] as usize]))
             .fold(0.0, f64::max);
         // Stop when fine enough, at the cap, or when three refinements in a row did not help (a
         // panel whose arcs cross at a corner: invalid input, see `Panel::folded_triangles`).

@@ -7,17 +7,17 @@ use glam::DVec3;
 use super::fields::{field, Field};
 use crate::congruence::central_spheres::CurvatureField;
 use crate::congruence::support_structure::{SupportGeometry, SupportStructure};
+use crate::export::absolute_sphere_extras;
 use crate::export::report::{ExactSurfacesReport, InputCounts, OutputCounts};
 use crate::export::rhino::{RhinoInput, RhinoModel, RHINO_MODEL_FILE, RHINO_MODEL_MIME};
-use crate::export::step::write_exact_step;
-use crate::export::absolute_sphere_extras;
-use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::panels::exact_surface::ExactSurfaces;
-use crate::export::schedule::SupportRecord;
 use crate::export::schedule::MouldRecord;
+use crate::export::schedule::SupportRecord;
+use crate::export::step::write_exact_step;
 use crate::export::{build_schedule_with, panel_files, write_glb, write_obj, ExportFile, MouldReport, PanelMetrics, Report, SnapMisses, SnapReport};
+use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
+use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
@@ -53,11 +53,7 @@ pub(crate) fn curvature_fields(c: &CurvatureField) -> Vec<Field> {
         Field::f32(field::K1, 1, v.iter().map(|x| x.k1 as f32).collect()),
         Field::f32(field::K2, 1, v.iter().map(|x| x.k2 as f32).collect()),
         Field::f32(field::K1_MINUS_K2, 1, v.iter().map(|x| (x.k1 - x.k2).abs() as f32).collect()),
-        Field::f32(
-            field::CENTRAL_SPHERES,
-            5,
-            c.central_spheres.iter().flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c]).map(|x| x as f32).collect(),
-        ),
+        Field::f32(field::CENTRAL_SPHERES, 5, c.central_spheres.iter().flat_map(|s| [s.a, s.b.x, s.b.y, s.b.z, s.c]).map(|x| x as f32).collect()),
         Field::u32(field::BOUNDARY, 1, c.boundary.iter().map(|&b| b as u32).collect()),
     ]
 }
@@ -165,7 +161,6 @@ impl<'a> PanelExport<'a> {
     /// closer than `radius_tolerance` × `diag` counted as one, its own section of the report
     /// (a serializable type of the method's) and its timings; the moulds and units as
     /// `fabrication` asks.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         method: &'a str,
         sphere_mesh: &'a SphereMesh,
@@ -309,7 +304,8 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         Snapping::Snapped(snap) => fits.on_moulds(&snap.moulds),
         Snapping::Not(_) => e.fabrication.assign(&fits, e.diag),
     };
-    let snapped: Vec<bool> = moulds.panel_mould.iter().enumerate().map(|(i, &j)| fits.has_mould_radius(i, moulds.moulds[j as usize].curvature, e.diag)).collect();
+    let snapped: Vec<bool> =
+        moulds.panel_mould.iter().enumerate().map(|(i, &j)| fits.has_mould_radius(i, moulds.moulds[j as usize].curvature, e.diag)).collect();
     let units = e.fabrication.units;
     let mut schedule = build_schedule_with(e.panels, reference, e.radius_tolerance * e.diag, e.deviations).with_moulds(&moulds, &snapped, units);
     schedule.support_elements = e.support.map(|s| SupportRecord::of(&s.elements)).unwrap_or_default();

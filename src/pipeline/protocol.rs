@@ -12,8 +12,8 @@ use serde::{Deserialize, Serialize};
 use super::fields::{Field, FieldHeader, FieldLengthError, StageId, StageProgress};
 use super::stages::{curvature, sq, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
-use crate::geometry::mesh::topology::MeshStats;
 use crate::export::Report;
+use crate::geometry::mesh::topology::MeshStats;
 use crate::import::Format;
 use crate::panels::moulds::Fabrication;
 use crate::reference::bspline::BSplineInfo;
@@ -203,10 +203,7 @@ pub struct Envelope {
 
 /// Encodes a message from the worker with its fields (the header lists them).
 pub fn encode_from_worker(msg: &FromWorker, fields: &[Field]) -> Envelope {
-    Envelope {
-        json: serde_json::to_string(msg).expect("protocol types always serialize"),
-        bodies: fields.iter().map(Field::to_bytes).collect(),
-    }
+    Envelope { json: serde_json::to_string(msg).expect("protocol types always serialize"), bodies: fields.iter().map(Field::to_bytes).collect() }
 }
 
 /// A message that cannot be decoded.
@@ -268,8 +265,7 @@ mod tests {
 
     #[test]
     fn snapshot_round_trip() {
-        let fields =
-            vec![Field::f32(field::POSITIONS, 3, vec![0.0, 1.5, -2.0, 3.0, 4.0, 5.0]), Field::u32(field::TRIANGLES, 3, vec![0, 1, 0])];
+        let fields = vec![Field::f32(field::POSITIONS, 3, vec![0.0, 1.5, -2.0, 3.0, 4.0, 5.0]), Field::u32(field::TRIANGLES, 3, vec![0, 1, 0])];
         let msg = FromWorker::Snapshot { stage: StageId::Curvature, iteration: 3, fields: fields.iter().map(Field::header).collect() };
         let env = encode_from_worker(&msg, &fields);
         let (back, back_fields) = decode_from_worker(&env).unwrap();

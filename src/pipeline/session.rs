@@ -7,11 +7,11 @@ use super::protocol::{FileObject, FromWorker, ReferenceInfo, Source, StageReques
 use super::sink::Sink;
 use super::stages::{curvature, sq, st_adapted, st_support, StageError};
 use crate::export::ExportFile;
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::bspline::BSplineSurface;
+use crate::geometry::mesh::topology::Topology;
 use crate::import::{import_file, Format, ImportError, ImportedFile};
-use crate::reference::bspline::SplineReferenceError;
 use crate::progress::Clock;
+use crate::reference::bspline::SplineReferenceError;
 use crate::reference::Reference;
 use crate::samples::Sample;
 use crate::sq::SqResult;
@@ -40,7 +40,10 @@ pub struct Loaded {
 pub enum LoadError {
     Import(ImportError),
     /// A B-spline surface that cannot be a reference (in file `file`).
-    Spline { file: String, error: SplineReferenceError },
+    Spline {
+        file: String,
+        error: SplineReferenceError,
+    },
 }
 
 impl std::fmt::Display for LoadError {
@@ -306,4 +309,3 @@ impl Session {
 pub fn snapshot(stage: StageId, iteration: u32, fields: &[Field]) -> FromWorker {
     FromWorker::Snapshot { stage, iteration, fields: fields.iter().map(Field::header).collect() }
 }
-

@@ -7,7 +7,6 @@
 //! app show alike.
 
 // Negated float comparisons are deliberate: NaN counts as a kink and as a sliver.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::fmt;
 
@@ -206,8 +205,7 @@ fn sign_change(mesh: &TriMesh, field: &CurvatureField) -> Option<Warning> {
     let positive = h().filter(|&x| x > threshold).count();
     let negative = h().filter(|&x| x < -threshold).count();
     let need = ((SIGN_FRACTION * field.vertices.len() as f64).ceil() as usize).max(1);
-    (field.summary.h_changes_sign || (positive >= need && negative >= need))
-        .then_some(Warning::MeanCurvatureChangesSign { positive, negative })
+    (field.summary.h_changes_sign || (positive >= need && negative >= need)).then_some(Warning::MeanCurvatureChangesSign { positive, negative })
 }
 
 /// The kink warning of a result whose interior edges meet at `kinks_deg`, beside the reference's

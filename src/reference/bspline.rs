@@ -5,7 +5,6 @@
 //! the exact curvature at the tessellation's vertices, and the ranges of H and K.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -14,7 +13,6 @@ use crate::congruence::central_spheres::{CurvatureField, VertexCurvature};
 use crate::geometry::bspline::surface::TESSELLATION_TOLERANCE;
 use crate::geometry::bspline::{BSplineSurface, SurfaceDerivatives};
 use crate::geometry::mesh::PolyMesh;
-
 
 /// Why a B-spline surface cannot be a reference.
 #[derive(Clone, Copy, Debug, PartialEq)]

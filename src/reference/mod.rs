@@ -26,8 +26,8 @@ pub const TESSELLATION_ERROR_MARGIN: f64 = 1.5;
 use crate::congruence::central_spheres::{jet_fit, CurvatureField, JetParams};
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
-use crate::geometry::mesh::{PolyMesh, TriMesh};
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::{PolyMesh, TriMesh};
 use crate::progress::{Cancelled, OnProgress};
 
 /// A point of the reference surface.

@@ -8,8 +8,8 @@ use std::rc::Rc;
 use glam::DVec3;
 
 use super::{Reference, SearchStart};
-use crate::solver::{JacobianSink, Term};
 use crate::solver::terms::v3;
+use crate::solver::{JacobianSink, Term};
 
 /// Closest reference points of the vertices, shared by the proximity terms so that each moved
 /// vertex is looked up once per evaluation point (see [`ReferenceProximity::share_closest_with`]).
@@ -171,13 +171,7 @@ pub struct CentroidTargets<'a> {
 impl<'a> CentroidTargets<'a> {
     pub fn new(reference: &'a Reference, groups: Vec<Vec<usize>>, x: &[f64]) -> Self {
         let n = groups.len();
-        let mut t = Self {
-            reference,
-            groups,
-            targets: vec![DVec3::ZERO; n],
-            starts: vec![None; n],
-            centroids: vec![DVec3::NAN; n],
-        };
+        let mut t = Self { reference, groups, targets: vec![DVec3::ZERO; n], starts: vec![None; n], centroids: vec![DVec3::NAN; n] };
         t.update(x);
         t
     }

@@ -81,7 +81,11 @@ pub(crate) fn mean_cross(crosses: impl IntoIterator<Item = (f64, Cross)>) -> Opt
 /// The difference b − a of two cross angles, modulo a quarter turn, in (−π/4, π/4].
 pub(crate) fn angle_step(a: f64, b: f64) -> f64 {
     let d = (b - a).rem_euclid(FRAC_PI_2);
-    if d > 0.5 * FRAC_PI_2 { d - FRAC_PI_2 } else { d }
+    if d > 0.5 * FRAC_PI_2 {
+        d - FRAC_PI_2
+    } else {
+        d
+    }
 }
 
 /// A cross field on an n × n grid of a rectangle: per cell (i + (n − 1) j) its cross.
@@ -206,7 +210,7 @@ impl FineGrid {
     pub fn triangle(&self, t: usize) -> [usize; 3] {
         let cell = t / 2;
         let (i, j) = (cell % (self.nu - 1), cell / (self.nu - 1));
-        if t % 2 == 0 {
+        if t.is_multiple_of(2) {
             [self.node(i, j), self.node(i + 1, j), self.node(i, j + 1)]
         } else {
             [self.node(i + 1, j + 1), self.node(i, j + 1), self.node(i + 1, j)]
@@ -221,7 +225,11 @@ impl FineGrid {
         let t = ((p.y - self.origin[1]) / self.step[1]).clamp(0.0, (self.nv - 1) as f64);
         let (i, j) = ((s.floor() as usize).min(self.nu - 2), (t.floor() as usize).min(self.nv - 2));
         let cell = 2 * (i + (self.nu - 1) * j);
-        if (s - i as f64) + (t - j as f64) <= 1.0 { cell } else { cell + 1 }
+        if (s - i as f64) + (t - j as f64) <= 1.0 {
+            cell
+        } else {
+            cell + 1
+        }
     }
     /// Whether `node` is on the grid's outer boundary.
     pub(crate) fn on_border(&self, node: usize) -> bool {

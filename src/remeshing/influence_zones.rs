@@ -54,7 +54,6 @@
 //! spheres orthogonal to an absolute sphere Ω.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
 use glam::DVec3;
 
@@ -62,8 +61,8 @@ use crate::congruence::central_spheres::CurvatureField;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::geometry::closest::{ClosestHit, TriangleBvh};
 use crate::geometry::linalg::Svd;
-use crate::geometry::mesh::TriMesh;
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::progress::{ignore, Cancelled, OnProgress, Progress};
 
@@ -159,7 +158,8 @@ impl SizingField {
                 per_area * mesh.face_area_vector(f).length() / (g * g)
             })
             .sum();
-        let boundary: f64 = boundary_edges(mesh).map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]) / g_of(a).min(g_of(b))).sum();
+        let boundary: f64 =
+            boundary_edges(mesh).map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]) / g_of(a).min(g_of(b))).sum();
         interior + boundary
     }
 
@@ -207,10 +207,7 @@ impl SizingField {
 
     /// A field from given per-vertex values (clamped to `bounds`).
     pub(crate) fn from_values(mesh: &TriMesh, values: Vec<f64>, bounds: SizingBounds) -> Self {
-        let values = values
-            .into_iter()
-            .map(|v| if v.is_finite() { v.clamp(bounds.g_min, bounds.g_max) } else { bounds.g_max })
-            .collect();
+        let values = values.into_iter().map(|v| if v.is_finite() { v.clamp(bounds.g_min, bounds.g_max) } else { bounds.g_max }).collect();
         Self { values, triangles: mesh.triangles.clone(), bvh: TriangleBvh::new(mesh), uniform: None, bounds }
     }
 
@@ -511,12 +508,7 @@ impl ZoneGrower {
 /// ≈ Σ dist² near the sphere), solved in the frame centred at v and scaled to the neighbourhood
 /// as a 3 × 3 generalized eigenproblem. Oriented like the mesh normal at v and normalized. Where it
 /// is undetermined (fewer than 3 neighbours, degenerate data) the tangent plane through v is used.
-pub fn local_spheres_orthogonal(
-    mesh: &TriMesh,
-    topo: &Topology,
-    omega: &AbsoluteSphere,
-    min_points: usize,
-) -> Vec<Sphere> {
+pub fn local_spheres_orthogonal(mesh: &TriMesh, topo: &Topology, omega: &AbsoluteSphere, min_points: usize) -> Vec<Sphere> {
     let n = mesh.vertex_count().min(topo.vertex_count());
     let normals = mesh.vertex_normals();
     let mut stamp = vec![0u32; n];
@@ -552,8 +544,7 @@ pub fn local_spheres_orthogonal(
             out.push(fallback);
             continue;
         }
-        let sigma =
-            ring.iter().map(|&w| mesh.positions[w as usize].distance(p0)).sum::<f64>() / (ring.len() - 1) as f64;
+        let sigma = ring.iter().map(|&w| mesh.positions[w as usize].distance(p0)).sum::<f64>() / (ring.len() - 1) as f64;
         if !(sigma > 0.0) || !sigma.is_finite() {
             out.push(fallback);
             continue;

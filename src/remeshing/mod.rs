@@ -14,9 +14,9 @@
 //! let remeshed = pliant_remesh(&reference, &sizing, &RemeshParams::default(), &mut ignore).unwrap();
 //! ```
 
+pub mod cross_field;
 pub mod influence_zones;
 pub mod pliant;
-pub mod cross_field;
 pub mod quad_remeshing;
 pub mod seamless;
 
@@ -29,13 +29,10 @@ use crate::geometry::sphere::Sphere;
 use crate::progress::{Cancelled, OnProgress};
 use crate::reference::assumptions::Warning;
 
-pub use influence_zones::{
-    influence_zone, local_spheres_orthogonal, mean_edge_length, zone_diameter, SizingBounds, SizingField,
-    DEFAULT_EPSILON,
-};
+pub use influence_zones::{influence_zone, local_spheres_orthogonal, mean_edge_length, zone_diameter, SizingBounds, SizingField, DEFAULT_EPSILON};
 pub use pliant::{
-    face_cap, pliant_remesh, pliant_remesh_with_stats, RemeshError, RemeshOutput, RemeshParams, RoundStats,
-    COLLAPSE_BELOW, SPLIT_ABOVE, TARGET_FACTOR,
+    face_cap, pliant_remesh, pliant_remesh_with_stats, RemeshError, RemeshOutput, RemeshParams, RoundStats, COLLAPSE_BELOW, SPLIT_ABOVE,
+    TARGET_FACTOR,
 };
 
 /// The most faces any remesh may ask for, in the CLI, the design link and the app alike.
@@ -125,7 +122,11 @@ impl Sizing {
             (Sizing::Adaptive { .. }, Some(field)) => field.expected_faces(mesh).min(usize::MAX as f64) as usize,
             _ => mesh.face_count(),
         };
-        if faces > limit { Err(TooManyFaces { faces, limit }) } else { Ok(()) }
+        if faces > limit {
+            Err(TooManyFaces { faces, limit })
+        } else {
+            Ok(())
+        }
     }
 
     /// The sizing field a method asks for on `mesh` (the influence zones of `sphere_of(i)`, ε × the
@@ -149,8 +150,7 @@ impl Sizing {
             Sizing::UniformFaces(n) => Some(SizingField::uniform_for_face_count(mesh, n)),
             Sizing::None => None,
         };
-        self.check_size(mesh, field.as_ref(), MAX_METHOD_FACES)
-            .map_err(GuardedRemeshError::TooManyFaces)?;
+        self.check_size(mesh, field.as_ref(), MAX_METHOD_FACES).map_err(GuardedRemeshError::TooManyFaces)?;
         Ok(field)
     }
 
@@ -164,12 +164,7 @@ impl Sizing {
         warnings: &dyn Fn() -> Vec<Warning>,
         progress: &mut OnProgress,
     ) -> Result<TriMesh, GuardedRemeshError> {
-        let refused = |error| {
-            GuardedRemeshError::Refused(RemeshRefused {
-                error,
-                warnings: warnings(),
-            })
-        };
+        let refused = |error| GuardedRemeshError::Refused(RemeshRefused { error, warnings: warnings() });
         let remeshed = pliant_remesh(mesh, field, params, progress).map_err(|e| match e {
             pliant::RemeshError::Cancelled => GuardedRemeshError::Cancelled,
             pliant::RemeshError::NoFaces => GuardedRemeshError::NoFaces,

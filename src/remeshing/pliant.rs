@@ -39,7 +39,6 @@
 //! boundary loops are those of the reference.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -129,7 +128,11 @@ pub struct RemeshOutput {
 pub fn face_cap(reference: &TriMesh, sizing: &SizingField) -> usize {
     let expected = sizing.expected_faces(reference);
     let cap = 4.0 * expected + 2.0 * reference.face_count() as f64 + 64.0;
-    if cap.is_finite() && cap < 1e9 { cap as usize } else { 1_000_000_000 }
+    if cap.is_finite() && cap < 1e9 {
+        cap as usize
+    } else {
+        1_000_000_000
+    }
 }
 
 /// Why [`pliant_remesh`] gave no mesh.
@@ -140,7 +143,10 @@ pub enum RemeshError {
     NoFaces,
     /// A uniform remesh to about `target` faces made `faces`, off by more than a factor
     /// [`TARGET_FACTOR`]: the reference is too small, thin or folded to be cut that finely.
-    TargetMissed { target: usize, faces: usize },
+    TargetMissed {
+        target: usize,
+        faces: usize,
+    },
 }
 
 /// How far a uniform remesh may miss its face count before it is refused.
@@ -170,12 +176,7 @@ impl From<Cancelled> for RemeshError {
 
 /// Pliant remeshing of `reference` to the sizing field `sizing`. Reports step "remesh" before
 /// every round and at the end.
-pub fn pliant_remesh(
-    reference: &TriMesh,
-    sizing: &SizingField,
-    params: &RemeshParams,
-    progress: &mut OnProgress,
-) -> Result<TriMesh, RemeshError> {
+pub fn pliant_remesh(reference: &TriMesh, sizing: &SizingField, params: &RemeshParams, progress: &mut OnProgress) -> Result<TriMesh, RemeshError> {
     let mesh = pliant_remesh_with_stats(reference, sizing, params, progress)?.mesh;
     if mesh.face_count() == 0 {
         return Err(RemeshError::NoFaces);
@@ -202,13 +203,7 @@ pub fn pliant_remesh_with_stats(
     }
     progress(Progress::new("remesh", params.rounds, params.rounds))?;
     let (unprojected, max_d) = r.final_projection();
-    Ok(RemeshOutput {
-        mesh: r.m.to_mesh(),
-        rounds,
-        unprojected_vertices: unprojected,
-        max_distance_to_reference: max_d,
-        face_cap: r.face_cap,
-    })
+    Ok(RemeshOutput { mesh: r.m.to_mesh(), rounds, unprojected_vertices: unprojected, max_distance_to_reference: max_d, face_cap: r.face_cap })
 }
 
 /// Remeshing state: the halfedge mesh, the reference's BVHs and scratch buffers.
@@ -249,15 +244,10 @@ fn quality(a: DVec3, b: DVec3, c: DVec3) -> (f64, DVec3) {
 
 impl<'a> Remesher<'a> {
     pub fn new(reference: &TriMesh, sizing: &'a SizingField, params: &RemeshParams) -> Self {
-        let m = HalfedgeMesh::from_mesh(
-            reference,
-            params.feature_angle_deg.to_radians(),
-            params.corner_angle_deg.to_radians(),
-        );
+        let m = HalfedgeMesh::from_mesh(reference, params.feature_angle_deg.to_radians(), params.corner_angle_deg.to_radians());
         let shared = sizing.is_defined_on(reference);
         let own_surface = if shared { None } else { Some(TriangleBvh::new(reference)) };
-        let face_normals: Vec<DVec3> =
-            (0..reference.face_count()).map(|f| reference.face_area_vector(f).normalize_or_zero()).collect();
+        let face_normals: Vec<DVec3> = (0..reference.face_count()).map(|f| reference.face_area_vector(f).normalize_or_zero()).collect();
         let he_normal = |h: u32| m.face_normal(face(h)).unwrap_or(DVec3::ZERO);
         let (mut bseg, mut bnrm, mut fseg, mut fnrm) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for h in 0..m.twin.len() as u32 {
@@ -460,10 +450,7 @@ impl<'a> Remesher<'a> {
     fn face_ok(&self, p: [DVec3; 3], nref: [DVec3; 3], n_old: Option<DVec3>, floor: f64) -> bool {
         let (q, n) = quality(p[0], p[1], p[2]);
         let len = n.length();
-        len > 0.0
-            && q >= floor
-            && n_old.is_none_or(|o| n.dot(o) >= self.cos_normal * len)
-            && n.dot(nref[0] + nref[1] + nref[2]) > 0.0
+        len > 0.0 && q >= floor && n_old.is_none_or(|o| n.dot(o) >= self.cos_normal * len) && n.dot(nref[0] + nref[1] + nref[2]) > 0.0
     }
 
     // --- 2. Collapses ------------------------------------------------------------------------
@@ -476,8 +463,7 @@ impl<'a> Remesher<'a> {
         let mut touched: Vec<u32> = Vec::new();
         let mut ring = Vec::new();
         for _pass in 0..self.params.max_collapse_passes.max(1) {
-            let mut cand: Vec<(f64, u32)> =
-                edges.iter().map(|&h| (self.edge_length(h), h)).filter(|&(l, _)| l < COLLAPSE_BELOW).collect();
+            let mut cand: Vec<(f64, u32)> = edges.iter().map(|&h| (self.edge_length(h), h)).filter(|&(l, _)| l < COLLAPSE_BELOW).collect();
             if cand.is_empty() {
                 break;
             }
@@ -606,15 +592,7 @@ impl<'a> Remesher<'a> {
         ok
     }
 
-    fn collapse_geometry_ok_inner(
-        &self,
-        x: u32,
-        y: u32,
-        p: DVec3,
-        pn: DVec3,
-        faces: &mut Vec<u32>,
-        ring: &mut Vec<u32>,
-    ) -> bool {
+    fn collapse_geometry_ok_inner(&self, x: u32, y: u32, p: DVec3, pn: DVec3, faces: &mut Vec<u32>, ring: &mut Vec<u32>) -> bool {
         let m = &self.m;
         let py = m.pos[y as usize];
         // New edge lengths: neighbours of x (and of y if y moves).
@@ -702,8 +680,7 @@ impl<'a> Remesher<'a> {
         let (c, d) = (m.from(prev(h)), m.from(prev(t)));
         let val = |v: u32| m.valence(v) as i64;
         let (va, vb, vc, vd) = (val(a), val(b), val(c), val(d));
-        let (ta, tb, tc, td) =
-            (self.target_valence(a), self.target_valence(b), self.target_valence(c), self.target_valence(d));
+        let (ta, tb, tc, td) = (self.target_valence(a), self.target_valence(b), self.target_valence(c), self.target_valence(d));
         let before = (va - ta).pow(2) + (vb - tb).pow(2) + (vc - tc).pow(2) + (vd - td).pow(2);
         let after = (va - 1 - ta).pow(2) + (vb - 1 - tb).pow(2) + (vc + 1 - tc).pow(2) + (vd + 1 - td).pow(2);
         if after >= before {
@@ -733,9 +710,7 @@ impl<'a> Remesher<'a> {
         let floor = self.sin_min_angle.min(q0.min(q1));
         // Against the average normal of the old pair (None if both were degenerate).
         let avg = (n0.normalize_or_zero() + n1.normalize_or_zero()).try_normalize();
-        if !self.face_ok([pa, pd, pc], [na, nd, nc], avg, floor)
-            || !self.face_ok([pd, pb, pc], [nd, nb, nc], avg, floor)
-        {
+        if !self.face_ok([pa, pd, pc], [na, nd, nc], avg, floor) || !self.face_ok([pd, pb, pc], [nd, nb, nc], avg, floor) {
             return false;
         }
         let (qn0, m0) = quality(pa, pd, pc);

@@ -36,7 +36,6 @@
 //! ([`QuadRemesh::singular`]).
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::collections::{HashMap, HashSet};
 use std::fmt;
@@ -49,7 +48,6 @@ use crate::solver::{Linear, Problem, Solver, SolverOptions};
 
 pub use super::cross_field::{split_singularities, Cross, CrossField, FineGrid, SingularPoint};
 use super::seamless::{turn, Cuts};
-
 
 /// Settings of the remesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -206,7 +204,11 @@ pub fn integrate(fg: &FieldGrid, direction_weight: f64, spacing: f64) -> Result<
     for (t, d) in frames.iter().enumerate() {
         let dirs = cuts.combed[t].directions().map(|t| {
             let len = (d.su * t.x + d.sv * t.y).length();
-            if len > 0.0 { t / len } else { DVec2::ZERO }
+            if len > 0.0 {
+                t / len
+            } else {
+                DVec2::ZERO
+            }
         });
         // ∇φ on the triangle from its corners: φ = φ_a + (x − x_a)·∇φ.
         let c = grid.triangle(t);
@@ -623,7 +625,11 @@ fn extract(surface: &BSplineSurface, g: &Integration, h: f64, offset: [f64; 2], 
                 let to_side = [mean.x - u0, u1 - mean.x, mean.y - v0, v1 - mean.y];
                 let (side, _) = to_side.iter().enumerate().fold((0, f64::INFINITY), |b, (s, &d)| {
                     let scaled = d / if s < 2 { u1 - u0 } else { v1 - v0 };
-                    if scaled < b.1 { (s, scaled) } else { b }
+                    if scaled < b.1 {
+                        (s, scaled)
+                    } else {
+                        b
+                    }
                 });
                 let snapped = match side {
                     0 => DVec2::new(u0, mean.y),
@@ -968,7 +974,8 @@ mod tests {
     fn a_notch_at_the_boundary_drops_boundary_quads_only() {
         let (nx, ny) = (6u32, 5u32);
         let id = |i: u32, j: u32| i + (nx + 1) * j;
-        let pts: Vec<DVec3> = (0..=ny).flat_map(|j| (0..=nx).map(move |i| DVec3::new(i as f64, if j == 0 { 0.0 } else { 0.5 + 0.5 * j as f64 }, 0.0))).collect();
+        let pts: Vec<DVec3> =
+            (0..=ny).flat_map(|j| (0..=nx).map(move |i| DVec3::new(i as f64, if j == 0 { 0.0 } else { 0.5 + 0.5 * j as f64 }, 0.0))).collect();
         let boundary: Vec<bool> = (0..=ny).flat_map(|j| (0..=nx).map(move |i| i == 0 || i == nx || j == 0 || j == ny)).collect();
         let mut faces: Vec<Vec<u32>> = (0..ny)
             .flat_map(|j| (0..nx).map(move |i| (i, j)))
@@ -977,7 +984,7 @@ mod tests {
             .collect();
         let inner: Vec<Vec<u32>> = faces.iter().filter(|f| f.iter().all(|&v| !boundary[v as usize])).cloned().collect();
         let dropped = drop_reentrant_corners(&mut faces, &pts, Outline::BoundaryQuads, &boundary, true);
-        assert!(dropped >= 1 && dropped <= 5, "{dropped} dropped");
+        assert!((1..=5).contains(&dropped), "{dropped} dropped");
         for f in &inner {
             assert!(faces.contains(f), "inner quad {f:?} dropped");
         }

@@ -12,14 +12,12 @@
 //! a copy with ε² added on the diagonal, faer's numeric LLᵀ and a solve. No hashing, no
 //! allocation.
 
+use super::ordering::{BlockGraph, Ordering};
 use super::problem::{JacobianSink, Problem};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
-};
-use super::ordering::{BlockGraph, Ordering};
 use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
@@ -69,7 +67,6 @@ fn group_by_bucket<T: Copy + Default>(n_buckets: usize, items: impl Iterator<Ite
 }
 
 /// Evaluates one term into (cleared) buffers; used by `evaluate` and the Jacobian check.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn eval_term(
     term: &dyn super::problem::Term,
     x: &[f64],
@@ -113,16 +110,7 @@ pub(crate) fn evaluate(problem: &Problem, x: &[f64], buf: &mut EvalBuffers) {
     buf.term_trips.push(0);
     for (ti, t) in problem.terms.iter().enumerate() {
         let (r0, r1) = (buf.term_rows[ti], buf.term_rows[ti + 1]);
-        eval_term(
-            &*t.term,
-            x,
-            &mut buf.r[r0..r1],
-            &mut buf.active[r0..r1],
-            &mut buf.rows,
-            &mut buf.cols,
-            &mut buf.vals,
-            r0,
-        );
+        eval_term(&*t.term, x, &mut buf.r[r0..r1], &mut buf.active[r0..r1], &mut buf.rows, &mut buf.cols, &mut buf.vals, r0);
         buf.term_trips.push(buf.rows.len());
     }
 }
@@ -196,17 +184,12 @@ impl System {
     }
 
     pub(crate) fn is_supernodal(&self) -> bool {
-        matches!(
-            self.chol.as_ref().map(|c| c.raw()),
-            Some(faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_))
-        )
+        matches!(self.chol.as_ref().map(|c| c.raw()), Some(faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_)))
     }
 
     /// Whether `buf`'s structure (and the problem's variables) are those of this pattern.
     pub fn matches(&self, problem: &Problem, buf: &EvalBuffers) -> bool {
-        self.n_vars == problem.num_variables()
-            && self.fixed.as_slice() == problem.fixed_mask()
-            && self.matches_structure(buf)
+        self.n_vars == problem.num_variables() && self.fixed.as_slice() == problem.fixed_mask() && self.matches_structure(buf)
     }
 
     pub(crate) fn matches_structure(&self, buf: &EvalBuffers) -> bool {
@@ -251,10 +234,8 @@ impl System {
         let nf = free_to_var.len();
 
         // Group triplets with free columns by row.
-        let (row_start, mut order) = group_by_bucket(
-            m,
-            (0..n_trip).filter(|&t| free_index[buf.cols[t] as usize] != NONE).map(|t| (buf.rows[t] as usize, t as u32)),
-        );
+        let (row_start, mut order) =
+            group_by_bucket(m, (0..n_trip).filter(|&t| free_index[buf.cols[t] as usize] != NONE).map(|t| (buf.rows[t] as usize, t as u32)));
 
         // Unique (row, free col) entries, sorted by column within each row.
         let mut trip_entry = vec![NONE; n_trip];
@@ -451,27 +432,14 @@ impl System {
         }
         let mat = SparseColMatRef::new(self.a_sym.as_ref(), &self.a);
         let stack = MemStack::new(&mut self.mem);
-        let llt = match chol.factorize_numeric_llt(
-            &mut self.l,
-            mat,
-            Side::Upper,
-            LltRegularization::default(),
-            Par::Seq,
-            stack,
-            Default::default(),
-        ) {
+        let llt = match chol.factorize_numeric_llt(&mut self.l, mat, Side::Upper, LltRegularization::default(), Par::Seq, stack, Default::default()) {
             Ok(llt) => llt,
             Err(_) => return false,
         };
         for (d, g) in delta.iter_mut().zip(&self.g) {
             *d = -g;
         }
-        llt.solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(delta, nf, 1),
-            Par::Seq,
-            stack,
-        );
+        llt.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(delta, nf, 1), Par::Seq, stack);
         delta.iter().all(|d| d.is_finite())
     }
 }
@@ -517,9 +485,7 @@ fn symbolic_with_ordering(
 pub(crate) fn factor_flops(chol: &SymbolicCholesky<u32>) -> f64 {
     use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
     match chol.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => {
-            s.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum()
-        }
+        SymbolicCholeskyRaw::Simplicial(s) => s.col_ptr().windows(2).map(|w| ((w[1] - w[0]) as f64).powi(2)).sum(),
         SymbolicCholeskyRaw::Supernodal(s) => {
             let (b, e, rp) = (s.supernode_begin(), s.supernode_end(), s.col_ptr_for_row_idx());
             let mut f = 0.0;

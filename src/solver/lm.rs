@@ -123,14 +123,7 @@ pub enum Termination {
 impl Termination {
     /// Converged (as opposed to stopped by a limit, the hook or an error).
     pub fn converged(self) -> bool {
-        matches!(
-            self,
-            Self::StepTolerance
-                | Self::EnergyTolerance
-                | Self::GradientTolerance
-                | Self::RelativeDecrease
-                | Self::NoFreeVariables
-        )
+        matches!(self, Self::StepTolerance | Self::EnergyTolerance | Self::GradientTolerance | Self::RelativeDecrease | Self::NoFreeVariables)
     }
 }
 
@@ -320,12 +313,7 @@ impl Solver {
         self.x_trial.clear();
         self.x_trial.extend_from_slice(x);
 
-        let finish = |mut report: SolveReport,
-                      this: &Self,
-                      energy: f64,
-                      mu: f64,
-                      phase: PhaseTimes,
-                      t: Termination| {
+        let finish = |mut report: SolveReport, this: &Self, energy: f64, mu: f64, phase: PhaseTimes, t: Termination| {
             let sys = this.system.as_ref().unwrap();
             report.termination = t;
             report.energy = energy;
@@ -446,19 +434,12 @@ impl Solver {
             if hook(&ir).is_err() {
                 return finish(report, self, energy, mu, phase, Termination::Cancelled);
             }
-            let x_norm = sys
-                .free_to_var
-                .iter()
-                .map(|&v| x[v as usize] * x[v as usize])
-                .sum::<f64>()
-                .sqrt();
+            let x_norm = sys.free_to_var.iter().map(|&v| x[v as usize] * x[v as usize]).sum::<f64>().sqrt();
             let t = if energy <= opts.energy_tolerance {
                 Some(Termination::EnergyTolerance)
             } else if accepted && gnorm <= opts.gradient_tolerance {
                 Some(Termination::GradientTolerance)
-            } else if solved
-                && step_norm <= opts.step_tolerance * (x_norm + opts.step_tolerance)
-            {
+            } else if solved && step_norm <= opts.step_tolerance * (x_norm + opts.step_tolerance) {
                 Some(Termination::StepTolerance)
             } else if small_decrease {
                 Some(Termination::RelativeDecrease)
@@ -479,12 +460,7 @@ pub(crate) fn empty_stats(problem: &Problem) -> Vec<TermStats> {
     problem
         .terms
         .iter()
-        .map(|t| TermStats {
-            name: t.term.name().to_string(),
-            weight: t.weight,
-            residuals: t.term.residual_count(),
-            ..Default::default()
-        })
+        .map(|t| TermStats { name: t.term.name().to_string(), weight: t.weight, residuals: t.term.residual_count(), ..Default::default() })
         .collect()
 }
 

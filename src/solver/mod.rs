@@ -36,12 +36,9 @@ pub mod problem;
 pub mod terms;
 
 pub use check::{check_jacobian, check_jacobian_report, jacobians, residuals, JacobianCheck};
+pub use lm::{IterationReport, PhaseTimes, SolveReport, Solver, SolverOptions, TermStats, Termination};
 pub use ordering::Ordering;
-pub use lm::{
-    IterationReport, PhaseTimes, SolveReport, Solver, SolverOptions, TermStats, Termination,
-};
-pub use terms::{
-    Anchor, Band, FnTerm, Hinge, InversiveProduct, InversiveProductFixed, Linear, PointOnPlane,
-    PointOnSphere, Proximal, SphereFit, UnitLength,
-};
 pub use problem::{JacobianSink, Problem, Term, TermId};
+pub use terms::{
+    Anchor, Band, FnTerm, Hinge, InversiveProduct, InversiveProductFixed, Linear, PointOnPlane, PointOnSphere, Proximal, SphereFit, UnitLength,
+};

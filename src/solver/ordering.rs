@@ -193,13 +193,7 @@ impl BlockGraph {
     /// Nested-dissection node order.
     pub(crate) fn nested_dissection_order(&self) -> Vec<u32> {
         let n = self.n();
-        let mut st = NdState {
-            stamp: vec![0; n],
-            level: vec![u32::MAX; n],
-            local: vec![u32::MAX; n],
-            cur: 0,
-            out: Vec::with_capacity(n),
-        };
+        let mut st = NdState { stamp: vec![0; n], level: vec![u32::MAX; n], local: vec![u32::MAX; n], cur: 0, out: Vec::with_capacity(n) };
         let nodes: Vec<u32> = (0..n as u32).collect();
         self.dissect(nodes, &mut st);
         debug_assert_eq!(st.out.len(), n);
@@ -270,13 +264,7 @@ impl BlockGraph {
         let mut root = nodes[0];
         let mut depth = st.level[*order.last().unwrap() as usize];
         for _ in 0..4 {
-            let far = order
-                .iter()
-                .rev()
-                .take_while(|&&k| st.level[k as usize] == depth)
-                .min_by_key(|&&k| self.neighbors(k).len())
-                .copied()
-                .unwrap();
+            let far = order.iter().rev().take_while(|&&k| st.level[k as usize] == depth).min_by_key(|&&k| self.neighbors(k).len()).copied().unwrap();
             self.bfs(far, st, &mut order);
             let d = st.level[*order.last().unwrap() as usize];
             root = far;

@@ -35,13 +35,7 @@ pub struct JacobianSink<'s> {
 }
 
 impl<'s> JacobianSink<'s> {
-    pub(crate) fn new(
-        rows: &'s mut Vec<u32>,
-        cols: &'s mut Vec<u32>,
-        vals: &'s mut Vec<f64>,
-        active: &'s mut [bool],
-        row_offset: usize,
-    ) -> Self {
+    pub(crate) fn new(rows: &'s mut Vec<u32>, cols: &'s mut Vec<u32>, vals: &'s mut Vec<f64>, active: &'s mut [bool], row_offset: usize) -> Self {
         Self { rows, cols, vals, active, row_offset: row_offset as u32 }
     }
 
@@ -100,6 +94,9 @@ pub(crate) struct TermSlot<'a> {
 /// Variables (count and hard-fixed mask) and weighted terms.
 ///
 /// The lifetime lets terms borrow reference data (e.g. a BVH of the reference surface).
+/// A hard constraint on the iterates: true where a point is admissible.
+type Admissible<'a> = Box<dyn Fn(&[f64]) -> bool + 'a>;
+
 pub struct Problem<'a> {
     n_vars: usize,
     fixed: Vec<bool>,
@@ -107,7 +104,7 @@ pub struct Problem<'a> {
     groups: Vec<u32>,
     pub(crate) terms: Vec<TermSlot<'a>>,
     /// A hard constraint on the iterates: a step to a point it rejects is not taken.
-    admissible: Option<Box<dyn Fn(&[f64]) -> bool + 'a>>,
+    admissible: Option<Admissible<'a>>,
 }
 
 impl<'a> Problem<'a> {

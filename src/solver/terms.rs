@@ -212,7 +212,6 @@ impl<T: Term> Hinge<T> {
     pub fn inner(&self) -> &T {
         &self.inner
     }
-
 }
 
 impl<T: Term> Term for Hinge<T> {
@@ -260,7 +259,6 @@ impl<T: Term> Band<T> {
     pub fn inner(&self) -> &T {
         &self.inner
     }
-
 
     pub fn with_name(mut self, name: impl Into<String>) -> Self {
         self.name = name.into();
@@ -319,13 +317,7 @@ impl Default for Linear {
 
 impl Linear {
     pub fn new() -> Self {
-        Self {
-            name: "linear".into(),
-            row_ptr: vec![0],
-            cols: Vec::new(),
-            coeffs: Vec::new(),
-            constants: Vec::new(),
-        }
+        Self { name: "linear".into(), row_ptr: vec![0], cols: Vec::new(), coeffs: Vec::new(), constants: Vec::new() }
     }
 
     /// Appends the residual Σ coeffs.1 · x[coeffs.0] + constant; returns its row.

@@ -15,17 +15,32 @@ pub enum SqError {
     /// A parameter out of range.
     Parameter(ParamError),
     /// S_u × S_v vanishes at a point of G.
-    Singular { uv: [f64; 2] },
+    Singular {
+        uv: [f64; 2],
+    },
     /// H takes both signs (Sec. 6.3): area shares of H > 0 and H < 0, and where the other sign
     /// is strongest inside the patch.
-    MeanCurvatureSignChange { positive_share: f64, negative_share: f64, at: Option<[f64; 2]> },
+    MeanCurvatureSignChange {
+        positive_share: f64,
+        negative_share: f64,
+        at: Option<[f64; 2]>,
+    },
     /// |H| · diag below [`super::radius::MIN_MEAN_CURVATURE`] at a point of G.
-    MeanCurvatureNearZero { uv: [f64; 2], h_diag: f64 },
+    MeanCurvatureNearZero {
+        uv: [f64; 2],
+        h_diag: f64,
+    },
     RadiusBasis(String),
     /// Too few samples for the radius basis.
-    RadiusFit { samples: usize, coefficients: usize },
+    RadiusFit {
+        samples: usize,
+        coefficients: usize,
+    },
     /// c_u × c_v vanishes: the spheres do not vary (e.g. a sphere patch's central spheres).
-    SingularCentreSurface { points: usize, total: usize },
+    SingularCentreSurface {
+        points: usize,
+        total: usize,
+    },
     /// No grid quad has real torsal directions to remesh along.
     NoTorsalField,
     /// The quad remeshing failed (Sec. 5.2).
@@ -39,9 +54,9 @@ pub enum SqError {
 impl fmt::Display for SqError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SqError::NotBSpline => f.write_str(
-                "SQ meshes need a B-spline reference surface (Sec. 5): load a B-spline .json file or the vault sample",
-            ),
+            SqError::NotBSpline => {
+                f.write_str("SQ meshes need a B-spline reference surface (Sec. 5): load a B-spline .json file or the vault sample")
+            }
             SqError::Parameter(e) => e.fmt(f),
             SqError::Singular { uv } => {
                 write!(f, "the surface has no normal at (u, v) = ({:.6}, {:.6}) (S_u × S_v = 0)", uv[0], uv[1])
@@ -64,10 +79,9 @@ impl fmt::Display for SqError {
                 h_diag.abs()
             ),
             SqError::RadiusBasis(m) => write!(f, "radius basis: {m}"),
-            SqError::RadiusFit { samples, coefficients } => write!(
-                f,
-                "{samples} radius samples cannot determine {coefficients} coefficients: use a finer grid or a smaller radius basis"
-            ),
+            SqError::RadiusFit { samples, coefficients } => {
+                write!(f, "{samples} radius samples cannot determine {coefficients} coefficients: use a finer grid or a smaller radius basis")
+            }
             SqError::SingularCentreSurface { points, total } => write!(
                 f,
                 "the line congruence is undefined at {points} of {total} grid points: the centre surface c = f + r n is \

@@ -77,7 +77,13 @@ pub enum Delivered<'a> {
     QuadMesh(&'a PolyMesh, f64),
     /// The SQ mesh: its figures of exactness, its panels (within `max_distance` of the
     /// reference, relative to the diagonal) and the share of the patch they cover.
-    SqMesh { mesh: &'a PolyMesh, figures: &'a SqMeshFigures, panels: &'a Buildability, max_distance: f64, coverage: f64 },
+    SqMesh {
+        mesh: &'a PolyMesh,
+        figures: &'a SqMeshFigures,
+        panels: &'a Buildability,
+        max_distance: f64,
+        coverage: f64,
+    },
 }
 
 /// The verdict of a run on what it delivers: the congruence's guarantees when it stopped there

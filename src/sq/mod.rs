@@ -30,8 +30,8 @@
 //! Everything is computed in the frame y = (x − t)/s of the bounding box (centre t, diagonal s),
 //! so the weights are dimensionless; results are returned in model units.
 
-mod error;
 pub mod congruence_file;
+mod error;
 pub mod guarantees;
 pub mod metrics;
 pub mod moulds;
@@ -50,26 +50,26 @@ pub mod terms;
 use glam::DVec3;
 
 use crate::congruence::torsal::{parameter_pair, TorsalPair};
-use crate::geometry::rigid_alignment::point_to_plane_motion;
 use crate::geometry::bspline::BSplineFunction;
+use crate::geometry::rigid_alignment::point_to_plane_motion;
 use crate::panels::buildability::Buildability;
 use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
-use crate::remeshing::quad_remeshing::coverage;
 use crate::reference::assumptions::Warning;
 use crate::reference::Reference;
+use crate::remeshing::quad_remeshing::coverage;
 use crate::solver::TermStats;
 use crate::stats::median;
 
 pub use self::error::SqError;
 pub use self::guarantees::Delivered;
 use self::metrics::{torsal_pairs, CongruenceFigures};
+use self::moulds::{fewer_moulds, SqMouldOutcome};
 use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
 use self::radius::{check_mean_curvature, constant_radius_fit, fit_radius, mean_curvature_shares, SamplingGrid};
-use self::moulds::{fewer_moulds, SqMouldOutcome};
 use self::sphere_optimization::{on_grid, optimize_spheres, project_to_curvatures, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
 use self::start::{constant_function, constant_radius, spherical_reference};
@@ -325,7 +325,6 @@ struct Kept {
 /// that meets θ and α, else the first with the fewest misses. The constant start is not
 /// optimized, and its misses count the points of G where its radius cannot meet the guarantees
 /// ([`start::constant_start_misses`]).
-#[allow(clippy::too_many_arguments)]
 fn optimize_starts(
     problem: &CongruenceProblem,
     fitted: &BSplineFunction,
@@ -343,7 +342,8 @@ fn optimize_starts(
     for (k, &start) in starts.iter().enumerate() {
         let (function, collapsed) = match start {
             RadiusStart::Constant => {
-                let (r, misses) = constant_radius(grid, sign, params.faces, params.max_distance).ok_or(SqError::MeanCurvatureNearZero { uv: grid.uv[0], h_diag: 0.0 })?;
+                let (r, misses) = constant_radius(grid, sign, params.faces, params.max_distance)
+                    .ok_or(SqError::MeanCurvatureNearZero { uv: grid.uv[0], h_diag: 0.0 })?;
                 (constant_function(fitted, r), misses)
             }
             _ => (fitted.clone(), 0),
@@ -445,7 +445,8 @@ fn spherical_congruence(
     let function = BSplineFunction::constant(sphere.1, domain);
     timings.lap("radius");
     let misses = metrics::misses(&grid, &lines, &pairs, params.theta_deg, params.alpha_deg);
-    let attempt = CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses, final_misses: None };
+    let attempt =
+        CongruenceAttempt { start: RadiusStart::Central, initial_figures: figures.clone(), figures: figures.clone(), misses, final_misses: None };
     SqCongruence {
         grid: params.grid,
         uv: grid.uv.clone(),
@@ -626,7 +627,8 @@ fn only_distance_missed(verdict: &Verdict) -> bool {
 
 /// `tried` meets every guarantee, or misses only the distance, by less than `before` does.
 fn closer(tried: &Verdict, before: &Verdict) -> bool {
-    let distance = |v: &Verdict| v.guarantees.iter().find(|g| g.name == crate::panels::buildability::MAX_DISTANCE).map_or(f64::INFINITY, |g| g.measured);
+    let distance =
+        |v: &Verdict| v.guarantees.iter().find(|g| g.name == crate::panels::buildability::MAX_DISTANCE).map_or(f64::INFINITY, |g| g.measured);
     tried.holds() || (only_distance_missed(tried) && distance(tried) < distance(before))
 }
 
@@ -660,10 +662,9 @@ fn finish_from(
     }
     let mut timings = Timings::start(clock);
     on_event(SqEvent::Progress(Progress::new("remesh", 0, 1)))?;
-    let quad =
-        quad_mesh(reference, result.congruence.grid, &result.congruence.torsal_uv, params, clock, &mut |iteration, terms, positions| {
-            on_event(SqEvent::Fairing { iteration, terms, positions })
-        });
+    let quad = quad_mesh(reference, result.congruence.grid, &result.congruence.torsal_uv, params, clock, &mut |iteration, terms, positions| {
+        on_event(SqEvent::Fairing { iteration, terms, positions })
+    });
     let quad = match quad {
         Err(SqError::Cancelled) => return Err(SqError::Cancelled),
         other => other?,
@@ -815,7 +816,14 @@ fn final_mesh(
         // patch the panels cover with their corners at the closest points.
         let nv = positions.len();
         let measure = |points: &[DVec3]| -> (f64, f64) {
-            let closest: Vec<([f64; 2], DVec3)> = points.iter().enumerate().map(|(i, p)| { let (w, q, _) = spline.closest_point(*p, start_uv(i)); (w, q) }).collect();
+            let closest: Vec<([f64; 2], DVec3)> = points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let (w, q, _) = spline.closest_point(*p, start_uv(i));
+                    (w, q)
+                })
+                .collect();
             let farthest = closest.iter().zip(points).map(|((_, q), p)| q.distance(*p)).fold(0.0, f64::max);
             let uv: Vec<[f64; 2]> = closest[..nv].iter().map(|c| c.0).collect();
             (farthest, coverage(surface, faces, &uv))
@@ -861,7 +869,8 @@ fn final_mesh(
     // Fewer moulds: the projection again from the exact mesh, every face at its mould's curvature.
     let events = std::cell::RefCell::new(on_event);
     let mut project = |from: &SqFinal, curvatures: &[f64]| {
-        let frame_mesh = PolyMesh::new(from.mesh.sphere_mesh.mesh.positions.iter().map(|p| (*p - t) / s).collect(), from.mesh.sphere_mesh.mesh.faces.clone());
+        let frame_mesh =
+            PolyMesh::new(from.mesh.sphere_mesh.mesh.positions.iter().map(|p| (*p - t) / s).collect(), from.mesh.sphere_mesh.mesh.faces.clone());
         let spheres: Vec<Sphere> = from.mesh.sphere_mesh.face_spheres.iter().map(|x| x.in_frame(t, s).normalized()).collect();
         let curvatures: Vec<f64> = curvatures.iter().map(|k| k * s).collect();
         let input = SphereInput { mesh: &frame_mesh, ..input };
@@ -875,7 +884,9 @@ fn final_mesh(
         let holds = meets(&moved).holds();
         Ok((moved, holds))
     };
-    let (best, outcome) = fewer_moulds(&done, &|f: &SqFinal| &f.mesh, reference.diagonal(), &params.fabrication, &mut project, &mut |p| (events.borrow_mut())(SqEvent::Progress(p)))?;
+    let (best, outcome) = fewer_moulds(&done, &|f: &SqFinal| &f.mesh, reference.diagonal(), &params.fabrication, &mut project, &mut |p| {
+        (events.borrow_mut())(SqEvent::Progress(p))
+    })?;
     timings.lap("fewer_moulds");
     let mut out = best.unwrap_or(done);
     out.moulds = Some(outcome);

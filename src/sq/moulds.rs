@@ -52,12 +52,16 @@ impl MouldRoundFigures for SqMouldRound {
 /// and what they did. `project` moves a result so that every face has the given signed
 /// curvature (model units, per face; NaN: free) and answers whether the moved one meets the
 /// guarantees.
+/// The projection of a result to exactness with every face at the curvature given, and whether
+/// it is exact.
+pub type SqProjection<'a, R> = dyn FnMut(&R, &[f64]) -> Result<(R, bool), SqError> + 'a;
+
 pub fn fewer_moulds<R>(
     done: &R,
     mesh: &dyn Fn(&R) -> &SqMesh,
     diag: f64,
     fabrication: &Fabrication,
-    project: &mut dyn FnMut(&R, &[f64]) -> Result<(R, bool), SqError>,
+    project: &mut SqProjection<R>,
     progress: &mut dyn FnMut(Progress) -> Result<(), Cancelled>,
 ) -> Result<(Option<R>, SqMouldOutcome), SqError> {
     let distance_limit = DISTANCE_GROWTH * mesh(done).figures.max_vertex_distance_to_reference;

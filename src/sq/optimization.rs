@@ -196,13 +196,7 @@ impl CongruenceProblem {
     }
 
     /// Step 1 (see the module docs); `x` from [`Self::initial_point`].
-    pub fn line_congruence_step(
-        &self,
-        x: &mut [f64],
-        params: &SqParams,
-        clock: Clock,
-        hook: &mut IterationHook,
-    ) -> Result<StepOutcome, Cancelled> {
+    pub fn line_congruence_step(&self, x: &mut [f64], params: &SqParams, clock: Clock, hook: &mut IterationHook) -> Result<StepOutcome, Cancelled> {
         let w = params.lc_weights;
         let mut problem = Problem::new(self.layout.line_variables());
         problem.add_term(self.line_congruence(), w.lc);
@@ -210,8 +204,7 @@ impl CongruenceProblem {
         problem.add_term(UnitLength::vectors(self.line_offsets()), w.unit);
         self.group_blocks(&mut problem);
         // Lines in 3 × 3 blocks with the radius coefficients as a dense border: supernodal is faster.
-        let mut solver =
-            Solver::new(SolverOptions { max_iterations: params.lc_iterations, clock, supernodal: true, ..SolverOptions::default() });
+        let mut solver = Solver::new(SolverOptions { max_iterations: params.lc_iterations, clock, supernodal: true, ..SolverOptions::default() });
         let report = solver.solve(&mut problem, x, |it| hook(SqStep::LineCongruence, it.iteration, it.terms, it.x));
         // Back to unit lines on the side of n.
         for (p, l) in self.lines(x).into_iter().enumerate() {

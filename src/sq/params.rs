@@ -307,10 +307,7 @@ impl SqParams {
         check_max_distance(self.max_distance).map_err(ParamError::MaxDistance)?;
         let b = self.radius_basis;
         if !(1..=15).contains(&b.degree) || b.controls <= b.degree || b.controls > 40 {
-            return Err(ParamError::RadiusBasis {
-                degree: b.degree,
-                controls: b.controls,
-            });
+            return Err(ParamError::RadiusBasis { degree: b.degree, controls: b.controls });
         }
         Ok(())
     }
@@ -351,12 +348,7 @@ impl<T: PartialOrd + Copy + std::fmt::Display> ParamRange<T> {
         if self.contains(x) {
             Ok(x)
         } else {
-            Err(ParamError::OutOfRange {
-                name: self.name,
-                value: x.to_string(),
-                lo: self.lo.to_string(),
-                hi: self.hi.to_string(),
-            })
+            Err(ParamError::OutOfRange { name: self.name, value: x.to_string(), lo: self.lo.to_string(), hi: self.hi.to_string() })
         }
     }
 

@@ -27,7 +27,9 @@ use crate::progress::{Cancelled, Clock};
 use crate::reference::assumptions::Warning;
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
-use crate::remeshing::quad_remeshing::{coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint};
+use crate::remeshing::quad_remeshing::{
+    coverage, edge_field_angles, prepare, quad_remesh, quad_remesh_prepared, CrossField, QuadRemesh, QuadRemeshParams, SingularPoint,
+};
 use crate::solver::{Linear, Problem, Proximal, Solver, SolverOptions, TermStats, Termination};
 
 use super::error::SqError;
@@ -421,7 +423,8 @@ mod tests {
         let (nu, nv) = (5, 4);
         let uv: Vec<[f64; 2]> = (0..nv).flat_map(|j| (0..nu).map(move |i| [0.1 + 0.2 * i as f64, 0.22 * j as f64])).collect();
         let id = |i: usize, j: usize| (i + nu * j) as u32;
-        let faces = (0..nv - 1).flat_map(|j| (0..nu - 1).map(move |i| Face::quad([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))).collect();
+        let faces =
+            (0..nv - 1).flat_map(|j| (0..nu - 1).map(move |i| Face::quad([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]))).collect();
         let positions = uv.iter().map(|p| DVec3::new(p[0], p[1], 0.0)).collect();
         let on_boundary = uv.iter().map(|p| p[1] == 0.0).collect();
         (PolyMesh::new(positions, faces), uv, on_boundary)

@@ -17,7 +17,6 @@
 //!   have as many coefficients as G has points; the authors' code fits 36).
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface, FitError, SurfaceFrame};
 use crate::reference::assumptions::Warning;
@@ -55,10 +54,7 @@ impl SamplingGrid {
             }
         };
         let uv: Vec<[f64; 2]> = (0..n).flat_map(|j| (0..n).map(move |i| [at(u0, u1, i), at(v0, v1, j)])).collect();
-        let frames = uv
-            .iter()
-            .map(|p| surface.frame(p[0], p[1]).ok_or(SqError::Singular { uv: *p }))
-            .collect::<Result<Vec<_>, _>>()?;
+        let frames = uv.iter().map(|p| surface.frame(p[0], p[1]).ok_or(SqError::Singular { uv: *p })).collect::<Result<Vec<_>, _>>()?;
         Ok(Self { n, uv, frames })
     }
 
@@ -108,9 +104,12 @@ pub const SPECK_TOLERANCE: f64 = 1e-3;
 /// At most this share of G's points inside the patch may be left out of the radius fit.
 pub(crate) const MAX_EXCLUDED_SHARE: f64 = 0.25;
 
+/// A cell of the fine grid: (u, v, H, area element).
+type SignCell = (f64, f64, f64, f64);
+
 /// The cells of the fine grid as (u, v, H, area element), the area shares of H > 0 and H < 0,
 /// and the total of the area elements with a sign.
-fn sign_cells(surface: &BSplineSurface) -> (Vec<(f64, f64, f64, f64)>, [f64; 2], f64) {
+fn sign_cells(surface: &BSplineSurface) -> (Vec<SignCell>, [f64; 2], f64) {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let (mut pos, mut neg) = (0.0, 0.0);
     let mut cells = Vec::with_capacity(SIGN_GRID * SIGN_GRID);
@@ -228,7 +227,8 @@ pub struct RadiusFit {
 /// The radius basis `basis` on the surface's domain, in U and V.
 fn radius_bases(surface: &BSplineSurface, basis: RadiusBasis) -> Result<(BSplineBasis, BSplineBasis), SqError> {
     let ((u0, u1), (v0, v1)) = surface.domain();
-    let make = |lo: f64, hi: f64| BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi)).map_err(|e| SqError::RadiusBasis(e.to_string()));
+    let make =
+        |lo: f64, hi: f64| BSplineBasis::clamped_uniform(basis.degree, basis.controls, (lo, hi)).map_err(|e| SqError::RadiusBasis(e.to_string()));
     Ok((make(u0, u1)?, make(v0, v1)?))
 }
 
@@ -245,7 +245,8 @@ pub fn fit_radius(surface: &BSplineSurface, grid: &SamplingGrid, basis: RadiusBa
     let (bu, bv) = radius_bases(surface, basis)?;
     let samples: Vec<([f64; 2], f64)> =
         (0..grid.point_count()).filter(|p| !excluded.contains(p)).map(|p| (grid.uv[p], 1.0 / grid.frames[p].mean)).collect();
-    let (function, error) = BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit { samples: samples.len(), coefficients: basis.controls * basis.controls })?;
+    let (function, error) =
+        BSplineFunction::fit(bu, bv, &samples).ok_or(SqError::RadiusFit { samples: samples.len(), coefficients: basis.controls * basis.controls })?;
     let mean = samples.iter().map(|s| s.1.abs()).sum::<f64>() / samples.len() as f64;
     Ok(RadiusFit { function, error, relative_error: error.max / mean, samples: samples.len() })
 }

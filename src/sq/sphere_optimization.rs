@@ -46,9 +46,7 @@ use crate::progress::{Cancelled, Clock};
 use crate::reference::proximity::{BoundaryProximity, CentroidTargets, ReferenceProximity};
 use crate::reference::Reference;
 use crate::solver::terms::v3;
-use crate::solver::{
-    Anchor, Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermId, TermStats, Termination, UnitLength,
-};
+use crate::solver::{Anchor, Hinge, PhaseTimes, PointOnSphere, Problem, Proximal, Solver, SolverOptions, TermId, TermStats, Termination, UnitLength};
 
 use super::params::{SphereWeights, SqParams};
 use super::quad_mesh::polyline_fairness;
@@ -358,8 +356,7 @@ fn sphere_problem<'a>(
     star_normals: &[DVec3],
 ) -> (Problem<'a>, SphereTerms, SphereLayout, Vec<f64>) {
     let mesh = input.mesh;
-    let layout =
-        SphereLayout { faces: mesh.face_count(), vertices: mesh.vertex_count(), stars: stars.stars.len(), edges: stars.edges.len() };
+    let layout = SphereLayout { faces: mesh.face_count(), vertices: mesh.vertex_count(), stars: stars.stars.len(), edges: stars.edges.len() };
     let mut x = vec![0.0; layout.len()];
     for (f, s) in spheres.iter().enumerate() {
         x[layout.sphere(f)..layout.sphere(f) + 5].copy_from_slice(&s.to_array());
@@ -430,8 +427,7 @@ fn sphere_problem<'a>(
     let fair_id = problem.add_term(polyline_fairness(input.polylines, input.on_boundary, &stars.edges, |v| layout.vertex(v)), w.fair);
     let quads: Vec<Vec<usize>> = stars.stars.iter().map(|(_, faces)| faces.iter().map(|&f| layout.sphere(f as usize)).collect()).collect();
     let axes: Vec<(usize, usize)> = stars.stars.iter().enumerate().map(|(s, &(v, _))| (layout.star_normal(s), v as usize)).collect();
-    let fans: Vec<([usize; 3], usize)> =
-        stars.fans.iter().map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize)).collect();
+    let fans: Vec<([usize; 3], usize)> = stars.fans.iter().map(|&(v, faces)| (faces.map(|f| layout.sphere(f as usize)), v as usize)).collect();
     // The proximity terms come first, so their lookups are fresh when the hinges prepare.
     let normals = VertexNormals::new(input.reference, (0..layout.vertices).map(|v| layout.vertex(v)).collect(), input.normals.to_vec(), &x)
         .with_lookups(lookups);
@@ -440,10 +436,8 @@ fn sphere_problem<'a>(
     let mut hinges = |cos2_alpha: f64, cos2_theta: f64, suffix: &str| {
         // At a singular vertex the planes aim at most at what its valence allows.
         let alpha = cos2_alpha.sqrt().acos().to_degrees();
-        let stars = quads
-            .iter()
-            .map(|q| (q.clone(), super::sphere_terms::support_plane_aim_deg(q.len(), alpha).to_radians().cos().powi(2)))
-            .collect();
+        let stars =
+            quads.iter().map(|q| (q.clone(), super::sphere_terms::support_plane_aim_deg(q.len(), alpha).to_radians().cos().powi(2))).collect();
         let angle = Hinge::new(CentreQuadAngle { stars }).with_name(format!("support_plane_angle{suffix}"));
         let axis = Hinge::new(AxisNormalAngle { axes: axes.clone(), normals: normals.clone(), cos2: cos2_theta })
             .with_name(format!("axis_normal_angle{suffix}"));
@@ -462,8 +456,7 @@ fn sphere_problem<'a>(
             Some((layout.sphere(f as usize), layout.sphere(g as usize), cf.distance_squared(cg)))
         })
         .collect();
-    let separation_id =
-        problem.add_term(Hinge::new(CentreSeparation { pairs, share: CENTRE_SEPARATION }).with_name("centre_separation"), 1.0);
+    let separation_id = problem.add_term(Hinge::new(CentreSeparation { pairs, share: CENTRE_SEPARATION }).with_name("centre_separation"), 1.0);
     let sphere_vars: Vec<usize> = (0..5 * layout.faces).collect();
     let reg_sphere_id = problem.add_term(Proximal::new(sphere_vars).with_name("regularization_spheres"), w.reg_sphere);
     let normal_vars: Vec<usize> = (layout.star_normal(0)..layout.len()).collect();
@@ -509,7 +502,6 @@ fn sphere_problem<'a>(
 /// One phase: the solver on `problem` from `x` for at most `max` iterations, each reported to
 /// `hook`; the full optimization's iteration times and terms kept in `outcome`. Returns the
 /// iterations and the damping ε it ended with.
-#[allow(clippy::too_many_arguments)]
 fn run_phase(
     problem: &mut Problem,
     x: &mut [f64],
@@ -547,7 +539,6 @@ fn run_phase(
 /// that nothing pulls against exactness; `equations` are further equations held in every pass
 /// (the moulds' curvatures).
 /// Returns the iterations.
-#[allow(clippy::too_many_arguments)]
 fn project(
     problem: &mut Problem,
     terms: &SphereTerms,

@@ -193,7 +193,11 @@ pub fn support_plane_bound_deg(valence: usize) -> f64 {
 
 /// The angle the support planes at a vertex of `valence` edges are held to at α (degrees).
 pub(crate) fn support_plane_aim_deg(valence: usize, alpha_deg: f64) -> f64 {
-    if valence == 4 { alpha_deg } else { alpha_deg.min(support_plane_bound_deg(valence) - SINGULAR_MARGIN_DEG) }
+    if valence == 4 {
+        alpha_deg
+    } else {
+        alpha_deg.min(support_plane_bound_deg(valence) - SINGULAR_MARGIN_DEG)
+    }
 }
 
 /// Per star: its 3 to 5 sphere offsets in order around the vertex; one residual per face (see

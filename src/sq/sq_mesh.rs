@@ -17,16 +17,13 @@
 //!   own arc points.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::collections::HashMap;
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::congruence::support_structure::{
-    edge_circle, node_axes, support_element, support_strips, EdgePlane, NodeAxes, SupportStructure,
-};
+use crate::congruence::support_structure::{edge_circle, node_axes, support_element, support_strips, EdgePlane, NodeAxes, SupportStructure};
 use crate::geometry::linalg::Svd;
 use crate::geometry::mesh::PolyMesh;
 use crate::geometry::sphere::Sphere;
@@ -95,15 +92,7 @@ pub(crate) fn support_plane_normal(s1: &Sphere, s2: &Sphere, [u, w]: [DVec3; 2],
 
 /// Builds the SQ mesh from the optimized vertices and face spheres (model units); `normals` are
 /// the reference normals at the vertices; `depth` and `axis_length` absolute.
-pub fn sq_mesh(
-    mesh: PolyMesh,
-    spheres: Vec<Sphere>,
-    normals: &[DVec3],
-    stars: &QuadStars,
-    diag: f64,
-    depth: f64,
-    axis_length: f64,
-) -> SqMesh {
+pub fn sq_mesh(mesh: PolyMesh, spheres: Vec<Sphere>, normals: &[DVec3], stars: &QuadStars, diag: f64, depth: f64, axis_length: f64) -> SqMesh {
     let sm = SphereMesh::new(mesh, spheres, BoundaryArcRule::Parallel(DVec3::ZERO));
     let node_axes = support_side_axes(&sm, normals);
     let axes = &node_axes.axes;
@@ -182,12 +171,7 @@ pub fn star_support_plane_angle_deg(sm: &SphereMesh, axes: &[(DVec3, DVec3)], v:
         .map(|k| {
             let (f, g) = (faces[k] as usize, faces[(k + 1) % m] as usize);
             let other = mesh.faces[f].corners().iter().copied().find(|&c| c != v && mesh.faces[g].corners().contains(&c))?;
-            support_plane_normal(
-                &spheres[f],
-                &spheres[g],
-                [p, mesh.positions[other as usize]],
-                [axes[v as usize].1, axes[other as usize].1],
-            )
+            support_plane_normal(&spheres[f], &spheres[g], [p, mesh.positions[other as usize]], [axes[v as usize].1, axes[other as usize].1])
         })
         .collect();
     (0..m)

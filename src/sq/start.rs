@@ -100,6 +100,8 @@ pub fn spherical_reference(grid: &SamplingGrid) -> Option<(DVec3, f64)> {
         .iter()
         // Umbilic: H² − K = ((κ1 − κ2)/2)² vanishes (κ1 − κ2 itself carries the square root's
         // rounding, about 1e-8).
-        .all(|f| (f.mean * f.mean - f.gauss).abs() * r * r <= tol && (1.0 / f.mean - r).abs() <= tol && (f.point + r * f.normal).distance(centre) <= tol)
+        .all(|f| {
+            (f.mean * f.mean - f.gauss).abs() * r * r <= tol && (1.0 / f.mean - r).abs() <= tol && (f.point + r * f.normal).distance(centre) <= tol
+        })
         .then_some((centre, r.abs()))
 }

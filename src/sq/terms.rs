@@ -257,10 +257,7 @@ pub fn line_fairness(n: usize, layout: &Layout) -> Linear {
                     continue;
                 }
                 for c in 0..3 {
-                    fair.push_row(
-                        &[(layout.line(p - step) + c, 1.0), (layout.line(p) + c, -2.0), (layout.line(p + step) + c, 1.0)],
-                        0.0,
-                    );
+                    fair.push_row(&[(layout.line(p - step) + c, 1.0), (layout.line(p) + c, -2.0), (layout.line(p + step) + c, 1.0)], 0.0);
                 }
             }
         }

@@ -86,7 +86,12 @@ pub fn shape(sm: &SphereMesh, reference: &Reference) -> StAdaptedShape {
         max_vertex_sphere_residual: sm.max_vertex_sphere_residual() / diag,
         mean_kink_angle_deg: mean(&kinks),
         max_kink_angle_deg: kinks.iter().copied().fold(0.0, f64::max),
-        max_vertex_distance_to_reference: mesh.positions.iter().map(|&p| reference.closest_point(p).map_or(f64::INFINITY, |h| h.point.distance(p))).fold(0.0, f64::max) / diag,
+        max_vertex_distance_to_reference: mesh
+            .positions
+            .iter()
+            .map(|&p| reference.closest_point(p).map_or(f64::INFINITY, |h| h.point.distance(p)))
+            .fold(0.0, f64::max)
+            / diag,
         faces: mesh.face_count(),
         interior_edges: kinks.len(),
         flipped_faces,

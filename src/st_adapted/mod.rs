@@ -64,7 +64,6 @@
 //! use that rule throughout.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod boundary_arcs;
 pub mod events;
@@ -85,6 +84,7 @@ use crate::congruence::central_spheres::{CurvatureField, UnusableCentralSpheres}
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::{MouldFits, MouldSnap};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
@@ -93,13 +93,12 @@ use crate::reference::{Reference, ReferenceError};
 use crate::remeshing::{GuardedRemeshError, RemeshRefused, SizingBounds, TooManyFaces};
 use crate::solver::{IterationReport, Solver, SolverOptions, TermStats};
 use crate::stats::median;
+pub use events::{OnEvent, StAdaptedEvent};
 use initialization::initial_spheres;
 use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
-use optimization::{run_stages, OptimizationFrame};
-use crate::panels::moulds::{MouldFits, MouldSnap};
 use moulds::{fewer_moulds, snap_to_moulds, MouldRound, MouldTargets};
+use optimization::{run_stages, OptimizationFrame};
 use params::StAdaptedParams;
-pub use events::{OnEvent, StAdaptedEvent};
 
 /// Why the method gave no mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -193,7 +192,6 @@ pub struct StAdaptedResult {
     pub warnings: Vec<Warning>,
 }
 
-
 /// Announces a step (0 of 0).
 fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {
     on_event(StAdaptedEvent::Progress(Progress::new(name, 0, 0)))
@@ -201,12 +199,7 @@ fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {
 
 /// The angle-minimizing ST method end to end (see the module docs): the curvature and its
 /// refusal, sizing and remeshing, the initial spheres, the optimization, the metrics.
-pub fn compute(
-    reference: &Reference,
-    params: &StAdaptedParams,
-    clock: Clock,
-    on_event: &mut OnEvent,
-) -> Result<StAdaptedResult, StAdaptedError> {
+pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on_event: &mut OnEvent) -> Result<StAdaptedResult, StAdaptedError> {
     reference.validate().map_err(StAdaptedError::Reference)?;
     let mut timings = Timings::start(clock);
     step(on_event, "jet_fit")?;
@@ -222,7 +215,10 @@ pub fn compute(
     // The remesh's own central spheres, as ST with support structure takes them: jets on the
     // mesh the face spheres pass through (examples/remesh_central_spheres.rs measures both ways).
     let central_spheres = match remeshed_by_sizing {
-        true => Reference::from_triangles(remeshed.clone()).curvature(&params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?.central_spheres.clone(),
+        true => Reference::from_triangles(remeshed.clone())
+            .curvature(&params.jet, &mut |p| on_event(StAdaptedEvent::Progress(p)))?
+            .central_spheres
+            .clone(),
         false => field.central_spheres.clone(),
     };
     let init = initial_spheres(&remeshed, &central_spheres);

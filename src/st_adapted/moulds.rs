@@ -11,10 +11,11 @@
 use std::cell::RefCell;
 
 use super::boundary_arcs::delivered_arcs;
+use super::events::{OnEvent, StAdaptedEvent};
 use super::metrics::{metrics, StAdaptedMetrics};
 use super::optimization::{run_stages, OptimizationFrame};
 use super::params::{OptimizationStage, StAdaptedParams};
-use super::terms::{FaceSpheres, vertex_offset};
+use super::terms::{vertex_offset, FaceSpheres};
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
@@ -22,7 +23,6 @@ use crate::panels::exact_surface::arcs_cross;
 use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
-use super::events::{OnEvent, StAdaptedEvent};
 use crate::progress::{Cancelled, Clock, Progress};
 use crate::reference::Reference;
 use crate::solver::{JacobianSink, Solver, SolverOptions, Term};
@@ -124,7 +124,6 @@ pub struct MouldRound {
 
 /// The rounds on `sphere_mesh` (the method's result on `reference`), each sent to `on_event` as
 /// moved; None when no round kept fewer moulds.
-#[allow(clippy::too_many_arguments)]
 pub fn fewer_moulds(
     reference: &Reference,
     sphere_mesh: &SphereMesh,

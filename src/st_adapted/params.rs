@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::congruence::central_spheres::JetParams;
-use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
+use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::moulds::Fabrication;
 use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
 

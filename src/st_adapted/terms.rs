@@ -10,15 +10,15 @@ use std::rc::Rc;
 use glam::DVec3;
 
 use super::params::StAdaptedWeights;
-use crate::geometry::mesh::TriMesh;
-use crate::geometry::mesh::topology::Topology;
 use crate::geometry::dual::{Dual, D3};
+use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::TriMesh;
 use crate::geometry::pencil::{pencil_angle, pencil_member, PencilMember};
 use crate::geometry::sphere::Sphere;
 use crate::reference::proximity::{value_gradient, CentroidTargets, ClosestLookups, ReferenceProximity};
 use crate::reference::Reference;
-use crate::solver::{Band, Hinge, JacobianSink, Linear, Problem, Term, TermId};
 use crate::solver::terms::v3;
+use crate::solver::{Band, Hinge, JacobianSink, Linear, Problem, Term, TermId};
 
 /// Boundary vertices get this factor on their point-distance residuals.
 pub const BOUNDARY_POINT_FACTOR: f64 = 10.0;
@@ -79,7 +79,11 @@ impl FaceOrientation {
             .map(|(o, n): (&[usize; 3], &DVec3)| {
                 let [a, b, c] = o.map(|k| DVec3::new(x[k], x[k + 1], x[k + 2]));
                 let area = (b - a).cross(c - a).dot(*n);
-                if area > 0.0 { 1.0 / area } else { 0.0 }
+                if area > 0.0 {
+                    1.0 / area
+                } else {
+                    0.0
+                }
             })
             .collect();
         Self { items, normals, inv_areas, tau: UNFOLDED_AREA_FRACTION }
@@ -150,9 +154,11 @@ impl FaceSpheres {
         let mut cache = self.shared.cache.borrow_mut();
         let (key, members) = &mut *cache;
         let fresh = key.len() == 10 * corners.len()
-            && corners.iter().zip(key.chunks_exact(10)).enumerate().all(|(k, (c, kk))| {
-                kk[0] == x[angle_offset(k)] && c.iter().enumerate().all(|(i, &o)| kk[1 + 3 * i..4 + 3 * i] == x[o..o + 3])
-            });
+            && corners
+                .iter()
+                .zip(key.chunks_exact(10))
+                .enumerate()
+                .all(|(k, (c, kk))| kk[0] == x[angle_offset(k)] && c.iter().enumerate().all(|(i, &o)| kk[1 + 3 * i..4 + 3 * i] == x[o..o + 3]));
         if !fresh {
             key.clear();
             members.clear();
@@ -412,11 +418,7 @@ pub fn pack(mesh: &TriMesh, spheres: &[Sphere]) -> Vec<f64> {
 pub fn unpack(x: &[f64], triangles: &[[u32; 3]], vertices: usize) -> (Vec<DVec3>, Vec<Sphere>) {
     let nf = triangles.len();
     let verts: Vec<DVec3> = (0..vertices).map(|v| v3(x, vertex_offset(nf, v))).collect();
-    let spheres = triangles
-        .iter()
-        .enumerate()
-        .map(|(f, t)| pencil_member(t.map(|v| verts[v as usize]), x[angle_offset(f)]).sphere())
-        .collect();
+    let spheres = triangles.iter().enumerate().map(|(f, t)| pencil_member(t.map(|v| verts[v as usize]), x[angle_offset(f)]).sphere()).collect();
     (verts, spheres)
 }
 
@@ -435,10 +437,8 @@ pub fn build_problem<'a>(
     x: &[f64],
 ) -> (Problem<'a>, StAdaptedTerms) {
     let boundary = boundary_vertices(topology);
-    let interior: Vec<(u32, u32, usize, usize)> = topology
-        .interior_edges()
-        .map(|(e, f, g)| (topology.edges()[e][0], topology.edges()[e][1], f as usize, g as usize))
-        .collect();
+    let interior: Vec<(u32, u32, usize, usize)> =
+        topology.interior_edges().map(|(e, f, g)| (topology.edges()[e][0], topology.edges()[e][1], f as usize, g as usize)).collect();
     let nf = mesh.face_count();
     let nv = mesh.vertex_count();
     let mut problem = Problem::new(nf + 3 * nv);
@@ -503,10 +503,14 @@ pub fn build_problem<'a>(
             .iter()
             .map(|&(_, _, f, g)| (mesh.face_area_vector(f).normalize_or_zero() + mesh.face_area_vector(g).normalize_or_zero()).normalize_or_zero())
             .collect();
-        problem.add_term(EdgeCircle { spheres: spheres.clone(), edges: edge_faces.clone(), ends, lookups: lookups.clone(), normals }, weights.edge_circle)
+        problem.add_term(
+            EdgeCircle { spheres: spheres.clone(), edges: edge_faces.clone(), ends, lookups: lookups.clone(), normals },
+            weights.edge_circle,
+        )
     });
     let sagitta_match = tolerance.filter(|_| weights.sagitta_match > 0.0).map(|tau| {
-        problem.add_term(Band::new(SagittaMatch { spheres: spheres.clone(), edges: edge_faces }, tau).with_name("sagitta_match"), weights.sagitta_match)
+        problem
+            .add_term(Band::new(SagittaMatch { spheres: spheres.clone(), edges: edge_faces }, tau).with_name("sagitta_match"), weights.sagitta_match)
     });
     let terms = StAdaptedTerms {
         angle,

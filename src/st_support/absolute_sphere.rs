@@ -30,7 +30,6 @@
 //! refuses with an error saying so.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
@@ -60,13 +59,7 @@ pub struct AbsoluteSphereParams {
 
 impl Default for AbsoluteSphereParams {
     fn default() -> Self {
-        Self {
-            far_factor: 50.0,
-            min_gain: 0.02,
-            min_curvature_ratio: 0.1,
-            min_usable_fraction: 0.5,
-            max_iterations: 200,
-        }
+        Self { far_factor: 50.0, min_gain: 0.02, min_curvature_ratio: 0.1, min_usable_fraction: 0.5, max_iterations: 200 }
     }
 }
 
@@ -179,11 +172,7 @@ pub fn m0_from_normal_lines(points: &[DVec3], normals: &[DVec3]) -> Option<DVec3
         a += q;
         rhs += q * y;
     }
-    let (vals, vecs) = sym3_eigen([
-        [a.x_axis.x, a.y_axis.x, a.z_axis.x],
-        [a.x_axis.y, a.y_axis.y, a.z_axis.y],
-        [a.x_axis.z, a.y_axis.z, a.z_axis.z],
-    ]);
+    let (vals, vecs) = sym3_eigen([[a.x_axis.x, a.y_axis.x, a.z_axis.x], [a.x_axis.y, a.y_axis.y, a.z_axis.y], [a.x_axis.z, a.y_axis.z, a.z_axis.z]]);
     let trace = vals.iter().sum::<f64>().abs();
     let mut y = DVec3::ZERO;
     for k in 0..3 {
@@ -198,25 +187,14 @@ pub fn m0_from_normal_lines(points: &[DVec3], normals: &[DVec3]) -> Option<DVec3
 /// Sec. 4 "Estimating the center m": m0 (Eq. 7), the orientation flip, LM on E_center.
 /// `normals` are unit vertex normals of the mesh orientation. The returned normals are the
 /// working ones (negated when flipped).
-pub fn center_from_normals(
-    points: &[DVec3],
-    normals: &[DVec3],
-    params: &AbsoluteSphereParams,
-) -> Option<(CenterEstimate, Vec<DVec3>)> {
+pub fn center_from_normals(points: &[DVec3], normals: &[DVec3], params: &AbsoluteSphereParams) -> Option<(CenterEstimate, Vec<DVec3>)> {
     let m0 = m0_from_normal_lines(points, normals)?;
     let n = points.len() as f64;
     let side = points.iter().zip(normals).map(|(v, nn)| (m0 - *v).normalize_or_zero().dot(*nn)).sum::<f64>() / n;
     let flipped = side > 0.0;
     let normals: Vec<DVec3> = if flipped { normals.iter().map(|x| -*x).collect() } else { normals.to_vec() };
     let (m, iterations) = levenberg_marquardt(points, &normals, m0, params);
-    let est = CenterEstimate {
-        m0,
-        m,
-        flipped,
-        e_m0: e_center(points, &normals, m0),
-        e_m: e_center(points, &normals, m),
-        iterations,
-    };
+    let est = CenterEstimate { m0, m, flipped, e_m0: e_center(points, &normals, m0), e_m: e_center(points, &normals, m), iterations };
     Some((est, normals))
 }
 
@@ -228,12 +206,7 @@ pub fn center_from_normals(
 /// and E_center is so flat at its minimum that the two iterations (Marquardt's diag(JᵀJ)
 /// damping here, ε²I there) reach the same E to 2e-15 but m 1e-9 of the diagonal apart on
 /// `tri_mesh.obj`, which moves the face spheres by 1e-7.
-fn levenberg_marquardt(
-    points: &[DVec3],
-    normals: &[DVec3],
-    m0: DVec3,
-    params: &AbsoluteSphereParams,
-) -> (DVec3, usize) {
+fn levenberg_marquardt(points: &[DVec3], normals: &[DVec3], m0: DVec3, params: &AbsoluteSphereParams) -> (DVec3, usize) {
     let (t, s) = frame(points);
     let ys: Vec<DVec3> = points.iter().map(|p| (*p - t) / s).collect();
     let mut y = (m0 - t) / s;
@@ -362,8 +335,7 @@ pub fn estimate_absolute_sphere(
     let usable_count = usable.iter().filter(|&&u| u).count();
     let skipped = nv - usable_count;
     let jet_normals: Vec<DVec3> = field.vertices[..nv].iter().map(|c| c.normal).collect();
-    let (center, normals) =
-        center_from_normals(points, &jet_normals, params).ok_or(AbsoluteSphereError::NoCenter)?;
+    let (center, normals) = center_from_normals(points, &jet_normals, params).ok_or(AbsoluteSphereError::NoCenter)?;
     let (t, _) = frame(points);
     let axis = spherical_barycenter(&normals);
     let e_inf = axis.map_or(f64::INFINITY, |a| normals.iter().map(|n| (1.0 - a.dot(*n)).powi(2)).sum());

@@ -49,14 +49,7 @@ pub struct Counts {
 
 /// The figures of `sphere_mesh` (diagonal `diag`) against `omega`, with its node axes and the
 /// reference normals.
-pub fn metrics(
-    sphere_mesh: &SphereMesh,
-    omega: &AbsoluteSphere,
-    axes: &NodeAxes,
-    normals: &[DVec3],
-    diag: f64,
-    counts: Counts,
-) -> StSupportMetrics {
+pub fn metrics(sphere_mesh: &SphereMesh, omega: &AbsoluteSphere, axes: &NodeAxes, normals: &[DVec3], diag: f64, counts: Counts) -> StSupportMetrics {
     let mesh = &sphere_mesh.mesh;
     let kinks = sphere_mesh.kink_angles_deg();
     let mut metrics = StSupportMetrics {

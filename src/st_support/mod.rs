@@ -30,7 +30,6 @@
 //!    segments: what is exported and shown.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod absolute_sphere;
 pub mod face_spheres;
@@ -69,8 +68,8 @@ use crate::remeshing::{
 use absolute_sphere::{estimate_absolute_sphere, AbsoluteSphereError, AbsoluteSphereEstimate, AbsoluteSphereParams};
 use face_spheres::face_spheres;
 pub use metrics::StSupportMetrics;
-use moulds::{StSupportMouldOutcome, StSupportMouldRound};
 use metrics::{metrics, Counts};
+use moulds::{StSupportMouldOutcome, StSupportMouldRound};
 use optimize_radius::choose_omega;
 pub use params::{StSupportParams, LOCAL_SPHERE_POINTS};
 use second_envelope::second_envelope;
@@ -190,12 +189,7 @@ fn remeshed_reference(
 
 /// The method on `reference` (see the module documentation): optionally remeshed first, then the
 /// steps on the working mesh, and the warnings of the reference and the result.
-pub fn compute(
-    reference: &Reference,
-    params: &StSupportParams,
-    clock: Clock,
-    progress: &mut OnProgress,
-) -> Result<StSupportResult, StSupportError> {
+pub fn compute(reference: &Reference, params: &StSupportParams, clock: Clock, progress: &mut OnProgress) -> Result<StSupportResult, StSupportError> {
     reference.validate().map_err(StSupportError::Reference)?;
     let field = reference.curvature(&params.jet, progress)?;
     let mut timings = Timings::start(clock);
@@ -247,14 +241,12 @@ fn fewer_moulds(
             iteration += 1;
             (progress.borrow_mut())(Progress::new("project_to_moulds", iteration, 2 * moulds::ITERATIONS))
         };
-        let Some(moved) = moulds::project_to_curvatures(work, &triangles, &sm.face_spheres, &from.omega, &curvatures, clock, &mut on_iteration)? else {
+        let Some(moved) = moulds::project_to_curvatures(work, &triangles, &sm.face_spheres, &from.omega, &curvatures, clock, &mut on_iteration)?
+        else {
             return Ok(None);
         };
-        let chosen = Chosen {
-            omega: from.omega,
-            mean_kink_estimate_deg: Some(from.mean_kink_estimate_deg),
-            optimized_parameter: from.optimized_parameter,
-        };
+        let chosen =
+            Chosen { omega: from.omega, mean_kink_estimate_deg: Some(from.mean_kink_estimate_deg), optimized_parameter: from.optimized_parameter };
         let mesh = TriMesh::new(moved, triangles.triangles);
         let mut scratch = Timings::start(clock);
         let moved = structure(mesh, work.topology(), chosen, from.absolute.clone(), params, from.diag, &mut scratch, &mut **progress.borrow_mut())?;
@@ -274,16 +266,16 @@ fn fewer_moulds(
             kept: count.kept,
         });
     };
-    let out = snapped_rounds(
-        &start,
-        &|r: &StSupportResult| &r.panels[..],
-        diag,
-        &params.fabrication,
-        &mut project,
-        &mut on_round,
-        &mut |p| (progress.borrow_mut())(p),
-    )?;
-    let outcome = MouldOutcome { snap: out.snap, rounds, before: out.before, fits_before: out.fits_before, distance_limit: moulds::DISTANCE_GROWTH * start_distance };
+    let out = snapped_rounds(&start, &|r: &StSupportResult| &r.panels[..], diag, &params.fabrication, &mut project, &mut on_round, &mut |p| {
+        (progress.borrow_mut())(p)
+    })?;
+    let outcome = MouldOutcome {
+        snap: out.snap,
+        rounds,
+        before: out.before,
+        fits_before: out.fits_before,
+        distance_limit: moulds::DISTANCE_GROWTH * start_distance,
+    };
     let mut result = out.best.unwrap_or(start);
     result.moulds = Some(outcome);
     Ok(result)
@@ -310,7 +302,8 @@ fn steps(
     if params.optimize_radius {
         timings.lap("optimize_radius");
     }
-    let chosen = Chosen { omega: chosen.omega, mean_kink_estimate_deg: chosen.mean_kink_estimate_deg, optimized_parameter: chosen.optimized_parameter };
+    let chosen =
+        Chosen { omega: chosen.omega, mean_kink_estimate_deg: chosen.mean_kink_estimate_deg, optimized_parameter: chosen.optimized_parameter };
     structure(work, topo, chosen, absolute, params, diag, timings, progress)
 }
 
@@ -324,7 +317,6 @@ struct Chosen {
 
 /// Steps 2 and 4 to 7 on the working mesh `work` with Ω chosen, the estimate of step 1 (its
 /// normals at the vertices) and the diagonal `diag` the lengths are relative to.
-#[allow(clippy::too_many_arguments)]
 fn structure(
     work: TriMesh,
     topo: &Topology,

@@ -22,9 +22,7 @@ use crate::panels::moulds::{MouldOutcome, MouldRoundFigures};
 use crate::progress::{Cancelled, Clock};
 use crate::reference::proximity::ReferenceProximity;
 use crate::reference::Reference;
-use crate::solver::{
-    Anchor, InversiveProductFixed, PointOnSphere, Problem, Proximal, Solver, SolverOptions, Termination, UnitLength,
-};
+use crate::solver::{Anchor, InversiveProductFixed, PointOnSphere, Problem, Proximal, Solver, SolverOptions, Termination, UnitLength};
 
 /// The panels' largest distance to the reference may grow by this factor.
 pub const DISTANCE_GROWTH: f64 = 1.2;
@@ -121,12 +119,8 @@ pub fn project_to_curvatures(
     problem.add_term(InversiveProductFixed::new(orthogonal, o, 0.0), 1.0);
     // A normalized sphere's curvature along its normal is 2a: hold a at |κ|/2 (frame: |κ| s)
     // with the sign of the start's a, so that no panel is asked to turn over.
-    let (held, halves): (Vec<usize>, Vec<f64>) = curvatures
-        .iter()
-        .enumerate()
-        .filter(|(_, k)| k.is_finite())
-        .map(|(f, &k)| (sphere(f), (0.5 * k.abs() * s).copysign(x[sphere(f)])))
-        .unzip();
+    let (held, halves): (Vec<usize>, Vec<f64>) =
+        curvatures.iter().enumerate().filter(|(_, k)| k.is_finite()).map(|(f, &k)| (sphere(f), (0.5 * k.abs() * s).copysign(x[sphere(f)]))).unzip();
     problem.add_term(Anchor::new(held, halves).with_name("mould_curvature"), 1.0);
     let vertices: Vec<usize> = (0..nv).map(vertex).collect();
     let glide = problem.add_term(ReferenceProximity::tangent(&framed, vertices.clone()).with_name("vertex_proximity"), 1.0);

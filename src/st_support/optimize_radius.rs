@@ -5,7 +5,6 @@
 //! the best cell. R² may end up ≤ 0. The result is never worse than R̂².
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::absolute_sphere::AbsoluteSphereEstimate;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
@@ -44,12 +43,7 @@ fn mean_kink_for(families: &[[Sphere; 2]], interior: &[[u32; 2]], omega: &Absolu
             Sphere::combine(s0, sign * alpha / h, s1, -sign * beta / h)
         })
         .collect();
-    mean(
-        &interior
-            .iter()
-            .map(|[f, g]| spheres[*f as usize].kink_angle(&spheres[*g as usize]).to_degrees())
-            .collect::<Vec<_>>(),
-    )
+    mean(&interior.iter().map(|[f, g]| spheres[*f as usize].kink_angle(&spheres[*g as usize]).to_degrees()).collect::<Vec<_>>())
 }
 
 /// Scan + golden section of the mean kink angle over R² = R̂² + w sinh(u) (or d = d̂ + diag sinh u).
@@ -135,29 +129,15 @@ pub fn choose_omega(
     progress: &mut OnProgress,
 ) -> Result<ChosenOmega, Cancelled> {
     if !optimize {
-        return Ok(ChosenOmega {
-            omega: absolute.omega,
-            optimized_parameter: None,
-            mean_kink_estimate_deg: None,
-        });
+        return Ok(ChosenOmega { omega: absolute.omega, optimized_parameter: None, mean_kink_estimate_deg: None });
     }
     progress(Progress::new("optimize_radius", 0, 1))?;
-    let families: Vec<[Sphere; 2]> = (0..mesh.face_count())
-        .map(|f| Sphere::through_points_family(mesh.face_points(f)))
-        .collect();
+    let families: Vec<[Sphere; 2]> = (0..mesh.face_count()).map(|f| Sphere::through_points_family(mesh.face_points(f))).collect();
     let (best, value, initial) = optimize_parameter(mesh, absolute, &families, interior, progress)?;
     let chosen = if value < initial {
-        ChosenOmega {
-            omega: with_parameter(&absolute.omega, best),
-            optimized_parameter: Some(best),
-            mean_kink_estimate_deg: Some(initial),
-        }
+        ChosenOmega { omega: with_parameter(&absolute.omega, best), optimized_parameter: Some(best), mean_kink_estimate_deg: Some(initial) }
     } else {
-        ChosenOmega {
-            omega: absolute.omega,
-            optimized_parameter: Some(parameter_of(&absolute.omega)),
-            mean_kink_estimate_deg: Some(initial),
-        }
+        ChosenOmega { omega: absolute.omega, optimized_parameter: Some(parameter_of(&absolute.omega)), mean_kink_estimate_deg: Some(initial) }
     };
     progress(Progress::new("optimize_radius", 1, 1))?;
     Ok(chosen)

@@ -25,12 +25,8 @@ pub struct AbsoluteSphereSection {
 impl From<&AbsoluteSphere> for AbsoluteSphereSection {
     fn from(o: &AbsoluteSphere) -> Self {
         match *o {
-            AbsoluteSphere::Sphere { center, r2 } => {
-                Self { center: Some(center.to_array()), r2: Some(r2), at_infinity: false, axis: None, d: None }
-            }
-            AbsoluteSphere::Plane { axis, d } => {
-                Self { center: None, r2: None, at_infinity: true, axis: Some(axis.to_array()), d: Some(d) }
-            }
+            AbsoluteSphere::Sphere { center, r2 } => Self { center: Some(center.to_array()), r2: Some(r2), at_infinity: false, axis: None, d: None },
+            AbsoluteSphere::Plane { axis, d } => Self { center: None, r2: None, at_infinity: true, axis: Some(axis.to_array()), d: Some(d) },
         }
     }
 }

@@ -8,8 +8,6 @@ use crate::geometry::mesh::TriMesh;
 pub fn second_envelope(mesh: &TriMesh, omega: &AbsoluteSphere) -> Option<TriMesh> {
     match *omega {
         AbsoluteSphere::Sphere { r2: 0.0, .. } => None,
-        _ => {
-            mesh.positions.iter().map(|p| omega.invert(*p)).collect::<Option<Vec<_>>>().map(|pos| TriMesh::new(pos, mesh.triangles.clone()))
-        }
+        _ => mesh.positions.iter().map(|p| omega.invert(*p)).collect::<Option<Vec<_>>>().map(|pos| TriMesh::new(pos, mesh.triangles.clone())),
     }
 }

@@ -35,8 +35,7 @@ pub fn support_elements(
             let s2 = (faces.len() == 2).then(|| &face_spheres[faces[1] as usize]);
             edge_circle(&face_spheres[f1 as usize], s2, [u, w], plane)
         });
-        let element =
-            circle.and_then(|c| support_element(*edge, c, [u, w], [node_axes[edge[0] as usize].1, node_axes[edge[1] as usize].1], depth));
+        let element = circle.and_then(|c| support_element(*edge, c, [u, w], [node_axes[edge[0] as usize].1, node_axes[edge[1] as usize].1], depth));
         match element {
             Some(el) => elements.push(el),
             None => without_support += 1,

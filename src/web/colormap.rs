@@ -46,7 +46,11 @@ pub fn viridis(t: f32) -> [f32; 3] {
 pub fn diverging(t: f32) -> [f32; 3] {
     let mix = |a: [f32; 3], b: [f32; 3], s: f32| [a[0] + (b[0] - a[0]) * s, a[1] + (b[1] - a[1]) * s, a[2] + (b[2] - a[2]) * s];
     let (blue, white, red) = ([0.23, 0.30, 0.75], [0.87, 0.87, 0.87], [0.71, 0.02, 0.15]);
-    if t < 0.5 { mix(blue, white, t * 2.0) } else { mix(white, red, (t - 0.5) * 2.0) }
+    if t < 0.5 {
+        mix(blue, white, t * 2.0)
+    } else {
+        mix(white, red, (t - 0.5) * 2.0)
+    }
 }
 
 /// The shader writes linear values into an sRGB target; match that for the legend.

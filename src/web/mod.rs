@@ -22,7 +22,5 @@ pub async fn start_app(canvas: web_sys::HtmlCanvasElement, backend: String) -> R
             _ => egui_wgpu::wgpu::Backends::BROWSER_WEBGPU | egui_wgpu::wgpu::Backends::GL,
         };
     }
-    eframe::WebRunner::new()
-        .start(canvas, options, Box::new(|cc| Ok(Box::new(app::App::new(cc)))))
-        .await
+    eframe::WebRunner::new().start(canvas, options, Box::new(|cc| Ok(Box::new(app::App::new(cc))))).await
 }

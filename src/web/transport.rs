@@ -41,10 +41,7 @@ impl std::error::Error for TransportError {}
 
 /// Reads `{json, bodies}` back.
 pub fn from_js(value: &JsValue) -> Result<Envelope, TransportError> {
-    let json = Reflect::get(value, &"json".into())
-        .ok()
-        .and_then(|j| j.as_string())
-        .ok_or(TransportError::NoJsonHeader)?;
+    let json = Reflect::get(value, &"json".into()).ok().and_then(|j| j.as_string()).ok_or(TransportError::NoJsonHeader)?;
     let mut bodies = Vec::new();
     if let Ok(list) = Reflect::get(value, &"bodies".into()) {
         if let Some(list) = list.dyn_ref::<Array>() {

@@ -78,8 +78,7 @@ impl WorkerClient {
         let inbox: Inbox = Rc::new(RefCell::new(VecDeque::new()));
         let opts = WorkerOptions::new();
         opts.set_type(WorkerType::Module);
-        let worker = Worker::new_with_options("./worker.js", &opts)
-            .map_err(|e| WorkerStartError::Spawn(format!("{e:?}")))?;
+        let worker = Worker::new_with_options("./worker.js", &opts).map_err(|e| WorkerStartError::Spawn(format!("{e:?}")))?;
         let on_message = {
             let inbox = inbox.clone();
             let repaint = repaint.clone();
@@ -88,9 +87,8 @@ impl WorkerClient {
                 let item = if let Some(p) = Reflect::get(&data, &"panic".into()).ok().and_then(|p| p.as_string()) {
                     Incoming::Crashed(p)
                 } else {
-                    let decoded = transport::from_js(&data)
-                        .map_err(|e| e.to_string())
-                        .and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string()));
+                    let decoded =
+                        transport::from_js(&data).map_err(|e| e.to_string()).and_then(|env| decode_from_worker(&env).map_err(|e| e.to_string()));
                     match decoded {
                         Ok((msg, fields)) => Incoming::Message(msg, fields),
                         Err(message) => Incoming::Message(FromWorker::Error { message, remesh_to: None }, Vec::new()),
@@ -116,25 +114,13 @@ impl WorkerClient {
         worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
         worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
         // Cancel within one iteration needs shared memory, which needs cross-origin isolation.
-        let isolated = Reflect::get(&js_sys::global(), &"crossOriginIsolated".into())
-            .ok()
-            .and_then(|v| v.as_bool())
-            .unwrap_or(false);
+        let isolated = Reflect::get(&js_sys::global(), &"crossOriginIsolated".into()).ok().and_then(|v| v.as_bool()).unwrap_or(false);
         let cancel_flag = isolated.then(|| Int32Array::new(&SharedArrayBuffer::new(8)));
         let init = Object::new();
         let flag: JsValue = cancel_flag.as_ref().map_or(JsValue::UNDEFINED, |a| a.clone().into());
         let _ = Reflect::set(&init, &"init".into(), &flag);
         worker.post_message(&init).map_err(|e| WorkerStartError::Init(format!("{e:?}")))?;
-        Ok(Self {
-            worker,
-            inbox,
-            cancel_flag,
-            polled: Cell::new(0),
-            repaint,
-            _on_message: on_message,
-            _on_error: on_error,
-            restarts: 0,
-        })
+        Ok(Self { worker, inbox, cancel_flag, polled: Cell::new(0), repaint, _on_message: on_message, _on_error: on_error, restarts: 0 })
     }
 
     /// Sends a message; a `LoadFile` carries the browser `File` (read inside the worker).

@@ -46,9 +46,8 @@ pub fn khronos_validate(file: &Path) -> (bool, Value) {
         .output()
         .unwrap_or_else(|e| panic!("cannot run `node` ({e}); install Node.js and run `npm ci` in tests/e2e"));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let json: Value = serde_json::from_str(&stdout).unwrap_or_else(|e| {
-        panic!("validate-gltf.mjs printed no JSON ({e}); stdout: {stdout}; stderr: {}", String::from_utf8_lossy(&out.stderr))
-    });
+    let json: Value = serde_json::from_str(&stdout)
+        .unwrap_or_else(|e| panic!("validate-gltf.mjs printed no JSON ({e}); stdout: {stdout}; stderr: {}", String::from_utf8_lossy(&out.stderr)));
     (out.status.success(), json)
 }
 

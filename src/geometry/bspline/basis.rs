@@ -3,9 +3,7 @@
 //! vanish on a knot span with their derivatives (Piegl & Tiller, *The NURBS Book*, A2.1, A2.3).
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 // The loops index as Piegl & Tiller's algorithms do.
-#![allow(clippy::needless_range_loop)]
 
 use std::fmt;
 

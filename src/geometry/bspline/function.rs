@@ -3,7 +3,6 @@
 //! the least-squares fit of samples.
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::basis::{BSplineBasis, BasisValues};
 use faer::prelude::SolveLstsq;
@@ -66,7 +65,8 @@ impl BSplineFunction {
 
     fn row_with(nu: usize, bu: &BasisValues, bv: &BasisValues) -> FunctionRow {
         let n = bu.count * bv.count;
-        let mut row = FunctionRow { index: Vec::with_capacity(n), value: Vec::with_capacity(n), du: Vec::with_capacity(n), dv: Vec::with_capacity(n) };
+        let mut row =
+            FunctionRow { index: Vec::with_capacity(n), value: Vec::with_capacity(n), du: Vec::with_capacity(n), dv: Vec::with_capacity(n) };
         for jb in 0..bv.count {
             for ib in 0..bu.count {
                 row.index.push(bu.first + ib + nu * (bv.first + jb));

@@ -8,7 +8,6 @@
 //! central sphere (Sec. 2.6) has centre f + n/H and radius 1/H; K = (LN − M²)/(EG − F²).
 
 // Negated float comparisons are deliberate: they also reject NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use std::fmt;
 
@@ -288,18 +287,22 @@ impl BSplineSurface {
         let fold = |lines: Vec<(f64, f64)>| lines.into_iter().fold((0.0f64, 0.0f64), |a, l| (a.0.max(l.0), a.1.max(l.1)));
         let (need_u, len_u) = fold(
             (0..=nv)
-                .map(|j| (0..nu).fold((0.0, 0.0), |a, i| {
-                    let l = at(i, j).0.distance(at(i + 1, j).0);
-                    (a.0 + need(l, at(i, j).1.max(at(i + 1, j).1)), a.1 + l)
-                }))
+                .map(|j| {
+                    (0..nu).fold((0.0, 0.0), |a, i| {
+                        let l = at(i, j).0.distance(at(i + 1, j).0);
+                        (a.0 + need(l, at(i, j).1.max(at(i + 1, j).1)), a.1 + l)
+                    })
+                })
                 .collect(),
         );
         let (need_v, len_v) = fold(
             (0..=nu)
-                .map(|i| (0..nv).fold((0.0, 0.0), |a, j| {
-                    let l = at(i, j).0.distance(at(i, j + 1).0);
-                    (a.0 + need(l, at(i, j).2.max(at(i, j + 1).2)), a.1 + l)
-                }))
+                .map(|i| {
+                    (0..nv).fold((0.0, 0.0), |a, j| {
+                        let l = at(i, j).0.distance(at(i, j + 1).0);
+                        (a.0 + need(l, at(i, j).2.max(at(i, j + 1).2)), a.1 + l)
+                    })
+                })
                 .collect(),
         );
         let h = [len_u / need_u.max(1.0), len_v / need_v.max(1.0), diag / EDGES_PER_DIAGONAL].into_iter().fold(f64::INFINITY, f64::min);

@@ -17,8 +17,6 @@
 //! collapsed or flipped), and vertices whose faces do not form a single fan are **locked** (never
 //! moved or removed). The remesher leaves such regions as they are.
 
-#![allow(clippy::needless_range_loop)] // index loops over parallel arrays read better here
-
 use super::TriMesh;
 use glam::DVec3;
 
@@ -92,12 +90,8 @@ impl HalfedgeMesh {
     /// features) turning by more than `corner_angle` at a vertex make it a corner.
     pub fn from_mesh(mesh: &TriMesh, feature_angle: f64, corner_angle: f64) -> Self {
         let nv = mesh.positions.len();
-        let tri: Vec<[u32; 3]> = mesh
-            .triangles
-            .iter()
-            .copied()
-            .filter(|t| t.iter().all(|&v| (v as usize) < nv) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-            .collect();
+        let tri: Vec<[u32; 3]> =
+            mesh.triangles.iter().copied().filter(|t| t.iter().all(|&v| (v as usize) < nv) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
         let nh = tri.len() * 3;
         let mut m = HalfedgeMesh {
             pos: mesh.positions.clone(),
@@ -528,14 +522,9 @@ impl HalfedgeMesh {
         let (hn, hp, tn, tp) = (next(h), prev(h), next(t), prev(t));
         let (a, b, c, d) = (self.from(h), self.to(h), self.from(hp), self.from(tp));
         // Outer twins and flags: b→c (hn), c→a (hp), a→d (tn), d→b (tp).
-        let (o_bc, o_ca, o_ad, o_db) =
-            (self.twin[hn as usize], self.twin[hp as usize], self.twin[tn as usize], self.twin[tp as usize]);
-        let (f_bc, f_ca, f_ad, f_db) = (
-            self.edge_flag[hn as usize],
-            self.edge_flag[hp as usize],
-            self.edge_flag[tn as usize],
-            self.edge_flag[tp as usize],
-        );
+        let (o_bc, o_ca, o_ad, o_db) = (self.twin[hn as usize], self.twin[hp as usize], self.twin[tn as usize], self.twin[tp as usize]);
+        let (f_bc, f_ca, f_ad, f_db) =
+            (self.edge_flag[hn as usize], self.edge_flag[hp as usize], self.edge_flag[tn as usize], self.edge_flag[tp as usize]);
         let (f0, f1) = (face(h) as u32, face(t) as u32);
         self.tri[f0 as usize] = [a, d, c];
         self.tri[f1 as usize] = [d, b, c];
@@ -780,11 +769,7 @@ impl HalfedgeMesh {
                 return Err(format!("vertex {v} has a bad outgoing halfedge"));
             }
             if self.outgoing(v as u32).len() != incident[v] {
-                return Err(format!(
-                    "vertex {v}: fan of {} faces, {} incident",
-                    self.outgoing(v as u32).len(),
-                    incident[v]
-                ));
+                return Err(format!("vertex {v}: fan of {} faces, {} incident", self.outgoing(v as u32).len(), incident[v]));
             }
         }
         Ok(())

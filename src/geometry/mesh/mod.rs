@@ -11,7 +11,6 @@ pub mod weld;
 
 use glam::DVec3;
 
-
 /// A triangle mesh with f64 positions. Connectivity is derived by [`topology::Topology`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
@@ -53,7 +52,11 @@ impl TriMesh {
                 hi = hi.max(*p);
             }
         }
-        if lo.x > hi.x { 0.0 } else { (hi - lo).length() }
+        if lo.x > hi.x {
+            0.0
+        } else {
+            (hi - lo).length()
+        }
     }
 
     /// Corner positions of face `f`.
@@ -86,9 +89,7 @@ pub fn bbox(points: &[DVec3]) -> (DVec3, DVec3) {
     if points.is_empty() {
         return (DVec3::ZERO, DVec3::ZERO);
     }
-    points
-        .iter()
-        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+    points.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
 }
 
 /// The diagonal of [`bbox`]: the unit of every relative tolerance.

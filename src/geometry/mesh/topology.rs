@@ -114,17 +114,7 @@ impl Topology {
             }
         }
         let edge_face_offsets = prefix_sum(&edge_face_count);
-        Self {
-            neighbor_offsets,
-            neighbors,
-            face_offsets,
-            faces,
-            edges,
-            edge_face_count,
-            edge_face_offsets,
-            edge_faces,
-            boundary_vertex,
-        }
+        Self { neighbor_offsets, neighbors, face_offsets, faces, edges, edge_face_count, edge_face_offsets, edge_faces, boundary_vertex }
     }
 
     pub fn vertex_count(&self) -> usize {
@@ -207,13 +197,7 @@ impl Topology {
                 }
             }
         }
-        MeshStats {
-            vertices: mesh.vertex_count(),
-            faces: mesh.face_count(),
-            boundary_loops,
-            non_manifold_edges,
-            boundary_vertices,
-        }
+        MeshStats { vertices: mesh.vertex_count(), faces: mesh.face_count(), boundary_loops, non_manifold_edges, boundary_vertices }
     }
 }
 
@@ -259,9 +243,8 @@ mod tests {
         for round in 0..50 {
             let n = 4 + round % 9;
             let pick = |rng: &mut Rng| ((rng.uniform() * n as f64) as u32).min(n as u32 - 1);
-            let faces: Vec<Vec<u32>> = (0..3 + round)
-                .map(|_| (0..if rng.uniform() < 0.5 { 3 } else { 4 }).map(|_| pick(&mut rng)).collect())
-                .collect();
+            let faces: Vec<Vec<u32>> =
+                (0..3 + round).map(|_| (0..if rng.uniform() < 0.5 { 3 } else { 4 }).map(|_| pick(&mut rng)).collect()).collect();
             let soup = Soup { n, faces };
             let topo = Topology::new(&soup);
             let mut map: BTreeMap<[u32; 2], Vec<(u32, u8)>> = BTreeMap::new();

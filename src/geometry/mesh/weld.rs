@@ -234,4 +234,3 @@ fn merge_vertices(positions: &[DVec3], tolerance: f64) -> Vec<u32> {
     }
     remap
 }
-

@@ -14,11 +14,10 @@ use serde::{Deserialize, Serialize};
 use super::StageError;
 use crate::congruence::central_spheres::JetParams;
 use crate::export::glb::{write_lines_glb, LineSet};
-use crate::geometry::mesh::TriMesh;
-use crate::sq::congruence_file::{CongruenceJson, CongruenceSegments};
 use crate::export::report::{InputCounts, OutputCounts};
 use crate::export::{report_file, write_mesh_obj, ExportFile, Report};
 use crate::geometry::mesh::PolyMesh;
+use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
@@ -30,6 +29,7 @@ use crate::pipeline::sink::{report, Sink};
 use crate::progress::{ignore, Cancelled, Clock, Progress};
 use crate::reference::Reference;
 use crate::solver::TermStats;
+use crate::sq::congruence_file::{CongruenceJson, CongruenceSegments};
 use crate::sq::params::{SqParams, Until};
 use crate::sq::report::SqSection;
 use crate::sq::segments::{grid_spacing, line_segments, LINE_LENGTH};
@@ -296,13 +296,7 @@ pub(crate) fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
 /// `congruence.glb`; with the quad mesh `mesh.obj` (Q′, or the SQ mesh's vertices and quads);
 /// with the SQ mesh `panels.glb`, `panels.obj`, the schedule (`panels.csv`, `panels.json`,
 /// `support.csv`); and `report.json`.
-pub fn export(
-    reference: &Reference,
-    result: &SqResult,
-    params: &SqParams,
-    segments: &CongruenceSegments,
-    clock: Clock,
-) -> (Report, Vec<ExportFile>) {
+pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, segments: &CongruenceSegments, clock: Clock) -> (Report, Vec<ExportFile>) {
     let (report, files, _) = exported(reference, result, params, segments, clock);
     (report, files)
 }

@@ -9,13 +9,13 @@ use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
 use crate::panels::buildability::Buildability;
-use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::exact_surface::ExactSurfaces;
+use crate::panels::moulds::{MouldAssignment, SnapLimit};
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, StageId};
 use crate::pipeline::panel_output::{export_panels, panel_fields, result_panel_fields, triangle_mesh_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
-use crate::panels::moulds::{MouldAssignment, SnapLimit};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
 use crate::st_adapted::metrics::{StAdaptedMetrics, StAdaptedShape};
@@ -47,7 +47,12 @@ pub struct StAdaptedSummary {
 
 /// Runs the method on `reference`, streaming snapshots and progress to `sink`; returns the
 /// summary and the result after sending the files.
-pub fn run(reference: &Reference, params: &StAdaptedParams, clock: Clock, sink: &mut dyn Sink) -> Result<(StAdaptedSummary, StAdaptedResult), StageError> {
+pub fn run(
+    reference: &Reference,
+    params: &StAdaptedParams,
+    clock: Clock,
+    sink: &mut dyn Sink,
+) -> Result<(StAdaptedSummary, StAdaptedResult), StageError> {
     let start = sink.now_ms();
     let diag = reference.diagonal();
     let mut last_snapshot = f64::NEG_INFINITY;
@@ -140,15 +145,23 @@ fn exported(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedP
     if let Some(med) = result.angle_iteration_median_ms {
         timings.push(("angle_iteration_median".into(), med));
     }
-    let export =
-        PanelExport::new(STAGE.key(), &result.sphere_mesh, &result.panels, result.diag, params.radius_tolerance, params.fabrication, &section, &timings)
-            .with_extras(serde_json::json!({ "variant": variant }))
-            .with_deviations(&result.panel_deviations)
-            .with_moulds_before(result.fits_before.as_ref())
-            .with_warnings(&result.warnings)
-            .with_verdict(&verdict)
-            .with_exact_surfaces(&exact)
-            .with_snapping(result.mould_snap.as_ref().map_or(Snapping::Not(SnapLimit::NotAsked), Snapping::Snapped));
+    let export = PanelExport::new(
+        STAGE.key(),
+        &result.sphere_mesh,
+        &result.panels,
+        result.diag,
+        params.radius_tolerance,
+        params.fabrication,
+        &section,
+        &timings,
+    )
+    .with_extras(serde_json::json!({ "variant": variant }))
+    .with_deviations(&result.panel_deviations)
+    .with_moulds_before(result.fits_before.as_ref())
+    .with_warnings(&result.warnings)
+    .with_verdict(&verdict)
+    .with_exact_surfaces(&exact)
+    .with_snapping(result.mould_snap.as_ref().map_or(Snapping::Not(SnapLimit::NotAsked), Snapping::Snapped));
     let (report, mut files, moulds) = export_panels(reference, export, clock);
     files.push(report_file(&report));
     (report, files, moulds)

@@ -7,13 +7,13 @@ use serde::{Deserialize, Serialize};
 use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::pipeline::fields::{field, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
-use crate::pipeline::sink::{report, Sink};
 use crate::panels::buildability::Buildability;
 use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::moulds::MouldAssignment;
+use crate::pipeline::fields::{field, Field, StageId};
+use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
+use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::st_support::report::StSupportSection;
@@ -48,7 +48,12 @@ impl StSupportSummary {
 
 /// Runs the method on `reference`, sends its display fields and files; returns the summary and
 /// the result.
-pub fn run(reference: &Reference, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Result<(StSupportSummary, StSupportResult), StageError> {
+pub fn run(
+    reference: &Reference,
+    params: &StSupportParams,
+    clock: Clock,
+    sink: &mut dyn Sink,
+) -> Result<(StSupportSummary, StSupportResult), StageError> {
     let start = sink.now_ms();
     let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
     let report = reexport(reference, &result, params, clock, sink);

@@ -45,7 +45,8 @@ pub fn energy_plot(ui: &mut egui::Ui, series: &[(u32, String, f64)]) {
     let (lo, hi) = if hi - lo < 1e-9 { (lo - 0.5, hi + 0.5) } else { (lo, hi) };
     let last = series.last().map_or(1, |s| s.0).max(1) as f32;
     let inner = rect.shrink2(Vec2::new(4.0, 14.0));
-    let at = |it: u32, y: f64| Pos2::new(inner.left() + inner.width() * it as f32 / last, inner.bottom() - inner.height() * ((y - lo) / (hi - lo)) as f32);
+    let at =
+        |it: u32, y: f64| Pos2::new(inner.left() + inner.width() * it as f32 / last, inner.bottom() - inner.height() * ((y - lo) / (hi - lo)) as f32);
     let palette = [Color32::from_rgb(110, 150, 230), Color32::from_rgb(90, 190, 90), Color32::from_rgb(230, 170, 60), Color32::from_rgb(220, 80, 70)];
     let mut stage_index = 0;
     for k in 1..series.len() {
@@ -73,14 +74,18 @@ pub fn term_plot(ui: &mut egui::Ui, series: &[(u32, String, Vec<Energy>)]) {
     let p = ui.painter();
     p.rect_filled(rect, 2.0, Color32::from_gray(30));
     let log = |e: f64| e.max(1e-30).log10();
-    let (lo, hi) = series.iter().flat_map(|(_, _, e)| e.iter().map(|e| log(e.value))).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    let (lo, hi) = series
+        .iter()
+        .flat_map(|(_, _, e)| e.iter().map(|e| log(e.value)))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
     if !(hi >= lo) {
         return;
     }
     let (lo, hi) = if hi - lo < 1e-9 { (lo - 0.5, hi + 0.5) } else { (lo, hi) };
     let last = series.iter().map(|s| s.0).max().unwrap_or(1).max(1) as f32;
     let inner = rect.shrink2(Vec2::new(4.0, 14.0));
-    let at = |it: u32, y: f64| Pos2::new(inner.left() + inner.width() * it as f32 / last, inner.bottom() - inner.height() * ((y - lo) / (hi - lo)) as f32);
+    let at =
+        |it: u32, y: f64| Pos2::new(inner.left() + inner.width() * it as f32 / last, inner.bottom() - inner.height() * ((y - lo) / (hi - lo)) as f32);
     let palette = [
         Color32::WHITE,
         Color32::from_rgb(110, 150, 230),

@@ -33,11 +33,8 @@ impl App {
                 ColorBy::K2 => field::K2,
                 ColorBy::K1MinusK2 => field::K1_MINUS_K2,
             };
-            let values = if color == ColorBy::Sizing {
-                self.view().sizing()?.to_vec()
-            } else {
-                find(&l.curvature.as_ref()?.fields, key)?.as_f32()?.to_vec()
-            };
+            let values =
+                if color == ColorBy::Sizing { self.view().sizing()?.to_vec() } else { find(&l.curvature.as_ref()?.fields, key)?.as_f32()?.to_vec() };
             let (range, diverging) = colormap::robust_range(&values);
             self.generation += 1;
             self.scalars = Some(ScalarView { color, data: Arc::new(ScalarData { generation: self.generation, values }), range, diverging });

@@ -18,13 +18,7 @@ impl OrbitCamera {
 
     pub fn framing(center: Vec3, radius: f32) -> Self {
         let radius = radius.max(1e-6);
-        Self {
-            yaw: -0.9,
-            pitch: 0.55,
-            distance: radius / (Self::FOV_Y * 0.5).tan() * 1.15,
-            target: center,
-            scene_radius: radius,
-        }
+        Self { yaw: -0.9, pitch: 0.55, distance: radius / (Self::FOV_Y * 0.5).tan() * 1.15, target: center, scene_radius: radius }
     }
 
     pub fn eye(&self) -> Vec3 {

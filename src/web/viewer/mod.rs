@@ -191,12 +191,7 @@ impl ViewerResources {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &shader,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers,
-                },
+                vertex: wgpu::VertexState { module: &shader, entry_point: Some(vs), compilation_options: Default::default(), buffers },
                 primitive: wgpu::PrimitiveState { topology, cull_mode: None, ..Default::default() },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
@@ -210,11 +205,7 @@ impl ViewerResources {
                     module: &shader,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: target_format,
-                        blend,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    targets: &[Some(wgpu::ColorTargetState { format: target_format, blend, write_mask: wgpu::ColorWrites::ALL })],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -223,15 +214,7 @@ impl ViewerResources {
         let tri = wgpu::PrimitiveTopology::TriangleList;
         let surface = pipeline("surface", "vs_surface", "fs_surface", &surface_buffers, tri, true, None);
         let lines = pipeline("lines", "vs_edges", "fs_edges", &line_buffers, wgpu::PrimitiveTopology::LineList, true, None);
-        let translucent = pipeline(
-            "translucent",
-            "vs_surface",
-            "fs_overlay",
-            &surface_buffers,
-            tri,
-            false,
-            Some(wgpu::BlendState::ALPHA_BLENDING),
-        );
+        let translucent = pipeline("translucent", "vs_surface", "fs_overlay", &surface_buffers, tri, false, Some(wgpu::BlendState::ALPHA_BLENDING));
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("layer uniforms"),
             size: SLOT * MAX_LAYERS as u64,
@@ -306,9 +289,7 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
         for (slot, layer) in self.layers.iter().take(MAX_LAYERS).enumerate() {
             let (key, vertex_count) = match &layer.geometry {
                 Geometry::Mesh(m) => {
-                    r.meshes
-                        .entry(m.generation)
-                        .or_insert_with(|| GpuMesh::new(device, &m.positions, &m.normals, &m.triangles, &m.edges));
+                    r.meshes.entry(m.generation).or_insert_with(|| GpuMesh::new(device, &m.positions, &m.normals, &m.triangles, &m.edges));
                     used_meshes.push(m.generation);
                     (Key::Mesh(m.generation), m.positions.len() / 3)
                 }
@@ -357,12 +338,7 @@ impl egui_wgpu::CallbackTrait for ViewerFrame {
         Vec::new()
     }
 
-    fn paint(
-        &self,
-        _info: egui::PaintCallbackInfo,
-        pass: &mut wgpu::RenderPass<'static>,
-        resources: &egui_wgpu::CallbackResources,
-    ) {
+    fn paint(&self, _info: egui::PaintCallbackInfo, pass: &mut wgpu::RenderPass<'static>, resources: &egui_wgpu::CallbackResources) {
         let Some(r) = resources.get::<ViewerResources>() else { return };
         for (slot, d) in r.draws.iter().enumerate() {
             let Some(m) = r.gpu_mesh(d.geometry) else { continue };

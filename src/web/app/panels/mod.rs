@@ -61,8 +61,15 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
 /// ([`crate::panels::buildability::MAX_DISTANCE_RANGE`]): a result farther away misses it.
 pub fn max_distance_slider(ui: &mut egui::Ui, max_distance: &mut f64) {
     let range = crate::panels::buildability::MAX_DISTANCE_RANGE;
-    ui.add(egui::Slider::new(max_distance, 1e-4..=range.end().min(0.1)).logarithmic(true).text("max distance").custom_formatter(|x, _| format!("{x:.2e}")))
-        .on_hover_text("The panels' promised largest distance to the reference, relative to the bbox diagonal: a result farther away misses its guarantees");
+    ui.add(
+        egui::Slider::new(max_distance, 1e-4..=range.end().min(0.1))
+            .logarithmic(true)
+            .text("max distance")
+            .custom_formatter(|x, _| format!("{x:.2e}")),
+    )
+    .on_hover_text(
+        "The panels' promised largest distance to the reference, relative to the bbox diagonal: a result farther away misses its guarantees",
+    );
 }
 
 /// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
@@ -78,7 +85,9 @@ pub fn missed_guarantees(report: &crate::export::Report) -> Option<String> {
 pub fn verdict(ui: &mut egui::Ui, report: &crate::export::Report) {
     match missed_guarantees(report) {
         Some(text) => ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {text}")).strong()),
-        None if report.meets_guarantees == Some(true) => ui.colored_label(egui::Color32::from_rgb(120, 200, 120), "✔ Meets every guarantee (see the figures below)"),
+        None if report.meets_guarantees == Some(true) => {
+            ui.colored_label(egui::Color32::from_rgb(120, 200, 120), "✔ Meets every guarantee (see the figures below)")
+        }
         None => return,
     };
 }

@@ -218,8 +218,15 @@ fn against_tolerance(ui: &mut egui::Ui, moulds: &MouldReport) {
     }
     let font = egui::FontId::proportional(10.0);
     let u = moulds.units;
-    let title = if before.len() >= 2 { format!("moulds against δ ({u}), log–log; grey: before") } else { format!("moulds against δ ({u}), log–log") };
+    let title =
+        if before.len() >= 2 { format!("moulds against δ ({u}), log–log; grey: before") } else { format!("moulds against δ ({u}), log–log") };
     p.text(rect.left_top() + Vec2::new(2.0, 1.0), egui::Align2::LEFT_TOP, title, font.clone(), Color32::LIGHT_GRAY);
-    p.text(rect.left_bottom() + Vec2::new(2.0, -1.0), egui::Align2::LEFT_BOTTOM, format!("{:.2e}", 10f64.powf(x0)), font.clone(), Color32::LIGHT_GRAY);
+    p.text(
+        rect.left_bottom() + Vec2::new(2.0, -1.0),
+        egui::Align2::LEFT_BOTTOM,
+        format!("{:.2e}", 10f64.powf(x0)),
+        font.clone(),
+        Color32::LIGHT_GRAY,
+    );
     p.text(rect.right_bottom() + Vec2::new(-2.0, -1.0), egui::Align2::RIGHT_BOTTOM, format!("{:.2e}", 10f64.powf(x1)), font, Color32::LIGHT_GRAY);
 }

@@ -16,12 +16,12 @@ use crate::export::Report;
 use crate::pipeline::fields::{field, find, Energy, Field, StageId, StageProgress};
 use crate::pipeline::protocol::StageResult;
 use crate::pipeline::stages::sq::{REFUSED_STAGE, STAGE};
-use crate::sq::report::SqSection;
 use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
+use crate::sq::report::SqSection;
 use crate::sq::sq_mesh::SqMeshFigures;
+use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::panels::{max_distance_slider, verdict, warnings};
 use crate::web::app::plots::{key_values, term_plot};
-use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::colormap;
 use crate::web::viewer::{ColorMap, Geometry, Layer, MeshData, ScalarData, Style};
@@ -95,10 +95,9 @@ impl SqView {
             self.support = Some(mesh_from_fields(fields, generation, SUPPORT_FIELDS));
             self.axes = Some(mesh_from_fields(fields, generation, AXES_FIELDS));
         }
-        let (Some(arms), Some(angles)) = (
-            find(fields, field::SQ_CROSS_FIELD).and_then(Field::as_f32),
-            find(fields, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32),
-        ) else {
+        let (Some(arms), Some(angles)) =
+            (find(fields, field::SQ_CROSS_FIELD).and_then(Field::as_f32), find(fields, field::SQ_CROSS_FIELD_ANGLE).and_then(Field::as_f32))
+        else {
             return;
         };
         let lo = angles.iter().copied().fold(90.0f32, f32::min).floor().min(89.0);
@@ -284,9 +283,7 @@ impl SqMethod {
         }
         if d.cross_field {
             let bins = v.cross_field.len();
-            layers.extend(
-                v.cross_field.iter().enumerate().filter(|(_, m)| !m.edges.is_empty()).map(|(k, m)| lines(m, colormap::bin_color(k, bins))),
-            );
+            layers.extend(v.cross_field.iter().enumerate().filter(|(_, m)| !m.edges.is_empty()).map(|(k, m)| lines(m, colormap::bin_color(k, bins))));
         }
         layers.extend(v.no_real_quads.as_ref().filter(|m| !m.edges.is_empty()).map(|m| lines(m, [0.95, 0.10, 0.10, 1.0])));
         if let Some(p) = v.panels.as_ref().filter(|_| d.panels) {
@@ -324,16 +321,7 @@ pub struct SqDisplay {
 
 impl Default for SqDisplay {
     fn default() -> Self {
-        Self {
-            initial_lines: false,
-            lines: true,
-            cross_field: true,
-            surface: true,
-            quad_mesh: true,
-            panels: true,
-            support: true,
-            axes: true,
-        }
+        Self { initial_lines: false, lines: true, cross_field: true, surface: true, quad_mesh: true, panels: true, support: true, axes: true }
     }
 }
 
@@ -427,8 +415,7 @@ fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         ui.colored_label(Color32::from_rgb(240, 180, 80), "The surface is coloured by the sign of H: red H > 0, blue H < 0.");
     }
     for (title, steps) in ENERGY_PLOTS {
-        let series: Vec<(u32, String, Vec<Energy>)> =
-            v.energy.iter().filter(|(_, step, _)| steps.contains(&step.as_str())).cloned().collect();
+        let series: Vec<(u32, String, Vec<Energy>)> = v.energy.iter().filter(|(_, step, _)| steps.contains(&step.as_str())).cloned().collect();
         if !series.is_empty() {
             ui.label(RichText::new(format!("{title}: energy of every term per iteration (log scale)")).small());
             term_plot(ui, &series);
@@ -485,10 +472,7 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
                 params.alpha_deg
             ),
         ),
-        (
-            "quads without real torsal directions",
-            format!("{} → {}", i.quads_without_real_torsal_directions, f.quads_without_real_torsal_directions),
-        ),
+        ("quads without real torsal directions", format!("{} → {}", i.quads_without_real_torsal_directions, f.quads_without_real_torsal_directions)),
         ("E_LC per term, step 1 / final", format!("{} / {}", g(c.lc_residual_step1), g(c.lc_residual))),
         ("radius fit error", g(c.radius_fit_error)),
         ("iterations", format!("{} + {}", c.line_congruence_iterations, c.torsal_iterations)),
@@ -510,29 +494,16 @@ fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
         let e = |x: f64| format!("{x:.1e}");
         let mut rows = vec![
             ("faces", format!("{} quads, {:.1} % of the patch", r.output.faces, 100.0 * quads.map_or(0.0, |q| q.coverage))),
-            (
-                "vertex–sphere residual / diag",
-                format!("{} {}", e(mf.max_vertex_sphere_residual), ok(mf.max_vertex_sphere_residual <= 1e-8)),
-            ),
+            ("vertex–sphere residual / diag", format!("{} {}", e(mf.max_vertex_sphere_residual), ok(mf.max_vertex_sphere_residual <= 1e-8))),
             ("centre-face planarity / diag", format!("{} {}", e(mf.max_centre_face_planarity), ok(mf.max_centre_face_planarity <= 1e-8))),
             ("torsal-plane residual", format!("{} {}", e(mf.max_torsal_plane_residual), ok(mf.max_torsal_plane_residual <= 1e-8))),
             (
                 "max ∠(node axis, n)",
-                format!(
-                    "{:.2}° {} (θ {}°)",
-                    mf.max_axis_normal_angle_deg,
-                    ok(mf.max_axis_normal_angle_deg <= params.theta_deg),
-                    params.theta_deg
-                ),
+                format!("{:.2}° {} (θ {}°)", mf.max_axis_normal_angle_deg, ok(mf.max_axis_normal_angle_deg <= params.theta_deg), params.theta_deg),
             ),
             (
                 "min support-plane angle",
-                format!(
-                    "{:.2}° {} (α {}°)",
-                    mf.min_torsal_plane_angle_deg,
-                    ok(mf.min_torsal_plane_angle_deg >= params.alpha_deg),
-                    params.alpha_deg
-                ),
+                format!("{:.2}° {} (α {}°)", mf.min_torsal_plane_angle_deg, ok(mf.min_torsal_plane_angle_deg >= params.alpha_deg), params.alpha_deg),
             ),
             ("max distance to the reference", panels.as_ref().map_or("–".into(), |p| p.max_distance_text())),
             (

@@ -139,8 +139,7 @@ impl MethodView for StAdaptedMethod {
             model: Mat4::IDENTITY,
             style: Style::Surface { shading: frame.shading, color: [0.70, 0.80, 0.88, 1.0], color_map: None },
         };
-        let lines =
-            |m: &Arc<MeshData>, color| Layer { geometry: Geometry::Mesh(m.clone()), model: Mat4::IDENTITY, style: Style::Lines { color } };
+        let lines = |m: &Arc<MeshData>, color| Layer { geometry: Geometry::Mesh(m.clone()), model: Mat4::IDENTITY, style: Style::Lines { color } };
         let mut layers = Vec::new();
         match (&a.panels, &a.remeshed) {
             (Some(p), _) => match a.moulds.as_ref().filter(|_| frame.moulds) {
@@ -194,13 +193,7 @@ impl MethodView for StAdaptedMethod {
 }
 
 /// The method's controls; true when a parameter changed.
-fn controls(
-    ui: &mut egui::Ui,
-    params: &mut StAdaptedParams,
-    memory: &mut SizingMemory,
-    show_reference: &mut bool,
-    show_remeshed: &mut bool,
-) -> bool {
+fn controls(ui: &mut egui::Ui, params: &mut StAdaptedParams, memory: &mut SizingMemory, show_reference: &mut bool, show_remeshed: &mut bool) -> bool {
     let before = params.clone();
     sizing_controls(ui, "st-sizing", &mut params.sizing, memory, &SizingKind::ALL);
     ui.horizontal(|ui| {
@@ -255,10 +248,7 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
     }
     key_values(ui, "st-adapted-metrics", &rows);
     if sum.metrics.flipped_faces > 0 {
-        ui.colored_label(
-            Color32::from_rgb(240, 180, 80),
-            format!("{} faces ended flipped against the reference.", sum.metrics.flipped_faces),
-        );
+        ui.colored_label(Color32::from_rgb(240, 180, 80), format!("{} faces ended flipped against the reference.", sum.metrics.flipped_faces));
     }
     warnings(ui, &sum.report.warnings);
 }

@@ -18,9 +18,9 @@ use crate::pipeline::stages::st_support::{StSupportSummary, STAGE};
 use crate::remeshing::Sizing;
 use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
+use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::panels::{max_distance_slider, sizing_controls, verdict, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
-use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
 
@@ -118,8 +118,7 @@ impl MethodView for StSupportMethod {
     }
     fn automation(&self) -> serde_json::Value {
         let summary = self.result.as_ref().and_then(|s| s.summary.as_ref());
-        serde_json::to_value(Automation { ready: summary.is_some(), panels: summary.map_or(0, |s| s.report.output.panels) })
-            .unwrap_or_default()
+        serde_json::to_value(Automation { ready: summary.is_some(), panels: summary.map_or(0, |s| s.report.output.panels) }).unwrap_or_default()
     }
     fn remesh_to(&self, design: &mut Design, faces: usize) {
         design.st_support.remesh = Sizing::UniformFaces(faces);
@@ -184,13 +183,7 @@ fn omega_layers(omega: Option<AbsoluteSphere>, frame: &Frame) -> Vec<Layer> {
 }
 
 /// The method's controls; true when a parameter changed.
-fn controls(
-    ui: &mut egui::Ui,
-    params: &mut StSupportParams,
-    memory: &mut SizingMemory,
-    show_reference: &mut bool,
-    show_envelope: &mut bool,
-) -> bool {
+fn controls(ui: &mut egui::Ui, params: &mut StSupportParams, memory: &mut SizingMemory, show_reference: &mut bool, show_envelope: &mut bool) -> bool {
     let before = params.clone();
     ui.checkbox(&mut params.optimize_radius, "optimize R (Fig. 16, right)");
     ui.add(egui::Slider::new(&mut params.support_depth, 0.0..=0.1).text("support depth"));
@@ -216,14 +209,7 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
     verdict(ui, &sum.report);
     let omega = match sum.omega {
         AbsoluteSphere::Sphere { center, r2 } => {
-            format!(
-                "m = ({:.3}, {:.3}, {:.3})\nR² = {:.4}{}",
-                center.x,
-                center.y,
-                center.z,
-                r2,
-                if r2 < 0.0 { " (imaginary Ω)" } else { "" }
-            )
+            format!("m = ({:.3}, {:.3}, {:.3})\nR² = {:.4}{}", center.x, center.y, center.z, r2, if r2 < 0.0 { " (imaginary Ω)" } else { "" })
         }
         AbsoluteSphere::Plane { axis, d } => format!("plane at infinity: a = ({:.3}, {:.3}, {:.3}), d = {:.4}", axis.x, axis.y, axis.z, d),
     };
@@ -234,24 +220,21 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
     let g = |x: f64| format!("{x:.3e}");
     let d = |x: f64| format!("{x:.3}°");
     let mut rows = vec![
-            ("panels", r.output.panels.to_string()),
-            ("distinct radii", sum.distinct_radii.to_string()),
-            ("kink mean / max", format!("{} / {}", d(m.mean_kink_angle_deg), d(m.max_kink_angle_deg))),
-            ("axis–normal mean / max", format!("{} / {}", d(s.mean_axis_normal_angle_deg), d(s.max_axis_normal_angle_deg))),
-            ("vertex–sphere residual", g(s.max_vertex_sphere_residual)),
-            ("orthogonality residual", g(s.max_orthogonality_residual)),
-            ("node-axis offset", g(s.max_node_axis_offset)),
-            ("distance to reference", m.max_distance_text()),
+        ("panels", r.output.panels.to_string()),
+        ("distinct radii", sum.distinct_radii.to_string()),
+        ("kink mean / max", format!("{} / {}", d(m.mean_kink_angle_deg), d(m.max_kink_angle_deg))),
+        ("axis–normal mean / max", format!("{} / {}", d(s.mean_axis_normal_angle_deg), d(s.max_axis_normal_angle_deg))),
+        ("vertex–sphere residual", g(s.max_vertex_sphere_residual)),
+        ("orthogonality residual", g(s.max_orthogonality_residual)),
+        ("node-axis offset", g(s.max_node_axis_offset)),
+        ("distance to reference", m.max_distance_text()),
     ];
     rows.extend(before_after(s.moulds.moulds_before, s.moulds.mould_rounds.len(), r.moulds.as_ref()));
     rows.extend(s.moulds.refused().map(|why| ("mould snap", why)));
     key_values(ui, "st-support-metrics", &rows);
     ui.label(RichText::new("∠(v − m, n): m0 (green) and optimized m (red)").small());
     histogram(ui, &[(&sum.angles_m0, Color32::from_rgb(90, 190, 90)), (&sum.angles_m, Color32::from_rgb(220, 80, 70))], "°");
-    ui.label(
-        RichText::new(if matches!(sum.omega, AbsoluteSphere::Plane { .. }) { "distances dᵢ" } else { "Rᵢ² of the central spheres" })
-            .small(),
-    );
+    ui.label(RichText::new(if matches!(sum.omega, AbsoluteSphere::Plane { .. }) { "distances dᵢ" } else { "Rᵢ² of the central spheres" }).small());
     histogram(ui, &[(&sum.r2, Color32::from_rgb(110, 150, 230))], "");
     warnings(ui, &r.warnings);
 }
