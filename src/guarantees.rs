@@ -79,6 +79,23 @@ impl Guarantee {
         Self { in_model_units: Some(text.into()), ..self }
     }
 
+    /// ✔ or ✘ and the limit, as a figure's mark in the app ("✔ (≤ 20 deg)").
+    pub fn mark(&self) -> String {
+        let op = match self.bound {
+            Bound::AtMost => "≤",
+            Bound::AtLeast => "≥",
+        };
+        let limit = if self.unit.is_empty() || self.unit == "deg" { format!("{}", self.limit) } else { format!("{:.0e}", self.limit) };
+        let unit = if self.unit == "deg" {
+            "°".to_string()
+        } else if self.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        };
+        format!("{} ({op} {limit}{unit})", if self.holds { "✔" } else { "✘" })
+    }
+
     /// A count that must not exceed `limit`.
     pub(crate) fn count_at_most(name: &str, measured: usize, limit: usize) -> Self {
         Self::at_most(name, measured as f64, limit as f64, "")

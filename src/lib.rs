@@ -19,13 +19,16 @@ pub mod guarantees;
 pub mod import;
 /// Sphere meshes and their panels: arcs, gaps, tessellation, deviation.
 pub mod panels;
-/// The session, its stages and the typed worker protocol.
+/// Parameter ranges, checked once, and a method's parameters in a design link.
+pub mod params;
+/// The session, one method seam, its stages and the typed worker protocol.
 pub mod pipeline;
 /// Progress events, the typed `Cancelled` and the caller's clock, taken by every method.
 pub mod progress;
 /// The reference surface R with its cached derived data, and the glide terms.
 pub mod reference;
-/// Sizing fields from influence zones and pliant remeshing (Sec. 3).
+/// Sizing fields from influence zones and pliant remeshing (Sec. 3); quad remeshing along a
+/// cross field (Sec. 5.2).
 pub mod remeshing;
 /// A small deterministic random generator for tests and samples.
 pub mod rng;

@@ -251,7 +251,7 @@ fn references(file: &str, text: &str) -> Vec<(Vec<String>, Root)> {
             None
         } else if rest.starts_with("crate::") {
             Some((7, vec![], Root::Crate))
-        } else if rest.starts_with("spherical_faces::") && (file == "cli.rs" || file == "main.rs") {
+        } else if rest.starts_with("spherical_faces::") && (file.starts_with("cli/") || file == "main.rs") {
             Some((17, vec![], Root::Crate))
         } else if rest.starts_with("super::") {
             let mut base = above.clone();

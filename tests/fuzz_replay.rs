@@ -90,6 +90,7 @@ mod seeds {
     use spherical_faces::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
     use spherical_faces::pipeline::fields::{Field, FieldData};
     use spherical_faces::pipeline::protocol::*;
+    use spherical_faces::pipeline::stages::{sq::SqStage, st_adapted::StAdaptedStage, st_support::StSupportStage};
     use spherical_faces::pipeline::{Outbox, Session};
     use spherical_faces::remeshing::Sizing;
     use spherical_faces::samples::Sample;
@@ -169,9 +170,9 @@ mod seeds {
             ("to_load_sample", ToWorker::LoadSample(Sample::WaveRoof), None),
             ("to_load_file", ToWorker::LoadFile { name: "tri.obj".into() }, Some(obj.clone())),
             ("to_run_curvature", run(StageRequest::Curvature(Default::default())), None),
-            ("to_run_st_adapted", run(StageRequest::StAdapted(StAdaptedParams::default())), None),
-            ("to_run_st_support", run(StageRequest::StSupport(StSupportParams::default())), None),
-            ("to_run_sq", run(StageRequest::Sq(SqParams::default())), None),
+            ("to_run_st_adapted", run(StageRequest::method::<StAdaptedStage>(StAdaptedParams::default())), None),
+            ("to_run_st_support", run(StageRequest::method::<StSupportStage>(StSupportParams::default())), None),
+            ("to_run_sq", run(StageRequest::method::<SqStage>(SqParams::default())), None),
             ("to_cancel", ToWorker::Cancel, None),
             ("to_crash", ToWorker::Crash, None),
         ];
@@ -187,12 +188,12 @@ mod seeds {
         s.handle(ToWorker::LoadSample(Sample::Dome), None, &mut keep);
         s.handle(run(StageRequest::Curvature(Default::default())), None, &mut keep);
         let st = StAdaptedParams { sizing: Sizing::UniformFaces(60), ..StAdaptedParams::default() };
-        s.handle(run(StageRequest::StAdapted(st)), None, &mut keep);
+        s.handle(run(StageRequest::method::<StAdaptedStage>(st)), None, &mut keep);
         let sts = StSupportParams { remesh: Sizing::UniformFaces(60), ..StSupportParams::default() };
-        s.handle(run(StageRequest::StSupport(sts)), None, &mut keep);
+        s.handle(run(StageRequest::method::<StSupportStage>(sts)), None, &mut keep);
         s.handle(ToWorker::LoadFile { name: "paraboloid_dome.json".into() }, Some(&spline), &mut keep);
-        s.handle(run(StageRequest::Sq(SqParams { grid: 8, until: Until::Congruence, ..SqParams::default() })), None, &mut keep);
-        keep.send(FromWorker::Cancelled { stage: spherical_faces::pipeline::fields::StageId::Sq }, vec![]);
+        s.handle(run(StageRequest::method::<SqStage>(SqParams { grid: 8, until: Until::Congruence, ..SqParams::default() })), None, &mut keep);
+        keep.send(FromWorker::Cancelled { stage: StageId::of(MethodId::Sq) }, vec![]);
         for (name, env) in &keep.out {
             write("protocol", name, &oracles::protocol_bytes(env));
         }
@@ -203,7 +204,7 @@ mod seeds {
             (
                 "app_st.frag",
                 Design {
-                    method: Method::StAdapted,
+                    method: Method::Of(MethodId::StAdapted),
                     reference: DesignSurface::Sample(Sample::SphereCap),
                     color: ColorBy::Sizing,
                     shading: Shading::Flat,
@@ -212,8 +213,8 @@ mod seeds {
                     ..Design::default()
                 },
             ),
-            ("app_st_support.frag", Design { method: Method::StSupport, ..Design::default() }),
-            ("app_sq.frag", Design { method: Method::Sq, reference: DesignSurface::Sample(Sample::Vault), ..Design::default() }),
+            ("app_st_support.frag", Design { method: Method::Of(MethodId::StSupport), ..Design::default() }),
+            ("app_sq.frag", Design { method: Method::Of(MethodId::Sq), reference: DesignSurface::Sample(Sample::Vault), ..Design::default() }),
             ("app_file.frag", Design { reference: DesignSurface::OwnFile("my roof #2.obj".into()), ..Design::default() }),
         ];
         for (name, d) in &designs {

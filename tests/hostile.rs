@@ -175,7 +175,7 @@ fn face_counts_are_capped_in_the_cli_and_the_link() {
     }
     let (d, notices) = Design::from_fragment("#v=1&method=st&sizing=faces&faces=200001");
     assert_eq!(notices.len(), 1, "{notices:?}");
-    assert_ne!(d.st_adapted.sizing, Sizing::UniformFaces(200_001));
+    assert_ne!(d.params::<spherical_faces::pipeline::stages::st_adapted::StAdaptedStage>().sizing, Sizing::UniformFaces(200_001));
 }
 
 // --- 2. Curvature is linear in the input ------------------------------------------------------------
@@ -262,7 +262,7 @@ fn design_links_round_trip_without_notices() {
         assert_eq!(again.to_fragment(), written);
     }
     let (d, _) = Design::from_fragment("#v=1&method=st-support&rtol=0.00001");
-    assert_eq!(d.st_support.radius_tolerance, 1e-5);
+    assert_eq!(d.params::<spherical_faces::pipeline::stages::st_support::StSupportStage>().radius_tolerance, 1e-5);
     let (d, _) = Design::from_fragment("#v=1&cam=0,0,0.00001,0,0,0");
     assert_eq!(d.camera.map(|c| c.distance), Some(1e-5));
 }
@@ -360,7 +360,7 @@ fn methods_refuse_more_faces_than_they_handle_and_name_the_remesh() {
     let StSupportError::TooManyFaces(e) = &err else { panic!("{err}") };
     assert_eq!(e.suggested(), MAX_METHOD_FACES / 2);
     assert!(err.to_string().contains(&format!("remesh to about {} faces first", MAX_METHOD_FACES / 2)), "{err}");
-    let stage = stages::StageError::StSupport(err);
+    let stage = stages::StageError::from(err);
     assert_eq!(stage.remesh_to(), Some(MAX_METHOD_FACES / 2));
     let params = StAdaptedParams { sizing: Sizing::UniformFaces(MAX_METHOD_FACES + 1), ..StAdaptedParams::default() };
     let err = spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_err();

@@ -18,7 +18,6 @@ use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::samples::Sample;
-use spherical_faces::sq::congruence_file::CongruenceSegments;
 use spherical_faces::sq::params::SqParams;
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::st_support::StSupportParams;
@@ -219,8 +218,7 @@ fn sq_panels_fit_their_moulds() {
     let delta = 1e-4 * reference.diagonal();
     let params = SqParams { fabrication: fabrication(delta), ..Default::default() };
     let result = spherical_faces::sq::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let segments = CongruenceSegments::of(&result.congruence);
-    let (report, files) = stages::sq::export(&reference, &result, &params, &segments, Clock::default());
+    let (report, files) = stages::sq::export(&reference, &result, &params, Clock::default());
     let panels = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh.panels;
     check("sq vault", panels, &report, &files, delta, None);
     not_snapped_when_not_asked("sq vault", &report);
@@ -294,8 +292,7 @@ fn sq_vault_moulds(scale: f64, max_moulds: usize) -> bool {
     let plain = spherical_faces::sq::compute(&reference, &base, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = SqParams { optimize_moulds: true, ..base.clone() };
     let result = spherical_faces::sq::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let segments = CongruenceSegments::of(&result.congruence);
-    let (report, files) = stages::sq::export(&reference, &result, &params, &segments, Clock::default());
+    let (report, files) = stages::sq::export(&reference, &result, &params, Clock::default());
     let (before, after) = (plain.sq_mesh.as_ref().unwrap(), result.sq_mesh.as_ref().unwrap());
     let rounds = after.moulds.as_ref().expect("the rounds ran");
     let start = before.mesh.figures.max_vertex_distance_to_reference;

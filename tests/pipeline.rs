@@ -2,9 +2,9 @@
 #![cfg(not(target_arch = "wasm32"))] // native: reads ../shared, spawns processes
 
 use spherical_faces::congruence::central_spheres::JetParams;
-use spherical_faces::pipeline::fields::{field, find, Field, StageId, StageProgress};
+use spherical_faces::pipeline::fields::{field, find, Field, Part};
 use spherical_faces::pipeline::protocol::*;
-use spherical_faces::pipeline::stages::st_adapted;
+use spherical_faces::pipeline::stages::{sq::SqStage, st_adapted::StAdaptedStage, st_support::StSupportStage};
 use spherical_faces::pipeline::{Outbox, Session};
 use spherical_faces::samples::Sample;
 use spherical_faces::st_adapted::params::StAdaptedParams;
@@ -135,7 +135,7 @@ fn st_support_streams_panels_files_and_a_report() {
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     r.messages.clear();
-    send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::method::<StSupportStage>(StSupportParams::default())), None);
     let snap = r.messages.iter().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if stage == "st-support")).unwrap();
     let tri = find(&snap.1, field::PANEL_TRIANGLES).unwrap().as_u32().unwrap();
     let pos = find(&snap.1, field::PANEL_POSITIONS).unwrap().as_f32().unwrap();
@@ -151,7 +151,7 @@ fn st_support_streams_panels_files_and_a_report() {
     );
     assert_eq!(mime.len(), 9);
     assert_eq!(&bodies[0].as_bytes().unwrap()[..4], b"glTF");
-    let Some((FromWorker::Finished { result: StageResult::StSupport(summary), .. }, _)) = r.messages.last() else { panic!() };
+    let Some((FromWorker::Finished { result: StageResult::Method(MethodSummary::StSupport(summary)), .. }, _)) = r.messages.last() else { panic!() };
     let m = &summary.section().expect("the report's section");
     assert!(m.max_vertex_sphere_residual <= 1e-9);
     assert!(m.max_orthogonality_residual <= 1e-9);
@@ -168,7 +168,7 @@ fn st_support_on_a_minimal_surface_is_refused() {
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadFile { name: "enneper2.obj".into() }, Some(bytes));
     r.messages.clear();
-    send(&mut s, &mut r, run(StageRequest::StSupport(StSupportParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::method::<StSupportStage>(StSupportParams::default())), None);
     let Some((FromWorker::Error { message, .. }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
     assert!(message.contains("no usable central spheres"), "{message}");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. })));
@@ -178,16 +178,17 @@ fn st_support_on_a_minimal_surface_is_refused() {
 /// panels, per-iteration energies, the files and its summary, in that order.
 #[test]
 fn st_stage_streams_sizing_remesh_panels_and_energies() {
-    use st_adapted::{REMESHED_STAGE, SIZING_STAGE, STAGE};
+    let (sizing_stage, remeshed_stage, panels_stage) =
+        (StageId::Method(MethodId::StAdapted, Part::Sizing), StageId::Method(MethodId::StAdapted, Part::Remeshed), StageId::of(MethodId::StAdapted));
     let (stf, pf) = (field::SIZING, field::PANEL_TRIANGLES);
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
     let FromWorker::Loaded(info) = r.messages[0].0.clone() else { panic!() };
     r.messages.clear();
-    send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::method::<StAdaptedStage>(StAdaptedParams::default())), None);
     let pos = |stage: StageId| r.messages.iter().position(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if *s == stage));
-    let (i_sizing, i_remesh, i_panels) = (pos(SIZING_STAGE).unwrap(), pos(REMESHED_STAGE).unwrap(), pos(STAGE).unwrap());
+    let (i_sizing, i_remesh, i_panels) = (pos(sizing_stage).unwrap(), pos(remeshed_stage).unwrap(), pos(panels_stage).unwrap());
     assert!(i_sizing < i_remesh && i_remesh < i_panels);
     let g = find(&r.messages[i_sizing].1, stf).unwrap().as_f32().unwrap();
     assert_eq!(g.len(), info.stats.vertices);
@@ -219,19 +220,19 @@ fn st_stage_streams_sizing_remesh_panels_and_energies() {
         .messages
         .iter()
         .filter_map(|m| match &m.0 {
-            FromWorker::Snapshot { stage, iteration, .. } if *stage == STAGE => Some(*iteration),
+            FromWorker::Snapshot { stage, iteration, .. } if *stage == panels_stage => Some(*iteration),
             _ => None,
         })
         .collect();
     assert_eq!(panel_snaps.first(), Some(&0));
     assert_eq!(panel_snaps.last(), Some(&45));
-    let last = r.messages.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if *stage == STAGE)).unwrap();
+    let last = r.messages.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage, .. } if *stage == panels_stage)).unwrap();
     let tri = find(&last.1, pf).unwrap().as_u32().unwrap();
     assert!(tri.len() / 3 >= rt.len() / 3);
     let files = r.messages.iter().find(|m| matches!(m.0, FromWorker::Files { .. })).unwrap();
     let names: Vec<&str> = files.1.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["panels.glb", "panels.obj", "panels.csv", "panels.json", "moulds.csv", "panels.step", "panels.3dm.json", "report.json"]);
-    let Some((FromWorker::Finished { result: StageResult::StAdapted(summary), .. }, _)) = r.messages.last() else { panic!() };
+    let Some((FromWorker::Finished { result: StageResult::Method(MethodSummary::StAdapted(summary)), .. }, _)) = r.messages.last() else { panic!() };
     assert_eq!(summary.report.method, "st");
     assert_eq!(summary.iterations, 45);
     assert_eq!(summary.remeshed_faces, rt.len() / 3);
@@ -255,7 +256,7 @@ fn st_stage_cancels_within_one_iteration() {
     r.messages.clear();
     r.cancel_after = Some(25);
     r.progress_seen = 0;
-    send(&mut s, &mut r, run(StageRequest::StAdapted(StAdaptedParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::method::<StAdaptedStage>(StAdaptedParams::default())), None);
     assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "st"), "{:?}", r.messages.last().unwrap().0);
     // The cancel was requested once 25 progress messages had been sent: the 25th is the last.
     let progress: Vec<usize> = r.messages.iter().enumerate().filter(|(_, m)| matches!(m.0, FromWorker::Progress(_))).map(|(i, _)| i).collect();
@@ -297,8 +298,8 @@ fn a_reference_fits_its_jets_once() {
     send(&mut s, &mut r, run(StageRequest::Curvature(JetParams::default())), None);
     assert!(reference_fits(&r) > 0, "the curvature stage reports its jet fit");
     for stage in [
-        StageRequest::StSupport(StSupportParams::default()),
-        StageRequest::StAdapted(StAdaptedParams { stages: StAdaptedParams::default().stages[..1].to_vec(), ..Default::default() }),
+        StageRequest::method::<StSupportStage>(StSupportParams::default()),
+        StageRequest::method::<StAdaptedStage>(StAdaptedParams { stages: StAdaptedParams::default().stages[..1].to_vec(), ..Default::default() }),
     ] {
         r.messages.clear();
         send(&mut s, &mut r, run(stage.clone()), None);
@@ -316,22 +317,26 @@ fn a_reference_fits_its_jets_once() {
 /// the summary; θ and α met on the vault sample, and the mesh exact.
 #[test]
 fn sq_streams_lines_and_energies_then_files() {
-    use spherical_faces::pipeline::stages::sq;
     use spherical_faces::sq::params::SqParams;
     let mut s = Session::new();
     let mut r = Recorder::default();
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Vault), None);
     r.messages.clear();
     let params = SqParams { grid: 12, ..SqParams::default() };
-    send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
+    send(&mut s, &mut r, run(StageRequest::method::<SqStage>(params)), None);
     let energies = r.messages.iter().filter(|(m, _)| matches!(m, FromWorker::Progress(p) if !p.energies.is_empty())).count();
-    let Some((FromWorker::Finished { result: StageResult::Sq(summary), .. }, _)) = r.messages.last() else { panic!("{:?}", r.messages.last()) };
+    let Some((FromWorker::Finished { result: StageResult::Method(MethodSummary::Sq(summary)), .. }, _)) = r.messages.last() else {
+        panic!("{:?}", r.messages.last())
+    };
     let section = summary.section().expect("the report's section");
     assert_eq!(energies, section.iterations, "one energy report per iteration");
     let figures = &section.congruence.figures;
     assert!(figures.max_line_normal_angle_deg <= 20.0 && figures.min_torsal_plane_angle_deg >= 75.0, "{figures:?}");
-    let snapshots: Vec<&Vec<Field>> =
-        r.messages.iter().filter_map(|(m, f)| matches!(m, FromWorker::Snapshot { stage, .. } if *stage == sq::STAGE).then_some(f)).collect();
+    let snapshots: Vec<&Vec<Field>> = r
+        .messages
+        .iter()
+        .filter_map(|(m, f)| matches!(m, FromWorker::Snapshot { stage, .. } if *stage == StageId::of(MethodId::Sq)).then_some(f))
+        .collect();
     let first = snapshots.first().unwrap();
     assert_eq!(find(first, field::SQ_INITIAL_LINES).and_then(Field::as_f32).unwrap().len(), 144 * 6, "two points per line");
     let last = snapshots.last().unwrap();
@@ -379,7 +384,6 @@ fn sq_streams_lines_and_energies_then_files() {
 /// needs a B-spline.
 #[test]
 fn sq_refusals_reach_the_app() {
-    use spherical_faces::pipeline::stages::sq;
     use spherical_faces::sq::params::{RadiusStart, SqParams};
     let bytes = std::fs::read("../shared/data/bsplines/saddle_sign_change.json").unwrap();
     let mut s = Session::new();
@@ -388,10 +392,10 @@ fn sq_refusals_reach_the_app() {
     let FromWorker::Loaded(info) = &r.messages[0].0 else { panic!() };
     let vertices = info.stats.vertices;
     r.messages.clear();
-    send(&mut s, &mut r, run(StageRequest::Sq(SqParams { start: RadiusStart::Central, ..SqParams::default() })), None);
+    send(&mut s, &mut r, run(StageRequest::method::<SqStage>(SqParams { start: RadiusStart::Central, ..SqParams::default() })), None);
     let n = r.messages.len();
     let (FromWorker::Snapshot { stage, .. }, fields) = &r.messages[n - 2] else { panic!("{:?}", r.messages[n - 2].0) };
-    assert_eq!(*stage, sq::REFUSED_STAGE);
+    assert_eq!(*stage, StageId::Method(MethodId::Sq, Part::Refused));
     let h = find(fields, field::MEAN_CURVATURE).and_then(Field::as_f32).unwrap();
     assert_eq!(h.len(), vertices);
     assert!(h.iter().any(|&x| x > 0.0) && h.iter().any(|&x| x < 0.0));
@@ -399,7 +403,7 @@ fn sq_refusals_reach_the_app() {
     assert!(message.contains("central start needs a mean curvature of one sign") && message.contains("constant radii"), "{message}");
 
     send(&mut s, &mut r, ToWorker::LoadSample(Sample::Dome), None);
-    send(&mut s, &mut r, run(StageRequest::Sq(SqParams::default())), None);
+    send(&mut s, &mut r, run(StageRequest::method::<SqStage>(SqParams::default())), None);
     let FromWorker::Error { message, .. } = &r.messages.last().unwrap().0 else { panic!() };
     assert!(message.contains("B-spline reference"), "{message}");
 }
@@ -416,15 +420,15 @@ fn sq_stage_cancels_within_one_iteration() {
     let params = SqParams { grid: 10, ..SqParams::default() };
     r.cancel_after = Some(60);
     r.progress_seen = 0;
-    send(&mut s, &mut r, run(StageRequest::Sq(params.clone())), None);
+    send(&mut s, &mut r, run(StageRequest::method::<SqStage>(params.clone())), None);
     assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Cancelled { stage } if stage == "sq"), "{:?}", r.messages.last().unwrap().0);
     let progress = r.messages.iter().filter(|m| matches!(m.0, FromWorker::Progress(_))).count();
     assert_eq!(progress, 60, "no progress after the cancel request");
     assert!(!r.messages.iter().any(|m| matches!(m.0, FromWorker::Files { .. } | FromWorker::Finished { .. })));
     r.messages.clear();
     r.cancel_after = None;
-    send(&mut s, &mut r, run(StageRequest::Sq(params)), None);
-    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Finished { result: StageResult::Sq(_), .. }));
+    send(&mut s, &mut r, run(StageRequest::method::<SqStage>(params)), None);
+    assert!(matches!(&r.messages.last().unwrap().0, FromWorker::Finished { result: StageResult::Method(MethodSummary::Sq(_)), .. }));
 }
 
 /// Progress messages of the method's stage among `messages`.
@@ -434,8 +438,8 @@ fn method_progress(messages: &[(FromWorker, Vec<Field>)], stage: StageId) -> usi
 
 /// The finished report of the last run.
 fn finished_report(messages: &[(FromWorker, Vec<Field>)]) -> spherical_faces::export::Report {
-    let Some((FromWorker::Finished { mut result, .. }, _)) = messages.last().cloned() else { panic!("{:?}", messages.last()) };
-    result.report_mut().expect("a method's report").clone()
+    let Some((FromWorker::Finished { result, .. }, _)) = messages.last().cloned() else { panic!("{:?}", messages.last()) };
+    result.report().expect("a method's report").clone()
 }
 
 /// A new δ or K for the finished result exports it again without running the method: no
@@ -452,9 +456,12 @@ fn new_moulds_export_the_last_result_again() {
         let snap = m.iter().rev().find(|m| matches!(&m.0, FromWorker::Snapshot { stage: s, .. } if *s == stage)).expect("a snapshot");
         find(&snap.1, field::PANEL_POSITIONS).unwrap().as_f32().unwrap().to_vec()
     };
-    let cases: [(Sample, fn(Fabrication, bool) -> StageRequest); 2] = [
-        (Sample::Dome, |f, o| StageRequest::StSupport(StSupportParams { fabrication: f, optimize_moulds: o, ..Default::default() })),
-        (Sample::Vault, |f, o| StageRequest::Sq(SqParams { fabrication: f, optimize_moulds: o, ..Default::default() })),
+    type Request = fn(Fabrication, bool) -> StageRequest;
+    let cases: [(Sample, Request); 2] = [
+        (Sample::Dome, |f, o| {
+            StageRequest::method::<StSupportStage>(StSupportParams { optimize_moulds: o, ..Default::default() }).with_fabrication(f)
+        }),
+        (Sample::Vault, |f, o| StageRequest::method::<SqStage>(SqParams { optimize_moulds: o, ..Default::default() }).with_fabrication(f)),
     ];
     for (sample, request) in cases {
         let mut s = Session::new();

@@ -9,7 +9,7 @@ use wasm_bindgen_test::*;
 
 use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::import::{import_mesh, Format};
-use spherical_faces::pipeline::fields::{field, Field, StageId};
+use spherical_faces::pipeline::fields::{field, Field};
 use spherical_faces::pipeline::protocol::*;
 use spherical_faces::pipeline::{Outbox, Session};
 use spherical_faces::samples::Sample;

@@ -33,6 +33,7 @@
 //! non-finite input) gets zero curvature, the frame normal, its tangent plane as central sphere,
 //! and is counted in `failed_fits`. No output is ever NaN or infinite.
 
+use crate::params::{LinkFields, LinkReader, LinkWriter, ParamRange};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -88,6 +89,26 @@ pub struct JetParams {
 impl Default for JetParams {
     fn default() -> Self {
         Self { degree: 3, min_points: min_points_for_degree(3), max_rings: 4 }
+    }
+}
+
+/// The jet's degree and its most rings, as a design sets them.
+pub const JET_DEGREE_RANGE: ParamRange<usize> = ParamRange::new("jet degree", 2, 4);
+pub const JET_RINGS_RANGE: ParamRange<usize> = ParamRange::new("jet rings", 1, 8);
+
+impl LinkFields for JetParams {
+    fn write_link(&self, link: &mut LinkWriter) {
+        link.count("jet_degree", self.degree as usize);
+        link.count("jet_rings", self.max_rings);
+    }
+
+    fn read_link(&mut self, link: &mut LinkReader) {
+        if let Some(d) = link.count("jet_degree", JET_DEGREE_RANGE) {
+            self.degree = d as u8;
+        }
+        if let Some(r) = link.count("jet_rings", JET_RINGS_RANGE) {
+            self.max_rings = r;
+        }
     }
 }
 

@@ -27,6 +27,7 @@ use crate::geometry::linalg::Svd;
 use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
+use crate::params::ParamRange;
 use crate::progress::{Cancelled, OnProgress, Progress};
 
 /// The node axis of a vertex star: the line through v and the second common point v̄ of the
@@ -40,6 +41,11 @@ pub struct StarAxis {
     /// σ₃/σ₁ of the system below: how well the spheres determine the line (0 = not at all).
     pub condition: f64,
 }
+
+/// The depth of the support elements, relative to the bounding-box diagonal.
+pub const SUPPORT_DEPTH_RANGE: ParamRange<f64> = ParamRange::new("support depth", 1e-4, 0.5);
+/// The length of the drawn node axes, relative to the diagonal.
+pub const AXIS_LENGTH_RANGE: ParamRange<f64> = ParamRange::new("axis length", 0.0, 10.0);
 
 /// Minimum [`StarAxis::condition`] accepted by [`second_common_point`] and [`star_axis`]'s
 /// callers in this crate: below it the spheres are nearly coaxal (e.g. all equal, as on a sphere)

@@ -4,6 +4,7 @@
 //! verdicts of all three methods, the CAD files' refusals and the app's warnings read it.
 
 use crate::guarantees::Guarantee;
+use crate::params::{LinkReader, LinkWriter, ParamRange};
 use crate::units::{format_length, Units};
 
 use super::exact_surface::{ExactSurfaceError, ExactSurfaces};
@@ -17,14 +18,19 @@ pub const MAX_DISTANCE: &str = "max_distance_to_reference";
 /// structure, relative to the bounding-box diagonal.
 pub const DEFAULT_MAX_DISTANCE: f64 = 0.01;
 /// The range a distance bound may take (relative to the diagonal).
-pub const MAX_DISTANCE_RANGE: std::ops::RangeInclusive<f64> = 1e-6..=1.0;
+pub const MAX_DISTANCE_RANGE: ParamRange<f64> = ParamRange::new("the distance bound", 1e-6, 1.0);
 
-/// Checks a distance bound ([`MAX_DISTANCE_RANGE`]).
-pub fn check_max_distance(d: f64) -> Result<(), String> {
-    if d.is_finite() && MAX_DISTANCE_RANGE.contains(&d) {
-        Ok(())
-    } else {
-        Err(format!("the distance bound must be in [{:e}, {}] of the diagonal, got {d}", MAX_DISTANCE_RANGE.start(), MAX_DISTANCE_RANGE.end()))
+/// `&max_dist=…` when the distance bound is not its default, so older links stay as they were.
+pub fn write_max_distance(link: &mut LinkWriter, max_distance: f64) {
+    if max_distance != DEFAULT_MAX_DISTANCE {
+        link.number("max_dist", max_distance);
+    }
+}
+
+/// The distance bound of a link, if it has one.
+pub fn read_max_distance(link: &mut LinkReader, max_distance: &mut f64) {
+    if let Some(d) = link.number("max_dist", MAX_DISTANCE_RANGE) {
+        *max_distance = d;
     }
 }
 

@@ -78,6 +78,9 @@ pub mod panel;
 pub mod sphere_mesh;
 pub mod tessellate;
 
+/// Radii closer than this, relative to the diagonal, count as one in the schedule.
+pub const RADIUS_TOLERANCE_RANGE: crate::params::ParamRange<f64> = crate::params::ParamRange::new("radius tolerance", 1e-9, 1.0);
+
 use glam::DVec3;
 
 use crate::geometry::sphere::Sphere;

@@ -16,6 +16,7 @@
 //! intersection unbounded above, of panels within δ of their centre: their mean curvature,
 //! clamped into it).
 
+use crate::params::{percent_encode, LinkFields, LinkReader, LinkWriter, ParamRange};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -471,6 +472,35 @@ pub struct Fabrication {
 impl Default for Fabrication {
     fn default() -> Self {
         Self { units: Units::M, moulds: MouldTarget::Tolerance(DEFAULT_MOULD_TOLERANCE) }
+    }
+}
+
+/// The number of moulds K a design may ask for.
+pub const MOULD_COUNT_RANGE: ParamRange<usize> = ParamRange::new("moulds", 1, 10_000);
+
+impl LinkFields for Fabrication {
+    /// Units and moulds only when not the defaults, so older links stay as they were.
+    fn write_link(&self, link: &mut LinkWriter) {
+        if self.units != Units::default() {
+            link.text("units", &self.units.to_string());
+        }
+        match self.moulds {
+            MouldTarget::Tolerance(t) if t == DEFAULT_MOULD_TOLERANCE => {}
+            MouldTarget::Tolerance(t) => link.text("mould_tol", &percent_encode(&t.to_string())),
+            MouldTarget::Count(k) => link.count("moulds", k),
+        }
+    }
+
+    fn read_link(&mut self, link: &mut LinkReader) {
+        if let Some(u) = link.parsed("units", |v| v.parse::<Units>().ok()) {
+            self.units = u;
+        }
+        if let Some(t) = link.parsed("mould_tol", |v| v.parse::<Length>().ok()) {
+            self.moulds = MouldTarget::Tolerance(t);
+        }
+        if let Some(k) = link.count("moulds", MOULD_COUNT_RANGE) {
+            self.moulds = MouldTarget::Count(k);
+        }
     }
 }
 

@@ -10,69 +10,35 @@ pub struct Energy {
     pub value: f64,
 }
 
-/// What a message of the worker is about: the import, the reference's geometry, a stage, or a
-/// part of a stage's stream. Written as its key ("st-support", "st.sizing").
+/// Which part of a stage's stream a snapshot belongs to: the stage's own geometry, or what a
+/// method made of the reference before it optimizes (Sec. 3: the sizing field, the remeshed
+/// triangulation), or what it shows when it refuses a surface (Sec. 6.3: H at the vertices).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum StageId {
-    #[serde(rename = "import")]
-    Import,
-    /// The reference's display geometry.
-    #[serde(rename = "reference")]
-    Reference,
-    #[serde(rename = "curvature")]
-    Curvature,
-    /// Sec. 3; its sizing field and its remeshed triangulation as they come.
-    #[serde(rename = "st")]
-    StAdapted,
-    #[serde(rename = "st.sizing")]
-    StAdaptedSizing,
-    #[serde(rename = "st.remeshed")]
-    StAdaptedRemeshed,
-    /// Sec. 4.
-    #[serde(rename = "st-support")]
-    StSupport,
-    /// Sec. 5; H at the vertices when it refuses for the sign of H.
-    #[serde(rename = "sq")]
-    Sq,
-    #[serde(rename = "sq.refused")]
-    SqRefused,
+pub enum Part {
+    Main,
+    Sizing,
+    Remeshed,
+    Refused,
 }
 
-impl StageId {
-    /// The key on the wire and in reports ("st-support").
-    pub fn key(self) -> &'static str {
+impl Part {
+    pub const ALL: [Part; 4] = [Part::Main, Part::Sizing, Part::Remeshed, Part::Refused];
+
+    /// The suffix of the stage's key ("" for the stage itself: "st", "st.sizing").
+    pub fn suffix(self) -> &'static str {
         match self {
-            StageId::Import => "import",
-            StageId::Reference => "reference",
-            StageId::Curvature => "curvature",
-            StageId::StAdapted => "st",
-            StageId::StAdaptedSizing => "st.sizing",
-            StageId::StAdaptedRemeshed => "st.remeshed",
-            StageId::StSupport => "st-support",
-            StageId::Sq => "sq",
-            StageId::SqRefused => "sq.refused",
+            Part::Main => "",
+            Part::Sizing => "sizing",
+            Part::Remeshed => "remeshed",
+            Part::Refused => "refused",
         }
     }
 }
 
-impl std::fmt::Display for StageId {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.key())
-    }
-}
-
-impl PartialEq<str> for StageId {
-    fn eq(&self, other: &str) -> bool {
-        self.key() == other
-    }
-}
-
-/// A stage's progress as the worker reports it (from a [`crate::progress::Progress`]).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StageProgress {
-    pub stage: StageId,
+/// A step's progress as a stage reports it; the session says which stage it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepProgress {
     /// The step within the stage, e.g. "absolute_sphere".
-    #[serde(default)]
     pub detail: String,
     pub iteration: u32,
     /// Total iterations when known (0 when open-ended).

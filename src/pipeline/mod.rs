@@ -3,6 +3,7 @@
 //! [`Outbox`]; stages stream to a [`sink::Sink`].
 
 pub mod fields;
+pub mod method;
 pub mod panel_output;
 pub mod protocol;
 pub mod session;

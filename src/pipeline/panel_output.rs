@@ -23,6 +23,7 @@ use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::progress::Clock;
 use crate::reference::Reference;
+use crate::units::format_length;
 
 /// Points as f32 triples.
 pub(crate) fn f32s(points: impl Iterator<Item = DVec3>) -> Vec<f32> {
@@ -358,4 +359,24 @@ pub(crate) fn export_panels(reference: &Reference, e: PanelExport, clock: Clock)
         files.push(ExportFile::new("support.csv", "text/csv", csv.into_bytes()));
     }
     (report, files, moulds)
+}
+
+/// `summary`, then the exact surfaces of `panels.step` and `panels.3dm` and the moulds of the report: how many,
+/// within what, in model units.
+pub fn with_moulds(summary: String, report: &Report) -> String {
+    let summary = match &report.exact_surfaces {
+        Some(e) => format!("{summary}; CAD surfaces (panels.step, panels.3dm): {}", e.describe()),
+        None => summary,
+    };
+    match &report.moulds {
+        Some(m) => format!(
+            "{summary}; {} mould{} within {} (largest fit deviation {}; moulds.csv); {}",
+            m.count,
+            if m.count == 1 { "" } else { "s" },
+            format_length(m.tolerance, m.units),
+            format_length(m.max_deviation, m.units),
+            m.snap.describe(report.output.panels, m.units),
+        ),
+        None => summary,
+    }
 }

@@ -1,26 +1,152 @@
-//! The typed worker protocol, and the only file that lists the methods. Headers travel as JSON
-//! (serde); bulk data travels beside them as binary [`Field`]s, which the web layer moves as
-//! transferable `ArrayBuffer`s.
-//!
-//! Adding a method: one [`StageRequest`] variant (its parameters), one [`StageResult`] variant
-//! (its summary), one arm in [`StageRequest::name`], and one in the session.
+//! The typed worker protocol, and the only file that lists the methods: [`methods!`] below
+//! makes the wire's enums ([`MethodId`], [`MethodParams`], [`MethodSummary`]) and the dispatch
+//! to each method's [`Method`] from one line per method. Headers travel as JSON (serde); bulk data
+//! travels beside them as binary [`Field`]s, which the web layer moves as transferable
+//! `ArrayBuffer`s.
 
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::fields::{Field, FieldHeader, FieldLengthError, StageId, StageProgress};
-use super::stages::{curvature, sq, st_adapted, st_support};
+use super::fields::{Energy, Field, FieldHeader, FieldLengthError, Part, StepProgress};
+use super::method::{same_result, Method, Request};
+use super::stages::{sq, st_adapted, st_support};
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::export::Report;
 use crate::geometry::mesh::topology::MeshStats;
 use crate::import::Format;
 use crate::panels::moulds::Fabrication;
+use crate::params::{LinkFields, LinkReader, LinkWriter};
 use crate::reference::bspline::BSplineInfo;
 use crate::samples::Sample;
-use crate::sq::params::SqParams;
-use crate::st_adapted::params::StAdaptedParams;
-use crate::st_support::StSupportParams;
+
+/// Runs a generic function of a method on the method a request names.
+pub trait MethodVisitor {
+    type Output;
+    fn visit<M: OnWire>(self) -> Self::Output;
+}
+
+/// A method on the wire: its variants of the protocol's enums.
+pub trait OnWire: Method {
+    const ID: MethodId;
+    fn unwrap_params(p: &MethodParams) -> Option<&Self::Params>;
+    fn unwrap_params_mut(p: &mut MethodParams) -> Option<&mut Self::Params>;
+    fn wrap_params(p: Self::Params) -> MethodParams;
+    fn unwrap_summary(s: &MethodSummary) -> Option<&Self::Summary>;
+    fn wrap_summary(s: Self::Summary) -> MethodSummary;
+}
+
+/// The methods: `Variant => its stage's Method`. A new method is one line here (the recipe in
+/// ARCHITECTURE.md).
+macro_rules! methods {
+    ($($variant:ident => $stage:ty),* $(,)?) => {
+        /// A method of the menu.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+        pub enum MethodId { $($variant),* }
+
+        impl MethodId {
+            pub const ALL: &'static [MethodId] = &[$(MethodId::$variant),*];
+
+            /// The key of the wire, the design link, the command line and the report.
+            pub fn key(self) -> &'static str {
+                match self { $(MethodId::$variant => <$stage as Method>::KEY),* }
+            }
+
+            /// The method's name in the menu.
+            pub fn label(self) -> &'static str {
+                match self { $(MethodId::$variant => <$stage as Method>::LABEL),* }
+            }
+
+            pub fn from_key(key: &str) -> Option<MethodId> {
+                Self::ALL.iter().copied().find(|m| m.key() == key)
+            }
+
+            /// The method's default parameters.
+            pub fn default_params(self) -> MethodParams {
+                match self { $(MethodId::$variant => MethodParams::$variant(Default::default())),* }
+            }
+
+            /// Runs `visitor` on the method.
+            pub fn visit<V: MethodVisitor>(self, visitor: V) -> V::Output {
+                match self { $(MethodId::$variant => visitor.visit::<$stage>()),* }
+            }
+        }
+
+        /// A method's parameters.
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum MethodParams { $($variant(<$stage as Method>::Params)),* }
+
+        impl MethodParams {
+            pub fn method(&self) -> MethodId {
+                match self { $(MethodParams::$variant(_) => MethodId::$variant),* }
+            }
+        }
+
+        impl LinkFields for MethodParams {
+            fn write_link(&self, link: &mut LinkWriter) {
+                match self { $(MethodParams::$variant(p) => p.write_link(link)),* }
+            }
+
+            fn read_link(&mut self, link: &mut LinkReader) {
+                match self { $(MethodParams::$variant(p) => p.read_link(link)),* }
+            }
+        }
+
+        /// A method's summary of a finished run.
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        pub enum MethodSummary { $($variant(Box<<$stage as Method>::Summary>)),* }
+
+        impl MethodSummary {
+            pub fn method(&self) -> MethodId {
+                match self { $(MethodSummary::$variant(_) => MethodId::$variant),* }
+            }
+        }
+
+        $(
+            impl OnWire for $stage {
+                const ID: MethodId = MethodId::$variant;
+                #[allow(unreachable_patterns)]
+                fn unwrap_params(p: &MethodParams) -> Option<&Self::Params> {
+                    match p { MethodParams::$variant(x) => Some(x), _ => None }
+                }
+                #[allow(unreachable_patterns)]
+                fn unwrap_params_mut(p: &mut MethodParams) -> Option<&mut Self::Params> {
+                    match p { MethodParams::$variant(x) => Some(x), _ => None }
+                }
+                fn wrap_params(p: Self::Params) -> MethodParams {
+                    MethodParams::$variant(p)
+                }
+                #[allow(unreachable_patterns)]
+                fn unwrap_summary(s: &MethodSummary) -> Option<&Self::Summary> {
+                    match s { MethodSummary::$variant(x) => Some(x), _ => None }
+                }
+                fn wrap_summary(s: Self::Summary) -> MethodSummary {
+                    MethodSummary::$variant(Box::new(s))
+                }
+            }
+        )*
+    };
+}
+
+methods! {
+    StAdapted => st_adapted::StAdaptedStage,
+    StSupport => st_support::StSupportStage,
+    Sq => sq::SqStage,
+}
+
+impl MethodSummary {
+    /// The run's report.
+    pub fn report(&self) -> &Report {
+        struct Get<'a>(&'a MethodSummary);
+        impl<'a> MethodVisitor for Get<'a> {
+            type Output = &'a Report;
+            fn visit<M: OnWire>(self) -> &'a Report {
+                M::report(M::unwrap_summary(self.0).expect("the summary's own method"))
+            }
+        }
+        self.method().visit(Get(self))
+    }
+}
 
 /// Where a reference surface comes from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -39,65 +165,173 @@ impl Source {
     }
 }
 
+/// What a message of the worker is about: the import, the reference's geometry, the curvature,
+/// or a part of a method's stream. Written as its key ("st-support", "st.sizing").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StageId {
+    Import,
+    /// The reference's display geometry.
+    Reference,
+    Curvature,
+    Method(MethodId, Part),
+}
+
+impl StageId {
+    /// A method's own stage.
+    pub fn of(method: MethodId) -> StageId {
+        StageId::Method(method, Part::Main)
+    }
+
+    /// The key on the wire ("st-support", "st.sizing", "sq.refused").
+    pub fn key(self) -> String {
+        match self {
+            StageId::Import => "import".into(),
+            StageId::Reference => "reference".into(),
+            StageId::Curvature => "curvature".into(),
+            StageId::Method(m, Part::Main) => m.key().into(),
+            StageId::Method(m, part) => format!("{}.{}", m.key(), part.suffix()),
+        }
+    }
+
+    pub fn from_key(key: &str) -> Option<StageId> {
+        let fixed = [StageId::Import, StageId::Reference, StageId::Curvature];
+        let methods = MethodId::ALL.iter().flat_map(|&m| Part::ALL.map(|p| StageId::Method(m, p)));
+        fixed.into_iter().chain(methods).find(|s| s.key() == key)
+    }
+
+    /// The method the stage belongs to, if any.
+    pub fn method(self) -> Option<MethodId> {
+        match self {
+            StageId::Method(m, _) => Some(m),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for StageId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.key())
+    }
+}
+
+impl PartialEq<str> for StageId {
+    fn eq(&self, other: &str) -> bool {
+        self.key() == other
+    }
+}
+
+impl Serialize for StageId {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.key())
+    }
+}
+
+impl<'de> Deserialize<'de> for StageId {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let key = String::deserialize(d)?;
+        StageId::from_key(&key).ok_or_else(|| serde::de::Error::custom(format!("unknown stage '{key}'")))
+    }
+}
+
+/// A stage's progress as the worker reports it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageProgress {
+    pub stage: StageId,
+    /// The step within the stage, e.g. "absolute_sphere".
+    #[serde(default)]
+    pub detail: String,
+    pub iteration: u32,
+    /// Total iterations when known (0 when open-ended).
+    pub total: u32,
+    pub energies: Vec<Energy>,
+    pub elapsed_ms: f64,
+}
+
+impl StageProgress {
+    pub fn of(stage: StageId, p: StepProgress) -> Self {
+        let StepProgress { detail, iteration, total, energies, elapsed_ms } = p;
+        Self { stage, detail, iteration, total, energies, elapsed_ms }
+    }
+}
+
+/// A method's request on the wire: its parameters, the fabrication settings and the jet fit.
+pub type MethodRequest = Request<MethodParams>;
+
+impl MethodRequest {
+    pub fn method(&self) -> MethodId {
+        self.params.method()
+    }
+
+    /// The request of method `M`, if it is `M`'s.
+    pub fn for_method<M: OnWire>(&self) -> Option<Request<M::Params>> {
+        M::unwrap_params(&self.params).map(|p| Request { params: p.clone(), fabrication: self.fabrication, jet: self.jet.clone() })
+    }
+}
+
 /// A stage and its parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum StageRequest {
     /// Jet-fitted curvature and central spheres (Sec. 2.6).
     Curvature(JetParams),
-    /// Angle-minimizing ST mesh with face size adapted to the surface (Sec. 3), with panels
-    /// and exports.
-    StAdapted(StAdaptedParams),
-    /// ST mesh with support structure (Sec. 4), with panels and exports.
-    StSupport(StSupportParams),
-    /// SQ mesh with support structure (Sec. 5): the congruence and its torsal field (5.1), the
-    /// quad mesh, the final sphere optimization, panels and support structure (5.2), as far as
-    /// its `until` asks, with its files.
-    Sq(SqParams),
+    /// A method, with its panels and files.
+    Method(Box<MethodRequest>),
 }
 
 impl StageRequest {
-    /// The stage's name on the wire.
-    pub fn name(&self) -> StageId {
-        match self {
-            StageRequest::Curvature(_) => curvature::STAGE,
-            StageRequest::StAdapted(_) => st_adapted::STAGE,
-            StageRequest::StSupport(_) => st_support::STAGE,
-            StageRequest::Sq(_) => sq::STAGE,
-        }
+    /// A method's request with the default fabrication settings and jet fit.
+    pub fn method<M: OnWire>(params: M::Params) -> StageRequest {
+        StageRequest::Method(Box::new(Request::new(M::wrap_params(params))))
     }
 
-    /// The method's fabrication settings and whether it optimizes for its moulds (None: the
-    /// curvature, which has no panels).
-    fn fabrication_mut(&mut self) -> Option<(&mut Fabrication, bool)> {
+    /// A method's request with `fabrication` (the curvature has none).
+    pub fn with_fabrication(self, fabrication: Fabrication) -> StageRequest {
         match self {
-            StageRequest::Curvature(_) => None,
-            StageRequest::StAdapted(p) => Some((&mut p.fabrication, p.optimize_moulds)),
-            StageRequest::StSupport(p) => Some((&mut p.fabrication, p.optimize_moulds)),
-            StageRequest::Sq(p) => Some((&mut p.fabrication, p.optimize_moulds)),
+            StageRequest::Method(r) => StageRequest::Method(Box::new(Request { fabrication, ..*r })),
+            curvature => curvature,
         }
     }
 
     /// Whether `self` asks for the very result `earlier` made, with other moulds at most (a new
-    /// δ, K or unit): then that result is exported again, not computed again. A method that
-    /// optimizes for its moulds makes a result that depends on them.
+    /// δ, K or unit): then that result is exported again, not computed again.
     pub fn same_result_as(&self, earlier: &StageRequest) -> bool {
-        let (mut a, mut b) = (self.clone(), earlier.clone());
-        match (a.fabrication_mut(), b.fabrication_mut()) {
-            (Some((fa, false)), Some((fb, false))) => *fa = *fb,
-            _ => return false,
+        struct Same<'a>(&'a MethodRequest, &'a MethodRequest);
+        impl MethodVisitor for Same<'_> {
+            type Output = bool;
+            fn visit<M: OnWire>(self) -> bool {
+                match (self.0.for_method::<M>(), self.1.for_method::<M>()) {
+                    (Some(a), Some(b)) => same_result::<M>(&a, &b),
+                    _ => false,
+                }
+            }
         }
-        a == b
+        match (self, earlier) {
+            (StageRequest::Method(a), StageRequest::Method(b)) => a.method().visit(Same(a, b)),
+            _ => false,
+        }
     }
+
+    /// The stage's name on the wire.
+    pub fn name(&self) -> StageId {
+        match self {
+            StageRequest::Curvature(_) => StageId::Curvature,
+            StageRequest::Method(r) => StageId::of(r.method()),
+        }
+    }
+}
+
+/// The summary a finished stage returns (bulk data arrives as snapshot fields).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum StageResult {
+    Curvature(CurvatureSummary),
+    Method(MethodSummary),
 }
 
 impl StageResult {
     /// The method's report (None: the curvature).
-    pub fn report_mut(&mut self) -> Option<&mut Report> {
+    pub fn report(&self) -> Option<&Report> {
         match self {
             StageResult::Curvature(_) => None,
-            StageResult::StAdapted(s) => Some(&mut s.report),
-            StageResult::StSupport(s) => Some(&mut s.report),
-            StageResult::Sq(s) => Some(&mut s.report),
+            StageResult::Method(s) => Some(s.report()),
         }
     }
 }
@@ -139,22 +373,30 @@ pub struct ReferenceInfo {
     pub units: Option<crate::units::Units>,
 }
 
+/// What an object of a Rhino file is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObjectKind {
+    /// A NURBS surface (read as a B-spline reference).
+    Surface,
+    Mesh,
+}
+
+impl fmt::Display for ObjectKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ObjectKind::Surface => "surface",
+            ObjectKind::Mesh => "mesh",
+        })
+    }
+}
+
 /// One object of a file holding several (a Rhino .3dm: a NURBS surface or a mesh).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FileObject {
     pub name: String,
-    /// "surface" or "mesh".
-    pub kind: String,
+    pub kind: ObjectKind,
     pub summary: String,
-}
-
-/// The summary a finished stage returns (bulk data arrives as snapshot fields).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum StageResult {
-    Curvature(CurvatureSummary),
-    StAdapted(Box<st_adapted::StAdaptedSummary>),
-    StSupport(Box<st_support::StSupportSummary>),
-    Sq(Box<sq::SqSummary>),
 }
 
 /// Worker to main thread.
@@ -277,7 +519,7 @@ mod tests {
     fn files_round_trip() {
         let fields = vec![Field::bytes("panels.glb", b"glTF\x02\x00\x00\x00abc".to_vec()), Field::bytes("panels.csv", b"id\n".to_vec())];
         let msg = FromWorker::Files {
-            stage: StageId::StSupport,
+            stage: StageId::of(MethodId::StSupport),
             fields: fields.iter().map(Field::header).collect(),
             mime: vec!["model/gltf-binary".into(), "text/csv".into()],
         };
@@ -289,9 +531,26 @@ mod tests {
     #[test]
     fn truncated_body_is_rejected() {
         let fields = vec![Field::f32("x", 1, vec![1.0, 2.0])];
-        let msg = FromWorker::Snapshot { stage: StageId::Sq, iteration: 0, fields: fields.iter().map(Field::header).collect() };
+        let msg = FromWorker::Snapshot {
+            stage: StageId::Method(MethodId::Sq, Part::Refused),
+            iteration: 0,
+            fields: fields.iter().map(Field::header).collect(),
+        };
         let mut env = encode_from_worker(&msg, &fields);
         env.bodies[0].pop();
         assert!(decode_from_worker(&env).is_err());
+    }
+
+    #[test]
+    fn every_stage_reads_back_from_its_key() {
+        let methods = MethodId::ALL.iter().flat_map(|&m| Part::ALL.map(|p| StageId::Method(m, p)));
+        for stage in [StageId::Import, StageId::Reference, StageId::Curvature].into_iter().chain(methods) {
+            assert_eq!(StageId::from_key(&stage.key()), Some(stage));
+            let json = serde_json::to_string(&stage).unwrap();
+            assert_eq!(serde_json::from_str::<StageId>(&json).unwrap(), stage, "{json}");
+        }
+        assert_eq!(StageId::of(MethodId::StSupport).key(), "st-support");
+        assert_eq!(StageId::Method(MethodId::StAdapted, Part::Sizing).key(), "st.sizing");
+        assert!(serde_json::from_str::<StageId>("\"st.bogus\"").is_err());
     }
 }

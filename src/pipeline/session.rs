@@ -1,11 +1,15 @@
 //! The worker's state: at most one loaded reference, which survives failed loads and stages.
 //! The worker (wasm), the tests and the CLI drive the same [`Session`] through an [`Outbox`].
 
-use super::fields::{Field, StageId, StageProgress};
+use super::fields::{Field, Part, StepProgress};
+use super::method::{reexport, run, same_result, Computed, Method, Request};
 use super::panel_output::mesh_fields;
-use super::protocol::{FileObject, FromWorker, ReferenceInfo, Source, StageRequest, StageResult, ToWorker};
+use super::protocol::{
+    FileObject, FromWorker, MethodRequest, MethodSummary, MethodVisitor, ObjectKind, OnWire, ReferenceInfo, Source, StageId, StageProgress,
+    StageRequest, StageResult, ToWorker,
+};
 use super::sink::Sink;
-use super::stages::{curvature, sq, st_adapted, st_support, StageError};
+use super::stages::{curvature, StageError};
 use crate::export::ExportFile;
 use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::mesh::topology::Topology;
@@ -14,9 +18,6 @@ use crate::progress::Clock;
 use crate::reference::bspline::SplineReferenceError;
 use crate::reference::Reference;
 use crate::samples::Sample;
-use crate::sq::SqResult;
-use crate::st_adapted::StAdaptedResult;
-use crate::st_support::StSupportResult;
 use crate::units::Units;
 
 /// Where the session's messages go (the worker posts them to the main thread), and how it
@@ -117,22 +118,52 @@ pub struct Session {
     /// Times the stages (none by default: timings read 0).
     pub clock: Clock,
     /// The last method's result on the loaded reference, for new moulds without a new run.
-    last: Option<LastMethod>,
+    last: Option<Box<dyn Kept>>,
 }
 
-/// A method's result as the session keeps it: its request, its summary, and the result itself.
-struct LastMethod {
-    request: StageRequest,
-    summary: StageResult,
-    result: Computed,
+/// A method's result as the session keeps it: its request, its summary and the result, behind
+/// the one method seam.
+trait Kept {
+    /// Whether `request` asks for this very result with other moulds at most.
+    fn same_result(&self, request: &MethodRequest) -> bool;
+    /// Exports the result again for `request` (other moulds); returns the new summary.
+    fn reexport(&mut self, reference: &Reference, request: &MethodRequest, clock: Clock, sink: &mut dyn Sink) -> MethodSummary;
 }
 
-/// The result of one of the methods.
-enum Computed {
-    StAdapted(Box<StAdaptedResult>),
-    StSupport(Box<StSupportResult>),
-    /// With the iteration of its final snapshot.
-    Sq(Box<SqResult>, u32),
+struct KeptResult<M: Method> {
+    request: Request<M::Params>,
+    summary: M::Summary,
+    computed: Computed<M::Result>,
+}
+
+impl<M: OnWire> Kept for KeptResult<M> {
+    fn same_result(&self, request: &MethodRequest) -> bool {
+        request.for_method::<M>().is_some_and(|r| same_result::<M>(&r, &self.request))
+    }
+
+    fn reexport(&mut self, reference: &Reference, request: &MethodRequest, clock: Clock, sink: &mut dyn Sink) -> MethodSummary {
+        self.request = request.for_method::<M>().expect("same_result compares requests of one method");
+        *M::report_mut(&mut self.summary) = reexport::<M>(reference, &self.computed, &self.request, clock, sink);
+        M::wrap_summary(self.summary.clone())
+    }
+}
+
+/// Runs the method a request names and keeps its result.
+struct RunMethod<'a> {
+    reference: &'a Reference,
+    request: &'a MethodRequest,
+    clock: Clock,
+    sink: &'a mut dyn Sink,
+}
+
+impl MethodVisitor for RunMethod<'_> {
+    type Output = Result<(MethodSummary, Box<dyn Kept>), StageError>;
+
+    fn visit<M: OnWire>(self) -> Self::Output {
+        let request = self.request.for_method::<M>().expect("the request's own method");
+        let (summary, computed) = run::<M>(self.reference, &request, self.clock, self.sink)?;
+        Ok((M::wrap_summary(summary.clone()), Box::new(KeptResult::<M> { request, summary, computed })))
+    }
 }
 
 /// A file of several objects and their texts.
@@ -144,31 +175,44 @@ struct FileObjects {
     units: Option<Units>,
 }
 
-/// A stage's [`Sink`] over the session's [`Outbox`].
-struct Messages<'a>(&'a mut dyn Outbox);
+/// A stage's [`Sink`] over the session's [`Outbox`]: names the stage in every message.
+struct Messages<'a> {
+    out: &'a mut dyn Outbox,
+    stage: StageId,
+}
+
+impl Messages<'_> {
+    /// The stage of a part of this stage's stream.
+    fn part(&self, part: Part) -> StageId {
+        match self.stage {
+            StageId::Method(m, _) => StageId::Method(m, part),
+            stage => stage,
+        }
+    }
+}
 
 impl Sink for Messages<'_> {
-    fn progress(&mut self, progress: StageProgress) {
-        self.0.send(FromWorker::Progress(progress), Vec::new());
+    fn progress(&mut self, progress: StepProgress) {
+        self.out.send(FromWorker::Progress(StageProgress::of(self.stage, progress)), Vec::new());
     }
 
-    fn snapshot(&mut self, stage: StageId, iteration: u32, fields: Vec<Field>) {
-        self.0.send(snapshot(stage, iteration, &fields), fields);
+    fn snapshot(&mut self, part: Part, iteration: u32, fields: Vec<Field>) {
+        self.out.send(snapshot(self.part(part), iteration, &fields), fields);
     }
 
-    fn files(&mut self, stage: StageId, files: Vec<ExportFile>) {
+    fn files(&mut self, files: Vec<ExportFile>) {
         let mime = files.iter().map(|f| f.mime.clone()).collect();
         let fields: Vec<Field> = files.into_iter().map(|f| Field::bytes(&f.name, f.bytes)).collect();
         let headers = fields.iter().map(Field::header).collect();
-        self.0.send(FromWorker::Files { stage, fields: headers, mime }, fields);
+        self.out.send(FromWorker::Files { stage: self.stage, fields: headers, mime }, fields);
     }
 
     fn cancel_requested(&mut self) -> bool {
-        self.0.cancel_requested()
+        self.out.cancel_requested()
     }
 
     fn now_ms(&self) -> f64 {
-        self.0.now_ms()
+        self.out.now_ms()
     }
 }
 
@@ -220,7 +264,7 @@ impl Session {
             out.send(FromWorker::Error { message: format!("{file}: no NURBS surface or mesh in it"), remesh_to: None }, vec![]);
             return;
         }
-        let first = objects.iter().position(|o| o.kind == "surface").unwrap_or(0);
+        let first = objects.iter().position(|o| o.kind == ObjectKind::Surface).unwrap_or(0);
         self.objects = Some(FileObjects { file, objects, texts, notes, units });
         self.load_object(first, out);
     }
@@ -264,40 +308,25 @@ impl Session {
         let reference = &loaded.surface;
         let start = out.now_ms();
         let clock = self.clock;
-        let mut sink = Messages(&mut *out);
-        // New moulds for the last result: exported again, in milliseconds.
-        if let Some(last) = self.last.as_mut().filter(|l| stage.same_result_as(&l.request)) {
-            let report = match (&last.result, &stage) {
-                (Computed::StAdapted(r), StageRequest::StAdapted(p)) => st_adapted::reexport(reference, r, p, clock, &mut sink),
-                (Computed::StSupport(r), StageRequest::StSupport(p)) => st_support::reexport(reference, r, p, clock, &mut sink),
-                (Computed::Sq(r, iteration), StageRequest::Sq(p)) => sq::reexport(reference, r, p, clock, &mut sink, *iteration),
-                _ => unreachable!("same_result_as compares requests of one method"),
-            };
-            if let Some(r) = last.summary.report_mut() {
-                *r = report;
-            }
-            last.request = stage;
-            let elapsed_ms = out.now_ms() - start;
-            out.send(FromWorker::Finished { stage: name, result: last.summary.clone(), elapsed_ms }, vec![]);
-            return;
-        }
+        let mut sink = Messages { out: &mut *out, stage: name };
         let result = match &stage {
-            StageRequest::Curvature(p) => curvature::run(reference, p, &mut sink).map(|s| (StageResult::Curvature(s), None)),
-            StageRequest::StAdapted(p) => st_adapted::run(reference, p, clock, &mut sink)
-                .map(|(s, r)| (StageResult::StAdapted(Box::new(s)), Some(Computed::StAdapted(Box::new(r))))),
-            StageRequest::StSupport(p) => st_support::run(reference, p, clock, &mut sink)
-                .map(|(s, r)| (StageResult::StSupport(Box::new(s)), Some(Computed::StSupport(Box::new(r))))),
-            StageRequest::Sq(p) => {
-                sq::run(reference, p, clock, &mut sink).map(|(s, r, i)| (StageResult::Sq(Box::new(s)), Some(Computed::Sq(Box::new(r), i))))
+            StageRequest::Curvature(p) => curvature::run(reference, p, &mut sink).map(StageResult::Curvature),
+            // New moulds for the last result: exported again, in milliseconds.
+            StageRequest::Method(request) if self.last.as_ref().is_some_and(|l| l.same_result(request)) => {
+                let last = self.last.as_mut().expect("checked above");
+                Ok(StageResult::Method(last.reexport(reference, request, clock, &mut sink)))
+            }
+            StageRequest::Method(request) => {
+                request.method().visit(RunMethod { reference, request, clock, sink: &mut sink }).map(|(summary, kept)| {
+                    self.last = Some(kept);
+                    StageResult::Method(summary)
+                })
             }
         };
         match result {
-            Ok((summary, computed)) => {
-                if let Some(result) = computed {
-                    self.last = Some(LastMethod { request: stage.clone(), summary: summary.clone(), result });
-                }
+            Ok(result) => {
                 let elapsed_ms = out.now_ms() - start;
-                out.send(FromWorker::Finished { stage: name, result: summary, elapsed_ms }, vec![]);
+                out.send(FromWorker::Finished { stage: name, result, elapsed_ms }, vec![]);
             }
             Err(StageError::Cancelled) => out.send(FromWorker::Cancelled { stage: name }, vec![]),
             Err(e) => out.send(FromWorker::Error { message: e.to_string(), remesh_to: e.remesh_to() }, vec![]),

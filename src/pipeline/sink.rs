@@ -1,29 +1,34 @@
 //! Where a stage streams what it makes: progress, snapshots of fields and files. The session
-//! turns these into worker messages; tests and the CLI can record them directly.
+//! turns these into worker messages, naming the stage; tests and the CLI can record them directly.
 
-use super::fields::{Energy, Field, StageId, StageProgress};
+use super::fields::{Energy, Field, Part, StepProgress};
 use crate::export::ExportFile;
 use crate::progress::{Cancelled, Progress};
 
 /// A stage's outlet.
 pub trait Sink {
     /// Reports progress.
-    fn progress(&mut self, progress: StageProgress);
-    /// A snapshot of the stage's geometry and per-element data.
-    fn snapshot(&mut self, stage: StageId, iteration: u32, fields: Vec<Field>);
+    fn progress(&mut self, progress: StepProgress);
+    /// A snapshot of a part of the stage's geometry and per-element data.
+    fn snapshot(&mut self, part: Part, iteration: u32, fields: Vec<Field>);
     /// Files for download.
-    fn files(&mut self, stage: StageId, files: Vec<ExportFile>);
+    fn files(&mut self, files: Vec<ExportFile>);
     /// Polled at every step boundary; true stops the stage there.
     fn cancel_requested(&mut self) -> bool;
     /// Milliseconds from an arbitrary origin.
     fn now_ms(&self) -> f64;
+    /// Whether live snapshots are wanted while the stage runs (the CLI shows none: the stages
+    /// then skip building them). The final snapshot and the files are always sent.
+    fn wants_live_snapshots(&self) -> bool {
+        true
+    }
 }
 
-/// Reports `p` as progress of `stage` (started at `start` ms, with `energies` of an iteration),
+/// Reports `p` (with `energies` of an iteration) as progress of a stage started at `start` ms,
 /// then answers whether the stage goes on.
-pub fn report(sink: &mut dyn Sink, stage: StageId, p: Progress, energies: Vec<Energy>, start: f64) -> Result<(), Cancelled> {
+pub fn report(sink: &mut dyn Sink, p: Progress, energies: Vec<Energy>, start: f64) -> Result<(), Cancelled> {
     let elapsed_ms = sink.now_ms() - start;
-    sink.progress(StageProgress { stage, detail: p.step.into(), iteration: p.done as u32, total: p.total as u32, energies, elapsed_ms });
+    sink.progress(StepProgress { detail: p.step.into(), iteration: p.done as u32, total: p.total as u32, energies, elapsed_ms });
     if sink.cancel_requested() {
         Err(Cancelled)
     } else {

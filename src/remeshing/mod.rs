@@ -22,10 +22,10 @@ pub mod seamless;
 
 use serde::{Deserialize, Serialize};
 
-use crate::geometry::mesh::TriMesh;
-
 use crate::geometry::mesh::topology::Topology;
+use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
+use crate::params::{LinkReader, LinkWriter, ParamRange};
 use crate::progress::{Cancelled, OnProgress};
 use crate::reference::assumptions::Warning;
 
@@ -39,6 +39,10 @@ pub use pliant::{
 pub const MAX_FACES: usize = 200_000;
 /// The fewest.
 pub const MIN_FACES: usize = 4;
+/// A uniform remesh's face count N.
+pub const FACES_RANGE: ParamRange<usize> = ParamRange::new("faces", MIN_FACES, MAX_FACES);
+/// The sizing field's tolerance ε, relative to the bounding-box diagonal.
+pub const EPSILON_RANGE: ParamRange<f64> = ParamRange::new("ε", 1e-7, 0.1);
 /// The face count of a uniform remesh when none is given.
 pub(crate) const DEFAULT_FACES: usize = 600;
 
@@ -113,7 +117,84 @@ pub enum Sizing {
     None,
 }
 
+/// The kind of a [`Sizing`], as links and the app name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SizingKind {
+    None,
+    Adaptive,
+    Faces,
+}
+
+impl SizingKind {
+    pub const ALL: [SizingKind; 3] = [SizingKind::Adaptive, SizingKind::Faces, SizingKind::None];
+
+    pub fn of(sizing: Sizing) -> Self {
+        match sizing {
+            Sizing::None => SizingKind::None,
+            Sizing::Adaptive { .. } => SizingKind::Adaptive,
+            Sizing::UniformFaces(_) => SizingKind::Faces,
+        }
+    }
+
+    pub fn key(self) -> &'static str {
+        match self {
+            SizingKind::None => "none",
+            SizingKind::Adaptive => "adaptive",
+            SizingKind::Faces => "faces",
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            SizingKind::None => "keep the reference triangulation",
+            SizingKind::Adaptive => "adaptive (influence zones, ε)",
+            SizingKind::Faces => "uniform, about N faces",
+        }
+    }
+
+    pub fn from_key(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.key() == s)
+    }
+
+    /// The sizing of this kind with ε and N (the one the kind uses).
+    pub fn sizing(self, epsilon: f64, faces: usize) -> Sizing {
+        match self {
+            SizingKind::None => Sizing::None,
+            SizingKind::Adaptive => Sizing::Adaptive { epsilon },
+            SizingKind::Faces => Sizing::UniformFaces(faces),
+        }
+    }
+}
+
 impl Sizing {
+    /// `&{key}=kind` and the value the kind uses (`&eps=…` or `&faces=…`).
+    pub fn write_link(self, key: &str, link: &mut LinkWriter) {
+        link.text(key, SizingKind::of(self).key());
+        match self {
+            Sizing::None => {}
+            Sizing::Adaptive { epsilon } => link.number("eps", epsilon),
+            Sizing::UniformFaces(n) => link.count("faces", n),
+        }
+    }
+
+    /// Reads what [`Self::write_link`] wrote: the kind under `key`, with ε or N where the link
+    /// has them (else the current ones, or the defaults).
+    pub fn read_link(&mut self, key: &str, link: &mut LinkReader) {
+        let kind = link.parsed(key, SizingKind::from_key);
+        let epsilon = link.number("eps", EPSILON_RANGE);
+        let faces = link.count("faces", FACES_RANGE);
+        let kind = kind.unwrap_or(SizingKind::of(*self));
+        let epsilon = epsilon.unwrap_or(match *self {
+            Sizing::Adaptive { epsilon } => epsilon,
+            _ => DEFAULT_EPSILON,
+        });
+        let faces = faces.unwrap_or(match *self {
+            Sizing::UniformFaces(n) => n,
+            _ => DEFAULT_FACES,
+        });
+        *self = kind.sizing(epsilon, faces);
+    }
+
     /// The size guard: the faces the method will work on (the mesh's own, N, or what the
     /// adaptive `field` asks for) must not exceed `limit`.
     pub fn check_size(&self, mesh: &TriMesh, field: Option<&SizingField>, limit: usize) -> Result<(), TooManyFaces> {

@@ -3,8 +3,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::panels::buildability::{check_max_distance, DEFAULT_MAX_DISTANCE};
+use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
+use crate::panels::buildability::{read_max_distance, write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
 use crate::panels::moulds::Fabrication;
+use crate::panels::RADIUS_TOLERANCE_RANGE;
+use crate::params::{LinkFields, LinkReader, LinkWriter, ParamRange};
 
 /// How an inequality (∠(l, n) ≤ θ, torsal planes meeting at ≥ α) enters the energy. Measured on
 /// `tunnel_arch` and the vault (θ 20°, α 75°): with slacks, step 1 stalls at E_LC ≈ 4e-5 per term
@@ -300,14 +303,21 @@ impl SqParams {
         THETA_RANGE.check(self.theta_deg)?;
         ALPHA_RANGE.check(self.alpha_deg)?;
         FACES_RANGE.check(self.faces)?;
-        if !(self.support_depth > 0.0 && self.support_depth < 1.0) {
-            return Err(ParamError::SupportDepth(self.support_depth));
-        }
+        SUPPORT_DEPTH_RANGE.check(self.support_depth)?;
+        AXIS_LENGTH_RANGE.check(self.axis_length)?;
+        RADIUS_TOLERANCE_RANGE.check(self.radius_tolerance)?;
         RECOMPUTE_RANGE.check(self.recompute_every)?;
-        check_max_distance(self.max_distance).map_err(ParamError::MaxDistance)?;
+        MAX_DISTANCE_RANGE.check(self.max_distance)?;
         let b = self.radius_basis;
-        if !(1..=15).contains(&b.degree) || b.controls <= b.degree || b.controls > 40 {
+        if !RADIUS_DEGREE_RANGE.contains(b.degree) || b.controls <= b.degree || !RADIUS_CONTROLS_RANGE.contains(b.controls) {
             return Err(ParamError::RadiusBasis { degree: b.degree, controls: b.controls });
+        }
+        let mut p = self.clone();
+        for (key, field, range) in LINK_NUMBERS {
+            range.check(*field(&mut p)).map_err(|e| ParamError::OutOfRange(crate::params::ParamError { name: key, ..e }))?;
+        }
+        for (key, field, range) in LINK_COUNTS {
+            range.check(*field(&mut p)).map_err(|e| ParamError::OutOfRange(crate::params::ParamError { name: key, ..e }))?;
         }
         Ok(())
     }
@@ -323,68 +333,27 @@ impl SqParams {
     }
 }
 
-/// An inclusive range a parameter must lie in, with its name: the one check of that parameter,
-/// which the method, the CLI, the design link and the app's sliders all read.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ParamRange<T> {
-    pub name: &'static str,
-    pub lo: T,
-    pub hi: T,
-}
-
-impl<T: Copy> ParamRange<T> {
-    pub const fn new(name: &'static str, lo: T, hi: T) -> Self {
-        Self { name, lo, hi }
-    }
-}
-
-impl<T: PartialOrd + Copy + std::fmt::Display> ParamRange<T> {
-    pub fn contains(&self, x: T) -> bool {
-        self.lo <= x && x <= self.hi
-    }
-
-    /// `x`, or why it is outside.
-    pub fn check(&self, x: T) -> Result<T, ParamError> {
-        if self.contains(x) {
-            Ok(x)
-        } else {
-            Err(ParamError::OutOfRange { name: self.name, value: x.to_string(), lo: self.lo.to_string(), hi: self.hi.to_string() })
-        }
-    }
-
-    pub fn range(&self) -> std::ops::RangeInclusive<T> {
-        self.lo..=self.hi
-    }
-}
-
 /// Why [`SqParams::check`] refuses the parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ParamError {
-    OutOfRange {
-        name: &'static str,
-        value: String,
-        lo: String,
-        hi: String,
-    },
-    /// The support depth, relative to the diagonal, is not in (0, 1).
-    SupportDepth(f64),
-    /// The distance bound is out of its range (the message says which).
-    MaxDistance(String),
-    RadiusBasis {
-        degree: usize,
-        controls: usize,
-    },
+    OutOfRange(crate::params::ParamError),
+    RadiusBasis { degree: usize, controls: usize },
+}
+
+impl From<crate::params::ParamError> for ParamError {
+    fn from(e: crate::params::ParamError) -> Self {
+        ParamError::OutOfRange(e)
+    }
 }
 
 impl std::fmt::Display for ParamError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ParamError::OutOfRange { name, value, lo, hi } => write!(f, "{name} {value} is outside [{lo}, {hi}]"),
-            ParamError::SupportDepth(d) => write!(f, "support depth {d} is outside (0, 1) of the diagonal"),
-            ParamError::MaxDistance(why) => f.write_str(why),
+            ParamError::OutOfRange(e) => e.fmt(f),
             ParamError::RadiusBasis { degree, controls } => write!(
                 f,
-                "radius basis: degree {degree} with {controls} coefficients per direction (degree 1..=15, more coefficients than the degree, at most 40)"
+                "radius basis: degree {degree} with {controls} coefficients per direction (degree {}..={}, more coefficients than the degree, at most {})",
+                RADIUS_DEGREE_RANGE.lo, RADIUS_DEGREE_RANGE.hi, RADIUS_CONTROLS_RANGE.hi
             ),
         }
     }
@@ -401,7 +370,130 @@ pub const RECOMPUTE_RANGE: ParamRange<usize> = ParamRange::new("RS", 1, 1000);
 /// on the degree-10 `hard/roof_rough`: 2964 quads, exact, 61 s and 0.55 GB (the sparse
 /// factorization of the final optimization is 80 % of it and grows as N^1.8); with --faces 5000
 /// `tunnel_arch` took 23 s and 0.52 GB, `paraboloid_dome` 77 s and 0.72 GB.
-pub const FACES_RANGE: ParamRange<usize> = ParamRange::new("faces", 4, 3_000);
+pub const FACES_RANGE: ParamRange<usize> =
+    ParamRange::new("faces", 4, 3_000).bounded_by("more quads than SQ finishes within a minute and 1 GB natively");
+/// The radius function's degree and coefficients per direction (Eq. 8).
+pub const RADIUS_DEGREE_RANGE: ParamRange<usize> = ParamRange::new("radius degree", 1, 15);
+pub const RADIUS_CONTROLS_RANGE: ParamRange<usize> = ParamRange::new("radius coefficients", 2, 40);
+/// Iterations of a step, and a term's weight.
+pub const ITERATIONS_RANGE: ParamRange<usize> = ParamRange::new("iterations", 0, 10_000);
+pub const WEIGHT_RANGE: ParamRange<f64> = ParamRange::new("weight", 0.0, 1e6);
+
+/// A parameter of the link's advanced fields, by its key.
+type LinkNumber = (&'static str, fn(&mut SqParams) -> &mut f64, ParamRange<f64>);
+type LinkCount = (&'static str, fn(&mut SqParams) -> &mut usize, ParamRange<usize>);
+
+/// `[(key, accessor, range)]` of fields of [`SqParams`] of type `$ty`.
+macro_rules! link_fields {
+    ($ty:ty; $($key:literal => ($($path:tt)+), $range:expr;)*) => {
+        [$(($key, {
+            fn get(p: &mut SqParams) -> &mut $ty {
+                &mut p.$($path)+
+            }
+            get as fn(&mut SqParams) -> &mut $ty
+        }, $range)),*]
+    };
+}
+
+/// The design link's numbers beyond the main ones, written when not their defaults.
+const LINK_NUMBERS: [LinkNumber; 17] = link_fields!(f64;
+    "depth" => (support_depth), SUPPORT_DEPTH_RANGE;
+    "axis" => (axis_length), AXIS_LENGTH_RANGE;
+    "rtol" => (radius_tolerance), RADIUS_TOLERANCE_RANGE;
+    "w_lc1" => (lc_weights.lc), WEIGHT_RANGE;
+    "w_orth1" => (lc_weights.lc_orth), WEIGHT_RANGE;
+    "w_lc2" => (torsal_weights.lc), WEIGHT_RANGE;
+    "w_orth2" => (torsal_weights.lc_orth), WEIGHT_RANGE;
+    "w_torsal" => (torsal_weights.torsal), WEIGHT_RANGE;
+    "w_angle" => (torsal_weights.angle), WEIGHT_RANGE;
+    "w_fair2" => (torsal_weights.fair), WEIGHT_RANGE;
+    "w_reg" => (torsal_weights.reg), WEIGHT_RANGE;
+    "w_sphere" => (sphere_weights.sphere), WEIGHT_RANGE;
+    "w_supp" => (sphere_weights.supp), WEIGHT_RANGE;
+    "w_tplane" => (sphere_weights.torsal_plane), WEIGHT_RANGE;
+    "w_prox_f" => (sphere_weights.prox_f), WEIGHT_RANGE;
+    "w_prox_c" => (sphere_weights.prox_c), WEIGHT_RANGE;
+    "w_fair3" => (sphere_weights.fair), WEIGHT_RANGE;
+);
+
+/// The design link's counts beyond the main ones, written when not their defaults (the radius
+/// basis is read and checked whole, in [`SqParams::check`]).
+const LINK_COUNTS: [LinkCount; 6] = link_fields!(usize;
+    "lc_it" => (lc_iterations), ITERATIONS_RANGE;
+    "tor_it" => (torsal_iterations), ITERATIONS_RANGE;
+    "last_it" => (final_iterations), ITERATIONS_RANGE;
+    "final_it" => (sphere_iterations[1]), ITERATIONS_RANGE;
+    "r_deg" => (radius_basis.degree), RADIUS_DEGREE_RANGE;
+    "r_coef" => (radius_basis.controls), RADIUS_CONTROLS_RANGE;
+);
+
+impl LinkFields for SqParams {
+    fn write_link(&self, link: &mut LinkWriter) {
+        link.number("theta", self.theta_deg);
+        link.number("alpha", self.alpha_deg);
+        link.count("grid", self.grid);
+        link.count("rs", self.recompute_every);
+        link.count("faces", self.faces);
+        link.text("until", self.until.key());
+        // The starting congruence only when not the default, so older links stay as they were.
+        if self.start != RadiusStart::Auto {
+            link.text("start", self.start.key());
+        }
+        if self.optimize_moulds {
+            link.flag("opt_moulds", true);
+        }
+        write_max_distance(link, self.max_distance);
+        let (mut p, mut d) = (self.clone(), SqParams::default());
+        for (key, field, _) in LINK_NUMBERS {
+            if *field(&mut p) != *field(&mut d) {
+                link.number(key, *field(&mut p));
+            }
+        }
+        for (key, field, _) in LINK_COUNTS {
+            if *field(&mut p) != *field(&mut d) {
+                link.count(key, *field(&mut p));
+            }
+        }
+    }
+
+    fn read_link(&mut self, link: &mut LinkReader) {
+        if let Some(x) = link.number("theta", THETA_RANGE) {
+            self.theta_deg = x;
+        }
+        if let Some(x) = link.number("alpha", ALPHA_RANGE) {
+            self.alpha_deg = x;
+        }
+        if let Some(x) = link.count("grid", GRID_RANGE) {
+            self.grid = x;
+        }
+        if let Some(x) = link.count("rs", RECOMPUTE_RANGE) {
+            self.recompute_every = x;
+        }
+        if let Some(x) = link.count("faces", FACES_RANGE) {
+            self.faces = x;
+        }
+        if let Some(x) = link.parsed("until", Until::from_key) {
+            self.until = x;
+        }
+        if let Some(x) = link.parsed("start", RadiusStart::from_key) {
+            self.start = x;
+        }
+        if let Some(x) = link.flag("opt_moulds") {
+            self.optimize_moulds = x;
+        }
+        read_max_distance(link, &mut self.max_distance);
+        for (key, field, range) in LINK_NUMBERS {
+            if let Some(x) = link.number(key, range) {
+                *field(self) = x;
+            }
+        }
+        for (key, field, range) in LINK_COUNTS {
+            if let Some(x) = link.count(key, range) {
+                *field(self) = x;
+            }
+        }
+    }
+}
 
 /// How far below the bound of a singular vertex its support planes may meet (degrees).
 pub(crate) const SINGULAR_MARGIN_DEG: f64 = 1.0;

@@ -113,6 +113,8 @@ pub enum StAdaptedError {
     Remesh(RemeshRefused),
     /// More faces than the method handles.
     TooManyFaces(TooManyFaces),
+    /// A parameter outside its range.
+    Parameter(crate::params::ParamError),
 }
 
 impl fmt::Display for StAdaptedError {
@@ -128,6 +130,7 @@ impl fmt::Display for StAdaptedError {
             StAdaptedError::NoFaces => f.write_str("remeshing produced no faces"),
             StAdaptedError::Remesh(e) => e.fmt(f),
             StAdaptedError::TooManyFaces(e) => e.fmt(f),
+            StAdaptedError::Parameter(e) => e.fmt(f),
         }
     }
 }
@@ -163,6 +166,8 @@ pub struct StAdaptedResult {
     pub panel_deviations: Vec<f64>,
     pub initial_sphere_mesh: SphereMesh,
     pub remeshed: TriMesh,
+    /// min / max of the sizing field g (absolute), when the reference was remeshed to it.
+    pub sizing_range: Option<(f64, f64)>,
     /// The initial sphere mesh's shape (it gets no panels).
     pub initial_shape: StAdaptedShape,
     pub metrics: StAdaptedMetrics,
@@ -200,6 +205,7 @@ fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {
 /// The angle-minimizing ST method end to end (see the module docs): the curvature and its
 /// refusal, sizing and remeshing, the initial spheres, the optimization, the metrics.
 pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on_event: &mut OnEvent) -> Result<StAdaptedResult, StAdaptedError> {
+    params.check().map_err(StAdaptedError::Parameter)?;
     reference.validate().map_err(StAdaptedError::Reference)?;
     let mut timings = Timings::start(clock);
     step(on_event, "jet_fit")?;
@@ -209,7 +215,8 @@ pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on
         .usable_central_spheres(reference.mesh().vertex_count(), reference.diagonal(), params.min_curvature_ratio, params.min_usable_fraction)
         .map_err(StAdaptedError::NoCentralSpheres)?;
     timings.lap("jet_fit");
-    let (remeshed, remeshed_by_sizing) = remesh(reference, &field, params, &mut timings, on_event)?;
+    let (remeshed, sizing_range) = remesh(reference, &field, params, &mut timings, on_event)?;
+    let remeshed_by_sizing = sizing_range.is_some();
     step(on_event, "init")?;
     timings.skip();
     // The remesh's own central spheres, as ST with support structure takes them: jets on the
@@ -267,6 +274,7 @@ pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on
         panel_deviations,
         initial_sphere_mesh,
         remeshed,
+        sizing_range,
         initial_shape,
         metrics: final_metrics,
         iterations: optimized.iterations,
@@ -286,14 +294,14 @@ pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on
 }
 
 /// The sizing field g and the pliant remesh to it (Sec. 3) behind the shared guards; the mesh
-/// as is without a sizing. Whether it was remeshed.
+/// as is without a sizing. The range of g when it was remeshed to it.
 fn remesh(
     reference: &Reference,
     field: &CurvatureField,
     params: &StAdaptedParams,
     timings: &mut Timings,
     on_event: &mut OnEvent,
-) -> Result<(TriMesh, bool), StAdaptedError> {
+) -> Result<(TriMesh, Option<(f64, f64)>), StAdaptedError> {
     step(on_event, "remesh")?;
     timings.skip();
     let (mesh, topo) = (reference.mesh(), reference.topology());
@@ -312,7 +320,8 @@ fn remesh(
     };
     timings.lap("remesh");
     on_event(StAdaptedEvent::Remeshed { mesh: &remeshed })?;
-    Ok((remeshed, sizing.is_some()))
+    let range = sizing.map(|g| g.values().iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &g| (lo.min(g), hi.max(g))));
+    Ok((remeshed, range))
 }
 
 /// What the optimization made.

@@ -7,7 +7,9 @@ use crate::congruence::central_spheres::JetParams;
 use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::moulds::Fabrication;
-use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
+use crate::panels::RADIUS_TOLERANCE_RANGE;
+use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
+use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON, EPSILON_RANGE, FACES_RANGE};
 
 /// Term weights (frame scaled to diagonal 1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -155,6 +157,45 @@ impl Default for StAdaptedParams {
             radius_tolerance: 1e-3,
             fabrication: Fabrication::default(),
             optimize_moulds: false,
+        }
+    }
+}
+
+impl StAdaptedParams {
+    /// Every parameter a design sets, against its range.
+    pub fn check(&self) -> Result<(), ParamError> {
+        match self.sizing {
+            Sizing::Adaptive { epsilon } => EPSILON_RANGE.check(epsilon).map(|_| ())?,
+            Sizing::UniformFaces(n) => FACES_RANGE.check(n).map(|_| ())?,
+            Sizing::None => {}
+        }
+        RADIUS_TOLERANCE_RANGE.check(self.radius_tolerance)?;
+        Ok(())
+    }
+}
+
+impl LinkFields for StAdaptedParams {
+    fn write_link(&self, link: &mut LinkWriter) {
+        self.sizing.write_link("sizing", link);
+        link.text("variant", self.variant.key());
+        if self.optimize_moulds {
+            link.flag("opt_moulds", true);
+        }
+        if self.radius_tolerance != Self::default().radius_tolerance {
+            link.number("rtol", self.radius_tolerance);
+        }
+    }
+
+    fn read_link(&mut self, link: &mut LinkReader) {
+        self.sizing.read_link("sizing", link);
+        if let Some(v) = link.parsed("variant", EdgeArcs::from_key) {
+            self.variant = v;
+        }
+        if let Some(x) = link.flag("opt_moulds") {
+            self.optimize_moulds = x;
+        }
+        if let Some(x) = link.number("rtol", RADIUS_TOLERANCE_RANGE) {
+            self.radius_tolerance = x;
         }
     }
 }

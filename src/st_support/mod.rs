@@ -87,6 +87,8 @@ pub enum StSupportError {
     Remesh(RemeshRefused),
     /// More faces than the method handles.
     TooManyFaces(TooManyFaces),
+    /// A parameter outside its range.
+    Parameter(crate::params::ParamError),
 }
 
 impl fmt::Display for StSupportError {
@@ -98,6 +100,7 @@ impl fmt::Display for StSupportError {
             StSupportError::NoFaces => f.write_str("remeshing produced no faces"),
             StSupportError::Remesh(e) => e.fmt(f),
             StSupportError::TooManyFaces(e) => e.fmt(f),
+            StSupportError::Parameter(e) => e.fmt(f),
         }
     }
 }
@@ -190,6 +193,7 @@ fn remeshed_reference(
 /// The method on `reference` (see the module documentation): optionally remeshed first, then the
 /// steps on the working mesh, and the warnings of the reference and the result.
 pub fn compute(reference: &Reference, params: &StSupportParams, clock: Clock, progress: &mut OnProgress) -> Result<StSupportResult, StSupportError> {
+    params.check().map_err(StSupportError::Parameter)?;
     reference.validate().map_err(StSupportError::Reference)?;
     let field = reference.curvature(&params.jet, progress)?;
     let mut timings = Timings::start(clock);

@@ -5,9 +5,12 @@ use serde::{Deserialize, Serialize};
 
 use super::absolute_sphere::AbsoluteSphereParams;
 use crate::congruence::central_spheres::JetParams;
-use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
+use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
+use crate::panels::buildability::{read_max_distance, write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
 use crate::panels::moulds::Fabrication;
-use crate::remeshing::Sizing;
+use crate::panels::RADIUS_TOLERANCE_RANGE;
+use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
+use crate::remeshing::{Sizing, EPSILON_RANGE, FACES_RANGE};
 
 /// Neighbours of a local sphere orthogonal to Ω (remeshing with `Sizing::Adaptive`).
 pub const LOCAL_SPHERE_POINTS: usize = 16;
@@ -54,5 +57,55 @@ impl Default for StSupportParams {
             optimize_moulds: false,
             max_distance: DEFAULT_MAX_DISTANCE,
         }
+    }
+}
+
+impl StSupportParams {
+    /// Every parameter a design sets, against its range.
+    pub fn check(&self) -> Result<(), ParamError> {
+        match self.remesh {
+            Sizing::Adaptive { epsilon } => EPSILON_RANGE.check(epsilon).map(|_| ())?,
+            Sizing::UniformFaces(n) => FACES_RANGE.check(n).map(|_| ())?,
+            Sizing::None => {}
+        }
+        SUPPORT_DEPTH_RANGE.check(self.support_depth)?;
+        AXIS_LENGTH_RANGE.check(self.axis_length)?;
+        RADIUS_TOLERANCE_RANGE.check(self.radius_tolerance)?;
+        MAX_DISTANCE_RANGE.check(self.max_distance)?;
+        Ok(())
+    }
+}
+
+impl LinkFields for StSupportParams {
+    fn write_link(&self, link: &mut LinkWriter) {
+        link.flag("opt_r", self.optimize_radius);
+        link.number("depth", self.support_depth);
+        link.number("axis", self.axis_length);
+        link.number("rtol", self.radius_tolerance);
+        self.remesh.write_link("remesh", link);
+        if self.optimize_moulds {
+            link.flag("opt_moulds", true);
+        }
+        write_max_distance(link, self.max_distance);
+    }
+
+    fn read_link(&mut self, link: &mut LinkReader) {
+        if let Some(x) = link.flag("opt_r") {
+            self.optimize_radius = x;
+        }
+        if let Some(x) = link.number("depth", SUPPORT_DEPTH_RANGE) {
+            self.support_depth = x;
+        }
+        if let Some(x) = link.number("axis", AXIS_LENGTH_RANGE) {
+            self.axis_length = x;
+        }
+        if let Some(x) = link.number("rtol", RADIUS_TOLERANCE_RANGE) {
+            self.radius_tolerance = x;
+        }
+        self.remesh.read_link("remesh", link);
+        if let Some(x) = link.flag("opt_moulds") {
+            self.optimize_moulds = x;
+        }
+        read_max_distance(link, &mut self.max_distance);
     }
 }

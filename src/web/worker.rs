@@ -10,7 +10,7 @@ use web_sys::DedicatedWorkerGlobalScope;
 use super::transport;
 use super::worker_client::{CANCEL_SLOT, POSTED_SLOT};
 use crate::pipeline::fields::Field;
-use crate::pipeline::protocol::{decode_to_worker, encode_from_worker, FileObject, FromWorker};
+use crate::pipeline::protocol::{decode_to_worker, encode_from_worker, FileObject, FromWorker, ObjectKind};
 use crate::pipeline::{Outbox, Session};
 use crate::progress::Clock;
 
@@ -67,7 +67,11 @@ pub fn worker_load_objects(file: String, objects: JsValue, notes: JsValue, units
     let text = |o: &JsValue, key: &str| Reflect::get(o, &key.into()).ok().and_then(|v| v.as_string()).unwrap_or_default();
     let (mut list, mut texts) = (Vec::new(), Vec::new());
     for o in js_sys::Array::from(&objects).iter() {
-        list.push(FileObject { name: text(&o, "name"), kind: text(&o, "kind"), summary: text(&o, "summary") });
+        list.push(FileObject {
+            name: text(&o, "name"),
+            kind: if text(&o, "kind") == "surface" { ObjectKind::Surface } else { ObjectKind::Mesh },
+            summary: text(&o, "summary"),
+        });
         texts.push(text(&o, "text"));
     }
     let notes: Vec<String> = js_sys::Array::from(&notes).iter().filter_map(|n| n.as_string()).collect();

@@ -1,7 +1,5 @@
-//! One file per stage: each runs a method on the loaded reference, streams to a [`Sink`] and
-//! returns its summary. `protocol.rs` lists them; the session runs them.
-//!
-//! [`Sink`]: super::sink::Sink
+//! One file per stage: the curvature, and one per method, each implementing
+//! [`super::method::Method`]. `protocol.rs` lists the methods; the session runs them.
 
 pub mod curvature;
 pub mod sq;
@@ -11,26 +9,28 @@ pub mod st_support;
 use std::fmt;
 
 use crate::progress::Cancelled;
-use crate::sq::SqError;
-use crate::st_adapted::StAdaptedError;
-use crate::st_support::StSupportError;
 
 /// Why a stage gave no result.
 #[derive(Clone, Debug, PartialEq)]
 pub enum StageError {
     Cancelled,
-    StAdapted(StAdaptedError),
-    StSupport(StSupportError),
-    Sq(SqError),
+    /// The method refused its input or failed on it, in words for the user.
+    Refused(Refusal),
+}
+
+/// A method's refusal: what it says, and the face count to remesh to first when it refused the
+/// size of its input.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refusal {
+    pub message: String,
+    pub remesh_to: Option<usize>,
 }
 
 impl fmt::Display for StageError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             StageError::Cancelled => f.write_str("cancelled"),
-            StageError::StAdapted(e) => e.fmt(f),
-            StageError::StSupport(e) => e.fmt(f),
-            StageError::Sq(e) => e.fmt(f),
+            StageError::Refused(r) => f.write_str(&r.message),
         }
     }
 }
@@ -38,12 +38,16 @@ impl fmt::Display for StageError {
 impl std::error::Error for StageError {}
 
 impl StageError {
+    /// A method's error, with the face count to remesh to when it refused its input's size.
+    pub fn refused(error: &dyn fmt::Display, remesh_to: Option<usize>) -> Self {
+        StageError::Refused(Refusal { message: error.to_string(), remesh_to })
+    }
+
     /// The face count to remesh to when the method refused the size of its input.
     pub fn remesh_to(&self) -> Option<usize> {
         match self {
-            StageError::StAdapted(crate::st_adapted::StAdaptedError::TooManyFaces(e))
-            | StageError::StSupport(crate::st_support::StSupportError::TooManyFaces(e)) => Some(e.suggested()),
-            _ => None,
+            StageError::Refused(r) => r.remesh_to,
+            StageError::Cancelled => None,
         }
     }
 }
@@ -51,32 +55,5 @@ impl StageError {
 impl From<Cancelled> for StageError {
     fn from(_: Cancelled) -> Self {
         StageError::Cancelled
-    }
-}
-
-impl From<StAdaptedError> for StageError {
-    fn from(e: StAdaptedError) -> Self {
-        match e {
-            StAdaptedError::Cancelled => StageError::Cancelled,
-            e => StageError::StAdapted(e),
-        }
-    }
-}
-
-impl From<StSupportError> for StageError {
-    fn from(e: StSupportError) -> Self {
-        match e {
-            StSupportError::Cancelled => StageError::Cancelled,
-            e => StageError::StSupport(e),
-        }
-    }
-}
-
-impl From<SqError> for StageError {
-    fn from(e: SqError) -> Self {
-        match e {
-            SqError::Cancelled => StageError::Cancelled,
-            e => StageError::Sq(e),
-        }
     }
 }

@@ -6,7 +6,7 @@
 //! on every iteration; the files and the summary (method "sq").
 //!
 //! When the mean curvature changes sign (Sec. 6.3), the stage sends H at the reference's
-//! vertices (snapshot [`REFUSED_STAGE`]) before its error, so the app can show where.
+//! vertices (snapshot part [`Part::Refused`]) before its error, so the app can show where.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -23,8 +23,9 @@ use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::moulds::MouldAssignment;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
-use crate::pipeline::fields::{field, Energy, Field, StageId};
-use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, PanelExport, Snapping};
+use crate::pipeline::fields::{field, Energy, Field, Part};
+use crate::pipeline::method::{Computed, Exported, Method, Request};
+use crate::pipeline::panel_output::{export_panels, f32s, panel_fields, result_panel_fields, support_fields, with_moulds, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{ignore, Cancelled, Clock, Progress};
 use crate::reference::Reference;
@@ -35,14 +36,13 @@ use crate::sq::report::SqSection;
 use crate::sq::segments::{grid_spacing, line_segments, LINE_LENGTH};
 use crate::sq::{compute, SqError, SqEvent, SqResult};
 
-/// Stage name of the method in the worker protocol (the design link's `method=sq`).
-pub const STAGE: StageId = StageId::Sq;
-/// Snapshot of H at the reference vertices, sent when SQ refuses the surface (Sec. 6.3).
-pub const REFUSED_STAGE: StageId = StageId::SqRefused;
 /// Least time between two live snapshots (ms); every iteration still sends its energies.
 pub(crate) const SNAPSHOT_INTERVAL_MS: f64 = 100.0;
 /// Chord tolerance of the live panels, relative to the diagonal (coarser than the export's).
 pub(crate) const LIVE_PANEL_TOLERANCE: f64 = 2e-3;
+
+/// The method in the pipeline.
+pub struct SqStage;
 
 /// What the UI shows after the run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -78,46 +78,144 @@ pub(crate) fn mesh_edge_segments(mesh: &PolyMesh) -> Vec<(DVec3, DVec3)> {
         .collect()
 }
 
-/// Runs the method on `reference`, streaming every stage to `sink`; returns the summary after
-/// sending the display fields and the files.
-pub fn run(reference: &Reference, params: &SqParams, clock: Clock, sink: &mut dyn Sink) -> Result<(SqSummary, SqResult, u32), StageError> {
-    let mut stream = Stream::new(sink, params, reference.diagonal());
-    let mut on_event = |e: SqEvent| stream.event(e);
-    let result = match compute(reference, params, clock, &mut on_event) {
-        Ok(r) => r,
-        Err(e @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
-            // Exact H at the vertices of a B-spline reference (cached for the app's colour map).
-            if let Ok(c) = reference.curvature(&JetParams::default(), &mut ignore) {
-                let h = c.vertices.iter().map(|v| v.mean as f32).collect();
-                stream.sink.snapshot(REFUSED_STAGE, 0, vec![Field::f32(field::MEAN_CURVATURE, 1, h)]);
+impl Method for SqStage {
+    const KEY: &'static str = "sq";
+    const LABEL: &'static str = "SQ with support structure (Sec. 5)";
+    type Params = SqParams;
+    type Result = SqResult;
+    type Summary = SqSummary;
+
+    fn optimizes_moulds(params: &SqParams) -> bool {
+        params.optimize_moulds
+    }
+
+    /// When the mean curvature changes sign (Sec. 6.3), sends H at the reference's vertices
+    /// ([`Part::Refused`]) before its error, so the app can show where.
+    fn compute(reference: &Reference, request: &Request<SqParams>, clock: Clock, sink: &mut dyn Sink) -> Result<Computed<SqResult>, StageError> {
+        let params = &core_params(request);
+        let mut stream = Stream::new(sink, params, reference.diagonal());
+        let mut on_event = |e: SqEvent| stream.event(e);
+        match compute(reference, params, clock, &mut on_event) {
+            Ok(result) => Ok(Computed { result, iteration: stream.planned as u32 }),
+            Err(e @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
+                // Exact H at the vertices of a B-spline reference (cached for the app's colour map).
+                if let Ok(c) = reference.curvature(&JetParams::default(), &mut ignore) {
+                    let h = c.vertices.iter().map(|v| v.mean as f32).collect();
+                    stream.sink.snapshot(Part::Refused, 0, vec![Field::f32(field::MEAN_CURVATURE, 1, h)]);
+                }
+                Err(e.into())
             }
-            return Err(e.into());
+            Err(e) => Err(e.into()),
         }
-        Err(e) => return Err(e.into()),
-    };
-    let (sink, planned) = (stream.sink, stream.planned as u32);
-    let report = reexport(reference, &result, params, clock, sink, planned);
-    Ok((SqSummary { report }, result, planned))
+    }
+
+    /// The report (method "sq", its section [`SqSection`]) and the files: `congruence.json`,
+    /// `congruence.glb`; with the quad mesh `mesh.obj` (Q′, or the SQ mesh's vertices and
+    /// quads); with the SQ mesh `panels.glb`, `panels.obj`, the schedule (`panels.csv`,
+    /// `panels.json`, `support.csv`); and `report.json`. The display: the congruence, the quad
+    /// mesh, the panels in their moulds' colours, the support structure.
+    fn export(reference: &Reference, result: &SqResult, request: &Request<SqParams>, clock: Clock) -> Exported {
+        let segments = CongruenceSegments::of(&result.congruence);
+        let (report, files, moulds) = exported(reference, result, &core_params(request), &segments, clock);
+        let mut display = display_fields(&segments);
+        if let Some(q) = &result.quad_mesh {
+            let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
+            display.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
+        }
+        if let (Some(f), Some(moulds)) = (&result.sq_mesh, &moulds) {
+            display.extend(result_panel_fields(&f.mesh.panels, moulds));
+            display.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
+        }
+        Exported { report, files, display }
+    }
+
+    fn summary(_result: &SqResult, report: Report) -> SqSummary {
+        SqSummary { report }
+    }
+
+    fn report(summary: &SqSummary) -> &Report {
+        &summary.report
+    }
+
+    fn report_mut(summary: &mut SqSummary) -> &mut Report {
+        &mut summary.report
+    }
+
+    fn describe(_result: &SqResult, report: &Report, request: &Request<SqParams>, out: &str) -> String {
+        let line = describe(report, &request.params, out);
+        let sq: SqSection = report.section().expect("the SQ report has its section");
+        match sq.sq_mesh.as_ref().and_then(|m| m.moulds.refused()) {
+            Some(why) => format!("{}; {why}", with_moulds(line, report)),
+            None => with_moulds(line, report),
+        }
+    }
 }
 
-/// Sends a result's final display fields (the congruence, the quad mesh, the panels in their
-/// moulds' colours, the support structure) as the snapshot of `iteration`, and its files for
-/// `params`; returns the report. A new δ, K or unit needs only this, not the method again.
-pub fn reexport(reference: &Reference, result: &SqResult, params: &SqParams, clock: Clock, sink: &mut dyn Sink, iteration: u32) -> Report {
-    let segments = CongruenceSegments::of(&result.congruence);
-    let (report, files, moulds) = exported(reference, result, params, &segments, clock);
-    let mut fields = display_fields(&segments);
-    if let Some(q) = &result.quad_mesh {
-        let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
-        fields.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
+/// What the command line says of a run (as far as its `until`) that wrote its files to `out`.
+fn describe(report: &Report, params: &SqParams, out: &str) -> String {
+    let sq: SqSection = report.section().expect("the SQ report has its section");
+    let panels = report.metrics.clone().unwrap_or_default();
+    let quads = sq.quad_mesh.as_ref();
+    match (params.until, &sq.sq_mesh) {
+        (Until::Final, Some(mesh)) => {
+            let f = &mesh.figures;
+            format!(
+                "wrote an SQ mesh of {} spherical quad panels with support structure to {}: vertex–sphere residual {:.1e}, centre-face \
+                 planarity {:.1e}, torsal-plane residual {:.1e}; node axes within {:.2}° of the normals (θ = {}°); support planes meet at \
+                 ≥ {:.2}° (α = {}°); max distance to the reference {}; edges off the torsal directions by {:.2}° on \
+                 average; {} distinct radii; {:.0} ms.",
+                report.output.panels,
+                out,
+                f.max_vertex_sphere_residual,
+                f.max_centre_face_planarity,
+                f.max_torsal_plane_residual,
+                f.max_axis_normal_angle_deg,
+                params.theta_deg,
+                f.min_torsal_plane_angle_deg,
+                params.alpha_deg,
+                panels.max_distance_text(),
+                quads.map_or(f64::NAN, |q| q.mean_edge_torsal_angle_deg),
+                panels.distinct_radii,
+                report.timings_ms.get("total").copied().unwrap_or(0.0),
+            )
+        }
+        (Until::Final | Until::Remesh, _) => format!(
+            "wrote the quad mesh Q′ ({} quads, {:.1} % of the patch, edges off the torsal directions by {:.2}° on average, at most {:.2}°) \
+             and the congruence to {}.",
+            report.output.faces,
+            100.0 * quads.map_or(f64::NAN, |q| q.coverage),
+            quads.map_or(f64::NAN, |q| q.mean_edge_torsal_angle_deg),
+            quads.map_or(f64::NAN, |q| q.max_edge_torsal_angle_deg),
+            out
+        ),
+        (Until::Congruence, _) => {
+            let c = &sq.congruence;
+            format!(
+                "wrote the congruence of a {n}×{n} grid to {} (lines within {:.2}° of the normals, θ = {}°; torsal planes meet at ≥ {:.2}°, \
+                 α = {}°; {} quads without real torsal directions; E_LC per term {:.2e}).",
+                out,
+                c.figures.max_line_normal_angle_deg,
+                params.theta_deg,
+                c.figures.min_torsal_plane_angle_deg,
+                params.alpha_deg,
+                c.figures.quads_without_real_torsal_directions,
+                c.lc_residual,
+                n = params.grid,
+            )
+        }
     }
-    if let (Some(f), Some(moulds)) = (&result.sq_mesh, &moulds) {
-        fields.extend(result_panel_fields(&f.mesh.panels, moulds));
-        fields.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
-    }
-    sink.snapshot(STAGE, iteration, fields);
-    sink.files(STAGE, files);
-    report
+}
+
+/// The method's own parameters with the request's fabrication settings.
+fn core_params(request: &Request<SqParams>) -> SqParams {
+    SqParams { fabrication: request.fabrication, ..request.params.clone() }
+}
+
+/// The report and the files of `result` for `params` (with their fabrication settings).
+pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let request = Request { params: params.clone(), fabrication: params.fabrication, jet: JetParams::default() };
+    let e = SqStage::export(reference, result, &request, clock);
+    (e.report, e.files)
 }
 
 /// What the stage streams while the method runs, with one progress count across its steps:
@@ -143,10 +241,13 @@ struct Stream<'a> {
     /// The first live snapshot of Q′ and of the panels goes out at once, later ones when due.
     first_fairing: bool,
     first_spheres: bool,
+    /// Whether the sink wants live snapshots.
+    live: bool,
 }
 
 impl<'a> Stream<'a> {
     fn new(sink: &'a mut dyn Sink, params: &'a SqParams, diag: f64) -> Self {
+        let live = sink.wants_live_snapshots();
         let [warm, full, projection] = params.sphere_iterations;
         let later = match params.until {
             Until::Congruence => 0,
@@ -169,13 +270,14 @@ impl<'a> Stream<'a> {
             later,
             first_fairing: true,
             first_spheres: true,
+            live,
         }
     }
 
     /// Whether a live snapshot is due.
     fn due(&mut self) -> bool {
         let now = self.sink.now_ms();
-        let due = now - self.last_snapshot >= SNAPSHOT_INTERVAL_MS;
+        let due = self.live && now - self.last_snapshot >= SNAPSHOT_INTERVAL_MS;
         if due {
             self.last_snapshot = now;
         }
@@ -183,15 +285,21 @@ impl<'a> Stream<'a> {
     }
 
     fn report(&mut self, step: &str, energies: Vec<Energy>) -> Result<(), Cancelled> {
-        report(self.sink, STAGE, Progress::new(step, self.done.min(self.planned), self.planned), energies, self.start_ms)
+        report(self.sink, Progress::new(step, self.done.min(self.planned), self.planned), energies, self.start_ms)
     }
 
     fn lines(&mut self, iteration: usize, name: &'static str, lines: &[DVec3]) {
-        self.sink.snapshot(STAGE, iteration as u32, vec![segments_field(name, &line_segments(&self.points, lines, self.length))]);
+        if !self.live {
+            return;
+        }
+        self.sink.snapshot(Part::Main, iteration as u32, vec![segments_field(name, &line_segments(&self.points, lines, self.length))]);
     }
 
     fn quad_mesh(&mut self, iteration: usize, mesh: &PolyMesh) {
-        self.sink.snapshot(STAGE, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh))]);
+        if !self.live {
+            return;
+        }
+        self.sink.snapshot(Part::Main, iteration as u32, vec![segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh))]);
     }
 
     fn event(&mut self, e: SqEvent) -> Result<(), Cancelled> {
@@ -201,7 +309,7 @@ impl<'a> Stream<'a> {
                 self.points = points.to_vec();
                 self.length = LINE_LENGTH * grid_spacing(self.params.grid, &self.points);
                 let initial = line_segments(&self.points, lines, self.length);
-                self.sink.snapshot(STAGE, 0, vec![segments_field(field::SQ_INITIAL_LINES, &initial), segments_field(field::SQ_LINES, &initial)]);
+                self.sink.snapshot(Part::Main, 0, vec![segments_field(field::SQ_INITIAL_LINES, &initial), segments_field(field::SQ_LINES, &initial)]);
                 self.last_snapshot = self.sink.now_ms();
                 self.report("line_congruence", Vec::new())
             }
@@ -229,7 +337,9 @@ impl<'a> Stream<'a> {
             SqEvent::Congruence(c) => {
                 self.done = self.lc_done + c.torsal_iterations;
                 self.planned = self.done + self.later;
-                self.sink.snapshot(STAGE, self.done as u32, display_fields(&CongruenceSegments::of(c)));
+                if self.live {
+                    self.sink.snapshot(Part::Main, self.done as u32, display_fields(&CongruenceSegments::of(c)));
+                }
                 self.report("cross_field", Vec::new())
             }
             SqEvent::Remeshed { mesh } => {
@@ -240,7 +350,7 @@ impl<'a> Stream<'a> {
             SqEvent::Fairing { iteration, terms, positions } => {
                 self.done += 1;
                 let go = self.report("fairing", energies(terms, false));
-                if go.is_ok() && (std::mem::take(&mut self.first_fairing) | self.due()) && !self.faces.is_empty() {
+                if go.is_ok() && (self.live && std::mem::take(&mut self.first_fairing) | self.due()) && !self.faces.is_empty() {
                     self.quad_mesh(iteration, &PolyMesh::new(positions.to_vec(), self.faces.clone()));
                 }
                 go
@@ -254,9 +364,9 @@ impl<'a> Stream<'a> {
             SqEvent::Spheres { phase, terms, positions, spheres, .. } => {
                 self.done += 1;
                 let go = self.report(phase.key(), energies(terms, true));
-                if go.is_ok() && (std::mem::take(&mut self.first_spheres) | self.due()) {
+                if go.is_ok() && (self.live && std::mem::take(&mut self.first_spheres) | self.due()) {
                     let fields = live_panels(positions, &self.faces, spheres, self.diag);
-                    self.sink.snapshot(STAGE, self.done as u32, fields);
+                    self.sink.snapshot(Part::Main, self.done as u32, fields);
                 }
                 go
             }
@@ -292,16 +402,7 @@ pub(crate) fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
     ]
 }
 
-/// The report (method "sq", its section [`SqSection`]) and the files: `congruence.json`,
-/// `congruence.glb`; with the quad mesh `mesh.obj` (Q′, or the SQ mesh's vertices and quads);
-/// with the SQ mesh `panels.glb`, `panels.obj`, the schedule (`panels.csv`, `panels.json`,
-/// `support.csv`); and `report.json`.
-pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, segments: &CongruenceSegments, clock: Clock) -> (Report, Vec<ExportFile>) {
-    let (report, files, _) = exported(reference, result, params, segments, clock);
-    (report, files)
-}
-
-/// [`export`] with the panels' moulds (when there are panels).
+/// The report, the files and the panels' moulds (when there are panels).
 fn exported(
     reference: &Reference,
     result: &SqResult,
@@ -314,7 +415,7 @@ fn exported(
     let ((u0, u1), (v0, v1)) = reference.spline().map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
     let json = CongruenceJson::of(c, params.theta_deg, params.alpha_deg, [[u0, u1], [v0, v1]]);
     let extras = serde_json::json!({
-        "method": STAGE.key(),
+        "method": SqStage::KEY,
         "theta_deg": params.theta_deg,
         "alpha_deg": params.alpha_deg,
         "grid": c.grid,
@@ -337,7 +438,7 @@ fn exported(
         Some(f) => {
             timings.push(("final_iteration_median".into(), result.final_iteration_median_ms().unwrap_or(0.0)));
             let export = PanelExport::new(
-                STAGE.key(),
+                SqStage::KEY,
                 &f.mesh.sphere_mesh,
                 &f.mesh.panels,
                 reference.diagonal(),
@@ -359,7 +460,7 @@ fn exported(
             report
         }
         None => {
-            let mut report = Report::new(STAGE.key());
+            let mut report = Report::new(SqStage::KEY);
             report.set_section(&section);
             report.add_timings(&timings);
             report
@@ -387,4 +488,13 @@ pub(crate) fn congruence_glb(surface: &TriMesh, segments: &CongruenceSegments, e
         LineSet { name: "quads_without_real_torsal_directions", color: [0.90, 0.10, 0.10, 1.0], segments: &segments.no_real_quads },
     ];
     write_lines_glb(surface, &sets, extras)
+}
+
+impl From<SqError> for StageError {
+    fn from(e: SqError) -> Self {
+        match e {
+            SqError::Cancelled => StageError::Cancelled,
+            e => StageError::refused(&e, None),
+        }
+    }
 }

@@ -10,8 +10,10 @@ use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::panels::buildability::Buildability;
 use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
-use crate::panels::moulds::MouldAssignment;
-use crate::pipeline::fields::{field, Field, StageId};
+use crate::panels::moulds::{MouldAssignment, MouldOutcome};
+use crate::pipeline::fields::{field, Field};
+use crate::pipeline::method::{Computed, Exported, Method, Request};
+use crate::pipeline::panel_output::with_moulds;
 use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
@@ -20,8 +22,8 @@ use crate::st_support::report::StSupportSection;
 use crate::st_support::{compute, StSupportParams, StSupportResult};
 use crate::stats::Histogram;
 
-/// Stage name of the method in the worker protocol (the design link's `method=st-support`).
-pub const STAGE: StageId = StageId::StSupport;
+/// The method in the pipeline.
+pub struct StSupportStage;
 
 /// Data for the histograms of Fig. 14 and the Ω display.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -46,77 +48,108 @@ impl StSupportSummary {
     }
 }
 
-/// Runs the method on `reference`, sends its display fields and files; returns the summary and
-/// the result.
-pub fn run(
-    reference: &Reference,
-    params: &StSupportParams,
-    clock: Clock,
-    sink: &mut dyn Sink,
-) -> Result<(StSupportSummary, StSupportResult), StageError> {
-    let start = sink.now_ms();
-    let result = compute(reference, params, clock, &mut |p| report(sink, STAGE, p, Vec::new(), start))?;
-    let report = reexport(reference, &result, params, clock, sink);
-    let a = &result.absolute;
-    let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
-    let summary = StSupportSummary {
-        distinct_radii: report.metrics.as_ref().map_or(0, |m| m.distinct_radii),
-        report,
-        omega: result.omega,
-        m0: a.m0.to_array(),
-        m: a.m.to_array(),
-        flipped: a.flipped,
-        angles_m0: Histogram::new(&a.angles_m0_deg, 36),
-        angles_m: Histogram::new(&a.angles_m_deg, 36),
-        r2: Histogram::new(r2_values, 36),
-    };
-    Ok((summary, result))
+impl Method for StSupportStage {
+    const KEY: &'static str = "st-support";
+    const LABEL: &'static str = "ST with support structure (Sec. 4)";
+    type Params = StSupportParams;
+    type Result = StSupportResult;
+    type Summary = StSupportSummary;
+
+    fn optimizes_moulds(params: &StSupportParams) -> bool {
+        params.optimize_moulds
+    }
+
+    fn compute(
+        reference: &Reference,
+        request: &Request<StSupportParams>,
+        clock: Clock,
+        sink: &mut dyn Sink,
+    ) -> Result<Computed<StSupportResult>, StageError> {
+        let start = sink.now_ms();
+        let result = compute(reference, &core_params(request), clock, &mut |p| report(sink, p, Vec::new(), start))?;
+        Ok(Computed { result, iteration: 1 })
+    }
+
+    /// The report (method "st-support") and the export files of a result; distances are
+    /// measured to the reference as loaded, also when the method remeshed it.
+    fn export(reference: &Reference, result: &StSupportResult, request: &Request<StSupportParams>, clock: Clock) -> Exported {
+        let params = &core_params(request);
+        let section = StSupportSection::of(result, params.remesh);
+        let exact = ExactSurfaces::of(&result.panels, &result.support.elements);
+        let deviations = panel_distances(&result.panels, reference);
+        let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), params.fabrication.units);
+        let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega, &buildability, params.max_distance);
+        let export = PanelExport::new(
+            Self::KEY,
+            &result.sphere_mesh,
+            &result.panels,
+            result.diag,
+            params.radius_tolerance,
+            params.fabrication,
+            &section,
+            &result.timings_ms,
+        )
+        .with_absolute_sphere(&result.omega)
+        .with_support(&result.support)
+        .with_warnings(&result.warnings)
+        .with_verdict(&verdict)
+        .with_exact_surfaces(&exact)
+        .with_deviations(&deviations)
+        .with_moulds_before(result.moulds.as_ref().map(|m| &m.fits_before))
+        .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
+        let (report, mut files, moulds) = export_panels(reference, export, clock);
+        files.push(report_file(&report));
+        Exported { display: display_fields(result, &moulds), report, files }
+    }
+
+    fn summary(result: &StSupportResult, report: Report) -> StSupportSummary {
+        let a = &result.absolute;
+        let r2_values = if a.at_infinity { &a.d_samples } else { &a.r2_samples };
+        StSupportSummary {
+            distinct_radii: report.metrics.as_ref().map_or(0, |m| m.distinct_radii),
+            report,
+            omega: result.omega,
+            m0: a.m0.to_array(),
+            m: a.m.to_array(),
+            flipped: a.flipped,
+            angles_m0: Histogram::new(&a.angles_m0_deg, 36),
+            angles_m: Histogram::new(&a.angles_m_deg, 36),
+            r2: Histogram::new(r2_values, 36),
+        }
+    }
+
+    fn report(summary: &StSupportSummary) -> &Report {
+        &summary.report
+    }
+
+    fn report_mut(summary: &mut StSupportSummary) -> &mut Report {
+        &mut summary.report
+    }
+
+    fn describe(result: &StSupportResult, report: &Report, _request: &Request<StSupportParams>, out: &str) -> String {
+        let summary = format!(
+            "wrote {} panels to {out} (max kink {:.3}°, max distance to reference {})",
+            result.panels.len(),
+            result.metrics.max_kink_angle_deg,
+            report.metrics.as_ref().map_or("–".into(), |m| m.max_distance_text())
+        );
+        match MouldOutcome::section(result.moulds.as_ref()).refused() {
+            Some(why) => format!("{}; {why}", with_moulds(summary, report)),
+            None => with_moulds(summary, report),
+        }
+    }
 }
 
-/// Sends a result's display fields (panels in their moulds' colours) and files for `params`;
-/// returns the report. A new δ, K or unit needs only this, not the method again.
-pub fn reexport(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock, sink: &mut dyn Sink) -> Report {
-    let (report, files, moulds) = exported(reference, result, params, clock);
-    sink.snapshot(STAGE, 1, display_fields(result, &moulds));
-    sink.files(STAGE, files);
-    report
+/// The method's own parameters with the request's fabrication settings and jet fit.
+fn core_params(request: &Request<StSupportParams>) -> StSupportParams {
+    StSupportParams { fabrication: request.fabrication, jet: request.jet.clone(), ..request.params.clone() }
 }
 
-/// The report (method "st-support") and the export files of a result; distances are measured to
-/// the reference as loaded, also when the method remeshed it.
+/// The report and the files of `result` for `params` (with their fabrication settings and jet).
 pub fn export(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>) {
-    let (report, files, _) = exported(reference, result, params, clock);
-    (report, files)
-}
-
-/// [`export`] with the panels' moulds.
-fn exported(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>, MouldAssignment) {
-    let section = StSupportSection::of(result, params.remesh);
-    let exact = ExactSurfaces::of(&result.panels, &result.support.elements);
-    let deviations = panel_distances(&result.panels, reference);
-    let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), params.fabrication.units);
-    let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega, &buildability, params.max_distance);
-    let export = PanelExport::new(
-        STAGE.key(),
-        &result.sphere_mesh,
-        &result.panels,
-        result.diag,
-        params.radius_tolerance,
-        params.fabrication,
-        &section,
-        &result.timings_ms,
-    )
-    .with_absolute_sphere(&result.omega)
-    .with_support(&result.support)
-    .with_warnings(&result.warnings)
-    .with_verdict(&verdict)
-    .with_exact_surfaces(&exact)
-    .with_deviations(&deviations)
-    .with_moulds_before(result.moulds.as_ref().map(|m| &m.fits_before))
-    .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
-    let (report, mut files, moulds) = export_panels(reference, export, clock);
-    files.push(report_file(&report));
-    (report, files, moulds)
+    let request = Request { params: params.clone(), fabrication: params.fabrication, jet: params.jet.clone() };
+    let e = StSupportStage::export(reference, result, &request, clock);
+    (e.report, e.files)
 }
 
 /// Display fields: panels, support, node axes, second envelope.
@@ -128,4 +161,15 @@ pub(crate) fn display_fields(result: &StSupportResult, moulds: &MouldAssignment)
         fields.push(Field::u32(field::ENVELOPE_TRIANGLES, 3, env.triangles.iter().flatten().copied().collect()));
     }
     fields
+}
+
+impl From<crate::st_support::StSupportError> for StageError {
+    fn from(e: crate::st_support::StSupportError) -> Self {
+        use crate::st_support::StSupportError;
+        match e {
+            StSupportError::Cancelled => StageError::Cancelled,
+            StSupportError::TooManyFaces(t) => StageError::refused(&t, Some(t.suggested())),
+            e => StageError::refused(&e, None),
+        }
+    }
 }

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::{App, CLEAR_COLOR};
 use crate::design_link::Method;
-use crate::pipeline::fields::StageId;
+use crate::pipeline::protocol::StageId;
 use crate::stats::percentile;
 
 /// Whether the page is cross-origin isolated (shared memory, so Cancel reaches the worker).
@@ -83,7 +83,7 @@ struct Cancels {
 impl App {
     pub(super) fn publish_state(&mut self) {
         let info = self.loaded.as_ref().map(|l| &l.info);
-        let stats = info.map(|i| i.stats.clone()).unwrap_or_default();
+        let stats = info.map(|i| i.stats).unwrap_or_default();
         let vp = self.viewport;
         let state = AutomationState {
             ready: self.drawn,

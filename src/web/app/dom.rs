@@ -46,8 +46,11 @@ pub fn count_events(event: &str, ctx: &egui::Context) -> (Rc<RefCell<u32>>, Clos
     (count, c)
 }
 
+/// Strings queued by an event listener, and the listener (kept alive while it listens).
+pub type EventQueue = (Rc<RefCell<Vec<String>>>, Closure<dyn FnMut(web_sys::CustomEvent)>);
+
 /// Listens for the `CustomEvent` `event` on the window; its string details queue up for the app.
-pub fn queue_events(event: &str, ctx: &egui::Context) -> (Rc<RefCell<Vec<String>>>, Closure<dyn FnMut(web_sys::CustomEvent)>) {
+pub fn queue_events(event: &str, ctx: &egui::Context) -> EventQueue {
     let queue = Rc::new(RefCell::new(Vec::new()));
     let (q2, ctx) = (queue.clone(), ctx.clone());
     let c = Closure::<dyn FnMut(web_sys::CustomEvent)>::new(move |ev: web_sys::CustomEvent| {
@@ -66,11 +69,11 @@ pub fn location_hash() -> String {
     web_sys::window().and_then(|w| w.location().hash().ok()).unwrap_or_default()
 }
 
+/// A file input and its change listener (kept alive while it listens).
+pub type FileInput = (Option<web_sys::HtmlInputElement>, Option<Closure<dyn FnMut()>>);
+
 /// A hidden `<input type=file>` whose chosen files land in `sink`.
-pub fn make_file_input(
-    sink: Rc<RefCell<Vec<web_sys::File>>>,
-    ctx: egui::Context,
-) -> (Option<web_sys::HtmlInputElement>, Option<Closure<dyn FnMut()>>) {
+pub fn make_file_input(sink: Rc<RefCell<Vec<web_sys::File>>>, ctx: egui::Context) -> FileInput {
     let doc = web_sys::window().and_then(|w| w.document());
     let Some(doc) = doc else { return (None, None) };
     let Ok(el) = doc.create_element("input") else { return (None, None) };

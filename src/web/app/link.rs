@@ -19,10 +19,7 @@ impl App {
         let (design, notices) = Design::from_fragment(&hash);
         self.notices = notices;
         let reference_changed = design.reference != self.design.reference;
-        let jet_changed = design.jet != self.design.jet
-            || design.method != self.design.method
-            || design.st_support != self.design.st_support
-            || design.st_adapted != self.design.st_adapted;
+        let jet_changed = design.jet != self.design.jet || design.method != self.design.method || design.methods != self.design.methods;
         self.camera_from_link = design.camera;
         for v in &mut self.views {
             v.link_applied(&design);

@@ -7,18 +7,15 @@ use glam::Vec3;
 use super::state::{CurvatureView, Download, Scene};
 use super::App;
 use crate::design_link::DesignSurface;
-use crate::pipeline::fields::{field, find, Field, FieldData, StageId, StageProgress};
-use crate::pipeline::protocol::{FromWorker, ReferenceInfo, Source, StageResult, ToWorker};
+use crate::pipeline::fields::{field, find, Field, FieldData};
+use crate::pipeline::protocol::{FromWorker, ReferenceInfo, Source, StageId, StageProgress, StageResult, ToWorker};
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::MeshData;
 use crate::web::worker_client::Incoming;
 
 impl App {
     pub(super) fn handle_messages(&mut self) {
-        loop {
-            let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) else {
-                break;
-            };
+        while let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) {
             match item {
                 Incoming::Crashed(message) => {
                     self.error = Some(format!("{message}. The worker was restarted; your design is kept."));

@@ -30,8 +30,7 @@ use glam::Vec3;
 use wasm_bindgen::prelude::*;
 
 use crate::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
-use crate::pipeline::fields::StageId;
-use crate::pipeline::protocol::{StageRequest, ToWorker};
+use crate::pipeline::protocol::{StageId, StageRequest, ToWorker};
 use crate::samples::Sample;
 use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::ViewerResources;
@@ -412,7 +411,7 @@ impl App {
         ui.strong("Method");
         let mut method = self.design.method;
         egui::ComboBox::from_id_salt("method").selected_text(method.title()).show_ui(ui, |ui| {
-            for m in Method::ALL {
+            for m in Method::all() {
                 ui.selectable_value(&mut method, m, m.title());
             }
         });

@@ -8,8 +8,9 @@ use glam::Vec3;
 
 use crate::congruence::central_spheres::CurvatureSummary;
 use crate::design_link::ColorBy;
-use crate::pipeline::fields::{field, find, Field, StageId, StageProgress};
+use crate::pipeline::fields::{field, find, Field};
 use crate::pipeline::protocol::ReferenceInfo;
+use crate::pipeline::protocol::{StageId, StageProgress};
 use crate::web::viewer::{MeshData, ScalarData};
 
 /// The loaded reference and its curvature.

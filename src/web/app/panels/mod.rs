@@ -5,9 +5,7 @@
 pub mod info;
 pub mod moulds;
 
-use crate::design_link::SizingKind;
-use crate::remeshing::DEFAULT_FACES;
-use crate::remeshing::{Sizing, DEFAULT_EPSILON};
+use crate::remeshing::{Sizing, SizingKind, DEFAULT_EPSILON, DEFAULT_FACES};
 
 /// ε and N as last set, so that switching the sizing kind back and forth keeps them.
 #[derive(Clone, Copy, Debug)]
@@ -62,7 +60,7 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
 pub fn max_distance_slider(ui: &mut egui::Ui, max_distance: &mut f64) {
     let range = crate::panels::buildability::MAX_DISTANCE_RANGE;
     ui.add(
-        egui::Slider::new(max_distance, 1e-4..=range.end().min(0.1))
+        egui::Slider::new(max_distance, range.lo.max(1e-4)..=range.hi.min(0.1))
             .logarithmic(true)
             .text("max distance")
             .custom_formatter(|x, _| format!("{x:.2e}")),
@@ -70,6 +68,13 @@ pub fn max_distance_slider(ui: &mut egui::Ui, max_distance: &mut f64) {
     .on_hover_text(
         "The panels' promised largest distance to the reference, relative to the bbox diagonal: a result farther away misses its guarantees",
     );
+}
+
+/// A figure's mark as the run's verdict grades it: " ✔ (≤ 20°)" from the report's guarantee
+/// `name`, or nothing when the method promises nothing of that figure. The app never grades a
+/// figure itself: the report's limits are the run's, not the sliders' now.
+pub fn graded(report: &crate::export::Report, name: &str) -> String {
+    report.guarantees.iter().find(|g| g.name == name).map_or(String::new(), |g| format!(" {}", g.mark()))
 }
 
 /// A report's warnings (failed assumptions of the reference, fallbacks), in amber.

@@ -4,8 +4,8 @@
 use super::method_view::{Drawn, Frame, MethodView};
 use crate::design_link::{Design, Method};
 use crate::export::Report;
-use crate::pipeline::fields::{Field, StageId};
-use crate::pipeline::protocol::StageResult;
+use crate::pipeline::fields::Field;
+use crate::pipeline::protocol::{StageId, StageResult};
 
 pub struct CurvatureMethod;
 

@@ -4,8 +4,8 @@ use glam::Vec3;
 
 use crate::design_link::{ColorBy, Design, Method};
 use crate::export::Report;
-use crate::pipeline::fields::{Field, StageId, StageProgress};
-use crate::pipeline::protocol::StageResult;
+use crate::pipeline::fields::Field;
+use crate::pipeline::protocol::{StageId, StageProgress, StageResult};
 use crate::web::viewer::{ColorMap, Layer};
 
 /// What a view needs to draw: the design's shading, the edge colour, the reference's centre

@@ -14,7 +14,7 @@ pub use method_view::MethodView;
 
 use crate::design_link::Design;
 
-/// Every method's view, in the order of `Method::ALL`.
+/// Every method's view, in the order of [`crate::design_link::Method::all`].
 pub fn views(design: &Design) -> Vec<Box<dyn MethodView>> {
     vec![
         Box::new(curvature::CurvatureMethod),

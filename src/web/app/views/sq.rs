@@ -13,14 +13,18 @@ use serde::Serialize;
 use super::method_view::{Drawn, Frame, Legend, MethodView};
 use crate::design_link::{Design, Method};
 use crate::export::Report;
-use crate::pipeline::fields::{field, find, Energy, Field, StageId, StageProgress};
-use crate::pipeline::protocol::StageResult;
-use crate::pipeline::stages::sq::{REFUSED_STAGE, STAGE};
+use crate::pipeline::fields::{field, find, Energy, Field, Part};
+use crate::pipeline::protocol::{MethodId, MethodSummary, StageId, StageProgress, StageResult};
+use crate::pipeline::stages::sq::SqStage;
+
+/// The method's stage, and H at the vertices when it refuses the sign of H.
+const STAGE: StageId = StageId::Method(MethodId::Sq, Part::Main);
+const REFUSED_STAGE: StageId = StageId::Method(MethodId::Sq, Part::Refused);
 use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
 use crate::sq::report::SqSection;
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
-use crate::web::app::panels::{max_distance_slider, verdict, warnings};
+use crate::web::app::panels::{graded, max_distance_slider, verdict, warnings};
 use crate::web::app::plots::{key_values, term_plot};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::colormap;
@@ -151,7 +155,7 @@ struct Automation<'a> {
 
 impl MethodView for SqMethod {
     fn method(&self) -> Method {
-        Method::Sq
+        Method::Of(MethodId::Sq)
     }
     fn name(&self) -> &'static str {
         "sq"
@@ -169,11 +173,11 @@ impl MethodView for SqMethod {
         self.run = None;
     }
     fn controls(&mut self, ui: &mut egui::Ui, design: &mut Design) -> bool {
-        controls(ui, &mut design.sq, &mut self.display)
+        controls(ui, design.params_mut::<SqStage>(), &mut self.display)
     }
-    fn results(&self, ui: &mut egui::Ui, design: &Design) {
+    fn results(&self, ui: &mut egui::Ui, _design: &Design) {
         if let Some(v) = &self.run {
-            results(ui, v, &design.sq);
+            results(ui, v);
         }
     }
     fn snapshot(&mut self, stage: StageId, iteration: u32, fields: &[Field], generation: &mut u64) -> bool {
@@ -195,7 +199,7 @@ impl MethodView for SqMethod {
         }
     }
     fn finished(&mut self, result: StageResult) -> Option<Report> {
-        let (StageResult::Sq(summary), Some(v)) = (result, self.run.as_mut()) else {
+        let (StageResult::Method(MethodSummary::Sq(summary)), Some(v)) = (result, self.run.as_mut()) else {
             return None;
         };
         let section = summary.section()?;
@@ -408,7 +412,7 @@ fn weight(ui: &mut egui::Ui, w: &mut f64, label: &str) {
 }
 
 /// The live energy of every term and, when done, the figures before and after.
-fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
+fn results(ui: &mut egui::Ui, v: &SqView) {
     ui.separator();
     ui.strong("SQ mesh with support structure (Sec. 5)");
     if v.refused_h.is_some() {
@@ -428,19 +432,20 @@ fn results(ui: &mut egui::Ui, v: &SqView, params: &SqParams) {
         return;
     };
     verdict(ui, &sum.report);
-    congruence_figures(ui, sum, params);
-    mesh_figures(ui, sum, params);
+    congruence_figures(ui, sum);
+    mesh_figures(ui, sum);
     warnings(ui, &sum.report.warnings);
 }
 
-/// The congruence's figures at the start and optimized (Sec. 5.1).
-fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
+/// The congruence's figures at the start and optimized (Sec. 5.1), each marked as the run's
+/// verdict grades it (the limits the run had, not the sliders').
+fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished) {
     let sec = &sum.section;
     let c = &sec.congruence;
     let (i, f) = (&c.initial, &c.figures);
     let r = &sum.report;
     let g = |x: f64| format!("{x:.2e}");
-    let ok = |good: bool| if good { "✔" } else { "✘" };
+    let mark = |name: &str| graded(r, name);
     let tried: Vec<String> = c
         .attempts
         .iter()
@@ -454,23 +459,11 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
         ("start kept", format!("{} of {}", c.start.key(), tried.join(", then "))),
         (
             "max ∠(l, n), central → final",
-            format!(
-                "{:.2}° → {:.2}° {} (θ {}°)",
-                i.max_line_normal_angle_deg,
-                f.max_line_normal_angle_deg,
-                ok(f.max_line_normal_angle_deg <= params.theta_deg),
-                params.theta_deg
-            ),
+            format!("{:.2}° → {:.2}°{}", i.max_line_normal_angle_deg, f.max_line_normal_angle_deg, mark("max_line_normal_angle_deg")),
         ),
         (
             "min torsal-plane angle",
-            format!(
-                "{:.2}° → {:.2}° {} (α {}°)",
-                i.min_torsal_plane_angle_deg,
-                f.min_torsal_plane_angle_deg,
-                ok(f.min_torsal_plane_angle_deg >= params.alpha_deg),
-                params.alpha_deg
-            ),
+            format!("{:.2}° → {:.2}°{}", i.min_torsal_plane_angle_deg, f.min_torsal_plane_angle_deg, mark("min_torsal_plane_angle_deg")),
         ),
         ("quads without real torsal directions", format!("{} → {}", i.quads_without_real_torsal_directions, f.quads_without_real_torsal_directions)),
         ("E_LC per term, step 1 / final", format!("{} / {}", g(c.lc_residual_step1), g(c.lc_residual))),
@@ -483,28 +476,23 @@ fn congruence_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
     key_values(ui, "sq-metrics", &rows);
 }
 
-/// The SQ mesh's figures (Sec. 5.2), when the run got there.
-fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished, params: &SqParams) {
+/// The SQ mesh's figures (Sec. 5.2), when the run got there, each marked as the run's verdict
+/// grades it.
+fn mesh_figures(ui: &mut egui::Ui, sum: &SqFinished) {
     let (sec, r) = (&sum.section, &sum.report);
     let panels = r.metrics.clone();
-    let ok = |good: bool| if good { "✔" } else { "✘" };
+    let mark = |name: &str| graded(r, name);
     if let Some(mf) = sec.sq_mesh.as_ref().map(|m| &m.figures) {
         let quads = sec.quad_mesh.as_ref();
         ui.strong("SQ mesh (Sec. 5.2)");
         let e = |x: f64| format!("{x:.1e}");
         let mut rows = vec![
             ("faces", format!("{} quads, {:.1} % of the patch", r.output.faces, 100.0 * quads.map_or(0.0, |q| q.coverage))),
-            ("vertex–sphere residual / diag", format!("{} {}", e(mf.max_vertex_sphere_residual), ok(mf.max_vertex_sphere_residual <= 1e-8))),
-            ("centre-face planarity / diag", format!("{} {}", e(mf.max_centre_face_planarity), ok(mf.max_centre_face_planarity <= 1e-8))),
-            ("torsal-plane residual", format!("{} {}", e(mf.max_torsal_plane_residual), ok(mf.max_torsal_plane_residual <= 1e-8))),
-            (
-                "max ∠(node axis, n)",
-                format!("{:.2}° {} (θ {}°)", mf.max_axis_normal_angle_deg, ok(mf.max_axis_normal_angle_deg <= params.theta_deg), params.theta_deg),
-            ),
-            (
-                "min support-plane angle",
-                format!("{:.2}° {} (α {}°)", mf.min_torsal_plane_angle_deg, ok(mf.min_torsal_plane_angle_deg >= params.alpha_deg), params.alpha_deg),
-            ),
+            ("vertex–sphere residual / diag", format!("{}{}", e(mf.max_vertex_sphere_residual), mark("max_vertex_sphere_residual"))),
+            ("centre-face planarity / diag", format!("{}{}", e(mf.max_centre_face_planarity), mark("max_centre_face_planarity"))),
+            ("torsal-plane residual", e(mf.max_torsal_plane_residual)),
+            ("max ∠(node axis, n)", format!("{:.2}°{}", mf.max_axis_normal_angle_deg, mark("max_axis_normal_angle_deg"))),
+            ("min support-plane angle", format!("{:.2}°{}", mf.min_torsal_plane_angle_deg, mark("min_support_plane_angle_deg"))),
             ("max distance to the reference", panels.as_ref().map_or("–".into(), |p| p.max_distance_text())),
             (
                 "edges off the torsal directions",

@@ -9,12 +9,18 @@ use glam::Mat4;
 use serde::Serialize;
 
 use super::method_view::{Drawn, Frame, MethodView};
-use crate::design_link::{ColorBy, Design, Method, SizingKind};
+use crate::design_link::{ColorBy, Design, Method};
 use crate::export::Report;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::pipeline::fields::{field, find, Field, StageId, StageProgress};
-use crate::pipeline::protocol::StageResult;
-use crate::pipeline::stages::st_adapted::{StAdaptedSummary, REMESHED_STAGE, SIZING_STAGE, STAGE};
+use crate::pipeline::fields::{field, find, Field, Part};
+use crate::pipeline::protocol::{MethodId, MethodSummary, StageId, StageProgress, StageResult};
+use crate::pipeline::stages::st_adapted::{StAdaptedStage, StAdaptedSummary};
+use crate::remeshing::SizingKind;
+
+/// The method's stage and the parts of its stream before the panels.
+const STAGE: StageId = StageId::Method(MethodId::StAdapted, Part::Main);
+const SIZING_STAGE: StageId = StageId::Method(MethodId::StAdapted, Part::Sizing);
+const REMESHED_STAGE: StageId = StageId::Method(MethodId::StAdapted, Part::Remeshed);
 use crate::remeshing::Sizing;
 use crate::st_adapted::params::StAdaptedParams;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
@@ -52,7 +58,7 @@ pub struct StAdaptedMethod {
 
 impl StAdaptedMethod {
     pub fn new(design: &Design) -> Self {
-        Self { run: None, sizing_memory: SizingMemory::of(design.st_adapted.sizing), show_reference: false, show_remeshed: false }
+        Self { run: None, sizing_memory: SizingMemory::of(design.params::<StAdaptedStage>().sizing), show_reference: false, show_remeshed: false }
     }
 }
 
@@ -76,7 +82,7 @@ struct Automation<'a> {
 
 impl MethodView for StAdaptedMethod {
     fn method(&self) -> Method {
-        Method::StAdapted
+        Method::Of(MethodId::StAdapted)
     }
     fn name(&self) -> &'static str {
         "st_adapted"
@@ -91,7 +97,7 @@ impl MethodView for StAdaptedMethod {
         self.run = None;
     }
     fn controls(&mut self, ui: &mut egui::Ui, design: &mut Design) -> bool {
-        controls(ui, &mut design.st_adapted, &mut self.sizing_memory, &mut self.show_reference, &mut self.show_remeshed)
+        controls(ui, design.params_mut::<StAdaptedStage>(), &mut self.sizing_memory, &mut self.show_reference, &mut self.show_remeshed)
     }
     fn results(&self, ui: &mut egui::Ui, _design: &Design) {
         if let Some(run) = &self.run {
@@ -122,7 +128,7 @@ impl MethodView for StAdaptedMethod {
         }
     }
     fn finished(&mut self, result: StageResult) -> Option<Report> {
-        let (StageResult::StAdapted(summary), Some(a)) = (result, self.run.as_mut()) else {
+        let (StageResult::Method(MethodSummary::StAdapted(summary)), Some(a)) = (result, self.run.as_mut()) else {
             return None;
         };
         let report = summary.report.clone();
@@ -176,7 +182,7 @@ impl MethodView for StAdaptedMethod {
         serde_json::to_value(state).unwrap_or_default()
     }
     fn remesh_to(&self, design: &mut Design, faces: usize) {
-        design.st_adapted.sizing = Sizing::UniformFaces(faces);
+        design.params_mut::<StAdaptedStage>().sizing = Sizing::UniformFaces(faces);
     }
     fn iterations(&self) -> usize {
         self.run.as_ref().map_or(0, |a| a.energy.len())
@@ -188,7 +194,7 @@ impl MethodView for StAdaptedMethod {
         self.run.as_ref()?.sizing.as_deref()
     }
     fn link_applied(&mut self, design: &Design) {
-        self.sizing_memory.remember(design.st_adapted.sizing);
+        self.sizing_memory.remember(design.params::<StAdaptedStage>().sizing);
     }
 }
 

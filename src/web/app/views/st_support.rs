@@ -9,12 +9,16 @@ use glam::{Mat4, Vec3};
 use serde::Serialize;
 
 use super::method_view::{Drawn, Frame, MethodView};
-use crate::design_link::{Design, Method, SizingKind};
+use crate::design_link::{Design, Method};
 use crate::export::Report;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::pipeline::fields::{field, find, Field, StageId};
-use crate::pipeline::protocol::StageResult;
-use crate::pipeline::stages::st_support::{StSupportSummary, STAGE};
+use crate::pipeline::fields::{field, find, Field, Part};
+use crate::pipeline::protocol::{MethodId, MethodSummary, StageId, StageResult};
+use crate::pipeline::stages::st_support::{StSupportStage, StSupportSummary};
+use crate::remeshing::SizingKind;
+
+/// The method's stage.
+const STAGE: StageId = StageId::Method(MethodId::StSupport, Part::Main);
 use crate::remeshing::Sizing;
 use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
@@ -63,7 +67,7 @@ pub struct StSupportMethod {
 
 impl StSupportMethod {
     pub fn new(design: &Design) -> Self {
-        Self { result: None, remesh_memory: SizingMemory::of(design.st_support.remesh), show_reference: false, show_envelope: false }
+        Self { result: None, remesh_memory: SizingMemory::of(design.params::<StSupportStage>().remesh), show_reference: false, show_envelope: false }
     }
 }
 
@@ -75,7 +79,7 @@ struct Automation {
 
 impl MethodView for StSupportMethod {
     fn method(&self) -> Method {
-        Method::StSupport
+        Method::Of(MethodId::StSupport)
     }
     fn name(&self) -> &'static str {
         "st_support"
@@ -90,7 +94,7 @@ impl MethodView for StSupportMethod {
         self.result = None;
     }
     fn controls(&mut self, ui: &mut egui::Ui, design: &mut Design) -> bool {
-        controls(ui, &mut design.st_support, &mut self.remesh_memory, &mut self.show_reference, &mut self.show_envelope)
+        controls(ui, design.params_mut::<StSupportStage>(), &mut self.remesh_memory, &mut self.show_reference, &mut self.show_envelope)
     }
     fn results(&self, ui: &mut egui::Ui, _design: &Design) {
         if let Some(v) = &self.result {
@@ -102,7 +106,7 @@ impl MethodView for StSupportMethod {
         false
     }
     fn finished(&mut self, result: StageResult) -> Option<Report> {
-        let (StageResult::StSupport(summary), Some(v)) = (result, self.result.as_mut()) else {
+        let (StageResult::Method(MethodSummary::StSupport(summary)), Some(v)) = (result, self.result.as_mut()) else {
             return None;
         };
         let report = summary.report.clone();
@@ -121,10 +125,10 @@ impl MethodView for StSupportMethod {
         serde_json::to_value(Automation { ready: summary.is_some(), panels: summary.map_or(0, |s| s.report.output.panels) }).unwrap_or_default()
     }
     fn remesh_to(&self, design: &mut Design, faces: usize) {
-        design.st_support.remesh = Sizing::UniformFaces(faces);
+        design.params_mut::<StSupportStage>().remesh = Sizing::UniformFaces(faces);
     }
     fn link_applied(&mut self, design: &Design) {
-        self.remesh_memory.remember(design.st_support.remesh);
+        self.remesh_memory.remember(design.params::<StSupportStage>().remesh);
     }
 }
 
