@@ -1,4 +1,4 @@
-//! Moulds before and after the ST method's mould rounds (`st_adapted::moulds::fewer_moulds`) on
+//! Moulds before and after the ST method's mould rounds (`st_adapted::moulds::fewer_moulds_of`) on
 //! shared meshes, at 2 mm on a 30 m diagonal: per round the coarsening, moulds, largest kink and
 //! distance.
 //!
@@ -9,7 +9,7 @@ use spherical_faces::panels::moulds::{Fabrication, MouldFits, MouldTarget};
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
-use spherical_faces::st_adapted::moulds::fewer_moulds;
+use spherical_faces::st_adapted::moulds::{fewer_moulds_of, Moved};
 use spherical_faces::st_adapted::params::StAdaptedParams;
 use spherical_faces::units::{Length, Units};
 
@@ -19,23 +19,20 @@ fn main() {
         let reference = Reference::from_triangles(import_mesh(&bytes, &path).expect("a mesh").mesh);
         let diag = reference.diagonal();
         let fabrication = Fabrication { units: Units::M, moulds: MouldTarget::Tolerance(Length { value: diag * 2e-3 / 30.0, unit: None }) };
-        let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, fabrication, ..Default::default() };
-        let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+        let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
+        let result = spherical_faces::st_adapted::compute(&reference, &params, &Fabrication::default(), Clock::default(), &mut |_| Ok(())).unwrap();
         let before = fabrication.assign(&MouldFits::of(&result.panels), diag).moulds.len();
         let t = std::time::Instant::now();
-        let fewer =
-            fewer_moulds(&reference, &result.sphere_mesh, &result.metrics, &result.panels, &fabrication, &params, Clock::default(), &mut |_| Ok(()))
-                .unwrap();
+        let start = Moved { sphere_mesh: result.sphere_mesh, panels: result.panels, deviations: result.panel_deviations, metrics: result.metrics };
+        let (moved, outcome) = fewer_moulds_of(&reference, start.clone(), &params, &fabrication, Clock::default(), &mut |_| Ok(())).unwrap();
         println!(
             "{path}: {} panels, moulds {before}, kink max {:.2}°, distance {:.2e}; rounds in {:.0} ms:",
-            result.panels.len(),
-            result.metrics.max_kink_angle_deg,
-            result.metrics.max_distance_to_reference,
+            start.panels.len(),
+            start.metrics.max_kink_angle_deg,
+            start.metrics.max_distance_to_reference,
             t.elapsed().as_secs_f64() * 1e3
         );
-        match fewer {
-            Some(f) => f.rounds.iter().for_each(|r| println!("  {r:?}")),
-            None => println!("  no round kept fewer moulds"),
-        }
+        outcome.rounds.iter().for_each(|r| println!("  {r:?}"));
+        println!("  moulds after: {}", fabrication.assign(&MouldFits::of(&moved.panels), diag).moulds.len());
     }
 }

@@ -4,6 +4,7 @@
 
 use spherical_faces::geometry::bspline::BSplineSurface;
 use spherical_faces::geometry::mesh::Face;
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
 use spherical_faces::remeshing::quad_remeshing::coverage;
@@ -47,7 +48,7 @@ fn main() {
             None => Loaded::from_file(&std::fs::read(&a).expect("readable"), &a).expect("loads"),
         };
         let params = SqParams::default();
-        let r = spherical_faces::sq::compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).expect("runs");
+        let r = spherical_faces::sq::compute(&loaded.surface, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).expect("runs");
         let s = loaded.surface.spline().expect("a B-spline");
         let q = r.quad_mesh.as_ref().expect("Q′");
         println!("{a}: Q′ {} quads, coverage {:.4}", q.mesh.faces.len(), coverage(s, &q.mesh.faces, &q.uv));

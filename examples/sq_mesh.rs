@@ -6,6 +6,7 @@
 //! DUMP (each face's worst vertex distance to its sphere, and its radius), FAR (the vertices
 //! farthest from the reference), PHASES (the farthest vertex after each phase).
 
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
 use spherical_faces::samples::Sample;
@@ -42,7 +43,7 @@ fn main() {
         let mut last_phase: Option<(spherical_faces::sq::sphere_optimization::SpherePhase, f64)> = None;
         let mut phase_log: Vec<String> = Vec::new();
         let t0 = std::time::Instant::now();
-        let r = spherical_faces::sq::compute(&loaded.surface, &params, Clock::native(), &mut |e| {
+        let r = spherical_faces::sq::compute(&loaded.surface, &params, &Fabrication::default(), Clock::native(), &mut |e| {
             if let SqEvent::Spheres { phase, iteration, terms, positions, .. } = e {
                 if phases {
                     {

@@ -1,5 +1,6 @@
 // Development aid: runs SQ on one B-spline JSON and prints the stars whose support planes meet
 // below α, with their valence, parameters and distance to the nearest singular vertex.
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
 use spherical_faces::sq::compute;
@@ -11,7 +12,7 @@ fn main() {
     let name = std::env::args().nth(1).unwrap();
     let loaded = Loaded::from_file(&std::fs::read(&name).unwrap(), &name).unwrap();
     let params = SqParams::default();
-    let r = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    let r = compute(&loaded.surface, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
     let q = r.quad_mesh.as_ref().unwrap();
     let f = r.sq_mesh.as_ref().unwrap();
     let sm = &f.mesh.sphere_mesh;

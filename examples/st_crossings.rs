@@ -11,6 +11,7 @@ use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::import::import_mesh;
 use spherical_faces::panels::build_panels_with;
 use spherical_faces::panels::exact_surface::{ExactSurfaceError, ExactSurfaces};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
@@ -39,7 +40,7 @@ fn main() {
         let mesh = import_mesh(&std::fs::read(&path).unwrap(), &path).unwrap();
         let reference = Reference::from_triangles(mesh.mesh);
         let params = StAdaptedParams { sizing, ..StAdaptedParams::default() };
-        let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+        let r = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
         let tol = 1e-4 * r.diag;
         let initial = crossing(&build_panels_with(&r.initial_sphere_mesh, tol, params.variant));
         let mut intersection = r.sphere_mesh.clone();

@@ -7,6 +7,7 @@
 
 use spherical_faces::import::{import_file, ImportedFile};
 use spherical_faces::panels::deviation::panel_samples;
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
@@ -25,7 +26,7 @@ fn main() {
             ImportedFile::Mesh(m) => Reference::from_triangles(m.mesh),
         };
         let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon }, ..StAdaptedParams::default() };
-        let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+        let r = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
         let diag = r.diag;
         let bound = params.distance_bound(reference.facet_sagitta());
         let sm = &r.sphere_mesh;

@@ -12,6 +12,7 @@ use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::import::import_mesh;
 use spherical_faces::panels::deviation::max_deviation;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
@@ -46,7 +47,7 @@ fn main() {
                 params.weights.edge_circle = w;
             }
             let t0 = std::time::Instant::now();
-            let r = match compute(&reference, &params, Clock::native(), &mut |_| Ok(())) {
+            let r = match compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())) {
                 Ok(r) => r,
                 Err(e) => {
                     println!("| {name} | {variant:?} | refused: {e} | | | | |");

@@ -7,6 +7,7 @@
 
 use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
 use spherical_faces::import::import_mesh;
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::{ignore, Clock};
 use spherical_faces::reference::Reference;
 use spherical_faces::st_support::{compute, StSupportParams};
@@ -20,7 +21,7 @@ fn main() {
         let reference = Reference::from_triangles(mesh);
         for optimize_radius in [false, true] {
             let params = StSupportParams { optimize_radius, ..Default::default() };
-            let r = compute(&reference, &params, Clock::native(), &mut ignore).expect("st-support succeeds");
+            let r = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut ignore).expect("st-support succeeds");
             let est = &r.absolute;
             let (a0, m0med, m0max) = summary_stats(&est.angles_m0_deg);
             let (a1, m1med, m1max) = summary_stats(&est.angles_m_deg);

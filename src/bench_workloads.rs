@@ -35,7 +35,7 @@ use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::import::{import_file, ImportedFile};
 use crate::panels::build_panels;
-use crate::panels::moulds::MouldFits;
+use crate::panels::moulds::{Fabrication, MouldFits};
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::ignore;
 use crate::progress::Clock;
@@ -313,7 +313,7 @@ impl SqWorkload {
     /// final optimization, and the run's total (ms).
     pub fn sample(&self, clock: Clock) -> SqSample {
         let t0 = clock.now();
-        let r = sq::compute(&self.reference, &self.params, clock, &mut |_| Ok(())).expect("SQ runs");
+        let r = sq::compute(&self.reference, &self.params, &Fabrication::default(), clock, &mut |_| Ok(())).expect("SQ runs");
         let total_ms = clock.now() - t0;
         let faces = r.sq_mesh.as_ref().map_or(0, |f| f.mesh.panels.len());
         let c = r.congruence;
@@ -578,14 +578,15 @@ impl VerdictRun {
             VerdictRun::StDome => {
                 let dome = Reference::from_triangles(samples::Sample::Dome.mesh());
                 let params = crate::st_adapted::params::StAdaptedParams { sizing: Sizing::UniformFaces(300), ..Default::default() };
-                let st = crate::st_adapted::compute(&dome, &params, Clock(None), &mut |_| Ok(())).expect("ST runs on the dome");
-                crate::pipeline::stages::st_adapted::export(&dome, &st, &params, Clock(None)).0.guarantees
+                let st =
+                    crate::st_adapted::compute(&dome, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(())).expect("ST runs on the dome");
+                crate::pipeline::stages::st_adapted::export(&dome, &st, &params, &Fabrication::default(), Clock(None)).0.guarantees
             }
             VerdictRun::SqVault => {
                 let vault = samples::Sample::Vault.bspline().expect("the vault is a B-spline");
                 let vault = Reference::from_bspline(vault).expect("a B-spline reference");
                 let params = sq::params::SqParams { grid: 12, faces: 60, ..Default::default() };
-                sq::compute(&vault, &params, Clock(None), &mut |_| Ok(())).expect("SQ runs on the vault").verdict.guarantees
+                sq::compute(&vault, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(())).expect("SQ runs on the vault").verdict.guarantees
             }
         }
     }
@@ -606,7 +607,10 @@ pub fn hard_verdict_run(name: &str, bytes: &[u8]) -> Vec<crate::guarantees::Guar
     let params = sq::params::SqParams { grid: 16, faces: 120, theta_deg: 15.0, alpha_deg: 45.0, ..Default::default() };
     let Ok(ImportedFile::BSpline(b)) = import_file(bytes, name) else { panic!("{name} is a B-spline") };
     let reference = Reference::from_bspline(b.surface).expect("a B-spline reference");
-    sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}")).verdict.guarantees
+    sq::compute(&reference, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(()))
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .verdict
+        .guarantees
 }
 
 /// Whether two runs of [`verdict_runs`] reach the same verdict: the same guarantees, each holding

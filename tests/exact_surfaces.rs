@@ -15,6 +15,7 @@ use spherical_faces::geometry::rational_bezier::{RationalCurve, RationalPatch, S
 use spherical_faces::import::{import_file, ImportedFile};
 use spherical_faces::panels::arc::Arc;
 use spherical_faces::panels::exact_surface::{panel_patch, support_patch, ExactSurfaceError};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::panels::panel::Panel;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
@@ -124,14 +125,16 @@ fn check_support(name: &str, elements: &[SupportElement], diag: f64) {
 fn st_adapted_panels_are_exact_patches() {
     let reference = load_reference("tri_mesh");
     let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
-    let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
+    let result = spherical_faces::st_adapted::compute(&reference, &params, &Fabrication::default(), Clock::default(), &mut |_| Ok(())).unwrap();
     check_panels("st tri_mesh", &result.panels, reference.diagonal());
 }
 
 #[test]
 fn st_support_panels_and_elements_are_exact_patches() {
     let reference = load_reference("cmc1");
-    let result = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock::default(), &mut |_| Ok(())).unwrap();
+    let result =
+        spherical_faces::st_support::compute(&reference, &StSupportParams::default(), &Fabrication::default(), Clock::default(), &mut |_| Ok(()))
+            .unwrap();
     check_panels("st-support cmc1", &result.panels, reference.diagonal());
     check_support("st-support cmc1", &result.support.elements, reference.diagonal());
 }
@@ -144,7 +147,8 @@ fn sq_panels_and_elements_are_exact_patches() {
     };
     for (name, surface) in [("sq vault", Sample::Vault.bspline().unwrap()), ("sq tunnel_arch", tunnel)] {
         let reference = Reference::from_bspline(surface).unwrap();
-        let result = spherical_faces::sq::compute(&reference, &SqParams::default(), Clock::default(), &mut |_| Ok(())).unwrap();
+        let result =
+            spherical_faces::sq::compute(&reference, &SqParams::default(), &Fabrication::default(), Clock::default(), &mut |_| Ok(())).unwrap();
         let mesh = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh;
         assert!(mesh.panels.iter().all(|p| p.arcs.len() == 4));
         check_panels(name, &mesh.panels, reference.diagonal());
@@ -157,7 +161,9 @@ fn sq_panels_and_elements_are_exact_patches() {
 #[test]
 fn planar_and_triangular_panels() {
     let reference = Reference::from_triangles(Sample::SphereCap.mesh());
-    let result = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock::default(), &mut |_| Ok(())).unwrap();
+    let result =
+        spherical_faces::st_support::compute(&reference, &StSupportParams::default(), &Fabrication::default(), Clock::default(), &mut |_| Ok(()))
+            .unwrap();
     let p = &result.panels[0];
     let patch = panel_patch(p).unwrap();
     let collapsed = patch.side(Side::V1);

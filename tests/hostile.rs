@@ -15,6 +15,7 @@ use spherical_faces::export::Report;
 use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::import::import_mesh;
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::panels::panel::Panel;
 use spherical_faces::panels::tessellate::MAX_PANEL_TRIANGLES;
 use spherical_faces::panels::{level_cap, PANEL_TRIANGLE_BUDGET};
@@ -117,20 +118,20 @@ fn every_hostile_file_gets_a_bounded_clear_answer() {
         // faces is bounded too, but takes minutes in a test build).
         let remesh = if reference.mesh().face_count() <= 2000 { Sizing::None } else { Sizing::UniformFaces(300) };
         let params = StSupportParams { remesh, ..StSupportParams::default() };
-        match spherical_faces::st_support::compute(reference, &params, clock, &mut ignore) {
+        match spherical_faces::st_support::compute(reference, &params, &Fabrication::default(), clock, &mut ignore) {
             Ok(result) => {
                 assert_bounded_panels(&result.panels, &file);
-                let (report, _) = stages::st_support::export(reference, &result, &params, clock);
+                let (report, _) = stages::st_support::export(reference, &result, &params, &Fabrication::default(), clock);
                 assert_report(&report, &file);
             }
             Err(e) => assert_clear(&e.to_string(), &file),
         }
         let params = StAdaptedParams { sizing: Sizing::UniformFaces(60), ..StAdaptedParams::default() };
-        match spherical_faces::st_adapted::compute(reference, &params, clock, &mut |_| Ok(())) {
+        match spherical_faces::st_adapted::compute(reference, &params, &Fabrication::default(), clock, &mut |_| Ok(())) {
             Ok(result) => {
                 assert_bounded_panels(&result.panels, &file);
                 assert!(result.remeshed.face_count() <= 180, "{file}: {} faces for 60", result.remeshed.face_count());
-                let (report, _) = stages::st_adapted::export(reference, &result, &params, clock);
+                let (report, _) = stages::st_adapted::export(reference, &result, &params, &Fabrication::default(), clock);
                 assert_report(&report, &file);
             }
             Err(e) => assert_clear(&e.to_string(), &file),
@@ -155,7 +156,7 @@ fn remeshing_a_tiny_mesh_reaches_its_target_or_refuses() {
         assert!(out.mesh.face_count() <= cap, "{} faces over the cap {cap}", out.mesh.face_count());
         assert!(splits <= out.rounds.len() * cap, "{splits} splits");
         let st = StAdaptedParams { sizing: Sizing::UniformFaces(n), ..StAdaptedParams::default() };
-        match spherical_faces::st_adapted::compute(&reference, &st, Clock(None), &mut |_| Ok(())) {
+        match spherical_faces::st_adapted::compute(&reference, &st, &Fabrication::default(), Clock(None), &mut |_| Ok(())) {
             Ok(r) => assert!((n / 3..=3 * n).contains(&r.remeshed.face_count()), "{} faces for {n}", r.remeshed.face_count()),
             Err(e) => assert!(matches!(e, StAdaptedError::Remesh(..)) && e.to_string().contains("remesh"), "{e}"),
         }
@@ -296,16 +297,18 @@ fn st_support_warns_where_h_changes_sign() {
 #[test]
 fn slivers_are_counted_and_tessellation_is_bounded() {
     let reference = load(&Path::new(OWN).join("sliver_dome.obj")).unwrap().surface;
-    let result = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
+    let result =
+        spherical_faces::st_support::compute(&reference, &StSupportParams::default(), &Fabrication::default(), Clock(None), &mut ignore).unwrap();
     assert!(result.metrics.degenerate_faces >= 1);
     assert!(result.warnings.iter().any(|w| matches!(w, Warning::Slivers { faces } if *faces >= 1)), "{:?}", result.warnings);
     assert_bounded_panels(&result.panels, "sliver_dome");
 
     let saddle = load(&Path::new(SHARED).join("tessellation_blowup_saddle18.obj")).unwrap().surface;
-    let result = spherical_faces::st_support::compute(&saddle, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
+    let result =
+        spherical_faces::st_support::compute(&saddle, &StSupportParams::default(), &Fabrication::default(), Clock(None), &mut ignore).unwrap();
     assert_bounded_panels(&result.panels, "saddle18");
     let ngon = load(&Path::new(OWN).join("ngon_1500.obj")).unwrap().surface;
-    let result = spherical_faces::st_support::compute(&ngon, &StSupportParams::default(), Clock(None), &mut ignore).unwrap();
+    let result = spherical_faces::st_support::compute(&ngon, &StSupportParams::default(), &Fabrication::default(), Clock(None), &mut ignore).unwrap();
     let triangles: usize = result.panels.iter().map(|p| p.triangles.len()).sum();
     let zippers = result.panels.len() * 4 * (4 * level_cap(result.panels.len(), PANEL_TRIANGLE_BUDGET, 32) + 2);
     assert!(triangles <= PANEL_TRIANGLE_BUDGET + zippers, "{triangles} triangles for {} panels", result.panels.len());
@@ -325,7 +328,7 @@ fn a_folded_flap_is_warned_about_and_remeshes_within_bounds() {
     assert!(operations <= 40 * cap, "{operations} operations, cap {cap}");
     // The flap cannot be cut into 200 even faces: refused, and the refusal names the fold.
     let params = StAdaptedParams { sizing: Sizing::UniformFaces(200), ..StAdaptedParams::default() };
-    let err = spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_err();
+    let err = spherical_faces::st_adapted::compute(&reference, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(())).unwrap_err();
     let StAdaptedError::Remesh(refused) = &err else { panic!("{err}") };
     assert!(refused.warnings.iter().any(|w| matches!(w, Warning::Folds { .. })), "{err}");
     assert!(err.to_string().contains("folds back"), "{err}");
@@ -356,13 +359,14 @@ fn grid(n: usize) -> TriMesh {
 fn methods_refuse_more_faces_than_they_handle_and_name_the_remesh() {
     let reference = Reference::from_triangles(grid(145)); // 42,050 faces
     assert!(reference.mesh().face_count() > MAX_METHOD_FACES);
-    let err = spherical_faces::st_support::compute(&reference, &StSupportParams::default(), Clock(None), &mut ignore).unwrap_err();
+    let err =
+        spherical_faces::st_support::compute(&reference, &StSupportParams::default(), &Fabrication::default(), Clock(None), &mut ignore).unwrap_err();
     let StSupportError::TooManyFaces(e) = &err else { panic!("{err}") };
     assert_eq!(e.suggested(), MAX_METHOD_FACES / 2);
     assert!(err.to_string().contains(&format!("remesh to about {} faces first", MAX_METHOD_FACES / 2)), "{err}");
     let stage = stages::StageError::from(err);
     assert_eq!(stage.remesh_to(), Some(MAX_METHOD_FACES / 2));
     let params = StAdaptedParams { sizing: Sizing::UniformFaces(MAX_METHOD_FACES + 1), ..StAdaptedParams::default() };
-    let err = spherical_faces::st_adapted::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap_err();
+    let err = spherical_faces::st_adapted::compute(&reference, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(())).unwrap_err();
     assert!(matches!(err, StAdaptedError::TooManyFaces(_)), "{err}");
 }

@@ -175,9 +175,10 @@ fn fabrication(delta: f64) -> Fabrication {
 fn st_adapted_panels_fit_their_moulds() {
     let reference = load_reference("tri_mesh");
     let delta = 2e-4 * reference.diagonal();
-    let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, fabrication: fabrication(delta), ..Default::default() };
-    let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_adapted::export(&reference, &result, &params, Clock::default());
+    let fab = fabrication(delta);
+    let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
+    let result = spherical_faces::st_adapted::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_adapted::export(&reference, &result, &params, &fab, Clock::default());
     check("st tri_mesh", &result.panels, &report, &files, delta, None);
 }
 
@@ -185,9 +186,10 @@ fn st_adapted_panels_fit_their_moulds() {
 fn st_support_panels_fit_their_moulds() {
     let reference = load_reference("cmc1");
     let delta = 1e-4 * reference.diagonal();
-    let params = StSupportParams { fabrication: fabrication(delta), ..Default::default() };
-    let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
+    let fab = fabrication(delta);
+    let params = StSupportParams::default();
+    let result = spherical_faces::st_support::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_support::export(&reference, &result, &params, &fab, Clock::default());
     check("st-support cmc1", &result.panels, &report, &files, delta, None);
     not_snapped_when_not_asked("st-support cmc1", &report);
 }
@@ -199,9 +201,10 @@ fn st_support_panels_fit_their_moulds() {
 fn a_tolerance_beyond_the_panels_still_gives_a_sphere() {
     let reference = load_reference("cmc1");
     let delta = 0.12 * reference.diagonal();
-    let params = StSupportParams { fabrication: fabrication(delta), ..Default::default() };
-    let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
+    let fab = fabrication(delta);
+    let params = StSupportParams::default();
+    let result = spherical_faces::st_support::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_support::export(&reference, &result, &params, &fab, Clock::default());
     check("st-support cmc1 at 0.12 of the diagonal", &result.panels, &report, &files, delta, None);
     let m = report.moulds.as_ref().unwrap();
     assert_eq!(m.count, 1);
@@ -216,9 +219,10 @@ fn a_tolerance_beyond_the_panels_still_gives_a_sphere() {
 fn sq_panels_fit_their_moulds() {
     let reference = Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap();
     let delta = 1e-4 * reference.diagonal();
-    let params = SqParams { fabrication: fabrication(delta), ..Default::default() };
-    let result = spherical_faces::sq::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::sq::export(&reference, &result, &params, Clock::default());
+    let fab = fabrication(delta);
+    let params = SqParams::default();
+    let result = spherical_faces::sq::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::sq::export(&reference, &result, &params, &fab, Clock::default());
     let panels = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh.panels;
     check("sq vault", panels, &report, &files, delta, None);
     not_snapped_when_not_asked("sq vault", &report);
@@ -230,9 +234,9 @@ fn sq_panels_fit_their_moulds() {
 fn tolerances_are_read_in_the_design_units() {
     let reference = load_reference("cmc1");
     let run = |fabrication: Fabrication| {
-        let params = StSupportParams { fabrication, ..Default::default() };
-        let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-        stages::st_support::export(&reference, &result, &params, Clock::default())
+        let params = StSupportParams::default();
+        let result = spherical_faces::st_support::compute(&reference, &params, &fabrication, Clock::default(), &mut |_| Ok(())).unwrap();
+        stages::st_support::export(&reference, &result, &params, &fabrication, Clock::default())
     };
     let (mm, files) = run(Fabrication { units: Units::Cm, moulds: MouldTarget::Tolerance(Length::new(20.0, Units::Mm)) });
     let m = mm.moulds.unwrap();
@@ -255,22 +259,24 @@ fn tolerances_are_read_in_the_design_units() {
 fn st_adapted_moves_its_panels_onto_fewer_moulds() {
     let reference = load_reference("tri_mesh");
     let delta = 2e-3 / 30.0 * reference.diagonal();
-    let base = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, fabrication: fabrication(delta), ..Default::default() };
-    let plain = spherical_faces::st_adapted::compute(&reference, &base, Clock::default(), &mut |_| Ok(())).unwrap();
+    let fab = fabrication(delta);
+    let base = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
+    let plain = spherical_faces::st_adapted::compute(&reference, &base, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = StAdaptedParams { optimize_moulds: true, ..base.clone() };
-    let result = spherical_faces::st_adapted::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_adapted::export(&reference, &result, &params, Clock::default());
+    let result = spherical_faces::st_adapted::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_adapted::export(&reference, &result, &params, &fab, Clock::default());
     let before = MouldFits::of(&plain.panels).count(delta);
     let after = report.moulds.as_ref().unwrap().count;
-    eprintln!("tri_mesh: moulds {before} → {after}; rounds {:?}", result.mould_rounds);
-    assert_eq!(result.moulds_before, Some(before));
+    let rounds = result.moulds.as_ref().expect("the rounds ran");
+    eprintln!("tri_mesh: moulds {before} → {after}; rounds {:?}", rounds.rounds);
+    assert_eq!(rounds.before, before);
     assert!(after <= 15 && after < before, "{before} → {after}");
     assert_eq!(report.meets_guarantees, Some(true), "{:?}", report.guarantees);
     assert_eq!(result.metrics.flipped_faces, 0);
     assert!(result.metrics.max_vertex_sphere_residual <= 1e-8);
     assert!(result.metrics.max_kink_angle_deg <= 1.2 * plain.metrics.max_kink_angle_deg);
     assert!(result.metrics.max_distance_to_reference <= 2.0 * 2e-3);
-    check("st tri_mesh, fewer moulds", &result.panels, &report, &files, delta, Some(&result.mould_snap.as_ref().expect("snapped").moulds));
+    check("st tri_mesh, fewer moulds", &result.panels, &report, &files, delta, Some(&rounds.snap.as_ref().expect("snapped").moulds));
     snapped_panels_have_their_moulds_radius(&report, &files);
     // The count against δ before and after: the middle of the grid is δ itself.
     let m = report.moulds.as_ref().unwrap();
@@ -288,11 +294,12 @@ fn st_adapted_moves_its_panels_onto_fewer_moulds() {
 fn sq_vault_moulds(scale: f64, max_moulds: usize) -> bool {
     let reference = Reference::from_bspline(Sample::Vault.bspline().unwrap()).unwrap();
     let delta = scale * 2e-3 / 30.0 * reference.diagonal();
-    let base = SqParams { fabrication: fabrication(delta), ..Default::default() };
-    let plain = spherical_faces::sq::compute(&reference, &base, Clock::default(), &mut |_| Ok(())).unwrap();
+    let fab = fabrication(delta);
+    let base = SqParams::default();
+    let plain = spherical_faces::sq::compute(&reference, &base, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = SqParams { optimize_moulds: true, ..base.clone() };
-    let result = spherical_faces::sq::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::sq::export(&reference, &result, &params, Clock::default());
+    let result = spherical_faces::sq::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::sq::export(&reference, &result, &params, &fab, Clock::default());
     let (before, after) = (plain.sq_mesh.as_ref().unwrap(), result.sq_mesh.as_ref().unwrap());
     let rounds = after.moulds.as_ref().expect("the rounds ran");
     let start = before.mesh.figures.max_vertex_distance_to_reference;
@@ -349,14 +356,15 @@ fn sq_keeps_its_guarantees_on_the_vaults_moulds() {
 fn st_support_cmc1_moulds(scale: f64, max_moulds: usize) -> bool {
     let reference = load_reference("cmc1");
     let delta = scale * 2e-3 / 30.0 * reference.diagonal();
-    let base = StSupportParams { fabrication: fabrication(delta), ..Default::default() };
-    let plain = spherical_faces::st_support::compute(&reference, &base, Clock::default(), &mut |_| Ok(())).unwrap();
+    let fab = fabrication(delta);
+    let base = StSupportParams::default();
+    let plain = spherical_faces::st_support::compute(&reference, &base, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = StSupportParams { optimize_moulds: true, ..base.clone() };
-    let result = spherical_faces::st_support::compute(&reference, &params, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_support::export(&reference, &result, &params, Clock::default());
+    let result = spherical_faces::st_support::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
+    let (report, files) = stages::st_support::export(&reference, &result, &params, &fab, Clock::default());
     let rounds = result.moulds.as_ref().expect("the rounds ran");
     let distance = |r: &Report| r.metrics.as_ref().unwrap().max_distance_to_reference;
-    let (plain_report, _) = stages::st_support::export(&reference, &plain, &base, Clock::default());
+    let (plain_report, _) = stages::st_support::export(&reference, &plain, &base, &fab, Clock::default());
     eprintln!("st-support cmc1, δ×{scale}: distance before {:.3e}; rounds {:?}", distance(&plain_report), rounds.rounds);
     let m = &result.metrics;
     assert!(m.max_vertex_sphere_residual <= 1e-9 && m.max_orthogonality_residual <= 1e-9 && m.max_center_plane_residual <= 1e-9, "{m:?}");

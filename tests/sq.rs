@@ -9,6 +9,7 @@ mod common;
 use glam::DVec3;
 use spherical_faces::geometry::bspline::{BSplineBasis, BSplineFunction, BSplineSurface};
 use spherical_faces::import::{import_file, ImportedFile};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::assumptions::Warning;
 use spherical_faces::reference::Reference;
@@ -91,7 +92,7 @@ fn a_sign_change_of_the_mean_curvature_is_refused_with_the_shares() {
 fn a_sphere_patch_gives_one_sphere_with_node_axes_through_its_centre() {
     let r = Reference::from_bspline(spline("sphere_patch")).unwrap();
     let params = SqParams::default();
-    let result = spherical_faces::sq::compute(&r, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    let result = spherical_faces::sq::compute(&r, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
     assert!(result.congruence.sphere.is_some_and(|(c, radius)| c.length() < 1e-9 && (radius - 2.0).abs() < 1e-9), "{:?}", result.congruence.sphere);
     assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
     let m = &result.sq_mesh.expect("the SQ mesh").mesh;

@@ -8,6 +8,7 @@
 
 use glam::DVec3;
 use spherical_faces::geometry::bspline::{BSplineBasis, BSplineSurface};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::rng::Rng;
@@ -144,7 +145,7 @@ fn no_generated_roof_misses_a_guarantee_silently() {
             assert!(seed < 1000, "no {kind:?} of one-signed H");
         };
         let reference = Reference::from_bspline(surface).unwrap();
-        let result = match compute(&reference, &params, Clock::native(), &mut |_| Ok(())) {
+        let result = match compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())) {
             Ok(r) => r,
             Err(e @ SqError::MeanCurvatureNearZero { .. }) => panic!("{kind:?} {k}: {e}"),
             Err(e) => panic!("{kind:?} {k}: {e}"),
@@ -200,7 +201,7 @@ fn the_shared_surfaces_meet_their_guarantees_or_say_so() {
     for (name, surface, theta, alpha, must_meet) in cases {
         let reference = Reference::from_bspline(surface).unwrap();
         let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
-        let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+        let result = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
         let misses = delivered_misses(&reference, &result, &params);
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
         assert!(!must_meet || result.verdict.holds(), "{name}: {}", result.verdict.failure_text());
@@ -224,7 +225,8 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
         let reference = Reference::from_bspline(b.surface).unwrap();
         for (theta, alpha) in [(20.0, 75.0), (15.0, 45.0)] {
             let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
-            let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: refused: {e}"));
+            let result = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(()))
+                .unwrap_or_else(|e| panic!("{name}: refused: {e}"));
             let misses = delivered_misses(&reference, &result, &params);
             assert_eq!(result.verdict.holds(), misses.is_empty(), "{name} θ {theta}: verdict {} against {misses:?}", result.verdict.failure_text());
             let holds = |g: &str| result.verdict.guarantees.iter().any(|x| x.name == g && x.holds);
@@ -260,7 +262,7 @@ fn the_hard_surfaces_run_and_say_what_they_miss() {
 fn exact_vault() -> (Reference, SqParams, spherical_faces::sq::SqResult) {
     let reference = Reference::from_bspline(spherical_faces::samples::Sample::Vault.bspline().unwrap()).unwrap();
     let params = SqParams::default();
-    let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    let result = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
     assert!(result.verdict.holds(), "{}", result.verdict.failure_text());
     (reference, params, result)
 }
@@ -283,7 +285,7 @@ fn a_broken_sq_mesh_fails_its_final_check() {
     let broken = PolyMesh::new(positions, sm.mesh.faces.clone());
     let stars = QuadStars::new(&broken);
     let out = sq_mesh(broken, sm.face_spheres.clone(), &normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
-    let (_, panels, coverage) = spherical_faces::sq::measure_panels(&reference, &out, &f.uv, &params);
+    let (_, panels, coverage) = spherical_faces::sq::measure_panels(&reference, &out, &f.uv);
     let delivered =
         Delivered::SqMesh { mesh: &out.sphere_mesh.mesh, figures: &out.figures, panels: &panels, max_distance: params.max_distance, coverage };
     let check = verdict(&result.congruence.figures, delivered, params.theta_deg, params.alpha_deg);
@@ -328,7 +330,7 @@ fn an_sq_mesh_with_a_hole_misses_its_coverage() {
     let normals: Vec<DVec3> = f.uv.iter().map(|uv| reference.spline().unwrap().derivatives(uv[0], uv[1]).normal().unwrap()).collect();
     let stars = QuadStars::new(&holed);
     let out = sq_mesh(holed, spheres, &normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
-    let (_, panels, coverage) = spherical_faces::sq::measure_panels(&reference, &out, &f.uv, &params);
+    let (_, panels, coverage) = spherical_faces::sq::measure_panels(&reference, &out, &f.uv);
     assert!(coverage < f.coverage - 0.05 && coverage < MIN_COVERAGE, "the hole shows: {coverage} of {}", f.coverage);
     let delivered =
         Delivered::SqMesh { mesh: &out.sphere_mesh.mesh, figures: &out.figures, panels: &panels, max_distance: params.max_distance, coverage };
@@ -364,7 +366,8 @@ fn our_hard_corpus_runs_and_says_what_it_misses() {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
         let Ok(ImportedFile::BSpline(b)) = import_file(&std::fs::read(&path).unwrap(), &name) else { panic!("{name}") };
         let reference = Reference::from_bspline(b.surface).unwrap();
-        let result = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: refused: {e}"));
+        let result = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(()))
+            .unwrap_or_else(|e| panic!("{name}: refused: {e}"));
         let misses = delivered_misses(&reference, &result, &params);
         assert_eq!(result.verdict.holds(), misses.is_empty(), "{name}: verdict {} against {misses:?}", result.verdict.failure_text());
         met += usize::from(result.verdict.holds());

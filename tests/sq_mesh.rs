@@ -8,6 +8,7 @@
 
 mod common;
 
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::pipeline::session::Loaded;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::assumptions::Warning;
@@ -26,7 +27,8 @@ fn load(name: &str) -> Loaded {
 fn run(name: &str) -> (Loaded, SqResult) {
     let loaded = load(name);
     let params = SqParams { theta_deg: 20.0, alpha_deg: 75.0, ..SqParams::default() };
-    let result = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let result =
+        compute(&loaded.surface, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
     (loaded, result)
 }
 
@@ -158,7 +160,7 @@ fn the_remesh_follows_the_torsal_field_with_about_n_quads() {
 fn a_singular_torsal_field_falls_back_to_the_parameter_lines_and_says_so() {
     let loaded = load("paraboloid_dome.json");
     let params = SqParams { until: Until::Remesh, ..SqParams::default() };
-    let r = compute(&loaded.surface, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    let r = compute(&loaded.surface, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
     let q = r.quad_mesh.unwrap();
     assert!(q.parameter_lines());
     assert!(!q.singular_points.is_empty());
@@ -242,7 +244,7 @@ fn the_torsal_remesh_does_not_depend_on_the_parameter_speeds() {
     let mut found = Vec::new();
     for surface in [given, even] {
         let reference = Reference::from_bspline(surface.clone()).unwrap();
-        let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+        let r = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
         let mut singular: Vec<i32> = r.quad_mesh.unwrap().singular_points.iter().map(|s| s.quarters).collect();
         singular.sort();
         // The remesh along the field itself (SQ follows the parameter lines while it has

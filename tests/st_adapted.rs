@@ -13,6 +13,7 @@ use spherical_faces::geometry::mesh::TriMesh;
 use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
 use spherical_faces::panels::gaps::{max_arc_gap, GAP_SAMPLES};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::progress::{ignore, Cancelled, Clock};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
@@ -36,7 +37,7 @@ fn params(sizing: Sizing, variant: EdgeArcs, iterations: [usize; 3]) -> StAdapte
 fn run(name: &str, p: &StAdaptedParams) -> StAdaptedResult {
     let reference = load_reference(name);
     let mut log = Vec::new();
-    let r = compute(&reference, p, Clock::native(), &mut |e| {
+    let r = compute(&reference, p, &Fabrication::default(), Clock::native(), &mut |e| {
         if let StAdaptedEvent::Iteration { progress, energy, terms, .. } = e {
             let angle = terms.iter().find(|t| t.name == "angle").map_or(0.0, |t| t.max_abs);
             log.push(format!("  {:>9} it {:3} E {energy:.3e} max(1-cos) {angle:.2e}", progress.step, progress.done));
@@ -297,7 +298,8 @@ fn bubble_optimization_lowers_kinks_variant_b() {
 #[test]
 fn enneper_is_refused() {
     let reference = load_reference("enneper2");
-    let err = compute(&reference, &StAdaptedParams::default(), Clock::default(), &mut |_| Ok(())).expect_err("minimal surface refused");
+    let err = compute(&reference, &StAdaptedParams::default(), &Fabrication::default(), Clock::default(), &mut |_| Ok(()))
+        .expect_err("minimal surface refused");
     println!("enneper2: {err}");
     assert!(matches!(err, StAdaptedError::NoCentralSpheres(_)), "{err:?}");
     assert!(err.to_string().contains("no usable central spheres"), "{err}");
@@ -308,7 +310,7 @@ fn cancel_from_hook() {
     let reference = load_reference("tri_mesh");
     let p = params(Sizing::UniformFaces(150), EdgeArcs::Intersection, [3, 3, 6]);
     let (mut n, mut after) = (0, 0);
-    let err = compute(&reference, &p, Clock::default(), &mut |e| {
+    let err = compute(&reference, &p, &Fabrication::default(), Clock::default(), &mut |e| {
         if n >= 2 {
             after += 1;
         }
@@ -383,8 +385,8 @@ fn timing_about_600_faces() {
 fn report_has_the_st_schema() {
     let reference = load_reference("tri_mesh");
     let p = params(Sizing::UniformFaces(120), EdgeArcs::BisectingPlanes, [2, 3, 6]);
-    let r = compute(&reference, &p, Clock::native(), &mut |_| Ok(())).unwrap();
-    let (report, files) = spherical_faces::pipeline::stages::st_adapted::export(&reference, &r, &p, Clock::native());
+    let r = compute(&reference, &p, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
+    let (report, files) = spherical_faces::pipeline::stages::st_adapted::export(&reference, &r, &p, &Fabrication::default(), Clock::native());
     let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
     assert_eq!(json["method"], "st");
     for k in ["mean_kink_angle_deg", "max_kink_angle_deg", "max_distance_to_reference"] {
@@ -530,7 +532,7 @@ fn panels_stay_within_two_epsilon_boundary_included() {
             // variant (b) rises over a saddle to 2.03ε.
             let bound = if name == "botanic-garden-bubble-0" && variant == EdgeArcs::BisectingPlanes { 2.1 } else { 2.0 };
             let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon }, variant, ..Default::default() };
-            let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let r = compute(&reference, &p, &Fabrication::default(), Clock::default(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
             let boundary = boundary_vertices(&Topology::new(&r.sphere_mesh.mesh));
             let mut worst = (0.0f64, 0.0f64);
             for (face, panel) in r.sphere_mesh.mesh.faces.iter().zip(&r.panels) {
@@ -562,7 +564,7 @@ fn boundary_arcs_follow_the_reference_boundary() {
     use spherical_faces::samples::sphere_cap;
     let reference = Reference::from_triangles(sphere_cap(20.0, 12.0, 48));
     let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
-    let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).expect("the cap runs");
+    let r = compute(&reference, &p, &Fabrication::default(), Clock::default(), &mut |_| Ok(())).expect("the cap runs");
     let off_circle = |x: DVec3| (x.truncate().length() - 12.0).hypot(x.z);
     let worst = |sm: &SphereMesh| -> f64 {
         let panels = build_panels_with(sm, 1e-4 * r.diag, r.variant);
@@ -622,7 +624,7 @@ fn a_sphere_stays_trivial_at_the_default_tolerance() {
     let reference = load_reference("chebyshev_sphere");
     for variant in [EdgeArcs::Intersection, EdgeArcs::BisectingPlanes] {
         let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: DEFAULT_EPSILON }, variant, ..Default::default() };
-        let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).unwrap();
+        let r = compute(&reference, &p, &Fabrication::default(), Clock::default(), &mut |_| Ok(())).unwrap();
         let m = &r.metrics;
         println!(
             "{variant:?}: {} faces, kink mean {:.3}° max {:.3}°, max distance {:.2}ε",
@@ -686,7 +688,7 @@ fn a_folded_boundary_face_is_counted_and_fails_the_verdict() {
 fn the_optimization_folds_no_face_on_a_coarse_uniform_remesh() {
     let reference = load_reference("cmc1");
     let params = StAdaptedParams { sizing: Sizing::UniformFaces(120), ..StAdaptedParams::default() };
-    let r = compute(&reference, &params, Clock::native(), &mut |_| Ok(())).unwrap();
+    let r = compute(&reference, &params, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
     assert_eq!(r.initial_shape.flipped_faces, 0);
     assert_eq!(r.metrics.flipped_faces, 0, "{:?}", r.metrics);
     let panels = spherical_faces::panels::buildability::Buildability::of_panels(&r.panels, None, &r.panel_deviations, r.diag, Default::default());
@@ -733,7 +735,7 @@ fn crossing_intersection_arcs_are_cut_by_bisecting_planes() {
     for name in ["botanic-garden-bubble-0", "conical1"] {
         let reference = load_reference(name);
         let p = StAdaptedParams { sizing: Sizing::Adaptive { epsilon }, ..Default::default() };
-        let r = compute(&reference, &p, Clock::default(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let r = compute(&reference, &p, &Fabrication::default(), Clock::default(), &mut |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
         let sm = &r.sphere_mesh;
         let mut plain = sm.clone();
         plain.bisected_edges.clear();

@@ -12,6 +12,7 @@ use spherical_faces::congruence::central_spheres::{jet_fit, JetParams};
 use spherical_faces::geometry::absolute_sphere::AbsoluteSphere;
 use spherical_faces::geometry::mesh::topology::Topology;
 use spherical_faces::geometry::mesh::{PolyMesh, TriMesh};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::panels::sphere_mesh::BoundaryArcRule;
 use spherical_faces::progress::{ignore, Cancelled, Clock, OnProgress};
 use spherical_faces::reference::Reference;
@@ -27,7 +28,7 @@ use spherical_faces::stats::{summary_stats, Histogram};
 const MESHES: [&str; 3] = ["tri_mesh", "botanic-garden-bubble-0", "cmc1"];
 
 fn st_support(mesh: &TriMesh, params: &StSupportParams, progress: &mut OnProgress) -> Result<StSupportResult, StSupportError> {
-    compute(&Reference::from_triangles(mesh.clone()), params, Clock::native(), progress)
+    compute(&Reference::from_triangles(mesh.clone()), params, &Fabrication::default(), Clock::native(), progress)
 }
 
 fn run(mesh: &TriMesh, optimize_radius: bool) -> StSupportResult {
@@ -389,9 +390,9 @@ fn remeshed_runs_measure_distances_to_the_original_reference() {
     use spherical_faces::remeshing::Sizing;
     let reference = common::load_reference("tri_mesh");
     let params = StSupportParams { remesh: Sizing::UniformFaces(300), ..Default::default() };
-    let result = compute(&reference, &params, Clock::default(), &mut ignore).unwrap();
+    let result = compute(&reference, &params, &Fabrication::default(), Clock::default(), &mut ignore).unwrap();
     assert_ne!(result.sphere_mesh.mesh.face_count(), reference.mesh().face_count(), "remeshed");
-    let (report, files) = export(&reference, &result, &params, Clock::default());
+    let (report, files) = export(&reference, &result, &params, &Fabrication::default(), Clock::default());
     let to_original = result.panels.iter().map(|p| max_deviation(p, &reference)).fold(0.0, f64::max);
     let remesh = Reference::from_triangles(result.sphere_mesh.mesh.triangulated());
     let to_remesh = result.panels.iter().map(|p| max_deviation(p, remesh.bvh())).fold(0.0, f64::max);

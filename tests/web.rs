@@ -9,6 +9,7 @@ use wasm_bindgen_test::*;
 
 use spherical_faces::congruence::central_spheres::JetParams;
 use spherical_faces::import::{import_mesh, Format};
+use spherical_faces::panels::moulds::Fabrication;
 use spherical_faces::pipeline::fields::{field, Field};
 use spherical_faces::pipeline::protocol::*;
 use spherical_faces::pipeline::{Outbox, Session};
@@ -225,7 +226,7 @@ async fn sq_meets_its_guarantees_in_wasm_on(name: &str, surface: spherical_faces
     use spherical_faces::sq::params::SqParams;
     let reference = Reference::from_bspline(surface).unwrap();
     let params = SqParams { theta_deg: theta, alpha_deg: alpha, ..SqParams::default() };
-    let run = || spherical_faces::sq::compute(&reference, &params, Clock(None), &mut |_| Ok(())).unwrap();
+    let run = || spherical_faces::sq::compute(&reference, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(())).unwrap();
     let result = in_own_task(&format!("SQ on {name}"), run).await;
     let c = &result.congruence;
     let n = c.grid;

@@ -158,26 +158,44 @@ pub struct ExactSurfacesReport {
     pub refused: Vec<RefusedSurface>,
 }
 
-/// A panel ("panel") or support element ("support element") without an exact patch.
+/// What has no exact patch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SurfaceKind {
+    #[serde(rename = "panel")]
+    Panel,
+    #[serde(rename = "support element")]
+    SupportElement,
+}
+
+impl std::fmt::Display for SurfaceKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SurfaceKind::Panel => "panel",
+            SurfaceKind::SupportElement => "support element",
+        })
+    }
+}
+
+/// A panel or support element without an exact patch, and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RefusedSurface {
-    pub kind: String,
+    pub kind: SurfaceKind,
     pub id: usize,
     pub reason: String,
 }
 
 impl ExactSurfacesReport {
     pub fn of(exact: &crate::panels::exact_surface::ExactSurfaces) -> Self {
-        let refused = |kind: &str, list: &[Result<_, crate::panels::exact_surface::ExactSurfaceError>]| -> Vec<RefusedSurface> {
+        let refused = |kind: SurfaceKind, list: &[Result<_, crate::panels::exact_surface::ExactSurfaceError>]| -> Vec<RefusedSurface> {
             list.iter()
                 .enumerate()
                 .filter_map(|(id, r): (usize, &Result<crate::geometry::rational_bezier::RationalPatch, _>)| {
-                    r.as_ref().err().map(|e| RefusedSurface { kind: kind.into(), id, reason: e.to_string() })
+                    r.as_ref().err().map(|e| RefusedSurface { kind, id, reason: e.to_string() })
                 })
                 .collect()
         };
-        let mut all = refused("panel", &exact.panels);
-        all.extend(refused("support element", &exact.support));
+        let mut all = refused(SurfaceKind::Panel, &exact.panels);
+        all.extend(refused(SurfaceKind::SupportElement, &exact.support));
         Self {
             panels: exact.panels.iter().filter(|p| p.is_ok()).count(),
             support_elements: exact.support.iter().filter(|p| p.is_ok()).count(),

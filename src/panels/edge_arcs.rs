@@ -54,6 +54,21 @@ pub(crate) fn bisecting_plane_normal(p: DVec3, q: DVec3, af: DVec3, ag: DVec3, c
     })
 }
 
+/// An [`EdgeArcs`] written as its key ("a" or "b"), as reports carry it.
+pub mod as_key {
+    use crate::panels::edge_arcs::EdgeArcs;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &EdgeArcs, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(v.key())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<EdgeArcs, D::Error> {
+        let key = String::deserialize(d)?;
+        EdgeArcs::from_key(&key).ok_or_else(|| serde::de::Error::custom(format!("unknown edge variant '{key}'")))
+    }
+}
+
 /// The triangles of face `f` (one for a triangle, two for a quad), for the side tests below.
 pub(crate) fn face_triangles(mesh: &PolyMesh, f: usize) -> Vec<[DVec3; 3]> {
     mesh.faces[f].triangles().map(|t| t.map(|v| mesh.positions[v as usize])).collect()

@@ -300,7 +300,7 @@ pub trait MouldRoundFigures {
     fn kept(&self) -> bool;
 }
 
-/// What a method's rounds toward fewer moulds ([`snapped_rounds`]) did.
+/// What a method's rounds toward fewer moulds ([`fewer_moulds`]) did.
 #[derive(Clone, Debug)]
 pub struct MouldOutcome<Round> {
     /// The moulds the kept panels were snapped to, or why none was.
@@ -337,6 +337,12 @@ pub struct MouldRoundsSection<Round> {
     pub moulds_distance_limit: Option<f64>,
 }
 
+impl<Round> Default for MouldRoundsSection<Round> {
+    fn default() -> Self {
+        Self { mould_rounds: Vec::new(), moulds_before: None, moulds_distance_limit: None }
+    }
+}
+
 impl<Round: MouldRoundFigures> MouldRoundsSection<Round> {
     /// In words, why the method kept none of its rounds; None when a round was kept or none ran.
     pub fn refused(&self) -> Option<String> {
@@ -360,7 +366,7 @@ impl<Round: MouldRoundFigures> MouldRoundsSection<Round> {
 /// The rounds' tolerances, as multiples of δ, in order: δ itself (the snap), then coarser.
 pub const SNAP_COARSENING: [f64; 7] = [1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
 
-/// What one round of [`snapped_rounds`] found: its coarsening γ, the moulds at δ of the moved
+/// What one round of [`fewer_moulds`] found: its coarsening γ, the moulds at δ of the moved
 /// panels, and whether it was kept.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoundCount {
@@ -369,47 +375,86 @@ pub struct RoundCount {
     pub kept: bool,
 }
 
-/// What [`snapped_rounds`] made: the last kept result (None: none was kept), the moulds its
-/// panels were snapped to or why none was, and the moulds at δ before with the fits then.
-pub struct SnappedRounds<R> {
-    pub best: Option<R>,
-    pub snap: Result<MouldSnap, SnapLimit>,
-    pub before: usize,
-    pub fits_before: MouldFits,
+/// How a method's rounds toward fewer moulds go.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoundSchedule {
+    /// The rounds' tolerances, as multiples of δ, in order.
+    pub coarsening: &'static [f64],
+    /// The method's pull gives every panel its mould's curvature exactly (ST with support
+    /// structure, SQ): each round starts from the last kept result and skips a tolerance that
+    /// would not lower its count; the first round whose guarantees hold is kept (it is the
+    /// snap), later ones with fewer moulds. Otherwise the pull draws the panels toward their
+    /// moulds (the angle-minimizing ST method): each round starts from the last round's result
+    /// with δ measured on its panels, a round is kept with fewer moulds than before the rounds,
+    /// and [`MouldHook::snap`] gives the panels their moulds' radii after the rounds.
+    pub exact: bool,
 }
 
-/// Rounds toward fewer moulds for a method that can give every panel a prescribed curvature
-/// exactly: each round assigns the panels of the last kept result to the moulds of γ δ
-/// ([`SNAP_COARSENING`]; γ = 1 first), and `project` moves that result so that every panel has
-/// its mould's curvature (signed, per panel in order), answering the moved result and whether
-/// the method's guarantees hold (None: it could not; the rounds end). A round is kept when they
-/// hold and the moulds at δ fell; the rounds end at the first that breaks them. A kept round's
-/// panels have their moulds' radii (measured: [`MouldFits::has_mould_radius`]), so the last is
-/// the snap. `on_round` sees every round's result with its count.
-/// A method's projection of a result to exactness with every face at the curvature given: the
-/// projected result and whether it is exact, or None where it cannot be.
-pub type Projection<'a, R, E> = dyn FnMut(&R, &[f64]) -> Result<Option<(R, bool)>, E> + 'a;
+/// The schedule of the methods that give every panel a prescribed curvature exactly.
+pub const EXACT_ROUNDS: RoundSchedule = RoundSchedule { coarsening: &SNAP_COARSENING, exact: true };
 
-pub fn snapped_rounds<R, E: From<Cancelled>>(
-    start: &R,
-    panels: &dyn Fn(&R) -> &[Panel],
+/// A method's part in the rounds toward fewer moulds ([`fewer_moulds`], the one engine): how
+/// its result is pulled to the moulds' curvatures, and what a round reports.
+pub trait MouldHook {
+    type Result: Clone;
+    /// A round's figures, as the method's report lists them.
+    type Round;
+    type Error: From<Cancelled>;
+
+    fn schedule(&self) -> RoundSchedule;
+    fn panels<'r>(&self, result: &'r Self::Result) -> &'r [Panel];
+    /// Moves `from` so that every panel has (or draws toward) the signed curvature given, per
+    /// panel in order: the moved result and whether the method's guarantees hold on it; None
+    /// where it cannot (the rounds end).
+    fn pull(&mut self, from: &Self::Result, curvatures: &[f64]) -> Result<Option<(Self::Result, bool)>, Self::Error>;
+    /// A round's figures.
+    fn round(&self, moved: &Self::Result, count: RoundCount) -> Self::Round;
+    /// After the rounds of a schedule that is not exact: `kept` (the last kept result, else the
+    /// start) with every panel at its mould's radius where the method can, and the moulds; the
+    /// snapped result is None where it misses the method's guarantees.
+    fn snap(&mut self, _kept: &Self::Result, _fabrication: &Fabrication) -> Option<(Option<Self::Result>, MouldSnap)> {
+        None
+    }
+    /// The largest distance to the reference a round may reach (relative to the diagonal).
+    fn distance_limit(&self) -> f64;
+    fn progress(&mut self, p: Progress) -> Result<(), Cancelled>;
+}
+
+/// What the rounds made: the last kept result (None: none was kept) and what they did.
+pub struct MouldRun<R, Round> {
+    pub best: Option<R>,
+    pub outcome: MouldOutcome<Round>,
+}
+
+/// The rounds toward fewer moulds (`optimize_moulds`) of every method, from its result `start` on
+/// a reference of diagonal `diag`: each round assigns the panels of its start to the moulds of
+/// γ δ (the hook's [`RoundSchedule`]) and the hook pulls them to those moulds' curvatures
+/// (signed, per panel); a round is kept when the method's guarantees hold and the moulds at δ
+/// fell, and the rounds end at the first that breaks them. A kept round's panels of an exact
+/// schedule have their moulds' radii (measured: [`MouldFits::has_mould_radius`]), so the last is
+/// the snap; otherwise the hook snaps after the rounds.
+pub fn fewer_moulds<H: MouldHook>(
+    hook: &mut H,
+    start: &H::Result,
     diag: f64,
     fabrication: &Fabrication,
-    project: &mut Projection<R, E>,
-    on_round: &mut dyn FnMut(&R, RoundCount),
-    progress: &mut dyn FnMut(Progress) -> Result<(), Cancelled>,
-) -> Result<SnappedRounds<R>, E> {
-    let fits_before = MouldFits::of(panels(start));
-    let delta = fabrication.tolerance(&fits_before, diag);
+) -> Result<MouldRun<H::Result, H::Round>, H::Error> {
+    let schedule = hook.schedule();
+    let fits_before = MouldFits::of(hook.panels(start));
+    let delta_before = fabrication.tolerance(&fits_before, diag);
     let before = fabrication.assign(&fits_before, diag).moulds.len();
-    let (mut best, mut best_count, mut snap) = (None::<R>, usize::MAX, Err(SnapLimit::MethodTargets));
-    let n = SNAP_COARSENING.len();
-    for (k, &gamma) in SNAP_COARSENING.iter().enumerate() {
-        progress(Progress::new("fewer_moulds", k, n))?;
-        let current = best.as_ref().unwrap_or(start);
-        let fits = MouldFits::of(panels(current));
+    let (mut best, mut last) = (None::<H::Result>, None::<H::Result>);
+    let mut best_count = if schedule.exact { usize::MAX } else { before };
+    let mut snap = Err(SnapLimit::MethodTargets);
+    let mut rounds = Vec::new();
+    let n = schedule.coarsening.len();
+    for (k, &gamma) in schedule.coarsening.iter().enumerate() {
+        hook.progress(Progress::new("fewer_moulds", k, n))?;
+        let current = if schedule.exact { best.as_ref() } else { last.as_ref() }.unwrap_or(start);
+        let fits = MouldFits::of(hook.panels(current));
+        let delta = if schedule.exact { delta_before } else { fabrication.tolerance(&fits, diag) };
         let coarse = fits.assign(gamma * delta);
-        if coarse.moulds.len() >= best_count {
+        if schedule.exact && coarse.moulds.len() >= best_count {
             continue;
         }
         let curvatures: Vec<f64> = (0..fits.len())
@@ -422,31 +467,50 @@ pub fn snapped_rounds<R, E: From<Cancelled>>(
                 }
             })
             .collect();
-        let Some((moved, holds)) = project(current, &curvatures)? else {
+        let Some((moved, holds)) = hook.pull(current, &curvatures)? else {
             break;
         };
-        let moved_fits = MouldFits::of(panels(&moved));
+        let moved_fits = MouldFits::of(hook.panels(&moved));
         let count = fabrication.assign(&moved_fits, diag).moulds.len();
         let kept = holds && count < best_count;
-        on_round(&moved, RoundCount { coarsening: gamma, moulds: count, kept });
+        rounds.push(hook.round(&moved, RoundCount { coarsening: gamma, moulds: count, kept }));
         if !holds {
             break;
         }
         if kept {
-            let limits = coarse
-                .panel_mould
-                .iter()
-                .enumerate()
-                .map(|(i, &j)| (!moved_fits.has_mould_radius(i, coarse.moulds[j as usize].curvature, diag)).then_some(SnapLimit::Missed))
-                .collect();
-            // Snapped panels are cut from their moulds with no deviation: the fit is at δ.
-            snap = Ok(MouldSnap { moulds: MouldAssignment { tolerance: delta, ..coarse }, limits });
             best_count = count;
-            best = Some(moved);
+            if schedule.exact {
+                let limits = coarse
+                    .panel_mould
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &j)| (!moved_fits.has_mould_radius(i, coarse.moulds[j as usize].curvature, diag)).then_some(SnapLimit::Missed))
+                    .collect();
+                // Snapped panels are cut from their moulds with no deviation: the fit is at δ.
+                snap = Ok(MouldSnap { moulds: MouldAssignment { tolerance: delta, ..coarse }, limits });
+            }
+        }
+        match (schedule.exact, kept) {
+            (true, true) => best = Some(moved),
+            (true, false) => {}
+            (false, true) => {
+                best = Some(moved.clone());
+                last = Some(moved);
+            }
+            (false, false) => last = Some(moved),
         }
     }
-    progress(Progress::new("fewer_moulds", n, n))?;
-    Ok(SnappedRounds { best, snap, before, fits_before })
+    hook.progress(Progress::new("fewer_moulds", n, n))?;
+    if !schedule.exact {
+        if let Some((snapped, s)) = hook.snap(best.as_ref().unwrap_or(start), fabrication) {
+            snap = Ok(s);
+            if snapped.is_some() {
+                best = snapped;
+            }
+        }
+    }
+    let outcome = MouldOutcome { snap, rounds, before, fits_before, distance_limit: hook.distance_limit() };
+    Ok(MouldRun { best, outcome })
 }
 
 /// How many moulds: the fewest within a tolerance, or a count (the smallest tolerance that

@@ -95,6 +95,12 @@ pub trait Method: 'static {
     fn report(summary: &Self::Summary) -> &Report;
     fn report_mut(summary: &mut Self::Summary) -> &mut Report;
 
+    /// Runs the method's hot code once at worker start, so that a browser's first real run starts
+    /// on optimized wasm code (nothing by default).
+    fn warm_up() -> Result<(), String> {
+        Ok(())
+    }
+
     /// What the command line says of a run that wrote its files to `out`.
     fn describe(result: &Self::Result, report: &Report, request: &Request<Self::Params>, out: &str) -> String;
 }

@@ -9,6 +9,5 @@ pub mod protocol;
 pub mod session;
 pub mod sink;
 pub mod stages;
-pub mod warm_up;
 
 pub use session::{Loaded, Outbox, Session};

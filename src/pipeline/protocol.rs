@@ -134,6 +134,18 @@ methods! {
     Sq => sq::SqStage,
 }
 
+/// Every method's warm-up ([`Method::warm_up`]), at worker start.
+pub fn warm_up() -> Result<(), String> {
+    struct WarmUp;
+    impl MethodVisitor for WarmUp {
+        type Output = Result<(), String>;
+        fn visit<M: OnWire>(self) -> Result<(), String> {
+            M::warm_up()
+        }
+    }
+    MethodId::ALL.iter().try_for_each(|m| m.visit(WarmUp))
+}
+
 impl MethodSummary {
     /// The run's report.
     pub fn report(&self) -> &Report {

@@ -51,25 +51,30 @@ use glam::DVec3;
 
 use crate::congruence::torsal::{parameter_pair, TorsalPair};
 use crate::geometry::bspline::BSplineFunction;
+use crate::geometry::bspline::BSplineSurface;
 use crate::geometry::rigid_alignment::point_to_plane_motion;
 use crate::panels::buildability::Buildability;
 use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
+use crate::panels::moulds::{Fabrication, MouldHook, RoundCount, RoundSchedule, EXACT_ROUNDS};
+use crate::panels::panel::Panel;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::assumptions::Warning;
+use crate::reference::bspline::SplineReference;
 use crate::reference::Reference;
 use crate::remeshing::quad_remeshing::coverage;
 use crate::solver::TermStats;
 use crate::stats::median;
+use crate::units::Units;
 
 pub use self::error::SqError;
 pub use self::guarantees::Delivered;
 use self::metrics::{torsal_pairs, CongruenceFigures};
-use self::moulds::{fewer_moulds, SqMouldOutcome};
+use self::moulds::{SqMouldOutcome, SqMouldRound, DISTANCE_GROWTH};
 use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
-use self::radius::{check_mean_curvature, constant_radius_fit, fit_radius, mean_curvature_shares, SamplingGrid};
+use self::radius::{check_mean_curvature, RadiusFit, constant_radius_fit, fit_radius, mean_curvature_shares, SamplingGrid};
 use self::sphere_optimization::{on_grid, optimize_spheres, project_to_curvatures, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
 use self::start::{constant_function, constant_radius, spherical_reference};
@@ -240,22 +245,7 @@ pub fn compute_congruence(
         let sphere = (t + s * centre, s * radius);
         return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
     }
-    // Where H changes sign or vanishes, the central spheres pass through planes: only the
-    // constant start exists (Sec. 6.3).
-    let (sign, fit, mut warnings, starts) = match check_mean_curvature(&surface, &grid, (hi - lo).length() / s, params.faces) {
-        Ok(signs) => (signs.sign, fit_radius(&surface, &grid, params.radius_basis, &signs.excluded)?, signs.warnings, params.start.starts()),
-        Err(refusal @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
-            let [positive_share, negative_share] = mean_curvature_shares(&surface);
-            let sign = if positive_share >= negative_share { 1.0 } else { -1.0 };
-            let r = match (params.start, constant_radius(&grid, sign, params.faces, params.max_distance)) {
-                (RadiusStart::Auto | RadiusStart::Constant, Some((r, _))) => r,
-                _ => return Err(refusal),
-            };
-            let warning = Warning::CentralCongruenceUnbounded { positive_share, negative_share };
-            (sign, constant_radius_fit(&surface, params.radius_basis, r)?, vec![warning], &[RadiusStart::Constant][..])
-        }
-        Err(e) => return Err(e),
-    };
+    let (sign, fit, mut warnings, starts) = radius_start(&surface, &grid, (hi - lo).length() / s, params)?;
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
     let grid = &problem.grid;
     timings.lap("radius");
@@ -271,16 +261,7 @@ pub fn compute_congruence(
     let radius = BSplineFunction { coefficients, ..fit.function.clone() };
     let radii = grid.uv.iter().map(|p| radius.evaluate(p[0], p[1]).0).collect();
     timings.lap("metrics");
-    if let Some(central) = attempts.iter().find(|a| a.start == RadiusStart::Central && a.start != attempts[chosen].start) {
-        let a = &central.figures;
-        warnings.push(Warning::CentralCongruenceReplaced {
-            max_line_normal_angle_deg: a.max_line_normal_angle_deg,
-            theta_deg: params.theta_deg,
-            quads_without_real_torsal_directions: a.quads_without_real_torsal_directions,
-            min_torsal_plane_angle_deg: a.min_torsal_plane_angle_deg,
-            alpha_deg: params.alpha_deg,
-        });
-    }
+    warnings.extend(central_replaced(&attempts, chosen, params));
     let initial_figures = attempts[0].initial_figures.clone();
     Ok(SqCongruence {
         grid: n,
@@ -498,18 +479,23 @@ pub struct SqFinal {
 impl SqFinal {
     /// The mesh, its panels and what was measured on them, for [`guarantees::verdict`].
     pub fn delivered(&self, params: &SqParams) -> Delivered<'_> {
+        self.delivered_with(params, &self.buildability)
+    }
+
+    /// [`Self::delivered`] with `panels` measured on its panels.
+    fn delivered_with<'a>(&'a self, params: &SqParams, panels: &'a Buildability) -> Delivered<'a> {
         Delivered::SqMesh {
             mesh: &self.mesh.sphere_mesh.mesh,
             figures: &self.mesh.figures,
-            panels: &self.buildability,
+            panels,
             max_distance: params.max_distance,
             coverage: self.coverage,
         }
     }
 
     /// The final mesh with its panels measured ([`measure_panels`]).
-    fn new(reference: &Reference, mesh: SqMesh, uv: Vec<[f64; 2]>, edge_angles_deg: Vec<f64>, outcome: SphereOutcome, params: &SqParams) -> Self {
-        let (exact, buildability, coverage) = measure_panels(reference, &mesh, &uv, params);
+    fn new(reference: &Reference, mesh: SqMesh, uv: Vec<[f64; 2]>, edge_angles_deg: Vec<f64>, outcome: SphereOutcome) -> Self {
+        let (exact, buildability, coverage) = measure_panels(reference, &mesh, &uv);
         SqFinal { mesh, uv, edge_angles_deg, outcome, moulds: None, exact, buildability, coverage }
     }
 }
@@ -517,10 +503,11 @@ impl SqFinal {
 /// The exact surfaces of an SQ mesh's panels and support elements, what stops them from being
 /// built (with each panel's distance to the reference) and the share of the patch they cover
 /// (vertices at their closest points `uv`).
-pub fn measure_panels(reference: &Reference, mesh: &SqMesh, uv: &[[f64; 2]], params: &SqParams) -> (ExactSurfaces, Buildability, f64) {
+/// Lengths in the default unit: [`SqResult::verdict_in`] gives them in the design's.
+pub fn measure_panels(reference: &Reference, mesh: &SqMesh, uv: &[[f64; 2]]) -> (ExactSurfaces, Buildability, f64) {
     let exact = ExactSurfaces::of(&mesh.panels, &mesh.support.elements);
     let distances = panel_distances(&mesh.panels, reference);
-    let buildability = Buildability::measure(&exact, &distances, true, reference.diagonal(), params.fabrication.units);
+    let buildability = Buildability::measure(&exact, &distances, true, reference.diagonal(), Units::default());
     let coverage = reference.spline().map_or(f64::NAN, |s| coverage(s, &mesh.sphere_mesh.mesh.faces, uv));
     (exact, buildability, coverage)
 }
@@ -539,6 +526,22 @@ pub struct SqResult {
 }
 
 impl SqResult {
+    /// The verdict of what the run delivers ([`guarantees::verdict`], as far as it ran): the one
+    /// measurement the report, the CLI and the app read, lengths in `units` beside their share of
+    /// the diagonal. [`Self::verdict`] is the same measurement in the default unit, which the
+    /// method weighs its starts by.
+    pub fn verdict_in(&self, params: &SqParams, units: Units) -> Verdict {
+        let (c, theta, alpha) = (&self.congruence.figures, params.theta_deg, params.alpha_deg);
+        match (&self.sq_mesh, &self.quad_mesh) {
+            (Some(f), _) => {
+                let panels = Buildability { units, ..f.buildability.clone() };
+                guarantees::verdict(c, f.delivered_with(params, &panels), theta, alpha)
+            }
+            (None, Some(q)) => guarantees::verdict(c, Delivered::QuadMesh(&q.mesh, q.coverage), theta, alpha),
+            (None, None) => guarantees::verdict(c, Delivered::Congruence, theta, alpha),
+        }
+    }
+
     /// Median time of a full-optimization iteration (ms).
     pub fn final_iteration_median_ms(&self) -> Option<f64> {
         self.sq_mesh.as_ref().and_then(|f| median(&f.outcome.iteration_ms))
@@ -555,13 +558,14 @@ impl SqResult {
 pub fn compute(
     reference: &Reference,
     params: &SqParams,
+    fabrication: &Fabrication,
     clock: Clock,
     on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
 ) -> Result<SqResult, SqError> {
     if params.start != RadiusStart::Auto || params.until != Until::Final {
-        return compute_from(reference, params, clock, on_event);
+        return compute_from(reference, params, fabrication, clock, on_event);
     }
-    let mut constant = compute_from(reference, &SqParams { start: RadiusStart::Constant, ..params.clone() }, clock, on_event)?;
+    let mut constant = compute_from(reference, &SqParams { start: RadiusStart::Constant, ..params.clone() }, fabrication, clock, on_event)?;
     if constant.verdict.holds() {
         return Ok(constant);
     }
@@ -593,7 +597,7 @@ pub fn compute(
         constant.congruence.attempts.extend(central.attempts.into_iter().filter(|a| a.start == RadiusStart::Central));
         return Ok(constant);
     }
-    let mut central = finish_from(reference, &central_params, central, clock, &mut restarted)?;
+    let mut central = finish_from(reference, &central_params, central, fabrication, clock, &mut restarted)?;
     let (c, k) = (missed(&constant), missed(&central));
     let keep_central = k.len() < c.len();
     weigh(&mut constant, c);
@@ -610,6 +614,44 @@ pub fn compute(
         kept.congruence.attempts.append(&mut attempts);
     }
     Ok(kept)
+}
+
+/// The radius function to start from (Eq. 8), the sign of H it follows, the warnings, and the
+/// starts that exist: where H changes sign or vanishes, the central spheres pass through planes
+/// and only the constant start exists (Sec. 6.3). `extent`: the frame's bounding-box diagonal.
+fn radius_start(
+    surface: &BSplineSurface,
+    grid: &SamplingGrid,
+    extent: f64,
+    params: &SqParams,
+) -> Result<(f64, RadiusFit, Vec<Warning>, &'static [RadiusStart]), SqError> {
+    match check_mean_curvature(surface, grid, extent, params.faces) {
+        Ok(signs) => Ok((signs.sign, fit_radius(surface, grid, params.radius_basis, &signs.excluded)?, signs.warnings, params.start.starts())),
+        Err(refusal @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
+            let [positive_share, negative_share] = mean_curvature_shares(surface);
+            let sign = if positive_share >= negative_share { 1.0 } else { -1.0 };
+            let r = match (params.start, constant_radius(grid, sign, params.faces, params.max_distance)) {
+                (RadiusStart::Auto | RadiusStart::Constant, Some((r, _))) => r,
+                _ => return Err(refusal),
+            };
+            let warning = Warning::CentralCongruenceUnbounded { positive_share, negative_share };
+            Ok((sign, constant_radius_fit(surface, params.radius_basis, r)?, vec![warning], &[RadiusStart::Constant][..]))
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// The warning that the central congruence was tried and another start kept, with its figures.
+fn central_replaced(attempts: &[CongruenceAttempt], chosen: usize, params: &SqParams) -> Option<Warning> {
+    let central = attempts.iter().find(|a| a.start == RadiusStart::Central && a.start != attempts[chosen].start)?;
+    let a = &central.figures;
+    Some(Warning::CentralCongruenceReplaced {
+        max_line_normal_angle_deg: a.max_line_normal_angle_deg,
+        theta_deg: params.theta_deg,
+        quads_without_real_torsal_directions: a.quads_without_real_torsal_directions,
+        min_torsal_plane_angle_deg: a.min_torsal_plane_angle_deg,
+        alpha_deg: params.alpha_deg,
+    })
 }
 
 /// Rounds of the rigid alignment of the final mesh onto the reference.
@@ -636,11 +678,12 @@ fn closer(tried: &Verdict, before: &Verdict) -> bool {
 fn compute_from(
     reference: &Reference,
     params: &SqParams,
+    fabrication: &Fabrication,
     clock: Clock,
     on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
 ) -> Result<SqResult, SqError> {
     let congruence = compute_congruence(reference, params, clock, on_event)?;
-    finish_from(reference, params, congruence, clock, on_event)
+    finish_from(reference, params, congruence, fabrication, clock, on_event)
 }
 
 /// [`compute_from`] after the congruence: the quad mesh and the final mesh from `congruence`.
@@ -648,6 +691,7 @@ fn finish_from(
     reference: &Reference,
     params: &SqParams,
     congruence: SqCongruence,
+    fabrication: &Fabrication,
     clock: Clock,
     on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
 ) -> Result<SqResult, SqError> {
@@ -680,7 +724,7 @@ fn finish_from(
         result.warnings = warnings;
         return Ok(result);
     }
-    let mut done = final_mesh(reference, &result.congruence, &quad, params, clock, &mut timings, on_event)?;
+    let mut done = final_mesh(reference, &result.congruence, &quad, params, fabrication, clock, &mut timings, on_event)?;
     let verdict = |f: &SqFinal| guarantees::verdict(&result.congruence.figures, f.delivered(params), theta, alpha);
     result.verdict = verdict(&done);
     if result.congruence.start == RadiusStart::Constant && result.congruence.sphere.is_none() {
@@ -690,7 +734,7 @@ fn finish_from(
         while retry && scale < MAX_RADIUS_SCALE && !result.verdict.holds() {
             scale *= 2.0;
             let wider = SqCongruence { radius: result.congruence.radius.scaled(scale), ..result.congruence.clone() };
-            let tried = final_mesh(reference, &wider, &quad, params, clock, &mut timings, on_event)?;
+            let tried = final_mesh(reference, &wider, &quad, params, fabrication, clock, &mut timings, on_event)?;
             let v = verdict(&tried);
             if closer(&v, &result.verdict) {
                 (done, result.verdict, kept_scale) = (tried, v, scale);
@@ -726,76 +770,121 @@ fn spherical_mesh(
     let mut out = sq_mesh(mesh, spheres, &normals, stars, diag, params.support_depth * diag, params.axis_length * diag);
     let distance = out.sphere_mesh.mesh.positions.iter().map(|p| (p.distance(centre) - r).abs()).fold(0.0, f64::max);
     out.figures.max_vertex_distance_to_reference = distance / diag;
-    let done = SqFinal::new(reference, out, quad.uv.clone(), quad.edge_angles_deg.clone(), SphereOutcome::default(), params);
+    let done = SqFinal::new(reference, out, quad.uv.clone(), quad.edge_angles_deg.clone(), SphereOutcome::default());
     timings.lap("panels");
     done
 }
 
-/// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2).
-fn final_mesh(
-    reference: &Reference,
-    congruence: &SqCongruence,
-    quad: &SqQuadMesh,
-    params: &SqParams,
-    clock: Clock,
-    timings: &mut Timings,
-    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
-) -> Result<SqFinal, SqError> {
-    let surface = reference.spline().ok_or(SqError::NotBSpline)?;
-    let spline = reference.spline_reference().ok_or(SqError::NotBSpline)?;
-    let (lo, hi) = reference.mesh().bbox();
-    let (t, s) = (0.5 * (lo + hi), reference.diagonal());
-    let framed = reference.in_frame(t, s);
-    let mesh = &quad.mesh;
-    let frame_mesh = PolyMesh::new(mesh.positions.iter().map(|p| (*p - t) / s).collect(), mesh.faces.clone());
-    let radii: Vec<f64> = quad.uv.iter().map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s).collect();
-    let normals: Vec<DVec3> = quad.uv.iter().map(|uv| surface.derivatives(uv[0], uv[1]).normal().unwrap_or(DVec3::Z)).collect();
-    let lines: Vec<DVec3> = quad
-        .uv
-        .iter()
-        .zip(&normals)
-        .map(|(uv, n)| {
-            let l = on_grid(surface, congruence.grid, &congruence.lines, *uv).normalize_or_zero();
-            if l.dot(*n) < 0.0 {
-                -l
-            } else {
-                l
-            }
-        })
-        .collect();
-    let stars = QuadStars::new(mesh);
-    if let Some((centre, r)) = congruence.sphere {
-        return Ok(spherical_mesh(reference, quad, &stars, centre, r, params, timings));
+/// What the final optimization of Q′ works on (Sec. 5.2): the frame (lengths relative to the
+/// diagonal about the bounding box's centre), Q′ in it with the congruence's radii, lines and
+/// the normals at its vertices, and the stars of its vertices.
+struct FinalSetup<'a> {
+    reference: &'a Reference,
+    surface: &'a BSplineSurface,
+    spline: &'a SplineReference,
+    quad: &'a SqQuadMesh,
+    params: &'a SqParams,
+    /// The frame: x ↦ (x − t) / s.
+    t: DVec3,
+    s: f64,
+    framed: Reference,
+    frame_mesh: PolyMesh,
+    radii: Vec<f64>,
+    lines: Vec<DVec3>,
+    normals: Vec<DVec3>,
+    stars: QuadStars,
+}
+
+impl<'a> FinalSetup<'a> {
+    fn new(reference: &'a Reference, congruence: &SqCongruence, quad: &'a SqQuadMesh, params: &'a SqParams) -> Result<Self, SqError> {
+        let surface = reference.spline().ok_or(SqError::NotBSpline)?;
+        let spline = reference.spline_reference().ok_or(SqError::NotBSpline)?;
+        let (lo, hi) = reference.mesh().bbox();
+        let (t, s) = (0.5 * (lo + hi), reference.diagonal());
+        let mesh = &quad.mesh;
+        let frame_mesh = PolyMesh::new(mesh.positions.iter().map(|p| (*p - t) / s).collect(), mesh.faces.clone());
+        let radii: Vec<f64> = quad.uv.iter().map(|uv| congruence.radius.evaluate(uv[0], uv[1]).0 / s).collect();
+        let normals: Vec<DVec3> = quad.uv.iter().map(|uv| surface.derivatives(uv[0], uv[1]).normal().unwrap_or(DVec3::Z)).collect();
+        let lines: Vec<DVec3> = quad
+            .uv
+            .iter()
+            .zip(&normals)
+            .map(|(uv, n)| {
+                let l = on_grid(surface, congruence.grid, &congruence.lines, *uv).normalize_or_zero();
+                if l.dot(*n) < 0.0 {
+                    -l
+                } else {
+                    l
+                }
+            })
+            .collect();
+        let stars = QuadStars::new(mesh);
+        Ok(Self { reference, surface, spline, quad, params, t, s, framed: reference.in_frame(t, s), frame_mesh, radii, lines, normals, stars })
     }
-    let input = SphereInput {
-        mesh: &frame_mesh,
-        radii: &radii,
-        lines: &lines,
-        normals: &normals,
-        polylines: &quad.polylines,
-        on_boundary: &quad.on_boundary,
-        reference: &framed,
-        cos2_theta: params.target_theta_deg().to_radians().cos().powi(2),
-        cos2_alpha: params.target_alpha_deg().to_radians().cos().powi(2),
-        limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
-    };
-    // The Spheres event carries the phase and iteration: it is the progress of this step.
-    let mut hook = |phase, iteration, terms: &[TermStats], v: &[DVec3], sp: &[Sphere]| {
-        let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
-        let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
-        on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
-    };
-    let (vertices, spheres, outcome) = optimize_spheres(&input, &stars, params, clock, &mut hook)?;
-    timings.lap("spheres");
-    let finish = |vertices: &[DVec3], spheres: &[Sphere], outcome: SphereOutcome, on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>| {
-        let positions: Vec<DVec3> = vertices.iter().map(|p| t + s * *p).collect();
-        let spheres: Vec<Sphere> = spheres.iter().map(|x| x.from_frame(t, s).normalized()).collect();
+
+    /// The final optimization's input with Q′ (or a mesh of its faces) `frame_mesh` in the frame.
+    fn input<'m>(&'m self, frame_mesh: &'m PolyMesh) -> SphereInput<'m> {
+        let params = self.params;
+        SphereInput {
+            mesh: frame_mesh,
+            radii: &self.radii,
+            lines: &self.lines,
+            normals: &self.normals,
+            polylines: &self.quad.polylines,
+            on_boundary: &self.quad.on_boundary,
+            reference: &self.framed,
+            cos2_theta: params.target_theta_deg().to_radians().cos().powi(2),
+            cos2_alpha: params.target_alpha_deg().to_radians().cos().powi(2),
+            limits: [params.theta_deg - PROJECTION_MARGIN_DEG, (params.alpha_deg + PROJECTION_MARGIN_DEG).min(90.0)],
+        }
+    }
+
+    /// The optimizer's vertices and spheres, in the frame, back in model units.
+    fn to_model(&self, v: &[DVec3], sp: &[Sphere]) -> (Vec<DVec3>, Vec<Sphere>) {
+        (v.iter().map(|p| self.t + self.s * *p).collect(), sp.iter().map(|x| x.from_frame(self.t, self.s).normalized()).collect())
+    }
+
+    /// The SQ mesh of the optimized vertices and spheres (frame units): moved rigidly closest to
+    /// the reference ([`Self::aligned`]), with its panels, support structure and node axes.
+    fn finish(
+        &self,
+        vertices: &[DVec3],
+        spheres: &[Sphere],
+        outcome: SphereOutcome,
+        on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+    ) -> Result<SqFinal, SqError> {
+        let (positions, spheres) = self.to_model(vertices, spheres);
         if positions.iter().any(|p| !p.is_finite()) || spheres.iter().any(|x| !x.is_finite()) {
             return Err(SqError::FinalOptimization("a vertex or a face sphere is not finite; try fewer faces or a smaller θ".into()));
         }
         on_event(SqEvent::Progress(Progress::new("panels", 0, 1)))?;
-        // The rigid motion that brings the panels closest to the reference (their corners and
-        // the points of their spheres over their centres) keeps the mesh exact.
+        let (positions, spheres) = self.aligned(positions, spheres);
+        // The reference's closest points: (u, v), normals and the vertices' distance.
+        let mut uv = Vec::with_capacity(positions.len());
+        let mut final_normals = Vec::with_capacity(positions.len());
+        let mut distance: f64 = 0.0;
+        for (p, start) in positions.iter().zip(&self.quad.uv) {
+            let (w, q, n) = self.spline.closest_point(*p, *start);
+            uv.push(w);
+            final_normals.push(n.unwrap_or(DVec3::Z));
+            distance = distance.max(p.distance(q));
+        }
+        let (reference, params, quad) = (self.reference, self.params, self.quad);
+        let diag = reference.diagonal();
+        let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
+        let edge_angles_deg = edge_field_angles(self.surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
+        let mut out = sq_mesh(mesh, spheres, &final_normals, &self.stars, diag, params.support_depth * diag, params.axis_length * diag);
+        out.figures.max_vertex_distance_to_reference = distance / diag;
+        on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
+        Ok(SqFinal::new(reference, out, uv, edge_angles_deg, outcome))
+    }
+
+    /// The rigid motion that brings the panels closest to the reference (their corners and the
+    /// points of their spheres over their centres) keeps the mesh exact: applied when it brings
+    /// the farthest point closer without sliding the panels off the patch (below what they
+    /// covered, or below the guarantee).
+    fn aligned(&self, positions: Vec<DVec3>, spheres: Vec<Sphere>) -> (Vec<DVec3>, Vec<Sphere>) {
+        let (quad, spline) = (self.quad, self.spline);
         let faces = &quad.mesh.faces;
         let centre_uv: Vec<[f64; 2]> = faces
             .iter()
@@ -804,13 +893,11 @@ fn final_mesh(
                 f.corners().iter().fold([0.0, 0.0], |a, &v| [a[0] + quad.uv[v as usize][0] / k, a[1] + quad.uv[v as usize][1] / k])
             })
             .collect();
-        let samples = |positions: &[DVec3], spheres: &[Sphere]| -> Vec<DVec3> {
-            let centres = faces.iter().zip(spheres).map(|(f, x)| {
-                let m = f.corners().iter().map(|&v| positions[v as usize]).sum::<DVec3>() / f.corners().len() as f64;
-                x.closest_point(m)
-            });
-            positions.iter().copied().chain(centres).collect()
-        };
+        let centres = faces.iter().zip(&spheres).map(|(f, x)| {
+            let m = f.corners().iter().map(|&v| positions[v as usize]).sum::<DVec3>() / f.corners().len() as f64;
+            x.closest_point(m)
+        });
+        let before: Vec<DVec3> = positions.iter().copied().chain(centres).collect();
         let start_uv = |i: usize| if i < quad.uv.len() { quad.uv[i] } else { centre_uv[i - quad.uv.len()] };
         // One closest-point pass per set of points: the farthest of them, and the share of the
         // patch the panels cover with their corners at the closest points.
@@ -826,69 +913,138 @@ fn final_mesh(
                 .collect();
             let farthest = closest.iter().zip(points).map(|((_, q), p)| q.distance(*p)).fold(0.0, f64::max);
             let uv: Vec<[f64; 2]> = closest[..nv].iter().map(|c| c.0).collect();
-            (farthest, coverage(surface, faces, &uv))
+            (farthest, coverage(self.surface, faces, &uv))
         };
-        let before = samples(&positions, &spheres);
         let (rotation, shift) = point_to_plane_motion(&before, ALIGNMENT_ROUNDS, &mut |i, p| {
             let (_, q, n) = spline.closest_point(p, start_uv(i));
             Some((q, n?))
         });
         let after: Vec<DVec3> = before.iter().map(|p| rotation * *p + shift).collect();
         let ((far_before, covered_before), (far_after, covered_after)) = (measure(&before), measure(&after));
-        // Kept when it brings the farthest point closer without sliding the panels off the
-        // patch: below what they covered, or below the guarantee.
-        let (positions, spheres) = if far_after < far_before && covered_after >= covered_before.min(guarantees::MIN_COVERAGE) {
+        if far_after < far_before && covered_after >= covered_before.min(guarantees::MIN_COVERAGE) {
             (after[..nv].to_vec(), spheres.iter().map(|x| x.moved(rotation, shift)).collect())
         } else {
             (positions, spheres)
-        };
-        // The reference's closest points: (u, v), normals and the vertices' distance.
-        let mut uv = Vec::with_capacity(positions.len());
-        let mut final_normals = Vec::with_capacity(positions.len());
-        let mut distance: f64 = 0.0;
-        for (p, start) in positions.iter().zip(&quad.uv) {
-            let (w, q, n) = spline.closest_point(*p, *start);
-            uv.push(w);
-            final_normals.push(n.unwrap_or(DVec3::Z));
-            distance = distance.max(p.distance(q));
         }
-        let diag = reference.diagonal();
-        let mesh = PolyMesh::new(positions, quad.mesh.faces.clone());
-        let edge_angles_deg = edge_field_angles(surface, &quad.torsal, &mesh, &uv, &quad.on_boundary);
-        let mut out = sq_mesh(mesh, spheres, &final_normals, &stars, diag, params.support_depth * diag, params.axis_length * diag);
-        out.figures.max_vertex_distance_to_reference = distance / diag;
-        on_event(SqEvent::Progress(Progress::new("panels", 1, 1)))?;
-        Ok(SqFinal::new(reference, out, uv, edge_angles_deg, outcome, params))
+    }
+}
+
+/// The final optimization on Q′ and the SQ mesh out of it (Sec. 5.2); with `optimize_moulds`,
+/// when it meets the method's guarantees, the rounds toward fewer moulds.
+fn final_mesh(
+    reference: &Reference,
+    congruence: &SqCongruence,
+    quad: &SqQuadMesh,
+    params: &SqParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+    timings: &mut Timings,
+    on_event: &mut dyn FnMut(SqEvent) -> Result<(), Cancelled>,
+) -> Result<SqFinal, SqError> {
+    let setup = FinalSetup::new(reference, congruence, quad, params)?;
+    if let Some((centre, r)) = congruence.sphere {
+        return Ok(spherical_mesh(reference, quad, &setup.stars, centre, r, params, timings));
+    }
+    // The Spheres event carries the phase and iteration: it is the progress of this step.
+    let mut hook = |phase, iteration, terms: &[TermStats], v: &[DVec3], sp: &[Sphere]| {
+        let (positions, spheres) = setup.to_model(v, sp);
+        on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
     };
-    let done = finish(&vertices, &spheres, outcome, on_event)?;
+    let (vertices, spheres, outcome) = optimize_spheres(&setup.input(&setup.frame_mesh), &setup.stars, params, clock, &mut hook)?;
+    timings.lap("spheres");
+    let done = setup.finish(&vertices, &spheres, outcome, on_event)?;
     timings.lap("panels");
-    let meets = |f: &SqFinal| guarantees::verdict(&congruence.figures, f.delivered(params), params.theta_deg, params.alpha_deg);
-    if !params.optimize_moulds || !meets(&done).holds() {
+    if !params.optimize_moulds || !setup.meets(congruence, &done) {
         return Ok(done);
     }
-    // Fewer moulds: the projection again from the exact mesh, every face at its mould's curvature.
-    let events = std::cell::RefCell::new(on_event);
-    let mut project = |from: &SqFinal, curvatures: &[f64]| {
-        let frame_mesh =
-            PolyMesh::new(from.mesh.sphere_mesh.mesh.positions.iter().map(|p| (*p - t) / s).collect(), from.mesh.sphere_mesh.mesh.faces.clone());
-        let spheres: Vec<Sphere> = from.mesh.sphere_mesh.face_spheres.iter().map(|x| x.in_frame(t, s).normalized()).collect();
-        let curvatures: Vec<f64> = curvatures.iter().map(|k| k * s).collect();
-        let input = SphereInput { mesh: &frame_mesh, ..input };
-        let mut hook = |phase, iteration, terms: &[TermStats], v: &[DVec3], sp: &[Sphere]| {
-            let positions: Vec<DVec3> = v.iter().map(|p| t + s * *p).collect();
-            let spheres: Vec<Sphere> = sp.iter().map(|x| x.from_frame(t, s).normalized()).collect();
-            (events.borrow_mut())(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
-        };
-        let (v, sp, iterations) = project_to_curvatures(&input, &stars, &spheres, &curvatures, params, clock, &mut hook)?;
-        let moved = finish(&v, &sp, SphereOutcome { projection_iterations: iterations, ..from.outcome.clone() }, &mut **events.borrow_mut())?;
-        let holds = meets(&moved).holds();
-        Ok((moved, holds))
-    };
-    let (best, outcome) = fewer_moulds(&done, &|f: &SqFinal| &f.mesh, reference.diagonal(), &params.fabrication, &mut project, &mut |p| {
-        (events.borrow_mut())(SqEvent::Progress(p))
-    })?;
+    let distance_limit = DISTANCE_GROWTH * done.mesh.figures.max_vertex_distance_to_reference;
+    let mut moulds = Moulds { setup: &setup, congruence, clock, on_event, distance_limit };
+    let run = crate::panels::moulds::fewer_moulds(&mut moulds, &done, reference.diagonal(), fabrication)?;
     timings.lap("fewer_moulds");
-    let mut out = best.unwrap_or(done);
-    out.moulds = Some(outcome);
+    let mut out = run.best.unwrap_or(done);
+    out.moulds = Some(run.outcome);
     Ok(out)
+}
+
+impl FinalSetup<'_> {
+    /// Whether `done` meets the method's guarantees (the verdict with the congruence's figures).
+    fn meets(&self, congruence: &SqCongruence, done: &SqFinal) -> bool {
+        let p = self.params;
+        guarantees::verdict(&congruence.figures, done.delivered(p), p.theta_deg, p.alpha_deg).holds()
+    }
+}
+
+/// SQ's part in the rounds toward fewer moulds ([`crate::panels::moulds::fewer_moulds`]): the
+/// projection to exactness again from the exact mesh, every face held at its mould's curvature
+/// ([`project_to_curvatures`]), landing on a nearby exact SQ mesh. A round counts when that mesh
+/// meets the method's guarantees (exact, θ, α) and its vertices stay within
+/// [`DISTANCE_GROWTH`] × the method's distance to the reference.
+struct Moulds<'a, 'e> {
+    setup: &'a FinalSetup<'a>,
+    congruence: &'a SqCongruence,
+    clock: Clock,
+    on_event: &'a mut (dyn FnMut(SqEvent) -> Result<(), Cancelled> + 'e),
+    distance_limit: f64,
+}
+
+impl MouldHook for Moulds<'_, '_> {
+    type Result = SqFinal;
+    type Round = SqMouldRound;
+    type Error = SqError;
+
+    fn schedule(&self) -> RoundSchedule {
+        EXACT_ROUNDS
+    }
+
+    fn panels<'r>(&self, result: &'r SqFinal) -> &'r [Panel] {
+        &result.mesh.panels
+    }
+
+    fn pull(&mut self, from: &SqFinal, per_panel: &[f64]) -> Result<Option<(SqFinal, bool)>, SqError> {
+        let (setup, s, t) = (self.setup, self.setup.s, self.setup.t);
+        let sm = &from.mesh.sphere_mesh;
+        let mut curvatures = vec![f64::NAN; sm.mesh.face_count()];
+        for (p, &k) in from.mesh.panels.iter().zip(per_panel) {
+            curvatures[p.face] = k * s;
+        }
+        let frame_mesh = PolyMesh::new(sm.mesh.positions.iter().map(|p| (*p - t) / s).collect(), sm.mesh.faces.clone());
+        let spheres: Vec<Sphere> = sm.face_spheres.iter().map(|x| x.in_frame(t, s).normalized()).collect();
+        let on_event = &mut *self.on_event;
+        let mut hook = |phase, iteration, terms: &[TermStats], v: &[DVec3], sp: &[Sphere]| {
+            let (positions, spheres) = setup.to_model(v, sp);
+            on_event(SqEvent::Spheres { phase, iteration, terms, positions: &positions, spheres: &spheres })
+        };
+        let input = setup.input(&frame_mesh);
+        let (v, sp, iterations) = project_to_curvatures(&input, &setup.stars, &spheres, &curvatures, setup.params, self.clock, &mut hook)?;
+        let outcome = SphereOutcome { projection_iterations: iterations, ..from.outcome.clone() };
+        let moved = match setup.finish(&v, &sp, outcome, self.on_event) {
+            Err(SqError::Cancelled) => return Err(SqError::Cancelled),
+            Err(_) => return Ok(None),
+            Ok(m) => m,
+        };
+        let holds = setup.meets(self.congruence, &moved) && moved.mesh.figures.max_vertex_distance_to_reference <= self.distance_limit;
+        Ok(Some((moved, holds)))
+    }
+
+    fn round(&self, moved: &SqFinal, count: RoundCount) -> SqMouldRound {
+        let f = &moved.mesh.figures;
+        SqMouldRound {
+            coarsening: count.coarsening,
+            moulds: count.moulds,
+            max_vertex_sphere_residual: f.max_vertex_sphere_residual,
+            max_centre_face_planarity: f.max_centre_face_planarity,
+            max_axis_normal_angle_deg: f.max_axis_normal_angle_deg,
+            min_support_plane_angle_deg: f.min_torsal_plane_angle_deg,
+            max_vertex_distance_to_reference: f.max_vertex_distance_to_reference,
+            kept: count.kept,
+        }
+    }
+
+    fn distance_limit(&self) -> f64 {
+        self.distance_limit
+    }
+
+    fn progress(&mut self, p: Progress) -> Result<(), Cancelled> {
+        (self.on_event)(SqEvent::Progress(p))
+    }
 }

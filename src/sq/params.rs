@@ -5,7 +5,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
 use crate::panels::buildability::{read_max_distance, write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
-use crate::panels::moulds::Fabrication;
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamRange};
 
@@ -252,8 +251,6 @@ pub struct SqParams {
     pub axis_length: f64,
     /// Radii closer than this (relative to the diagonal) count as one in the schedule.
     pub radius_tolerance: f64,
-    /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
-    pub fabrication: Fabrication,
     /// Move the exact mesh onto fewer moulds, its panels snapped to their radii
     /// ([`super::moulds`]).
     pub optimize_moulds: bool,
@@ -289,7 +286,6 @@ impl Default for SqParams {
             support_depth: 0.02,
             axis_length: 0.06,
             radius_tolerance: 1e-3,
-            fabrication: Fabrication::default(),
             optimize_moulds: false,
             max_distance: DEFAULT_MAX_DISTANCE,
         }

@@ -7,8 +7,22 @@
 
 use crate::guarantees::{Guarantee, Verdict};
 use crate::panels::buildability::Buildability;
+use crate::panels::exact_surface::ExactSurfaces;
+use crate::reference::Reference;
+use crate::units::Units;
 
 use super::metrics::StAdaptedMetrics;
+use super::params::StAdaptedParams;
+use super::StAdaptedResult;
+
+/// The verdict of the delivered result: the one measurement of its guarantees, on its panels and
+/// their exact surfaces (returned, for the CAD files), independent of the optimizer's variables;
+/// lengths in `units` beside their share of the diagonal.
+pub fn measure(result: &StAdaptedResult, reference: &Reference, params: &StAdaptedParams, units: Units) -> (Verdict, ExactSurfaces) {
+    let exact = ExactSurfaces::of(&result.panels, &[]);
+    let buildability = Buildability::measure(&exact, &result.panel_deviations, false, result.diag, units);
+    (verdict(&result.metrics, &buildability, params.distance_bound(reference.facet_sagitta())), exact)
+}
 
 /// Vertex–sphere residual, relative to the diagonal.
 pub const EXACT: f64 = 1e-8;

@@ -75,6 +75,7 @@ pub mod optimization;
 pub mod params;
 pub mod report;
 pub mod terms;
+pub mod warm_up;
 
 use std::fmt;
 
@@ -84,7 +85,7 @@ use crate::congruence::central_spheres::{CurvatureField, UnusableCentralSpheres}
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::{MouldFits, MouldSnap};
+use crate::panels::moulds::Fabrication;
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::progress::{Cancelled, Clock, Progress, Timings};
@@ -96,7 +97,7 @@ use crate::stats::median;
 pub use events::{OnEvent, StAdaptedEvent};
 use initialization::initial_spheres;
 use metrics::{metrics, shape, StAdaptedMetrics, StAdaptedShape};
-use moulds::{fewer_moulds, snap_to_moulds, MouldRound, MouldTargets};
+use moulds::{fewer_moulds_of, Moved, StAdaptedMouldOutcome};
 use optimization::{run_stages, OptimizationFrame};
 use params::StAdaptedParams;
 
@@ -185,13 +186,8 @@ pub struct StAdaptedResult {
     pub variant: EdgeArcs,
     /// Final term statistics.
     pub terms: Vec<TermStats>,
-    /// The rounds toward fewer moulds (`optimize_moulds`; empty otherwise or when none helped).
-    pub mould_rounds: Vec<MouldRound>,
-    /// The moulds at δ before those rounds, and the fits of the panels then.
-    pub moulds_before: Option<usize>,
-    pub fits_before: Option<MouldFits>,
-    /// The moulds the panels were snapped to, and why some were not (`optimize_moulds`).
-    pub mould_snap: Option<MouldSnap>,
+    /// The rounds toward fewer moulds and the snap to their radii (`optimize_moulds`).
+    pub moulds: Option<StAdaptedMouldOutcome>,
     /// The method's assumptions the reference fails (H of one sign, no folds, no slivers, not
     /// coarser than ε) and the kinks over the warning angle.
     pub warnings: Vec<Warning>,
@@ -204,7 +200,13 @@ fn step(on_event: &mut OnEvent, name: &str) -> Result<(), Cancelled> {
 
 /// The angle-minimizing ST method end to end (see the module docs): the curvature and its
 /// refusal, sizing and remeshing, the initial spheres, the optimization, the metrics.
-pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on_event: &mut OnEvent) -> Result<StAdaptedResult, StAdaptedError> {
+pub fn compute(
+    reference: &Reference,
+    params: &StAdaptedParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+    on_event: &mut OnEvent,
+) -> Result<StAdaptedResult, StAdaptedError> {
     params.check().map_err(StAdaptedError::Parameter)?;
     reference.validate().map_err(StAdaptedError::Reference)?;
     let mut timings = Timings::start(clock);
@@ -242,26 +244,15 @@ pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on
     let mut sphere_mesh = optimized.sphere_mesh;
     let (mut final_metrics, mut panels, mut panel_deviations) = metrics(&sphere_mesh, reference, params.variant);
     timings.lap("metrics");
-    let (mut mould_rounds, mut moulds_before, mut fits_before, mut mould_snap) = (Vec::new(), None, None, None);
+    let mut moulds = None;
     if params.optimize_moulds {
         step(on_event, "fewer_moulds")?;
         timings.skip();
-        let targets = MouldTargets::of(&final_metrics, params);
-        if let Some(f) = fewer_moulds(reference, &sphere_mesh, &final_metrics, &panels, &params.fabrication, params, clock, on_event)? {
-            (sphere_mesh, panels, panel_deviations, final_metrics) = (f.sphere_mesh, f.panels, f.deviations, f.metrics);
-            mould_rounds = f.rounds;
-            moulds_before = Some(f.before);
-            fits_before = Some(f.fits_before);
-        }
+        let start = Moved { sphere_mesh, panels, deviations: panel_deviations, metrics: final_metrics };
+        let (moved, outcome) = fewer_moulds_of(reference, start, params, fabrication, clock, on_event)?;
+        (sphere_mesh, panels, panel_deviations, final_metrics) = (moved.sphere_mesh, moved.panels, moved.deviations, moved.metrics);
+        moulds = Some(outcome);
         timings.lap("fewer_moulds");
-        step(on_event, "snap_moulds")?;
-        timings.skip();
-        let (snapped, snap) = snap_to_moulds(reference, &sphere_mesh, &panels, &targets, &params.fabrication, params.variant);
-        if let Some(s) = snapped {
-            (sphere_mesh, panels, panel_deviations, final_metrics) = (s.sphere_mesh, s.panels, s.deviations, s.metrics);
-        }
-        mould_snap = Some(snap);
-        timings.lap("snap_moulds");
     }
     let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));
@@ -285,10 +276,7 @@ pub fn compute(reference: &Reference, params: &StAdaptedParams, clock: Clock, on
         diag: reference.diagonal(),
         variant: params.variant,
         terms: optimized.terms,
-        mould_rounds,
-        moulds_before,
-        fits_before,
-        mould_snap,
+        moulds,
         warnings,
     })
 }

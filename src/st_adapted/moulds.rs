@@ -8,8 +8,6 @@
 //! radius exactly: a face sphere is free in the pencil through its three vertices, which holds
 //! one sphere of each radius above their circumradius, so the vertices stay.
 
-use std::cell::RefCell;
-
 use super::boundary_arcs::delivered_arcs;
 use super::events::{OnEvent, StAdaptedEvent};
 use super::metrics::{metrics, StAdaptedMetrics};
@@ -20,7 +18,10 @@ use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::exact_surface::arcs_cross;
-use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
+use crate::panels::moulds::{
+    fewer_moulds, Fabrication, MouldAssignment, MouldFits, MouldHook, MouldOutcome, MouldRoundFigures, MouldSnap, RoundCount, RoundSchedule,
+    SnapLimit,
+};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
 use crate::progress::{Cancelled, Clock, Progress};
@@ -98,21 +99,18 @@ impl MouldTargets {
     }
 }
 
-/// What the rounds made: the kept sphere mesh with its panels and deviations, and per round
-/// (γ, moulds at δ, largest kink, largest distance) for the report.
-pub struct FewerMoulds {
+/// The method's result as the rounds move it: the sphere mesh, its panels, their distances and
+/// the metrics.
+#[derive(Clone, Debug)]
+pub struct Moved {
     pub sphere_mesh: SphereMesh,
     pub panels: Vec<Panel>,
     pub deviations: Vec<f64>,
     pub metrics: StAdaptedMetrics,
-    pub rounds: Vec<MouldRound>,
-    pub iterations: usize,
-    /// Moulds at δ before the rounds, and the fits of the panels then.
-    pub before: usize,
-    pub fits_before: MouldFits,
 }
 
-/// One round of [`fewer_moulds`].
+/// One round toward fewer moulds: its coarsening γ, the moulds at δ of the moved panels, the
+/// largest kink and distance, and whether it was kept.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MouldRound {
     pub coarsening: f64,
@@ -122,40 +120,56 @@ pub struct MouldRound {
     pub kept: bool,
 }
 
-/// The rounds on `sphere_mesh` (the method's result on `reference`), each sent to `on_event` as
-/// moved; None when no round kept fewer moulds.
-pub fn fewer_moulds(
-    reference: &Reference,
-    sphere_mesh: &SphereMesh,
-    start: &StAdaptedMetrics,
-    panels: &[Panel],
-    fabrication: &Fabrication,
-    params: &StAdaptedParams,
+impl MouldRoundFigures for MouldRound {
+    fn moulds(&self) -> usize {
+        self.moulds
+    }
+    fn distance_to_reference(&self) -> f64 {
+        self.max_distance_to_reference
+    }
+    fn kept(&self) -> bool {
+        self.kept
+    }
+}
+
+/// What the rounds did.
+pub type StAdaptedMouldOutcome = MouldOutcome<MouldRound>;
+
+/// The method's part in the rounds ([`crate::panels::moulds::fewer_moulds`]): each round
+/// continues the method's last stage for a few iterations with [`MouldCurvature`] pulling every
+/// face sphere's curvature to its mould's; after the rounds [`snap_to_moulds`].
+struct Hook<'a, 'e> {
+    reference: &'a Reference,
+    params: &'a StAdaptedParams,
+    /// The params with the method's last stage only, for [`ROUND_ITERATIONS`].
+    stages: StAdaptedParams,
+    targets: MouldTargets,
     clock: Clock,
-    on_event: &mut OnEvent,
-) -> Result<Option<FewerMoulds>, Cancelled> {
-    let diag = reference.diagonal();
-    let mut panels = panels.to_vec();
-    let limits = MouldTargets::of(start, params);
-    let fits_before = MouldFits::of(&panels);
-    let before = fabrication.assign(&fits_before, diag).moulds.len();
-    let mut best_count = before;
-    let mut best: Option<FewerMoulds> = None;
-    let mut rounds = Vec::new();
-    let mut iterations = 0;
-    let mut current = sphere_mesh.clone();
-    // Each round continues the last stage of the method for a few iterations.
-    let last = params.stages.last().cloned().map(|s| OptimizationStage { iterations: s.iterations.min(ROUND_ITERATIONS), ..s });
-    let stages = StAdaptedParams { stages: last.into_iter().collect(), ..params.clone() };
-    for (k, &gamma) in COARSENING.iter().enumerate() {
-        on_event(StAdaptedEvent::Progress(Progress::new("fewer_moulds", k, COARSENING.len())))?;
-        let fits = MouldFits::of(&panels);
-        let coarse = fits.assign(gamma * fabrication.tolerance(&fits, diag));
+    on_event: &'a mut OnEvent<'e>,
+    round: usize,
+}
+
+impl MouldHook for Hook<'_, '_> {
+    type Result = Moved;
+    type Round = MouldRound;
+    type Error = Cancelled;
+
+    fn schedule(&self) -> RoundSchedule {
+        RoundSchedule { coarsening: &COARSENING, exact: false }
+    }
+
+    fn panels<'r>(&self, result: &'r Moved) -> &'r [Panel] {
+        &result.panels
+    }
+
+    fn pull(&mut self, from: &Moved, curvatures: &[f64]) -> Result<Option<(Moved, bool)>, Cancelled> {
+        let (reference, params) = (self.reference, self.params);
+        let diag = reference.diagonal();
+        let current = &from.sphere_mesh;
         let mut targets = vec![f64::NAN; current.mesh.face_count()];
-        for (i, p) in panels.iter().enumerate() {
-            let m = coarse.moulds[coarse.panel_mould[i] as usize].curvature;
-            // The frame scales lengths by 1/diag, curvatures by diag; the mould either way up.
-            targets[p.face] = m * diag * if fits.curvature[i] < 0.0 { -1.0 } else { 1.0 };
+        for (p, &k) in from.panels.iter().zip(curvatures) {
+            // The frame scales lengths by 1/diag, curvatures by diag.
+            targets[p.face] = k * diag;
         }
         let mesh = current.mesh.triangulated();
         let frame = OptimizationFrame::new(reference, &mesh, &current.face_spheres, params);
@@ -163,47 +177,61 @@ pub fn fewer_moulds(
         let (mut problem, ids) = frame.problem(&params.variant_weights());
         let corners = mesh.triangles.iter().map(|t| t.map(|v| vertex_offset(mesh.face_count(), v as usize))).collect();
         problem.add_term(MouldCurvature::new(FaceSpheres::new(corners), targets), MOULD_WEIGHT * params.weights.angle);
-        let mut solver = Solver::new(SolverOptions { clock, ..SolverOptions::default() });
-        let run = RefCell::new(0usize);
-        run_stages(&mut problem, &ids, &mut x, &stages, &mut solver, &mut |_, _| {
-            *run.borrow_mut() += 1;
-            Ok(())
-        })?;
-        iterations += run.into_inner();
+        let mut solver = Solver::new(SolverOptions { clock: self.clock, ..SolverOptions::default() });
+        run_stages(&mut problem, &ids, &mut x, &self.stages, &mut solver, &mut |_, _| Ok(()))?;
         let (verts, spheres) = frame.to_model(&x);
         let moved = SphereMesh::new(TriMesh::new(verts, mesh.triangles.clone()), spheres, current.boundary_arcs);
         let moved = delivered_arcs(moved, reference, params.variant);
-        on_event(StAdaptedEvent::MouldRound { round: k + 1, sphere_mesh: &moved })?;
-        let (m, moved_panels, deviations) = metrics(&moved, reference, params.variant);
-        let count = fabrication.assign(&MouldFits::of(&moved_panels), diag).moulds.len();
-        let holds = limits.hold(&m, &moved_panels);
-        let kept = holds && count < best_count;
-        rounds.push(MouldRound {
-            coarsening: gamma,
-            moulds: count,
-            max_kink_angle_deg: m.max_kink_angle_deg,
-            max_distance_to_reference: m.max_distance_to_reference,
-            kept,
-        });
-        if !holds {
-            break;
-        }
-        if kept {
-            best_count = count;
-            best = Some(FewerMoulds {
-                sphere_mesh: moved.clone(),
-                panels: moved_panels.clone(),
-                deviations,
-                metrics: m,
-                rounds: Vec::new(),
-                iterations: 0,
-                before,
-                fits_before: MouldFits::default(),
-            });
-        }
-        (current, panels) = (moved, moved_panels);
+        self.round += 1;
+        (self.on_event)(StAdaptedEvent::MouldRound { round: self.round, sphere_mesh: &moved })?;
+        let (metrics, panels, deviations) = metrics(&moved, reference, params.variant);
+        let holds = self.targets.hold(&metrics, &panels);
+        Ok(Some((Moved { sphere_mesh: moved, panels, deviations, metrics }, holds)))
     }
-    Ok(best.map(|b| FewerMoulds { rounds, iterations, fits_before, ..b }))
+
+    fn round(&self, moved: &Moved, count: RoundCount) -> MouldRound {
+        MouldRound {
+            coarsening: count.coarsening,
+            moulds: count.moulds,
+            max_kink_angle_deg: moved.metrics.max_kink_angle_deg,
+            max_distance_to_reference: moved.metrics.max_distance_to_reference,
+            kept: count.kept,
+        }
+    }
+
+    fn snap(&mut self, kept: &Moved, fabrication: &Fabrication) -> Option<(Option<Moved>, MouldSnap)> {
+        let (snapped, snap) = snap_to_moulds(self.reference, &kept.sphere_mesh, &kept.panels, &self.targets, fabrication, self.params.variant);
+        let snapped = snapped.map(|s| Moved { sphere_mesh: s.sphere_mesh, panels: s.panels, deviations: s.deviations, metrics: s.metrics });
+        Some((snapped, snap))
+    }
+
+    fn distance_limit(&self) -> f64 {
+        self.targets.max_distance_to_reference
+    }
+
+    fn progress(&mut self, p: Progress) -> Result<(), Cancelled> {
+        (self.on_event)(StAdaptedEvent::Progress(p))
+    }
+}
+
+/// The rounds toward fewer moulds on the method's result `start` on `reference`, each round's
+/// mesh sent to `on_event`, then the snap: the result moved onto fewer moulds (`start` where no
+/// round was kept and the snap missed the targets) and what the rounds did.
+pub fn fewer_moulds_of(
+    reference: &Reference,
+    start: Moved,
+    params: &StAdaptedParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+    on_event: &mut OnEvent,
+) -> Result<(Moved, StAdaptedMouldOutcome), Cancelled> {
+    // Each round continues the last stage of the method for a few iterations.
+    let last = params.stages.last().cloned().map(|s| OptimizationStage { iterations: s.iterations.min(ROUND_ITERATIONS), ..s });
+    let stages = StAdaptedParams { stages: last.into_iter().collect(), ..params.clone() };
+    let targets = MouldTargets::of(&start.metrics, params);
+    let mut hook = Hook { reference, params, stages, targets, clock, on_event, round: 0 };
+    let run = fewer_moulds(&mut hook, &start, reference.diagonal(), fabrication)?;
+    Ok((run.best.unwrap_or(start), run.outcome))
 }
 
 /// The sphere mesh with every face sphere snapped to its mould's radius, its panels, their

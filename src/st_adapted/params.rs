@@ -6,7 +6,6 @@ use serde::{Deserialize, Serialize};
 use crate::congruence::central_spheres::JetParams;
 use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::Fabrication;
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
 use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON, EPSILON_RANGE, FACES_RANGE};
@@ -85,8 +84,6 @@ pub struct StAdaptedParams {
     pub fix_features: bool,
     /// Radii closer than this (× the bbox diagonal) count as one in the panel schedule.
     pub radius_tolerance: f64,
-    /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
-    pub fabrication: Fabrication,
     /// Move the panels onto fewer moulds after optimizing ([`super::moulds::fewer_moulds`]).
     pub optimize_moulds: bool,
 }
@@ -155,7 +152,6 @@ impl Default for StAdaptedParams {
             fix_boundary: true,
             fix_features: true,
             radius_tolerance: 1e-3,
-            fabrication: Fabrication::default(),
             optimize_moulds: false,
         }
     }

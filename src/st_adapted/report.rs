@@ -6,11 +6,14 @@ use serde::{Deserialize, Serialize};
 use super::moulds::MouldRound;
 use super::StAdaptedResult;
 use crate::guarantees::f64_or_nan;
+use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::{MouldOutcome, MouldRoundsSection};
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StAdaptedSection {
-    /// Edge variant (Fig. 12): "a" or "b".
-    pub variant: String,
+    /// Edge variant (Fig. 12), written "a" or "b".
+    #[serde(with = "crate::panels::edge_arcs::as_key")]
+    pub variant: EdgeArcs,
     /// Solver iterations of the angle optimization.
     pub angle_iterations: usize,
     /// max over faces and their corners of | |v − c| − r |, relative to the diagonal.
@@ -37,18 +40,16 @@ pub struct StAdaptedSection {
     #[serde(default, skip_serializing_if = "is_zero")]
     pub bisected_edges: usize,
     /// With `--optimize-moulds`: each round toward fewer moulds (coarsening, moulds at δ, largest
-    /// kink, distance, kept).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub mould_rounds: Vec<MouldRound>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub moulds_before: Option<usize>,
+    /// kink, distance, kept), the moulds before them and the distance they were held to.
+    #[serde(flatten)]
+    pub moulds: MouldRoundsSection<MouldRound>,
 }
 
 impl StAdaptedSection {
     pub fn of(result: &StAdaptedResult) -> Self {
         let (m, i) = (&result.metrics, &result.initial_shape);
         Self {
-            variant: result.variant.key().into(),
+            variant: result.variant,
             angle_iterations: result.iterations,
             max_vertex_sphere_residual: m.max_vertex_sphere_residual,
             max_vertex_distance_to_reference: m.max_vertex_distance_to_reference,
@@ -58,8 +59,7 @@ impl StAdaptedSection {
             initial_max_kink_angle_deg: i.max_kink_angle_deg,
             max_gap: m.max_gap,
             bisected_edges: m.bisected_edges,
-            mould_rounds: result.mould_rounds.clone(),
-            moulds_before: result.moulds_before,
+            moulds: MouldOutcome::section(result.moulds.as_ref()),
         }
     }
 }

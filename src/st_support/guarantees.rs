@@ -9,8 +9,40 @@
 use crate::geometry::absolute_sphere::AbsoluteSphere;
 use crate::guarantees::{Guarantee, Verdict};
 use crate::panels::buildability::Buildability;
+use crate::panels::deviation::panel_distances;
+use crate::panels::exact_surface::ExactSurfaces;
+use crate::reference::Reference;
+use crate::units::Units;
 
 use super::metrics::StSupportMetrics;
+use super::params::StSupportParams;
+use crate::congruence::support_structure::SupportStructure;
+use crate::panels::panel::Panel;
+
+/// What the verdict was measured on: the exact surfaces of the panels and support elements and
+/// each panel's distance to the reference as loaded (also when the method remeshed it).
+pub struct Measured {
+    pub verdict: Verdict,
+    pub exact: ExactSurfaces,
+    pub deviations: Vec<f64>,
+}
+
+/// The delivered result: its panels and support structure, their figures and Ω.
+pub struct Delivered<'a> {
+    pub panels: &'a [Panel],
+    pub support: &'a SupportStructure,
+    pub metrics: &'a StSupportMetrics,
+    pub omega: &'a AbsoluteSphere,
+}
+
+/// The verdict of the delivered result: the one measurement of its guarantees, independent of the
+/// optimizer's variables; lengths in `units` beside their share of the diagonal.
+pub fn measure(result: Delivered, reference: &Reference, params: &StSupportParams, units: Units) -> Measured {
+    let exact = ExactSurfaces::of(result.panels, &result.support.elements);
+    let deviations = panel_distances(result.panels, reference);
+    let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), units);
+    Measured { verdict: verdict(result.metrics, result.omega, &buildability, params.max_distance), exact, deviations }
+}
 
 /// Exact: vertex–sphere, orthogonality, centre-plane and node-axis residuals at most this
 /// (relative to the diagonal; the orthogonality residual to its square).

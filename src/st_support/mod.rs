@@ -42,7 +42,6 @@ pub mod report;
 pub mod second_envelope;
 pub mod support_elements;
 
-use std::cell::RefCell;
 use std::fmt;
 use std::rc::Rc;
 
@@ -55,7 +54,7 @@ use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::deviation::max_distance_to_reference;
-use crate::panels::moulds::{snapped_rounds, MouldOutcome, RoundCount};
+use crate::panels::moulds::{Fabrication, MouldHook, RoundCount, RoundSchedule, EXACT_ROUNDS};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
@@ -192,7 +191,13 @@ fn remeshed_reference(
 
 /// The method on `reference` (see the module documentation): optionally remeshed first, then the
 /// steps on the working mesh, and the warnings of the reference and the result.
-pub fn compute(reference: &Reference, params: &StSupportParams, clock: Clock, progress: &mut OnProgress) -> Result<StSupportResult, StSupportError> {
+pub fn compute(
+    reference: &Reference,
+    params: &StSupportParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+    progress: &mut OnProgress,
+) -> Result<StSupportResult, StSupportError> {
     params.check().map_err(StSupportError::Parameter)?;
     reference.validate().map_err(StSupportError::Reference)?;
     let field = reference.curvature(&params.jet, progress)?;
@@ -211,77 +216,112 @@ pub fn compute(reference: &Reference, params: &StSupportParams, clock: Clock, pr
     let mut steps = steps(work.mesh(), work.topology(), &field, params, &mut timings, progress)?;
     if params.optimize_moulds {
         timings.skip();
-        steps = fewer_moulds(reference, work, steps, params, clock, progress)?;
+        steps = fewer_moulds(reference, work, steps, params, fabrication, clock, progress)?;
         timings.lap("fewer_moulds");
     }
     warnings.extend(kink_warning(&steps.sphere_mesh.kink_angles_deg(), work));
     Ok(StSupportResult { timings_ms: timings.laps, warnings, ..steps })
 }
 
-/// The rounds toward fewer moulds ([`moulds`], [`snapped_rounds`]) from the method's result
-/// `start` on `work` (the reference it ran on), its panels measured against `reference`.
-fn fewer_moulds(
-    reference: &Reference,
-    work: &Reference,
-    start: StSupportResult,
-    params: &StSupportParams,
+/// The method's part in the rounds toward fewer moulds ([`crate::panels::moulds::fewer_moulds`]):
+/// [`moulds::project_to_curvatures`] moves the vertices so that every face sphere, still through
+/// its vertices and orthogonal to Ω, has its mould's curvature; steps 2 and 4 to 7 then make the
+/// structure again on the moved mesh, exact by construction.
+struct Moulds<'a, 'p> {
+    /// The reference the panels are measured against, and the one the method ran on.
+    reference: &'a Reference,
+    work: &'a Reference,
+    params: &'a StSupportParams,
+    start_metrics: StSupportMetrics,
+    start_distance: f64,
     clock: Clock,
-    progress: &mut OnProgress,
-) -> Result<StSupportResult, StSupportError> {
-    let diag = reference.diagonal();
-    let distance = |panels: &[Panel]| max_distance_to_reference(panels, reference, diag);
-    let start_distance = distance(&start.panels);
-    let progress = RefCell::new(progress);
-    let faces = start.sphere_mesh.mesh.face_count();
-    let mut project = |from: &StSupportResult, per_panel: &[f64]| -> Result<Option<(StSupportResult, bool)>, StSupportError> {
-        let mut curvatures = vec![f64::NAN; faces];
+    progress: &'a mut OnProgress<'p>,
+}
+
+impl Moulds<'_, '_> {
+    fn distance(&self, panels: &[Panel]) -> f64 {
+        max_distance_to_reference(panels, self.reference, self.reference.diagonal())
+    }
+}
+
+impl MouldHook for Moulds<'_, '_> {
+    type Result = StSupportResult;
+    type Round = StSupportMouldRound;
+    type Error = StSupportError;
+
+    fn schedule(&self) -> RoundSchedule {
+        EXACT_ROUNDS
+    }
+
+    fn panels<'r>(&self, result: &'r StSupportResult) -> &'r [Panel] {
+        &result.panels
+    }
+
+    fn pull(&mut self, from: &StSupportResult, per_panel: &[f64]) -> Result<Option<(StSupportResult, bool)>, StSupportError> {
+        let mut curvatures = vec![f64::NAN; from.sphere_mesh.mesh.face_count()];
         for (p, &k) in from.panels.iter().zip(per_panel) {
             curvatures[p.face] = k;
         }
         let sm = &from.sphere_mesh;
         let triangles = sm.mesh.triangulated();
         let mut iteration = 0;
+        let progress = &mut *self.progress;
         let mut on_iteration = |_: &[DVec3]| {
             iteration += 1;
-            (progress.borrow_mut())(Progress::new("project_to_moulds", iteration, 2 * moulds::ITERATIONS))
+            progress(Progress::new("project_to_moulds", iteration, 2 * moulds::ITERATIONS))
         };
-        let Some(moved) = moulds::project_to_curvatures(work, &triangles, &sm.face_spheres, &from.omega, &curvatures, clock, &mut on_iteration)?
+        let Some(moved) =
+            moulds::project_to_curvatures(self.work, &triangles, &sm.face_spheres, &from.omega, &curvatures, self.clock, &mut on_iteration)?
         else {
             return Ok(None);
         };
         let chosen =
             Chosen { omega: from.omega, mean_kink_estimate_deg: Some(from.mean_kink_estimate_deg), optimized_parameter: from.optimized_parameter };
         let mesh = TriMesh::new(moved, triangles.triangles);
-        let mut scratch = Timings::start(clock);
-        let moved = structure(mesh, work.topology(), chosen, from.absolute.clone(), params, from.diag, &mut scratch, &mut **progress.borrow_mut())?;
-        let holds = moulds::holds(&start.metrics, &moved.metrics, start_distance, distance(&moved.panels));
+        let mut scratch = Timings::start(self.clock);
+        let moved = structure(mesh, self.work.topology(), chosen, from.absolute.clone(), self.params, from.diag, &mut scratch, self.progress)?;
+        let holds = moulds::holds(&self.start_metrics, &moved.metrics, self.start_distance, self.distance(&moved.panels));
         Ok(Some((moved, holds)))
-    };
-    let mut rounds = Vec::new();
-    let mut on_round = |moved: &StSupportResult, count: RoundCount| {
+    }
+
+    fn round(&self, moved: &StSupportResult, count: RoundCount) -> StSupportMouldRound {
         let m = &moved.metrics;
-        rounds.push(StSupportMouldRound {
+        StSupportMouldRound {
             coarsening: count.coarsening,
             moulds: count.moulds,
             max_vertex_sphere_residual: m.max_vertex_sphere_residual,
             max_orthogonality_residual: m.max_orthogonality_residual.max(m.max_center_plane_residual),
             max_node_axis_offset: m.max_node_axis_offset,
-            max_distance_to_reference: distance(&moved.panels),
+            max_distance_to_reference: self.distance(&moved.panels),
             kept: count.kept,
-        });
-    };
-    let out = snapped_rounds(&start, &|r: &StSupportResult| &r.panels[..], diag, &params.fabrication, &mut project, &mut on_round, &mut |p| {
-        (progress.borrow_mut())(p)
-    })?;
-    let outcome = MouldOutcome {
-        snap: out.snap,
-        rounds,
-        before: out.before,
-        fits_before: out.fits_before,
-        distance_limit: moulds::DISTANCE_GROWTH * start_distance,
-    };
-    let mut result = out.best.unwrap_or(start);
-    result.moulds = Some(outcome);
+        }
+    }
+
+    fn distance_limit(&self) -> f64 {
+        moulds::DISTANCE_GROWTH * self.start_distance
+    }
+
+    fn progress(&mut self, p: Progress) -> Result<(), Cancelled> {
+        (self.progress)(p)
+    }
+}
+
+/// The rounds toward fewer moulds from the method's result `start` on `work` (the reference it
+/// ran on), its panels measured against `reference`.
+fn fewer_moulds(
+    reference: &Reference,
+    work: &Reference,
+    start: StSupportResult,
+    params: &StSupportParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+    progress: &mut OnProgress,
+) -> Result<StSupportResult, StSupportError> {
+    let start_distance = max_distance_to_reference(&start.panels, reference, reference.diagonal());
+    let mut hook = Moulds { reference, work, params, start_metrics: start.metrics.clone(), start_distance, clock, progress };
+    let run = crate::panels::moulds::fewer_moulds(&mut hook, &start, reference.diagonal(), fabrication)?;
+    let mut result = run.best.unwrap_or(start);
+    result.moulds = Some(run.outcome);
     Ok(result)
 }
 

@@ -7,7 +7,6 @@ use super::absolute_sphere::AbsoluteSphereParams;
 use crate::congruence::central_spheres::JetParams;
 use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
 use crate::panels::buildability::{read_max_distance, write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
-use crate::panels::moulds::Fabrication;
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
 use crate::remeshing::{Sizing, EPSILON_RANGE, FACES_RANGE};
@@ -28,8 +27,6 @@ pub struct StSupportParams {
     pub axis_length: f64,
     /// Radii closer than this count as one in the panel schedule. Default 1e-3.
     pub radius_tolerance: f64,
-    /// The model unit and the moulds the panels are fitted to ([`crate::panels::moulds`]).
-    pub fabrication: Fabrication,
     /// Remesh first: adaptively with the sizing field of the local spheres orthogonal to Ω
     /// (Fig. 16, bottom; ε × diag), uniformly to about N faces, or not at all (the default).
     pub remesh: Sizing,
@@ -50,7 +47,6 @@ impl Default for StSupportParams {
             support_depth: 0.02,
             axis_length: 0.1,
             radius_tolerance: 1e-3,
-            fabrication: Fabrication::default(),
             remesh: Sizing::None,
             jet: JetParams::default(),
             absolute: AbsoluteSphereParams::default(),

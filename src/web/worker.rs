@@ -41,7 +41,7 @@ pub fn worker_start(cancel: JsValue) {
     SESSION.with(|s| s.borrow_mut().clock = Clock(Some(js_sys::Date::now)));
     WorkerOutbox.send(FromWorker::Ready, Vec::new());
     // Messages that arrive meanwhile wait (a few hundred ms in baseline code).
-    if let Err(e) = crate::pipeline::warm_up::warm_up() {
+    if let Err(e) = crate::pipeline::protocol::warm_up() {
         web_sys::console::warn_1(&format!("the solver warm-up failed: {e}").into());
     }
 }

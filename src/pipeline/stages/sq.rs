@@ -21,7 +21,7 @@ use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::MouldAssignment;
+use crate::panels::moulds::{Fabrication, MouldAssignment};
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, Part};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
@@ -92,10 +92,10 @@ impl Method for SqStage {
     /// When the mean curvature changes sign (Sec. 6.3), sends H at the reference's vertices
     /// ([`Part::Refused`]) before its error, so the app can show where.
     fn compute(reference: &Reference, request: &Request<SqParams>, clock: Clock, sink: &mut dyn Sink) -> Result<Computed<SqResult>, StageError> {
-        let params = &core_params(request);
+        let params = &request.params;
         let mut stream = Stream::new(sink, params, reference.diagonal());
         let mut on_event = |e: SqEvent| stream.event(e);
-        match compute(reference, params, clock, &mut on_event) {
+        match compute(reference, params, &request.fabrication, clock, &mut on_event) {
             Ok(result) => Ok(Computed { result, iteration: stream.planned as u32 }),
             Err(e @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
                 // Exact H at the vertices of a B-spline reference (cached for the app's colour map).
@@ -116,7 +116,7 @@ impl Method for SqStage {
     /// mesh, the panels in their moulds' colours, the support structure.
     fn export(reference: &Reference, result: &SqResult, request: &Request<SqParams>, clock: Clock) -> Exported {
         let segments = CongruenceSegments::of(&result.congruence);
-        let (report, files, moulds) = exported(reference, result, &core_params(request), &segments, clock);
+        let (report, files, moulds) = exported(reference, result, request, &segments, clock);
         let mut display = display_fields(&segments);
         if let Some(q) = &result.quad_mesh {
             let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
@@ -206,14 +206,9 @@ fn describe(report: &Report, params: &SqParams, out: &str) -> String {
     }
 }
 
-/// The method's own parameters with the request's fabrication settings.
-fn core_params(request: &Request<SqParams>) -> SqParams {
-    SqParams { fabrication: request.fabrication, ..request.params.clone() }
-}
-
-/// The report and the files of `result` for `params` (with their fabrication settings).
-pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, clock: Clock) -> (Report, Vec<ExportFile>) {
-    let request = Request { params: params.clone(), fabrication: params.fabrication, jet: JetParams::default() };
+/// The report and the files of `result` for `params` and `fabrication`.
+pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, fabrication: &Fabrication, clock: Clock) -> (Report, Vec<ExportFile>) {
+    let request = Request { params: params.clone(), fabrication: *fabrication, jet: JetParams::default() };
     let e = SqStage::export(reference, result, &request, clock);
     (e.report, e.files)
 }
@@ -402,14 +397,17 @@ pub(crate) fn display_fields(s: &CongruenceSegments) -> Vec<Field> {
     ]
 }
 
-/// The report, the files and the panels' moulds (when there are panels).
+/// The report (with the run's verdict, [`SqResult::verdict_in`]), the files and the panels'
+/// moulds (when there are panels).
 fn exported(
     reference: &Reference,
     result: &SqResult,
-    params: &SqParams,
+    request: &Request<SqParams>,
     segments: &CongruenceSegments,
     clock: Clock,
 ) -> (Report, Vec<ExportFile>, Option<MouldAssignment>) {
+    let params = &request.params;
+    let verdict = result.verdict_in(params, request.fabrication.units);
     let c = &result.congruence;
     let section = SqSection::of(result, params);
     let ((u0, u1), (v0, v1)) = reference.spline().map_or(((0.0, 1.0), (0.0, 1.0)), |s| s.domain());
@@ -443,13 +441,13 @@ fn exported(
                 &f.mesh.panels,
                 reference.diagonal(),
                 params.radius_tolerance,
-                params.fabrication,
+                request.fabrication,
                 &section,
                 &timings,
             )
             .with_extras(serde_json::json!({ "theta_deg": params.theta_deg, "alpha_deg": params.alpha_deg, "faces": f.mesh.panels.len() }))
             .with_support(&f.mesh.support)
-            .with_verdict(&result.verdict)
+            .with_verdict(&verdict)
             .with_exact_surfaces(&f.exact)
             .with_deviations(&f.buildability.panel_distances)
             .with_moulds_before(f.moulds.as_ref().map(|m| &m.fits_before))
@@ -474,7 +472,7 @@ fn exported(
     let total: f64 = c.timings_ms.iter().chain(&result.timings_ms).map(|(_, ms)| ms).sum();
     report.timings_ms.insert("total".into(), total);
     report.warnings = result.warnings.iter().map(ToString::to_string).collect();
-    report.set_verdict(&result.verdict);
+    report.set_verdict(&verdict);
     files.push(report_file(&report));
     (report, files, moulds)
 }

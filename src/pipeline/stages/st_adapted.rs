@@ -8,10 +8,8 @@ use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
-use crate::panels::buildability::Buildability;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::exact_surface::ExactSurfaces;
-use crate::panels::moulds::SnapLimit;
+use crate::panels::moulds::Fabrication;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, Part};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
@@ -19,6 +17,7 @@ use crate::pipeline::panel_output::{export_panels, panel_fields, result_panel_fi
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::{Clock, Progress};
 use crate::reference::Reference;
+use crate::st_adapted::guarantees::measure;
 use crate::st_adapted::metrics::{StAdaptedMetrics, StAdaptedShape};
 use crate::st_adapted::params::StAdaptedParams;
 use crate::st_adapted::report::StAdaptedSection;
@@ -106,7 +105,7 @@ impl Method for StAdaptedStage {
                 Ok(())
             }
         };
-        let result = compute(reference, params, clock, &mut on_event)?;
+        let result = compute(reference, params, &request.fabrication, clock, &mut on_event)?;
         Ok(Computed { iteration: result.iterations as u32, result })
     }
 
@@ -115,12 +114,9 @@ impl Method for StAdaptedStage {
     /// the iteration count is `metrics.angle_iterations`.
     fn export(reference: &Reference, result: &StAdaptedResult, request: &Request<StAdaptedParams>, clock: Clock) -> Exported {
         let params = &core_params(request);
-        let m = &result.metrics;
         let variant = result.variant.key();
         let section = StAdaptedSection::of(result);
-        let exact = ExactSurfaces::of(&result.panels, &[]);
-        let buildability = Buildability::measure(&exact, &result.panel_deviations, false, result.diag, params.fabrication.units);
-        let verdict = crate::st_adapted::guarantees::verdict(m, &buildability, params.distance_bound(reference.facet_sagitta()));
+        let (verdict, exact) = measure(result, reference, params, request.fabrication.units);
         let mut timings = result.timings_ms.clone();
         if let Some(med) = result.angle_iteration_median_ms {
             timings.push(("angle_iteration_median".into(), med));
@@ -131,17 +127,17 @@ impl Method for StAdaptedStage {
             &result.panels,
             result.diag,
             params.radius_tolerance,
-            params.fabrication,
+            request.fabrication,
             &section,
             &timings,
         )
         .with_extras(serde_json::json!({ "variant": variant }))
         .with_deviations(&result.panel_deviations)
-        .with_moulds_before(result.fits_before.as_ref())
+        .with_moulds_before(result.moulds.as_ref().map(|m| &m.fits_before))
         .with_warnings(&result.warnings)
         .with_verdict(&verdict)
         .with_exact_surfaces(&exact)
-        .with_snapping(result.mould_snap.as_ref().map_or(Snapping::Not(SnapLimit::NotAsked), Snapping::Snapped));
+        .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
         let (report, mut files, moulds) = export_panels(reference, export, clock);
         files.push(report_file(&report));
         Exported { display: result_panel_fields(&result.panels, &moulds), report, files }
@@ -166,6 +162,11 @@ impl Method for StAdaptedStage {
         &mut summary.report
     }
 
+    /// The ST method on a small dome ([`crate::st_adapted::warm_up`]).
+    fn warm_up() -> Result<(), String> {
+        crate::st_adapted::warm_up::warm_up().map(|_| ()).map_err(|e| e.to_string())
+    }
+
     fn describe(result: &StAdaptedResult, report: &Report, _request: &Request<StAdaptedParams>, out: &str) -> String {
         let line = format!(
             "wrote {} panels to {out} (kink mean {:.3}°, max {:.3}°; max distance to reference {}; {} folded faces)",
@@ -179,14 +180,20 @@ impl Method for StAdaptedStage {
     }
 }
 
-/// The method's own parameters with the request's fabrication settings and jet fit.
+/// The method's own parameters with the request's jet fit.
 fn core_params(request: &Request<StAdaptedParams>) -> StAdaptedParams {
-    StAdaptedParams { fabrication: request.fabrication, jet: request.jet.clone(), ..request.params.clone() }
+    StAdaptedParams { jet: request.jet.clone(), ..request.params.clone() }
 }
 
-/// The report and the files of `result` for `params` (with their fabrication settings and jet).
-pub fn export(reference: &Reference, result: &StAdaptedResult, params: &StAdaptedParams, clock: Clock) -> (Report, Vec<ExportFile>) {
-    let request = Request { params: params.clone(), fabrication: params.fabrication, jet: params.jet.clone() };
+/// The report and the files of `result` for `params` (with their jet) and `fabrication`.
+pub fn export(
+    reference: &Reference,
+    result: &StAdaptedResult,
+    params: &StAdaptedParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+) -> (Report, Vec<ExportFile>) {
+    let request = Request { params: params.clone(), fabrication: *fabrication, jet: params.jet.clone() };
     let e = StAdaptedStage::export(reference, result, &request, clock);
     (e.report, e.files)
 }

@@ -7,17 +7,14 @@ use serde::{Deserialize, Serialize};
 use super::StageError;
 use crate::export::{report_file, ExportFile, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::panels::buildability::Buildability;
-use crate::panels::deviation::panel_distances;
-use crate::panels::exact_surface::ExactSurfaces;
-use crate::panels::moulds::{MouldAssignment, MouldOutcome};
+use crate::panels::moulds::{Fabrication, MouldAssignment, MouldOutcome};
 use crate::pipeline::fields::{field, Field};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
-use crate::pipeline::panel_output::with_moulds;
-use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, PanelExport, Snapping};
+use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, with_moulds, PanelExport, Snapping};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
 use crate::reference::Reference;
+use crate::st_support::guarantees::{measure, Delivered, Measured};
 use crate::st_support::report::StSupportSection;
 use crate::st_support::{compute, StSupportParams, StSupportResult};
 use crate::stats::Histogram;
@@ -66,7 +63,7 @@ impl Method for StSupportStage {
         sink: &mut dyn Sink,
     ) -> Result<Computed<StSupportResult>, StageError> {
         let start = sink.now_ms();
-        let result = compute(reference, &core_params(request), clock, &mut |p| report(sink, p, Vec::new(), start))?;
+        let result = compute(reference, &core_params(request), &request.fabrication, clock, &mut |p| report(sink, p, Vec::new(), start))?;
         Ok(Computed { result, iteration: 1 })
     }
 
@@ -75,17 +72,15 @@ impl Method for StSupportStage {
     fn export(reference: &Reference, result: &StSupportResult, request: &Request<StSupportParams>, clock: Clock) -> Exported {
         let params = &core_params(request);
         let section = StSupportSection::of(result, params.remesh);
-        let exact = ExactSurfaces::of(&result.panels, &result.support.elements);
-        let deviations = panel_distances(&result.panels, reference);
-        let buildability = Buildability::measure(&exact, &deviations, true, reference.diagonal(), params.fabrication.units);
-        let verdict = crate::st_support::guarantees::verdict(&result.metrics, &result.omega, &buildability, params.max_distance);
+        let delivered = Delivered { panels: &result.panels, support: &result.support, metrics: &result.metrics, omega: &result.omega };
+        let Measured { verdict, exact, deviations } = measure(delivered, reference, params, request.fabrication.units);
         let export = PanelExport::new(
             Self::KEY,
             &result.sphere_mesh,
             &result.panels,
             result.diag,
             params.radius_tolerance,
-            params.fabrication,
+            request.fabrication,
             &section,
             &result.timings_ms,
         )
@@ -140,14 +135,20 @@ impl Method for StSupportStage {
     }
 }
 
-/// The method's own parameters with the request's fabrication settings and jet fit.
+/// The method's own parameters with the request's jet fit.
 fn core_params(request: &Request<StSupportParams>) -> StSupportParams {
-    StSupportParams { fabrication: request.fabrication, jet: request.jet.clone(), ..request.params.clone() }
+    StSupportParams { jet: request.jet.clone(), ..request.params.clone() }
 }
 
-/// The report and the files of `result` for `params` (with their fabrication settings and jet).
-pub fn export(reference: &Reference, result: &StSupportResult, params: &StSupportParams, clock: Clock) -> (Report, Vec<ExportFile>) {
-    let request = Request { params: params.clone(), fabrication: params.fabrication, jet: params.jet.clone() };
+/// The report and the files of `result` for `params` (with their jet) and `fabrication`.
+pub fn export(
+    reference: &Reference,
+    result: &StSupportResult,
+    params: &StSupportParams,
+    fabrication: &Fabrication,
+    clock: Clock,
+) -> (Report, Vec<ExportFile>) {
+    let request = Request { params: params.clone(), fabrication: *fabrication, jet: params.jet.clone() };
     let e = StSupportStage::export(reference, result, &request, clock);
     (e.report, e.files)
 }

@@ -118,17 +118,20 @@ pub struct App {
     _file_input_closure: Option<Closure<dyn FnMut()>>,
 }
 
+/// Installs the viewer's GPU resources; the backend's name ("WebGPU", "WebGL2"; empty without one).
+fn install_viewer(cc: &eframe::CreationContext<'_>) -> String {
+    let Some(rs) = cc.wgpu_render_state.as_ref() else { return String::new() };
+    rs.renderer.write().callback_resources.insert(ViewerResources::new(&rs.device, rs.target_format));
+    match rs.adapter.get_info().backend {
+        egui_wgpu::wgpu::Backend::BrowserWebGpu => "WebGPU".into(),
+        egui_wgpu::wgpu::Backend::Gl => "WebGL2".into(),
+        other => format!("{other:?}"),
+    }
+}
+
 impl App {
     pub fn new(cc: &eframe::CreationContext<'_>) -> Self {
-        let mut backend = String::new();
-        if let Some(rs) = cc.wgpu_render_state.as_ref() {
-            rs.renderer.write().callback_resources.insert(ViewerResources::new(&rs.device, rs.target_format));
-            backend = match rs.adapter.get_info().backend {
-                egui_wgpu::wgpu::Backend::BrowserWebGpu => "WebGPU".into(),
-                egui_wgpu::wgpu::Backend::Gl => "WebGL2".into(),
-                other => format!("{other:?}"),
-            };
-        }
+        let backend = install_viewer(cc);
         cc.egui_ctx.set_theme(egui::Theme::Dark);
         let fragment = dom::location_hash();
         let (design, notices) = Design::from_fragment(&fragment);

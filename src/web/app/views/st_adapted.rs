@@ -177,7 +177,7 @@ impl MethodView for StAdaptedMethod {
                 .summary
                 .as_ref()
                 .and_then(|s| s.report.section::<crate::st_adapted::report::StAdaptedSection>())
-                .and_then(|s| s.moulds_before),
+                .and_then(|s| s.moulds.moulds_before),
         });
         serde_json::to_value(state).unwrap_or_default()
     }
@@ -247,8 +247,8 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
         rows.push(("sizing g min / max", format!("{lo:.4} / {hi:.4}")));
     }
     let section: Option<crate::st_adapted::report::StAdaptedSection> = sum.report.section();
-    let rounds = section.as_ref().map_or(0, |s| s.mould_rounds.len());
-    rows.extend(before_after(section.as_ref().and_then(|s| s.moulds_before), rounds, sum.report.moulds.as_ref()));
+    let rounds = section.as_ref().map_or(0, |s| s.moulds.mould_rounds.len());
+    rows.extend(before_after(section.as_ref().and_then(|s| s.moulds.moulds_before), rounds, sum.report.moulds.as_ref()));
     if let Some(ms) = sum.report.timings_ms.get("angle_iteration_median") {
         rows.push(("median iteration", format!("{ms:.2} ms")));
     }

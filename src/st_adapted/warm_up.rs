@@ -8,11 +8,12 @@
 //! factorization, panels) on about [`WARM_UP_FACES`] faces, so the user's first run starts on
 //! optimized code.
 
+use super::params::StAdaptedParams;
+use super::{compute, StAdaptedError};
+use crate::panels::moulds::Fabrication;
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::remeshing::Sizing;
-use crate::st_adapted::params::StAdaptedParams;
-use crate::st_adapted::{compute, StAdaptedError};
 
 /// Faces of the warm-up's remeshed dome: a few hundred, so that the factorization takes the same
 /// (supernodal) path as a real run.
@@ -39,7 +40,7 @@ pub fn warm_up() -> Result<WarmUp, StAdaptedError> {
         stages: StAdaptedParams::stages_with([WARM_UP_STAGE_ITERATIONS; 3]),
         ..Default::default()
     };
-    let result = compute(&reference, &params, Clock(None), &mut |_| Ok(()))?;
+    let result = compute(&reference, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(()))?;
     Ok(WarmUp { faces: result.panels.len(), iterations: result.iterations, supernodal: result.supernodal })
 }
 
