@@ -74,7 +74,7 @@ use self::moulds::{SqMouldOutcome, SqMouldRound, DISTANCE_GROWTH};
 use self::optimization::{CongruenceProblem, SqStep};
 use self::params::{RadiusBasis, RadiusStart, SqParams, Until, PROJECTION_MARGIN_DEG};
 use self::quad_mesh::{quad_mesh, SqQuadMesh};
-use self::radius::{check_mean_curvature, RadiusFit, constant_radius_fit, fit_radius, mean_curvature_shares, SamplingGrid};
+use self::radius::{check_mean_curvature, constant_radius_fit, fit_radius, mean_curvature_shares, RadiusFit, SamplingGrid};
 use self::sphere_optimization::{on_grid, optimize_spheres, project_to_curvatures, QuadStars, SphereInput, SphereOutcome, SpherePhase};
 use self::sq_mesh::{sq_mesh, SqMesh};
 use self::start::{constant_function, constant_radius, spherical_reference};
@@ -245,7 +245,7 @@ pub fn compute_congruence(
         let sphere = (t + s * centre, s * radius);
         return Ok(spherical_congruence(grid, model_points, sphere, params, [du, dv], spline.domain(), timings));
     }
-    let (sign, fit, mut warnings, starts) = radius_start(&surface, &grid, (hi - lo).length() / s, params)?;
+    let StartingRadius { sign, fit, mut warnings, starts } = radius_start(&surface, &grid, (hi - lo).length() / s, params)?;
     let problem = CongruenceProblem::new(grid, &fit.function, params.inequality);
     let grid = &problem.grid;
     timings.lap("radius");
@@ -617,16 +617,25 @@ pub fn compute(
 }
 
 /// The radius function to start from (Eq. 8), the sign of H it follows, the warnings, and the
+/// starts that exist.
+struct StartingRadius {
+    sign: f64,
+    fit: RadiusFit,
+    warnings: Vec<Warning>,
+    starts: &'static [RadiusStart],
+}
+
+/// The radius function to start from (Eq. 8), the sign of H it follows, the warnings, and the
 /// starts that exist: where H changes sign or vanishes, the central spheres pass through planes
 /// and only the constant start exists (Sec. 6.3). `extent`: the frame's bounding-box diagonal.
-fn radius_start(
-    surface: &BSplineSurface,
-    grid: &SamplingGrid,
-    extent: f64,
-    params: &SqParams,
-) -> Result<(f64, RadiusFit, Vec<Warning>, &'static [RadiusStart]), SqError> {
+fn radius_start(surface: &BSplineSurface, grid: &SamplingGrid, extent: f64, params: &SqParams) -> Result<StartingRadius, SqError> {
     match check_mean_curvature(surface, grid, extent, params.faces) {
-        Ok(signs) => Ok((signs.sign, fit_radius(surface, grid, params.radius_basis, &signs.excluded)?, signs.warnings, params.start.starts())),
+        Ok(signs) => Ok(StartingRadius {
+            sign: signs.sign,
+            fit: fit_radius(surface, grid, params.radius_basis, &signs.excluded)?,
+            warnings: signs.warnings,
+            starts: params.start.starts(),
+        }),
         Err(refusal @ (SqError::MeanCurvatureSignChange { .. } | SqError::MeanCurvatureNearZero { .. })) => {
             let [positive_share, negative_share] = mean_curvature_shares(surface);
             let sign = if positive_share >= negative_share { 1.0 } else { -1.0 };
@@ -635,7 +644,8 @@ fn radius_start(
                 _ => return Err(refusal),
             };
             let warning = Warning::CentralCongruenceUnbounded { positive_share, negative_share };
-            Ok((sign, constant_radius_fit(surface, params.radius_basis, r)?, vec![warning], &[RadiusStart::Constant][..]))
+            let fit = constant_radius_fit(surface, params.radius_basis, r)?;
+            Ok(StartingRadius { sign, fit, warnings: vec![warning], starts: &[RadiusStart::Constant] })
         }
         Err(e) => Err(e),
     }
