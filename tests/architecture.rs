@@ -388,39 +388,88 @@ fn imports_follow_the_documented_layers_without_cycles() {
 #[test]
 fn the_toolkit_imports_no_method() {
     let layers = documented_layers();
-    let methods = layers["st_adapted"];
+    let row = layers["st_adapted"];
     for m in ["geometry", "reference", "congruence", "solver", "remeshing", "panels"] {
-        assert!(layers[m] < methods, "{m} is not below the methods");
+        assert!(layers[m] < row, "{m} is not below the methods");
     }
-    for m in ["st_adapted", "st_support"] {
-        assert!(layers[m] < layers["export"] && layers[m] < layers["pipeline"] && layers[m] < layers["web"]);
+    for m in methods(&layers) {
+        assert!(layers[&m] < layers["export"] && layers[&m] < layers["pipeline"] && layers[&m] < layers["web"]);
     }
 }
 
+/// The methods: the modules on the methods row of the layer table (as many as there are).
+fn methods(layers: &BTreeMap<String, usize>) -> Vec<String> {
+    let row = layers["st_adapted"];
+    layers.iter().filter(|(_, &l)| l == row).map(|(m, _)| m.clone()).collect()
+}
+
+/// The places of the recipe where a method is named outside its folder, its stage file and its
+/// view: the protocol's line, the view registry, the CLI's subcommand, the module lines of
+/// `lib.rs` and `stages/mod.rs`, and the benchmark workloads, which measure named methods.
+const SEAMS: [&str; 6] = ["pipeline/protocol.rs", "web/app/views/mod.rs", "cli/methods.rs", "lib.rs", "pipeline/stages/mod.rs", "bench_workloads.rs"];
+
+/// The stage type a method's line in `methods!` names (`Sq => stages::sq::SqStage`).
+fn stage_type(protocol: &str, method: &str) -> Option<String> {
+    let needle = format!("stages::{method}::");
+    let line = protocol.lines().find(|l| l.contains("=>") && l.contains(&needle))?;
+    let after = &line[line.find(&needle)? + needle.len()..];
+    Some(after.chars().take_while(|&c| is_ident(c)).collect())
+}
+
 /// The recipe of ARCHITECTURE.md for every method on the methods row: its folder with a driver,
-/// `params.rs` and `report.rs`, its stage file, its view module and its line in `views::views`.
+/// `params.rs` (with its link fields), `guarantees.rs` and `report.rs`, its stage file
+/// implementing `Method`, its view module and its line in `views::views`, its line in the
+/// protocol's `methods!` and its CLI subcommand. No count: a fourth method passes the same way.
 #[test]
 fn every_method_follows_the_recipe() {
     let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md")).unwrap();
     assert!(doc.contains("<!-- recipe") && doc.contains("<!-- /recipe -->"), "ARCHITECTURE.md shows the recipe");
     let files = source_files();
-    let layers = documented_layers();
-    let row = layers["st_adapted"];
-    let methods: Vec<&String> = layers.iter().filter(|(_, &l)| l == row).map(|(m, _)| m).collect();
-    assert_eq!(methods.len(), 3, "the three methods of the paper: {methods:?}");
-    let views = &files["web/app/views/mod.rs"];
-    for m in methods {
+    let methods = methods(&documented_layers());
+    assert!(!methods.is_empty(), "the methods row of the layer table is empty");
+    let (views, protocol, cli) = (&files["web/app/views/mod.rs"], &files["pipeline/protocol.rs"], &files["cli/methods.rs"]);
+    for m in &methods {
         for part in [
             format!("{m}/mod.rs"),
             format!("{m}/params.rs"),
+            format!("{m}/guarantees.rs"),
             format!("{m}/report.rs"),
             format!("pipeline/stages/{m}.rs"),
             format!("web/app/views/{m}.rs"),
         ] {
             assert!(files.contains_key(&part), "{m}: src/{part} is missing (ARCHITECTURE.md, How to add a method)");
         }
+        assert!(files[&format!("{m}/params.rs")].contains("impl LinkFields for"), "{m}: its params.rs writes no link fields");
+        let stage = stage_type(protocol, m).unwrap_or_else(|| panic!("{m}: no line in the protocol's methods!"));
+        assert!(files[&format!("pipeline/stages/{m}.rs")].contains(&format!("impl Method for {stage}")), "{m}: its stage file implements no Method");
         assert!(views.contains(&format!("{m}::")), "{m}: no line in views::views");
+        assert!(cli.contains("MethodArgs<") && code(cli).contains(&stage), "{m}: no subcommand in cli/methods.rs");
     }
+}
+
+/// A method is named outside its folder, its stage file and its view only in the recipe's
+/// places ([`SEAMS`]): the session, the design link, the stage ids, the worker and the rest of the
+/// app go through the seam.
+#[test]
+fn no_file_outside_the_recipe_names_a_method() {
+    let files = source_files();
+    let methods = methods(&documented_layers());
+    let protocol = &files["pipeline/protocol.rs"];
+    let mut found = Vec::new();
+    for m in &methods {
+        let stage = stage_type(protocol, m).unwrap_or_default();
+        let own = |f: &str| f.starts_with(&format!("{m}/")) || f == format!("pipeline/stages/{m}.rs") || f == format!("web/app/views/{m}.rs");
+        for (file, text) in files.iter().filter(|(f, _)| !own(f) && !SEAMS.contains(&f.as_str())) {
+            let code = code(text);
+            let words: Vec<&str> = code.split(|c: char| !is_ident(c)).collect();
+            let path = code.contains(&format!("{m}::"))
+                && code.match_indices(&format!("{m}::")).any(|(i, _)| i == 0 || !is_ident(code.as_bytes()[i - 1] as char));
+            if path || (!stage.is_empty() && words.contains(&stage.as_str())) {
+                found.push(format!("{file} names `{m}`"));
+            }
+        }
+    }
+    assert!(found.is_empty(), "outside the recipe's places:\n{}", found.join("\n"));
 }
 
 /// The checker itself: it finds an upward import, a cycle between files, an import through a

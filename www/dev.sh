@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Spherical Faces developer entry point.
 #   bash www/dev.sh serve   install what is missing, build the release wasm, serve on 127.0.0.1:8080
-#   bash www/dev.sh test    install what is missing, run native, wasm-pack and browser end-to-end tests
+#   bash www/dev.sh test    install what is missing, run the lint gate, native, wasm-pack and browser end-to-end tests
+#   bash www/dev.sh lint    cargo fmt --check, and clippy -D warnings natively and for the app's wasm
 #   bash www/dev.sh timings the app's timings in headless Chromium (tests/e2e/timings.mjs)
 #   bash www/dev.sh bench   native benches (cargo bench, divan) and the same workloads in release wasm in
 #                           headless Chromium, then a native-vs-wasm table (target/bench/)
@@ -137,6 +138,24 @@ build_web() {
 
 cmd_setup() { setup_rust; setup_wasm_tools; }
 
+# rustfmt and clippy of the toolchain that builds (Debian's on the Debian route, rustup's else).
+setup_lints() {
+  if [ "$(command -v cargo)" = /usr/bin/cargo ]; then apt_install rust-web-clippy rustfmt-web; fi
+}
+
+# The lint gate: the house format (rustfmt.toml) and clippy without warnings, the allows that
+# remain justified in Cargo.toml's [lints.clippy]; the app's code is wasm-only, so clippy runs
+# for wasm too.
+cmd_lint() {
+  setup_rust
+  setup_lints
+  log "format: cargo fmt --check"
+  cargo fmt --check
+  log "lints: cargo clippy -D warnings (native, all targets; wasm32, the library and its tests)"
+  cargo clippy -q --all-targets -- -D warnings
+  cargo clippy -q --target "$WASM_TARGET" --lib --tests -- -D warnings
+}
+
 cmd_serve() {
   cmd_setup
   build_web release
@@ -144,6 +163,7 @@ cmd_serve() {
 }
 
 cmd_test() {
+  cmd_lint
   cmd_setup
   setup_browser
   setup_rhino3dm
@@ -274,8 +294,9 @@ case "${1:-}" in
   build) cmd_setup; build_web "${2:-release}" ;;
   serve) cmd_serve ;;
   test) cmd_test ;;
+  lint) cmd_lint ;;
   bench) cmd_bench ;;
   timings) cmd_timings ;;
   fuzz) cmd_fuzz "${2:-all}" "${3:-60}" ;;
-  *) echo "usage: bash www/dev.sh serve|test|bench|timings|fuzz [target|all] [seconds]   (also: setup, build [release|dev])" >&2; exit 2 ;;
+  *) echo "usage: bash www/dev.sh serve|test|lint|bench|timings|fuzz [target|all] [seconds]   (also: setup, build [release|dev])" >&2; exit 2 ;;
 esac

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::fields::{Energy, Field, FieldHeader, FieldLengthError, Part, StepProgress};
 use super::method::{same_result, Method, Request};
-use super::stages::{sq, st_adapted, st_support};
+use super::stages;
 use crate::congruence::central_spheres::{CurvatureSummary, JetParams};
 use crate::export::Report;
 use crate::geometry::mesh::topology::MeshStats;
@@ -129,9 +129,9 @@ macro_rules! methods {
 }
 
 methods! {
-    StAdapted => st_adapted::StAdaptedStage,
-    StSupport => st_support::StSupportStage,
-    Sq => sq::SqStage,
+    StAdapted => stages::st_adapted::StAdaptedStage,
+    StSupport => stages::st_support::StSupportStage,
+    Sq => stages::sq::SqStage,
 }
 
 /// Every method's warm-up ([`Method::warm_up`]), at worker start.

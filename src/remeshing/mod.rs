@@ -1,5 +1,8 @@
 //! Meshes with adapted face size (Sec. 3): influence zones and the sizing field g
-//! ([`influence_zones`], Fig. 13), and pliant remeshing to it ([`pliant`]) on a halfedge mesh.
+//! ([`influence_zones`], Fig. 13), and pliant remeshing to it ([`pliant`]) on a halfedge mesh;
+//! quad meshes along a cross field on a B-spline patch (Sec. 5.2): [`cross_field`], [`seamless`]
+//! and [`quad_remeshing`]. The sizing's kinds, ε and N with their ranges, and how a link holds
+//! them.
 //!
 //! Typical use:
 //! ```no_run
