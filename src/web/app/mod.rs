@@ -29,6 +29,7 @@ use egui::{Color32, Rect, RichText};
 use glam::Vec3;
 use wasm_bindgen::prelude::*;
 
+use crate::congruence::central_spheres::{JET_DEGREE_RANGE, JET_RINGS_RANGE};
 use crate::design_link::{CameraState, ColorBy, Design, DesignSurface, Method, Shading};
 use crate::pipeline::protocol::{StageId, StageRequest, ToWorker};
 use crate::samples::Sample;
@@ -429,10 +430,10 @@ impl App {
         }
         ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
         let mut jet = self.design.jet.clone();
-        let mut degree = jet.degree as u32;
-        ui.add(egui::Slider::new(&mut degree, 2..=4).text("jet degree"));
+        let mut degree = jet.degree as usize;
+        ui.add(egui::Slider::new(&mut degree, JET_DEGREE_RANGE.range()).text("jet degree"));
         jet.degree = degree as u8;
-        ui.add(egui::Slider::new(&mut jet.max_rings, 1..=8).text("max rings"));
+        ui.add(egui::Slider::new(&mut jet.max_rings, JET_RINGS_RANGE.range()).text("max rings"));
         if jet != self.design.jet {
             self.design.jet = jet;
             self.run_method();

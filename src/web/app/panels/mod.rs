@@ -5,7 +5,7 @@
 pub mod info;
 pub mod moulds;
 
-use crate::remeshing::{Sizing, SizingKind, DEFAULT_EPSILON, DEFAULT_FACES};
+use crate::remeshing::{Sizing, SizingKind, DEFAULT_EPSILON, DEFAULT_FACES, EPSILON_RANGE, FACES_RANGE};
 
 /// ε and N as last set, so that switching the sizing kind back and forth keeps them.
 #[derive(Clone, Copy, Debug)]
@@ -42,12 +42,17 @@ pub fn sizing_controls(ui: &mut egui::Ui, id: &str, sizing: &mut Sizing, memory:
     let (mut epsilon, mut faces) = (memory.epsilon, memory.faces);
     match kind {
         SizingKind::Adaptive => {
-            ui.add(egui::Slider::new(&mut epsilon, 2e-5..=1e-2).logarithmic(true).text("ε").custom_formatter(|x, _| format!("{x:.2e}")))
-                .on_hover_text("Distance tolerance of the influence zones, relative to the bbox diagonal (Sec. 3): smaller ε, smaller faces");
+            ui.add(
+                egui::Slider::new(&mut epsilon, EPSILON_RANGE.lo.max(2e-5)..=EPSILON_RANGE.hi.min(1e-2))
+                    .logarithmic(true)
+                    .text("ε")
+                    .custom_formatter(|x, _| format!("{x:.2e}")),
+            )
+            .on_hover_text("Distance tolerance of the influence zones, relative to the bbox diagonal (Sec. 3): smaller ε, smaller faces");
         }
         SizingKind::Faces => {
             // The methods' own cap: more faces are refused with an offer to remesh.
-            ui.add(egui::Slider::new(&mut faces, 50..=crate::remeshing::MAX_METHOD_FACES).logarithmic(true).text("faces"));
+            ui.add(egui::Slider::new(&mut faces, FACES_RANGE.lo.max(50)..=crate::remeshing::MAX_METHOD_FACES).logarithmic(true).text("faces"));
         }
         SizingKind::None => {}
     }

@@ -8,7 +8,7 @@ use egui::{Color32, Pos2, RichText, Sense, Vec2};
 use glam::Mat4;
 
 use crate::export::MouldReport;
-use crate::panels::moulds::{mould_colour, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE, MOULD_COLOURS};
+use crate::panels::moulds::{mould_colour, Fabrication, MouldTarget, DEFAULT_MOULD_TOLERANCE, MOULD_COLOURS, MOULD_COUNT_RANGE};
 use crate::pipeline::fields::{field, find, Field};
 use crate::units::{format_length, Length, Units};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
@@ -126,7 +126,7 @@ pub fn controls(ui: &mut egui::Ui, fabrication: &mut Fabrication, last: Option<&
         }
         MouldTarget::Count(k) => {
             ui.horizontal(|ui| {
-                ui.add(egui::DragValue::new(k).range(1..=10_000).prefix("K "));
+                ui.add(egui::DragValue::new(k).range(MOULD_COUNT_RANGE.range()).prefix("K "));
                 if let Some(m) = last {
                     ui.label(RichText::new(format!("→ δ = {}", format_length(m.tolerance, m.units))).small())
                         .on_hover_text("the smallest fit tolerance of the last result for K moulds");

@@ -20,7 +20,11 @@ use crate::pipeline::stages::sq::SqStage;
 /// The method's stage, and H at the vertices when it refuses the sign of H.
 const STAGE: StageId = StageId::Method(MethodId::Sq, Part::Main);
 const REFUSED_STAGE: StageId = StageId::Method(MethodId::Sq, Part::Refused);
-use crate::sq::params::{RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, THETA_RANGE};
+use crate::congruence::support_structure::SUPPORT_DEPTH_RANGE;
+use crate::sq::params::{
+    RadiusStart, SqParams, Until, ALPHA_RANGE, FACES_RANGE, GRID_RANGE, ITERATIONS_RANGE, RADIUS_CONTROLS_RANGE, RADIUS_DEGREE_RANGE,
+    RECOMPUTE_RANGE, THETA_RANGE, WEIGHT_RANGE,
+};
 use crate::sq::report::SqSection;
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
@@ -341,8 +345,12 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
         .on_hover_text("Points per direction of the sampling grid G");
     ui.add(egui::Slider::new(&mut params.faces, FACES_RANGE.lo.max(16)..=FACES_RANGE.hi).logarithmic(true).text("faces"))
         .on_hover_text("Quads the remesh along the torsal cross field aims at (Sec. 5.2)");
-    ui.add(egui::Slider::new(&mut params.support_depth, 0.002..=0.1).logarithmic(true).text("support depth"))
-        .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
+    ui.add(
+        egui::Slider::new(&mut params.support_depth, SUPPORT_DEPTH_RANGE.lo.max(0.002)..=SUPPORT_DEPTH_RANGE.hi.min(0.1))
+            .logarithmic(true)
+            .text("support depth"),
+    )
+    .on_hover_text("Depth of the support elements, relative to the bounding-box diagonal");
     max_distance_slider(ui, &mut params.max_distance);
     optimize_moulds_checkbox(ui, &mut params.optimize_moulds, "Projections to exactness with every panel's curvature held at its mould's, coarser each round while exactness, θ and α hold and the vertices stay within 1.2× of their distance to the reference; every kept panel has its mould's radius exactly");
     egui::ComboBox::from_label("run until").selected_text(params.until.key()).show_ui(ui, |ui| {
@@ -360,16 +368,22 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
             })
             .response
             .on_hover_text("auto: the central congruence r = 1/H, then constant radii when it misses θ or α (Sec. 5.1, 6.3)");
-        ui.add(egui::Slider::new(&mut params.recompute_every, 1..=50).text("RS"))
+        ui.add(egui::Slider::new(&mut params.recompute_every, RECOMPUTE_RANGE.lo..=RECOMPUTE_RANGE.hi.min(50)).text("RS"))
             .on_hover_text("The torsal directions and planes are recomputed every RS iterations");
-        ui.add(egui::Slider::new(&mut params.lc_iterations, 1..=500).text("step 1 iterations"));
-        ui.add(egui::Slider::new(&mut params.torsal_iterations, 1..=500).text("step 2 iterations"));
-        ui.add(egui::Slider::new(&mut params.final_iterations, 0..=50).text("last iterations without angle and fairness"));
+        ui.add(egui::Slider::new(&mut params.lc_iterations, 1..=ITERATIONS_RANGE.hi.min(500)).text("step 1 iterations"));
+        ui.add(egui::Slider::new(&mut params.torsal_iterations, 1..=ITERATIONS_RANGE.hi.min(500)).text("step 2 iterations"));
+        ui.add(
+            egui::Slider::new(&mut params.final_iterations, ITERATIONS_RANGE.lo..=ITERATIONS_RANGE.hi.min(50))
+                .text("last iterations without angle and fairness"),
+        );
         let mut degree = params.radius_basis.degree;
-        ui.add(egui::Slider::new(&mut degree, 1..=7).text("radius degree"));
+        ui.add(egui::Slider::new(&mut degree, RADIUS_DEGREE_RANGE.lo..=RADIUS_DEGREE_RANGE.hi.min(7)).text("radius degree"));
         params.radius_basis.degree = degree;
         params.radius_basis.controls = params.radius_basis.controls.max(degree + 1);
-        ui.add(egui::Slider::new(&mut params.radius_basis.controls, degree + 1..=20).text("radius coefficients per direction"));
+        ui.add(
+            egui::Slider::new(&mut params.radius_basis.controls, degree + 1..=RADIUS_CONTROLS_RANGE.hi.min(20))
+                .text("radius coefficients per direction"),
+        );
         ui.label(RichText::new("step 1 weights (Table 1)").small());
         let w = &mut params.lc_weights;
         weight(ui, &mut w.lc, "w_LC");
@@ -383,7 +397,7 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
         weight(ui, &mut w.fair, "w_fair");
         weight(ui, &mut w.reg, "w_reg");
         ui.label(RichText::new("final optimization (Eq. 10, Table 3)").small());
-        ui.add(egui::Slider::new(&mut params.sphere_iterations[1], 0..=500).text("iterations"));
+        ui.add(egui::Slider::new(&mut params.sphere_iterations[1], ITERATIONS_RANGE.lo..=ITERATIONS_RANGE.hi.min(500)).text("iterations"));
         let w = &mut params.sphere_weights;
         weight(ui, &mut w.sphere, "w_sphere");
         weight(ui, &mut w.supp, "w_supp");
@@ -408,7 +422,7 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
 }
 
 fn weight(ui: &mut egui::Ui, w: &mut f64, label: &str) {
-    ui.add(egui::Slider::new(w, 0.0..=10.0).logarithmic(true).text(label));
+    ui.add(egui::Slider::new(w, WEIGHT_RANGE.lo..=WEIGHT_RANGE.hi.min(10.0)).logarithmic(true).text(label));
 }
 
 /// The live energy of every term and, when done, the figures before and after.

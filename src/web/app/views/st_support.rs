@@ -9,9 +9,11 @@ use glam::{Mat4, Vec3};
 use serde::Serialize;
 
 use super::method_view::{Drawn, Frame, MethodView};
+use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
 use crate::design_link::{Design, Method};
 use crate::export::Report;
 use crate::geometry::absolute_sphere::AbsoluteSphere;
+use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::pipeline::fields::{field, find, Field, Part};
 use crate::pipeline::protocol::{MethodId, MethodSummary, StageId, StageResult};
 use crate::pipeline::stages::st_support::{StSupportStage, StSupportSummary};
@@ -190,9 +192,13 @@ fn omega_layers(omega: Option<AbsoluteSphere>, frame: &Frame) -> Vec<Layer> {
 fn controls(ui: &mut egui::Ui, params: &mut StSupportParams, memory: &mut SizingMemory, show_reference: &mut bool, show_envelope: &mut bool) -> bool {
     let before = params.clone();
     ui.checkbox(&mut params.optimize_radius, "optimize R (Fig. 16, right)");
-    ui.add(egui::Slider::new(&mut params.support_depth, 0.0..=0.1).text("support depth"));
-    ui.add(egui::Slider::new(&mut params.axis_length, 0.0..=0.5).text("axis length"));
-    ui.add(egui::Slider::new(&mut params.radius_tolerance, 1e-5..=1e-1).logarithmic(true).text("radius tolerance"));
+    ui.add(egui::Slider::new(&mut params.support_depth, SUPPORT_DEPTH_RANGE.lo..=SUPPORT_DEPTH_RANGE.hi.min(0.1)).text("support depth"));
+    ui.add(egui::Slider::new(&mut params.axis_length, AXIS_LENGTH_RANGE.lo..=AXIS_LENGTH_RANGE.hi.min(0.5)).text("axis length"));
+    ui.add(
+        egui::Slider::new(&mut params.radius_tolerance, RADIUS_TOLERANCE_RANGE.lo.max(1e-5)..=RADIUS_TOLERANCE_RANGE.hi.min(1e-1))
+            .logarithmic(true)
+            .text("radius tolerance"),
+    );
     ui.label(RichText::new("lengths relative to the bbox diagonal").small());
     ui.label(RichText::new("Remesh first (Fig. 16, bottom)").small());
     sizing_controls(ui, "st-remesh", &mut params.remesh, memory, &[SizingKind::None, SizingKind::Adaptive, SizingKind::Faces]);
