@@ -37,6 +37,8 @@ use crate::import::{import_file, ImportedFile};
 use crate::panels::build_panels;
 use crate::panels::moulds::{Fabrication, MouldFits};
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
+use crate::pipeline::method::export;
+use crate::pipeline::stages::st_adapted::StAdaptedStage;
 use crate::progress::ignore;
 use crate::progress::Clock;
 use crate::reference::Reference;
@@ -580,7 +582,7 @@ impl VerdictRun {
                 let params = crate::st_adapted::params::StAdaptedParams { sizing: Sizing::UniformFaces(300), ..Default::default() };
                 let st =
                     crate::st_adapted::compute(&dome, &params, &Fabrication::default(), Clock(None), &mut |_| Ok(())).expect("ST runs on the dome");
-                crate::pipeline::stages::st_adapted::export(&dome, &st, &params, &Fabrication::default(), Clock(None)).0.guarantees
+                export::<StAdaptedStage>(&dome, &st, &params, &Fabrication::default(), Clock(None)).0.guarantees
             }
             VerdictRun::SqVault => {
                 let vault = samples::Sample::Vault.bspline().expect("the vault is a B-spline");

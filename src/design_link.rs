@@ -289,20 +289,12 @@ impl Design {
     /// The method, its fields, and the fields every design has. Another method's fields are not
     /// this design's: they are known, and left.
     fn read_fields(&mut self, link: &mut LinkReader) {
-        if let Some(m) = link.parsed("method", Method::from_key) {
-            self.method = m;
-        }
+        link.set_parsed("method", Method::from_key, &mut self.method);
         self.jet.read_link(link);
         self.fabrication.read_link(link);
-        if let Some(c) = link.parsed("color", ColorBy::from_key) {
-            self.color = c;
-        }
-        if let Some(s) = link.parsed("shading", Shading::from_key) {
-            self.shading = s;
-        }
-        if let Some(e) = link.flag("edges") {
-            self.edges = e;
-        }
+        link.set_parsed("color", ColorBy::from_key, &mut self.color);
+        link.set_parsed("shading", Shading::from_key, &mut self.shading);
+        link.set_flag("edges", &mut self.edges);
         if let Some(c) = link.parsed("cam", parse_camera) {
             self.camera = Some(c);
         }

@@ -195,6 +195,34 @@ impl LinkReader {
         })
     }
 
+    /// Sets `into` to the number under `key`, when the link has a valid one.
+    pub fn set_number(&mut self, key: &str, range: ParamRange<f64>, into: &mut f64) {
+        if let Some(x) = self.number(key, range) {
+            *into = x;
+        }
+    }
+
+    /// Sets `into` to the count under `key`, when the link has a valid one.
+    pub fn set_count(&mut self, key: &str, range: ParamRange<usize>, into: &mut usize) {
+        if let Some(n) = self.count(key, range) {
+            *into = n;
+        }
+    }
+
+    /// Sets `into` to the flag under `key`, when the link has a valid one.
+    pub fn set_flag(&mut self, key: &str, into: &mut bool) {
+        if let Some(x) = self.flag(key) {
+            *into = x;
+        }
+    }
+
+    /// Sets `into` to what `parse` makes of the value under `key`, when it makes something.
+    pub fn set_parsed<T>(&mut self, key: &str, parse: impl Fn(&str) -> Option<T>, into: &mut T) {
+        if let Some(x) = self.parsed(key, parse) {
+            *into = x;
+        }
+    }
+
     /// Marks `key` as invalid (a value that parsed but that the design cannot take).
     pub fn invalid(&mut self, key: &str) {
         if let Some(i) = self.pairs.iter().rposition(|(k, _)| k == key) {

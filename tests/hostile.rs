@@ -5,6 +5,9 @@
 //! tessellation triangles per panel), never by wall time.
 #![cfg(not(target_arch = "wasm32"))] // native: reads files, spawns the CLI
 
+use spherical_faces::pipeline::method::export;
+use spherical_faces::pipeline::stages::st_adapted::StAdaptedStage;
+use spherical_faces::pipeline::stages::st_support::StSupportStage;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -121,7 +124,7 @@ fn every_hostile_file_gets_a_bounded_clear_answer() {
         match spherical_faces::st_support::compute(reference, &params, &Fabrication::default(), clock, &mut ignore) {
             Ok(result) => {
                 assert_bounded_panels(&result.panels, &file);
-                let (report, _) = stages::st_support::export(reference, &result, &params, &Fabrication::default(), clock);
+                let (report, _) = export::<StSupportStage>(reference, &result, &params, &Fabrication::default(), clock);
                 assert_report(&report, &file);
             }
             Err(e) => assert_clear(&e.to_string(), &file),
@@ -131,7 +134,7 @@ fn every_hostile_file_gets_a_bounded_clear_answer() {
             Ok(result) => {
                 assert_bounded_panels(&result.panels, &file);
                 assert!(result.remeshed.face_count() <= 180, "{file}: {} faces for 60", result.remeshed.face_count());
-                let (report, _) = stages::st_adapted::export(reference, &result, &params, &Fabrication::default(), clock);
+                let (report, _) = export::<StAdaptedStage>(reference, &result, &params, &Fabrication::default(), clock);
                 assert_report(&report, &file);
             }
             Err(e) => assert_clear(&e.to_string(), &file),

@@ -13,7 +13,10 @@ use spherical_faces::panels::moulds::{
     fewest_stabbing_values, Fabrication, MouldAssignment, MouldFits, MouldOutcome, MouldRoundFigures, MouldTarget, SnapLimit, SNAPPED,
 };
 use spherical_faces::panels::panel::Panel;
-use spherical_faces::pipeline::stages;
+use spherical_faces::pipeline::method::export;
+use spherical_faces::pipeline::stages::sq::SqStage;
+use spherical_faces::pipeline::stages::st_adapted::StAdaptedStage;
+use spherical_faces::pipeline::stages::st_support::StSupportStage;
 use spherical_faces::progress::Clock;
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
@@ -178,7 +181,7 @@ fn st_adapted_panels_fit_their_moulds() {
     let fab = fabrication(delta);
     let params = StAdaptedParams { sizing: Sizing::Adaptive { epsilon: 2e-3 }, ..Default::default() };
     let result = spherical_faces::st_adapted::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_adapted::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<StAdaptedStage>(&reference, &result, &params, &fab, Clock::default());
     check("st tri_mesh", &result.panels, &report, &files, delta, None);
 }
 
@@ -189,7 +192,7 @@ fn st_support_panels_fit_their_moulds() {
     let fab = fabrication(delta);
     let params = StSupportParams::default();
     let result = spherical_faces::st_support::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_support::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<StSupportStage>(&reference, &result, &params, &fab, Clock::default());
     check("st-support cmc1", &result.panels, &report, &files, delta, None);
     not_snapped_when_not_asked("st-support cmc1", &report);
 }
@@ -204,7 +207,7 @@ fn a_tolerance_beyond_the_panels_still_gives_a_sphere() {
     let fab = fabrication(delta);
     let params = StSupportParams::default();
     let result = spherical_faces::st_support::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_support::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<StSupportStage>(&reference, &result, &params, &fab, Clock::default());
     check("st-support cmc1 at 0.12 of the diagonal", &result.panels, &report, &files, delta, None);
     let m = report.moulds.as_ref().unwrap();
     assert_eq!(m.count, 1);
@@ -222,7 +225,7 @@ fn sq_panels_fit_their_moulds() {
     let fab = fabrication(delta);
     let params = SqParams::default();
     let result = spherical_faces::sq::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::sq::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<SqStage>(&reference, &result, &params, &fab, Clock::default());
     let panels = &result.sq_mesh.as_ref().expect("an SQ mesh").mesh.panels;
     check("sq vault", panels, &report, &files, delta, None);
     not_snapped_when_not_asked("sq vault", &report);
@@ -236,7 +239,7 @@ fn tolerances_are_read_in_the_design_units() {
     let run = |fabrication: Fabrication| {
         let params = StSupportParams::default();
         let result = spherical_faces::st_support::compute(&reference, &params, &fabrication, Clock::default(), &mut |_| Ok(())).unwrap();
-        stages::st_support::export(&reference, &result, &params, &fabrication, Clock::default())
+        export::<StSupportStage>(&reference, &result, &params, &fabrication, Clock::default())
     };
     let (mm, files) = run(Fabrication { units: Units::Cm, moulds: MouldTarget::Tolerance(Length::new(20.0, Units::Mm)) });
     let m = mm.moulds.unwrap();
@@ -264,7 +267,7 @@ fn st_adapted_moves_its_panels_onto_fewer_moulds() {
     let plain = spherical_faces::st_adapted::compute(&reference, &base, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = StAdaptedParams { optimize_moulds: true, ..base.clone() };
     let result = spherical_faces::st_adapted::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_adapted::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<StAdaptedStage>(&reference, &result, &params, &fab, Clock::default());
     let before = MouldFits::of(&plain.panels).count(delta);
     let after = report.moulds.as_ref().unwrap().count;
     let rounds = result.moulds.as_ref().expect("the rounds ran");
@@ -299,7 +302,7 @@ fn sq_vault_moulds(scale: f64, max_moulds: usize) -> bool {
     let plain = spherical_faces::sq::compute(&reference, &base, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = SqParams { optimize_moulds: true, ..base.clone() };
     let result = spherical_faces::sq::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::sq::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<SqStage>(&reference, &result, &params, &fab, Clock::default());
     let (before, after) = (plain.sq_mesh.as_ref().unwrap(), result.sq_mesh.as_ref().unwrap());
     let rounds = after.moulds.as_ref().expect("the rounds ran");
     let start = before.mesh.figures.max_vertex_distance_to_reference;
@@ -361,10 +364,10 @@ fn st_support_cmc1_moulds(scale: f64, max_moulds: usize) -> bool {
     let plain = spherical_faces::st_support::compute(&reference, &base, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
     let params = StSupportParams { optimize_moulds: true, ..base.clone() };
     let result = spherical_faces::st_support::compute(&reference, &params, &fab, Clock::default(), &mut |_| Ok(())).unwrap();
-    let (report, files) = stages::st_support::export(&reference, &result, &params, &fab, Clock::default());
+    let (report, files) = export::<StSupportStage>(&reference, &result, &params, &fab, Clock::default());
     let rounds = result.moulds.as_ref().expect("the rounds ran");
     let distance = |r: &Report| r.metrics.as_ref().unwrap().max_distance_to_reference;
-    let (plain_report, _) = stages::st_support::export(&reference, &plain, &base, &fab, Clock::default());
+    let (plain_report, _) = export::<StSupportStage>(&reference, &plain, &base, &fab, Clock::default());
     eprintln!("st-support cmc1, δ×{scale}: distance before {:.3e}; rounds {:?}", distance(&plain_report), rounds.rounds);
     let m = &result.metrics;
     assert!(m.max_vertex_sphere_residual <= 1e-9 && m.max_orthogonality_residual <= 1e-9 && m.max_center_plane_residual <= 1e-9, "{m:?}");

@@ -14,6 +14,8 @@ use spherical_faces::geometry::sphere::Sphere;
 use spherical_faces::panels::edge_arcs::EdgeArcs;
 use spherical_faces::panels::gaps::{max_arc_gap, GAP_SAMPLES};
 use spherical_faces::panels::moulds::Fabrication;
+use spherical_faces::pipeline::method::export;
+use spherical_faces::pipeline::stages::st_adapted::StAdaptedStage;
 use spherical_faces::progress::{ignore, Cancelled, Clock};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
@@ -386,7 +388,7 @@ fn report_has_the_st_schema() {
     let reference = load_reference("tri_mesh");
     let p = params(Sizing::UniformFaces(120), EdgeArcs::BisectingPlanes, [2, 3, 6]);
     let r = compute(&reference, &p, &Fabrication::default(), Clock::native(), &mut |_| Ok(())).unwrap();
-    let (report, files) = spherical_faces::pipeline::stages::st_adapted::export(&reference, &r, &p, &Fabrication::default(), Clock::native());
+    let (report, files) = export::<StAdaptedStage>(&reference, &r, &p, &Fabrication::default(), Clock::native());
     let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
     assert_eq!(json["method"], "st");
     for k in ["mean_kink_angle_deg", "max_kink_angle_deg", "max_distance_to_reference"] {

@@ -386,13 +386,14 @@ fn samples_run() {
 #[test]
 fn remeshed_runs_measure_distances_to_the_original_reference() {
     use spherical_faces::panels::deviation::max_deviation;
-    use spherical_faces::pipeline::stages::st_support::export;
+    use spherical_faces::pipeline::method::export;
+    use spherical_faces::pipeline::stages::st_support::StSupportStage;
     use spherical_faces::remeshing::Sizing;
     let reference = common::load_reference("tri_mesh");
     let params = StSupportParams { remesh: Sizing::UniformFaces(300), ..Default::default() };
     let result = compute(&reference, &params, &Fabrication::default(), Clock::default(), &mut ignore).unwrap();
     assert_ne!(result.sphere_mesh.mesh.face_count(), reference.mesh().face_count(), "remeshed");
-    let (report, files) = export(&reference, &result, &params, &Fabrication::default(), Clock::default());
+    let (report, files) = export::<StSupportStage>(&reference, &result, &params, &Fabrication::default(), Clock::default());
     let to_original = result.panels.iter().map(|p| max_deviation(p, &reference)).fold(0.0, f64::max);
     let remesh = Reference::from_triangles(result.sphere_mesh.mesh.triangulated());
     let to_remesh = result.panels.iter().map(|p| max_deviation(p, remesh.bvh())).fold(0.0, f64::max);

@@ -126,6 +126,15 @@ fn drive<F: MethodFlags>(a: MethodArgs<F>, progress: &mut ProgressLine) -> Resul
     verdict(F::Method::describe(&computed.result, report, &request, &a.output.out.display().to_string()), report)
 }
 
+/// The panels' promised distance to the reference, of the methods with support structure.
+#[derive(Args)]
+pub struct MaxDistance {
+    /// The panels' promised largest distance to the reference, relative to the diagonal (a
+    /// miss exits with 3).
+    #[arg(long, value_name = "D", default_value_t = DEFAULT_MAX_DISTANCE, value_parser = in_range_f64(MAX_DISTANCE_RANGE))]
+    max_distance: f64,
+}
+
 /// `st`'s flags.
 #[derive(Args)]
 pub struct StAdaptedFlags {
@@ -187,10 +196,8 @@ pub struct StSupportFlags {
     /// every face sphere still orthogonal to Ω (the schedule's `mould_snapped`).
     #[arg(long)]
     optimize_moulds: bool,
-    /// The panels' promised largest distance to the reference, relative to the diagonal (a
-    /// miss exits with 3).
-    #[arg(long, value_name = "D", default_value_t = DEFAULT_MAX_DISTANCE, value_parser = in_range_f64(MAX_DISTANCE_RANGE))]
-    max_distance: f64,
+    #[command(flatten)]
+    distance: MaxDistance,
 }
 
 impl MethodFlags for StSupportFlags {
@@ -209,7 +216,7 @@ impl MethodFlags for StSupportFlags {
             radius_tolerance: self.radius_tolerance,
             remesh,
             optimize_moulds: self.optimize_moulds,
-            max_distance: self.max_distance,
+            max_distance: self.distance.max_distance,
             ..StSupportParams::default()
         }
     }
@@ -249,10 +256,8 @@ pub struct SqFlags {
     /// exactly, keeping exactness, θ and α (the schedule's `mould_snapped`).
     #[arg(long)]
     optimize_moulds: bool,
-    /// The panels' promised largest distance to the reference, relative to the diagonal (a
-    /// miss exits with 3).
-    #[arg(long, value_name = "D", default_value_t = DEFAULT_MAX_DISTANCE, value_parser = in_range_f64(MAX_DISTANCE_RANGE))]
-    max_distance: f64,
+    #[command(flatten)]
+    distance: MaxDistance,
 }
 
 impl MethodFlags for SqFlags {
@@ -269,7 +274,7 @@ impl MethodFlags for SqFlags {
             start: self.start,
             support_depth: self.depth,
             optimize_moulds: self.optimize_moulds,
-            max_distance: self.max_distance,
+            max_distance: self.distance.max_distance,
             ..SqParams::default()
         }
     }

@@ -103,12 +103,10 @@ impl LinkFields for JetParams {
     }
 
     fn read_link(&mut self, link: &mut LinkReader) {
-        if let Some(d) = link.count("jet_degree", JET_DEGREE_RANGE) {
-            self.degree = d as u8;
-        }
-        if let Some(r) = link.count("jet_rings", JET_RINGS_RANGE) {
-            self.max_rings = r;
-        }
+        let mut degree = self.degree as usize;
+        link.set_count("jet_degree", JET_DEGREE_RANGE, &mut degree);
+        self.degree = degree as u8;
+        link.set_count("jet_rings", JET_RINGS_RANGE, &mut self.max_rings);
     }
 }
 

@@ -4,7 +4,7 @@
 //! verdicts of all three methods, the CAD files' refusals and the app's warnings read it.
 
 use crate::guarantees::Guarantee;
-use crate::params::{LinkReader, LinkWriter, ParamRange};
+use crate::params::{LinkWriter, ParamRange};
 use crate::units::{format_length, Units};
 
 use super::exact_surface::{ExactSurfaceError, ExactSurfaces};
@@ -24,13 +24,6 @@ pub const MAX_DISTANCE_RANGE: ParamRange<f64> = ParamRange::new("the distance bo
 pub fn write_max_distance(link: &mut LinkWriter, max_distance: f64) {
     if max_distance != DEFAULT_MAX_DISTANCE {
         link.number("max_dist", max_distance);
-    }
-}
-
-/// The distance bound of a link, if it has one.
-pub fn read_max_distance(link: &mut LinkReader, max_distance: &mut f64) {
-    if let Some(d) = link.number("max_dist", MAX_DISTANCE_RANGE) {
-        *max_distance = d;
     }
 }
 

@@ -420,6 +420,16 @@ pub trait MouldHook {
     fn progress(&mut self, p: Progress) -> Result<(), Cancelled>;
 }
 
+/// Per-panel curvatures (a round's, in panel order) as per-face ones of a mesh of `faces` faces,
+/// NaN where a face has no panel, each multiplied by `scale` (a frame's).
+pub fn per_face(panels: &[Panel], per_panel: &[f64], faces: usize, scale: f64) -> Vec<f64> {
+    let mut curvatures = vec![f64::NAN; faces];
+    for (p, &k) in panels.iter().zip(per_panel) {
+        curvatures[p.face] = k * scale;
+    }
+    curvatures
+}
+
 /// What the rounds made: the last kept result (None: none was kept) and what they did.
 pub struct MouldRun<R, Round> {
     pub best: Option<R>,

@@ -133,6 +133,20 @@ pub fn reexport<M: Method>(
     report
 }
 
+/// The report and the files of `result` for `params` and `fabrication`, for code that runs a
+/// method's `compute` itself (tests, benchmarks, examples).
+pub fn export<M: Method>(
+    reference: &Reference,
+    result: &M::Result,
+    params: &M::Params,
+    fabrication: &Fabrication,
+    clock: Clock,
+) -> (Report, Vec<ExportFile>) {
+    let request = Request { params: params.clone(), fabrication: *fabrication, jet: JetParams::default() };
+    let Exported { report, files, .. } = M::export(reference, result, &request, clock);
+    (report, files)
+}
+
 /// Whether `request` asks for the very result `earlier` made, with other moulds at most (a new δ,
 /// K or unit): then that result is exported again, not computed again.
 pub fn same_result<M: Method>(request: &Request<M::Params>, earlier: &Request<M::Params>) -> bool {

@@ -56,7 +56,7 @@ use crate::geometry::rigid_alignment::point_to_plane_motion;
 use crate::panels::buildability::Buildability;
 use crate::panels::deviation::panel_distances;
 use crate::panels::exact_surface::ExactSurfaces;
-use crate::panels::moulds::{Fabrication, MouldHook, RoundCount, RoundSchedule, EXACT_ROUNDS};
+use crate::panels::moulds::{per_face, Fabrication, MouldHook, RoundCount, RoundSchedule, EXACT_ROUNDS};
 use crate::panels::panel::Panel;
 use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::assumptions::Warning;
@@ -1013,10 +1013,7 @@ impl MouldHook for Moulds<'_, '_> {
     fn pull(&mut self, from: &SqFinal, per_panel: &[f64]) -> Result<Option<(SqFinal, bool)>, SqError> {
         let (setup, s, t) = (self.setup, self.setup.s, self.setup.t);
         let sm = &from.mesh.sphere_mesh;
-        let mut curvatures = vec![f64::NAN; sm.mesh.face_count()];
-        for (p, &k) in from.mesh.panels.iter().zip(per_panel) {
-            curvatures[p.face] = k * s;
-        }
+        let curvatures = per_face(&from.mesh.panels, per_panel, sm.mesh.face_count(), s);
         let frame_mesh = PolyMesh::new(sm.mesh.positions.iter().map(|p| (*p - t) / s).collect(), sm.mesh.faces.clone());
         let spheres: Vec<Sphere> = sm.face_spheres.iter().map(|x| x.in_frame(t, s).normalized()).collect();
         let on_event = &mut *self.on_event;

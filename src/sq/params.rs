@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
-use crate::panels::buildability::{read_max_distance, write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
+use crate::panels::buildability::{write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamRange};
 
@@ -453,40 +453,20 @@ impl LinkFields for SqParams {
     }
 
     fn read_link(&mut self, link: &mut LinkReader) {
-        if let Some(x) = link.number("theta", THETA_RANGE) {
-            self.theta_deg = x;
-        }
-        if let Some(x) = link.number("alpha", ALPHA_RANGE) {
-            self.alpha_deg = x;
-        }
-        if let Some(x) = link.count("grid", GRID_RANGE) {
-            self.grid = x;
-        }
-        if let Some(x) = link.count("rs", RECOMPUTE_RANGE) {
-            self.recompute_every = x;
-        }
-        if let Some(x) = link.count("faces", FACES_RANGE) {
-            self.faces = x;
-        }
-        if let Some(x) = link.parsed("until", Until::from_key) {
-            self.until = x;
-        }
-        if let Some(x) = link.parsed("start", RadiusStart::from_key) {
-            self.start = x;
-        }
-        if let Some(x) = link.flag("opt_moulds") {
-            self.optimize_moulds = x;
-        }
-        read_max_distance(link, &mut self.max_distance);
+        link.set_number("theta", THETA_RANGE, &mut self.theta_deg);
+        link.set_number("alpha", ALPHA_RANGE, &mut self.alpha_deg);
+        link.set_count("grid", GRID_RANGE, &mut self.grid);
+        link.set_count("rs", RECOMPUTE_RANGE, &mut self.recompute_every);
+        link.set_count("faces", FACES_RANGE, &mut self.faces);
+        link.set_parsed("until", Until::from_key, &mut self.until);
+        link.set_parsed("start", RadiusStart::from_key, &mut self.start);
+        link.set_flag("opt_moulds", &mut self.optimize_moulds);
+        link.set_number("max_dist", MAX_DISTANCE_RANGE, &mut self.max_distance);
         for (key, field, range) in LINK_NUMBERS {
-            if let Some(x) = link.number(key, range) {
-                *field(self) = x;
-            }
+            link.set_number(key, range, field(self));
         }
         for (key, field, range) in LINK_COUNTS {
-            if let Some(x) = link.count(key, range) {
-                *field(self) = x;
-            }
+            link.set_count(key, range, field(self));
         }
     }
 }

@@ -19,8 +19,8 @@ use crate::geometry::sphere::Sphere;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::exact_surface::arcs_cross;
 use crate::panels::moulds::{
-    fewer_moulds, Fabrication, MouldAssignment, MouldFits, MouldHook, MouldOutcome, MouldRoundFigures, MouldSnap, RoundCount, RoundSchedule,
-    SnapLimit,
+    fewer_moulds, per_face, Fabrication, MouldAssignment, MouldFits, MouldHook, MouldOutcome, MouldRoundFigures, MouldSnap, RoundCount,
+    RoundSchedule, SnapLimit,
 };
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
@@ -166,11 +166,8 @@ impl MouldHook for Hook<'_, '_> {
         let (reference, params) = (self.reference, self.params);
         let diag = reference.diagonal();
         let current = &from.sphere_mesh;
-        let mut targets = vec![f64::NAN; current.mesh.face_count()];
-        for (p, &k) in from.panels.iter().zip(curvatures) {
-            // The frame scales lengths by 1/diag, curvatures by diag.
-            targets[p.face] = k * diag;
-        }
+        // The frame scales lengths by 1/diag, curvatures by diag.
+        let targets = per_face(&from.panels, curvatures, current.mesh.face_count(), diag);
         let mesh = current.mesh.triangulated();
         let frame = OptimizationFrame::new(reference, &mesh, &current.face_spheres, params);
         let mut x = frame.x0.clone();

@@ -184,14 +184,8 @@ impl LinkFields for StAdaptedParams {
 
     fn read_link(&mut self, link: &mut LinkReader) {
         self.sizing.read_link("sizing", link);
-        if let Some(v) = link.parsed("variant", EdgeArcs::from_key) {
-            self.variant = v;
-        }
-        if let Some(x) = link.flag("opt_moulds") {
-            self.optimize_moulds = x;
-        }
-        if let Some(x) = link.number("rtol", RADIUS_TOLERANCE_RANGE) {
-            self.radius_tolerance = x;
-        }
+        link.set_parsed("variant", EdgeArcs::from_key, &mut self.variant);
+        link.set_flag("opt_moulds", &mut self.optimize_moulds);
+        link.set_number("rtol", RADIUS_TOLERANCE_RANGE, &mut self.radius_tolerance);
     }
 }

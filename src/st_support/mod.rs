@@ -54,7 +54,7 @@ use crate::geometry::mesh::topology::Topology;
 use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::deviation::max_distance_to_reference;
-use crate::panels::moulds::{Fabrication, MouldHook, RoundCount, RoundSchedule, EXACT_ROUNDS};
+use crate::panels::moulds::{per_face, Fabrication, MouldHook, RoundCount, RoundSchedule, EXACT_ROUNDS};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::panels::{build_panels, edge_arc_points, DEFAULT_CHORD_TOLERANCE};
@@ -258,10 +258,7 @@ impl MouldHook for Moulds<'_, '_> {
     }
 
     fn pull(&mut self, from: &StSupportResult, per_panel: &[f64]) -> Result<Option<(StSupportResult, bool)>, StSupportError> {
-        let mut curvatures = vec![f64::NAN; from.sphere_mesh.mesh.face_count()];
-        for (p, &k) in from.panels.iter().zip(per_panel) {
-            curvatures[p.face] = k;
-        }
+        let curvatures = per_face(&from.panels, per_panel, from.sphere_mesh.mesh.face_count(), 1.0);
         let sm = &from.sphere_mesh;
         let triangles = sm.mesh.triangulated();
         let mut iteration = 0;

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::absolute_sphere::AbsoluteSphereParams;
 use crate::congruence::central_spheres::JetParams;
 use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANGE};
-use crate::panels::buildability::{read_max_distance, write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
+use crate::panels::buildability::{write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
 use crate::remeshing::{Sizing, EPSILON_RANGE, FACES_RANGE};
@@ -86,22 +86,12 @@ impl LinkFields for StSupportParams {
     }
 
     fn read_link(&mut self, link: &mut LinkReader) {
-        if let Some(x) = link.flag("opt_r") {
-            self.optimize_radius = x;
-        }
-        if let Some(x) = link.number("depth", SUPPORT_DEPTH_RANGE) {
-            self.support_depth = x;
-        }
-        if let Some(x) = link.number("axis", AXIS_LENGTH_RANGE) {
-            self.axis_length = x;
-        }
-        if let Some(x) = link.number("rtol", RADIUS_TOLERANCE_RANGE) {
-            self.radius_tolerance = x;
-        }
+        link.set_flag("opt_r", &mut self.optimize_radius);
+        link.set_number("depth", SUPPORT_DEPTH_RANGE, &mut self.support_depth);
+        link.set_number("axis", AXIS_LENGTH_RANGE, &mut self.axis_length);
+        link.set_number("rtol", RADIUS_TOLERANCE_RANGE, &mut self.radius_tolerance);
         self.remesh.read_link("remesh", link);
-        if let Some(x) = link.flag("opt_moulds") {
-            self.optimize_moulds = x;
-        }
-        read_max_distance(link, &mut self.max_distance);
+        link.set_flag("opt_moulds", &mut self.optimize_moulds);
+        link.set_number("max_dist", MAX_DISTANCE_RANGE, &mut self.max_distance);
     }
 }

@@ -21,7 +21,7 @@ use crate::geometry::mesh::TriMesh;
 use crate::geometry::sphere::Sphere;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::{Fabrication, MouldAssignment};
+use crate::panels::moulds::MouldAssignment;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, Part};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
@@ -204,13 +204,6 @@ fn describe(report: &Report, params: &SqParams, out: &str) -> String {
             )
         }
     }
-}
-
-/// The report and the files of `result` for `params` and `fabrication`.
-pub fn export(reference: &Reference, result: &SqResult, params: &SqParams, fabrication: &Fabrication, clock: Clock) -> (Report, Vec<ExportFile>) {
-    let request = Request { params: params.clone(), fabrication: *fabrication, jet: JetParams::default() };
-    let e = SqStage::export(reference, result, &request, clock);
-    (e.report, e.files)
 }
 
 /// What the stage streams while the method runs, with one progress count across its steps:

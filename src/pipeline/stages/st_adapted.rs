@@ -5,11 +5,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::StageError;
-use crate::export::{report_file, ExportFile, Report};
+use crate::export::{report_file, Report};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
-use crate::panels::moulds::Fabrication;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, Part};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
@@ -183,19 +182,6 @@ impl Method for StAdaptedStage {
 /// The method's own parameters with the request's jet fit.
 fn core_params(request: &Request<StAdaptedParams>) -> StAdaptedParams {
     StAdaptedParams { jet: request.jet.clone(), ..request.params.clone() }
-}
-
-/// The report and the files of `result` for `params` (with their jet) and `fabrication`.
-pub fn export(
-    reference: &Reference,
-    result: &StAdaptedResult,
-    params: &StAdaptedParams,
-    fabrication: &Fabrication,
-    clock: Clock,
-) -> (Report, Vec<ExportFile>) {
-    let request = Request { params: params.clone(), fabrication: *fabrication, jet: params.jet.clone() };
-    let e = StAdaptedStage::export(reference, result, &request, clock);
-    (e.report, e.files)
 }
 
 /// A panel snapshot of the method's stage at `iteration`.

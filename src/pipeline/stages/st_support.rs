@@ -5,9 +5,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::StageError;
-use crate::export::{report_file, ExportFile, Report};
+use crate::export::{report_file, Report};
 use crate::geometry::absolute_sphere::AbsoluteSphere;
-use crate::panels::moulds::{Fabrication, MouldAssignment, MouldOutcome};
+use crate::panels::moulds::{MouldAssignment, MouldOutcome};
 use crate::pipeline::fields::{field, Field};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
 use crate::pipeline::panel_output::{export_panels, f32s, result_panel_fields, support_fields, with_moulds, PanelExport, Snapping};
@@ -138,19 +138,6 @@ impl Method for StSupportStage {
 /// The method's own parameters with the request's jet fit.
 fn core_params(request: &Request<StSupportParams>) -> StSupportParams {
     StSupportParams { jet: request.jet.clone(), ..request.params.clone() }
-}
-
-/// The report and the files of `result` for `params` (with their jet) and `fabrication`.
-pub fn export(
-    reference: &Reference,
-    result: &StSupportResult,
-    params: &StSupportParams,
-    fabrication: &Fabrication,
-    clock: Clock,
-) -> (Report, Vec<ExportFile>) {
-    let request = Request { params: params.clone(), fabrication: *fabrication, jet: params.jet.clone() };
-    let e = StSupportStage::export(reference, result, &request, clock);
-    (e.report, e.files)
 }
 
 /// Display fields: panels, support, node axes, second envelope.
