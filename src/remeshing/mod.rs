@@ -170,6 +170,15 @@ impl SizingKind {
 }
 
 impl Sizing {
+    /// ε or N against its range.
+    pub fn check(self) -> Result<(), crate::params::ParamError> {
+        match self {
+            Sizing::Adaptive { epsilon } => EPSILON_RANGE.check(epsilon).map(|_| ()),
+            Sizing::UniformFaces(n) => FACES_RANGE.check(n).map(|_| ()),
+            Sizing::None => Ok(()),
+        }
+    }
+
     /// `&{key}=kind` and the value the kind uses (`&eps=…` or `&faces=…`).
     pub fn write_link(self, key: &str, link: &mut LinkWriter) {
         link.text(key, SizingKind::of(self).key());

@@ -8,7 +8,7 @@ use crate::panels::buildability::DEFAULT_MAX_DISTANCE;
 use crate::panels::edge_arcs::EdgeArcs;
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
-use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON, EPSILON_RANGE, FACES_RANGE};
+use crate::remeshing::{RemeshParams, Sizing, DEFAULT_EPSILON};
 
 /// Term weights (frame scaled to diagonal 1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -160,11 +160,7 @@ impl Default for StAdaptedParams {
 impl StAdaptedParams {
     /// Every parameter a design sets, against its range.
     pub fn check(&self) -> Result<(), ParamError> {
-        match self.sizing {
-            Sizing::Adaptive { epsilon } => EPSILON_RANGE.check(epsilon).map(|_| ())?,
-            Sizing::UniformFaces(n) => FACES_RANGE.check(n).map(|_| ())?,
-            Sizing::None => {}
-        }
+        self.sizing.check()?;
         RADIUS_TOLERANCE_RANGE.check(self.radius_tolerance)?;
         Ok(())
     }

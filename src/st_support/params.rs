@@ -9,7 +9,7 @@ use crate::congruence::support_structure::{AXIS_LENGTH_RANGE, SUPPORT_DEPTH_RANG
 use crate::panels::buildability::{write_max_distance, DEFAULT_MAX_DISTANCE, MAX_DISTANCE_RANGE};
 use crate::panels::RADIUS_TOLERANCE_RANGE;
 use crate::params::{LinkFields, LinkReader, LinkWriter, ParamError};
-use crate::remeshing::{Sizing, EPSILON_RANGE, FACES_RANGE};
+use crate::remeshing::Sizing;
 
 /// Neighbours of a local sphere orthogonal to Ω (remeshing with `Sizing::Adaptive`).
 pub const LOCAL_SPHERE_POINTS: usize = 16;
@@ -59,11 +59,7 @@ impl Default for StSupportParams {
 impl StSupportParams {
     /// Every parameter a design sets, against its range.
     pub fn check(&self) -> Result<(), ParamError> {
-        match self.remesh {
-            Sizing::Adaptive { epsilon } => EPSILON_RANGE.check(epsilon).map(|_| ())?,
-            Sizing::UniformFaces(n) => FACES_RANGE.check(n).map(|_| ())?,
-            Sizing::None => {}
-        }
+        self.remesh.check()?;
         SUPPORT_DEPTH_RANGE.check(self.support_depth)?;
         AXIS_LENGTH_RANGE.check(self.axis_length)?;
         RADIUS_TOLERANCE_RANGE.check(self.radius_tolerance)?;
