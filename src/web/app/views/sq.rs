@@ -358,58 +358,7 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
             ui.selectable_value(&mut params.until, u, u.key());
         }
     });
-    egui::CollapsingHeader::new("advanced").id_salt("sq-advanced").show(ui, |ui| {
-        egui::ComboBox::from_label("starting congruence")
-            .selected_text(params.start.key())
-            .show_ui(ui, |ui| {
-                for s in RadiusStart::ALL {
-                    ui.selectable_value(&mut params.start, s, s.key());
-                }
-            })
-            .response
-            .on_hover_text("auto: the central congruence r = 1/H, then constant radii when it misses θ or α (Sec. 5.1, 6.3)");
-        ui.add(egui::Slider::new(&mut params.recompute_every, RECOMPUTE_RANGE.lo..=RECOMPUTE_RANGE.hi.min(50)).text("RS"))
-            .on_hover_text("The torsal directions and planes are recomputed every RS iterations");
-        ui.add(egui::Slider::new(&mut params.lc_iterations, 1..=ITERATIONS_RANGE.hi.min(500)).text("step 1 iterations"));
-        ui.add(egui::Slider::new(&mut params.torsal_iterations, 1..=ITERATIONS_RANGE.hi.min(500)).text("step 2 iterations"));
-        ui.add(
-            egui::Slider::new(&mut params.final_iterations, ITERATIONS_RANGE.lo..=ITERATIONS_RANGE.hi.min(50))
-                .text("last iterations without angle and fairness"),
-        );
-        let mut degree = params.radius_basis.degree;
-        ui.add(egui::Slider::new(&mut degree, RADIUS_DEGREE_RANGE.lo..=RADIUS_DEGREE_RANGE.hi.min(7)).text("radius degree"));
-        params.radius_basis.degree = degree;
-        params.radius_basis.controls = params.radius_basis.controls.max(degree + 1);
-        ui.add(
-            egui::Slider::new(&mut params.radius_basis.controls, degree + 1..=RADIUS_CONTROLS_RANGE.hi.min(20))
-                .text("radius coefficients per direction"),
-        );
-        ui.label(RichText::new("step 1 weights (Table 1)").small());
-        let w = &mut params.lc_weights;
-        weight(ui, &mut w.lc, "w_LC");
-        weight(ui, &mut w.lc_orth, "w_LC_orth");
-        ui.label(RichText::new("step 2 weights (Table 2)").small());
-        let w = &mut params.torsal_weights;
-        weight(ui, &mut w.lc, "w_LC");
-        weight(ui, &mut w.lc_orth, "w_LC_orth");
-        weight(ui, &mut w.torsal, "w_torsal");
-        weight(ui, &mut w.angle, "w_angle");
-        weight(ui, &mut w.fair, "w_fair");
-        weight(ui, &mut w.reg, "w_reg");
-        ui.label(RichText::new("final optimization (Eq. 10, Table 3)").small());
-        ui.add(egui::Slider::new(&mut params.sphere_iterations[1], ITERATIONS_RANGE.lo..=ITERATIONS_RANGE.hi.min(500)).text("iterations"));
-        let w = &mut params.sphere_weights;
-        weight(ui, &mut w.sphere, "w_sphere");
-        weight(ui, &mut w.supp, "w_supp");
-        weight(ui, &mut w.torsal_plane, "w_torsal_plane");
-        weight(ui, &mut w.prox_f, "w_prox_f");
-        weight(ui, &mut w.prox_c, "w_prox_c");
-        weight(ui, &mut w.fair, "w_fair");
-        if ui.small_button("defaults").clicked() {
-            let keep = (params.theta_deg, params.alpha_deg, params.grid, params.faces, params.until);
-            *params = SqParams { theta_deg: keep.0, alpha_deg: keep.1, grid: keep.2, faces: keep.3, until: keep.4, ..SqParams::default() };
-        }
-    });
+    egui::CollapsingHeader::new("advanced").id_salt("sq-advanced").show(ui, |ui| advanced_controls(ui, params));
     ui.checkbox(&mut display.lines, "optimized lines");
     ui.checkbox(&mut display.initial_lines, "lines of the central congruence (before)");
     ui.checkbox(&mut display.cross_field, "torsal cross field");
@@ -419,6 +368,60 @@ fn controls(ui: &mut egui::Ui, params: &mut SqParams, display: &mut SqDisplay) -
     ui.checkbox(&mut display.support, "support structure");
     ui.checkbox(&mut display.axes, "node axes");
     *params != before
+}
+
+/// The advanced controls: the start, the steps' iterations, the radius basis and the weights of
+/// Tables 1–3.
+fn advanced_controls(ui: &mut egui::Ui, params: &mut SqParams) {
+    egui::ComboBox::from_label("starting congruence")
+        .selected_text(params.start.key())
+        .show_ui(ui, |ui| {
+            for s in RadiusStart::ALL {
+                ui.selectable_value(&mut params.start, s, s.key());
+            }
+        })
+        .response
+        .on_hover_text("auto: the central congruence r = 1/H, then constant radii when it misses θ or α (Sec. 5.1, 6.3)");
+    ui.add(egui::Slider::new(&mut params.recompute_every, RECOMPUTE_RANGE.lo..=RECOMPUTE_RANGE.hi.min(50)).text("RS"))
+        .on_hover_text("The torsal directions and planes are recomputed every RS iterations");
+    ui.add(egui::Slider::new(&mut params.lc_iterations, 1..=ITERATIONS_RANGE.hi.min(500)).text("step 1 iterations"));
+    ui.add(egui::Slider::new(&mut params.torsal_iterations, 1..=ITERATIONS_RANGE.hi.min(500)).text("step 2 iterations"));
+    ui.add(
+        egui::Slider::new(&mut params.final_iterations, ITERATIONS_RANGE.lo..=ITERATIONS_RANGE.hi.min(50))
+            .text("last iterations without angle and fairness"),
+    );
+    let mut degree = params.radius_basis.degree;
+    ui.add(egui::Slider::new(&mut degree, RADIUS_DEGREE_RANGE.lo..=RADIUS_DEGREE_RANGE.hi.min(7)).text("radius degree"));
+    params.radius_basis.degree = degree;
+    params.radius_basis.controls = params.radius_basis.controls.max(degree + 1);
+    ui.add(
+        egui::Slider::new(&mut params.radius_basis.controls, degree + 1..=RADIUS_CONTROLS_RANGE.hi.min(20)).text("radius coefficients per direction"),
+    );
+    ui.label(RichText::new("step 1 weights (Table 1)").small());
+    let w = &mut params.lc_weights;
+    weight(ui, &mut w.lc, "w_LC");
+    weight(ui, &mut w.lc_orth, "w_LC_orth");
+    ui.label(RichText::new("step 2 weights (Table 2)").small());
+    let w = &mut params.torsal_weights;
+    weight(ui, &mut w.lc, "w_LC");
+    weight(ui, &mut w.lc_orth, "w_LC_orth");
+    weight(ui, &mut w.torsal, "w_torsal");
+    weight(ui, &mut w.angle, "w_angle");
+    weight(ui, &mut w.fair, "w_fair");
+    weight(ui, &mut w.reg, "w_reg");
+    ui.label(RichText::new("final optimization (Eq. 10, Table 3)").small());
+    ui.add(egui::Slider::new(&mut params.sphere_iterations[1], ITERATIONS_RANGE.lo..=ITERATIONS_RANGE.hi.min(500)).text("iterations"));
+    let w = &mut params.sphere_weights;
+    weight(ui, &mut w.sphere, "w_sphere");
+    weight(ui, &mut w.supp, "w_supp");
+    weight(ui, &mut w.torsal_plane, "w_torsal_plane");
+    weight(ui, &mut w.prox_f, "w_prox_f");
+    weight(ui, &mut w.prox_c, "w_prox_c");
+    weight(ui, &mut w.fair, "w_fair");
+    if ui.small_button("defaults").clicked() {
+        let keep = (params.theta_deg, params.alpha_deg, params.grid, params.faces, params.until);
+        *params = SqParams { theta_deg: keep.0, alpha_deg: keep.1, grid: keep.2, faces: keep.3, until: keep.4, ..SqParams::default() };
+    }
 }
 
 fn weight(ui: &mut egui::Ui, w: &mut f64, label: &str) {
