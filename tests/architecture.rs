@@ -310,7 +310,7 @@ fn aliases_of_crate(code: &str) -> Vec<String> {
     words.windows(3).filter(|w| matches!(w, ["crate", "as", _] | ["crate", "self", "as"])).map(|w| w.join(" ")).collect()
 }
 
-/// The top-level module of a file ("geometry/mesh/mod.rs" → "geometry", "cli.rs" → "cli").
+/// The top-level module of a file ("geometry/mesh/mod.rs" → "geometry", "cli/args.rs" → "cli").
 fn top(file: &str) -> String {
     file.split('/').next().unwrap().trim_end_matches(".rs").to_string()
 }
