@@ -6,7 +6,7 @@
 
 use spherical_faces::import::import_mesh;
 use spherical_faces::panels::moulds::{Fabrication, MouldFits, MouldTarget};
-use spherical_faces::progress::Clock;
+use spherical_faces::progress::{Clock, Timings};
 use spherical_faces::reference::Reference;
 use spherical_faces::remeshing::Sizing;
 use spherical_faces::st_adapted::moulds::{fewer_moulds_of, Moved};
@@ -24,7 +24,11 @@ fn main() {
         let before = fabrication.assign(&MouldFits::of(&result.panels), diag).moulds.len();
         let t = std::time::Instant::now();
         let start = Moved { sphere_mesh: result.sphere_mesh, panels: result.panels, deviations: result.panel_deviations, metrics: result.metrics };
-        let (moved, outcome) = fewer_moulds_of(&reference, start.clone(), &params, &fabrication, Clock::default(), &mut |_| Ok(())).unwrap();
+        let (moved, outcome) =
+            fewer_moulds_of(&reference, start.clone(), &params, &fabrication, Clock::default(), &mut Timings::start(Clock::default()), &mut |_| {
+                Ok(())
+            })
+            .unwrap();
         println!(
             "{path}: {} panels, moulds {before}, kink max {:.2}°, distance {:.2e}; rounds in {:.0} ms:",
             start.panels.len(),

@@ -249,10 +249,9 @@ pub fn compute(
         step(on_event, "fewer_moulds")?;
         timings.skip();
         let start = Moved { sphere_mesh, panels, deviations: panel_deviations, metrics: final_metrics };
-        let (moved, outcome) = fewer_moulds_of(reference, start, params, fabrication, clock, on_event)?;
+        let (moved, outcome) = fewer_moulds_of(reference, start, params, fabrication, clock, &mut timings, on_event)?;
         (sphere_mesh, panels, panel_deviations, final_metrics) = (moved.sphere_mesh, moved.panels, moved.deviations, moved.metrics);
         moulds = Some(outcome);
-        timings.lap("fewer_moulds");
     }
     let mut warnings = method_warnings(reference, &field, remeshed_by_sizing.then_some(&remeshed));
     warnings.extend(kink_warning(&sphere_mesh.kink_angles_deg(), reference));

@@ -24,7 +24,7 @@ use crate::panels::moulds::{
 };
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
-use crate::progress::{Cancelled, Clock, Progress};
+use crate::progress::{Cancelled, Clock, Progress, Timings};
 use crate::reference::Reference;
 use crate::solver::{JacobianSink, Solver, SolverOptions, Term};
 
@@ -147,6 +147,8 @@ struct Hook<'a, 'e> {
     clock: Clock,
     on_event: &'a mut OnEvent<'e>,
     round: usize,
+    /// The method's step timings: the rounds' lap, then the snap's.
+    timings: &'a mut Timings,
 }
 
 impl MouldHook for Hook<'_, '_> {
@@ -197,8 +199,12 @@ impl MouldHook for Hook<'_, '_> {
     }
 
     fn snap(&mut self, kept: &Moved, fabrication: &Fabrication) -> Option<(Option<Moved>, MouldSnap)> {
+        self.timings.lap("fewer_moulds");
+        // The snap takes milliseconds: a cancel arriving now stops the method after it.
+        let _ = (self.on_event)(StAdaptedEvent::Progress(Progress::new("snap_moulds", 0, 0)));
         let (snapped, snap) = snap_to_moulds(self.reference, &kept.sphere_mesh, &kept.panels, &self.targets, fabrication, self.params.variant);
         let snapped = snapped.map(|s| Moved { sphere_mesh: s.sphere_mesh, panels: s.panels, deviations: s.deviations, metrics: s.metrics });
+        self.timings.lap("snap_moulds");
         Some((snapped, snap))
     }
 
@@ -213,20 +219,22 @@ impl MouldHook for Hook<'_, '_> {
 
 /// The rounds toward fewer moulds on the method's result `start` on `reference`, each round's
 /// mesh sent to `on_event`, then the snap: the result moved onto fewer moulds (`start` where no
-/// round was kept and the snap missed the targets) and what the rounds did.
+/// round was kept and the snap missed the targets) and what the rounds did. `timings` gets the
+/// laps `fewer_moulds` and `snap_moulds`.
 pub fn fewer_moulds_of(
     reference: &Reference,
     start: Moved,
     params: &StAdaptedParams,
     fabrication: &Fabrication,
     clock: Clock,
+    timings: &mut Timings,
     on_event: &mut OnEvent,
 ) -> Result<(Moved, StAdaptedMouldOutcome), Cancelled> {
     // Each round continues the last stage of the method for a few iterations.
     let last = params.stages.last().cloned().map(|s| OptimizationStage { iterations: s.iterations.min(ROUND_ITERATIONS), ..s });
     let stages = StAdaptedParams { stages: last.into_iter().collect(), ..params.clone() };
     let targets = MouldTargets::of(&start.metrics, params);
-    let mut hook = Hook { reference, params, stages, targets, clock, on_event, round: 0 };
+    let mut hook = Hook { reference, params, stages, targets, clock, on_event, round: 0, timings };
     let run = fewer_moulds(&mut hook, &start, reference.diagonal(), fabrication)?;
     Ok((run.best.unwrap_or(start), run.outcome))
 }
