@@ -132,6 +132,129 @@ impl fmt::Display for Guarantee {
     }
 }
 
+/// A share of the diagonal (or of an area) as a percentage a designer reads: "2.6 %",
+/// "0.0031 %", "3.1e-9 %".
+fn percent(x: f64) -> String {
+    let p = 100.0 * x;
+    if !p.is_finite() {
+        "an unmeasurable amount".into()
+    } else if p.abs() >= 10.0 {
+        format!("{p:.0} %")
+    } else if p.abs() >= 0.1 {
+        format!("{p:.1} %")
+    } else if p.abs() >= 1e-6 {
+        // Two significant digits.
+        let digits = (1.0 - p.abs().log10().floor()) as usize;
+        format!("{p:.digits$} %")
+    } else {
+        format!("{p:.1e} %")
+    }
+}
+
+/// An angle in degrees, to a tenth.
+fn degrees(x: f64) -> String {
+    let s = format!("{x:.1}");
+    format!("{}°", s.strip_suffix(".0").unwrap_or(&s))
+}
+
+impl Guarantee {
+    /// The promise in words a designer reads, with the figure and what it must be: "panels are
+    /// up to 2.6 % of the model's size off their spheres (must be exact)". The technical line
+    /// ([`fmt::Display`]) names the figure as the report does.
+    pub fn in_words(&self) -> String {
+        let (m, l) = (self.measured, self.limit);
+        let n = format!("{m:.0}");
+        // "Exact" limits are the methods' numerical zero (≤ 1e-8 of the diagonal).
+        let share = if self.bound == Bound::AtMost && l <= 1e-8 { "must be exact".to_string() } else { format!("must be at most {}", percent(l)) };
+        let most_deg = format!("must be at most {}", degrees(l));
+        let least_deg = format!("must be at least {}", degrees(l));
+        let none = "must be none".to_string();
+        // (what is measured, the sentence with its figure, what it must be)
+        let (noun, sentence, must) = match self.name.as_str() {
+            "max_vertex_sphere_residual" => (
+                "how far panel corners are off their spheres",
+                format!("panel corners are up to {} of the model's size off their spheres", percent(m)),
+                share,
+            ),
+            "max_centre_face_planarity" => (
+                "how far the sphere centres around a node are off one plane",
+                format!("the sphere centres around a node are up to {} of the model's size off one plane", percent(m)),
+                share,
+            ),
+            "max_center_plane_residual" => (
+                "how far the sphere centres are off their common plane",
+                format!("the sphere centres are up to {} of the model's size off their common plane", percent(m)),
+                share,
+            ),
+            "max_node_axis_offset" if self.unit == "(sine)" => (
+                "how far node axes are off parallel",
+                format!("node axes are up to {} off parallel", degrees(m.clamp(-1.0, 1.0).asin().to_degrees())),
+                "must be exact".into(),
+            ),
+            "max_node_axis_offset" => (
+                "how far node axes miss their common point",
+                format!("node axes miss their common point by up to {} of the model's size", percent(m)),
+                share,
+            ),
+            "max_orthogonality_residual" => (
+                "how far panel spheres are off orthogonal to the support's sphere Ω",
+                format!("panel spheres are off orthogonal to the support's sphere Ω by {m:.1e} of the size squared"),
+                "must be exact".into(),
+            ),
+            "max_distance_to_reference" => (
+                "the panels' distance to the design surface",
+                format!(
+                    "panels are up to {} of the model's size from the design surface{}",
+                    percent(m),
+                    self.in_model_units.as_ref().map_or(String::new(), |t| format!(" ({t})"))
+                ),
+                format!("must be at most {}", percent(l)),
+            ),
+            "coverage" => (
+                "how much of the surface the panels cover",
+                format!("the panels cover {} of the surface", percent(m)),
+                format!("must be at least {}", percent(l)),
+            ),
+            "folded_faces" => ("folded faces", format!("{n} faces are folded over"), none),
+            "panels_with_crossing_arcs" => ("panels whose arcs cross", format!("{n} panels have edge arcs that cross"), none),
+            "panels_without_exact_surface" => ("panels without an exact surface", format!("{n} panels have no exact surface for CAD"), none),
+            "support_elements_that_fold" => ("support elements that fold", format!("{n} support elements fold over"), none),
+            "faces" => ("the faces", "the mesh has no faces".into(), "must have at least one".into()),
+            "faces_not_quads" => ("faces that are not quads", format!("{n} faces are not quads"), none),
+            "quads_without_real_torsal_directions" => (
+                "grid quads without real torsal directions",
+                format!("{n} grid quads have no real torsal directions, so no support can follow them"),
+                none,
+            ),
+            "max_line_normal_angle_deg" => {
+                ("the lines' angle to the normals", format!("the lines lean up to {} from the surface normals", degrees(m)), most_deg)
+            }
+            "max_axis_normal_angle_deg" => {
+                ("the node axes' angle to the normals", format!("node axes lean up to {} from the surface normals", degrees(m)), most_deg)
+            }
+            "min_torsal_plane_angle_deg" => ("the torsal planes' angle", format!("torsal planes meet at angles down to {}", degrees(m)), least_deg),
+            "min_support_plane_angle_deg" => {
+                ("the support planes' angle", format!("support planes meet at angles down to {}", degrees(m)), least_deg)
+            }
+            "min_support_plane_angle_valence_3_deg" => (
+                "the support planes' angle at nodes of three edges",
+                format!("at nodes of three edges, support planes meet at angles down to {}", degrees(m)),
+                least_deg,
+            ),
+            "min_support_plane_angle_valence_5_deg" => (
+                "the support planes' angle at nodes of five edges",
+                format!("at nodes of five edges, support planes meet at angles down to {}", degrees(m)),
+                least_deg,
+            ),
+            _ => return self.to_string(),
+        };
+        match &self.unmeasured {
+            Some(reason) => format!("{noun} could not be measured: {reason} ({must})"),
+            None => format!("{sentence} ({must})"),
+        }
+    }
+}
+
 /// The guarantees of one run.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Verdict {
@@ -182,5 +305,22 @@ mod tests {
         assert_eq!(why.to_string(), "min_support_plane_angle_deg not measured: the support planes at vertex 7 meet in no line (must be ≥ 75 deg)");
         let d = Guarantee::at_most("max_distance_to_reference", 0.0123, 0.01, "of the diagonal").with_model_units("0.123 m, limit 0.1 m");
         assert_eq!(d.to_string(), "max_distance_to_reference 1.23e-2 of the diagonal (must be ≤ 1.00e-2 of the diagonal; 0.123 m, limit 0.1 m)");
+    }
+
+    #[test]
+    fn a_guarantee_in_words_gives_its_figure_as_a_designer_reads_it() {
+        let residual = Guarantee::at_most("max_vertex_sphere_residual", 2.59e-2, 1e-8, "of the diagonal");
+        assert_eq!(residual.in_words(), "panel corners are up to 2.6 % of the model's size off their spheres (must be exact)");
+        let tiny = Guarantee::at_most("max_centre_face_planarity", 3.1e-7, 1e-8, "of the diagonal");
+        assert_eq!(tiny.in_words(), "the sphere centres around a node are up to 0.000031 % of the model's size off one plane (must be exact)");
+        let angle = Guarantee::at_least("min_support_plane_angle_deg", 44.54, 45.0, "deg");
+        assert_eq!(angle.in_words(), "support planes meet at angles down to 44.5° (must be at least 45°)");
+        let nan = Guarantee::at_least("min_support_plane_angle_deg", f64::NAN, 75.0, "deg").unmeasured("the planes meet in no line");
+        assert_eq!(nan.in_words(), "the support planes' angle could not be measured: the planes meet in no line (must be at least 75°)");
+        let d = Guarantee::at_most("max_distance_to_reference", 0.0123, 0.01, "of the diagonal").with_model_units("0.123 m, limit 0.1 m");
+        assert_eq!(d.in_words(), "panels are up to 1.2 % of the model's size from the design surface (0.123 m, limit 0.1 m) (must be at most 1.0 %)");
+        assert_eq!(Guarantee::count_at_most("panels_with_crossing_arcs", 3, 0).in_words(), "3 panels have edge arcs that cross (must be none)");
+        let words = [residual, tiny, angle, nan, d].map(|g| g.in_words());
+        assert!(words.iter().all(|w| !w.contains("NaN") && !w.contains("inf")), "{words:?}");
     }
 }
