@@ -1132,3 +1132,33 @@ fn report_schema() {
     assert_close(&serde_json::to_value(back).unwrap(), &serde_json::to_value(&r).unwrap());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The panels as drawn stay within their triangle budget, each on its sphere with its corners,
+/// and panels within their share are drawn as measured.
+#[test]
+fn drawn_panels_are_bounded_and_stay_on_their_spheres() {
+    let mut coarsened = 0;
+    for (name, sm) in all_fixtures() {
+        let panels = build_panels(&sm, tol_for(&sm));
+        let total: usize = panels.iter().map(|p| p.triangles.len()).sum();
+        assert!(matches!(display_panels(&panels, 10 * total), std::borrow::Cow::Borrowed(_)), "{name}: within the budget, as measured");
+        let budget = total / 4;
+        let drawn = display_panels(&panels, budget);
+        let drawn_total: usize = drawn.iter().map(|p| p.triangles.len()).sum();
+        // The per-panel share at level_cap, with its zippers: at most about 1.5 × the budget.
+        assert!(drawn_total <= budget * 3 / 2 + 64 * panels.len(), "{name}: {drawn_total} triangles drawn for a budget of {budget}");
+        if matches!(drawn, std::borrow::Cow::Owned(_)) {
+            assert!(drawn_total < total, "{name}: {drawn_total} of {total}");
+            coarsened += 1;
+        }
+        let diag = sm.mesh.bbox_diagonal();
+        for (p, q) in panels.iter().zip(drawn.iter()) {
+            assert_eq!(p.positions[..p.corners.len()], q.positions[..q.corners.len()], "{name}: corners kept");
+            for &x in &q.positions {
+                assert!(q.sphere.eval(x).abs() <= 1e-9 * diag.max(1.0), "{name}: a drawn point off its sphere by {:e}", q.sphere.eval(x));
+            }
+            assert_eq!(q.arc_vertices.len(), p.arc_vertices.len());
+        }
+    }
+    assert!(coarsened >= 3, "only {coarsened} fixtures were drawn coarser");
+}

@@ -119,6 +119,33 @@ pub fn level_cap(faces: usize, budget: usize, min_level: usize) -> usize {
     level.clamp(min_level, tessellate::MAX_LEVEL)
 }
 
+/// The most triangles a result's panels are drawn with, in all.
+pub const DISPLAY_PANEL_TRIANGLE_BUDGET: usize = 500_000;
+
+/// The panels as drawn, within `budget` triangles about: each panel over its share (at the
+/// subdivision level [`level_cap`] of the budget) is tessellated again at that level, its arcs
+/// at most 4 × that level in segments. Glass panels stay far below their share and are drawn as
+/// measured; the ballooning or folded panels of a failed result would otherwise take the whole
+/// measurement's budget ([`PANEL_TRIANGLE_BUDGET`]) on screen.
+pub fn display_panels(panels: &[Panel], budget: usize) -> std::borrow::Cow<'_, [Panel]> {
+    let level = level_cap(panels.len(), budget, 2);
+    let share = 2 * level * level + 4 * (5 * level + 2);
+    if panels.iter().all(|p| p.triangles.len() <= share) {
+        return std::borrow::Cow::Borrowed(panels);
+    }
+    let coarse = |p: &Panel| {
+        if p.triangles.len() <= share {
+            return p.clone();
+        }
+        let sides = p.arcs.iter().zip(&p.arc_vertices).map(|(arc, ids)| (*arc, arc.sample((ids.len() - 1).clamp(1, 4 * level)))).collect();
+        let corners: Vec<DVec3> = p.positions[..p.corners.len()].to_vec();
+        // No chord tolerance: the level alone bounds it.
+        let t = tessellate(&p.sphere, sides, &corners, 0.0, level);
+        Panel { positions: t.positions, triangles: t.triangles, area: t.area, arc_vertices: t.arc_vertices, ..p.clone() }
+    };
+    std::borrow::Cow::Owned(panels.iter().map(coarse).collect())
+}
+
 pub fn build_panels_with(sm: &SphereMesh, chord_tolerance: f64, edge_arcs: EdgeArcs) -> Vec<Panel> {
     build_panels_within(sm, chord_tolerance, edge_arcs, level_cap(sm.mesh.face_count(), PANEL_TRIANGLE_BUDGET, 32))
 }

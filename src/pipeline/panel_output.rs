@@ -21,6 +21,7 @@ use crate::panels::exact_surface::ExactSurfaces;
 use crate::panels::moulds::{Fabrication, MouldAssignment, MouldFits, MouldSnap, SnapLimit};
 use crate::panels::panel::Panel;
 use crate::panels::sphere_mesh::SphereMesh;
+use crate::panels::{display_panels, DISPLAY_PANEL_TRIANGLE_BUDGET};
 use crate::progress::Clock;
 use crate::reference::Reference;
 use crate::units::format_length;
@@ -82,9 +83,11 @@ pub(crate) fn panel_fields(panels: &[Panel]) -> Vec<Field> {
     ]
 }
 
-/// A result's panels as display fields ([`panel_fields`]) with each panel vertex's mould
+/// A result's panels as display fields ([`panel_fields`], within
+/// [`DISPLAY_PANEL_TRIANGLE_BUDGET`] triangles: [`display_panels`]) with each panel vertex's mould
 /// ([`field::PANEL_MOULDS`]), as the export assigned them ([`export_panels`]).
 pub(crate) fn result_panel_fields(panels: &[Panel], moulds: &MouldAssignment) -> Vec<Field> {
+    let panels = &*display_panels(panels, DISPLAY_PANEL_TRIANGLE_BUDGET);
     let per_vertex = panels.iter().zip(&moulds.panel_mould).flat_map(|(p, &m)| std::iter::repeat_n(m, p.positions.len())).collect();
     let mut fields = panel_fields(panels);
     fields.push(Field::u32(field::PANEL_MOULDS, 1, per_vertex));
