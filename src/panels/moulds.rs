@@ -599,8 +599,9 @@ pub const MOULD_COLOURS: usize = 16;
 
 /// The display colour of mould `j` (RGB in [0, 1]): hues a golden angle apart, so neighbouring
 /// ids differ, repeating every [`MOULD_COLOURS`]; the app and the GLB's materials use the same.
+/// Mould 0 is a calm blue, and no mould is red (30° to 330° only): red says a result failed.
 pub fn mould_colour(j: usize) -> [f32; 3] {
-    let hue = ((j % MOULD_COLOURS) as f32 * 0.618_034).fract() * 6.0;
+    let hue = 0.5 + (0.57 + (j % MOULD_COLOURS) as f32 * 0.618_034).fract() * 5.0;
     let (s, v) = (0.55, 0.9);
     let f = hue.fract();
     let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));
@@ -654,6 +655,19 @@ mod tests {
                     .any(|m| intervals.iter().all(|&[lo, hi]| (0..n).any(|j| m & (1 << j) != 0 && ends[j] >= lo && ends[j] <= hi)))
             })
             .unwrap()
+    }
+
+    #[test]
+    fn no_mould_colour_reads_as_an_error() {
+        for j in 0..MOULD_COLOURS {
+            let [r, g, b] = mould_colour(j);
+            // Red dominates neither green nor blue by much: a mould never looks like a failure.
+            assert!(r < 1.4 * g.max(b), "mould {j}: {:?}", [r, g, b]);
+        }
+        let [r, _, b] = mould_colour(0);
+        assert!(b > r, "mould 0 is blue");
+        let distinct: std::collections::HashSet<_> = (0..MOULD_COLOURS).map(|j| mould_colour(j).map(|c| (c * 255.0) as u8)).collect();
+        assert_eq!(distinct.len(), MOULD_COLOURS);
     }
 
     #[test]
