@@ -321,7 +321,10 @@ fn sq_runs_where_the_mean_curvature_changes_sign() {
 #[test]
 fn sq_refuses_bad_input_with_one_line() {
     for (args, needle) in [
-        (vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--start", "central", "--out", "/tmp/sf-sq-x"], "start from constant radii"),
+        (
+            vec!["sq", "../shared/data/bsplines/saddle_sign_change.json", "--start", "central", "--out", "/tmp/sf-sq-x"],
+            "starting congruence 'auto' or 'constant'",
+        ),
         (vec!["sq", "../shared/data/meshes/tri_dome.obj", "--out", "/tmp/sf-sq-x"], "B-spline reference"),
         (vec!["sq", "sample:vault", "--theta", "95", "--out", "/tmp/sf-sq-x"], "'95' for '--theta <DEG>'"),
         (vec!["sq", "sample:vault", "--until", "panels", "--out", "/tmp/sf-sq-x"], "'panels' for '--until <STAGE>'"),

@@ -65,7 +65,7 @@ impl fmt::Display for SqError {
                 f,
                 "the central start needs a mean curvature of one sign (Sec. 6.3), but H > 0 on {:.1} % of the area and H < 0 on \
                  {:.1} %{}. Where H = 0 the central spheres become planes (radius 1/H unbounded), so the sphere congruence \
-                 cannot start from them there; start from constant radii (the constant or the automatic start) instead.",
+                 cannot start from them there; choose the starting congruence 'auto' or 'constant' (constant radii) instead.",
                 100.0 * positive_share,
                 100.0 * negative_share,
                 at.map_or(String::new(), |[u, v]| format!(", the other sign strongest at (u, v) = ({u:.3}, {v:.3})"))
@@ -73,7 +73,7 @@ impl fmt::Display for SqError {
             SqError::MeanCurvatureNearZero { uv, h_diag } => write!(
                 f,
                 "the mean curvature nearly vanishes at (u, v) = ({:.4}, {:.4}) (|H| · diagonal = {:.2e}): the central sphere \
-                 there is almost a plane (Sec. 6.3); start from constant radii (the constant or the automatic start) instead.",
+                 there is almost a plane (Sec. 6.3); choose the starting congruence 'auto' or 'constant' (constant radii) instead.",
                 uv[0],
                 uv[1],
                 h_diag.abs()
