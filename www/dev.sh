@@ -121,6 +121,7 @@ build_web() {
   rm -rf "$DIST"; mkdir -p "$DIST/pkg"
   cp index.html "$DIST/"
   cp www/*.js www/*.css "$DIST/" 2>/dev/null || true
+  cp www/favicon.svg "$DIST/"
   cp target/pkg/spherical_faces.js target/pkg/spherical_faces_bg.wasm "$DIST/pkg/"
   setup_rhino3dm
   mkdir -p "$DIST/rhino3dm"
