@@ -260,10 +260,9 @@ impl Design {
                 FieldStatus::Unread => notices.push(format!("ignored unknown design-link field '{}'", clip(k))),
             }
         }
+        // The app asks for the file by name in its view, and keeps the link until it comes.
         if wants_file {
-            let name = file_name.unwrap_or_else(|| "your file".into());
-            notices.push(format!("this design uses the file '{name}': drop it on the viewport to continue"));
-            d.reference = DesignSurface::OwnFile(name);
+            d.reference = DesignSurface::OwnFile(file_name.unwrap_or_default());
         }
         (d, notices)
     }

@@ -22,6 +22,19 @@ pub fn robust_range(values: &[f32]) -> ((f32, f32), bool) {
     }
 }
 
+/// A symmetric range (−m, m) for a diverging map of values whose sign matters: m is the 80th
+/// percentile of |value| (finite values), so that a few peaks do not wash out where the sign
+/// changes.
+pub fn symmetric_range(values: &[f32]) -> (f32, f32) {
+    let mut v: Vec<f32> = values.iter().map(|x| x.abs()).filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return (-1.0, 1.0);
+    }
+    v.sort_by(f32::total_cmp);
+    let m = v[((v.len() - 1) as f32 * 0.8).round() as usize].max(1e-12);
+    (-m, m)
+}
+
 pub fn viridis(t: f32) -> [f32; 3] {
     const C: [[f32; 3]; 7] = [
         [0.2777, 0.0054, 0.3340],

@@ -13,7 +13,9 @@ import {
   TRI_DOME,
   MIXED_3DM, SADDLE,
   changedFraction,
+  countPixels,
   dropFile,
+  editLink,
   isSettled,
   launchBrowser,
   measureViewport,
@@ -96,6 +98,13 @@ for (const project of PROJECTS) {
         const m = await measureViewport(app, s, 'default-sample');
         t.diagnostic(`drawn ${(100 * m.drawnFraction).toFixed(1)}% of viewport ${JSON.stringify(m.rect)}; screenshot ${m.file}`);
         assertDrawn(m, 'default sample');
+        const icon = await app.page.evaluate(async () => {
+          const link = document.querySelector('link[rel="icon"]');
+          return link ? { href: link.href, status: (await fetch(link.href)).status } : null;
+        });
+        assert.ok(icon && icon.status === 200, `the favicon is linked and served: ${JSON.stringify(icon)}`);
+        assert.deepEqual(app.requestFailures, [], 'no request fails on load (the favicon included)');
+        assert.deepEqual(app.consoleErrors, [], 'no console error on load');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });
@@ -620,6 +629,20 @@ for (const project of PROJECTS) {
         assert.ok(s.missed_guarantees && s.missed_guarantees.includes('min_support_plane_angle_deg') && s.missed_guarantees.includes('≥ 90'), `status bar: ${s.missed_guarantees}`);
         // A missed result is never called exact (the guarantee `panels_without_exact_surface` may be named).
         assert.ok(!/\bexact\b/.test(s.missed_guarantees), 'no word of exactness');
+        // The miss in a designer's words, at the top of the side panel and above the downloads,
+        // which are marked as coming from a failed result.
+        t.diagnostic(`in words: ${JSON.stringify(s.missed_in_words)}; side panel ${JSON.stringify(s.side_panel)}`);
+        assert.ok(s.missed_in_words.some((w) => /^support planes meet at angles down to [\d.]+° \(must be at least 90°\)$/.test(w)), `${s.missed_in_words}`);
+        assert.ok(s.missed_in_words.every((w) => !/_deg|_residual|NaN|\binf\b/.test(w)), `no code words or NaN: ${s.missed_in_words}`);
+        assert.ok(!JSON.stringify(s).includes('NaN'), 'no NaN in the state');
+        assert.equal(s.downloads_marked_failed, true, 'the downloads are marked as coming from a failed result');
+        const [vx, vy, vw, vh] = s.side_panel.verdict;
+        assert.ok(s.side_panel.downloads && vy < s.side_panel.downloads[1], `the verdict ${s.side_panel.verdict} is above the downloads ${s.side_panel.downloads}`);
+        assert.ok(vy >= 0 && vy + vh <= 800, `the verdict is visible without scrolling: ${s.side_panel.verdict}`);
+        const m = await measureViewport(app, s, 'sq-miss');
+        assertDrawn(m, 'the failed result');
+        const red = countPixels(m, ([r, g, b]) => r > 200 && g < 120 && b < 120, [vx, vy, vw, vh]);
+        assert.ok(red > 50, `the verdict is drawn in red (${red} red pixels in ${s.side_panel.verdict})`);
         fs.mkdirSync(ARTIFACTS_DIR, { recursive: true });
         await app.page.screenshot({ path: path.join(ARTIFACTS_DIR, `${project.name}-n2-sq-miss.png`), timeout: 15_000 });
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
@@ -650,7 +673,94 @@ for (const project of PROJECTS) {
         assert.match(String(s.error), /central start needs a mean curvature of one sign/);
         assert.match(String(s.error), /constant radii/);
         assert.equal(s.sq.ready, false);
-        assertDrawn(await measureViewport(app, s, 'sq-refused'), 'the surface coloured by the sign of H');
+        // The refusal offers the menu's other methods by their menu names, not the CLI's.
+        assert.deepEqual(s.error_offers, ['ST, adapted face size (Sec. 3)', 'ST with support structure (Sec. 4)']);
+        assert.ok(!/\b(st-support|--start)\b/.test(s.error), `no CLI words: ${s.error}`);
+        const m = await measureViewport(app, s, 'sq-refused');
+        assertDrawn(m, 'the surface coloured by the sign of H');
+        // A robust diverging map: both signs show in colour, not washed out to white by peaks.
+        const blue = countPixels(m, ([r, g, b]) => b > r + 60);
+        const red = countPixels(m, ([r, g, b]) => r > b + 60);
+        t.diagnostic(`H < 0 (blue) ${blue} px, H > 0 (red) ${red} px of ${m.drawn} drawn`);
+        assert.ok(blue > 0.1 * m.drawn && red > 0.1 * m.drawn, `both signs of H show: blue ${blue}, red ${red} of ${m.drawn}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] p. editing θ, α, δ and the mould count in the link of an open page reruns SQ with them`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const base = 'v=1&sample=vault&method=sq&grid=12&rs=10&faces=60&until=final';
+      await withApp(t, browser, server, project, { name: 'p-link-rerun', fragment: `${base}&theta=20&alpha=75` }, async (app) => {
+        const limit = (s, name) => s.sq.report.guarantees.find((g) => g.name === name)?.limit;
+        const done = (pred) => (s) => s.sq && s.sq.ready && !s.busy && s.sq.report && pred(s);
+        let s = await waitForState(app, 'sq at θ 20, α 75', done((s) => limit(s, 'max_axis_normal_angle_deg') === 20), { timeout: T.load });
+        assert.equal(limit(s, 'min_support_plane_angle_deg'), 75);
+        const before = await measureViewport(app, s, 'theta20');
+        await editLink(app, `${base}&theta=15&alpha=45`);
+        s = await waitForState(app, 'sq rerun at θ 15, α 45', done((s) => limit(s, 'max_axis_normal_angle_deg') === 15 && limit(s, 'min_support_plane_angle_deg') === 45), { timeout: T.load });
+        assert.ok(s.design_link.includes('theta=15') && s.design_link.includes('alpha=45'), s.design_link);
+        const after = await measureViewport(app, s, 'theta15');
+        t.diagnostic(`the view changed on ${(100 * changedFraction(before, after)).toFixed(1)} % of its pixels`);
+        assert.ok(changedFraction(before, after) > 0.002, 'the view shows the new result');
+        // δ: the moulds are grouped again within the new tolerance.
+        await editLink(app, `${base}&theta=15&alpha=45&mould_tol=0.05`);
+        s = await waitForState(app, 'moulds within δ 0.05', done((s) => s.moulds && Math.abs(s.moulds[1] - 0.05) < 1e-12), { timeout: T.load });
+        const within = s.moulds[0];
+        // K: at most K moulds.
+        await editLink(app, `${base}&theta=15&alpha=45&moulds=2`);
+        s = await waitForState(app, 'at most 2 moulds', done((s) => s.moulds && s.moulds[0] <= 2 && s.design_link.includes('moulds=2')), { timeout: T.load });
+        t.diagnostic(`moulds: ${within} within δ 0.05, then ${JSON.stringify(s.moulds)} for K = 2`);
+        assert.ok(s.moulds[0] >= 1 && s.moulds[0] <= 2);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] q. an error belongs to its run: switching method after SQ refused a mesh clears it`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      await withApp(t, browser, server, project, { name: 'q-cleared-error', fragment: 'v=1&sample=dome&method=sq' }, async (app) => {
+        let s = await waitForState(app, 'SQ refuses the dome mesh', (s) => /B-spline/.test(String(s.error)) && !s.busy && s.curvature_ready, { timeout: T.load });
+        assert.deepEqual(s.error_offers, ['ST, adapted face size (Sec. 3)', 'ST with support structure (Sec. 4)'], 'the menu names of the other methods');
+        const red = await measureViewport(app, s, 'sq-refused-mesh');
+        await editLink(app, 'v=1&sample=dome&method=st-support');
+        s = await waitForState(app, 'st-support done, no error', (s) => s.st_support && s.st_support.ready && !s.busy, { timeout: T.load });
+        assert.equal(s.error, null, 'the refusal of the last run is gone');
+        assert.deepEqual(s.error_offers, []);
+        assert.ok(s.side_panel.verdict, 'the new verdict shows at the top');
+        assertDrawn(await measureViewport(app, s, 'st-support-after-error'), 'the new result');
+        t.diagnostic(`viewport before ${red.file}`);
+        assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
+      });
+    });
+
+    test(`[${project.name}] r. a link naming a file keeps it, asks for the file in the view, and gives the same link back after the drop`, { timeout: T.test }, async (t) => {
+      const { server, browser } = await env();
+      const bytes = fs.readFileSync(TRI_DOME);
+      let link;
+      await withApp(t, browser, server, project, { name: 'r-file-link-1', fragment: 'v=1&sample=dome&method=curvature&jet_degree=2&color=k1' }, async (app) => {
+        await settledDefault(app);
+        await dropFile(app, 'tri_dome.obj', bytes, 'model/obj');
+        const s = await waitForState(app, 'tri_dome.obj settled', (s) => s.source === 'file:tri_dome.obj' && isSettled(s));
+        link = s.design_link;
+      });
+      t.diagnostic(`the design's link: ${link}`);
+      assert.ok(link.includes('sample=file') && link.includes('file=tri_dome.obj') && link.includes('cam='), link);
+      await withApp(t, browser, server, project, { name: 'r-file-link-2', fragment: link }, async (app) => {
+        let s = await waitForState(app, 'the drop prompt', (s) => s.ready === true && s.awaiting_file === 'tri_dome.obj', { timeout: T.load });
+        assert.equal(s.design_link, link, 'the link is kept as it was');
+        assert.equal(s.error, null, 'no error while the file is awaited');
+        assert.equal(s.source, '', 'nothing else is shown instead');
+        const m = await measureViewport(app, s, 'drop-prompt');
+        const text = countPixels(m, ([r, g, b]) => r > 200 && g > 200 && b > 200);
+        assert.ok(text > 300, `the prompt is written in the view (${text} white pixels)`);
+        await dropFile(app, 'tri_dome.obj', bytes, 'model/obj');
+        s = await waitForState(app, 'tri_dome.obj settled', (s) => s.source === 'file:tri_dome.obj' && isSettled(s));
+        assert.equal(s.awaiting_file, null);
+        assert.equal(s.jet_degree, 2);
+        assert.equal(s.color_by, 'k1');
+        assert.ok(!s.notices.some((n) => /drop/i.test(n)), `no stale prompt among the notices: ${JSON.stringify(s.notices)}`);
+        s = await waitForState(app, 'the same link back', (s) => s.design_link === link, { timeout: 15_000 }).catch(() => app.lastState);
+        assert.equal(s.design_link, link, 'copying the link gives the same link back');
+        assertDrawn(await measureViewport(app, s, 'file-link-dropped'), 'tri_dome.obj');
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
       });
     });

@@ -462,6 +462,7 @@ export async function measureViewport(app, state, label, { tolerance = 12 } = {}
     png,
     rect: [x0, y0, x1 - x0, y1 - y0],
     image: [png.width, png.height],
+    scale,
     dpr,
     area,
     drawn,
@@ -507,4 +508,29 @@ export function truncatedGlb() {
   head.writeUInt32LE(400, 12); // JSON chunk length (a lie)
   head.write('JSON', 16, 'latin1');
   return Buffer.concat([head, Buffer.from('{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attri', 'latin1')]);
+}
+
+/**
+ * Counts the pixels of a measureViewport() screenshot inside `rect` ([x, y, w, h] in CSS px of
+ * the page; the whole viewport when omitted) for which `pick([r, g, b])` holds.
+ */
+export function countPixels(m, pick, rect = null) {
+  const { png } = m;
+  const scale = m.scale;
+  const [x0, y0, w, h] = rect ? rect.map((v) => Math.round(v * scale)) : m.rect;
+  let n = 0;
+  for (let y = Math.max(0, y0); y < Math.min(png.height, y0 + h); y++) {
+    for (let x = Math.max(0, x0); x < Math.min(png.width, x0 + w); x++) {
+      const i = (y * png.width + x) * 4;
+      if (pick([png.data[i], png.data[i + 1], png.data[i + 2]])) n++;
+    }
+  }
+  return n;
+}
+
+/** Sets the page's design link (the URL fragment), as a user editing the address would. */
+export async function editLink(app, fragment) {
+  await app.page.evaluate((f) => {
+    location.hash = f;
+  }, fragment.startsWith('#') ? fragment.slice(1) : fragment);
 }

@@ -38,15 +38,24 @@ struct AutomationState<'a> {
     shading: &'static str,
     edges: bool,
     jet_degree: u8,
-    error: &'a Option<String>,
-    /// The status bar's line when the last result misses its method's guarantees.
-    missed_guarantees: &'a Option<String>,
+    error: Option<&'a str>,
+    /// The menu's methods the error offers (a method refused its input).
+    error_offers: Vec<&'static str>,
+    /// The missed guarantees of the last result as the report names them, None when it meets
+    /// them (or there is none).
+    missed_guarantees: Option<String>,
+    /// The same in a designer's words, as the side panel and the status bar show them.
+    missed_in_words: Vec<String>,
+    /// The downloads are marked as coming from a result that misses its guarantees.
+    downloads_marked_failed: bool,
+    /// The design's file the view asks for (a link that names a file the app does not have).
+    awaiting_file: Option<&'a str>,
     /// The moulds of the last panel result: how many, within what (model units), and how many
     /// panels have exactly their mould's radius.
     moulds: Option<(usize, f64, usize)>,
     /// The exact surfaces of the last panel result: panels, support elements, refused ones.
     exact_surfaces: Option<(usize, usize, usize)>,
-    notices: &'a [String],
+    notices: Vec<&'a str>,
     design_link: &'a str,
     clear_color: [u8; 3],
     viewport: [f32; 4],
@@ -85,6 +94,7 @@ impl App {
         let info = self.loaded.as_ref().map(|l| &l.info);
         let stats = info.map(|i| i.stats).unwrap_or_default();
         let vp = self.viewport;
+        let missed = self.verdict.as_ref().filter(|v| !v.holds());
         let state = AutomationState {
             ready: self.drawn,
             backend: &self.backend,
@@ -103,11 +113,15 @@ impl App {
             shading: self.design.shading.key(),
             edges: self.design.edges,
             jet_degree: self.design.jet.degree,
-            error: &self.error,
-            missed_guarantees: &self.missed_guarantees,
+            error: self.error.as_ref().map(|e| e.text.as_str()),
+            error_offers: self.offered_methods().into_iter().map(|m| m.title()).collect(),
+            missed_guarantees: missed.map(|v| v.failure_text()),
+            missed_in_words: missed.map_or(Vec::new(), |v| v.failures().map(|g| g.in_words()).collect()),
+            downloads_marked_failed: missed.is_some() && !self.downloads.is_empty(),
+            awaiting_file: self.awaiting_file.as_deref(),
             moulds: self.moulds.as_ref().map(|m| (m.count, m.tolerance, m.snap.snapped)),
             exact_surfaces: self.exact_surfaces.as_ref().map(|e| (e.panels, e.support_elements, e.refused.len())),
-            notices: &self.notices,
+            notices: self.notices.iter().map(|n| n.text.as_str()).collect(),
             design_link: &self.last_fragment,
             clear_color: [CLEAR_COLOR.r(), CLEAR_COLOR.g(), CLEAR_COLOR.b()],
             viewport: [vp.min.x, vp.min.y, vp.width(), vp.height()],

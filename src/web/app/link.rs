@@ -5,6 +5,7 @@ use glam::Vec3;
 use wasm_bindgen::prelude::*;
 
 use super::dom::location_hash;
+use super::state::{Notice, Origin};
 use super::App;
 use crate::design_link::{CameraState, Design};
 
@@ -14,12 +15,17 @@ impl App {
         if hash == self.last_fragment {
             return;
         }
-        // The user edited or navigated the link: apply it.
+        // The user edited or navigated the link: apply it, as the sliders would. A new link
+        // replaces the last one's notices.
         self.last_fragment = hash.clone();
         let (design, notices) = Design::from_fragment(&hash);
-        self.notices = notices;
-        let reference_changed = design.reference != self.design.reference;
-        let jet_changed = design.jet != self.design.jet || design.method != self.design.method || design.methods != self.design.methods;
+        self.notices.retain(|n| n.origin != Origin::Link);
+        self.notices.extend(notices.into_iter().map(|n| Notice::new(n, Origin::Link)));
+        let reference_changed = design.reference != self.design.reference || self.awaiting_file.is_some();
+        // Everything that defines the result reruns it; the moulds alone (δ, K, unit) group it
+        // again.
+        let rerun = design.jet != self.design.jet || design.method != self.design.method || design.methods != self.design.methods;
+        let regroup = design.fabrication != self.design.fabrication;
         self.camera_from_link = design.camera;
         for v in &mut self.views {
             v.link_applied(&design);
@@ -34,8 +40,10 @@ impl App {
                 self.camera.distance = c.distance as f32;
                 self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
             }
-            if jet_changed {
+            if rerun {
                 self.run_method();
+            } else if regroup {
+                self.regroup();
             }
         }
     }

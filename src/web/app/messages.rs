@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::state::{CurvatureView, Download, Scene};
+use super::state::{CurvatureView, Download, Origin, Scene, ShownError};
 use super::App;
 use crate::design_link::DesignSurface;
 use crate::pipeline::fields::{field, find, Field, FieldData};
@@ -18,7 +18,7 @@ impl App {
         while let Some(item) = self.worker.as_ref().and_then(|w| w.poll()) {
             match item {
                 Incoming::Crashed(message) => {
-                    self.error = Some(format!("{message}. The worker was restarted; your design is kept."));
+                    self.error = Some(ShownError::new(format!("{message}. The worker was restarted; your design is kept."), Origin::Worker));
                     self.busy = None;
                     if let Some(w) = self.worker.as_mut() {
                         w.restart();
@@ -61,14 +61,19 @@ impl App {
             FromWorker::Finished { stage, result, .. } => self.finished(stage, result),
             FromWorker::Cancelled { stage } => {
                 self.busy = None;
-                self.notices.push(format!("Stage '{stage}' cancelled."));
+                self.notice(format!("Stage '{stage}' cancelled."), Origin::Run);
             }
             FromWorker::Error { message, remesh_to } => {
-                // A failed stage also ends the stages queued after it.
-                self.busy = None;
+                // A failed stage also ends the stages queued after it. The error belongs to the
+                // file being loaded, or to the run of the method that refused.
+                let stage = self.busy.take().map(|b| b.stage);
                 self.file_in_flight = None;
-                self.error = Some(message);
-                self.remesh_to = remesh_to;
+                let refused_by = match stage {
+                    Some(StageId::Method(m, _)) => Some(m),
+                    _ => None,
+                };
+                let origin = if stage == Some(StageId::Import) { Origin::Reference } else { Origin::Run };
+                self.error = Some(ShownError { remesh_to, refused_by, ..ShownError::new(message, origin) });
             }
         }
     }
@@ -88,9 +93,12 @@ impl App {
     }
 
     fn loaded(&mut self, info: ReferenceInfo) {
+        // A new reference replaces everything said of the old one (a restored one keeps it).
         if !self.restoring {
             self.error = None;
+            self.notices.retain(|n| n.origin == Origin::Link || n.origin == Origin::Ui);
         }
+        self.awaiting_file = None;
         match &info.source {
             Source::Sample(s) => {
                 self.design.reference = DesignSurface::Sample(*s);
@@ -103,11 +111,13 @@ impl App {
                 }
             }
         }
-        self.notices.extend(info.notes.iter().cloned());
+        for note in &info.notes {
+            self.notice(note.clone(), Origin::Reference);
+        }
         // A file that names its model unit sets the design's (the moulds' tolerance reads in it).
         if let Some(u) = info.units.filter(|&u| u != self.design.fabrication.units) {
             self.design.fabrication.units = u;
-            self.notices.push(format!("model unit from the file: {u}"));
+            self.notice(format!("model unit from the file: {u}"), Origin::Reference);
         }
         self.loaded = Some(Scene::new(info));
     }
@@ -154,7 +164,7 @@ impl App {
             }
         } else if let Some(v) = self.views.iter_mut().find(|v| v.owns(stage)) {
             if let Some(report) = v.finished(result) {
-                self.missed_guarantees = super::panels::missed_guarantees(&report);
+                self.verdict = report.meets_guarantees.is_some().then(|| crate::guarantees::Verdict::new(report.guarantees.clone()));
                 self.moulds = report.moulds;
                 self.exact_surfaces = report.exact_surfaces;
             }
@@ -189,7 +199,8 @@ impl App {
         if !self.restoring {
             self.selected = None;
         }
-        if std::mem::take(&mut self.restoring) {
+        let restored = std::mem::take(&mut self.restoring);
+        if restored {
             self.camera.scene_radius = l.radius;
         } else {
             self.camera = OrbitCamera::framing(l.center, l.radius);
@@ -201,6 +212,11 @@ impl App {
             self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
         }
         self.busy = None;
+        // The run that restores a crashed worker's design keeps its message.
+        let kept = if restored { self.error.take().filter(|e| e.origin == Origin::Worker) } else { None };
         self.run_method();
+        if kept.is_some() {
+            self.error = kept;
+        }
     }
 }

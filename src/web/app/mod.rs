@@ -37,29 +37,31 @@ use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::ViewerResources;
 use crate::web::worker_client::{Wake, WorkerClient, LIVE_REPAINT_MS};
 use dom::{count_events, make_file_input, now_ms, save_file};
-use state::{Busy, Download, ScalarView, Scene};
+use state::{Busy, Download, Notice, Origin, ScalarView, Scene, ShownError, UI_NOTICE_MS};
 use views::MethodView;
 
 /// How many frames' `ui` times are kept for the state's percentiles.
 const UI_TIMES: usize = 120;
+
+/// The side panel's width (points).
+const SIDE_PANEL_WIDTH: f32 = 380.0;
 
 /// Viewport background, also reported to tests.
 pub const CLEAR_COLOR: Color32 = Color32::from_rgb(28, 30, 36);
 
 pub struct App {
     design: Design,
-    notices: Vec<String>,
-    error: Option<String>,
-    /// The last result misses a guarantee of its method: which, by how much (the status bar
-    /// shows it in red).
-    missed_guarantees: Option<String>,
+    notices: Vec<Notice>,
+    error: Option<ShownError>,
+    /// The design link names a file the app does not have: the view asks for it by name.
+    awaiting_file: Option<String>,
+    /// The verdict of the last result: its method's guarantees, each measured on the result.
+    verdict: Option<crate::guarantees::Verdict>,
     /// The moulds of the last panel result, and whether the panels show them.
     moulds: Option<crate::export::MouldReport>,
     mould_colours: bool,
     /// What `panels.step` and `panels.3dm` of the last panel result hold as exact surfaces.
     exact_surfaces: Option<crate::export::report::ExactSurfacesReport>,
-    /// The method refused its input's size: a remesh to about this many faces is offered.
-    remesh_to: Option<usize>,
     worker: Option<WorkerClient>,
     loaded: Option<Scene>,
     /// The file behind the loaded design, kept to restore it in a fresh worker.
@@ -85,6 +87,8 @@ pub struct App {
     camera_from_link: Option<CameraState>,
     selected: Option<usize>,
     scalars: Option<ScalarView>,
+    /// What the camera fits of the layers drawn.
+    extent: Option<view::Extent>,
     generation: u64,
     backend: String,
     frames: u64,
@@ -103,8 +107,11 @@ pub struct App {
     /// the panel's content and visible heights.
     results_visible: bool,
     side_panel_heights: (f32, f32),
-    /// Where the Copy link button is (for the tests, which click it).
+    /// Where the Copy link button, the verdict and the downloads are (for the tests).
     copy_link_rect: Rect,
+    verdict_rect: Rect,
+    downloads_rect: Rect,
+    side_panel_width: f32,
     /// Cancels asked for (Cancel button or automation), and how each was carried out.
     cancels: u32,
     cancels_in_worker: u32,
@@ -157,13 +164,13 @@ impl App {
             camera_from_link: design.camera,
             views: views::views(&design),
             design,
-            notices,
-            error,
-            missed_guarantees: None,
+            notices: notices.into_iter().map(|n| Notice::new(n, Origin::Link)).collect(),
+            error: error.map(|e| ShownError::new(e, Origin::Worker)),
+            awaiting_file: None,
+            verdict: None,
             moulds: None,
             exact_surfaces: None,
             mould_colours: true,
-            remesh_to: None,
             worker,
             loaded: None,
             file: None,
@@ -178,6 +185,7 @@ impl App {
             camera: OrbitCamera::framing(Vec3::ZERO, 1.0),
             selected: None,
             scalars: None,
+            extent: None,
             generation: 0,
             backend,
             frames: 0,
@@ -198,6 +206,9 @@ impl App {
             results_visible: false,
             side_panel_heights: (0.0, 0.0),
             copy_link_rect: Rect::NOTHING,
+            verdict_rect: Rect::NOTHING,
+            downloads_rect: Rect::NOTHING,
+            side_panel_width: 0.0,
             download_requests,
             _download_listener: Some(download_listener),
             file_input,
@@ -211,25 +222,47 @@ impl App {
     fn load_design_reference(&mut self) {
         let sample = match &self.design.reference {
             DesignSurface::Sample(s) => *s,
-            DesignSurface::OwnFile(_) => match self.file.clone() {
+            DesignSurface::OwnFile(name) => match self.file.clone() {
                 Some(f) => return self.load_file(f),
-                // The link names a file we do not have: open on the default sample meanwhile.
-                None => Sample::Dome,
+                // The link names a file the app does not have: the view asks for it, and the
+                // link stays as it is until it comes.
+                None => return self.await_file(name.clone()),
             },
         };
         self.send(&ToWorker::LoadSample(sample), None);
     }
 
+    /// Nothing is shown but the request for the design's file `name`: what was loaded belongs
+    /// to another design.
+    fn await_file(&mut self, name: String) {
+        self.awaiting_file = Some(name);
+        self.loaded = None;
+        for v in &mut self.views {
+            v.clear();
+        }
+        self.clear_result();
+        self.error = None;
+        self.notices.retain(|n| n.origin == Origin::Link);
+        self.busy = None;
+        self.selected = None;
+        self.scalars = None;
+    }
+
+    /// Forgets the last result's verdict, moulds, surfaces and files.
+    fn clear_result(&mut self) {
+        self.verdict = None;
+        self.moulds = None;
+        self.exact_surfaces = None;
+        self.downloads.clear();
+    }
+
     fn load_file(&mut self, file: web_sys::File) {
-        self.remesh_to = None;
         // Refused before a byte is read: the worker would hold the whole file.
         if file.size() > crate::import::MAX_BYTES as f64 {
             let name = crate::text::clip(&file.name(), 120);
-            self.error = Some(format!(
-                "{name}: {:.0} bytes exceed the limit of {} ({} MiB)",
-                file.size(),
-                crate::import::MAX_BYTES,
-                crate::import::MAX_BYTES >> 20
+            self.error = Some(ShownError::new(
+                format!("{name}: {:.0} bytes exceed the limit of {} ({} MiB)", file.size(), crate::import::MAX_BYTES, crate::import::MAX_BYTES >> 20),
+                Origin::Reference,
             ));
             return;
         }
@@ -241,16 +274,20 @@ impl App {
     fn send(&mut self, msg: &ToWorker, file: Option<&web_sys::File>) {
         match &self.worker {
             Some(w) => w.send(msg, file),
-            None => self.error = Some("The pipeline worker is not running; reload the page.".into()),
+            None => self.error = Some(ShownError::new("The pipeline worker is not running; reload the page.", Origin::Worker)),
         }
+    }
+
+    fn notice(&mut self, text: impl Into<String>, origin: Origin) {
+        self.notices.push(Notice::new(text, origin));
     }
 
     /// Runs the design's stages in the worker (the curvature first; the method reuses it).
     fn run_method(&mut self) {
-        self.remesh_to = None;
-        self.missed_guarantees = None;
-        self.moulds = None;
-        self.exact_surfaces = None;
+        // A new run replaces what the last one said, and the error of the last run or file.
+        self.clear_result();
+        self.error = None;
+        self.notices.retain(|n| n.origin != Origin::Run);
         if self.loaded.is_none() {
             return;
         }
@@ -268,7 +305,6 @@ impl App {
         if self.design.color == ColorBy::Sizing {
             self.scalars = None;
         }
-        self.downloads.clear();
         let last = stages.last().map_or(StageId::Curvature, |s| s.name());
         self.busy = Some(Busy::new(last));
         self.last_request = stages.last().cloned();
@@ -302,7 +338,7 @@ impl App {
                 self.note_cancel_point();
             } else {
                 // Without shared memory the worker was replaced; its Ready reloads the design.
-                self.notices.push("Cancelled (the worker was restarted).".into());
+                self.notice("Cancelled (the worker was restarted).", Origin::Run);
             }
         }
         self.busy = None;
@@ -342,7 +378,7 @@ impl App {
             if copy.clicked() {
                 let url = self.share_url();
                 ui.ctx().copy_text(url);
-                self.notices.push("Design link copied.".into());
+                self.notice("Design link copied.", Origin::Ui);
             }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 let label = if self.backend.is_empty() { "no GPU backend".to_string() } else { self.backend.clone() };
@@ -359,15 +395,31 @@ impl App {
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
         let out = egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-            if let Some(err) = self.error.clone() {
-                self.error_box(ui, err);
+            if self.error.is_some() {
+                self.error_box(ui);
                 ui.add_space(6.0);
+            }
+            if let Some(name) = &self.awaiting_file {
+                ui.colored_label(Color32::from_rgb(240, 180, 80), RichText::new(view::drop_prompt(name)).strong());
+                ui.add_space(6.0);
+            }
+            // The verdict first: whether the result can be built is what a designer reads first.
+            if let (Some(v), None) = (&self.verdict, &self.busy) {
+                let r = panels::verdict(ui, v).rect;
+                self.verdict_rect = r;
+                ui.add_space(4.0);
+            } else {
+                self.verdict_rect = Rect::NOTHING;
             }
             self.method_section(ui);
             ui.separator();
             self.display_section(ui);
             ui.separator();
-            if let Some(k) = panels::info::show(ui, self.loaded.as_ref(), self.selected, self.design.fabrication.units) {
+            let picked = match self.awaiting_file {
+                None => panels::info::show(ui, self.loaded.as_ref(), self.selected, self.design.fabrication.units),
+                Some(_) => None,
+            };
+            if let Some(k) = picked {
                 self.send(&ToWorker::PickObject(k), None);
                 self.busy = Some(Busy::new(StageId::Import));
             }
@@ -388,26 +440,53 @@ impl App {
         self.side_panel_heights = (out.content_size.y, out.inner_rect.height());
     }
 
-    /// The error, with the remesh a method's size refusal offers.
-    fn error_box(&mut self, ui: &mut egui::Ui, err: String) {
+    /// The error, with what it offers: the remesh a method's size refusal asks for, and the
+    /// menu's other methods when a method refused its input.
+    fn error_box(&mut self, ui: &mut egui::Ui) {
+        let Some(err) = self.error.as_ref() else { return };
+        let (text, remesh_to, offers) = (err.text.clone(), err.remesh_to, self.offered_methods());
         egui::Frame::new().fill(Color32::from_rgb(90, 24, 24)).inner_margin(6.0).corner_radius(4.0).show(ui, |ui| {
-            ui.label(RichText::new(err).color(Color32::WHITE));
+            ui.label(RichText::new(text).color(Color32::WHITE));
+            if !offers.is_empty() {
+                ui.label(RichText::new("Or choose another method:").color(Color32::WHITE).small());
+                for m in offers {
+                    if ui.small_button(m.title()).on_hover_text("switch to this method and run it").clicked() {
+                        self.switch_method(m);
+                    }
+                }
+            }
             ui.horizontal(|ui| {
-                if let Some(n) = self.remesh_to {
+                if let Some(n) = remesh_to {
                     if ui.small_button(format!("Remesh to about {n} faces and run")).clicked() {
                         let m = self.design.method;
                         if let Some(v) = self.views.iter().find(|v| v.method() == m) {
                             v.remesh_to(&mut self.design, n);
                         }
-                        (self.error, self.remesh_to) = (None, None);
                         self.run_method();
                     }
                 }
                 if ui.small_button("Dismiss").clicked() {
-                    (self.error, self.remesh_to) = (None, None);
+                    self.error = None;
                 }
             });
         });
+    }
+
+    /// The menu's other methods, offered when a method refused its input.
+    fn offered_methods(&self) -> Vec<Method> {
+        let Some(refused) = self.error.as_ref().and_then(|e| e.refused_by) else { return Vec::new() };
+        Method::all().filter(|m| matches!(m, Method::Of(o) if *o != refused)).collect()
+    }
+
+    /// The design's method becomes `method`, and runs.
+    fn switch_method(&mut self, method: Method) {
+        // The colours follow the method where they were the old method's own.
+        let before = self.view().colors();
+        self.design.method = method;
+        if self.design.color == before {
+            self.design.color = self.view().colors();
+        }
+        self.run_method();
     }
 
     /// The method, the jet fit, and the method's own controls (a change reruns it).
@@ -420,13 +499,7 @@ impl App {
             }
         });
         if method != self.design.method {
-            // The colours follow the method where they were the old method's own.
-            let before = self.view().colors();
-            self.design.method = method;
-            if self.design.color == before {
-                self.design.color = self.view().colors();
-            }
-            self.run_method();
+            self.switch_method(method);
         }
         ui.label(RichText::new("Curvature by jet fitting (Sec. 2.6)").small());
         let mut jet = self.design.jet.clone();
@@ -473,21 +546,38 @@ impl App {
         });
     }
 
+    /// The result's files; a result that misses its guarantees says so above them, and each
+    /// file is marked as coming from it.
     fn downloads_section(&mut self, ui: &mut egui::Ui) {
         if self.downloads.is_empty() {
+            self.downloads_rect = Rect::NOTHING;
             return;
         }
         ui.separator();
-        ui.strong("Downloads");
+        let failed = self.verdict.as_ref().filter(|v| !v.holds());
+        let top = ui.strong("Downloads").rect;
+        if let Some(v) = failed {
+            panels::missed_above_downloads(ui, v);
+        }
+        let mut saved = None;
         ui.horizontal_wrapped(|ui| {
             for d in &self.downloads {
-                if ui.button(&d.name).on_hover_text(format!("{} bytes", d.bytes.len())).clicked() {
-                    if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
-                        self.error = Some(format!("could not save {}: {e:?}", d.name));
-                    }
+                let (label, hover) = match failed {
+                    Some(_) => (
+                        RichText::new(format!("⚠ {}", d.name)).color(panels::MISSED_COLOR),
+                        format!("{} bytes, from a result that misses its guarantees", d.bytes.len()),
+                    ),
+                    None => (RichText::new(&d.name), format!("{} bytes", d.bytes.len())),
+                };
+                if ui.button(label).on_hover_text(hover).clicked() {
+                    saved = Some(d.name.clone());
                 }
             }
         });
+        self.downloads_rect = top;
+        if let Some(name) = saved {
+            self.save_download(&name);
+        }
         if let Some(e) = &self.exact_surfaces {
             let text = RichText::new(format!("panels.step, panels.3dm: {}", e.describe())).small();
             if e.refused.is_empty() {
@@ -510,18 +600,21 @@ impl App {
             }
         });
         for n in self.notices.iter().rev().take(8) {
-            ui.label(RichText::new(n).small());
+            ui.label(RichText::new(&n.text).small());
         }
     }
 
     /// What the tests read of the side panel and the buttons they click.
     fn side_panel_state(&self) -> serde_json::Value {
-        let r = self.copy_link_rect;
+        let rect = |r: Rect| (r != Rect::NOTHING).then(|| [r.min.x, r.min.y, r.width(), r.height()]);
         serde_json::json!({
             "results_visible": self.results_visible,
             "content_height": self.side_panel_heights.0,
             "visible_height": self.side_panel_heights.1,
-            "copy_link_button": [r.min.x, r.min.y, r.width(), r.height()],
+            "width": self.side_panel_width,
+            "copy_link_button": rect(self.copy_link_rect),
+            "verdict": rect(self.verdict_rect),
+            "downloads": rect(self.downloads_rect),
         })
     }
 }
@@ -531,14 +624,7 @@ impl App {
     fn take_requests(&mut self, ui: &egui::Ui) {
         let requested: Vec<String> = self.download_requests.borrow_mut().drain(..).collect();
         for name in requested {
-            match self.downloads.iter().find(|d| d.name == name) {
-                Some(d) => {
-                    if let Err(e) = save_file(&d.name, &d.mime, &d.bytes) {
-                        self.error = Some(format!("could not save {name}: {e:?}"));
-                    }
-                }
-                None => self.notices.push(format!("no file named '{name}' to download yet")),
-            }
+            self.save_download(&name);
         }
         if std::mem::take(&mut *self.crash_requests.borrow_mut()) > 0 {
             self.send(&ToWorker::Crash, None);
@@ -551,6 +637,17 @@ impl App {
         let picked: Vec<web_sys::File> = self.picked_files.borrow_mut().drain(..).collect();
         if let Some(f) = dropped.into_iter().chain(picked).last() {
             self.load_file(f);
+        }
+    }
+
+    /// Saves the download `name`.
+    fn save_download(&mut self, name: &str) {
+        let saved = match self.downloads.iter().find(|d| d.name == name) {
+            Some(d) => save_file(&d.name, &d.mime, &d.bytes).map_err(|e| format!("could not save {name}: {e:?}")),
+            None => Err(format!("no file named '{name}' to download yet")),
+        };
+        if let Err(e) = saved {
+            self.notice(e, Origin::Ui);
         }
     }
 
@@ -572,9 +669,10 @@ impl App {
                 });
             });
         }
-        if let (None, Some(missed)) = (&self.busy, &self.missed_guarantees) {
+        if let (None, Some(v)) = (&self.busy, self.verdict.as_ref().filter(|v| !v.holds())) {
             egui::Panel::bottom("verdict").show(ui, |ui| {
-                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {missed}")).strong());
+                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {}", panels::missed_in_words(v))).strong())
+                    .on_hover_text(v.failure_text());
             });
         }
     }
@@ -584,12 +682,15 @@ impl eframe::App for App {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let started = now_ms();
         self.frames += 1;
+        self.notices.retain(|n| n.origin != Origin::Ui || started - n.since_ms < UI_NOTICE_MS);
         self.handle_messages();
         self.apply_link_if_changed();
         self.take_requests(ui);
         egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
         self.status_bars(ui);
-        egui::Panel::left("side").default_size(290.0).resizable(true).show(ui, |ui| self.side_panel(ui));
+        // One width whatever the results hold: the view does not jump when they arrive.
+        let side = egui::Panel::left("side").exact_size(SIDE_PANEL_WIDTH).resizable(false).show(ui, |ui| self.side_panel(ui));
+        self.side_panel_width = side.response.rect.width();
         let hovering = ui.input(|i| !i.raw.hovered_files.is_empty());
         egui::CentralPanel::no_frame().show(ui, |ui| {
             self.viewport(ui);

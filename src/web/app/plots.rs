@@ -129,8 +129,18 @@ pub fn key_values(ui: &mut egui::Ui, id: &str, rows: &[(&str, String)]) {
     egui::Grid::new(id).num_columns(2).show(ui, |ui| {
         for (k, v) in rows {
             ui.label(*k);
-            ui.label(v);
+            ui.label(no_nan(v));
             ui.end_row();
         }
     });
+}
+
+/// A figure as shown: a number that could not be measured reads so, never "NaN" or "inf".
+pub fn no_nan(text: &str) -> std::borrow::Cow<'_, str> {
+    let unbounded = |w: &str| w.parse::<f64>().is_ok_and(f64::is_infinite);
+    if !text.contains("NaN") && !text.split_whitespace().any(unbounded) {
+        return text.into();
+    }
+    let words: Vec<String> = text.split(' ').map(|w| if unbounded(w) { "unbounded".into() } else { w.replace("NaN", "not measured") }).collect();
+    words.join(" ").into()
 }

@@ -80,3 +80,52 @@ pub struct ScalarView {
 pub fn empty_mesh() -> MeshData {
     MeshData { generation: 0, positions: Vec::new(), normals: Vec::new(), triangles: Vec::new(), edges: Vec::new() }
 }
+
+/// What a message belongs to, which says when it goes: a message lives as long as what caused
+/// it (a new link replaces the link's notices, a new reference or file replaces everything of
+/// the old one, a new run replaces the last run's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// The design link as opened or edited.
+    Link,
+    /// The loaded reference or a file the user gave.
+    Reference,
+    /// A run of the method.
+    Run,
+    /// The worker itself (a crash): kept through the run that restores the design.
+    Worker,
+    /// A button's confirmation: goes after [`UI_NOTICE_MS`].
+    Ui,
+}
+
+/// How long a button's confirmation shows (ms).
+pub const UI_NOTICE_MS: f64 = 6000.0;
+
+/// A notice, and what it belongs to.
+pub struct Notice {
+    pub text: String,
+    pub origin: Origin,
+    pub since_ms: f64,
+}
+
+impl Notice {
+    pub fn new(text: impl Into<String>, origin: Origin) -> Self {
+        Self { text: text.into(), origin, since_ms: super::dom::now_ms() }
+    }
+}
+
+/// The error shown, what it belongs to, and what it offers.
+pub struct ShownError {
+    pub text: String,
+    pub origin: Origin,
+    /// A method refused its input's size: a remesh to about this many faces is offered.
+    pub remesh_to: Option<usize>,
+    /// The method that refused its input: the menu's other methods are offered.
+    pub refused_by: Option<crate::pipeline::protocol::MethodId>,
+}
+
+impl ShownError {
+    pub fn new(text: impl Into<String>, origin: Origin) -> Self {
+        Self { text: text.into(), origin, remesh_to: None, refused_by: None }
+    }
+}

@@ -17,6 +17,56 @@ use crate::web::viewer::camera::OrbitCamera;
 use crate::web::viewer::picking::pick_vertex;
 use crate::web::viewer::{ColorMap, Geometry, Layer, ScalarData, Style, ViewerFrame};
 
+/// What the camera fits: the reference and the bulk of the method's layers (a double click
+/// frames it), and the radius of everything drawn about its centre (the clip planes), at most
+/// [`CLIP_REACH`] × the reference's.
+pub struct Extent {
+    key: Vec<u64>,
+    pub center: Vec3,
+    pub radius: f32,
+    pub clip_radius: f32,
+}
+
+/// How far beyond the reference's radius the clip planes reach at most.
+const CLIP_REACH: f32 = 50.0;
+
+impl Extent {
+    fn of(key: Vec<u64>, layers: &[Layer], center: Vec3, radius: f32) -> Self {
+        let points: Vec<Vec3> = layers
+            .iter()
+            .filter_map(|l| match &l.geometry {
+                Geometry::Mesh(m) => Some((m, l.model)),
+                _ => None,
+            })
+            .flat_map(|(m, model)| m.positions.chunks_exact(3).map(move |p| model.transform_point3(Vec3::from_slice(p))))
+            .filter(|p| p.is_finite())
+            .collect();
+        let (mut lo, mut hi) = (center - Vec3::splat(radius), center + Vec3::splat(radius));
+        let (mut all_lo, mut all_hi) = (lo, hi);
+        if !points.is_empty() {
+            // The bulk of the layers: the 2nd to 98th percentile along each axis.
+            for axis in 0..3 {
+                let mut v: Vec<f32> = points.iter().map(|p| p[axis]).collect();
+                v.sort_by(f32::total_cmp);
+                let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
+                lo[axis] = lo[axis].min(at(0.02));
+                hi[axis] = hi[axis].max(at(0.98));
+                all_lo[axis] = all_lo[axis].min(v[0]);
+                all_hi[axis] = all_hi[axis].max(v[v.len() - 1]);
+            }
+        }
+        let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
+        let reach = (all_lo - center).abs().max((all_hi - center).abs()).length();
+        Self { key, center, radius, clip_radius: reach.clamp(radius, CLIP_REACH * radius) }
+    }
+}
+
+/// What the view says while a design waits for its file.
+pub fn drop_prompt(name: &str) -> String {
+    let name = if name.is_empty() { "your file" } else { name };
+    format!("This design uses {name}.\nDrop {name} here (or Open…) to continue it.")
+}
+
 impl App {
     /// Scalars for the current colour choice, with a robust range (2nd to 98th percentile).
     fn scalar_view(&mut self) -> Option<&ScalarView> {
@@ -49,14 +99,19 @@ impl App {
         ui.painter().rect_filled(rect, 0.0, CLEAR_COLOR);
         self.camera_input(ui, &response, rect);
         let Some(l) = &self.loaded else {
-            ui.painter().text(rect.center(), egui::Align2::CENTER_CENTER, "loading…", egui::FontId::proportional(18.0), Color32::GRAY);
+            let (text, size, color) = match &self.awaiting_file {
+                Some(name) => (drop_prompt(name), 22.0, Color32::WHITE),
+                None => ("loading…".to_string(), 18.0, Color32::GRAY),
+            };
+            ui.painter().text(rect.center(), egui::Align2::CENTER_CENTER, text, egui::FontId::proportional(size), color);
+            // The prompt is what this design shows until its file comes.
+            self.drawn |= self.awaiting_file.is_some();
             return;
         };
         if l.mesh.triangles.is_empty() {
             return;
         }
         let (mesh, center, radius) = (l.mesh.clone(), l.center, l.radius);
-        self.camera.scene_radius = radius;
         let aspect = rect.width() / rect.height().max(1.0);
         let shading = match self.design.shading {
             Shading::Flat => 0,
@@ -79,6 +134,8 @@ impl App {
             }
         }
         layers.extend(drawn.layers);
+        // The clip planes hold everything drawn, however wild a failed result's parts are.
+        self.camera.scene_radius = self.drawn_extent(&layers, center, radius).clip_radius;
         layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
         let frame = ViewerFrame {
             view_proj: self.camera.proj(aspect) * self.camera.view(),
@@ -127,14 +184,29 @@ impl App {
             }
         }
         if response.double_clicked() {
-            if let Some(l) = &self.loaded {
-                self.camera = OrbitCamera { target: l.center, ..OrbitCamera::framing(l.center, l.radius) };
+            if let Some(e) = &self.extent {
+                self.camera = OrbitCamera { scene_radius: e.clip_radius, ..OrbitCamera::framing(e.center, e.radius) };
             }
         } else if response.clicked() {
             if let Some(pos) = response.interact_pointer_pos() {
                 self.selected = self.pick(pos, rect);
             }
         }
+    }
+
+    /// The extent of the layers drawn, computed again when their meshes change.
+    fn drawn_extent(&mut self, layers: &[Layer], center: Vec3, radius: f32) -> &Extent {
+        let key: Vec<u64> = layers
+            .iter()
+            .filter_map(|l| match &l.geometry {
+                Geometry::Mesh(m) => Some(m.generation),
+                _ => None,
+            })
+            .collect();
+        if self.extent.as_ref().is_none_or(|e| e.key != key) {
+            self.extent = Some(Extent::of(key, layers, center, radius));
+        }
+        self.extent.as_ref().expect("just set")
     }
 
     /// The running stage and its progress, top left.

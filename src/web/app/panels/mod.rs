@@ -5,6 +5,7 @@
 pub mod info;
 pub mod moulds;
 
+use crate::guarantees::{Guarantee, Verdict};
 use crate::remeshing::{Sizing, SizingKind, DEFAULT_EPSILON, DEFAULT_FACES, EPSILON_RANGE, FACES_RANGE};
 
 /// ε and N as last set, so that switching the sizing kind back and forth keeps them.
@@ -82,26 +83,43 @@ pub fn graded(report: &crate::export::Report, name: &str) -> String {
     report.guarantees.iter().find(|g| g.name == name).map_or(String::new(), |g| format!(" {}", g.mark()))
 }
 
-/// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
 /// The colour of a result that misses its guarantees.
 pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);
+/// The colour of a result that meets them.
+pub const MET_COLOR: egui::Color32 = egui::Color32::from_rgb(120, 200, 120);
 
-/// The status line of a result that misses its method's guarantees, None when it meets them.
-pub fn missed_guarantees(report: &crate::export::Report) -> Option<String> {
-    (report.meets_guarantees == Some(false)).then(|| format!("The result misses its guarantees: {}", report.failure_text()))
+/// The missed guarantees in a designer's words, in one line (the status bar's).
+pub fn missed_in_words(v: &Verdict) -> String {
+    let words: Vec<String> = v.failures().map(Guarantee::in_words).collect();
+    format!("The result misses its guarantees: {}", words.join("; "))
 }
 
-/// The verdict at the top of a method's results: the missed guarantees in red, or a check mark.
-pub fn verdict(ui: &mut egui::Ui, report: &crate::export::Report) {
-    match missed_guarantees(report) {
-        Some(text) => ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {text}")).strong()),
-        None if report.meets_guarantees == Some(true) => {
-            ui.colored_label(egui::Color32::from_rgb(120, 200, 120), "✔ Meets every guarantee (see the figures below)")
+/// The verdict at the top of the results: each missed guarantee in a designer's words (its
+/// figure as the report names it on hover), or a check mark.
+pub fn verdict(ui: &mut egui::Ui, v: &Verdict) -> egui::Response {
+    ui.scope(|ui| {
+        if v.holds() {
+            ui.colored_label(MET_COLOR, "✔ Meets every guarantee (see the figures below)");
+            return;
         }
-        None => return,
-    };
+        ui.colored_label(MISSED_COLOR, egui::RichText::new("✘ The result misses its guarantees:").strong());
+        for g in v.failures() {
+            ui.colored_label(MISSED_COLOR, format!("• {}", g.in_words())).on_hover_text(g.to_string());
+        }
+    })
+    .response
 }
 
+/// Above a failed result's downloads: that they come from it, and its first miss.
+pub fn missed_above_downloads(ui: &mut egui::Ui, v: &Verdict) {
+    let first = v.failures().next().map_or(String::new(), Guarantee::in_words);
+    let more = v.failures().count().saturating_sub(1);
+    let text = if more > 0 { format!("{first}, and {more} more (see the top)") } else { first };
+    ui.colored_label(MISSED_COLOR, egui::RichText::new("✘ From a result that misses its guarantees; build from it at your own risk:").small());
+    ui.colored_label(MISSED_COLOR, egui::RichText::new(text).small()).on_hover_text(v.failure_text());
+}
+
+/// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
 pub fn warnings(ui: &mut egui::Ui, warnings: &[String]) {
     for w in warnings {
         ui.colored_label(egui::Color32::from_rgb(240, 180, 80), w);

@@ -28,7 +28,7 @@ use crate::sq::params::{
 use crate::sq::report::SqSection;
 use crate::sq::sq_mesh::SqMeshFigures;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
-use crate::web::app::panels::{graded, max_distance_slider, verdict, warnings};
+use crate::web::app::panels::{graded, max_distance_slider, warnings};
 use crate::web::app::plots::{key_values, term_plot};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::colormap;
@@ -59,7 +59,8 @@ pub struct SqView {
     pub axes: Option<Arc<MeshData>>,
     /// (iteration, step, energy of every term and the total).
     pub energy: Vec<(u32, String, Vec<Energy>)>,
-    pub refused_h: Option<Arc<ScalarData>>,
+    /// H at the vertices when SQ refused its sign, and its diverging colour map's range.
+    pub refused_h: Option<ColorMap>,
     pub summary: Option<SqFinished>,
 }
 
@@ -191,7 +192,10 @@ impl MethodView for SqMethod {
         if stage == REFUSED_STAGE {
             let values = find(fields, field::MEAN_CURVATURE).and_then(Field::as_f32).map(<[f32]>::to_vec).unwrap_or_default();
             *generation += 1;
-            v.refused_h = Some(Arc::new(ScalarData { generation: *generation, values }));
+            // A robust range, so that a few peaks do not wash the map out: the H = 0 curves show
+            // between the blue and the red.
+            let range = colormap::symmetric_range(&values);
+            v.refused_h = Some(ColorMap { scalars: Arc::new(ScalarData { generation: *generation, values }), range, diverging: true });
         } else {
             v.install(fields, iteration, generation);
         }
@@ -221,10 +225,7 @@ impl MethodView for SqMethod {
             return Drawn::reference_only();
         };
         // Refused for the sign of H (Sec. 6.3): the surface shows where H > 0 and H < 0.
-        let refused_h = v.refused_h.clone().map(|h| {
-            let m = h.values.iter().fold(0.0f32, |m, x| m.max(x.abs())).max(1e-12);
-            ColorMap { scalars: h, range: (-m, m), diverging: true }
-        });
+        let refused_h = v.refused_h.clone();
         let legend = match &refused_h {
             Some(cm) => Some(Legend::Scale { title: "H (SQ needs one sign)", range: cm.range, diverging: true }),
             None if self.display.cross_field && v.cross_field_arms > 0 => {
@@ -448,7 +449,6 @@ fn results(ui: &mut egui::Ui, v: &SqView) {
         }
         return;
     };
-    verdict(ui, &sum.report);
     congruence_figures(ui, sum);
     mesh_figures(ui, sum);
     warnings(ui, &sum.report.warnings);

@@ -24,7 +24,7 @@ const REMESHED_STAGE: StageId = StageId::Method(MethodId::StAdapted, Part::Remes
 use crate::remeshing::Sizing;
 use crate::st_adapted::params::StAdaptedParams;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
-use crate::web::app::panels::{sizing_controls, verdict, warnings, SizingMemory};
+use crate::web::app::panels::{sizing_controls, warnings, SizingMemory};
 use crate::web::app::plots::{energy_plot, key_values};
 use crate::web::app::state::{mesh_from_fields, MESH_FIELDS, PANEL_FIELDS};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
@@ -227,7 +227,6 @@ fn results(ui: &mut egui::Ui, a: &StAdaptedView) {
         energy_plot(ui, &a.energy);
     }
     let Some(sum) = &a.summary else { return };
-    verdict(ui, &sum.report);
     let g = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{v:.3e}"));
     let mut rows = vec![
         ("panels", sum.report.output.panels.to_string()),

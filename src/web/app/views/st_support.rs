@@ -25,7 +25,7 @@ use crate::remeshing::Sizing;
 use crate::st_support::report::StSupportSection;
 use crate::st_support::StSupportParams;
 use crate::web::app::panels::moulds::{before_after, optimize_moulds_checkbox, MouldMeshes};
-use crate::web::app::panels::{max_distance_slider, sizing_controls, verdict, warnings, SizingMemory};
+use crate::web::app::panels::{max_distance_slider, sizing_controls, warnings, SizingMemory};
 use crate::web::app::plots::{histogram, key_values};
 use crate::web::app::state::{mesh_from_fields, AXES_FIELDS, PANEL_FIELDS, SUPPORT_FIELDS};
 use crate::web::viewer::{Geometry, Layer, MeshData, Style};
@@ -216,7 +216,6 @@ fn results(ui: &mut egui::Ui, view: &StSupportView) {
     };
     ui.separator();
     ui.strong("ST mesh with support structure");
-    verdict(ui, &sum.report);
     let omega = match sum.omega {
         AbsoluteSphere::Sphere { center, r2 } => {
             format!("m = ({:.3}, {:.3}, {:.3})\nR² = {:.4}{}", center.x, center.y, center.z, r2, if r2 < 0.0 { " (imaginary Ω)" } else { "" })
