@@ -132,23 +132,31 @@ impl fmt::Display for Guarantee {
     }
 }
 
-/// A share of the diagonal (or of an area) as a percentage a designer reads: "2.6 %",
-/// "0.0031 %", "3.1e-9 %".
-fn percent(x: f64) -> String {
+/// A share of the diagonal (or of an area) as a percentage a designer reads, to `digits`
+/// significant digits: "2.6 %", "0.0031 %", "3.1e-9 %".
+fn percent_to(x: f64, digits: usize) -> String {
     let p = 100.0 * x;
     if !p.is_finite() {
-        "an unmeasurable amount".into()
-    } else if p.abs() >= 10.0 {
-        format!("{p:.0} %")
-    } else if p.abs() >= 0.1 {
-        format!("{p:.1} %")
-    } else if p.abs() >= 1e-6 {
-        // Two significant digits.
-        let digits = (1.0 - p.abs().log10().floor()) as usize;
-        format!("{p:.digits$} %")
-    } else {
-        format!("{p:.1e} %")
+        return "an unmeasurable amount".into();
     }
+    if p != 0.0 && p.abs() < 1e-6 {
+        return format!("{:.*e} %", digits - 1, p);
+    }
+    let magnitude = if p == 0.0 { 0 } else { p.abs().log10().floor() as i32 };
+    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+    format!("{p:.decimals$} %")
+}
+
+/// A figure and its limit as percentages ([`percent_to`]), with enough digits that a figure
+/// that differs from its limit does not read as it.
+fn percents(x: f64, limit: f64) -> (String, String) {
+    let at = |d| (percent_to(x, d), percent_to(limit, d));
+    (2..7).map(at).find(|(a, b)| a != b || x == limit).unwrap_or_else(|| at(7))
+}
+
+/// A share as a percentage to two significant digits.
+fn percent(x: f64) -> String {
+    percent_to(x, 2)
 }
 
 /// An angle in degrees, to a tenth.
@@ -165,7 +173,8 @@ impl Guarantee {
         let (m, l) = (self.measured, self.limit);
         let n = format!("{m:.0}");
         // "Exact" limits are the methods' numerical zero (≤ 1e-8 of the diagonal).
-        let share = if self.bound == Bound::AtMost && l <= 1e-8 { "must be exact".to_string() } else { format!("must be at most {}", percent(l)) };
+        let (pm, pl) = percents(m, l);
+        let share = if self.bound == Bound::AtMost && l <= 1e-8 { "must be exact".to_string() } else { format!("must be at most {pl}") };
         let most_deg = format!("must be at most {}", degrees(l));
         let least_deg = format!("must be at least {}", degrees(l));
         let none = "must be none".to_string();
@@ -204,17 +213,14 @@ impl Guarantee {
             "max_distance_to_reference" => (
                 "the panels' distance to the design surface",
                 format!(
-                    "panels are up to {} of the model's size from the design surface{}",
-                    percent(m),
+                    "panels are up to {pm} of the model's size from the design surface{}",
                     self.in_model_units.as_ref().map_or(String::new(), |t| format!(" ({t})"))
                 ),
-                format!("must be at most {}", percent(l)),
+                format!("must be at most {pl}"),
             ),
-            "coverage" => (
-                "how much of the surface the panels cover",
-                format!("the panels cover {} of the surface", percent(m)),
-                format!("must be at least {}", percent(l)),
-            ),
+            "coverage" => {
+                ("how much of the surface the panels cover", format!("the panels cover {pm} of the surface"), format!("must be at least {pl}"))
+            }
             "folded_faces" => ("folded faces", format!("{n} faces are folded over"), none),
             "panels_with_crossing_arcs" => ("panels whose arcs cross", format!("{n} panels have edge arcs that cross"), none),
             "panels_without_exact_surface" => ("panels without an exact surface", format!("{n} panels have no exact surface for CAD"), none),
@@ -319,6 +325,10 @@ mod tests {
         assert_eq!(nan.in_words(), "the support planes' angle could not be measured: the planes meet in no line (must be at least 75°)");
         let d = Guarantee::at_most("max_distance_to_reference", 0.0123, 0.01, "of the diagonal").with_model_units("0.123 m, limit 0.1 m");
         assert_eq!(d.in_words(), "panels are up to 1.2 % of the model's size from the design surface (0.123 m, limit 0.1 m) (must be at most 1.0 %)");
+        let close = Guarantee::at_most("max_distance_to_reference", 0.001_14, 0.000_96, "of the diagonal");
+        assert!(close.in_words().contains("up to 0.11 %") && close.in_words().contains("at most 0.096 %"), "{}", close.in_words());
+        let closer = Guarantee::at_least("coverage", 0.9496, 0.95, "of the patch area");
+        assert_eq!(closer.in_words(), "the panels cover 94.96 % of the surface (must be at least 95.00 %)");
         assert_eq!(Guarantee::count_at_most("panels_with_crossing_arcs", 3, 0).in_words(), "3 panels have edge arcs that cross (must be none)");
         let words = [residual, tiny, angle, nan, d].map(|g| g.in_words());
         assert!(words.iter().all(|w| !w.contains("NaN") && !w.contains("inf")), "{words:?}");

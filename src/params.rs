@@ -223,13 +223,6 @@ impl LinkReader {
         }
     }
 
-    /// Marks `key` as invalid (a value that parsed but that the design cannot take).
-    pub fn invalid(&mut self, key: &str) {
-        if let Some(i) = self.pairs.iter().rposition(|(k, _)| k == key) {
-            self.status[i] = FieldStatus::Invalid;
-        }
-    }
-
     /// Every field in the link's order, with what became of it.
     pub fn fields(&self) -> impl Iterator<Item = (&str, &str, FieldStatus)> {
         self.pairs.iter().zip(&self.status).map(|((k, v), s)| (k.as_str(), v.as_str(), *s))

@@ -57,10 +57,6 @@ macro_rules! methods {
                 match self { $(MethodId::$variant => <$stage as Method>::LABEL),* }
             }
 
-            pub fn from_key(key: &str) -> Option<MethodId> {
-                Self::ALL.iter().copied().find(|m| m.key() == key)
-            }
-
             /// The method's default parameters.
             pub fn default_params(self) -> MethodParams {
                 match self { $(MethodId::$variant => MethodParams::$variant(Default::default())),* }

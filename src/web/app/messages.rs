@@ -68,10 +68,7 @@ impl App {
                 // file being loaded, or to the run of the method that refused.
                 let stage = self.busy.take().map(|b| b.stage);
                 self.file_in_flight = None;
-                let refused_by = match stage {
-                    Some(StageId::Method(m, _)) => Some(m),
-                    _ => None,
-                };
+                let refused_by = stage.and_then(StageId::method);
                 let origin = if stage == Some(StageId::Import) { Origin::Reference } else { Origin::Run };
                 self.error = Some(ShownError { remesh_to, refused_by, ..ShownError::new(message, origin) });
             }

@@ -671,7 +671,7 @@ impl App {
         }
         if let (None, Some(v)) = (&self.busy, self.verdict.as_ref().filter(|v| !v.holds())) {
             egui::Panel::bottom("verdict").show(ui, |ui| {
-                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {}", panels::missed_in_words(v))).strong())
+                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {}", panels::missed_line(v))).strong())
                     .on_hover_text(v.failure_text());
             });
         }

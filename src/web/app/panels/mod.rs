@@ -88,10 +88,13 @@ pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);
 /// The colour of a result that meets them.
 pub const MET_COLOR: egui::Color32 = egui::Color32::from_rgb(120, 200, 120);
 
-/// The missed guarantees in a designer's words, in one line (the status bar's).
-pub fn missed_in_words(v: &Verdict) -> String {
-    let words: Vec<String> = v.failures().map(Guarantee::in_words).collect();
-    format!("The result misses its guarantees: {}", words.join("; "))
+/// The status bar's line: the first missed guarantee in a designer's words, and how many more.
+pub fn missed_line(v: &Verdict) -> String {
+    let first = v.failures().next().map_or(String::new(), Guarantee::in_words);
+    match v.failures().count() {
+        0 | 1 => format!("The result misses its guarantees: {first}"),
+        n => format!("The result misses {n} guarantees: {first}, and {} more (see the side panel)", n - 1),
+    }
 }
 
 /// The verdict at the top of the results: each missed guarantee in a designer's words (its
@@ -110,13 +113,10 @@ pub fn verdict(ui: &mut egui::Ui, v: &Verdict) -> egui::Response {
     .response
 }
 
-/// Above a failed result's downloads: that they come from it, and its first miss.
+/// Above a failed result's downloads: that they come from it, and its misses.
 pub fn missed_above_downloads(ui: &mut egui::Ui, v: &Verdict) {
-    let first = v.failures().next().map_or(String::new(), Guarantee::in_words);
-    let more = v.failures().count().saturating_sub(1);
-    let text = if more > 0 { format!("{first}, and {more} more (see the top)") } else { first };
-    ui.colored_label(MISSED_COLOR, egui::RichText::new("✘ From a result that misses its guarantees; build from it at your own risk:").small());
-    ui.colored_label(MISSED_COLOR, egui::RichText::new(text).small()).on_hover_text(v.failure_text());
+    ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {}; build from these files at your own risk.", missed_line(v))).small())
+        .on_hover_text(v.failure_text());
 }
 
 /// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
