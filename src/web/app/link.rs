@@ -34,17 +34,22 @@ impl App {
         if reference_changed {
             self.load_design_reference();
         } else {
-            if let Some(c) = self.camera_from_link.take() {
-                self.camera.yaw = c.yaw as f32;
-                self.camera.pitch = c.pitch as f32;
-                self.camera.distance = c.distance as f32;
-                self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
-            }
+            self.apply_link_camera();
             if rerun {
                 self.run_method();
             } else if regroup {
                 self.regroup();
             }
+        }
+    }
+
+    /// The camera the link holds, once.
+    pub(super) fn apply_link_camera(&mut self) {
+        if let Some(c) = self.camera_from_link.take() {
+            self.camera.yaw = c.yaw as f32;
+            self.camera.pitch = c.pitch as f32;
+            self.camera.distance = c.distance as f32;
+            self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
         }
     }
 

@@ -202,12 +202,7 @@ impl App {
         } else {
             self.camera = OrbitCamera::framing(l.center, l.radius);
         }
-        if let Some(c) = self.camera_from_link.take() {
-            self.camera.yaw = c.yaw as f32;
-            self.camera.pitch = c.pitch as f32;
-            self.camera.distance = c.distance as f32;
-            self.camera.target = Vec3::new(c.target[0] as f32, c.target[1] as f32, c.target[2] as f32);
-        }
+        self.apply_link_camera();
         self.busy = None;
         // The run that restores a crashed worker's design keeps its message.
         let kept = if restored { self.error.take().filter(|e| e.origin == Origin::Worker) } else { None };
