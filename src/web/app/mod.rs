@@ -88,7 +88,7 @@ pub struct App {
     selected: Option<usize>,
     scalars: Option<ScalarView>,
     /// What the camera fits of the layers drawn.
-    extent: Option<view::Extent>,
+    extent: Option<state::Extent>,
     generation: u64,
     backend: String,
     frames: u64,
@@ -400,7 +400,7 @@ impl App {
                 ui.add_space(6.0);
             }
             if let Some(name) = &self.awaiting_file {
-                ui.colored_label(Color32::from_rgb(240, 180, 80), RichText::new(view::drop_prompt(name)).strong());
+                ui.colored_label(Color32::from_rgb(240, 180, 80), RichText::new(state::drop_prompt(name)).strong());
                 ui.add_space(6.0);
             }
             // The verdict first: whether the result can be built is what a designer reads first.

@@ -11,7 +11,7 @@ use crate::design_link::ColorBy;
 use crate::pipeline::fields::{field, find, Field};
 use crate::pipeline::protocol::ReferenceInfo;
 use crate::pipeline::protocol::{StageId, StageProgress};
-use crate::web::viewer::{MeshData, ScalarData};
+use crate::web::viewer::{Geometry, Layer, MeshData, ScalarData};
 
 /// The loaded reference and its curvature.
 pub struct Scene {
@@ -128,4 +128,54 @@ impl ShownError {
     pub fn new(text: impl Into<String>, origin: Origin) -> Self {
         Self { text: text.into(), origin, remesh_to: None, refused_by: None }
     }
+}
+
+/// What the camera fits: the reference and the bulk of the method's layers (a double click
+/// frames it), and the radius of everything drawn about its centre (the clip planes), at most
+/// [`CLIP_REACH`] × the reference's.
+pub struct Extent {
+    pub key: Vec<u64>,
+    pub center: Vec3,
+    pub radius: f32,
+    pub clip_radius: f32,
+}
+
+/// How far beyond the reference's radius the clip planes reach at most.
+const CLIP_REACH: f32 = 50.0;
+
+impl Extent {
+    pub fn of(key: Vec<u64>, layers: &[Layer], center: Vec3, radius: f32) -> Self {
+        let points: Vec<Vec3> = layers
+            .iter()
+            .filter_map(|l| match &l.geometry {
+                Geometry::Mesh(m) => Some((m, l.model)),
+                _ => None,
+            })
+            .flat_map(|(m, model)| m.positions.chunks_exact(3).map(move |p| model.transform_point3(Vec3::from_slice(p))))
+            .filter(|p| p.is_finite())
+            .collect();
+        let (mut lo, mut hi) = (center - Vec3::splat(radius), center + Vec3::splat(radius));
+        let (mut all_lo, mut all_hi) = (lo, hi);
+        if !points.is_empty() {
+            // The bulk of the layers: the 2nd to 98th percentile along each axis.
+            for axis in 0..3 {
+                let mut v: Vec<f32> = points.iter().map(|p| p[axis]).collect();
+                v.sort_by(f32::total_cmp);
+                let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
+                lo[axis] = lo[axis].min(at(0.02));
+                hi[axis] = hi[axis].max(at(0.98));
+                all_lo[axis] = all_lo[axis].min(v[0]);
+                all_hi[axis] = all_hi[axis].max(v[v.len() - 1]);
+            }
+        }
+        let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
+        let reach = (all_lo - center).abs().max((all_hi - center).abs()).length();
+        Self { key, center, radius, clip_radius: reach.clamp(radius, CLIP_REACH * radius) }
+    }
+}
+
+/// What the view says while a design waits for its file.
+pub fn drop_prompt(name: &str) -> String {
+    let name = if name.is_empty() { "your file" } else { name };
+    format!("This design uses {name}.\nDrop {name} here (or Open…) to continue it.")
 }
