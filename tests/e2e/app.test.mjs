@@ -721,11 +721,13 @@ for (const project of PROJECTS) {
         let s = await waitForState(app, 'SQ refuses the dome mesh', (s) => /B-spline/.test(String(s.error)) && !s.busy && s.curvature_ready, { timeout: T.load });
         assert.deepEqual(s.error_offers, ['ST, adapted face size (Sec. 3)', 'ST with support structure (Sec. 4)'], 'the menu names of the other methods');
         const red = await measureViewport(app, s, 'sq-refused-mesh');
+        const width = s.side_panel.width;
         await editLink(app, 'v=1&sample=dome&method=st-support');
         s = await waitForState(app, 'st-support done, no error', (s) => s.st_support && s.st_support.ready && !s.busy, { timeout: T.load });
         assert.equal(s.error, null, 'the refusal of the last run is gone');
         assert.deepEqual(s.error_offers, []);
         assert.ok(s.side_panel.verdict, 'the new verdict shows at the top');
+        assert.equal(s.side_panel.width, width, 'the side panel keeps its width when results arrive');
         assertDrawn(await measureViewport(app, s, 'st-support-after-error'), 'the new result');
         t.diagnostic(`viewport before ${red.file}`);
         assert.deepEqual(app.pageErrors, [], 'uncaught page errors');
