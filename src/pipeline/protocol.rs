@@ -190,21 +190,27 @@ impl StageId {
         StageId::Method(method, Part::Main)
     }
 
-    /// The key on the wire ("st-support", "st.sizing", "sq.refused").
+    /// The key on the wire ("st-support", "st.sizing", "sq.refused"), as [`fmt::Display`]
+    /// writes it.
     pub fn key(self) -> String {
-        match self {
-            StageId::Import => "import".into(),
-            StageId::Reference => "reference".into(),
-            StageId::Curvature => "curvature".into(),
-            StageId::Method(m, Part::Main) => m.key().into(),
-            StageId::Method(m, part) => format!("{}.{}", m.key(), part.suffix()),
-        }
+        self.to_string()
     }
 
+    /// The stage of a key on the wire, read without building any key.
     pub fn from_key(key: &str) -> Option<StageId> {
-        let fixed = [StageId::Import, StageId::Reference, StageId::Curvature];
-        let methods = MethodId::ALL.iter().flat_map(|&m| Part::ALL.map(|p| StageId::Method(m, p)));
-        fixed.into_iter().chain(methods).find(|s| s.key() == key)
+        match key {
+            "import" => return Some(StageId::Import),
+            "reference" => return Some(StageId::Reference),
+            "curvature" => return Some(StageId::Curvature),
+            _ => {}
+        }
+        let (method, suffix) = match key.split_once('.') {
+            Some((_, "")) => return None,
+            Some(pair) => pair,
+            None => (key, ""),
+        };
+        let method = MethodId::ALL.iter().copied().find(|m| m.key() == method)?;
+        Part::ALL.into_iter().find(|p| p.suffix() == suffix).map(|part| StageId::Method(method, part))
     }
 
     /// The method the stage belongs to, if any.
@@ -218,19 +224,25 @@ impl StageId {
 
 impl fmt::Display for StageId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.key())
+        match self {
+            StageId::Import => f.write_str("import"),
+            StageId::Reference => f.write_str("reference"),
+            StageId::Curvature => f.write_str("curvature"),
+            StageId::Method(m, Part::Main) => f.write_str(m.key()),
+            StageId::Method(m, part) => write!(f, "{}.{}", m.key(), part.suffix()),
+        }
     }
 }
 
 impl PartialEq<str> for StageId {
     fn eq(&self, other: &str) -> bool {
-        self.key() == other
+        StageId::from_key(other) == Some(*self)
     }
 }
 
 impl Serialize for StageId {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&self.key())
+        s.collect_str(self)
     }
 }
 
@@ -560,5 +572,9 @@ mod tests {
         assert_eq!(StageId::of(MethodId::StSupport).key(), "st-support");
         assert_eq!(StageId::Method(MethodId::StAdapted, Part::Sizing).key(), "st.sizing");
         assert!(serde_json::from_str::<StageId>("\"st.bogus\"").is_err());
+        for bad in ["st.", ".sizing", "sq.refused.x", "", "bogus"] {
+            assert_eq!(StageId::from_key(bad), None, "{bad}");
+        }
+        assert!(StageId::Method(MethodId::Sq, Part::Refused) == *"sq.refused");
     }
 }
