@@ -130,6 +130,8 @@ use crate::dummy::params::DummyParams;
 use crate::dummy::report::DummySection;
 use crate::dummy::{compute, guarantees, DummyError, DummyResult};
 use crate::export::{report_file, Report};
+use crate::panels::moulds::MouldAssignment;
+use crate::pipeline::fields::Field;
 use crate::pipeline::method::{Computed, Exported, Method, Request};
 use crate::pipeline::sink::{report, Sink};
 use crate::progress::Clock;
@@ -164,7 +166,11 @@ impl Method for DummyStage {
         report.set_section(&DummySection { faces: result.faces });
         report.set_verdict(&guarantees::measure(result));
         let files = vec![report_file(&report)];
-        Exported { report, files, display: Vec::new() }
+        Exported { report, files, moulds: None }
+    }
+
+    fn display(_result: &DummyResult, _moulds: Option<&MouldAssignment>) -> Vec<Field> {
+        Vec::new()
     }
 
     fn summary(_result: &DummyResult, report: Report) -> DummySummary {

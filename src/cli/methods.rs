@@ -102,7 +102,7 @@ impl Sink for Collect<'_> {
         self.clock.now()
     }
 
-    fn wants_live_snapshots(&self) -> bool {
+    fn wants_snapshots(&self) -> bool {
         false
     }
 }

@@ -17,7 +17,7 @@ use super::sink::Sink;
 use super::stages::StageError;
 use crate::congruence::central_spheres::JetParams;
 use crate::export::{ExportFile, Report};
-use crate::panels::moulds::Fabrication;
+use crate::panels::moulds::{Fabrication, MouldAssignment};
 use crate::params::LinkFields;
 use crate::progress::Clock;
 use crate::reference::Reference;
@@ -50,12 +50,12 @@ pub struct Computed<R> {
     pub iteration: u32,
 }
 
-/// What an export delivers: the report (with the run's verdict), the files, and the fields of
-/// the final snapshot (the panels in their moulds' colours).
+/// What an export delivers: the report (with the run's verdict), the files, and the moulds it
+/// assigned the panels (the final snapshot shows the panels in their colours).
 pub struct Exported {
     pub report: Report,
     pub files: Vec<ExportFile>,
-    pub display: Vec<Field>,
+    pub moulds: Option<MouldAssignment>,
 }
 
 /// A method as the pipeline runs it.
@@ -84,9 +84,13 @@ pub trait Method: 'static {
         sink: &mut dyn Sink,
     ) -> Result<Computed<Self::Result>, StageError>;
 
-    /// The report, the files and the final display fields of `result` for `request`'s
-    /// fabrication settings. The verdict in the report is measured here, on the delivered output.
+    /// The report, the files and the moulds of `result` for `request`'s fabrication settings.
+    /// The verdict in the report is measured here, on the delivered output.
     fn export(reference: &Reference, result: &Self::Result, request: &Request<Self::Params>, clock: Clock) -> Exported;
+
+    /// The fields of the final snapshot of `result`, its panels in the colours of `moulds`: built
+    /// only for a sink that shows snapshots.
+    fn display(result: &Self::Result, moulds: Option<&MouldAssignment>) -> Vec<Field>;
 
     /// The summary of a run whose export made `report`.
     fn summary(result: &Self::Result, report: Report) -> Self::Summary;
@@ -127,8 +131,10 @@ pub fn reexport<M: Method>(
     clock: Clock,
     sink: &mut dyn Sink,
 ) -> Report {
-    let Exported { report, files, display } = M::export(reference, &computed.result, request, clock);
-    sink.snapshot(Part::Main, computed.iteration, display);
+    let Exported { report, files, moulds } = M::export(reference, &computed.result, request, clock);
+    if sink.wants_snapshots() {
+        sink.snapshot(Part::Main, computed.iteration, M::display(&computed.result, moulds.as_ref()));
+    }
     sink.files(files);
     report
 }

@@ -17,9 +17,9 @@ pub trait Sink {
     fn cancel_requested(&mut self) -> bool;
     /// Milliseconds from an arbitrary origin.
     fn now_ms(&self) -> f64;
-    /// Whether live snapshots are wanted while the stage runs (the CLI shows none: the stages
-    /// then skip building them). The final snapshot and the files are always sent.
-    fn wants_live_snapshots(&self) -> bool {
+    /// Whether snapshots are wanted, live while the stage runs and the final one (the CLI shows
+    /// none: the stages then skip building them). The files are always sent.
+    fn wants_snapshots(&self) -> bool {
         true
     }
 }

@@ -117,16 +117,20 @@ impl Method for SqStage {
     fn export(reference: &Reference, result: &SqResult, request: &Request<SqParams>, clock: Clock) -> Exported {
         let segments = CongruenceSegments::of(&result.congruence);
         let (report, files, moulds) = exported(reference, result, request, &segments, clock);
-        let mut display = display_fields(&segments);
+        Exported { report, files, moulds }
+    }
+
+    fn display(result: &SqResult, moulds: Option<&MouldAssignment>) -> Vec<Field> {
+        let mut display = display_fields(&CongruenceSegments::of(&result.congruence));
         if let Some(q) = &result.quad_mesh {
             let mesh = result.sq_mesh.as_ref().map_or(&q.mesh, |f| &f.mesh.sphere_mesh.mesh);
             display.push(segments_field(field::SQ_QUAD_MESH, &mesh_edge_segments(mesh)));
         }
-        if let (Some(f), Some(moulds)) = (&result.sq_mesh, &moulds) {
+        if let (Some(f), Some(moulds)) = (&result.sq_mesh, moulds) {
             display.extend(result_panel_fields(&f.mesh.panels, moulds));
             display.extend(support_fields(&f.mesh.support.geometry, &f.mesh.support.axis_segments()));
         }
-        Exported { report, files, display }
+        display
     }
 
     fn summary(_result: &SqResult, report: Report) -> SqSummary {
@@ -235,7 +239,7 @@ struct Stream<'a> {
 
 impl<'a> Stream<'a> {
     fn new(sink: &'a mut dyn Sink, params: &'a SqParams, diag: f64) -> Self {
-        let live = sink.wants_live_snapshots();
+        let live = sink.wants_snapshots();
         let [warm, full, projection] = params.sphere_iterations;
         let later = match params.until {
             Until::Congruence => 0,

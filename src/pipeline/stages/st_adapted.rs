@@ -9,6 +9,7 @@ use crate::export::{report_file, Report};
 use crate::geometry::mesh::TriMesh;
 use crate::panels::build_live_panels;
 use crate::panels::edge_arcs::EdgeArcs;
+use crate::panels::moulds::MouldAssignment;
 use crate::panels::sphere_mesh::{BoundaryArcRule, SphereMesh};
 use crate::pipeline::fields::{field, Energy, Field, Part};
 use crate::pipeline::method::{Computed, Exported, Method, Request};
@@ -62,7 +63,7 @@ impl Method for StAdaptedStage {
         let params = &core_params(request);
         let start = sink.now_ms();
         let diag = reference.diagonal();
-        let live = sink.wants_live_snapshots();
+        let live = sink.wants_snapshots();
         let mut last_snapshot = f64::NEG_INFINITY;
         let mut remeshed_triangles: Vec<[u32; 3]> = Vec::new();
         let mut on_event = |e: StAdaptedEvent| {
@@ -139,7 +140,11 @@ impl Method for StAdaptedStage {
         .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
         let (report, mut files, moulds) = export_panels(reference, export, clock);
         files.push(report_file(&report));
-        Exported { display: result_panel_fields(&result.panels, &moulds), report, files }
+        Exported { report, files, moulds: Some(moulds) }
+    }
+
+    fn display(result: &StAdaptedResult, moulds: Option<&MouldAssignment>) -> Vec<Field> {
+        moulds.map_or_else(Vec::new, |m| result_panel_fields(&result.panels, m))
     }
 
     fn summary(result: &StAdaptedResult, report: Report) -> StAdaptedSummary {

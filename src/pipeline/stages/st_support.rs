@@ -94,7 +94,11 @@ impl Method for StSupportStage {
         .with_snapping(Snapping::of(result.moulds.as_ref().map(|m| &m.snap)));
         let (report, mut files, moulds) = export_panels(reference, export, clock);
         files.push(report_file(&report));
-        Exported { display: display_fields(result, &moulds), report, files }
+        Exported { report, files, moulds: Some(moulds) }
+    }
+
+    fn display(result: &StSupportResult, moulds: Option<&MouldAssignment>) -> Vec<Field> {
+        moulds.map_or_else(Vec::new, |m| display_fields(result, m))
     }
 
     fn summary(result: &StSupportResult, report: Report) -> StSupportSummary {
