@@ -43,9 +43,9 @@ struct AutomationState<'a> {
     error_offers: Vec<&'static str>,
     /// The missed guarantees of the last result as the report names them, None when it meets
     /// them (or there is none).
-    missed_guarantees: Option<String>,
+    missed_guarantees: Option<&'a str>,
     /// The same in a designer's words, as the side panel and the status bar show them.
-    missed_in_words: Vec<String>,
+    missed_in_words: Vec<&'a str>,
     /// The downloads are marked as coming from a result that misses its guarantees.
     downloads_marked_failed: bool,
     /// The design's file the view asks for (a link that names a file the app does not have).
@@ -94,7 +94,7 @@ impl App {
         let info = self.loaded.as_ref().map(|l| &l.info);
         let stats = info.map(|i| i.stats).unwrap_or_default();
         let vp = self.viewport;
-        let missed = self.verdict.as_ref().filter(|v| !v.holds());
+        let missed = self.verdict.as_ref().filter(|v| !v.holds);
         let state = AutomationState {
             ready: self.drawn,
             backend: &self.backend,
@@ -115,8 +115,8 @@ impl App {
             jet_degree: self.design.jet.degree,
             error: self.error.as_ref().map(|e| e.text.as_str()),
             error_offers: self.offered_methods().into_iter().map(|m| m.title()).collect(),
-            missed_guarantees: missed.map(|v| v.failure_text()),
-            missed_in_words: missed.map_or(Vec::new(), |v| v.failures().map(|g| g.in_words()).collect()),
+            missed_guarantees: missed.map(|v| v.technical.as_str()),
+            missed_in_words: missed.map_or(Vec::new(), |v| v.misses.iter().map(|m| m.0.as_str()).collect()),
             downloads_marked_failed: missed.is_some() && !self.downloads.is_empty(),
             awaiting_file: self.awaiting_file.as_deref(),
             moulds: self.moulds.as_ref().map(|m| (m.count, m.tolerance, m.snap.snapped)),

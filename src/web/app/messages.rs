@@ -161,7 +161,7 @@ impl App {
             }
         } else if let Some(v) = self.views.iter_mut().find(|v| v.owns(stage)) {
             if let Some(report) = v.finished(result) {
-                self.verdict = report.meets_guarantees.is_some().then(|| crate::guarantees::Verdict::new(report.guarantees.clone()));
+                self.verdict = report.meets_guarantees.is_some().then(|| super::panels::ShownVerdict::of(&report.guarantees));
                 self.moulds = report.moulds;
                 self.exact_surfaces = report.exact_surfaces;
             }

@@ -56,7 +56,7 @@ pub struct App {
     /// The design link names a file the app does not have: the view asks for it by name.
     awaiting_file: Option<String>,
     /// The verdict of the last result: its method's guarantees, each measured on the result.
-    verdict: Option<crate::guarantees::Verdict>,
+    verdict: Option<panels::ShownVerdict>,
     /// The moulds of the last panel result, and whether the panels show them.
     moulds: Option<crate::export::MouldReport>,
     mould_colours: bool,
@@ -554,7 +554,7 @@ impl App {
             return;
         }
         ui.separator();
-        let failed = self.verdict.as_ref().filter(|v| !v.holds());
+        let failed = self.verdict.as_ref().filter(|v| !v.holds);
         let top = ui.strong("Downloads").rect;
         if let Some(v) = failed {
             panels::missed_above_downloads(ui, v);
@@ -669,10 +669,9 @@ impl App {
                 });
             });
         }
-        if let (None, Some(v)) = (&self.busy, self.verdict.as_ref().filter(|v| !v.holds())) {
+        if let (None, Some(v)) = (&self.busy, self.verdict.as_ref().filter(|v| !v.holds)) {
             egui::Panel::bottom("verdict").show(ui, |ui| {
-                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {}", panels::missed_line(v))).strong())
-                    .on_hover_text(v.failure_text());
+                ui.colored_label(panels::MISSED_COLOR, RichText::new(format!("✘ {}", v.line)).strong()).on_hover_text(&v.technical);
             });
         }
     }

@@ -5,7 +5,7 @@
 pub mod info;
 pub mod moulds;
 
-use crate::guarantees::{Guarantee, Verdict};
+use crate::guarantees::Guarantee;
 use crate::remeshing::{Sizing, SizingKind, DEFAULT_EPSILON, DEFAULT_FACES, EPSILON_RANGE, FACES_RANGE};
 
 /// ε and N as last set, so that switching the sizing kind back and forth keeps them.
@@ -88,35 +88,51 @@ pub const MISSED_COLOR: egui::Color32 = egui::Color32::from_rgb(235, 80, 70);
 /// The colour of a result that meets them.
 pub const MET_COLOR: egui::Color32 = egui::Color32::from_rgb(120, 200, 120);
 
-/// The status bar's line: the first missed guarantee in a designer's words, and how many more.
-pub fn missed_line(v: &Verdict) -> String {
-    let first = v.failures().next().map_or(String::new(), Guarantee::in_words);
-    match v.failures().count() {
-        0 | 1 => format!("The result misses its guarantees: {first}"),
-        n => format!("The result misses {n} guarantees: {first}, and {} more (see the side panel)", n - 1),
+/// A result's verdict as the app shows it, worded once when the result arrives (not at every
+/// frame).
+pub struct ShownVerdict {
+    pub holds: bool,
+    /// Each missed guarantee in a designer's words, and as the report names it.
+    pub misses: Vec<(String, String)>,
+    /// The status bar's line: the first miss in words and how many more.
+    pub line: String,
+    /// Every miss as the report names it.
+    pub technical: String,
+}
+
+impl ShownVerdict {
+    pub fn of(guarantees: &[Guarantee]) -> Self {
+        let misses: Vec<(String, String)> = guarantees.iter().filter(|g| !g.holds).map(|g| (g.in_words(), g.to_string())).collect();
+        let first = misses.first().map_or("", |m| m.0.as_str());
+        let line = match misses.len() {
+            0 | 1 => format!("The result misses its guarantees: {first}"),
+            n => format!("The result misses {n} guarantees: {first}, and {} more (see the side panel)", n - 1),
+        };
+        let technical = misses.iter().map(|m| m.1.as_str()).collect::<Vec<_>>().join("; ");
+        Self { holds: !guarantees.is_empty() && misses.is_empty(), misses, line, technical }
     }
 }
 
 /// The verdict at the top of the results: each missed guarantee in a designer's words (its
 /// figure as the report names it on hover), or a check mark.
-pub fn verdict(ui: &mut egui::Ui, v: &Verdict) -> egui::Response {
+pub fn verdict(ui: &mut egui::Ui, v: &ShownVerdict) -> egui::Response {
     ui.scope(|ui| {
-        if v.holds() {
+        if v.holds {
             ui.colored_label(MET_COLOR, "✔ Meets every guarantee (see the figures below)");
             return;
         }
         ui.colored_label(MISSED_COLOR, egui::RichText::new("✘ The result misses its guarantees:").strong());
-        for g in v.failures() {
-            ui.colored_label(MISSED_COLOR, format!("• {}", g.in_words())).on_hover_text(g.to_string());
+        for (words, technical) in &v.misses {
+            ui.colored_label(MISSED_COLOR, format!("• {words}")).on_hover_text(technical);
         }
     })
     .response
 }
 
 /// Above a failed result's downloads: that they come from it, and its misses.
-pub fn missed_above_downloads(ui: &mut egui::Ui, v: &Verdict) {
-    ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {}; build from these files at your own risk.", missed_line(v))).small())
-        .on_hover_text(v.failure_text());
+pub fn missed_above_downloads(ui: &mut egui::Ui, v: &ShownVerdict) {
+    ui.colored_label(MISSED_COLOR, egui::RichText::new(format!("✘ {}; build from these files at your own risk.", v.line)).small())
+        .on_hover_text(&v.technical);
 }
 
 /// A report's warnings (failed assumptions of the reference, fallbacks), in amber.
