@@ -89,6 +89,8 @@ pub struct App {
     scalars: Option<ScalarView>,
     /// What the camera fits of the layers drawn.
     extent: Option<state::Extent>,
+    /// A double click asked to frame what is drawn.
+    frame_requested: bool,
     generation: u64,
     backend: String,
     frames: u64,
@@ -186,6 +188,7 @@ impl App {
             selected: None,
             scalars: None,
             extent: None,
+            frame_requested: false,
             generation: 0,
             backend,
             frames: 0,

@@ -130,48 +130,52 @@ impl ShownError {
     }
 }
 
-/// What the camera fits: the reference and the bulk of the method's layers (a double click
-/// frames it), and the radius of everything drawn about its centre (the clip planes), at most
-/// [`CLIP_REACH`] × the reference's.
+/// The reach of what is drawn, for the clip planes: the radius about the reference's centre of
+/// everything drawn, at least the reference's, at most [`CLIP_REACH`] × it. Computed again when
+/// the layers' meshes change (one pass over their points).
 pub struct Extent {
     pub key: Vec<u64>,
-    pub center: Vec3,
-    pub radius: f32,
     pub clip_radius: f32,
 }
 
 /// How far beyond the reference's radius the clip planes reach at most.
 const CLIP_REACH: f32 = 50.0;
 
+/// The finite points of the mesh layers, in world coordinates.
+fn layer_points(layers: &[Layer]) -> impl Iterator<Item = Vec3> + '_ {
+    layers
+        .iter()
+        .filter_map(|l| match &l.geometry {
+            Geometry::Mesh(m) => Some((m, l.model)),
+            _ => None,
+        })
+        .flat_map(|(m, model)| m.positions.chunks_exact(3).map(move |p| model.transform_point3(Vec3::from_slice(p))))
+        .filter(|p| p.is_finite())
+}
+
 impl Extent {
     pub fn of(key: Vec<u64>, layers: &[Layer], center: Vec3, radius: f32) -> Self {
-        let points: Vec<Vec3> = layers
-            .iter()
-            .filter_map(|l| match &l.geometry {
-                Geometry::Mesh(m) => Some((m, l.model)),
-                _ => None,
-            })
-            .flat_map(|(m, model)| m.positions.chunks_exact(3).map(move |p| model.transform_point3(Vec3::from_slice(p))))
-            .filter(|p| p.is_finite())
-            .collect();
-        let (mut lo, mut hi) = (center - Vec3::splat(radius), center + Vec3::splat(radius));
-        let (mut all_lo, mut all_hi) = (lo, hi);
-        if !points.is_empty() {
-            // The bulk of the layers: the 2nd to 98th percentile along each axis.
-            for axis in 0..3 {
-                let mut v: Vec<f32> = points.iter().map(|p| p[axis]).collect();
-                v.sort_by(f32::total_cmp);
-                let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
-                lo[axis] = lo[axis].min(at(0.02));
-                hi[axis] = hi[axis].max(at(0.98));
-                all_lo[axis] = all_lo[axis].min(v[0]);
-                all_hi[axis] = all_hi[axis].max(v[v.len() - 1]);
-            }
-        }
-        let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
-        let reach = (all_lo - center).abs().max((all_hi - center).abs()).length();
-        Self { key, center, radius, clip_radius: reach.clamp(radius, CLIP_REACH * radius) }
+        let reach = layer_points(layers).fold(radius, |r, p| r.max(p.distance(center)));
+        Self { key, clip_radius: reach.min(CLIP_REACH * radius) }
     }
+}
+
+/// What a double click frames: the reference and the bulk of the layers (the 2nd to 98th
+/// percentile along each axis), so that a failed result's wild parts do not shrink the rest to
+/// a dot. Centre and radius.
+pub fn framing(layers: &[Layer], center: Vec3, radius: f32) -> (Vec3, f32) {
+    let points: Vec<Vec3> = layer_points(layers).collect();
+    let (mut lo, mut hi) = (center - Vec3::splat(radius), center + Vec3::splat(radius));
+    if !points.is_empty() {
+        for axis in 0..3 {
+            let mut v: Vec<f32> = points.iter().map(|p| p[axis]).collect();
+            v.sort_by(f32::total_cmp);
+            let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
+            lo[axis] = lo[axis].min(at(0.02));
+            hi[axis] = hi[axis].max(at(0.98));
+        }
+    }
+    ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6))
 }
 
 /// What the view says while a design waits for its file.

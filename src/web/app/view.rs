@@ -7,7 +7,7 @@ use egui::{Color32, Pos2, Rect, Sense, Vec2};
 use glam::{Mat4, Vec3};
 
 use super::panels::info::{center_radius, central_sphere};
-use super::state::{drop_prompt, Extent, ScalarView};
+use super::state::{drop_prompt, framing, Extent, ScalarView};
 use super::views::method_view::{Frame, Legend};
 use super::{App, CLEAR_COLOR};
 use crate::design_link::{ColorBy, Shading};
@@ -86,6 +86,10 @@ impl App {
         layers.extend(drawn.layers);
         // The clip planes hold everything drawn, however wild a failed result's parts are.
         self.camera.scene_radius = self.drawn_extent(&layers, center, radius).clip_radius;
+        if std::mem::take(&mut self.frame_requested) {
+            let (c, r) = framing(&layers, center, radius);
+            self.camera = OrbitCamera { scene_radius: self.camera.scene_radius, ..OrbitCamera::framing(c, r) };
+        }
         layers.extend(self.selected.and_then(|v| self.central_sphere_layer(v)));
         let frame = ViewerFrame {
             view_proj: self.camera.proj(aspect) * self.camera.view(),
@@ -134,9 +138,8 @@ impl App {
             }
         }
         if response.double_clicked() {
-            if let Some(e) = &self.extent {
-                self.camera = OrbitCamera { scene_radius: e.clip_radius, ..OrbitCamera::framing(e.center, e.radius) };
-            }
+            // Framed once this frame's layers are known.
+            self.frame_requested = true;
         } else if response.clicked() {
             if let Some(pos) = response.interact_pointer_pos() {
                 self.selected = self.pick(pos, rect);
